@@ -1,0 +1,297 @@
+/*
+ * lightfield.h - sphere-plane incident light fields: slabs, their radiance,
+ * queries, the zero-radiance mask, and HDF5 files.
+ *
+ * Conventions, stated once (docs/format.md states them again for readers of
+ * the files):
+ *   - World frame: right-handed, metres. A slab is the rectangle
+ *     origin + s*u + t*v, s and t in [0, 1]; u and v are its edge vectors
+ *     and must be orthogonal, nonzero and finite.
+ *   - The slab frame is e1 = u/|u|, e2 = v/|v|, e3 = e1 x e2 (the slab's
+ *     normal, its "front"). Directions are stored in the slab frame, with the
+ *     partition's pole (+z of lfio/partition.h) along e3.
+ *   - L(x, w) is radiance propagating through point x in direction w.
+ *     Only the front hemisphere (w.e3 >= 0) is stored: the 4*n*n partition
+ *     ids 0 .. 4*n*n-1 of level n, in the slab frame.
+ *   - Positions form an nu x nv grid at cell centres:
+ *     x(i, j) = origin + (i+0.5)/nu*u + (j+0.5)/nv*v, i < nu along u, j < nv along v.
+ *   - Radiance is linear Rec.709 RGB, float32, in W sr^-1 m^-2 or in
+ *     relative units (recorded in the slab). Values are finite and >= 0.
+ *   - Memory layout of radiance: [dir][j][i][rgb], dir-major ("dir:v:u:rgb").
+ *   - Zero-radiance mask: for each level m in n, n/2, n/4, ... down to the
+ *     first odd level, one bit per hemisphere id at level m, set when some
+ *     direction of level n inside it has max(r,g,b) > threshold at some
+ *     position. The mask is kept up to date by every write.
+ *
+ * Thread safety: queries on a const slab may run concurrently; writes need
+ * exclusive access. File I/O may be called from any thread (HDF5 serialises it).
+ *
+ * This header is valid C99 and C++.
+ */
+#ifndef LFIO_LIGHTFIELD_H
+#define LFIO_LIGHTFIELD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "lfio/lfio.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Longest slab name, in bytes, without the terminating NUL. */
+#define LFIO_NAME_MAX 63
+
+/** Units of stored radiance. */
+typedef enum lfio_units {
+    LFIO_UNITS_RADIANCE = 0, /**< W sr^-1 m^-2 */
+    LFIO_UNITS_RELATIVE = 1  /**< relative (uncalibrated) units */
+} lfio_units;
+
+/** Geometry and sampling of one slab; every field is an input to lfio_slab_new(). */
+typedef struct lfio_slab_desc {
+    char name[LFIO_NAME_MAX + 1]; /**< unique within a file; letters, digits, '_', '-', '.' */
+    double origin[3];             /**< corner of the rectangle, metres, world frame */
+    double u[3];                  /**< first edge, metres, world frame */
+    double v[3];                  /**< second edge, orthogonal to u, metres, world frame */
+    uint32_t nu;                  /**< positions along u, >= 1 */
+    uint32_t nv;                  /**< positions along v, >= 1 */
+    uint32_t n;                   /**< partition level, 1 .. LFIO_SLAB_MAX_N */
+    lfio_units units;             /**< units of the radiance */
+    float mask_threshold;         /**< radiance above which the mask marks a direction, >= 0 */
+} lfio_slab_desc;
+
+/** Largest partition level a slab may use. */
+#define LFIO_SLAB_MAX_N 4096u
+
+/** Default limit, in bytes, on one slab's radiance array (see lfio_slab_new()). */
+#define LFIO_SLAB_MAX_BYTES ((uint64_t)1 << 36)
+
+/** One slab: geometry plus radiance for every (direction, position). Opaque. */
+typedef struct lfio_slab lfio_slab;
+
+/** An ordered collection of slabs, the content of one file. Opaque. */
+typedef struct lfio_lightfield lfio_lightfield;
+
+/** Fills *d with a 1 m x 1 m slab at the origin facing +z, 1x1 positions, n = 1, no name. */
+void lfio_slab_desc_init(lfio_slab_desc *d);
+
+/* ------------------------------------------------------------------ slabs */
+
+/**
+ * Creates a slab with all radiance zero after validating desc (orthogonal
+ * finite edges, sizes, a radiance array of at most LFIO_SLAB_MAX_BYTES).
+ * @return LFIO_OK and *out, owned by the caller; an error and *out = NULL.
+ */
+lfio_status lfio_slab_new(const lfio_slab_desc *desc, lfio_slab **out);
+
+/** Releases a slab. NULL is a no-op. */
+void lfio_slab_destroy(lfio_slab *s);
+
+/** @return the slab's description (borrowed; valid for the slab's life). */
+const lfio_slab_desc *lfio_slab_get_desc(const lfio_slab *s);
+
+/** @return the number of stored directions, 4*n*n. */
+uint64_t lfio_slab_dir_count(const lfio_slab *s);
+
+/** @return the radiance array, [dir][j][i][rgb] (borrowed, read-only). */
+const float *lfio_slab_radiance(const lfio_slab *s);
+
+/**
+ * Sets the radiance of one sample and updates the mask.
+ * @return LFIO_OK; LFIO_ERR_ARG if an index is out of range or a value is negative or not finite.
+ */
+lfio_status lfio_slab_write(lfio_slab *s, uint64_t dir, uint32_t i, uint32_t j, const float rgb[3]);
+
+/**
+ * Sets every position of one direction from img, laid out [j][i][rgb], and updates the mask.
+ * @return LFIO_OK; LFIO_ERR_ARG (slab unchanged) if dir is out of range or a value is invalid.
+ */
+lfio_status lfio_slab_write_direction(lfio_slab *s, uint64_t dir, const float *img);
+
+/**
+ * Sets every direction of one position from rgb, laid out [dir][rgb], and updates the mask.
+ * @return LFIO_OK; LFIO_ERR_ARG (slab unchanged) if (i, j) is out of range or a value is invalid.
+ */
+lfio_status lfio_slab_write_position(lfio_slab *s, uint32_t i, uint32_t j, const float *rgb);
+
+/** Copies the radiance of one direction into img ([j][i][rgb]). @return LFIO_OK or LFIO_ERR_ARG. */
+lfio_status lfio_slab_read_direction(const lfio_slab *s, uint64_t dir, float *img);
+
+/** Copies the radiance of one position into rgb ([dir][rgb]). @return LFIO_OK or LFIO_ERR_ARG. */
+lfio_status lfio_slab_read_position(const lfio_slab *s, uint32_t i, uint32_t j, float *rgb);
+
+/** Gives the world-frame centre of position (i, j). @return LFIO_OK or LFIO_ERR_ARG. */
+lfio_status lfio_slab_position(const lfio_slab *s, uint32_t i, uint32_t j, double x[3]);
+
+/** Converts a world-frame direction to the slab frame (no normalisation). */
+void lfio_slab_to_local(const lfio_slab *s, const double world[3], double local[3]);
+
+/** Converts a slab-frame direction to the world frame (no normalisation). */
+void lfio_slab_to_world(const lfio_slab *s, const double local[3], double world[3]);
+
+/**
+ * Finds the slab coordinates (s, t) of the orthogonal projection of world
+ * point x onto the slab's plane; *dist is x's signed height along e3.
+ * Any argument but s and x may be NULL.
+ */
+void lfio_slab_locate(const lfio_slab *s, const double x[3], double *st_s, double *st_t, double *dist);
+
+/* ---------------------------------------------------------------- queries */
+
+/**
+ * Radiance at slab coordinates (s, t) in world direction w, from the
+ * nearest position and the solid angle containing w.
+ * rgb = 0 when w points behind the slab (w.e3 < 0).
+ * @return LFIO_OK; LFIO_ERR_ARG if w is zero or not finite, or s, t are not finite.
+ */
+lfio_status lfio_slab_radiance_nearest(const lfio_slab *s, double st_s, double st_t,
+                                       const double w[3], float rgb[3]);
+
+/**
+ * Radiance at (s, t) in world direction w, interpolated bilinearly between
+ * position centres (clamped at the border) and over directions by
+ * lfio_part_interp() (neighbours behind the slab count as the containing solid angle).
+ * @return as lfio_slab_radiance_nearest().
+ */
+lfio_status lfio_slab_radiance_interp(const lfio_slab *s, double st_s, double st_t,
+                                      const double w[3], float rgb[3]);
+
+/**
+ * Irradiance at (s, t) on a surface facing -e3 that receives the light
+ * crossing the slab: sum over dirs of L * projected solid angle about e3,
+ * radiance bilinear over positions, piecewise constant over solid angles.
+ * Computed in double. W m^-2 when the units are radiance.
+ * @return LFIO_OK; LFIO_ERR_ARG if s or t is not finite.
+ */
+lfio_status lfio_slab_irradiance(const lfio_slab *s, double st_s, double st_t, double rgb[3]);
+
+/* ------------------------------------------------------------------- mask */
+
+/** @return the number of mask levels (1 for odd n; log2(n)+1 for powers of two). */
+uint32_t lfio_slab_mask_levels(const lfio_slab *s);
+
+/** @return the partition level of mask level k (k = 0 is the coarsest); 0 if k is out of range. */
+uint32_t lfio_slab_mask_n(const lfio_slab *s, uint32_t k);
+
+/**
+ * Tests the mask in constant time.
+ * @return 1 if hemisphere id at partition level m may carry radiance above
+ * the threshold, 0 if it carries none; 1 also when m is not a mask level or id is out of range
+ * (the conservative answer).
+ */
+int lfio_slab_mask_test(const lfio_slab *s, uint32_t m, uint64_t id);
+
+/** @return the number of set bits at partition level m (0 if m is not a mask level). */
+uint64_t lfio_slab_mask_count(const lfio_slab *s, uint32_t m);
+
+/* ------------------------------------------------------------ collections */
+
+/** Creates an empty light field. @return LFIO_OK and *out; LFIO_ERR_NOMEM. */
+lfio_status lfio_lightfield_new(lfio_lightfield **out);
+
+/** Releases a light field and every slab it owns. NULL is a no-op. */
+void lfio_lightfield_destroy(lfio_lightfield *lf);
+
+/**
+ * Appends slab s and takes ownership of it, also on failure (it is then destroyed).
+ * @return LFIO_OK; LFIO_ERR_ARG if its name is empty, invalid or already used.
+ */
+lfio_status lfio_lightfield_take_slab(lfio_lightfield *lf, lfio_slab *s);
+
+/** @return the number of slabs. */
+size_t lfio_lightfield_slab_count(const lfio_lightfield *lf);
+
+/** @return slab k (borrowed), or NULL if k is out of range. */
+lfio_slab *lfio_lightfield_slab(const lfio_lightfield *lf, size_t k);
+
+/** @return the slab named name (borrowed), or NULL if there is none. */
+lfio_slab *lfio_lightfield_find(const lfio_lightfield *lf, const char *name);
+
+/** Sets the creator string recorded in files (copied; default "lfio VERSION"). @return LFIO_OK or LFIO_ERR_ARG. */
+lfio_status lfio_lightfield_set_creator(lfio_lightfield *lf, const char *creator);
+
+/** @return the creator string (borrowed). */
+const char *lfio_lightfield_creator(const lfio_lightfield *lf);
+
+/* ------------------------------------------------------------------ files */
+
+/**
+ * Writes lf to path atomically: a temporary file in the same folder is
+ * written, flushed and renamed over path; on failure path is untouched and
+ * the temporary removed.
+ * @return LFIO_OK; LFIO_ERR_ARG if lf has no slabs; LFIO_ERR_IO.
+ */
+lfio_status lfio_lightfield_write(const lfio_lightfield *lf, const char *path);
+
+/**
+ * Reads a whole file, checking format, shapes, limits and checksums before
+ * and while allocating, and rebuilds each slab's mask from its radiance.
+ * @return LFIO_OK and *out, owned by the caller; LFIO_ERR_NOTFOUND, LFIO_ERR_IO,
+ * LFIO_ERR_FORMAT, LFIO_ERR_CHECKSUM or LFIO_ERR_NOMEM with *out = NULL.
+ */
+lfio_status lfio_lightfield_read(const char *path, lfio_lightfield **out);
+
+/** An open file whose slabs can be read in part. Opaque. */
+typedef struct lfio_reader lfio_reader;
+
+/**
+ * Opens a file and validates its metadata (not yet the radiance).
+ * @return LFIO_OK and *out; an error as lfio_lightfield_read() with *out = NULL.
+ */
+lfio_status lfio_reader_open(const char *path, lfio_reader **out);
+
+/** Closes the file. NULL is a no-op. */
+void lfio_reader_close(lfio_reader *r);
+
+/** @return the number of slabs in the file. */
+size_t lfio_reader_slab_count(const lfio_reader *r);
+
+/** @return the description of slab k (borrowed), or NULL if k is out of range. */
+const lfio_slab_desc *lfio_reader_slab_desc(const lfio_reader *r, size_t k);
+
+/** @return the creator string stored in the file (borrowed). */
+const char *lfio_reader_creator(const lfio_reader *r);
+
+/** @return the format version stored in the file. */
+int lfio_reader_format_version(const lfio_reader *r);
+
+/**
+ * Reads one direction of slab k into img ([j][i][rgb]) without reading the other directions.
+ * @return LFIO_OK; LFIO_ERR_ARG; LFIO_ERR_IO, LFIO_ERR_FORMAT or LFIO_ERR_CHECKSUM.
+ */
+lfio_status lfio_reader_read_direction(lfio_reader *r, size_t k, uint64_t dir, float *img);
+
+/**
+ * Reads every direction of position (i, j) of slab k into rgb ([dir][rgb]).
+ * @return as lfio_reader_read_direction().
+ */
+lfio_status lfio_reader_read_position(lfio_reader *r, size_t k, uint32_t i, uint32_t j, float *rgb);
+
+/**
+ * Reads slab k whole.
+ * @return LFIO_OK and *out, owned by the caller; an error and *out = NULL.
+ */
+lfio_status lfio_reader_read_slab(lfio_reader *r, size_t k, lfio_slab **out);
+
+/** Result of lfio_verify(). */
+typedef struct lfio_verify_report {
+    uint32_t problems;   /**< number of problems found */
+    char first[512];     /**< the first problem, "" if none */
+} lfio_verify_report;
+
+/**
+ * Checks a file completely: format, every attribute and shape, every checksum
+ * (by reading all data), the stored directions, solid angles and mask against
+ * values recomputed from the geometry and radiance.
+ * @return LFIO_OK if the file is valid; otherwise the first problem's status,
+ * with details in lfio_errmsg() and *report (which may be NULL).
+ */
+lfio_status lfio_verify(const char *path, lfio_verify_report *report);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* LFIO_LIGHTFIELD_H */

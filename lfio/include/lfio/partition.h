@@ -1,0 +1,114 @@
+/*
+ * partition.h - the sphere partition of Khanna et al., Appendix A.
+ *
+ * Conventions, stated once for every function below:
+ *   - A direction is any finite, nonzero 3-vector (x, y, z); it need not be
+ *     unit length. Results are unit vectors. Angles in steradians.
+ *   - Octants are numbered o = (x<0) + 2*(y<0) + 4*(z<0). A component that is
+ *     zero, including -0.0, counts as positive.
+ *   - Level n >= 1 cuts each octant's face of the octahedron |x|+|y|+|z| = 1
+ *     into n*n triangles and projects them onto the unit sphere from the
+ *     origin: 8*n*n solid angles in all. Ids run 0 .. 8*n*n-1:
+ *         id = o*n*n + zi*(2n - zi) + 2*xi + upper
+ *     where (xi, zi) is the lattice cell of the planar point n*|d|/|d|_1 in
+ *     the octant (x along |dx|, z along |dz|), upper = 0 for the triangle
+ *     (xi,zi),(xi+1,zi),(xi,zi+1) and 1 for (xi+1,zi),(xi,zi+1),(xi+1,zi+1).
+ *   - The octants with z >= 0 (o = 0..3) come first, so the ids of the
+ *     hemisphere around +z are exactly 0 .. 4*n*n-1.
+ *   - Solid angles differ (largest/smallest up to about 5.2); use the exact
+ *     values from lfio_part_solid_angle(), never 4*pi/(8*n*n).
+ *   - Hierarchy: for even n, solid angle id at level n is the union of the
+ *     four ids lfio_part_children() gives at level 2n, and lfio_part_parent()
+ *     at level n/2 contains it. Powers of two give the full quad-tree.
+ *   - All functions are pure and thread-safe. Functions returning int return
+ *     1 on success and 0 when an argument is invalid (outputs then untouched).
+ *
+ * This header is valid C99 and C++.
+ */
+#ifndef LFIO_PARTITION_H
+#define LFIO_PARTITION_H
+
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Largest supported level; 8*n*n then stays below 2^51. */
+#define LFIO_PART_MAX_N 16777216u
+
+/** @return the number of solid angles over the sphere at level n: 8*n*n (0 if n is invalid). */
+uint64_t lfio_part_count(uint32_t n);
+
+/** @return the number of solid angles over the +z hemisphere at level n: 4*n*n (0 if n is invalid). */
+uint64_t lfio_part_hemi_count(uint32_t n);
+
+/**
+ * Finds the solid angle containing direction d, in constant time.
+ * @return 1 and *id on success; 0 if n is invalid or d is zero or not finite.
+ */
+int lfio_part_id(uint32_t n, const double d[3], uint64_t *id);
+
+/**
+ * Gives the three corner directions of solid angle id, counter-clockwise seen
+ * from outside the sphere (so det(v[0], v[1], v[2]) > 0).
+ * @return 1 on success; 0 if n or id is invalid.
+ */
+int lfio_part_vertices(uint32_t n, uint64_t id, double v[3][3]);
+
+/**
+ * Gives the representative direction of id: the direction through the
+ * centroid of its planar triangle on the octahedron face (the point where
+ * the barycentric weights of lfio_part_interp() are equal).
+ * @return 1 on success; 0 if n or id is invalid.
+ */
+int lfio_part_centroid(uint32_t n, uint64_t id, double c[3]);
+
+/** @return the exact solid angle of id in steradians (about 1e-16 relative error); 0 if invalid. */
+double lfio_part_solid_angle(uint32_t n, uint64_t id);
+
+/**
+ * @return the projected solid angle of id about axis a (a unit vector):
+ * the integral of max(0, w.a) over the directions w of id, exact to rounding
+ * for ids entirely in a's hemisphere. 0 if invalid.
+ */
+double lfio_part_projected_solid_angle(uint32_t n, uint64_t id, const double a[3]);
+
+/**
+ * Gives the solid angle at level n/2 that contains id.
+ * @return 1 on success; 0 if n is odd or 1, or id is invalid.
+ */
+int lfio_part_parent(uint32_t n, uint64_t id, uint64_t *parent);
+
+/**
+ * Gives the four solid angles at level 2n whose union is id; the centre
+ * (inverted) child comes last.
+ * @return 1 on success; 0 if 2n exceeds LFIO_PART_MAX_N or id is invalid.
+ */
+int lfio_part_children(uint32_t n, uint64_t id, uint64_t child[4]);
+
+/**
+ * Gives the three solid angles sharing an edge with id; nb[k] lies across
+ * the edge opposite corner k of lfio_part_vertices(). Edges on octant
+ * borders lead to the mirror-image triangle in the adjacent octant.
+ * @return 1 on success; 0 if n or id is invalid.
+ */
+int lfio_part_neighbours(uint32_t n, uint64_t id, uint64_t nb[3]);
+
+/**
+ * Weights for interpolating a function sampled at the centroids, at
+ * direction d: ids[0] is the solid angle containing d and ids[1..3] its
+ * neighbours (as lfio_part_neighbours()). The weights are >= 0 and sum to 1;
+ * w[0] = 1 at the centroid of ids[0]; on an edge shared with neighbour k the
+ * weights are 1/2 for ids[0] and ids[k] and 0 otherwise, so the interpolant
+ * is continuous across edges; corners, a set of measure zero, take the mean
+ * of the two edges' values.
+ * @return 1 on success; 0 if n is invalid or d is zero or not finite.
+ */
+int lfio_part_interp(uint32_t n, const double d[3], uint64_t ids[4], double w[4]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* LFIO_PARTITION_H */
