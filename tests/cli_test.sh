@@ -1,0 +1,345 @@
+#!/usr/bin/env bash
+# cli_test.sh - end-to-end test of the `ilf` command.
+#
+# Usage: bash cli_test.sh ILF_BINARY TMPDIR
+#
+# Runs ilf as a user would and checks exit codes (0 ok, 1 failure while
+# running, 2 bad usage or input), messages, and files: help and version,
+# synth of every kind, info as text and JSON, irradiance of a constant field,
+# verify, slice in every mode and format, and the error paths (missing,
+# foreign, truncated and corrupted inputs; bad numbers; unwritable outputs,
+# which must leave no partial file and must not clobber an existing one).
+# Every check is counted; the last line is "N passed, M failed" and the exit
+# status is nonzero when anything failed. python3 (standard library only)
+# parses the JSON and the image headers.
+set -u
+
+if [ $# -ne 2 ]; then
+    echo "usage: bash cli_test.sh ILF_BINARY TMPDIR" >&2
+    exit 2
+fi
+ILF=$1
+TMP=$2
+rm -rf "$TMP"
+mkdir -p "$TMP"
+OUT=$TMP/stdout
+ERR=$TMP/stderr
+
+passed=0
+failed=0
+status=0
+
+# check DESCRIPTION COMMAND...: one check that passes when COMMAND succeeds.
+check() {
+    local what=$1
+    shift
+    if "$@"; then
+        passed=$((passed + 1))
+    else
+        failed=$((failed + 1))
+        echo "FAIL: $what"
+    fi
+}
+
+# run COMMAND...: runs it, keeping stdout in $OUT, stderr in $ERR, exit code in $status.
+run() {
+    "$@" >"$OUT" 2>"$ERR"
+    status=$?
+}
+
+# expect CODE DESCRIPTION COMMAND...: runs COMMAND and checks its exit code.
+expect() {
+    local code=$1 what=$2
+    shift 2
+    run "$@"
+    if [ "$status" -eq "$code" ]; then
+        passed=$((passed + 1))
+    else
+        failed=$((failed + 1))
+        echo "FAIL: $what: exit $status, expected $code"
+        sed 's/^/    stderr: /' "$ERR" | head -n 5
+    fi
+}
+
+# Helpers usable as check's COMMAND.
+stdout_has() { grep -q -e "$1" "$OUT"; }
+stderr_has() { grep -q -F -e "$1" "$ERR"; }
+nonempty() { [ -s "$1" ]; }
+absent() { [ ! -e "$1" ]; }
+none_match() { ! compgen -G "$1" >/dev/null; }
+# Nothing but the listed names is in folder $1 (no temporaries left behind).
+only_files() {
+    local dir=$1
+    shift
+    [ "$(cd "$dir" && ls -A | sort | tr '\n' ' ')" = "$(printf '%s\n' "$@" | sort | tr '\n' ' ')" ]
+}
+
+PYTHON=$(command -v python3 || true)
+# py SCRIPT ARGS...: runs a python3 check, or passes with a note when python3 is missing.
+py() {
+    if [ -z "$PYTHON" ]; then
+        echo "note: python3 not found, skipping a check"
+        return 0
+    fi
+    "$PYTHON" -c "$@"
+}
+
+# Image header checks with the standard library: EXR channels must be 32-bit
+# float (pixel type 2), PNG must be 8-bit; both must have the given size and channels.
+image_header_py='
+import struct, sys
+path, width, height, channels = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4])
+data = open(path, "rb").read()
+if path.endswith(".png"):
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
+    w, h, depth, colour = struct.unpack(">IIBB", data[16:26])
+    assert (w, h) == (width, height), (w, h)
+    assert depth == 8, depth
+    assert colour == {3: 2, 4: 6}[channels], colour
+else:
+    assert data[:4] == b"\x76\x2f\x31\x01", "not an EXR"
+    pos, types, window = 8, [], None
+    while data[pos] != 0:
+        end = data.index(b"\0", pos); name = data[pos:end]; pos = end + 1
+        end = data.index(b"\0", pos); kind = data[pos:end]; pos = end + 1
+        size, = struct.unpack("<i", data[pos:pos + 4]); pos += 4
+        value = data[pos:pos + size]; pos += size
+        if name == b"channels":
+            at = 0
+            while value[at] != 0:
+                at = value.index(b"\0", at) + 1
+                types.append(struct.unpack("<i", value[at:at + 4])[0]); at += 16
+        if name == b"dataWindow":
+            x0, y0, x1, y1 = struct.unpack("<iiii", value)
+            window = (x1 - x0 + 1, y1 - y0 + 1)
+    assert window == (width, height), window
+    assert types == [2] * channels, types
+'
+image_is() { py "$image_header_py" "$@"; }
+
+# ------------------------------------------------------------------ help
+expect 0 "ilf --help" "$ILF" --help
+check "ilf --help shows Usage" stdout_has "Usage"
+for sub in synth info verify slice; do
+    check "ilf --help lists $sub" stdout_has "^  $sub "
+done
+expect 0 "ilf --version" "$ILF" --version
+check "version line" stdout_has "^ilf (ilfkit) 0\.1\.0, lfio [0-9]"
+for sub in synth info verify slice; do
+    expect 0 "ilf $sub --help" "$ILF" "$sub" --help
+    check "ilf $sub --help shows Usage" stdout_has "^Usage: ilf $sub"
+    check "ilf $sub --help shows an example" stdout_has "^Example"
+done
+expect 2 "no arguments" "$ILF"
+expect 2 "unknown subcommand" "$ILF" frobnicate
+check "unknown subcommand is named" stderr_has "frobnicate"
+expect 2 "unknown top-level option" "$ILF" --frobnicate
+for sub in synth info verify slice; do
+    expect 2 "$sub: unknown option" "$ILF" "$sub" --frobnicate
+    check "$sub: unknown option is named" stderr_has "--frobnicate"
+done
+
+# ------------------------------------------------------------------ synth
+CONST=$TMP/constant.h5
+RADIAL=$TMP/radial.h5
+SPOT=$TMP/spot.h5
+expect 0 "synth constant" "$ILF" synth --kind constant --grid 8x6 --n 4 --name flat --radiance 2,2,2 -o "$CONST"
+check "synth constant wrote a file" nonempty "$CONST"
+check "synth prints where it wrote" stdout_has "constant.h5"
+expect 0 "synth radial" "$ILF" synth --kind radial --grid 8x8 --n 8 --cone 30 --supersample 2 -o "$RADIAL"
+check "synth radial wrote a file" nonempty "$RADIAL"
+expect 0 "synth spot" "$ILF" synth --kind spot --grid 8x8 --n 8 --spot 0,0,-1:0,0,1:30:2:0.3 \
+    --spot=0.2,0,-0.5:0,0,1:45:0 -o "$SPOT"
+check "synth spot wrote a file" nonempty "$SPOT"
+expect 0 "synth with --threads 1" "$ILF" synth --kind radial --grid 8x8 --n 8 --cone 30 --supersample 2 \
+    --threads 1 -o "$TMP/radial-1thread.h5"
+expect 0 "info of the one-thread file" "$ILF" info "$TMP/radial-1thread.h5"
+cp "$OUT" "$TMP/info-1thread.txt"
+expect 0 "info of the many-thread file" "$ILF" info "$RADIAL"
+check "the result does not depend on the thread count" \
+    diff <(grep -v -e '^file' -e 'creator' "$TMP/info-1thread.txt") <(grep -v -e '^file' -e 'creator' "$OUT")
+
+# ------------------------------------------------------------------ info
+expect 0 "info (text)" "$ILF" info "$CONST"
+check "info shows the grid" stdout_has "8x6 positions"
+check "info shows n" stdout_has "n: *4 (64 directions)"
+check "info shows the name" stdout_has "slab 0: flat"
+check "info shows the radiance" stdout_has "radiance max: *2 2 2"
+expect 0 "info --json" "$ILF" info "$CONST" --json
+check "info --json is JSON" py 'import json,sys; json.load(sys.stdin)' <"$OUT"
+check "info --json has the values given" py '
+import json, sys
+d = json.load(sys.stdin)
+s = d["slabs"][0]
+assert s["name"] == "flat" and s["nu"] == 8 and s["nv"] == 6 and s["n"] == 4, s
+assert s["directions"] == 64 and s["units"] == "W sr^-1 m^-2", s
+assert s["radiance_min"] == [2, 2, 2] and s["zero_fraction"] == 0, s
+assert s["mask"][-1] == {"n": 4, "set": 64, "total": 64}, s["mask"]
+assert d["file_bytes"] > 0 and d["format_version"] >= 1 and "irradiance" not in s
+' <"$OUT"
+expect 0 "info --irradiance" "$ILF" info "$CONST" --json --irradiance 3,2
+check "irradiance of constant radiance 2 is 2*pi" py '
+import json, math, sys
+s = json.load(sys.stdin)["slabs"][0]
+assert s["position"] == [3, 2], s["position"]
+assert all(abs(e - 2 * math.pi) < 1e-4 for e in s["irradiance"]), s["irradiance"]
+' <"$OUT"
+expect 0 "info --irradiance (text)" "$ILF" info "$CONST" --irradiance 0,0
+check "text irradiance is 2*pi" stdout_has "irradiance (0,0): 6\.28318"
+expect 0 "info --slab by name" "$ILF" info "$CONST" --slab flat
+expect 0 "info --slab by index" "$ILF" info "$CONST" --slab 0
+expect 2 "info --slab that does not exist" "$ILF" info "$CONST" --slab nosuch
+check "missing slab is named" stderr_has "nosuch"
+expect 2 "info --irradiance outside the grid" "$ILF" info "$CONST" --irradiance 8,0
+expect 0 "info of the spot file" "$ILF" info "$SPOT" --json
+check "spot file has dark and bright samples" py '
+import json, sys
+s = json.load(sys.stdin)["slabs"][0]
+assert 0 < s["zero_fraction"] < 1 and s["radiance_max"][0] > 0, s
+assert s["mask"][-1]["set"] < s["mask"][-1]["total"], s["mask"]
+' <"$OUT"
+
+# The models against closed forms, at one position at the slab centre.
+# radial: E = 2 pi / (1 - c) * ((1 - c^3)/3 - c (1 - c^2)/2), c = cos(cone).
+expect 0 "synth radial at one position" "$ILF" synth --kind radial --grid 1x1 --n 32 -o "$TMP/one-radial.h5"
+expect 0 "info --irradiance of radial" "$ILF" info "$TMP/one-radial.h5" --json --irradiance 0,0
+check "radial irradiance matches the closed form" py '
+import json, math, sys
+e = json.load(sys.stdin)["slabs"][0]["irradiance"][0]
+c = math.cos(math.radians(20))
+exact = 2 * math.pi / (1 - c) * ((1 - c**3) / 3 - c * (1 - c * c) / 2)
+assert abs(e / exact - 1) < 2e-3, (e, exact)
+' <"$OUT"
+# spot: a ball of radius R at distance D seen from x, lit in every direction
+# (cone 180, falloff 0), gives E = pi (R/D)^2.
+expect 0 "synth spot at one position" "$ILF" synth --kind spot --spot 0,0,-1:1,0,0:180:0:0.3 --grid 1x1 --n 32 \
+    -o "$TMP/one-spot.h5"
+expect 0 "info --irradiance of spot" "$ILF" info "$TMP/one-spot.h5" --json --irradiance 0,0
+check "spot irradiance matches the closed form" py '
+import json, math, sys
+e = json.load(sys.stdin)["slabs"][0]["irradiance"][0]
+assert abs(e / (math.pi * 0.09) - 1) < 5e-3, e
+' <"$OUT"
+
+# ------------------------------------------------------------------ verify
+expect 0 "verify valid files" "$ILF" verify "$CONST" "$RADIAL" "$SPOT"
+check "verify says ok" stdout_has "constant.h5: ok"
+
+# ------------------------------------------------------------------ slice
+expect 0 "slice unfold png" "$ILF" slice "$RADIAL" --position 3,4 --size 64 -o "$TMP/unfold.png"
+check "unfold png exists" nonempty "$TMP/unfold.png"
+check "unfold png is 8-bit RGBA 64x64" image_is "$TMP/unfold.png" 64 64 4
+check "slice prints the scale" stdout_has "scale"
+expect 0 "slice unfold exr" "$ILF" slice "$RADIAL" --position 3,4 --size 64 --layout unfold -o "$TMP/unfold.exr"
+check "unfold exr is float RGBA 64x64" image_is "$TMP/unfold.exr" 64 64 4
+expect 0 "slice latlong png" "$ILF" slice "$RADIAL" --position 0,0 --layout latlong --size 32 -o "$TMP/latlong.png"
+check "latlong png is 64x32 RGB" image_is "$TMP/latlong.png" 64 32 3
+expect 0 "slice latlong exr" "$ILF" slice "$RADIAL" --position 0,0 --layout latlong --size 32 -o "$TMP/latlong.EXR"
+check "latlong exr is float 64x32 RGB" image_is "$TMP/latlong.EXR" 64 32 3
+expect 0 "slice --direction png" "$ILF" slice "$SPOT" --direction 0 --exposure 1 -o "$TMP/dir.png"
+check "direction png is nu x nv" image_is "$TMP/dir.png" 8 8 3
+expect 0 "slice --direction exr" "$ILF" slice "$CONST" --direction 63 -o "$TMP/dir.exr"
+check "direction exr is float nu x nv" image_is "$TMP/dir.exr" 8 6 3
+expect 0 "slice --toward" "$ILF" slice "$SPOT" --toward 0,0.1,1 --slab 0 -o "$TMP/toward.png"
+check "toward png exists" nonempty "$TMP/toward.png"
+expect 2 "slice --toward behind the slab" "$ILF" slice "$SPOT" --toward 0,0,-1 -o "$TMP/behind.png"
+expect 2 "slice --direction out of range" "$ILF" slice "$CONST" --direction 64 -o "$TMP/x.png"
+expect 2 "slice --position out of range" "$ILF" slice "$CONST" --position 0,6 -o "$TMP/x.png"
+expect 2 "slice with two modes" "$ILF" slice "$CONST" --position 0,0 --direction 1 -o "$TMP/x.png"
+expect 2 "slice with no mode" "$ILF" slice "$CONST" -o "$TMP/x.png"
+expect 2 "slice to an unknown image type" "$ILF" slice "$CONST" --direction 0 -o "$TMP/x.tiff"
+expect 2 "slice --layout with --direction" "$ILF" slice "$CONST" --direction 0 --layout latlong -o "$TMP/x.png"
+check "rejected slices wrote nothing" absent "$TMP/x.png"
+
+# ------------------------------------------------------------------ bad inputs
+MISSING=$TMP/does-not-exist.h5
+TEXT=$TMP/notes.txt
+TRUNC=$TMP/truncated.h5
+FLIPPED=$TMP/flipped.h5
+echo "this is not a light field" >"$TEXT"
+head -c 3000 "$RADIAL" >"$TRUNC"
+# Radiance without zeros compresses little, so the middle of this file is radiance data.
+"$ILF" synth --kind radial --cone 180 --grid 16x16 --n 16 -o "$FLIPPED" >/dev/null
+cp "$FLIPPED" "$TMP/unflipped.h5"
+size=$(wc -c <"$FLIPPED")
+middle=$((size / 2))
+old=$(od -A n -t u1 -j "$middle" -N 1 "$FLIPPED" | tr -d ' ')
+printf "\\$(printf '%03o' $((old ^ 255)))" | dd of="$FLIPPED" bs=1 seek="$middle" conv=notrunc status=none
+check "the flipped copy differs" bash -c "! cmp -s '$TMP/unflipped.h5' '$FLIPPED'"
+
+for bad in "$MISSING" "$TEXT" "$TRUNC"; do
+    name=$(basename "$bad")
+    expect 2 "info $name" "$ILF" info "$bad"
+    check "info names $name" stderr_has "$name"
+    check "info error starts with 'ilf info:'" grep -q "^ilf info: " "$ERR"
+    expect 2 "verify $name" "$ILF" verify "$bad"
+    check "verify reports $name" stdout_has "$name: "
+    expect 2 "slice $name" "$ILF" slice "$bad" --position 0,0 -o "$TMP/never.png"
+    check "slice names $name" stderr_has "$name"
+done
+check "failed slices wrote nothing" absent "$TMP/never.png"
+expect 2 "verify a flipped byte" "$ILF" verify "$FLIPPED"
+check "verify reports a problem count" stdout_has "flipped.h5: .*([0-9]* problems*)"
+expect 2 "verify reports each file, failing if any fails" "$ILF" verify "$CONST" "$TRUNC"
+check "verify still reports the good file" stdout_has "constant.h5: ok"
+
+# ------------------------------------------------------------------ bad numbers
+expect 2 "--grid 0x5" "$ILF" synth --kind constant --grid 0x5 -o "$TMP/bad.h5"
+check "bad value is quoted" stderr_has "--grid '0x5'"
+expect 2 "--grid 8x" "$ILF" synth --kind constant --grid 8x -o "$TMP/bad.h5"
+expect 2 "--grid 8" "$ILF" synth --kind constant --grid 8 -o "$TMP/bad.h5"
+expect 2 "--n 0" "$ILF" synth --kind constant --n 0 -o "$TMP/bad.h5"
+expect 2 "--n abc" "$ILF" synth --kind constant --n abc -o "$TMP/bad.h5"
+expect 2 "--n -4" "$ILF" synth --kind constant --n -4 -o "$TMP/bad.h5"
+expect 2 "--n 4.5" "$ILF" synth --kind constant --n 4.5 -o "$TMP/bad.h5"
+expect 2 "--u 1,0" "$ILF" synth --kind constant --u 1,0 -o "$TMP/bad.h5"
+check "--u 1,0 explains the count" stderr_has "expected 3 comma-separated numbers"
+expect 2 "--u 1,0,0,0" "$ILF" synth --kind constant --u 1,0,0,0 -o "$TMP/bad.h5"
+expect 2 "--u 1,,0" "$ILF" synth --kind constant --u 1,,0 -o "$TMP/bad.h5"
+expect 2 "--origin nan" "$ILF" synth --kind constant --origin nan,0,0 -o "$TMP/bad.h5"
+expect 2 "--radiance 1e999" "$ILF" synth --kind constant --radiance 1e999,1,1 -o "$TMP/bad.h5"
+expect 2 "--radiance negative" "$ILF" synth --kind constant --radiance -1,1,1 -o "$TMP/bad.h5"
+expect 2 "u not orthogonal to v" "$ILF" synth --kind constant --u 1,0,0 --v 1,1,0 -o "$TMP/bad.h5"
+expect 2 "--kind missing" "$ILF" synth -o "$TMP/bad.h5"
+expect 2 "--kind unknown" "$ILF" synth --kind disco -o "$TMP/bad.h5"
+expect 2 "-o missing" "$ILF" synth --kind constant
+expect 2 "--grid without a value" "$ILF" synth --kind constant -o "$TMP/bad.h5" --grid
+expect 2 "--spot without --kind spot" "$ILF" synth --kind constant --spot 0,0,-1:0,0,1:30:1 -o "$TMP/bad.h5"
+expect 2 "--kind spot without --spot" "$ILF" synth --kind spot -o "$TMP/bad.h5"
+expect 2 "--spot with three fields" "$ILF" synth --kind spot --spot 0,0,-1:0,0,1:30 -o "$TMP/bad.h5"
+expect 2 "--spot with a zero axis" "$ILF" synth --kind spot --spot 0,0,-1:0,0,0:30:1 -o "$TMP/bad.h5"
+expect 2 "--cone 0" "$ILF" synth --kind radial --cone 0 -o "$TMP/bad.h5"
+expect 2 "--cone with constant" "$ILF" synth --kind constant --cone 10 -o "$TMP/bad.h5"
+expect 2 "--name too long" "$ILF" synth --kind constant --name "$(printf 'x%.0s' $(seq 70))" -o "$TMP/bad.h5"
+expect 2 "--name with a slash" "$ILF" synth --kind constant --name a/b -o "$TMP/bad.h5"
+expect 2 "--irradiance 1" "$ILF" info "$CONST" --irradiance 1
+expect 2 "--size 0" "$ILF" slice "$CONST" --position 0,0 --size 0 -o "$TMP/bad.png"
+expect 2 "--exposure abc" "$ILF" slice "$CONST" --position 0,0 --exposure abc -o "$TMP/bad.png"
+check "rejected commands wrote nothing" none_match "$TMP/bad.*"
+
+# ------------------------------------------------------------------ unwritable outputs
+expect 1 "synth into a missing folder" "$ILF" synth --kind constant --grid 2x2 --n 2 -o "$TMP/no/such/dir/x.h5"
+check "synth into a missing folder names it" stderr_has "$TMP/no/such/dir"
+check "no partial synth output" absent "$TMP/no"
+expect 1 "slice into a missing folder" "$ILF" slice "$CONST" --direction 0 -o "$TMP/no/such/dir/x.exr"
+check "no partial slice output" absent "$TMP/no"
+
+# A write that fails part-way (file size limit; SIGXFSZ ignored so write()
+# returns an error) must leave an existing output exactly as it was.
+KEEP=$TMP/keep
+mkdir -p "$KEEP"
+cp "$SPOT" "$KEEP/existing.h5"
+cp "$SPOT" "$KEEP/original.h5"
+expect 1 "synth failing mid-write" bash -c "trap '' XFSZ; ulimit -f 8; exec \"\$0\" \"\$@\"" \
+    "$ILF" synth --kind radial --cone 180 --grid 16x16 --n 16 -o "$KEEP/existing.h5"
+check "failed synth left the existing file alone" cmp -s "$KEEP/existing.h5" "$KEEP/original.h5"
+check "failed synth left no temporary" only_files "$KEEP" existing.h5 original.h5
+"$ILF" slice "$RADIAL" --direction 0 -o "$KEEP/existing.exr" >/dev/null 2>&1
+cp "$KEEP/existing.exr" "$KEEP/original.exr"
+expect 1 "slice failing mid-write" bash -c "trap '' XFSZ; ulimit -f 8; exec \"\$0\" \"\$@\"" \
+    "$ILF" slice "$RADIAL" --position 0,0 --size 1024 -o "$KEEP/existing.exr"
+check "failed slice left the existing image alone" cmp -s "$KEEP/existing.exr" "$KEEP/original.exr"
+check "failed slice left no temporary" only_files "$KEEP" existing.h5 original.h5 existing.exr original.exr
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]

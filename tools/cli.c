@@ -1,0 +1,482 @@
+/*
+ * cli.c - the pieces every `ilf` subcommand shares (see cli.h): error
+ * reporting and exit codes, the option parser and help printer, strict
+ * number parsing, slab selection and the progress bar.
+ *
+ * Invariants: parsers never accept part of a value; nothing here exits the
+ * process (subcommands return exit codes up to main); stdout carries only
+ * help text, stderr carries errors and the progress bar.
+ */
+#include "cli.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+/* --------------------------------------------------------------- errors */
+
+void cli_error(const char *sub, const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "ilf %s: ", sub);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+}
+
+const char *cli_one_line(const char *text, char *buf, size_t size)
+{
+    size_t k = 0;
+    for (; text[k] != '\0' && k + 1 < size; k++)
+        buf[k] = text[k] == '\n' || text[k] == '\r' ? ' ' : text[k];
+    buf[k] = '\0';
+    return buf;
+}
+
+int cli_lfio_failure(const char *sub, lfio_status status, cli_role role, const char *path)
+{
+    char line[1024];
+    const char *msg = cli_one_line(lfio_errmsg(), line, sizeof line);
+    if (msg[0] == '\0')
+        msg = lfio_status_name(status);
+    /* lfio's messages usually name the file already; add it only when they do not. */
+    if (path != NULL && strstr(msg, path) == NULL)
+        cli_error(sub, "%s: %s", path, msg);
+    else
+        cli_error(sub, "%s", msg);
+    if (status == LFIO_ERR_NOMEM)
+        return ILF_EXIT_FAILED;
+    return role == CLI_INPUT ? ILF_EXIT_USAGE : ILF_EXIT_FAILED;
+}
+
+/* -------------------------------------------------------------- options */
+
+void cli_parser_init(cli_parser *p, const cli_usage *usage, const cli_option *options,
+                     size_t option_count, int argc, char **argv)
+{
+    p->usage = usage;
+    p->options = options;
+    p->option_count = option_count;
+    p->argc = argc;
+    p->argv = argv;
+    p->next = 1;
+    p->options_ended = 0;
+    p->current = "";
+}
+
+static int is_help_flag(const char *arg)
+{
+    return strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0;
+}
+
+/* Finds a long option by the name between "--" and an optional '='. */
+static int find_long_option(const cli_parser *p, const char *name, size_t len)
+{
+    for (size_t k = 0; k < p->option_count; k++)
+        if (strlen(p->options[k].name) == len && strncmp(p->options[k].name, name, len) == 0)
+            return (int)k;
+    return -1;
+}
+
+static int find_short_option(const cli_parser *p, char c)
+{
+    for (size_t k = 0; k < p->option_count; k++)
+        if (p->options[k].short_name != 0 && p->options[k].short_name == c)
+            return (int)k;
+    return -1;
+}
+
+/* Locates the option named by arg; *inline_value gets the text after '=' if any. */
+static int identify_option(const cli_parser *p, const char *arg, const char **inline_value)
+{
+    *inline_value = NULL;
+    if (arg[1] == '-') {
+        const char *name = arg + 2;
+        const char *eq = strchr(name, '=');
+        size_t len = eq != NULL ? (size_t)(eq - name) : strlen(name);
+        if (eq != NULL)
+            *inline_value = eq + 1;
+        return find_long_option(p, name, len);
+    }
+    if (arg[2] != '\0')
+        return -1; /* bundled short options are not supported: "-ox" is an error */
+    return find_short_option(p, arg[1]);
+}
+
+/* Takes the option's value from "=VALUE" or the following argument. */
+static int take_value(cli_parser *p, int index, const char *inline_value, const char **value)
+{
+    const cli_option *opt = &p->options[index];
+    if (opt->value_name == NULL) {
+        if (inline_value != NULL) {
+            cli_error(p->usage->sub, "option --%s takes no value", opt->name);
+            return CLI_BAD;
+        }
+        *value = NULL;
+        return index;
+    }
+    if (inline_value != NULL) {
+        *value = inline_value;
+        return index;
+    }
+    if (p->next >= p->argc) {
+        cli_error(p->usage->sub, "option --%s needs a value (%s)", opt->name, opt->value_name);
+        return CLI_BAD;
+    }
+    *value = p->argv[p->next++];
+    return index;
+}
+
+int cli_next(cli_parser *p, const char **value)
+{
+    *value = NULL;
+    if (p->next >= p->argc)
+        return CLI_DONE;
+    const char *arg = p->argv[p->next++];
+    /* "-" alone is a positional argument by convention (standard input/output). */
+    if (p->options_ended || arg[0] != '-' || arg[1] == '\0') {
+        *value = arg;
+        return CLI_POSITIONAL;
+    }
+    if (strcmp(arg, "--") == 0) {
+        p->options_ended = 1;
+        return cli_next(p, value);
+    }
+    if (is_help_flag(arg)) {
+        cli_print_help(stdout, p->usage, p->options, p->option_count);
+        return CLI_HELP;
+    }
+    const char *inline_value;
+    int index = identify_option(p, arg, &inline_value);
+    if (index < 0) {
+        cli_error(p->usage->sub, "unknown option '%s' (see 'ilf %s --help')", arg, p->usage->sub);
+        return CLI_BAD;
+    }
+    p->current = p->options[index].name;
+    return take_value(p, index, inline_value, value);
+}
+
+/* One row of the option table; a long left column pushes the help to its own line. */
+static void print_option_line(FILE *out, const char *left, const char *help)
+{
+    enum { COLUMN = 28 };
+    if (strlen(left) < COLUMN)
+        fprintf(out, "  %-*s %s\n", COLUMN, left, help);
+    else
+        fprintf(out, "  %s\n  %-*s %s\n", left, COLUMN, "", help);
+}
+
+void cli_print_help(FILE *out, const cli_usage *usage, const cli_option *options, size_t option_count)
+{
+    fprintf(out, "Usage: ilf %s %s\n\n%s\n\nOptions:\n", usage->sub, usage->synopsis, usage->summary);
+    for (size_t k = 0; k < option_count; k++) {
+        const cli_option *o = &options[k];
+        char shortcut[8] = "    "; /* keeps long names aligned whether or not a letter exists */
+        char left[64];
+        if (o->short_name != 0)
+            snprintf(shortcut, sizeof shortcut, "-%c, ", o->short_name);
+        snprintf(left, sizeof left, "%s--%s%s%s", shortcut, o->name, o->value_name ? " " : "",
+                 o->value_name ? o->value_name : "");
+        print_option_line(out, left, o->help);
+    }
+    print_option_line(out, "-h, --help", "show this help and exit");
+    fprintf(out, "\n%s:\n", strchr(usage->example, '\n') != NULL ? "Examples" : "Example");
+    /* Indent each line of the examples. */
+    const char *line = usage->example;
+    while (*line != '\0') {
+        const char *end = strchr(line, '\n');
+        size_t len = end != NULL ? (size_t)(end - line) : strlen(line);
+        fprintf(out, "  %.*s\n", (int)len, line);
+        line += len + (end != NULL);
+    }
+}
+
+int cli_single_path(const char *sub, const char **path, const char *value)
+{
+    if (*path != NULL) {
+        cli_error(sub, "one file at a time (got '%s' and '%s')", *path, value);
+        return 0;
+    }
+    *path = value;
+    return 1;
+}
+
+int cli_bad_value(const cli_parser *p, const char *value, const char *why)
+{
+    cli_error(p->usage->sub, "--%s '%s': %s", p->current, value, why);
+    return ILF_EXIT_USAGE;
+}
+
+/* -------------------------------------------------------------- numbers */
+
+int cli_parse_double(const char *text, double *out, char *why, size_t why_size)
+{
+    /* strtod skips leading blanks and accepts "inf" and "nan"; neither is a valid value here. */
+    if (text[0] == '\0' || isspace((unsigned char)text[0])) {
+        snprintf(why, why_size, "expected a number");
+        return 0;
+    }
+    char *end;
+    double x = strtod(text, &end);
+    if (end == text || *end != '\0') {
+        snprintf(why, why_size, "'%s' is not a number", text);
+        return 0;
+    }
+    /* Overflow gives infinity; underflow to a tiny or zero value is harmless and accepted. */
+    if (!isfinite(x)) {
+        snprintf(why, why_size, "'%s' is not a finite number", text);
+        return 0;
+    }
+    *out = x;
+    return 1;
+}
+
+int cli_parse_doubles(const char *text, double *out, size_t count, char *why, size_t why_size)
+{
+    double values[16];
+    size_t found = 0;
+    const char *field = text;
+    if (count > sizeof values / sizeof values[0]) {
+        snprintf(why, why_size, "too many values requested");
+        return 0;
+    }
+    for (;;) {
+        const char *comma = strchr(field, ',');
+        size_t len = comma != NULL ? (size_t)(comma - field) : strlen(field);
+        char buf[128];
+        if (found == count) {
+            found++; /* count the surplus fields for the message */
+        } else {
+            if (len >= sizeof buf) {
+                snprintf(why, why_size, "value %zu is too long", found + 1);
+                return 0;
+            }
+            memcpy(buf, field, len);
+            buf[len] = '\0';
+            if (!cli_parse_double(buf, &values[found], why, why_size))
+                return 0;
+            found++;
+        }
+        if (comma == NULL)
+            break;
+        field = comma + 1;
+    }
+    if (found != count) {
+        snprintf(why, why_size, "expected %zu comma-separated numbers, got %s%zu", count,
+                 found > count ? "more than " : "", found > count ? count : found);
+        return 0;
+    }
+    memcpy(out, values, count * sizeof *out);
+    return 1;
+}
+
+int cli_parse_u32(const char *text, uint32_t lo, uint32_t hi, uint32_t *out, char *why, size_t why_size)
+{
+    /* Digits only: strtoull would accept "-1" (as a huge number), blanks and "+". */
+    size_t len = strlen(text);
+    int digits_only = len > 0;
+    for (size_t k = 0; k < len; k++)
+        digits_only = digits_only && isdigit((unsigned char)text[k]);
+    if (!digits_only) {
+        snprintf(why, why_size, "expected a whole number from %u to %u", (unsigned)lo, (unsigned)hi);
+        return 0;
+    }
+    errno = 0;
+    unsigned long long x = strtoull(text, NULL, 10);
+    if (errno == ERANGE || x < lo || x > hi) {
+        snprintf(why, why_size, "must be from %u to %u", (unsigned)lo, (unsigned)hi);
+        return 0;
+    }
+    *out = (uint32_t)x;
+    return 1;
+}
+
+int cli_parse_u32_pair(const char *text, char sep, uint32_t lo, uint32_t hi, uint32_t out[2],
+                       char *why, size_t why_size)
+{
+    const char *mid = strchr(text, sep);
+    char first[32];
+    size_t len = mid != NULL ? (size_t)(mid - text) : 0;
+    if (mid == NULL || len >= sizeof first || strchr(mid + 1, sep) != NULL) {
+        snprintf(why, why_size, "expected two whole numbers written A%cB", sep);
+        return 0;
+    }
+    memcpy(first, text, len);
+    first[len] = '\0';
+    uint32_t a, b;
+    if (!cli_parse_u32(first, lo, hi, &a, why, why_size) || !cli_parse_u32(mid + 1, lo, hi, &b, why, why_size))
+        return 0;
+    out[0] = a;
+    out[1] = b;
+    return 1;
+}
+
+int cli_value_double(const cli_parser *p, const char *text, double *out)
+{
+    char why[160];
+    return cli_parse_double(text, out, why, sizeof why) || (cli_bad_value(p, text, why), 0);
+}
+
+int cli_value_doubles(const cli_parser *p, const char *text, double *out, size_t count)
+{
+    char why[160];
+    return cli_parse_doubles(text, out, count, why, sizeof why) || (cli_bad_value(p, text, why), 0);
+}
+
+int cli_value_u32(const cli_parser *p, const char *text, uint32_t lo, uint32_t hi, uint32_t *out)
+{
+    char why[160];
+    return cli_parse_u32(text, lo, hi, out, why, sizeof why) || (cli_bad_value(p, text, why), 0);
+}
+
+int cli_value_u32_pair(const cli_parser *p, const char *text, char sep, uint32_t lo, uint32_t hi,
+                       uint32_t out[2])
+{
+    char why[160];
+    return cli_parse_u32_pair(text, sep, lo, hi, out, why, sizeof why) || (cli_bad_value(p, text, why), 0);
+}
+
+/* ---------------------------------------------------------------- slabs */
+
+int cli_select_slab(const char *sub, const char *path, const lfio_reader *r, const char *which,
+                    size_t *index)
+{
+    size_t count = lfio_reader_slab_count(r);
+    if (which == NULL) {
+        *index = 0;
+        return 1;
+    }
+    uint32_t k;
+    char why[160];
+    if (cli_parse_u32(which, 0, UINT32_MAX, &k, why, sizeof why)) {
+        if (k < count) {
+            *index = k;
+            return 1;
+        }
+        cli_error(sub, "%s: no slab %u (the file has %zu)", path, (unsigned)k, count);
+        return 0;
+    }
+    for (size_t s = 0; s < count; s++) {
+        if (strcmp(lfio_reader_slab_desc(r, s)->name, which) == 0) {
+            *index = s;
+            return 1;
+        }
+    }
+    cli_error(sub, "%s: no slab named '%s'", path, which);
+    return 0;
+}
+
+int cli_output_folder_exists(const char *sub, const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    char folder[4096];
+    if (slash == NULL)
+        return 1; /* the current folder */
+    size_t len = slash == path ? 1 : (size_t)(slash - path); /* "/x" lives in "/" */
+    if (len >= sizeof folder)
+        return 1; /* leave such paths to the writer, which reports precisely */
+    memcpy(folder, path, len);
+    folder[len] = '\0';
+    struct stat st;
+    if (stat(folder, &st) == 0 && S_ISDIR(st.st_mode))
+        return 1;
+    cli_error(sub, "cannot write %s: folder '%s' does not exist", path, folder);
+    return 0;
+}
+
+long long cli_file_size(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 ? (long long)st.st_size : -1;
+}
+
+const char *cli_format_bytes(long long bytes, char *buf, size_t size)
+{
+    static const char *const units[] = {"bytes", "KiB", "MiB", "GiB", "TiB"};
+    double x = (double)bytes;
+    size_t u = 0;
+    while (x >= 1024.0 && u + 1 < sizeof units / sizeof units[0]) {
+        x /= 1024.0;
+        u++;
+    }
+    if (u == 0)
+        snprintf(buf, size, "%lld bytes", bytes);
+    else
+        snprintf(buf, size, "%.1f %s", x, units[u]);
+    return buf;
+}
+
+unsigned cli_default_threads(void)
+{
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    /* Beyond a few dozen threads the serial lfio writes dominate anyway. */
+    return n < 1 ? 1u : n > 64 ? 64u : (unsigned)n;
+}
+
+/* ------------------------------------------------------------- progress */
+
+static int64_t monotonic_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
+}
+
+static void progress_draw(const cli_progress *p, uint64_t done)
+{
+    enum { WIDTH = 40 };
+    double fraction = p->total > 0 ? (double)done / (double)p->total : 1.0;
+    if (fraction > 1.0)
+        fraction = 1.0;
+    int filled = (int)(fraction * WIDTH);
+    char bar[WIDTH + 1];
+    memset(bar, '#', (size_t)filled);
+    memset(bar + filled, '.', (size_t)(WIDTH - filled));
+    bar[WIDTH] = '\0';
+    /* \r redraws in place; \033[K clears what a longer earlier line left behind. */
+    fprintf(stderr, "\r%s [%s] %5.1f%%\033[K", p->label, bar, 100.0 * fraction);
+    fflush(stderr);
+}
+
+void cli_progress_start(cli_progress *p, const char *label, uint64_t total)
+{
+    p->label = label;
+    p->total = total;
+    atomic_init(&p->done, 0);
+    atomic_flag_clear(&p->drawing);
+    atomic_init(&p->last_draw_ms, 0);
+    p->enabled = isatty(STDERR_FILENO);
+    if (p->enabled)
+        progress_draw(p, 0);
+}
+
+void cli_progress_add(cli_progress *p, uint64_t count)
+{
+    uint64_t done = atomic_fetch_add(&p->done, count) + count;
+    if (!p->enabled)
+        return;
+    int64_t now = monotonic_ms();
+    if (now - atomic_load(&p->last_draw_ms) < 100)
+        return;
+    /* One thread draws; the others carry on instead of waiting for the terminal. */
+    if (atomic_flag_test_and_set(&p->drawing))
+        return;
+    atomic_store(&p->last_draw_ms, now);
+    progress_draw(p, done);
+    atomic_flag_clear(&p->drawing);
+}
+
+void cli_progress_finish(cli_progress *p)
+{
+    if (!p->enabled)
+        return;
+    progress_draw(p, atomic_load(&p->done));
+    fputc('\n', stderr);
+}

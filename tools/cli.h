@@ -1,0 +1,195 @@
+/*
+ * cli.h - what every `ilf` subcommand shares: exit codes, error reporting,
+ * a table-driven option parser that also prints --help, strict parsers for
+ * numbers and number lists, slab selection, and a progress bar.
+ *
+ * Invariants:
+ *   - Errors go to stderr as "ilf SUB: <what was wrong>"; results go to stdout.
+ *   - Every parser either accepts the whole text or reports why it did not;
+ *     it never accepts a prefix ("3x" is not 3) or a non-finite number.
+ *   - The progress bar draws only when stderr is a terminal, so scripts and
+ *     tests see exactly the same stderr with or without it.
+ */
+#ifndef ILF_CLI_H
+#define ILF_CLI_H
+
+#include <stdatomic.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "lfio/lightfield.h"
+
+/* Set by the build (CMake's PROJECT_VERSION); the fallback keeps other builds compiling. */
+#ifndef ILFKIT_VERSION
+#define ILFKIT_VERSION "unknown"
+#endif
+
+/* Strict C17 does not provide M_PI. */
+#define ILF_PI 3.14159265358979323846
+
+/** Exit codes of `ilf`, shared by every subcommand. */
+enum ilf_exit {
+    ILF_EXIT_OK = 0,     /**< success */
+    ILF_EXIT_FAILED = 1, /**< a failure while running, such as an output that cannot be written */
+    ILF_EXIT_USAGE = 2   /**< bad usage or bad input: unknown option, invalid value, unreadable file */
+};
+
+/** Prints "ilf SUB: <message>" and a newline to stderr. */
+void cli_error(const char *sub, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/** Copies text into buf (size bytes) as one line, newlines turned to spaces. @return buf. */
+const char *cli_one_line(const char *text, char *buf, size_t size);
+
+/** Whether a file the failing call worked on was an input or an output. */
+typedef enum cli_role { CLI_INPUT, CLI_OUTPUT } cli_role;
+
+/**
+ * Reports a failed lfio call on path with lfio_errmsg() and maps its status
+ * to an exit code: every problem with an input is bad input (2); a failure to
+ * produce an output, or running out of memory, is a failure while running (1).
+ */
+int cli_lfio_failure(const char *sub, lfio_status status, cli_role role, const char *path);
+
+/* ------------------------------------------------------------- options */
+
+/** One accepted option; a table of these drives parsing and --help. */
+typedef struct cli_option {
+    const char *name;       /**< long name without "--", e.g. "grid" */
+    char short_name;        /**< single-letter alias, or 0 */
+    const char *value_name; /**< placeholder for the value ("NUxNV"); NULL for a flag */
+    const char *help;       /**< one line of description, including the default */
+} cli_option;
+
+/** A subcommand's help text around its option table. */
+typedef struct cli_usage {
+    const char *sub;      /**< subcommand name */
+    const char *synopsis; /**< the part after "ilf SUB " on the usage line */
+    const char *summary;  /**< one paragraph on what it does */
+    const char *example;  /**< one or more example command lines, newline separated */
+} cli_usage;
+
+/** Walks a subcommand's arguments; see cli_next(). */
+typedef struct cli_parser {
+    const cli_usage *usage;
+    const cli_option *options;
+    size_t option_count;
+    int argc;
+    char **argv;
+    int next;             /* index of the next argument to look at */
+    int options_ended;    /* set after "--": everything left is positional */
+    const char *current;  /* long name of the option last returned, for messages */
+} cli_parser;
+
+/** Results of cli_next() besides an option index. */
+enum {
+    CLI_POSITIONAL = -1, /**< *value is a positional argument */
+    CLI_DONE = -2,       /**< no arguments left */
+    CLI_HELP = -3,       /**< --help or -h was given; help has been printed to stdout */
+    CLI_BAD = -4         /**< an unknown option or a missing value; already reported */
+};
+
+/** Starts parsing argv[1..argc-1] (argv[0] is the subcommand's name). */
+void cli_parser_init(cli_parser *p, const cli_usage *usage, const cli_option *options,
+                     size_t option_count, int argc, char **argv);
+
+/**
+ * Returns the index in the option table of the next option, with its value
+ * in *value (from "--name VALUE", "--name=VALUE" or "-x VALUE"), or one of
+ * the CLI_ codes above.
+ */
+int cli_next(cli_parser *p, const char **value);
+
+/** Prints the usage line, summary, option table and examples. */
+void cli_print_help(FILE *out, const cli_usage *usage, const cli_option *options, size_t option_count);
+
+/**
+ * Stores the single FILE argument of a subcommand in *path.
+ * @return 1; 0 after reporting when a file was already given.
+ */
+int cli_single_path(const char *sub, const char **path, const char *value);
+
+/** Reports "ilf SUB: --OPT 'VALUE': <why>" for the option last returned. @return ILF_EXIT_USAGE. */
+int cli_bad_value(const cli_parser *p, const char *value, const char *why);
+
+/* ------------------------------------------------------------- numbers */
+
+/*
+ * Low-level parsers: 1 on success; 0 with a reason in why (why_size bytes)
+ * on failure, outputs untouched.
+ */
+
+/** A finite decimal or scientific number, the whole text. */
+int cli_parse_double(const char *text, double *out, char *why, size_t why_size);
+
+/** Exactly count finite numbers separated by commas ("x,y,z"). */
+int cli_parse_doubles(const char *text, double *out, size_t count, char *why, size_t why_size);
+
+/** An unsigned decimal integer in [lo, hi], digits only. */
+int cli_parse_u32(const char *text, uint32_t lo, uint32_t hi, uint32_t *out, char *why, size_t why_size);
+
+/** Two unsigned integers in [lo, hi] separated by sep ("32x32", "3,4"). */
+int cli_parse_u32_pair(const char *text, char sep, uint32_t lo, uint32_t hi, uint32_t out[2],
+                       char *why, size_t why_size);
+
+/*
+ * Option-value parsers: the same, but they report a failure themselves
+ * (through cli_bad_value) and return 0.
+ */
+int cli_value_double(const cli_parser *p, const char *text, double *out);
+int cli_value_doubles(const cli_parser *p, const char *text, double *out, size_t count);
+int cli_value_u32(const cli_parser *p, const char *text, uint32_t lo, uint32_t hi, uint32_t *out);
+int cli_value_u32_pair(const cli_parser *p, const char *text, char sep, uint32_t lo, uint32_t hi,
+                       uint32_t out[2]);
+
+/* --------------------------------------------------------------- slabs */
+
+/**
+ * Resolves --slab NAME|INDEX against an open file: a string of digits is an
+ * index, anything else a name. NULL selects slab 0.
+ * @return 1 and *index; 0 after reporting that no such slab exists.
+ */
+int cli_select_slab(const char *sub, const char *path, const lfio_reader *r, const char *which,
+                    size_t *index);
+
+/**
+ * Checks that the folder an output goes into exists, so a long computation
+ * does not end in a failed write. Reports the problem when it does not.
+ * @return 1 if the folder exists, else 0.
+ */
+int cli_output_folder_exists(const char *sub, const char *path);
+
+/** Size of a file in bytes, or -1 if it cannot be examined. */
+long long cli_file_size(const char *path);
+
+/** Formats a byte count for people ("12.6 MiB") into buf. @return buf. */
+const char *cli_format_bytes(long long bytes, char *buf, size_t size);
+
+/** Number of processors to use by default (at least 1). */
+unsigned cli_default_threads(void);
+
+/* ------------------------------------------------------------ progress */
+
+/**
+ * A one-line progress bar on stderr. cli_progress_add() may be called from
+ * any thread; it redraws at most about ten times a second.
+ */
+typedef struct cli_progress {
+    const char *label;
+    uint64_t total;
+    atomic_uint_fast64_t done;
+    atomic_flag drawing;       /* held by the thread that is redrawing */
+    atomic_int_fast64_t last_draw_ms;
+    int enabled;               /* stderr is a terminal */
+} cli_progress;
+
+void cli_progress_start(cli_progress *p, const char *label, uint64_t total);
+void cli_progress_add(cli_progress *p, uint64_t count);
+/** Draws the final state and ends the line (or does nothing when disabled). */
+void cli_progress_finish(cli_progress *p);
+
+#endif /* ILF_CLI_H */

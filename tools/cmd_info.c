@@ -1,0 +1,361 @@
+/*
+ * cmd_info.c - `ilf info FILE [--json] [--slab NAME|INDEX] [--irradiance I,J]`:
+ * describes a light field file: its format version, creator and size, and for
+ * each slab its geometry, sampling, units, radiance statistics, zero-radiance
+ * mask occupancy and, on request, the irradiance at one position centre.
+ *
+ * Invariants: slabs are read one at a time (the memory needed is one slab,
+ * not the file); the same slab_report feeds the text and the JSON output, so
+ * they cannot disagree; the JSON schema is the one documented in docs/cli.md.
+ */
+#include <cjson/cJSON.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "lfio/lightfield.h"
+#include "lfio/partition.h"
+
+#define INFO_MAX_MASK_LEVELS 32
+
+typedef struct info_options {
+    const char *path;
+    const char *slab;     /* NULL: every slab */
+    int json;
+    int want_irradiance;
+    uint32_t position[2]; /* (i, j) for --irradiance */
+} info_options;
+
+/* What info reports about one slab. */
+typedef struct slab_report {
+    lfio_slab_desc desc;
+    uint64_t directions;
+    double min[3], max[3], mean[3];
+    double zero_fraction; /* samples whose r, g and b are all 0 */
+    uint32_t mask_levels;
+    uint32_t mask_n[INFO_MAX_MASK_LEVELS];
+    uint64_t mask_set[INFO_MAX_MASK_LEVELS];
+    int has_irradiance;
+    double irradiance[3];
+} slab_report;
+
+enum info_option_id { OPT_JSON, OPT_SLAB, OPT_IRRADIANCE };
+
+static const cli_option info_options_table[] = {
+    {"json", 0, NULL, "print JSON (schema in docs/cli.md) instead of text"},
+    {"slab", 0, "NAME|INDEX", "describe only this slab (default: every slab)"},
+    {"irradiance", 0, "I,J", "also report the irradiance at the centre of position (I,J)"},
+};
+
+static const cli_usage info_usage = {
+    "info",
+    "FILE [--json] [--slab NAME|INDEX] [--irradiance I,J]",
+    "Describes a light field file: format version, creator, file size and, per slab,\n"
+    "name, origin, u, v, grid, partition level n, directions, units, mask threshold,\n"
+    "radiance min/max/mean per channel over all samples, the fraction of zero samples\n"
+    "and the mask's set/total bits per level. --irradiance I,J adds the irradiance at\n"
+    "s=(I+0.5)/nu, t=(J+0.5)/nv on a surface facing -e3 (lfio_slab_irradiance).",
+    "ilf info scene.h5\n"
+    "ilf info scene.h5 --json --irradiance 16,16 | python3 -m json.tool",
+};
+
+/* ------------------------------------------------------------ gathering */
+
+static void gather_radiance_stats(const lfio_slab *slab, slab_report *rep)
+{
+    const float *rad = lfio_slab_radiance(slab);
+    uint64_t samples = lfio_slab_dir_count(slab) * rep->desc.nu * rep->desc.nv;
+    double sum[3] = {0, 0, 0};
+    uint64_t zeros = 0;
+    for (int c = 0; c < 3; c++) {
+        rep->min[c] = samples > 0 ? rad[c] : 0.0;
+        rep->max[c] = rep->min[c];
+    }
+    for (uint64_t k = 0; k < samples; k++) {
+        const float *rgb = rad + 3 * k;
+        for (int c = 0; c < 3; c++) {
+            rep->min[c] = rgb[c] < rep->min[c] ? rgb[c] : rep->min[c];
+            rep->max[c] = rgb[c] > rep->max[c] ? rgb[c] : rep->max[c];
+            sum[c] += rgb[c];
+        }
+        zeros += rgb[0] == 0.0f && rgb[1] == 0.0f && rgb[2] == 0.0f;
+    }
+    for (int c = 0; c < 3; c++)
+        rep->mean[c] = samples > 0 ? sum[c] / (double)samples : 0.0;
+    rep->zero_fraction = samples > 0 ? (double)zeros / (double)samples : 0.0;
+}
+
+static void gather_mask(const lfio_slab *slab, slab_report *rep)
+{
+    uint32_t levels = lfio_slab_mask_levels(slab);
+    rep->mask_levels = levels < INFO_MAX_MASK_LEVELS ? levels : INFO_MAX_MASK_LEVELS;
+    for (uint32_t k = 0; k < rep->mask_levels; k++) {
+        rep->mask_n[k] = lfio_slab_mask_n(slab, k);
+        rep->mask_set[k] = lfio_slab_mask_count(slab, rep->mask_n[k]);
+    }
+}
+
+/* Reads slab k whole and fills its report. @return an exit code. */
+static int gather_slab(lfio_reader *r, size_t k, const info_options *o, slab_report *rep)
+{
+    lfio_slab *slab = NULL;
+    lfio_status st = lfio_reader_read_slab(r, k, &slab);
+    if (st != LFIO_OK)
+        return cli_lfio_failure("info", st, CLI_INPUT, o->path);
+    memset(rep, 0, sizeof *rep);
+    rep->desc = *lfio_slab_get_desc(slab);
+    rep->directions = lfio_slab_dir_count(slab);
+    gather_radiance_stats(slab, rep);
+    gather_mask(slab, rep);
+    int code = ILF_EXIT_OK;
+    if (o->want_irradiance) {
+        uint32_t i = o->position[0], j = o->position[1];
+        if (i >= rep->desc.nu || j >= rep->desc.nv) {
+            cli_error("info", "%s: slab '%s' has %ux%u positions; --irradiance %u,%u is outside", o->path,
+                      rep->desc.name, (unsigned)rep->desc.nu, (unsigned)rep->desc.nv, (unsigned)i, (unsigned)j);
+            code = ILF_EXIT_USAGE;
+        } else {
+            double s = (i + 0.5) / rep->desc.nu, t = (j + 0.5) / rep->desc.nv;
+            st = lfio_slab_irradiance(slab, s, t, rep->irradiance);
+            rep->has_irradiance = st == LFIO_OK;
+            if (st != LFIO_OK)
+                code = cli_lfio_failure("info", st, CLI_INPUT, o->path);
+        }
+    }
+    lfio_slab_destroy(slab);
+    return code;
+}
+
+static const char *units_name(lfio_units units)
+{
+    return units == LFIO_UNITS_RELATIVE ? "relative" : "W sr^-1 m^-2";
+}
+
+/* ------------------------------------------------------------ text */
+
+static void print_vec3(const char *label, const double v[3])
+{
+    printf("  %-16s %.9g %.9g %.9g\n", label, v[0], v[1], v[2]);
+}
+
+static void print_file_text(const char *path, lfio_reader *r, long long bytes)
+{
+    char size[32];
+    printf("file:             %s\n", path);
+    printf("format version:   %d\n", lfio_reader_format_version(r));
+    printf("creator:          %s\n", lfio_reader_creator(r));
+    printf("file size:        %s (%lld bytes)\n", cli_format_bytes(bytes, size, sizeof size), bytes);
+    printf("slabs:            %zu\n", lfio_reader_slab_count(r));
+}
+
+static void print_slab_text(size_t k, const slab_report *rep, const info_options *o)
+{
+    const lfio_slab_desc *d = &rep->desc;
+    printf("\nslab %zu: %s\n", k, d->name);
+    print_vec3("origin:", d->origin);
+    print_vec3("u:", d->u);
+    print_vec3("v:", d->v);
+    printf("  %-16s %ux%u positions\n", "grid:", (unsigned)d->nu, (unsigned)d->nv);
+    printf("  %-16s %u (%llu directions)\n", "n:", (unsigned)d->n, (unsigned long long)rep->directions);
+    printf("  %-16s %s\n", "units:", units_name(d->units));
+    printf("  %-16s %.9g\n", "mask threshold:", (double)d->mask_threshold);
+    print_vec3("radiance min:", rep->min);
+    print_vec3("radiance max:", rep->max);
+    print_vec3("radiance mean:", rep->mean);
+    printf("  %-16s %.4f%%\n", "zero samples:", 100.0 * rep->zero_fraction);
+    for (uint32_t l = 0; l < rep->mask_levels; l++)
+        printf("  %-16s n=%u: %llu/%llu set\n", l == 0 ? "mask:" : "", (unsigned)rep->mask_n[l],
+               (unsigned long long)rep->mask_set[l], (unsigned long long)lfio_part_hemi_count(rep->mask_n[l]));
+    if (rep->has_irradiance) {
+        char label[64];
+        snprintf(label, sizeof label, "irradiance (%u,%u):", (unsigned)o->position[0], (unsigned)o->position[1]);
+        printf("  %s %.9g %.9g %.9g\n", label, rep->irradiance[0], rep->irradiance[1], rep->irradiance[2]);
+    }
+}
+
+/* ------------------------------------------------------------ JSON */
+
+static int add_vec(cJSON *obj, const char *key, const double *v, int count)
+{
+    cJSON *arr = cJSON_CreateDoubleArray(v, count);
+    return arr != NULL && cJSON_AddItemToObject(obj, key, arr);
+}
+
+static cJSON *mask_json(const slab_report *rep)
+{
+    cJSON *mask = cJSON_CreateArray();
+    for (uint32_t l = 0; mask != NULL && l < rep->mask_levels; l++) {
+        cJSON *level = cJSON_CreateObject();
+        if (level == NULL || !cJSON_AddItemToArray(mask, level)) {
+            cJSON_Delete(level);
+            cJSON_Delete(mask);
+            return NULL;
+        }
+        cJSON_AddNumberToObject(level, "n", rep->mask_n[l]);
+        cJSON_AddNumberToObject(level, "set", (double)rep->mask_set[l]);
+        cJSON_AddNumberToObject(level, "total", (double)lfio_part_hemi_count(rep->mask_n[l]));
+    }
+    return mask;
+}
+
+/* Builds one entry of "slabs". @return NULL when memory runs out. */
+static cJSON *slab_json(const slab_report *rep, const info_options *o)
+{
+    const lfio_slab_desc *d = &rep->desc;
+    cJSON *s = cJSON_CreateObject();
+    if (s == NULL)
+        return NULL;
+    cJSON_AddStringToObject(s, "name", d->name);
+    int ok = add_vec(s, "origin", d->origin, 3) && add_vec(s, "u", d->u, 3) && add_vec(s, "v", d->v, 3);
+    cJSON_AddNumberToObject(s, "nu", d->nu);
+    cJSON_AddNumberToObject(s, "nv", d->nv);
+    cJSON_AddNumberToObject(s, "n", d->n);
+    cJSON_AddNumberToObject(s, "directions", (double)rep->directions);
+    cJSON_AddStringToObject(s, "units", units_name(d->units));
+    cJSON_AddNumberToObject(s, "mask_threshold", d->mask_threshold);
+    ok = ok && add_vec(s, "radiance_min", rep->min, 3) && add_vec(s, "radiance_max", rep->max, 3) &&
+         add_vec(s, "radiance_mean", rep->mean, 3);
+    cJSON_AddNumberToObject(s, "zero_fraction", rep->zero_fraction);
+    cJSON *mask = mask_json(rep);
+    ok = ok && mask != NULL && cJSON_AddItemToObject(s, "mask", mask);
+    if (rep->has_irradiance) {
+        double position[2] = {o->position[0], o->position[1]};
+        ok = ok && add_vec(s, "irradiance", rep->irradiance, 3) && add_vec(s, "position", position, 2);
+    }
+    if (!ok) {
+        cJSON_Delete(s);
+        return NULL;
+    }
+    return s;
+}
+
+static cJSON *file_json(const char *path, lfio_reader *r, long long bytes)
+{
+    cJSON *root = cJSON_CreateObject();
+    if (root == NULL)
+        return NULL;
+    cJSON_AddStringToObject(root, "file", path);
+    cJSON_AddNumberToObject(root, "format_version", lfio_reader_format_version(r));
+    cJSON_AddStringToObject(root, "creator", lfio_reader_creator(r));
+    cJSON_AddNumberToObject(root, "file_bytes", (double)bytes);
+    if (cJSON_AddArrayToObject(root, "slabs") == NULL) {
+        cJSON_Delete(root);
+        return NULL;
+    }
+    return root;
+}
+
+static int print_json(cJSON *root)
+{
+    char *text = cJSON_Print(root);
+    if (text == NULL) {
+        cli_error("info", "out of memory while formatting JSON");
+        return ILF_EXIT_FAILED;
+    }
+    puts(text);
+    cJSON_free(text);
+    return ILF_EXIT_OK;
+}
+
+/* ------------------------------------------------------------ main */
+
+static int parse_arguments(info_options *o, int argc, char **argv)
+{
+    cli_parser p;
+    cli_parser_init(&p, &info_usage, info_options_table, sizeof info_options_table / sizeof info_options_table[0],
+                    argc, argv);
+    const char *value;
+    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
+        if (opt == CLI_HELP)
+            return ILF_EXIT_OK;
+        if (opt == CLI_BAD)
+            return ILF_EXIT_USAGE;
+        int ok = 1;
+        if (opt == CLI_POSITIONAL)
+            ok = cli_single_path("info", &o->path, value);
+        else if (opt == OPT_JSON)
+            o->json = 1;
+        else if (opt == OPT_SLAB)
+            o->slab = value;
+        else
+            ok = o->want_irradiance = cli_value_u32_pair(&p, value, ',', 0, UINT32_MAX, o->position);
+        if (!ok)
+            return ILF_EXIT_USAGE;
+    }
+    if (o->path == NULL) {
+        cli_error("info", "no file given (see 'ilf info --help')");
+        return ILF_EXIT_USAGE;
+    }
+    return -1;
+}
+
+/* Gathers reports on slabs [first, first + count), one slab in memory at a time. @return an exit code. */
+static int gather_slabs(lfio_reader *r, size_t first, size_t count, const info_options *o, slab_report *reps)
+{
+    int code = ILF_EXIT_OK;
+    for (size_t k = 0; k < count && code == ILF_EXIT_OK; k++)
+        code = gather_slab(r, first + k, o, &reps[k]);
+    return code;
+}
+
+static int print_text(lfio_reader *r, size_t first, size_t count, const info_options *o, const slab_report *reps)
+{
+    print_file_text(o->path, r, cli_file_size(o->path));
+    for (size_t k = 0; k < count; k++)
+        print_slab_text(first + k, &reps[k], o);
+    return ILF_EXIT_OK;
+}
+
+static int print_json_report(lfio_reader *r, size_t count, const info_options *o, const slab_report *reps)
+{
+    cJSON *root = file_json(o->path, r, cli_file_size(o->path));
+    cJSON *slabs = cJSON_GetObjectItem(root, "slabs");
+    int ok = root != NULL;
+    for (size_t k = 0; ok && k < count; k++) {
+        cJSON *s = slab_json(&reps[k], o);
+        ok = s != NULL && cJSON_AddItemToArray(slabs, s);
+        if (!ok)
+            cJSON_Delete(s);
+    }
+    int code = ok ? print_json(root) : (cli_error("info", "out of memory while building JSON"), ILF_EXIT_FAILED);
+    cJSON_Delete(root);
+    return code;
+}
+
+/* Gathers everything first, so that a damaged slab leaves no half-printed report. */
+static int describe_file(lfio_reader *r, const info_options *o)
+{
+    size_t first = 0, count = lfio_reader_slab_count(r);
+    if (o->slab != NULL) {
+        if (!cli_select_slab("info", o->path, r, o->slab, &first))
+            return ILF_EXIT_USAGE;
+        count = 1;
+    }
+    slab_report *reps = calloc(count > 0 ? count : 1, sizeof *reps);
+    if (reps == NULL) {
+        cli_error("info", "out of memory");
+        return ILF_EXIT_FAILED;
+    }
+    int code = gather_slabs(r, first, count, o, reps);
+    if (code == ILF_EXIT_OK)
+        code = o->json ? print_json_report(r, count, o, reps) : print_text(r, first, count, o, reps);
+    free(reps);
+    return code;
+}
+
+int ilf_cmd_info(int argc, char **argv)
+{
+    info_options o = {0};
+    int code = parse_arguments(&o, argc, argv);
+    if (code >= 0)
+        return code;
+    lfio_reader *r = NULL;
+    lfio_status st = lfio_reader_open(o.path, &r);
+    if (st != LFIO_OK)
+        return cli_lfio_failure("info", st, CLI_INPUT, o.path);
+    code = describe_file(r, &o);
+    lfio_reader_close(r);
+    return code;
+}

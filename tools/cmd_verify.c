@@ -1,0 +1,93 @@
+/*
+ * cmd_verify.c - `ilf verify FILE...`: checks each file completely with
+ * lfio_verify() and prints one line per file, "FILE: ok" or
+ * "FILE: <first problem> (N problems)".
+ *
+ * Invariants: every file is checked even after a failure, so one run reports
+ * on all of them; the exit code is 0 only when every file is valid, and 2
+ * (bad input) otherwise. Results go to stdout, usage errors to stderr.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "lfio/lightfield.h"
+
+static const cli_option verify_options[] = {
+    {"quiet", 'q', NULL, "print only the files that fail"},
+};
+
+static const cli_usage verify_usage = {
+    "verify",
+    "[--quiet] FILE...",
+    "Checks each light field file completely: format, attributes and shapes, every\n"
+    "checksum (by reading all data), the stored directions, solid angles and mask.\n"
+    "Prints \"FILE: ok\" or \"FILE: <first problem> (N problems)\" for each file and\n"
+    "exits 0 when all are valid, 2 otherwise.",
+    "ilf verify scene.h5 backup/*.h5",
+};
+
+/* Verifies one file and prints its line. @return 1 if the file is valid. */
+static int verify_one(const char *path, int quiet)
+{
+    lfio_verify_report report = {0};
+    lfio_status status = lfio_verify(path, &report);
+    if (status == LFIO_OK) {
+        if (!quiet)
+            printf("%s: ok\n", path);
+        return 1;
+    }
+    char line[1024];
+    /* A file that cannot be opened at all may leave the report empty. HDF5's
+     * messages can span lines; the output keeps one line per file. */
+    const char *problem = cli_one_line(report.first[0] != '\0' ? report.first : lfio_errmsg(), line, sizeof line);
+    if (problem[0] == '\0')
+        problem = lfio_status_name(status);
+    /* The line starts with the path already; do not repeat it when lfio's message does. */
+    size_t len = strlen(path);
+    if (strncmp(problem, path, len) == 0 && strncmp(problem + len, ": ", 2) == 0)
+        problem += len + 2;
+    unsigned problems = report.problems > 0 ? (unsigned)report.problems : 1u;
+    printf("%s: %s (%u problem%s)\n", path, problem, problems, problems == 1 ? "" : "s");
+    return 0;
+}
+
+int ilf_cmd_verify(int argc, char **argv)
+{
+    cli_parser parser;
+    cli_parser_init(&parser, &verify_usage, verify_options, sizeof verify_options / sizeof verify_options[0],
+                    argc, argv);
+    /* Options may follow file names, so gather the names first. */
+    const char **files = calloc((size_t)argc, sizeof *files);
+    if (files == NULL) {
+        cli_error("verify", "out of memory");
+        return ILF_EXIT_FAILED;
+    }
+    size_t file_count = 0;
+    int quiet = 0, code = -1;
+    const char *value;
+    for (int opt; code < 0 && (opt = cli_next(&parser, &value)) != CLI_DONE;) {
+        if (opt == CLI_POSITIONAL)
+            files[file_count++] = value;
+        else if (opt == CLI_HELP)
+            code = ILF_EXIT_OK;
+        else if (opt == CLI_BAD)
+            code = ILF_EXIT_USAGE;
+        else
+            quiet = 1;
+    }
+    if (code < 0 && file_count == 0) {
+        cli_error("verify", "no file given (see 'ilf verify --help')");
+        code = ILF_EXIT_USAGE;
+    }
+    if (code < 0) {
+        int all_valid = 1;
+        for (size_t k = 0; k < file_count; k++)
+            all_valid &= verify_one(files[k], quiet);
+        code = all_valid ? ILF_EXIT_OK : ILF_EXIT_USAGE;
+    }
+    free(files);
+    return code;
+}
