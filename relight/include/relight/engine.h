@@ -1,0 +1,104 @@
+/*
+ * engine.h - running the relighting engine on a loaded scene: radiance maps
+ * by passes (direct, then `bounces` diffuse passes), irradiance at points,
+ * and the camera's view. Conventions as in relight/relight.h.
+ *
+ * This header is valid C99 and C++.
+ */
+#ifndef RELIGHT_ENGINE_H
+#define RELIGHT_ENGINE_H
+
+#include "relight/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** What one pass did. Times in seconds; counts summed over threads. */
+typedef struct rl_pass_stats {
+    double wall_seconds;          /**< elapsed time of the pass */
+    double cpu_seconds;           /**< process CPU time of the pass, all threads */
+    uint64_t samples;             /**< sample rays generated */
+    uint64_t rays_cast;           /**< rays handed to the ray tracer */
+    uint64_t rays_kept;           /**< rays that reached their emitter unoccluded */
+    uint64_t solid_angles_considered; /**< (emitter, receiver, solid angle) leaves considered */
+    uint64_t solid_angles_culled; /**< of those, culled without a ray */
+    uint64_t pairs;               /**< (emitter, receiver tile) pairs that can exchange light */
+    uint64_t pairs_descended;     /**< pairs sampled at a finer level than partition_n */
+    uint32_t emitters;            /**< emitters in this pass */
+} rl_pass_stats;
+
+/** Progress callback: done in [0, 1] over the whole run. Called from the calling thread only. */
+typedef void (*rl_progress_fn)(void *user, double done);
+
+/** A solved scene: radiance maps of every receiving polygon. Opaque. */
+typedef struct rl_solution rl_solution;
+
+/**
+ * Relights a scene with its sampling settings, on sampling.threads threads
+ * (0: every core). The scene must outlive the solution.
+ * @return RL_OK and *out, owned by the caller; RL_ERR_NOMEM, RL_ERR_INPUT, RL_ERR_INTERNAL.
+ */
+rl_status rl_relight(const rl_scene *scene, rl_progress_fn progress, void *user, rl_solution **out);
+
+/** Releases a solution. NULL is a no-op. */
+void rl_solution_destroy(rl_solution *s);
+
+/** @return the number of passes run (1 + bounces). */
+uint32_t rl_solution_pass_count(const rl_solution *s);
+
+/** Copies the statistics of pass k. @return RL_OK or RL_ERR_ARG. */
+rl_status rl_solution_pass_stats(const rl_solution *s, uint32_t k, rl_pass_stats *out);
+
+/** @return the number of radiance maps (one per receiving polygon). */
+size_t rl_solution_map_count(const rl_solution *s);
+
+/** Geometry of one radiance map. Cell (i, j) covers
+ * origin + [u0 + i*cell_size, u0 + (i+1)*cell_size] * e1 + [v0 + j*cell_size, ...] * e2, clipped to the polygon. */
+typedef struct rl_map_info {
+    uint32_t polygon;        /**< scene polygon index */
+    const char *label;       /**< the polygon's element name in the scene file (borrowed) */
+    double origin[3], e1[3], e2[3], normal[3]; /**< the map's frame, world */
+    double cell_size, u0, v0; /**< metres */
+    uint32_t nu, nv;         /**< grid size */
+    uint32_t ncells;         /**< cells with area (at most nu*nv) */
+    float albedo[3], emission[3];
+} rl_map_info;
+
+/** Describes map k. @return RL_OK or RL_ERR_ARG. */
+rl_status rl_solution_map_info(const rl_solution *s, size_t k, rl_map_info *out);
+
+/**
+ * Copies map k's cells; any output may be NULL. ij: [ncells][2] grid indices;
+ * area: [ncells] m^2; centre: [ncells][3] world centroid of the clipped cell;
+ * irradiance: [ncells][3] W m^-2 summed over passes; radiosity: [ncells][3]
+ * W m^-2, pi * emission + albedo * irradiance.
+ * @return RL_OK or RL_ERR_ARG.
+ */
+rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, double *area, double *centre,
+                                float *irradiance, float *radiosity);
+
+/**
+ * Renders the scene camera's view: width*height*3 floats, rows top to bottom,
+ * radiance (W sr^-1 m^-2) of the first surface seen: emission plus
+ * albedo * irradiance / pi of its cell; back faces and the background are 0.
+ * @return RL_OK; RL_ERR_ARG if the scene has no camera.
+ */
+rl_status rl_solution_render(const rl_solution *s, float *rgb);
+
+/**
+ * Irradiance at points, as Radiance's rtrace -I: points[6*i..] = x y z nx ny nz
+ * (normal need not be unit, must be nonzero); out[3*i..] = r g b in W m^-2.
+ * Each point is a receiver of zero area facing its normal; with bounces > 0
+ * the light reflected by the solved radiance maps is included.
+ * @return RL_OK; RL_ERR_ARG (a point or normal not finite or zero, with its index);
+ * RL_ERR_NOMEM; RL_ERR_INTERNAL. stats may be NULL.
+ */
+rl_status rl_irradiance(const rl_scene *scene, const double *points, size_t count, double *out,
+                        rl_pass_stats *stats);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RELIGHT_ENGINE_H */

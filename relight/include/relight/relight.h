@@ -1,0 +1,79 @@
+/*
+ * relight.h - the relighting engine: scenes of planar convex polygons lit by
+ * diffuse polygon emitters and incident light field slabs (lfio), solved by
+ * culled solid-angle transfer with projected Minkowski sums (Khanna et al.).
+ *
+ * Conventions, stated once:
+ *   - World frame right-handed, metres. A polygon's front is the side from
+ *     which its vertices run counter-clockwise; its normal points there.
+ *     Emitters emit and receivers receive on the front side only.
+ *   - Radiance in W sr^-1 m^-2, irradiance in W m^-2, linear Rec.709 RGB.
+ *     Receivers are Lambertian: radiosity B = albedo * E, exitant radiance
+ *     L = emission + albedo * E / pi.
+ *   - A receiving polygon carries a grid of square cells of side cell_size
+ *     in its own frame (e1 along its first edge, e2 = normal x e1, origin at
+ *     its first vertex), clipped to the polygon; a cell's value is the mean
+ *     over the clipped cell.
+ *   - Fallible calls return rl_status; rl_errmsg() gives the calling
+ *     thread's last message, naming the file and element. Destroy(NULL) is a no-op.
+ *   - Results are deterministic: the same scene and seed give bit-identical
+ *     output for any thread count.
+ *
+ * This header is valid C99 and C++.
+ */
+#ifndef RELIGHT_RELIGHT_H
+#define RELIGHT_RELIGHT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Result of a fallible call. */
+typedef enum rl_status {
+    RL_OK = 0,
+    RL_ERR_ARG = 1,     /**< an argument is invalid */
+    RL_ERR_NOMEM = 2,   /**< an allocation failed */
+    RL_ERR_IO = 3,      /**< a file could not be read or written */
+    RL_ERR_INPUT = 4,   /**< an input file (scene, mesh, light field, points) is invalid */
+    RL_ERR_INTERNAL = 5 /**< the ray tracer failed */
+} rl_status;
+
+/** @return the calling thread's last failure message ("" if none), owned by the library. */
+const char *rl_errmsg(void);
+
+/** Transfer methods. */
+typedef enum rl_method {
+    RL_METHOD_CULLED = 0,    /**< solid angles culled by projected Minkowski sums and the mask */
+    RL_METHOD_NAIVE = 1,     /**< every solid angle of the emitter's hemisphere, every cell */
+    RL_METHOD_AREA = 2,      /**< uniform points on the emitter with shadow rays */
+    RL_METHOD_SOLIDANGLE = 3 /**< uniform directions in the emitter's spherical polygon */
+} rl_method;
+
+/** @return the method's name ("culled", "naive", "area", "solidangle"). */
+const char *rl_method_name(rl_method m);
+
+/** Parses a method name. @return 1 and *m on success, 0 if name is unknown. */
+int rl_method_parse(const char *name, rl_method *m);
+
+/** Sampling settings (scene key "sampling"). */
+typedef struct rl_sampling {
+    rl_method method;              /**< default culled */
+    uint32_t partition_n;          /**< partition level, a power of two, default 32 (4096 solid angles per hemisphere) */
+    uint32_t rays_per_solid_angle; /**< k rays per (cell, solid angle), default 4 */
+    uint32_t samples_per_cell;     /**< shadow rays per (cell, emitter) for area and solidangle, default 128 */
+    uint32_t bounces;              /**< further diffuse passes after the direct one, default 0 */
+    uint64_t seed;                 /**< default 1 */
+    uint32_t threads;              /**< worker threads; 0 = every core (not part of the scene file) */
+} rl_sampling;
+
+/** Fills *s with the defaults above. */
+void rl_sampling_default(rl_sampling *s);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RELIGHT_RELIGHT_H */

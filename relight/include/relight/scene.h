@@ -1,0 +1,58 @@
+/*
+ * scene.h - scenes for the relighting engine, read from JSON (docs/scene.md).
+ *
+ * A scene holds materials, planar convex polygons (from the file's
+ * "polygons" and from mesh files read with assimp), light field slabs that
+ * act as emitters, the radiance-map cell size, sampling settings and an
+ * optional camera. Loading validates everything and reports the first
+ * problem with the file and the element ("beams.json: polygons[3]: not planar").
+ * A loaded scene is immutable apart from its sampling settings and may be
+ * read from several threads.
+ *
+ * This header is valid C99 and C++.
+ */
+#ifndef RELIGHT_SCENE_H
+#define RELIGHT_SCENE_H
+
+#include "relight/relight.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** A loaded scene. Opaque. */
+typedef struct rl_scene rl_scene;
+
+/**
+ * Reads and validates a scene file; relative paths inside it are relative to its folder.
+ * @return RL_OK and *out, owned by the caller; RL_ERR_IO (unreadable), RL_ERR_INPUT
+ * (invalid scene, mesh or light field; the message names the file and element), RL_ERR_NOMEM.
+ */
+rl_status rl_scene_load(const char *path, rl_scene **out);
+
+/** Releases a scene and the light fields it loaded. NULL is a no-op. */
+void rl_scene_destroy(rl_scene *s);
+
+/** @return the scene's sampling settings (borrowed). */
+const rl_sampling *rl_scene_sampling(const rl_scene *s);
+
+/** Replaces the sampling settings. @return RL_OK or RL_ERR_ARG (partition_n not a power of two in 1..4096, k = 0, ...). */
+rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *sampling);
+
+/** @return the number of polygons (after meshes are expanded). */
+size_t rl_scene_polygon_count(const rl_scene *s);
+
+/** @return the number of light field emitters. */
+size_t rl_scene_lightfield_count(const rl_scene *s);
+
+/** @return the radiance-map cell size in metres. */
+double rl_scene_cell_size(const rl_scene *s);
+
+/** @return 1 if the scene has a camera. */
+int rl_scene_has_camera(const rl_scene *s);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RELIGHT_SCENE_H */

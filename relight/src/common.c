@@ -1,0 +1,54 @@
+/*
+ * common.c - the engine's per-thread error message, method names and the
+ * default sampling settings.
+ */
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "scene_internal.h"
+
+static _Thread_local char errbuf[1024];
+
+const char *rl_errmsg(void)
+{
+    return errbuf;
+}
+
+rl_status rl__fail(rl_status status, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(errbuf, sizeof errbuf, fmt, ap);
+    va_end(ap);
+    return status;
+}
+
+static const char *const method_names[] = {"culled", "naive", "area", "solidangle"};
+
+const char *rl_method_name(rl_method m)
+{
+    return (unsigned)m < sizeof method_names / sizeof method_names[0] ? method_names[m] : "unknown";
+}
+
+int rl_method_parse(const char *name, rl_method *m)
+{
+    for (unsigned k = 0; name && k < sizeof method_names / sizeof method_names[0]; k++)
+        if (strcmp(name, method_names[k]) == 0) {
+            *m = (rl_method)k;
+            return 1;
+        }
+    return 0;
+}
+
+void rl_sampling_default(rl_sampling *s)
+{
+    memset(s, 0, sizeof *s);
+    s->method = RL_METHOD_CULLED;
+    s->partition_n = 32;
+    s->rays_per_solid_angle = 4;
+    s->samples_per_cell = 128;
+    s->bounces = 0;
+    s->seed = 1;
+    s->threads = 0;
+}

@@ -1,0 +1,550 @@
+/*
+ * engine.c - passes, threads and results of the relighting engine.
+ *
+ * A run builds the radiance maps and the ray tracer, then runs pass 0 from
+ * the scene's emitters (emissive polygons and light field slabs) and
+ * `bounces` further passes, each from the receivers that the previous pass
+ * lit, re-emitting albedo * E / pi. Within a pass, the work is the list of
+ * tiles (rows of one map's grid); worker threads take tiles from an atomic
+ * counter, and each tile's cells are written only by the thread that owns
+ * the tile, in an order fixed by the tile alone. So the output does not
+ * depend on the number of threads or on scheduling.
+ */
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "relight/engine.h"
+#include "transfer.h"
+
+#define PI 3.14159265358979323846
+#define TILE_CELLS 2048u
+
+struct rl_solution {
+    const rl_scene *scene;
+    rl_map *maps;
+    size_t nmaps;
+    int32_t *polygon_map; /* scene polygon -> map index, or -1 */
+    rl_tracer *tracer;
+    rl_pass_stats *passes;
+    uint32_t npasses;
+};
+
+/* ------------------------------------------------------------ parallel work */
+
+typedef struct work_item {
+    uint32_t map;
+    uint32_t row0, row1;
+} work_item;
+
+typedef struct pass_job {
+    rl_transfer_ctx ctx;
+    rl_map *maps;
+    const work_item *items;
+    size_t nitems;
+    atomic_size_t next, done;
+    atomic_int failed;
+    rl_counters *counters; /* one per thread */
+} pass_job;
+
+typedef struct worker_arg {
+    pass_job *job;
+    unsigned index;
+} worker_arg;
+
+/* Takes tiles until none are left. */
+static void *worker(void *p)
+{
+    worker_arg *a = p;
+    pass_job *job = a->job;
+    rl_scratch scratch = {0};
+    tracer_thread_init();
+    for (;;) {
+        size_t k = atomic_fetch_add(&job->next, 1);
+        if (k >= job->nitems || atomic_load(&job->failed))
+            break;
+        const work_item *w = &job->items[k];
+        if (transfer_tile(&job->ctx, w->map, &job->maps[w->map], w->row0, w->row1, &scratch,
+                          &job->counters[a->index]) != 0)
+            atomic_store(&job->failed, 1);
+        atomic_fetch_add(&job->done, 1);
+    }
+    free(scratch.leaves);
+    return NULL;
+}
+
+/* @return the number of worker threads to use for setting t (0 = every core). */
+static unsigned thread_count(uint32_t t)
+{
+    if (t > 0)
+        return t;
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n > 0 ? (unsigned)n : 1;
+}
+
+/* @return monotonic wall time or process CPU time, in seconds. */
+static double now(clockid_t clock)
+{
+    struct timespec ts;
+    clock_gettime(clock, &ts);
+    return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* Runs job on n threads, reporting progress from the calling thread.
+ * base and span place this pass within the run's [0, 1] progress. @return 0 or -1. */
+static int run_job(pass_job *job, unsigned n, rl_progress_fn progress, void *user, double base, double span)
+{
+    pthread_t *threads = malloc(n * sizeof *threads);
+    worker_arg *args = malloc(n * sizeof *args);
+    job->counters = calloc(n, sizeof *job->counters);
+    if (!threads || !args || !job->counters) {
+        free(threads);
+        free(args);
+        return -1;
+    }
+    atomic_init(&job->next, 0);
+    atomic_init(&job->done, 0);
+    atomic_init(&job->failed, 0);
+    unsigned started = 0;
+    for (; started < n; started++) {
+        args[started] = (worker_arg){job, started};
+        if (pthread_create(&threads[started], NULL, worker, &args[started]) != 0)
+            break;
+    }
+    if (started == 0) {
+        args[0] = (worker_arg){job, 0};
+        worker(&args[0]); /* no threads to be had: do the work here */
+    }
+    while (progress && started > 0 && atomic_load(&job->done) < job->nitems && !atomic_load(&job->failed)) {
+        progress(user, base + span * (double)atomic_load(&job->done) / (double)(job->nitems ? job->nitems : 1));
+        struct timespec ts = {0, 100 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+    }
+    for (unsigned k = 0; k < started; k++)
+        pthread_join(threads[k], NULL);
+    free(threads);
+    free(args);
+    return atomic_load(&job->failed) ? -1 : 0;
+}
+
+/* Sums the per-thread counters into stats. */
+static void sum_counters(const rl_counters *c, unsigned n, rl_pass_stats *st)
+{
+    for (unsigned k = 0; k < n; k++) {
+        st->samples += c[k].samples;
+        st->rays_cast += c[k].rays_cast;
+        st->rays_kept += c[k].rays_kept;
+        st->solid_angles_considered += c[k].leaves_considered;
+        st->solid_angles_culled += c[k].leaves_culled;
+        st->pairs += c[k].pairs;
+        st->pairs_descended += c[k].pairs_descended;
+    }
+}
+
+/* Splits every map into tiles of about TILE_CELLS grid squares. @return the items (count in *n) or NULL. */
+static work_item *make_tiles(const rl_map *maps, size_t nmaps, size_t *n)
+{
+    size_t count = 0, k = 0;
+    for (size_t m = 0; m < nmaps; m++) {
+        uint32_t rows = maps[m].nu >= TILE_CELLS ? 1 : TILE_CELLS / maps[m].nu;
+        count += (maps[m].nv + rows - 1) / rows;
+    }
+    work_item *items = malloc((count ? count : 1) * sizeof *items);
+    if (!items)
+        return NULL;
+    for (size_t m = 0; m < nmaps; m++) {
+        uint32_t rows = maps[m].nu >= TILE_CELLS ? 1 : TILE_CELLS / maps[m].nu;
+        for (uint32_t r = 0; r < maps[m].nv; r += rows)
+            items[k++] = (work_item){(uint32_t)m, r, r + rows < maps[m].nv ? r + rows : maps[m].nv};
+    }
+    *n = count;
+    return items;
+}
+
+/* ---------------------------------------------------------------- emitters */
+
+/* @return 1 if any channel of v is > 0. */
+static int positive3(const float v[3])
+{
+    return v[0] > 0 || v[1] > 0 || v[2] > 0;
+}
+
+/* Builds the emitters of the scene itself (pass 0). @return the array (count in *n) or NULL. */
+static rl_emitter *primary_emitters(const rl_scene *scene, size_t extra, size_t *n)
+{
+    size_t count = scene->nlightfields;
+    for (size_t k = 0; k < scene->npolygons; k++)
+        count += positive3(scene->materials[scene->polygons[k].material].emission);
+    rl_emitter *e = malloc((count + extra + 1) * sizeof *e);
+    if (!e)
+        return NULL;
+    size_t m = 0;
+    for (size_t k = 0; k < scene->npolygons; k++)
+        if (positive3(scene->materials[scene->polygons[k].material].emission))
+            emitter_from_polygon(scene, (uint32_t)k, NULL, &e[m++]);
+    for (size_t k = 0; k < scene->nlightfields; k++)
+        emitter_from_lightfield(&scene->lightfields[k], &e[m++]);
+    *n = m;
+    return e;
+}
+
+/* Appends to e (room assumed) one emitter per map that re-emits light. @return the new count. */
+static size_t append_bounce_emitters(const rl_scene *scene, const rl_map *maps, size_t nmaps, rl_emitter *e,
+                                     size_t n)
+{
+    for (size_t m = 0; m < nmaps; m++) {
+        int lit = 0;
+        for (uint32_t c = 0; c < maps[m].ncells && !lit; c++)
+            lit = maps[m].e_prev[c][0] > 0 || maps[m].e_prev[c][1] > 0 || maps[m].e_prev[c][2] > 0;
+        if (lit)
+            emitter_from_polygon(scene, (uint32_t)maps[m].polygon, &maps[m], &e[n++]);
+    }
+    return n;
+}
+
+/* Fills the shared context of a pass. */
+static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, uint32_t pass, const rl_emitter *e, size_t n,
+                     rl_transfer_ctx *ctx)
+{
+    ctx->scene = scene;
+    ctx->tracer = tracer;
+    ctx->sampling = &scene->sampling;
+    ctx->pass = pass;
+    ctx->emitters = e;
+    ctx->nemitters = n;
+    /* about eight single-precision ulps at the scene's extent */
+    ctx->centre = tracer_centre(tracer);
+    ctx->eps = 1e-6 * tracer_extent(tracer);
+    ctx->margin = 1e-9 * tracer_extent(tracer);
+}
+
+/* Runs one pass over maps with emitters e. @return RL_OK or an error. */
+static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, uint32_t pass, rl_map *maps,
+                          size_t nmaps, const rl_emitter *e, size_t ne, rl_progress_fn progress, void *user,
+                          double base, double span, rl_pass_stats *st)
+{
+    double w0 = now(CLOCK_MONOTONIC), c0 = now(CLOCK_PROCESS_CPUTIME_ID);
+    memset(st, 0, sizeof *st);
+    st->emitters = (uint32_t)ne;
+    for (size_t m = 0; m < nmaps; m++)
+        memset(maps[m].e_pass, 0, (maps[m].ncells ? maps[m].ncells : 1) * sizeof *maps[m].e_pass);
+    pass_job job;
+    memset(&job, 0, sizeof job);
+    make_ctx(scene, tracer, pass, e, ne, &job.ctx);
+    job.maps = maps;
+    job.items = make_tiles(maps, nmaps, &job.nitems);
+    if (!job.items)
+        return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
+    unsigned threads = thread_count(scene->sampling.threads);
+    int rc = ne > 0 ? run_job(&job, threads, progress, user, base, span) : 0;
+    if (job.counters)
+        sum_counters(job.counters, threads, st);
+    free(job.counters);
+    free((void *)job.items);
+    if (rc != 0)
+        return rl__fail(RL_ERR_NOMEM, "out of memory during pass %u", pass);
+    st->wall_seconds = now(CLOCK_MONOTONIC) - w0;
+    st->cpu_seconds = now(CLOCK_PROCESS_CPUTIME_ID) - c0;
+    return RL_OK;
+}
+
+/* Adds each map's pass irradiance to its total and keeps it for the next bounce. */
+static void close_pass(rl_map *maps, size_t nmaps)
+{
+    for (size_t m = 0; m < nmaps; m++)
+        for (uint32_t c = 0; c < maps[m].ncells; c++)
+            for (int k = 0; k < 3; k++) {
+                maps[m].e_total[c][k] += maps[m].e_pass[c][k];
+                maps[m].e_prev[c][k] = maps[m].e_pass[c][k];
+            }
+}
+
+/* Solves the maps with `passes` passes (may be 0). */
+static rl_status solve(const rl_scene *scene, uint32_t passes, rl_progress_fn progress, void *user,
+                       rl_solution **out)
+{
+    *out = NULL;
+    rl_solution *s = calloc(1, sizeof *s);
+    if (!s)
+        return rl__fail(RL_ERR_NOMEM, "out of memory");
+    s->scene = scene;
+    rl_status st = maps_build(scene, &s->maps, &s->nmaps);
+    if (st == RL_OK)
+        st = tracer_new(scene, &s->tracer);
+    s->polygon_map = malloc((scene->npolygons + 1) * sizeof *s->polygon_map);
+    s->passes = calloc(passes + 1, sizeof *s->passes);
+    if (st == RL_OK && (!s->polygon_map || !s->passes))
+        st = rl__fail(RL_ERR_NOMEM, "out of memory");
+    if (st != RL_OK) {
+        rl_solution_destroy(s);
+        return st;
+    }
+    for (size_t k = 0; k < scene->npolygons; k++)
+        s->polygon_map[k] = -1;
+    for (size_t m = 0; m < s->nmaps; m++)
+        s->polygon_map[s->maps[m].polygon] = (int32_t)m;
+    size_t ne = 0;
+    rl_emitter *e = primary_emitters(scene, s->nmaps, &ne);
+    if (!e) {
+        rl_solution_destroy(s);
+        return rl__fail(RL_ERR_NOMEM, "out of memory for emitters");
+    }
+    for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
+        if (p > 0)
+            ne = append_bounce_emitters(scene, s->maps, s->nmaps, e, 0);
+        st = run_pass(scene, s->tracer, p, s->maps, s->nmaps, e, ne, progress, user, (double)p / passes,
+                      1.0 / passes, &s->passes[p]);
+        close_pass(s->maps, s->nmaps);
+        s->npasses = p + 1;
+    }
+    free(e);
+    if (st != RL_OK) {
+        rl_solution_destroy(s);
+        return st;
+    }
+    if (progress)
+        progress(user, 1.0);
+    *out = s;
+    return RL_OK;
+}
+
+rl_status rl_relight(const rl_scene *scene, rl_progress_fn progress, void *user, rl_solution **out)
+{
+    if (!scene || !out)
+        return rl__fail(RL_ERR_ARG, "rl_relight: NULL argument");
+    return solve(scene, scene->sampling.bounces + 1, progress, user, out);
+}
+
+void rl_solution_destroy(rl_solution *s)
+{
+    if (!s)
+        return;
+    maps_free(s->maps, s->nmaps);
+    tracer_destroy(s->tracer);
+    free(s->polygon_map);
+    free(s->passes);
+    free(s);
+}
+
+uint32_t rl_solution_pass_count(const rl_solution *s)
+{
+    return s->npasses;
+}
+
+rl_status rl_solution_pass_stats(const rl_solution *s, uint32_t k, rl_pass_stats *out)
+{
+    if (k >= s->npasses)
+        return rl__fail(RL_ERR_ARG, "pass %u of %u", k, s->npasses);
+    *out = s->passes[k];
+    return RL_OK;
+}
+
+size_t rl_solution_map_count(const rl_solution *s)
+{
+    return s->nmaps;
+}
+
+rl_status rl_solution_map_info(const rl_solution *s, size_t k, rl_map_info *out)
+{
+    if (k >= s->nmaps)
+        return rl__fail(RL_ERR_ARG, "map %zu of %zu", k, s->nmaps);
+    const rl_map *m = &s->maps[k];
+    out->polygon = (uint32_t)m->polygon;
+    out->label = s->scene->polygons[m->polygon].label;
+    v3_store(m->frame.origin, out->origin);
+    v3_store(m->frame.e1, out->e1);
+    v3_store(m->frame.e2, out->e2);
+    v3_store(m->frame.n, out->normal);
+    out->cell_size = m->cell;
+    out->u0 = m->u0;
+    out->v0 = m->v0;
+    out->nu = m->nu;
+    out->nv = m->nv;
+    out->ncells = m->ncells;
+    memcpy(out->albedo, m->albedo, sizeof out->albedo);
+    memcpy(out->emission, m->emission, sizeof out->emission);
+    return RL_OK;
+}
+
+/* @return the centroid of the convex polygon p (count vertices). */
+static v2 polygon_centroid(const v2 *p, uint32_t count)
+{
+    double a = 0, cx = 0, cy = 0;
+    for (uint32_t i = 1; i + 1 < count; i++) {
+        double w = v2_cross(v2_sub(p[i], p[0]), v2_sub(p[i + 1], p[0]));
+        a += w;
+        cx += w * (p[0].x + p[i].x + p[i + 1].x) / 3;
+        cy += w * (p[0].y + p[i].y + p[i + 1].y) / 3;
+    }
+    return a > 0 ? (v2){cx / a, cy / a} : p[0];
+}
+
+rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, double *area, double *centre,
+                                float *irradiance, float *radiosity)
+{
+    if (k >= s->nmaps)
+        return rl__fail(RL_ERR_ARG, "map %zu of %zu", k, s->nmaps);
+    const rl_map *m = &s->maps[k];
+    for (uint32_t c = 0; c < m->ncells; c++) {
+        const rl_cell *cell = &m->cells[c];
+        if (ij) {
+            ij[2 * c] = cell->i;
+            ij[2 * c + 1] = cell->j;
+        }
+        if (area)
+            area[c] = cell->area;
+        if (centre) {
+            v2 poly[RL_MAX_POLY_VERTS + 8];
+            uint32_t n = map_cell_polygon(m, cell, poly);
+            v3_store(frame_point(&m->frame, polygon_centroid(poly, n)), centre + 3 * c);
+        }
+        for (int ch = 0; ch < 3; ch++) {
+            if (irradiance)
+                irradiance[3 * c + ch] = (float)m->e_total[c][ch];
+            if (radiosity)
+                radiosity[3 * c + ch] = (float)(PI * m->emission[ch] + m->albedo[ch] * m->e_total[c][ch]);
+        }
+    }
+    return RL_OK;
+}
+
+/* ------------------------------------------------------------------ render */
+
+typedef struct render_job {
+    const rl_solution *s;
+    float *rgb;
+    v3 forward, right, up;
+    double tan_half, aspect;
+    atomic_uint next_row;
+} render_job;
+
+/* Shades the first surface along one camera ray. */
+static void shade(const rl_solution *s, v3 org, v3 dir, float out[3])
+{
+    uint32_t poly;
+    double t;
+    out[0] = out[1] = out[2] = 0.0f;
+    if (!tracer_hit(s->tracer, org, dir, 0.0, INFINITY, &poly, &t))
+        return;
+    const rl_polygon *pg = &s->scene->polygons[poly];
+    if (v3_dot(dir, v3_load(pg->normal)) >= 0)
+        return; /* the back of a one-sided surface */
+    const rl_material *mat = &s->scene->materials[pg->material];
+    double l[3] = {mat->emission[0], mat->emission[1], mat->emission[2]};
+    int32_t m = s->polygon_map[poly];
+    if (m >= 0) {
+        const rl_map *map = &s->maps[m];
+        int64_t cell = map_cell_at(map, frame_project(&map->frame, v3_madd(org, dir, t)));
+        for (int c = 0; cell >= 0 && c < 3; c++)
+            l[c] += map->albedo[c] * map->e_total[cell][c] / PI;
+    }
+    for (int c = 0; c < 3; c++)
+        out[c] = (float)l[c];
+}
+
+/* Renders rows until none are left. */
+static void *render_worker(void *p)
+{
+    render_job *job = p;
+    const rl_camera *cam = &job->s->scene->camera;
+    tracer_thread_init();
+    for (;;) {
+        unsigned y = atomic_fetch_add(&job->next_row, 1);
+        if (y >= cam->height)
+            break;
+        for (unsigned x = 0; x < cam->width; x++) {
+            double sx = (2.0 * (x + 0.5) / cam->width - 1.0) * job->tan_half * job->aspect;
+            double sy = (1.0 - 2.0 * (y + 0.5) / cam->height) * job->tan_half;
+            v3 d = v3_norm(v3_add(job->forward, v3_add(v3_scale(job->right, sx), v3_scale(job->up, sy))));
+            shade(job->s, v3_load(cam->position), d, job->rgb + 3 * ((size_t)y * cam->width + x));
+        }
+    }
+    return NULL;
+}
+
+rl_status rl_solution_render(const rl_solution *s, float *rgb)
+{
+    const rl_camera *cam = &s->scene->camera;
+    if (!s->scene->has_camera)
+        return rl__fail(RL_ERR_ARG, "%s: the scene has no camera", s->scene->path);
+    render_job job;
+    job.s = s;
+    job.rgb = rgb;
+    job.forward = v3_norm(v3_sub(v3_load(cam->look_at), v3_load(cam->position)));
+    job.right = v3_norm(v3_cross(job.forward, v3_load(cam->up)));
+    job.up = v3_cross(job.right, job.forward);
+    job.tan_half = tan(cam->fov_deg * PI / 360.0);
+    job.aspect = (double)cam->width / cam->height;
+    atomic_init(&job.next_row, 0);
+    unsigned n = thread_count(s->scene->sampling.threads), started = 0;
+    pthread_t *threads = malloc(n * sizeof *threads);
+    for (; threads && started < n; started++)
+        if (pthread_create(&threads[started], NULL, render_worker, &job) != 0)
+            break;
+    if (started == 0)
+        render_worker(&job);
+    for (unsigned k = 0; k < started; k++)
+        pthread_join(threads[k], NULL);
+    free(threads);
+    return RL_OK;
+}
+
+/* ------------------------------------------------------------------ points */
+
+/* Checks the points and builds one zero-area receiver per point. @return RL_OK or an error. */
+static rl_status point_maps(const double *points, size_t count, rl_map **out)
+{
+    rl_map *maps = calloc(count ? count : 1, sizeof *maps);
+    if (!maps)
+        return rl__fail(RL_ERR_NOMEM, "out of memory for %zu points", count);
+    for (size_t k = 0; k < count; k++) {
+        v3 p = v3_load(points + 6 * k), n = v3_load(points + 6 * k + 3);
+        double len = v3_len(n);
+        if (!isfinite(v3_maxabs(p)) || !isfinite(len) || !(len > 0)) {
+            maps_free(maps, k);
+            return rl__fail(RL_ERR_ARG, "point %zu: position and normal must be finite, normal nonzero", k + 1);
+        }
+        if (map_point(p, v3_scale(n, 1.0 / len), &maps[k]) != RL_OK) {
+            maps_free(maps, k + 1);
+            return rl__fail(RL_ERR_NOMEM, "out of memory for %zu points", count);
+        }
+    }
+    *out = maps;
+    return RL_OK;
+}
+
+rl_status rl_irradiance(const rl_scene *scene, const double *points, size_t count, double *out,
+                        rl_pass_stats *stats)
+{
+    rl_map *pts = NULL;
+    rl_solution *sol = NULL;
+    rl_status st = point_maps(points, count, &pts);
+    if (st != RL_OK)
+        return st;
+    /* Light reflected by the scene: solve `bounces` passes and let every lit
+     * map re-emit the irradiance summed over them. */
+    st = solve(scene, scene->sampling.bounces, NULL, NULL, &sol);
+    size_t ne = 0;
+    rl_emitter *e = st == RL_OK ? primary_emitters(scene, sol->nmaps, &ne) : NULL;
+    if (st == RL_OK && !e)
+        st = rl__fail(RL_ERR_NOMEM, "out of memory for emitters");
+    if (st == RL_OK && scene->sampling.bounces > 0) {
+        for (size_t m = 0; m < sol->nmaps; m++)
+            memcpy(sol->maps[m].e_prev, sol->maps[m].e_total, sol->maps[m].ncells * sizeof *sol->maps[m].e_prev);
+        ne = append_bounce_emitters(scene, sol->maps, sol->nmaps, e, ne);
+    }
+    rl_pass_stats local;
+    if (st == RL_OK)
+        st = run_pass(scene, sol->tracer, scene->sampling.bounces, pts, count, e, ne, NULL, NULL, 0, 1,
+                      stats ? stats : &local);
+    for (size_t k = 0; st == RL_OK && k < count; k++)
+        for (int c = 0; c < 3; c++)
+            out[3 * k + c] = pts[k].e_pass[0][c];
+    free(e);
+    rl_solution_destroy(sol);
+    maps_free(pts, count);
+    return st;
+}

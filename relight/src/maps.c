@@ -1,0 +1,256 @@
+/*
+ * maps.c - radiance maps on receiving polygons.
+ *
+ * Each receiving polygon gets a frame (origin at its first vertex, e1 along
+ * its first edge, e2 = n x e1) and a grid of square cells of the scene's
+ * cell size over its bounding rectangle. Only cells whose intersection with
+ * the polygon has area survive; a cell cut by the polygon's border keeps its
+ * clipped polygon, so cell values are means over the part that is really
+ * surface. Memory is proportional to the cells that exist plus one index
+ * per grid square.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "maps.h"
+
+/* Cells a scene may have in all: about 3 GiB of accumulators. */
+#define MAX_TOTAL_CELLS ((uint64_t)1 << 26)
+
+double polygon_area2(const v2 *p, uint32_t count)
+{
+    double a = 0.0;
+    for (uint32_t i = 1; i + 1 < count; i++)
+        a += v2_cross(v2_sub(p[i], p[0]), v2_sub(p[i + 1], p[0]));
+    return 0.5 * a;
+}
+
+v2 sample_polygon(const v2 *p, uint32_t count, double a, double b)
+{
+    if (count < 3)
+        return p[0];
+    /* pick a fan triangle by area with a, then reuse a's remainder */
+    double total = polygon_area2(p, count), acc = 0.0;
+    uint32_t t = 1;
+    double pick = a * total, w = 0.0;
+    for (; t + 1 < count; t++) {
+        w = 0.5 * v2_cross(v2_sub(p[t], p[0]), v2_sub(p[t + 1], p[0]));
+        if (pick < acc + w || t + 2 == count)
+            break;
+        acc += w;
+    }
+    double r = w > 0 ? fmin(fmax((pick - acc) / w, 0.0), 1.0) : 0.5;
+    /* uniform in a triangle: the square-root warp */
+    double su = sqrt(r);
+    double l0 = 1 - su, l1 = su * (1 - b), l2 = su * b;
+    return (v2){l0 * p[0].x + l1 * p[t].x + l2 * p[t + 1].x, l0 * p[0].y + l1 * p[t].y + l2 * p[t + 1].y};
+}
+
+/* Sets up m's frame and 2D polygon from scene polygon k. */
+static void map_frame(const rl_scene *scene, uint32_t k, rl_map *m)
+{
+    const rl_polygon *pg = &scene->polygons[k];
+    const double (*v)[3] = scene->vertices + pg->first;
+    m->polygon = (int32_t)k;
+    m->frame.origin = v3_load(v[0]);
+    m->frame.n = v3_load(pg->normal);
+    m->frame.e1 = v3_norm(v3_sub(v3_load(v[1]), v3_load(v[0])));
+    m->frame.e2 = v3_cross(m->frame.n, m->frame.e1);
+    m->npoly = pg->count;
+    for (uint32_t i = 0; i < pg->count; i++)
+        m->poly[i] = frame_project(&m->frame, v3_load(v[i]));
+}
+
+/* Clips the square of cell (i, j) to m's polygon. @return the clipped vertex count. */
+static uint32_t clip_square(const rl_map *m, uint32_t i, uint32_t j, v2 *out)
+{
+    double x0 = m->u0 + i * m->cell, y0 = m->v0 + j * m->cell, x1 = x0 + m->cell, y1 = y0 + m->cell;
+    v2 a[RL_MAX_POLY_VERTS + 8] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}, b[RL_MAX_POLY_VERTS + 8];
+    size_t count = 4;
+    v2 *cur = a, *next = b;
+    for (uint32_t e = 0; e < m->npoly && count > 0; e++) {
+        v2 p = m->poly[e], q = m->poly[(e + 1) % m->npoly];
+        /* inside is to the left of each counter-clockwise edge */
+        rl_halfplane h = {-(q.y - p.y), q.x - p.x, 0};
+        h.c = -(h.a * p.x + h.b * p.y);
+        count = clip_poly2(cur, count, h, next);
+        v2 *t = cur;
+        cur = next;
+        next = t;
+    }
+    memcpy(out, cur, count * sizeof *cur);
+    return (uint32_t)count;
+}
+
+/* Fills the grid and cells of m. @return RL_OK, RL_ERR_NOMEM, or RL_ERR_INPUT
+ * when the grid would exceed the scene's cell budget (checked before allocating). */
+static rl_status map_cells(rl_map *m)
+{
+    double u1 = -INFINITY, v1 = -INFINITY;
+    m->u0 = m->v0 = INFINITY;
+    for (uint32_t i = 0; i < m->npoly; i++) {
+        m->u0 = fmin(m->u0, m->poly[i].x);
+        m->v0 = fmin(m->v0, m->poly[i].y);
+        u1 = fmax(u1, m->poly[i].x);
+        v1 = fmax(v1, m->poly[i].y);
+    }
+    double gu = fmax(1.0, ceil((u1 - m->u0) / m->cell - 1e-9));
+    double gv = fmax(1.0, ceil((v1 - m->v0) / m->cell - 1e-9));
+    if (!(gu * gv <= (double)MAX_TOTAL_CELLS))
+        return RL_ERR_INPUT;
+    m->nu = (uint32_t)gu;
+    m->nv = (uint32_t)gv;
+    size_t squares = (size_t)m->nu * m->nv;
+    m->grid = malloc(squares * sizeof *m->grid);
+    m->cells = malloc(squares * sizeof *m->cells);
+    size_t pool_cap = 64;
+    m->pool = malloc(pool_cap * sizeof *m->pool);
+    if (!m->grid || !m->cells || !m->pool)
+        return RL_ERR_NOMEM;
+    const double full = m->cell * m->cell, tiny = 1e-12 * full;
+    v2 poly[RL_MAX_POLY_VERTS + 8];
+    size_t npool = 0;
+    m->ncells = 0;
+    for (uint32_t j = 0; j < m->nv; j++)
+        for (uint32_t i = 0; i < m->nu; i++) {
+            uint32_t count = clip_square(m, i, j, poly);
+            double area = count >= 3 ? polygon_area2(poly, count) : 0.0;
+            m->grid[(size_t)j * m->nu + i] = -1;
+            if (!(area > tiny))
+                continue;
+            rl_cell *c = &m->cells[m->ncells];
+            c->i = i;
+            c->j = j;
+            c->area = area;
+            c->poly_first = (uint32_t)npool;
+            c->poly_count = 0;
+            if (area < full * (1 - 1e-9)) {
+                if (npool + count > pool_cap) {
+                    pool_cap = 2 * (npool + count);
+                    v2 *grown = realloc(m->pool, pool_cap * sizeof *grown);
+                    if (!grown)
+                        return RL_ERR_NOMEM;
+                    m->pool = grown;
+                }
+                memcpy(m->pool + npool, poly, count * sizeof *poly);
+                npool += count;
+                c->poly_count = count;
+            }
+            m->grid[(size_t)j * m->nu + i] = (int32_t)m->ncells++;
+        }
+    return RL_OK;
+}
+
+/* Allocates the three accumulators of m. @return RL_OK or RL_ERR_NOMEM. */
+static rl_status map_accumulators(rl_map *m)
+{
+    size_t n = m->ncells ? m->ncells : 1;
+    m->e_total = calloc(n, sizeof *m->e_total);
+    m->e_pass = calloc(n, sizeof *m->e_pass);
+    m->e_prev = calloc(n, sizeof *m->e_prev);
+    return m->e_total && m->e_pass && m->e_prev ? RL_OK : RL_ERR_NOMEM;
+}
+
+rl_status maps_build(const rl_scene *scene, rl_map **maps, size_t *count)
+{
+    size_t n = 0;
+    uint64_t total = 0;
+    *maps = NULL;
+    *count = 0;
+    for (size_t k = 0; k < scene->npolygons; k++) {
+        const float *al = scene->materials[scene->polygons[k].material].albedo;
+        n += al[0] > 0 || al[1] > 0 || al[2] > 0;
+    }
+    rl_map *out = calloc(n ? n : 1, sizeof *out);
+    if (!out)
+        return rl__fail(RL_ERR_NOMEM, "out of memory for %zu radiance maps", n);
+    size_t m = 0;
+    for (size_t k = 0; k < scene->npolygons; k++) {
+        const rl_material *mat = &scene->materials[scene->polygons[k].material];
+        if (!(mat->albedo[0] > 0 || mat->albedo[1] > 0 || mat->albedo[2] > 0))
+            continue;
+        rl_map *mp = &out[m++];
+        map_frame(scene, (uint32_t)k, mp);
+        mp->cell = scene->cell_size;
+        memcpy(mp->albedo, mat->albedo, sizeof mp->albedo);
+        memcpy(mp->emission, mat->emission, sizeof mp->emission);
+        rl_status st = map_cells(mp);
+        if (st == RL_OK)
+            st = map_accumulators(mp);
+        total += mp->ncells;
+        if (st == RL_ERR_INPUT || (st == RL_OK && total > MAX_TOTAL_CELLS))
+            st = rl__fail(RL_ERR_INPUT, "%s: %s: more than %llu radiance cells in the scene; raise "
+                          "radiance_maps.cell_size", scene->path, scene->polygons[k].label,
+                          (unsigned long long)MAX_TOTAL_CELLS);
+        else if (st == RL_ERR_NOMEM)
+            rl__fail(st, "%s: %s: out of memory for its radiance map", scene->path, scene->polygons[k].label);
+        if (st != RL_OK) {
+            maps_free(out, m);
+            return st;
+        }
+    }
+    *maps = out;
+    *count = m;
+    return RL_OK;
+}
+
+rl_status map_point(v3 p, v3 n, rl_map *out)
+{
+    memset(out, 0, sizeof *out);
+    out->polygon = -1;
+    out->frame.origin = p;
+    out->frame.n = n;
+    v3 helper = fabs(n.x) < 0.9 ? v3_make(1, 0, 0) : v3_make(0, 1, 0);
+    out->frame.e1 = v3_norm(v3_cross(helper, n));
+    out->frame.e2 = v3_cross(n, out->frame.e1);
+    out->npoly = 1;
+    out->poly[0] = (v2){0, 0};
+    out->cell = 1.0;
+    out->nu = out->nv = 1;
+    out->grid = malloc(sizeof *out->grid);
+    out->cells = calloc(1, sizeof *out->cells);
+    out->pool = malloc(sizeof *out->pool);
+    if (!out->grid || !out->cells || !out->pool)
+        return RL_ERR_NOMEM;
+    out->u0 = out->v0 = -0.5;
+    out->grid[0] = 0;
+    out->ncells = 1;
+    out->pool[0] = (v2){0, 0};
+    out->cells[0].poly_count = 1;
+    return map_accumulators(out);
+}
+
+void maps_free(rl_map *maps, size_t count)
+{
+    for (size_t k = 0; maps && k < count; k++) {
+        free(maps[k].grid);
+        free(maps[k].cells);
+        free(maps[k].pool);
+        free(maps[k].e_total);
+        free(maps[k].e_pass);
+        free(maps[k].e_prev);
+    }
+    free(maps);
+}
+
+uint32_t map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out)
+{
+    if (c->poly_count) {
+        memcpy(out, m->pool + c->poly_first, c->poly_count * sizeof *out);
+        return c->poly_count;
+    }
+    double x0 = m->u0 + c->i * m->cell, y0 = m->v0 + c->j * m->cell;
+    out[0] = (v2){x0, y0};
+    out[1] = (v2){x0 + m->cell, y0};
+    out[2] = (v2){x0 + m->cell, y0 + m->cell};
+    out[3] = (v2){x0, y0 + m->cell};
+    return 4;
+}
+
+int64_t map_cell_at(const rl_map *m, v2 q)
+{
+    double fi = floor((q.x - m->u0) / m->cell), fj = floor((q.y - m->v0) / m->cell);
+    if (!(fi >= 0 && fj >= 0 && fi < m->nu && fj < m->nv))
+        return -1;
+    return m->grid[(size_t)fj * m->nu + (size_t)fi];
+}

@@ -1,0 +1,65 @@
+/*
+ * maps.h - radiance maps: the grid of cells on each receiving polygon, and
+ * receivers of zero area (query points).
+ */
+#ifndef RELIGHT_MAPS_H
+#define RELIGHT_MAPS_H
+
+#include <stdint.h>
+
+#include "region.h"
+#include "scene_internal.h"
+
+/* One cell: grid position, area, and its clipped polygon when it is not a full square. */
+typedef struct rl_cell {
+    uint32_t i, j;
+    uint32_t poly_first; /* into rl_map.pool */
+    uint32_t poly_count; /* 0: the full square */
+    double area;         /* m^2; 0 for a point receiver */
+} rl_cell;
+
+/* A receiver: a polygon's grid of cells, or a single point (npoly = 1, one cell). */
+typedef struct rl_map {
+    int32_t polygon;       /* scene polygon, or -1 for a point receiver */
+    rl_frame frame;        /* origin at the first vertex, e1 along the first edge, n = front normal */
+    v2 poly[RL_MAX_POLY_VERTS];
+    uint32_t npoly;
+    double cell;           /* cell side, m */
+    double u0, v0;         /* grid origin in frame coordinates */
+    uint32_t nu, nv;
+    int32_t *grid;         /* nu*nv cell indices, -1 where the polygon has no area */
+    rl_cell *cells;
+    uint32_t ncells;
+    v2 *pool;              /* clipped cell polygons */
+    double (*e_total)[3];  /* irradiance summed over passes */
+    double (*e_pass)[3];   /* irradiance of the current pass */
+    double (*e_prev)[3];   /* irradiance of the previous pass: what bounces re-emit */
+    float albedo[3];
+    float emission[3];
+} rl_map;
+
+/* Builds the maps of every receiving polygon (albedo > 0 in some channel).
+ * @return RL_OK and *maps (count in *count); RL_ERR_NOMEM or RL_ERR_INPUT (too many cells). */
+rl_status maps_build(const rl_scene *scene, rl_map **maps, size_t *count);
+
+/* Builds one point receiver at p facing n (unit). @return RL_OK or RL_ERR_NOMEM. */
+rl_status map_point(v3 p, v3 n, rl_map *out);
+
+/* Frees every map's arrays and the array itself. */
+void maps_free(rl_map *maps, size_t count);
+
+/* @return the clipped polygon of cell c in frame coordinates, in out (room for
+ * RL_MAX_POLY_VERTS + 4); the vertex count. A point receiver gives its point. */
+uint32_t map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out);
+
+/* @return the cell of m containing frame point q, or -1. */
+int64_t map_cell_at(const rl_map *m, v2 q);
+
+/* A point uniformly distributed over polygon p (count vertices, convex),
+ * from two numbers in [0, 1); a point receiver (count 1) gives its point. */
+v2 sample_polygon(const v2 *p, uint32_t count, double a, double b);
+
+/* @return the area of convex polygon p. */
+double polygon_area2(const v2 *p, uint32_t count);
+
+#endif /* RELIGHT_MAPS_H */

@@ -1,0 +1,567 @@
+/*
+ * mesh.c - polygons for the scene loader: the checks that turn a vertex
+ * list into a scene polygon, ear clipping for mesh faces that fail them, and
+ * mesh files read with assimp's C API.
+ *
+ * A vertex list becomes a polygon in these steps (check_polygon()), with d
+ * its diameter (the largest distance between two of its vertices) and
+ * tol = 1e-6 * d:
+ *   1. d > 0;
+ *   2. a vertex within tol of the previously kept one is dropped
+ *      (consecutive duplicates, also across the closing edge), and at least
+ *      3 vertices remain;
+ *   3. the area, half the length of the Newell vector (the sum of the
+ *      cross products of consecutive vertices), exceeds 1e-12 * d^2;
+ *   4. every vertex lies within tol of the best-fit plane: the Newell normal
+ *      through the vertices' centroid;
+ *   5. a vertex within tol of the line through its neighbours is dropped
+ *      when it lies between them (collinear); where the boundary turns back
+ *      on itself (a spike) a scene polygon is not convex, while a mesh face
+ *      just loses the vertex;
+ *   6. every corner turns left about the normal and the turns add up to a
+ *      single full turn (convex, winding once).
+ * The normal stored is the unit Newell vector of what is kept: the
+ * right-hand rule normal, so counter-clockwise vertices face the viewer.
+ *
+ * Scene polygons (RL_POLY_STRICT) failing any step are errors whose message
+ * names the input vertex at fault. Mesh faces (RL_POLY_SPLIT) failing steps
+ * 1-3 are dropped, as they carry no area; failing step 4 or 6 they are
+ * projected onto their best-fit plane and ear clipped into triangles, each
+ * of which passes the same steps before it is kept. Whatever is appended
+ * therefore satisfies the polygon invariants of scene_internal.h.
+ */
+#define _POSIX_C_SOURCE 200809L /* stat(); the build defines it too */
+
+#include <assimp/cimport.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "mesh.h"
+
+static const double plane_tol = 1e-6; /* distances, relative to the diameter */
+static const double area_tol = 1e-12; /* areas, relative to the diameter squared */
+static const double pi = 3.14159265358979323846;
+
+/* ----------------------------------------------------------- vectors */
+
+/* out = a - b. */
+static void sub3(const double a[3], const double b[3], double out[3])
+{
+    for (int k = 0; k < 3; k++)
+        out[k] = a[k] - b[k];
+}
+
+/* @return a . b. */
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* out = a x b; out may not alias a or b. */
+static void cross3(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* @return |a - b|. */
+static double dist3(const double a[3], const double b[3])
+{
+    double d[3];
+    sub3(a, b, d);
+    return sqrt(dot3(d, d));
+}
+
+/* ------------------------------------------------------------ checks */
+
+/* How a vertex list fares against the steps above. */
+typedef enum verdict { V_OK, V_DEGENERATE, V_NONPLANAR, V_NONCONVEX } verdict;
+
+/* One vertex list under check: p is the input, keep[0..n) the surviving input indices. */
+typedef struct poly_check {
+    const double (*p)[3];
+    size_t *keep;
+    size_t n;
+    double diameter;
+    double tol;       /* plane_tol * diameter */
+    double normal[3]; /* unit Newell normal of the kept vertices */
+    double area;
+    char why[160];    /* the problem, once the verdict is not V_OK */
+} poly_check;
+
+/* @return kept vertex i, counted cyclically (i may be -1 or n). */
+static const double *kept(const poly_check *c, size_t i)
+{
+    return c->p[c->keep[(i + c->n) % c->n]];
+}
+
+/* @return the largest distance between two of the n vertices. */
+static double diameter(const double (*p)[3], size_t n)
+{
+    double best = 0;
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = i + 1; j < n; j++) {
+            double d = dist3(p[i], p[j]);
+            if (d > best)
+                best = d;
+        }
+    return best;
+}
+
+/* Keeps the vertices farther than tol from the previously kept one, also across the closing edge. */
+static void drop_duplicates(poly_check *c, size_t n)
+{
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++)
+        if (m == 0 || dist3(c->p[i], c->p[c->keep[m - 1]]) > c->tol)
+            c->keep[m++] = i;
+    while (m > 1 && dist3(c->p[c->keep[m - 1]], c->p[c->keep[0]]) <= c->tol)
+        m--;
+    c->n = m;
+}
+
+/* Sets normal and area from the Newell vector of the kept vertices. @return 1 if the area is large enough. */
+static int newell(poly_check *c)
+{
+    double sum[3] = {0, 0, 0};
+    const double *o = kept(c, 0); /* relative to a vertex, for precision far from the origin */
+    for (size_t i = 1; i + 1 < c->n; i++) {
+        double a[3], b[3], x[3];
+        sub3(kept(c, i), o, a);
+        sub3(kept(c, i + 1), o, b);
+        cross3(a, b, x);
+        for (int k = 0; k < 3; k++)
+            sum[k] += x[k];
+    }
+    double len = sqrt(dot3(sum, sum));
+    c->area = 0.5 * len;
+    if (!(c->area > area_tol * c->diameter * c->diameter) || !isfinite(len))
+        return 0;
+    for (int k = 0; k < 3; k++)
+        c->normal[k] = sum[k] / len;
+    return 1;
+}
+
+/* @return 1 if every kept vertex is within tol of the best-fit plane; else 0, naming the farthest in why. */
+static int check_plane(poly_check *c)
+{
+    double centre[3] = {0, 0, 0};
+    for (size_t i = 0; i < c->n; i++)
+        for (int k = 0; k < 3; k++)
+            centre[k] += kept(c, i)[k] / (double)c->n;
+    size_t worst = 0;
+    double off = 0;
+    for (size_t i = 0; i < c->n; i++) {
+        double d[3];
+        sub3(kept(c, i), centre, d);
+        double h = fabs(dot3(d, c->normal));
+        if (h > off) {
+            off = h;
+            worst = c->keep[i];
+        }
+    }
+    if (off <= c->tol)
+        return 1;
+    snprintf(c->why, sizeof c->why, "not planar (vertex %zu is %.3g m off the plane)", worst, off);
+    return 0;
+}
+
+/* How vertex v sits between its neighbours a and b. */
+typedef enum corner { CORNER, STRAIGHT, SPIKE } corner;
+
+/* @return STRAIGHT if v is within tol of segment ab, SPIKE if within tol of its line but outside it. */
+static corner classify(const double a[3], const double v[3], const double b[3], double tol)
+{
+    double ab[3], av[3], x[3];
+    sub3(b, a, ab);
+    sub3(v, a, av);
+    double len = sqrt(dot3(ab, ab));
+    if (len <= tol)
+        return SPIKE; /* the boundary goes out to v and straight back */
+    cross3(av, ab, x);
+    if (sqrt(dot3(x, x)) / len > tol)
+        return CORNER;
+    double t = dot3(av, ab) / (len * len);
+    return t > 0 && t < 1 ? STRAIGHT : SPIKE;
+}
+
+/*
+ * Drops kept vertices lying on the segment between their neighbours, and
+ * spikes too when drop_spikes. @return 1; 0 with why set at a spike otherwise.
+ */
+static int drop_collinear(poly_check *c, int drop_spikes)
+{
+    int changed = 1;
+    while (changed && c->n >= 3) {
+        changed = 0;
+        for (size_t i = 0; i < c->n && c->n >= 3;) {
+            corner k = classify(kept(c, i + c->n - 1), kept(c, i), kept(c, i + 1), c->tol);
+            if (k == CORNER) {
+                i++;
+                continue;
+            }
+            if (k == SPIKE && !drop_spikes) {
+                snprintf(c->why, sizeof c->why,
+                         "not convex (the boundary turns back on itself at vertex %zu)", c->keep[i]);
+                return 0;
+            }
+            memmove(c->keep + i, c->keep + i + 1, (c->n - i - 1) * sizeof *c->keep);
+            c->n--;
+            changed = 1;
+        }
+    }
+    return 1;
+}
+
+/* @return 1 if every corner turns left about the normal and the turns make one full turn; else 0 with why. */
+static int check_convex(poly_check *c)
+{
+    double turning = 0;
+    for (size_t i = 0; i < c->n; i++) {
+        double in[3], out[3], x[3];
+        sub3(kept(c, i), kept(c, i + c->n - 1), in);
+        sub3(kept(c, i + 1), kept(c, i), out);
+        cross3(in, out, x);
+        double s = dot3(x, c->normal);
+        if (!(s > 0)) {
+            snprintf(c->why, sizeof c->why, "not convex (the corner at vertex %zu turns the other way)",
+                     c->keep[i]);
+            return 0;
+        }
+        turning += atan2(s, dot3(in, out));
+    }
+    if (turning > 3 * pi) {
+        snprintf(c->why, sizeof c->why, "not convex (the boundary winds around %.0f times)",
+                 turning / (2 * pi));
+        return 0;
+    }
+    return 1;
+}
+
+/* Sets why for a degenerate polygon. @return V_DEGENERATE. */
+static verdict degenerate(poly_check *c, const char *what)
+{
+    snprintf(c->why, sizeof c->why, "degenerate (%s)", what);
+    return V_DEGENERATE;
+}
+
+/*
+ * Runs steps 1-6 on the n input vertices of c; mesh faces drop spikes and go
+ * on past a planarity failure so that keep holds the cleaned face to split.
+ * @return the verdict; keep, n, normal and area describe the cleaned polygon
+ * unless it is V_DEGENERATE.
+ */
+static verdict check_polygon(poly_check *c, size_t n, int mesh_face)
+{
+    c->diameter = diameter(c->p, n);
+    if (!(c->diameter > 0))
+        return degenerate(c, "all vertices coincide");
+    c->tol = plane_tol * c->diameter;
+    drop_duplicates(c, n);
+    if (c->n < 3)
+        return degenerate(c, "fewer than 3 distinct vertices");
+    if (!newell(c))
+        return degenerate(c, "zero area: the vertices are collinear or retrace each other");
+    verdict v = check_plane(c) ? V_OK : V_NONPLANAR;
+    if (v == V_NONPLANAR && !mesh_face)
+        return v;
+    if (!drop_collinear(c, mesh_face))
+        return V_NONCONVEX;
+    if (c->n < 3 || !newell(c))
+        return degenerate(c, "zero area once collinear vertices are removed");
+    if (v == V_OK && !check_convex(c))
+        v = V_NONCONVEX;
+    return v;
+}
+
+/* ------------------------------------------------------ ear clipping */
+
+/* @return twice the signed area of triangle a, b, c in the plane (> 0 counter-clockwise). */
+static double orient(const double a[2], const double b[2], const double c[2])
+{
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+}
+
+/* Writes the kept vertices of c in a right-handed basis of its plane, relative to the first one, to q. */
+static void project(const poly_check *c, double (*q)[2])
+{
+    const double *n = c->normal;
+    int axis = 0; /* the coordinate axis least aligned with the normal */
+    for (int k = 1; k < 3; k++)
+        if (fabs(n[k]) < fabs(n[axis]))
+            axis = k;
+    double e1[3] = {0, 0, 0}, e2[3];
+    e1[axis] = 1;
+    for (int k = 0; k < 3; k++)
+        e1[k] -= n[axis] * n[k];
+    double len = sqrt(dot3(e1, e1));
+    for (int k = 0; k < 3; k++)
+        e1[k] /= len;
+    cross3(n, e1, e2); /* e1 x e2 = n, so the face runs counter-clockwise in (e1, e2) */
+    for (size_t i = 0; i < c->n; i++) {
+        double d[3];
+        sub3(kept(c, i), kept(c, 0), d);
+        q[i][0] = dot3(d, e1);
+        q[i][1] = dot3(d, e2);
+    }
+}
+
+/* @return 1 if vertex i of the remaining polygon (links next, prev) is an ear: convex, no other vertex in or on it. */
+static int is_ear(const double (*q)[2], const int *next, const int *prev, int i)
+{
+    const double *a = q[prev[i]], *b = q[i], *c = q[next[i]];
+    if (!(orient(a, b, c) > 0))
+        return 0;
+    for (int j = next[next[i]]; j != prev[i]; j = next[j]) {
+        const double *p = q[j];
+        if ((p[0] == a[0] && p[1] == a[1]) || (p[0] == c[0] && p[1] == c[1]))
+            continue; /* a vertex repeated where the boundary touches itself */
+        if (orient(a, b, p) >= 0 && orient(b, c, p) >= 0 && orient(c, a, p) >= 0)
+            return 0;
+    }
+    return 1;
+}
+
+/*
+ * Triangulates the counter-clockwise polygon q[0..m) by ear clipping; link
+ * holds 2m ints. @return the number of triangles (m - 2), written to tri as
+ * indices into q, or 0 when no ear is left (the polygon crosses itself).
+ */
+static size_t ear_clip(const double (*q)[2], size_t m, int *link, size_t (*tri)[3])
+{
+    int *next = link, *prev = link + m;
+    for (size_t i = 0; i < m; i++) {
+        next[i] = (int)((i + 1) % m);
+        prev[i] = (int)((i + m - 1) % m);
+    }
+    size_t left = m, count = 0, misses = 0;
+    int i = 0;
+    while (left > 3) {
+        if (is_ear(q, next, prev, i)) {
+            size_t *t = tri[count++];
+            t[0] = (size_t)prev[i], t[1] = (size_t)i, t[2] = (size_t)next[i];
+            next[prev[i]] = next[i];
+            prev[next[i]] = prev[i];
+            i = prev[i];
+            left--;
+            misses = 0;
+        } else {
+            if (++misses > left)
+                return 0;
+            i = next[i];
+        }
+    }
+    size_t *t = tri[count++];
+    t[0] = (size_t)prev[i], t[1] = (size_t)i, t[2] = (size_t)next[i];
+    return count;
+}
+
+/* ----------------------------------------------------------- appending */
+
+/* Appends the kept vertices of c as one polygon. @return RL_OK; RL_ERR_INPUT past the limits; RL_ERR_NOMEM. */
+static rl_status append_polygon(rl_build *b, const poly_check *c, uint32_t material, const char *label)
+{
+    rl_scene *s = b->scene;
+    if (s->npolygons >= RL_MAX_ELEMENTS)
+        return rl__build_fail(b, label, "the scene has more than %zu polygons, the limit", RL_MAX_ELEMENTS);
+    if (c->n > RL_MAX_ELEMENTS - s->nvertices)
+        return rl__build_fail(b, label, "the scene has more than %zu vertices, the limit", RL_MAX_ELEMENTS);
+    void *v = rl__grow(s->vertices, &b->vertex_cap, s->nvertices + c->n, sizeof *s->vertices);
+    if (v)
+        s->vertices = v;
+    void *p = v ? rl__grow(s->polygons, &b->polygon_cap, s->npolygons + 1, sizeof *s->polygons) : NULL;
+    if (!p)
+        return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
+    s->polygons = p;
+
+    rl_polygon *poly = &s->polygons[s->npolygons++];
+    memset(poly, 0, sizeof *poly);
+    poly->first = (uint32_t)s->nvertices;
+    poly->count = (uint32_t)c->n;
+    poly->material = material;
+    memcpy(poly->normal, c->normal, sizeof poly->normal);
+    poly->area = c->area;
+    rl__format(poly->label, sizeof poly->label, "%s", label);
+    for (size_t i = 0; i < c->n; i++)
+        memcpy(s->vertices[s->nvertices++], kept(c, i), sizeof *s->vertices);
+    return RL_OK;
+}
+
+/* Ear clips the cleaned face c and appends its non-degenerate triangles. @return as rl__build_polygon(). */
+static rl_status split_face(rl_build *b, poly_check *c, uint32_t material, const char *label)
+{
+    project(c, b->flat);
+    size_t count = ear_clip((const double (*)[2])b->flat, c->n, b->link, b->tris);
+    if (count == 0)
+        return rl__build_fail(b, label, "cannot be split into triangles (the face crosses itself)");
+    for (size_t t = 0; t < count; t++)
+        for (int k = 0; k < 3; k++)
+            b->tris[t][k] = c->keep[b->tris[t][k]]; /* into the input: keep is reused below */
+    for (size_t t = 0; t < count; t++) {
+        double corners[3][3];
+        for (int k = 0; k < 3; k++)
+            memcpy(corners[k], c->p[b->tris[t][k]], sizeof corners[k]);
+        poly_check part = {.p = (const double (*)[3])corners, .keep = b->keep};
+        if (check_polygon(&part, 3, 1) != V_OK)
+            continue; /* a sliver: no area to carry light */
+        char name[sizeof ((rl_polygon *)0)->label];
+        rl__format(name, sizeof name, "%s part %zu", label, t);
+        rl_status st = append_polygon(b, &part, material, name);
+        if (st != RL_OK)
+            return st;
+    }
+    return RL_OK;
+}
+
+rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_t material,
+                            const char *label, rl_poly_policy policy)
+{
+    if (n < 3)
+        return policy == RL_POLY_STRICT
+                   ? rl__build_fail(b, label, "needs at least 3 vertices, got %zu", n)
+                   : RL_OK;
+    if (n > RL_MAX_POLYGON_VERTICES)
+        return rl__build_fail(b, label, "has %zu vertices, more than the limit of %u", n,
+                              RL_MAX_POLYGON_VERTICES);
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(v[i][0]) || !isfinite(v[i][1]) || !isfinite(v[i][2]))
+            return rl__build_fail(b, label, "vertex %zu is not finite", i);
+
+    poly_check c = {.p = v, .keep = b->keep};
+    verdict outcome = check_polygon(&c, n, policy == RL_POLY_SPLIT);
+    if (outcome == V_OK)
+        return append_polygon(b, &c, material, label);
+    if (policy == RL_POLY_STRICT)
+        return rl__build_fail(b, label, "%s", c.why);
+    if (outcome == V_DEGENERATE)
+        return RL_OK; /* a mesh face without area carries no light */
+    return split_face(b, &c, material, label);
+}
+
+/* ----------------------------------------------------------- mesh files */
+
+/* Marks a file material not yet turned into a scene material. */
+#define MATERIAL_UNSET UINT32_MAX
+
+/* @return 1 and its name if m is a material of the file's own, 0 for assimp's stand-in or no name. */
+static int own_material(const struct aiMaterial *m, struct aiString *name)
+{
+    if (aiGetMaterialString(m, AI_MATKEY_NAME, name) != aiReturn_SUCCESS)
+        return 0;
+    return name->length > 0 && strcmp(name->data, AI_DEFAULT_MATERIAL_NAME) != 0;
+}
+
+/* Copies the colour under key (type, index) of m into rgb, which keeps its value when m has no such key. */
+static void material_colour(const struct aiMaterial *m, const char *key, unsigned type, unsigned index,
+                            double rgb[3])
+{
+    struct aiColor4D c;
+    if (aiGetMaterialColor(m, key, type, index, &c) == aiReturn_SUCCESS)
+        rgb[0] = c.r, rgb[1] = c.g, rgb[2] = c.b;
+}
+
+/*
+ * Finds the scene material for file material k: "<shown>:<name>" with the
+ * diffuse colour as albedo and the emissive colour as emission, or *fallback
+ * when the file has none. @return RL_OK and *out; RL_ERR_INPUT; RL_ERR_NOMEM.
+ */
+static rl_status file_material(rl_build *b, const struct aiScene *sc, unsigned k, const char *elem,
+                               const char *shown, const uint32_t *fallback, uint32_t *out)
+{
+    struct aiString name;
+    if (k >= sc->mNumMaterials || !own_material(sc->mMaterials[k], &name)) {
+        if (!fallback)
+            return rl__build_fail(b, elem, "%s has faces without a material; give the entry a \"material\"",
+                                  shown);
+        *out = *fallback;
+        return RL_OK;
+    }
+    double albedo[3] = {0.8, 0.8, 0.8}, emission[3] = {0, 0, 0};
+    material_colour(sc->mMaterials[k], AI_MATKEY_COLOR_DIFFUSE, albedo);
+    material_colour(sc->mMaterials[k], AI_MATKEY_COLOR_EMISSIVE, emission);
+    char full[256], where[320];
+    rl__format(full, sizeof full, "%s:%s", shown, name.data);
+    rl__format(where, sizeof where, "%s (%s) material '%s'", elem, shown, name.data);
+    return rl__build_material(b, where, full, albedo, emission, out);
+}
+
+/* Copies face f of mesh m into b->face. @return RL_OK, or RL_ERR_INPUT for a bad index or coordinate. */
+static rl_status gather_face(rl_build *b, const struct aiMesh *m, const struct aiFace *f, const char *label)
+{
+    if (f->mNumIndices > RL_MAX_POLYGON_VERTICES)
+        return rl__build_fail(b, label, "has %u vertices, more than the limit of %u", f->mNumIndices,
+                              RL_MAX_POLYGON_VERTICES);
+    for (unsigned k = 0; k < f->mNumIndices; k++) {
+        unsigned i = f->mIndices[k];
+        if (i >= m->mNumVertices)
+            return rl__build_fail(b, label, "refers to vertex %u of %u", i, m->mNumVertices);
+        const struct aiVector3D *p = &m->mVertices[i];
+        b->face[k][0] = p->x, b->face[k][1] = p->y, b->face[k][2] = p->z;
+    }
+    return RL_OK;
+}
+
+/* Adds every face of the imported scene sc. @return as rl__build_mesh(). */
+static rl_status add_faces(rl_build *b, const struct aiScene *sc, uint32_t *materials, const char *elem,
+                           const char *shown, const uint32_t *fallback)
+{
+    size_t face_no = 0;
+    for (unsigned mi = 0; mi < sc->mNumMeshes; mi++) {
+        const struct aiMesh *m = sc->mMeshes[mi];
+        for (unsigned fi = 0; fi < m->mNumFaces; fi++, face_no++) {
+            const struct aiFace *f = &m->mFaces[fi];
+            if (f->mNumIndices < 3)
+                continue; /* points and lines carry no light */
+            char label[sizeof ((rl_polygon *)0)->label];
+            rl__format(label, sizeof label, "%s (%.40s) face %zu", elem, shown, face_no);
+            rl_status st = gather_face(b, m, f, label);
+            unsigned k = m->mMaterialIndex < sc->mNumMaterials ? m->mMaterialIndex : sc->mNumMaterials;
+            if (st == RL_OK && materials[k] == MATERIAL_UNSET)
+                st = file_material(b, sc, k, elem, shown, fallback, &materials[k]);
+            if (st == RL_OK)
+                st = rl__build_polygon(b, (const double (*)[3])b->face, f->mNumIndices, materials[k], label,
+                                       RL_POLY_SPLIT);
+            if (st != RL_OK)
+                return st;
+        }
+    }
+    return RL_OK;
+}
+
+rl_status rl__build_mesh(rl_build *b, const char *path, const char *elem, const char *shown,
+                         const uint32_t *fallback)
+{
+    struct stat sb;
+    if (stat(path, &sb) != 0)
+        return rl__build_fail(b, elem, "cannot open '%s': %s", path, strerror(errno));
+    if (!S_ISREG(sb.st_mode))
+        return rl__build_fail(b, elem, "'%s' is not a regular file", path);
+    const struct aiScene *sc =
+        aiImportFile(path, aiProcess_PreTransformVertices | aiProcess_ValidateDataStructure);
+    if (!sc)
+        return rl__build_fail(b, elem, "cannot read '%s': %s", path, aiGetErrorString());
+    if (sc->mFlags & AI_SCENE_FLAGS_INCOMPLETE) {
+        aiReleaseImport(sc);
+        return rl__build_fail(b, elem, "'%s' holds no complete mesh", path);
+    }
+    /* one slot per file material, plus one for meshes whose material index is out of range */
+    uint32_t *materials = malloc(((size_t)sc->mNumMaterials + 1) * sizeof *materials);
+    if (!materials) {
+        aiReleaseImport(sc);
+        return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
+    }
+    for (size_t k = 0; k <= sc->mNumMaterials; k++)
+        materials[k] = MATERIAL_UNSET;
+    rl_status st = add_faces(b, sc, materials, elem, shown, fallback);
+    free(materials);
+    aiReleaseImport(sc);
+    return st;
+}

@@ -1,0 +1,85 @@
+/*
+ * region.h - convex polygon clipping and the projected Minkowski sum
+ * (S + w)_R of the paper, as the intersection of half-planes on R's plane.
+ */
+#ifndef RELIGHT_REGION_H
+#define RELIGHT_REGION_H
+
+#include <stddef.h>
+
+#include "vec.h"
+
+/* Largest vertex count of the polygons handled here: scene polygons have at
+ * most RL_SCENE_MAX_POLY_VERTS (64), and clipping adds a few. */
+#define RL_MAX_POLY_VERTS 72
+#define RL_REGION_MAX_PLANES (RL_MAX_POLY_VERTS * 8)
+
+/* A plane frame: points p = origin + u*e1 + v*e2 (+ h*n). */
+typedef struct rl_frame {
+    v3 origin, e1, e2, n;
+} rl_frame;
+
+/* @return the 2D coordinates of world point p in frame f. */
+static inline v2 frame_project(const rl_frame *f, v3 p)
+{
+    v3 r = v3_sub(p, f->origin);
+    return (v2){v3_dot(r, f->e1), v3_dot(r, f->e2)};
+}
+
+/* @return the world point of 2D coordinates q in frame f. */
+static inline v3 frame_point(const rl_frame *f, v2 q)
+{
+    return v3_madd(v3_madd(f->origin, f->e1, q.x), f->e2, q.y);
+}
+
+/* A half-plane a*x + b*y + c >= 0. */
+typedef struct rl_halfplane {
+    double a, b, c;
+} rl_halfplane;
+
+/* The region of R's plane that may receive from S through a cone of
+ * directions: the intersection of its half-planes. all = 1 means "the whole
+ * plane" (a conservative answer when the geometry is degenerate); empty = 1
+ * means nothing can transfer. */
+typedef struct rl_region {
+    int empty, all;
+    size_t count;
+    rl_halfplane h[RL_REGION_MAX_PLANES];
+} rl_region;
+
+/* Clips the convex 3D polygon p (count vertices) to the half-space
+ * dot(x - o, n) >= 0, writing at most count+1 vertices to out.
+ * @return the vertex count of the result (0 if nothing remains). */
+size_t clip_poly3(const v3 *p, size_t count, v3 o, v3 n, v3 *out);
+
+/* Clips the convex 2D polygon p to half-plane h, writing at most count+1 vertices.
+ * @return the vertex count of the result. */
+size_t clip_poly2(const v2 *p, size_t count, rl_halfplane h, v2 *out);
+
+/* Clips the convex 2D polygon p (count vertices, at most RL_MAX_POLY_VERTS) to every
+ * half-plane of region r, into out (room for RL_MAX_POLY_VERTS + r->count vertices).
+ * @return the vertex count (0 if the polygon misses the region). */
+size_t clip_to_region(const v2 *p, size_t count, const rl_region *r, v2 *out, size_t out_cap);
+
+/* @return 1 if point q lies in region r. */
+int region_contains(const rl_region *r, v2 q);
+
+/*
+ * Computes (S + K)_R: the points x of R's plane (frame f, front side along
+ * f->n) such that x = y + t*d for some y in S, d in the cone K, t > 0.
+ * s: the emitter polygon already clipped to R's front half-space
+ * (dot(y - f->origin, f->n) >= 0), ns vertices. k: the cone's generators
+ * (unit vectors, propagation directions), nk of them (at most 8), already
+ * clipped to dot(d, f->n) <= 0. margin: a distance by which every
+ * half-plane is pushed outwards, so that rounding never makes the region
+ * smaller than the truth. Directions parallel to R's plane project to
+ * infinity; working with homogeneous coordinates keeps every number finite.
+ */
+void region_compute(const rl_frame *f, const v3 *s, size_t ns, const v3 *k, size_t nk, double margin,
+                    rl_region *out);
+
+/* Clips the cone spanned by generators g (count, a convex spherical polygon,
+ * at most 6) to dot(d, n) <= 0. @return the generator count of the result. */
+size_t clip_cone(const v3 *g, size_t count, v3 n, v3 *out);
+
+#endif /* RELIGHT_REGION_H */

@@ -1,0 +1,80 @@
+/*
+ * sampling.c - sample sequences and spherical-triangle warps.
+ *
+ * Everything here is a pure function of its arguments, which is what makes
+ * the engine's output independent of thread count and of which method
+ * (culled or naive) visits a (cell, solid angle) pair: the samples are a
+ * function of the pair's key alone.
+ */
+#include "sampling.h"
+
+/* @return the radical inverse of i in base b. */
+static double radical_inverse(uint32_t i, uint32_t b)
+{
+    double inv = 1.0 / b, f = inv, r = 0.0;
+    while (i) {
+        r += (i % b) * f;
+        i /= b;
+        f *= inv;
+    }
+    return r;
+}
+
+void lds4(uint64_t key, uint32_t i, double u[4])
+{
+    static const uint32_t bases[4] = {2, 3, 5, 7};
+    for (int k = 0; k < 4; k++) {
+        double shift = (hash_mix(key, (uint64_t)k + 1) >> 11) * (1.0 / 9007199254740992.0);
+        double x = radical_inverse(i, bases[k]) + shift;
+        x -= floor(x);
+        u[k] = x < 1.0 ? x : 0x1.fffffffffffffp-1;
+    }
+}
+
+double spherical_triangle_area(v3 a, v3 b, v3 c)
+{
+    double num = fabs(v3_dot(a, v3_cross(b, c)));
+    double den = 1.0 + v3_dot(a, b) + v3_dot(b, c) + v3_dot(c, a);
+    return 2.0 * atan2(num, den);
+}
+
+/* @return the component of v orthogonal to unit w, normalised (or w's
+ * perpendicular if v is parallel to w). */
+static v3 orthonormal_part(v3 v, v3 w)
+{
+    v3 p = v3_madd(v, w, -v3_dot(v, w));
+    double len = v3_len(p);
+    if (len > 0)
+        return v3_scale(p, 1.0 / len);
+    v3 h = fabs(w.x) < 0.9 ? v3_make(1, 0, 0) : v3_make(0, 1, 0);
+    return v3_norm(v3_cross(w, h));
+}
+
+v3 sample_spherical_triangle(v3 a, v3 b, v3 c, double omega, double u1, double u2)
+{
+    if (!(omega > 1e-9)) {
+        double su = sqrt(u1);
+        v3 p = v3_add(v3_add(v3_scale(a, 1 - su), v3_scale(b, su * (1 - u2))), v3_scale(c, su * u2));
+        return v3_norm(p);
+    }
+    /* Arvo: choose the sub-triangle a, b, c' of area u1*omega, then a point
+     * on the arc from b to c' with the right density. alpha is the interior
+     * angle at a, between the planes (a, b) and (a, c). */
+    v3 nab = v3_cross(a, b), nac = v3_cross(a, c);
+    double lab = v3_len(nab), lac = v3_len(nac);
+    if (!(lab > 0) || !(lac > 0))
+        return a;
+    double cos_alpha = fmin(1.0, fmax(-1.0, v3_dot(nab, nac) / (lab * lac)));
+    double sin_alpha = sqrt(fmax(0.0, 1.0 - cos_alpha * cos_alpha));
+    double area = u1 * omega;
+    double s = sin(area - acos(cos_alpha)), t = cos(area - acos(cos_alpha));
+    double u = t - cos_alpha, v = s + sin_alpha * v3_dot(a, b);
+    double den = (v * s + u * t) * sin_alpha;
+    double q = den != 0.0 ? ((v * t - u * s) * cos_alpha - v) / den : 1.0;
+    q = fmin(1.0, fmax(-1.0, q));
+    v3 c2 = v3_add(v3_scale(a, q), v3_scale(orthonormal_part(c, a), sqrt(fmax(0.0, 1 - q * q))));
+    double z = 1.0 - u2 * (1.0 - v3_dot(c2, b));
+    z = fmin(1.0, fmax(-1.0, z));
+    v3 p = v3_add(v3_scale(b, z), v3_scale(orthonormal_part(c2, b), sqrt(fmax(0.0, 1 - z * z))));
+    return v3_norm(p);
+}

@@ -1,0 +1,35 @@
+/*
+ * sampling.h - deterministic sample sequences and warps: a hash for keys,
+ * a scrambled 4-D Halton sequence, uniform directions in spherical
+ * triangles (Arvo 1995), and exact spherical-triangle solid angles.
+ */
+#ifndef RELIGHT_SAMPLING_H
+#define RELIGHT_SAMPLING_H
+
+#include <stdint.h>
+
+#include "vec.h"
+
+/* @return a well-mixed 64-bit hash of h and x (order matters). */
+static inline uint64_t hash_mix(uint64_t h, uint64_t x)
+{
+    uint64_t z = h ^ (x + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2));
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+/* Point i of a 4-D Halton sequence (bases 2, 3, 5, 7), shifted modulo 1 by
+ * offsets drawn from key (a Cranley-Patterson rotation): low discrepancy
+ * within one key, independent between keys. Each u[k] is in [0, 1). */
+void lds4(uint64_t key, uint32_t i, double u[4]);
+
+/* A direction uniformly distributed in the spherical triangle a, b, c (unit
+ * vectors) of solid angle omega, from u1, u2 in [0, 1). Below 1e-9 sr the
+ * planar triangle is sampled and normalised (density error < 1e-9). */
+v3 sample_spherical_triangle(v3 a, v3 b, v3 c, double omega, double u1, double u2);
+
+/* @return the solid angle of the spherical triangle a, b, c (unit vectors). */
+double spherical_triangle_area(v3 a, v3 b, v3 c);
+
+#endif /* RELIGHT_SAMPLING_H */

@@ -1,0 +1,976 @@
+/*
+ * scene.c - reads scene files (docs/scene.md) with cJSON into an rl_scene,
+ * and the accessors of relight/scene.h.
+ *
+ * Loading reads the whole file (at most 256 MiB), parses it, then walks the
+ * tree section by section: materials, radiance_maps, sampling, camera,
+ * polygons, meshes, lightfields. Every value is checked where it is read,
+ * and the first problem ends the load with a message
+ * "<scene file>: <element>: <problem>", the element written as a path into
+ * the file ("polygons[3].vertices[1][0]", "sampling.partition_n"). Defaults
+ * are applied for every absent optional key. Polygons and mesh faces go
+ * through mesh.c, which establishes the polygon invariants of
+ * scene_internal.h; this file establishes the others (materials, light
+ * field transforms, cell size, sampling, camera).
+ *
+ * Invariants: a scene returned by rl_scene_load() satisfies every invariant
+ * of scene_internal.h; on failure nothing is returned and everything
+ * allocated on the way (including loaded light fields) is released. No
+ * allocation is sized by a count read from a file before that count has
+ * been checked against its limit; arrays grow as elements pass their checks.
+ */
+#define _POSIX_C_SOURCE 200809L /* fileno(), fstat(); the build defines it too */
+
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "mesh.h"
+
+/* Largest scene file read, in bytes. */
+#define SCENE_MAX_BYTES ((size_t)256 << 20)
+
+/* Longest element path in messages. */
+#define ELEM_MAX 256
+
+/* ------------------------------------------------------------- limits */
+
+/* The allowed values of an integer setting. */
+typedef struct int_limit {
+    uint64_t lo, hi;
+    int pow2; /* also a power of two */
+} int_limit;
+
+static const int_limit lim_partition = {1, 4096, 1};
+static const int_limit lim_rays = {1, 65536, 0};
+static const int_limit lim_samples = {1, 1048576, 0};
+static const int_limit lim_bounces = {0, 64, 0};
+static const int_limit lim_threads = {0, 1024, 0};
+static const int_limit lim_seed = {0, (uint64_t)1 << 53, 0}; /* integers a JSON number holds exactly */
+static const int_limit lim_pixels = {1, 16384, 0};
+static const int_limit lim_index = {0, UINT32_MAX, 0};
+
+/* @return 1 if v is allowed by l. */
+static int limit_ok(const int_limit *l, uint64_t v)
+{
+    return v >= l->lo && v <= l->hi && (!l->pow2 || (v & (v - 1)) == 0);
+}
+
+/* Writes l's rule ("a power of two in 1..4096") to buf. @return buf. */
+static const char *limit_rule(const int_limit *l, char buf[64])
+{
+    snprintf(buf, 64, "%s in %llu..%llu", l->pow2 ? "a power of two" : "an integer",
+             (unsigned long long)l->lo, (unsigned long long)l->hi);
+    return buf;
+}
+
+/* ----------------------------------------------------------- messages */
+
+rl_status rl__build_fail(const rl_build *b, const char *elem, const char *fmt, ...)
+{
+    char msg[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    if (elem[0] == '\0')
+        return rl__fail(RL_ERR_INPUT, "%s: %s", b->file, msg);
+    return rl__fail(RL_ERR_INPUT, "%s: %s: %s", b->file, elem, msg);
+}
+
+void rl__format(char *out, size_t cap, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int len = vsnprintf(out, cap, fmt, ap);
+    va_end(ap);
+    if (len >= 0 && (size_t)len >= cap && cap >= 4)
+        memcpy(out + cap - 4, "...", 4);
+}
+
+/* Writes the path of member key of element elem ("sampling" + "seed" = "sampling.seed") to out. */
+static void member_elem(char out[ELEM_MAX], const char *elem, const char *key)
+{
+    rl__format(out, ELEM_MAX, "%s%s%s", elem, elem[0] ? "." : "", key);
+}
+
+/* Writes the path of entry i of array element elem ("polygons" + 3 = "polygons[3]") to out. */
+static void entry_elem(char out[ELEM_MAX], const char *elem, size_t i)
+{
+    rl__format(out, ELEM_MAX, "%s[%zu]", elem, i);
+}
+
+/* ------------------------------------------------------- JSON helpers */
+
+/* @return what j is, for messages ("a string"); "nothing" for NULL. */
+static const char *json_kind(const cJSON *j)
+{
+    if (!j)
+        return "nothing";
+    if (cJSON_IsBool(j))
+        return "a boolean";
+    if (cJSON_IsNull(j))
+        return "null";
+    if (cJSON_IsNumber(j))
+        return "a number";
+    if (cJSON_IsString(j))
+        return "a string";
+    if (cJSON_IsArray(j))
+        return "an array";
+    return "an object";
+}
+
+/* @return member key of object obj (case-sensitive), or NULL. */
+static const cJSON *member(const cJSON *obj, const char *key)
+{
+    return cJSON_GetObjectItemCaseSensitive(obj, key);
+}
+
+/*
+ * Checks that j is an object whose keys all appear in allowed (NULL-terminated,
+ * at most 32 names), each at most once. @return RL_OK or RL_ERR_INPUT naming the key.
+ */
+static rl_status json_keys(const rl_build *b, const cJSON *j, const char *elem, const char *const *allowed)
+{
+    if (!cJSON_IsObject(j))
+        return rl__build_fail(b, elem, "expected an object, got %s", json_kind(j));
+    uint32_t seen = 0;
+    for (const cJSON *k = j->child; k; k = k->next) {
+        size_t a = 0;
+        while (allowed[a] && strcmp(allowed[a], k->string) != 0)
+            a++;
+        if (!allowed[a]) {
+            char list[256] = "";
+            for (size_t i = 0; allowed[i]; i++)
+                snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", allowed[i]);
+            return rl__build_fail(b, elem, "unknown key '%.100s' (expected %s)", k->string, list);
+        }
+        if (seen & (UINT32_C(1) << a))
+            return rl__build_fail(b, elem, "duplicate key '%s'", allowed[a]);
+        seen |= UINT32_C(1) << a;
+    }
+    return RL_OK;
+}
+
+/* Reads the finite number j. @return RL_OK and *out, or RL_ERR_INPUT naming elem. */
+static rl_status json_number(const rl_build *b, const cJSON *j, const char *elem, double *out)
+{
+    if (!cJSON_IsNumber(j))
+        return rl__build_fail(b, elem, "expected a number, got %s", json_kind(j));
+    if (!isfinite(j->valuedouble))
+        return rl__build_fail(b, elem, "not a finite number (too large for a double)");
+    *out = j->valuedouble;
+    return RL_OK;
+}
+
+/* Reads a vector: the array j of exactly n finite numbers. @return RL_OK and out[0..n), or RL_ERR_INPUT. */
+static rl_status json_vector(const rl_build *b, const cJSON *j, const char *elem, size_t n, double *out)
+{
+    if (!cJSON_IsArray(j))
+        return rl__build_fail(b, elem, "expected an array of %zu numbers, got %s", n, json_kind(j));
+    size_t count = (size_t)cJSON_GetArraySize(j);
+    if (count != n)
+        return rl__build_fail(b, elem, "expected %zu numbers, got %zu", n, count);
+    size_t i = 0;
+    for (const cJSON *e = j->child; e; e = e->next, i++) {
+        char sub[ELEM_MAX];
+        entry_elem(sub, elem, i);
+        rl_status st = json_number(b, e, sub, &out[i]);
+        if (st != RL_OK)
+            return st;
+    }
+    return RL_OK;
+}
+
+/* Reads an integer allowed by l. @return RL_OK and *out, or RL_ERR_INPUT naming elem and the rule. */
+static rl_status json_integer(const rl_build *b, const cJSON *j, const char *elem, const int_limit *l,
+                              uint64_t *out)
+{
+    char rule[64];
+    if (!cJSON_IsNumber(j))
+        return rl__build_fail(b, elem, "expected %s, got %s", limit_rule(l, rule), json_kind(j));
+    double d = j->valuedouble;
+    if (!(d >= 0 && d <= 9007199254740992.0 && d == floor(d)) || !limit_ok(l, (uint64_t)d))
+        return rl__build_fail(b, elem, "must be %s, got %.17g", limit_rule(l, rule), d);
+    *out = (uint64_t)d;
+    return RL_OK;
+}
+
+/* Reads a non-empty string. @return RL_OK and *out (borrowed from j), or RL_ERR_INPUT. */
+static rl_status json_string(const rl_build *b, const cJSON *j, const char *elem, const char **out)
+{
+    if (!cJSON_IsString(j))
+        return rl__build_fail(b, elem, "expected a string, got %s", json_kind(j));
+    if (j->valuestring[0] == '\0')
+        return rl__build_fail(b, elem, "must not be empty");
+    *out = j->valuestring;
+    return RL_OK;
+}
+
+/* Finds the required member key of obj. @return RL_OK and *out, or RL_ERR_INPUT naming it. */
+static rl_status json_required(const rl_build *b, const cJSON *obj, const char *elem, const char *key,
+                               const cJSON **out)
+{
+    *out = member(obj, key);
+    return *out ? RL_OK : rl__build_fail(b, elem, "missing key '%s'", key);
+}
+
+/* -------------------------------------------------------- the builder */
+
+void *rl__grow(void *arr, size_t *cap, size_t need, size_t size)
+{
+    if (need <= *cap && arr)
+        return arr;
+    size_t n = *cap ? *cap : 16;
+    while (n < need) {
+        if (n > SIZE_MAX / 2)
+            return NULL;
+        n *= 2;
+    }
+    if (n > SIZE_MAX / size)
+        return NULL;
+    void *p = realloc(arr, n * size);
+    if (p)
+        *cap = n;
+    return p;
+}
+
+/* @return the FNV-1a hash of s. */
+static uint64_t name_hash(const char *s)
+{
+    uint64_t h = 14695981039346656037u;
+    for (; *s; s++)
+        h = (h ^ (unsigned char)*s) * 1099511628211u;
+    return h;
+}
+
+/* Puts material index i into the name table, which has room. */
+static void names_put(rl_build *b, uint32_t i)
+{
+    size_t mask = b->names_cap - 1, h = (size_t)name_hash(b->scene->materials[i].name) & mask;
+    while (b->names[h])
+        h = (h + 1) & mask;
+    b->names[h] = i + 1;
+}
+
+/* Makes room in the name table for one more material, rehashing into double the size. @return 0 on failure. */
+static int names_reserve(rl_build *b)
+{
+    size_t n = b->scene->nmaterials;
+    if (2 * (n + 1) < b->names_cap)
+        return 1;
+    size_t cap = b->names_cap ? 2 * b->names_cap : 64;
+    uint32_t *t = calloc(cap, sizeof *t);
+    if (!t)
+        return 0;
+    free(b->names);
+    b->names = t;
+    b->names_cap = cap;
+    for (size_t i = 0; i < n; i++)
+        names_put(b, (uint32_t)i);
+    return 1;
+}
+
+int rl__build_find_material(const rl_build *b, const char *name, uint32_t *index)
+{
+    if (b->names_cap == 0)
+        return 0;
+    size_t mask = b->names_cap - 1;
+    for (size_t h = (size_t)name_hash(name) & mask; b->names[h]; h = (h + 1) & mask)
+        if (strcmp(b->scene->materials[b->names[h] - 1].name, name) == 0) {
+            *index = b->names[h] - 1;
+            return 1;
+        }
+    return 0;
+}
+
+rl_status rl__build_material(rl_build *b, const char *elem, const char *name, const double albedo[3],
+                             const double emission[3], uint32_t *index)
+{
+    rl_scene *s = b->scene;
+    size_t len = strlen(name);
+    if (len == 0 || len >= sizeof s->materials->name)
+        return rl__build_fail(b, elem, "material name '%.100s' must be 1 to %zu bytes long", name,
+                              sizeof s->materials->name - 1);
+    rl_material m;
+    memset(&m, 0, sizeof m);
+    memcpy(m.name, name, len);
+    for (int k = 0; k < 3; k++) {
+        if (!(albedo[k] >= 0 && albedo[k] <= 1))
+            return rl__build_fail(b, elem, "albedo[%d] is %.6g, outside [0, 1]", k, albedo[k]);
+        if (!(emission[k] >= 0 && emission[k] <= FLT_MAX))
+            return rl__build_fail(b, elem, "emission[%d] is %.6g; it must be >= 0 and at most %.3g", k,
+                                  emission[k], (double)FLT_MAX);
+        m.albedo[k] = (float)albedo[k];
+        m.emission[k] = (float)emission[k];
+    }
+    uint32_t old;
+    if (rl__build_find_material(b, name, &old)) {
+        const rl_material *o = &s->materials[old];
+        if (memcmp(o->albedo, m.albedo, sizeof m.albedo) != 0 || memcmp(o->emission, m.emission, sizeof m.emission) != 0)
+            return rl__build_fail(b, elem, "material '%s' is already defined with other values", name);
+        *index = old;
+        return RL_OK;
+    }
+    if (s->nmaterials >= RL_MAX_ELEMENTS)
+        return rl__build_fail(b, elem, "more than %zu materials, the limit", RL_MAX_ELEMENTS);
+    void *p = rl__grow(s->materials, &b->material_cap, s->nmaterials + 1, sizeof *s->materials);
+    if (!p || !names_reserve(b)) {
+        if (p)
+            s->materials = p;
+        return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
+    }
+    s->materials = p;
+    s->materials[s->nmaterials] = m;
+    names_put(b, (uint32_t)s->nmaterials);
+    *index = (uint32_t)s->nmaterials++;
+    return RL_OK;
+}
+
+/* Writes file, a path relative to the scene's folder unless absolute, to out. @return RL_OK or RL_ERR_INPUT. */
+static rl_status resolve_path(const rl_build *b, const char *elem, const char *file, char *out, size_t cap)
+{
+    int len = snprintf(out, cap, "%s%s", file[0] == '/' ? "" : b->dir, file);
+    if (len < 0 || (size_t)len >= cap)
+        return rl__build_fail(b, elem, "the path '%.100s...' is too long", file);
+    return RL_OK;
+}
+
+/* ----------------------------------------------------------- sections */
+
+/* Reads "materials": an object of name -> {"albedo", "emission"}. */
+static rl_status read_materials(rl_build *b, const cJSON *j)
+{
+    static const char *const keys[] = {"albedo", "emission", NULL};
+    if (!cJSON_IsObject(j))
+        return rl__build_fail(b, "materials", "expected an object, got %s", json_kind(j));
+    for (const cJSON *m = j->child; m; m = m->next) {
+        char elem[ELEM_MAX], sub[ELEM_MAX];
+        member_elem(elem, "materials", m->string);
+        uint32_t index;
+        if (rl__build_find_material(b, m->string, &index))
+            return rl__build_fail(b, elem, "duplicate material");
+        double colour[2][3] = {{0.8, 0.8, 0.8}, {0, 0, 0}};
+        rl_status st = json_keys(b, m, elem, keys);
+        for (int k = 0; k < 2 && st == RL_OK; k++) {
+            const cJSON *c = member(m, keys[k]);
+            member_elem(sub, elem, keys[k]);
+            if (c)
+                st = json_vector(b, c, sub, 3, colour[k]);
+        }
+        if (st == RL_OK)
+            st = rl__build_material(b, elem, m->string, colour[0], colour[1], &index);
+        if (st != RL_OK)
+            return st;
+    }
+    return RL_OK;
+}
+
+/* Reads the member "material" of obj, which must name a known material. @return RL_OK and *index, or RL_ERR_INPUT. */
+static rl_status read_material_ref(const rl_build *b, const cJSON *j, const char *elem, uint32_t *index)
+{
+    const char *name = NULL;
+    rl_status st = json_string(b, j, elem, &name);
+    if (st == RL_OK && !rl__build_find_material(b, name, index))
+        st = rl__build_fail(b, elem, "unknown material '%.100s'", name);
+    return st;
+}
+
+/* Reads one entry of "polygons": {"material", "vertices"}. */
+static rl_status read_polygon(rl_build *b, const cJSON *p, const char *elem)
+{
+    static const char *const keys[] = {"material", "vertices", NULL};
+    char sub[ELEM_MAX];
+    const cJSON *mj = NULL, *vj = NULL;
+    uint32_t material = 0;
+    rl_status st = json_keys(b, p, elem, keys);
+    if (st == RL_OK)
+        st = json_required(b, p, elem, "material", &mj);
+    if (st == RL_OK) {
+        member_elem(sub, elem, "material");
+        st = read_material_ref(b, mj, sub, &material);
+    }
+    if (st == RL_OK)
+        st = json_required(b, p, elem, "vertices", &vj);
+    if (st != RL_OK)
+        return st;
+    member_elem(sub, elem, "vertices");
+    if (!cJSON_IsArray(vj))
+        return rl__build_fail(b, sub, "expected an array of [x, y, z] vertices, got %s", json_kind(vj));
+    size_t n = (size_t)cJSON_GetArraySize(vj);
+    if (n < 3)
+        return rl__build_fail(b, elem, "needs at least 3 vertices, got %zu", n);
+    if (n > RL_MAX_POLYGON_VERTICES)
+        return rl__build_fail(b, elem, "has %zu vertices, more than the limit of %u", n, RL_MAX_POLYGON_VERTICES);
+    size_t i = 0;
+    for (const cJSON *v = vj->child; v; v = v->next, i++) {
+        char ve[ELEM_MAX];
+        entry_elem(ve, sub, i);
+        if ((st = json_vector(b, v, ve, 3, b->face[i])) != RL_OK)
+            return st;
+    }
+    return rl__build_polygon(b, (const double (*)[3])b->face, n, material, elem, RL_POLY_STRICT);
+}
+
+/* Reads "polygons": an array of polygons. */
+static rl_status read_polygons(rl_build *b, const cJSON *j)
+{
+    if (!cJSON_IsArray(j))
+        return rl__build_fail(b, "polygons", "expected an array, got %s", json_kind(j));
+    size_t i = 0;
+    for (const cJSON *p = j->child; p; p = p->next, i++) {
+        char elem[ELEM_MAX];
+        entry_elem(elem, "polygons", i);
+        rl_status st = read_polygon(b, p, elem);
+        if (st != RL_OK)
+            return st;
+    }
+    return RL_OK;
+}
+
+/* Reads "meshes": an array of {"file", "material"}. */
+static rl_status read_meshes(rl_build *b, const cJSON *j)
+{
+    static const char *const keys[] = {"file", "material", NULL};
+    if (!cJSON_IsArray(j))
+        return rl__build_fail(b, "meshes", "expected an array, got %s", json_kind(j));
+    size_t i = 0;
+    for (const cJSON *m = j->child; m; m = m->next, i++) {
+        char elem[ELEM_MAX], sub[ELEM_MAX], path[1024];
+        entry_elem(elem, "meshes", i);
+        const cJSON *fj = NULL, *mj;
+        const char *file = NULL;
+        uint32_t material = 0;
+        rl_status st = json_keys(b, m, elem, keys);
+        if (st == RL_OK)
+            st = json_required(b, m, elem, "file", &fj);
+        member_elem(sub, elem, "file");
+        if (st == RL_OK)
+            st = json_string(b, fj, sub, &file);
+        if (st == RL_OK)
+            st = resolve_path(b, sub, file, path, sizeof path);
+        mj = member(m, "material");
+        member_elem(sub, elem, "material");
+        if (st == RL_OK && mj)
+            st = read_material_ref(b, mj, sub, &material);
+        if (st == RL_OK)
+            st = rl__build_mesh(b, path, elem, file, mj ? &material : NULL);
+        if (st != RL_OK)
+            return st;
+    }
+    return RL_OK;
+}
+
+/* Reads a 4x4 matrix: 16 numbers in row-major order, or 4 rows of 4. @return RL_OK and t, or RL_ERR_INPUT. */
+static rl_status read_matrix(const rl_build *b, const cJSON *j, const char *elem, double t[16])
+{
+    if (!cJSON_IsArray(j) || !cJSON_IsArray(j->child))
+        return json_vector(b, j, elem, 16, t);
+    if (cJSON_GetArraySize(j) != 4)
+        return rl__build_fail(b, elem, "expected 4 rows of 4 numbers, got %d rows", cJSON_GetArraySize(j));
+    size_t r = 0;
+    for (const cJSON *row = j->child; row; row = row->next, r++) {
+        char sub[ELEM_MAX];
+        entry_elem(sub, elem, r);
+        rl_status st = json_vector(b, row, sub, 4, t + 4 * r);
+        if (st != RL_OK)
+            return st;
+    }
+    return RL_OK;
+}
+
+/*
+ * Splits the row-major affine map t into rotation, uniform scale and
+ * translation (orthogonality to 1e-9 relative, determinant > 0).
+ * @return NULL on success, else the problem.
+ */
+static const char *split_similarity(const double t[16], rl_lightfield *lf)
+{
+    if (t[12] != 0 || t[13] != 0 || t[14] != 0 || t[15] != 1)
+        return "the last row must be [0, 0, 0, 1]";
+    double gram[3][3], s2 = 0;
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++)
+            gram[i][k] = t[i] * t[k] + t[4 + i] * t[4 + k] + t[8 + i] * t[8 + k];
+    for (int i = 0; i < 3; i++)
+        s2 += gram[i][i] / 3;
+    if (!(s2 > 0) || !isfinite(s2))
+        return "the upper 3x3 must be a rotation times a uniform scale > 0 (its scale is 0 or too large)";
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++)
+            if (fabs(gram[i][k] - (i == k ? s2 : 0)) > 1e-9 * s2)
+                return "the upper 3x3 must be a rotation times a uniform scale (it shears or scales unevenly)";
+    double det = t[0] * (t[5] * t[10] - t[6] * t[9]) - t[1] * (t[4] * t[10] - t[6] * t[8]) +
+                 t[2] * (t[4] * t[9] - t[5] * t[8]);
+    if (!(det > 0))
+        return "the upper 3x3 must have a positive determinant (it mirrors)";
+    lf->scale = sqrt(s2);
+    for (int i = 0; i < 3; i++) {
+        for (int k = 0; k < 3; k++)
+            lf->rot[i][k] = t[4 * i + k] / lf->scale;
+        lf->translate[i] = t[4 * i + 3];
+    }
+    return NULL;
+}
+
+/* out = the linear part of lf's transform applied to x. */
+static void transform_vector(const rl_lightfield *lf, const double x[3], double out[3])
+{
+    for (int i = 0; i < 3; i++)
+        out[i] = lf->scale * (lf->rot[i][0] * x[0] + lf->rot[i][1] * x[1] + lf->rot[i][2] * x[2]);
+}
+
+/* Lists lf's slab names into buf ("a, b"). */
+static void slab_names(const lfio_lightfield *lf, char *buf, size_t cap)
+{
+    buf[0] = '\0';
+    for (size_t k = 0; k < lfio_lightfield_slab_count(lf) && strlen(buf) + 1 < cap; k++)
+        snprintf(buf + strlen(buf), cap - strlen(buf), "%s'%s'", k ? ", " : "",
+                 lfio_slab_get_desc(lfio_lightfield_slab(lf, k))->name);
+}
+
+/* Picks lf's slab given by sj: a name, an index, or NULL for slab 0. @return RL_OK or RL_ERR_INPUT. */
+static rl_status pick_slab(const rl_build *b, const cJSON *sj, const char *elem, rl_lightfield *lf)
+{
+    size_t count = lfio_lightfield_slab_count(lf->lf);
+    uint64_t index = 0;
+    if (cJSON_IsString(sj)) {
+        lf->slab = lfio_lightfield_find(lf->lf, sj->valuestring);
+        if (lf->slab)
+            return RL_OK;
+        char names[256];
+        slab_names(lf->lf, names, sizeof names);
+        return rl__build_fail(b, elem, "no slab named '%.64s' in '%s' (it has %s)", sj->valuestring, lf->file, names);
+    }
+    rl_status st = sj ? json_integer(b, sj, elem, &lim_index, &index) : RL_OK;
+    if (st == RL_OK && index >= count)
+        st = rl__build_fail(b, elem, "slab index %llu is out of range: '%s' has %zu slab%s",
+                            (unsigned long long)index, lf->file, count, count == 1 ? "" : "s");
+    if (st == RL_OK)
+        lf->slab = lfio_lightfield_slab(lf->lf, (size_t)index);
+    return st;
+}
+
+/* Reads one entry of "lightfields" into lf, whose lf->lf the caller releases. */
+static rl_status read_lightfield(rl_build *b, const cJSON *j, const char *elem, rl_lightfield *lf)
+{
+    static const char *const keys[] = {"file", "slab", "transform", NULL};
+    char sub[ELEM_MAX];
+    const cJSON *fj = NULL, *sj, *tj;
+    const char *file = NULL;
+    double t[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    rl_status st = json_keys(b, j, elem, keys);
+    if (st == RL_OK)
+        st = json_required(b, j, elem, "file", &fj);
+    member_elem(sub, elem, "file");
+    if (st == RL_OK)
+        st = json_string(b, fj, sub, &file);
+    if (st == RL_OK)
+        st = resolve_path(b, sub, file, lf->file, sizeof lf->file);
+    sj = member(j, "slab");
+    member_elem(sub, elem, "slab");
+    if (st == RL_OK && sj && !cJSON_IsString(sj) && !cJSON_IsNumber(sj))
+        st = rl__build_fail(b, sub, "expected a slab name or index, got %s", json_kind(sj));
+    tj = member(j, "transform");
+    member_elem(sub, elem, "transform");
+    if (st == RL_OK && tj)
+        st = read_matrix(b, tj, sub, t);
+    const char *why = st == RL_OK ? split_similarity(t, lf) : NULL;
+    if (why)
+        st = rl__build_fail(b, sub, "%s", why);
+    if (st != RL_OK)
+        return st;
+
+    lfio_status ls = lfio_lightfield_read(lf->file, &lf->lf);
+    if (ls != LFIO_OK)
+        return ls == LFIO_ERR_NOMEM ? rl__fail(RL_ERR_NOMEM, "%s: %s: %s", b->file, elem, lfio_errmsg())
+                                    : rl__build_fail(b, elem, "%s", lfio_errmsg());
+    member_elem(sub, elem, "slab");
+    if ((st = pick_slab(b, sj, sub, lf)) != RL_OK)
+        return st;
+    const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
+    transform_vector(lf, d->origin, lf->origin);
+    for (int i = 0; i < 3; i++)
+        lf->origin[i] += lf->translate[i];
+    transform_vector(lf, d->u, lf->u);
+    transform_vector(lf, d->v, lf->v);
+    rl__format(lf->label, sizeof lf->label, "%s", elem);
+    return RL_OK;
+}
+
+/* Reads "lightfields": an array of light field emitters. */
+static rl_status read_lightfields(rl_build *b, const cJSON *j)
+{
+    if (!cJSON_IsArray(j))
+        return rl__build_fail(b, "lightfields", "expected an array, got %s", json_kind(j));
+    rl_scene *s = b->scene;
+    size_t i = 0;
+    for (const cJSON *e = j->child; e; e = e->next, i++) {
+        void *p = rl__grow(s->lightfields, &b->lightfield_cap, s->nlightfields + 1, sizeof *s->lightfields);
+        if (!p)
+            return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
+        s->lightfields = p;
+        rl_lightfield *lf = &s->lightfields[s->nlightfields++]; /* counted now so that destroy frees it */
+        memset(lf, 0, sizeof *lf);
+        char elem[ELEM_MAX];
+        entry_elem(elem, "lightfields", i);
+        rl_status st = read_lightfield(b, e, elem, lf);
+        if (st != RL_OK)
+            return st;
+    }
+    return RL_OK;
+}
+
+/* Reads "radiance_maps": {"cell_size"}. */
+static rl_status read_radiance_maps(rl_build *b, const cJSON *j)
+{
+    static const char *const keys[] = {"cell_size", NULL};
+    rl_status st = json_keys(b, j, "radiance_maps", keys);
+    const cJSON *c = member(j, "cell_size");
+    if (st != RL_OK || !c)
+        return st;
+    double size = 0;
+    if ((st = json_number(b, c, "radiance_maps.cell_size", &size)) != RL_OK)
+        return st;
+    if (!(size > 0))
+        return rl__build_fail(b, "radiance_maps.cell_size", "must be > 0 metres, got %.17g", size);
+    b->scene->cell_size = size;
+    return RL_OK;
+}
+
+/* Reads "sampling": method and the integer settings. */
+static rl_status read_sampling(rl_build *b, const cJSON *j)
+{
+    static const char *const keys[] = {"method", "partition_n", "rays_per_solid_angle", "samples_per_cell",
+                                       "bounces", "seed", NULL};
+    static const int_limit *const limits[] = {NULL, &lim_partition, &lim_rays, &lim_samples, &lim_bounces, &lim_seed};
+    rl_sampling *s = &b->scene->sampling;
+    uint32_t *const fields[] = {NULL, &s->partition_n, &s->rays_per_solid_angle, &s->samples_per_cell, &s->bounces, NULL};
+    rl_status st = json_keys(b, j, "sampling", keys);
+    const cJSON *m = member(j, "method");
+    const char *name = NULL;
+    if (st == RL_OK && m && (st = json_string(b, m, "sampling.method", &name)) == RL_OK &&
+        !rl_method_parse(name, &s->method))
+        st = rl__build_fail(b, "sampling.method", "unknown method '%.64s' (expected culled, naive, area or solidangle)", name);
+    for (size_t k = 1; keys[k] && st == RL_OK; k++) {
+        const cJSON *v = member(j, keys[k]);
+        char elem[ELEM_MAX];
+        uint64_t value = 0;
+        member_elem(elem, "sampling", keys[k]);
+        if (v && (st = json_integer(b, v, elem, limits[k], &value)) == RL_OK) {
+            if (fields[k])
+                *fields[k] = (uint32_t)value;
+            else
+                s->seed = value;
+        }
+    }
+    return st;
+}
+
+/* Reads "camera": position, look_at, up, fov_deg, width, height. */
+static rl_status read_camera(rl_build *b, const cJSON *j)
+{
+    static const char *const keys[] = {"position", "look_at", "up", "fov_deg", "width", "height", NULL};
+    rl_camera *c = &b->scene->camera;
+    double *const vectors[] = {c->position, c->look_at, c->up};
+    uint32_t *const sizes[] = {&c->width, &c->height};
+    char elem[ELEM_MAX];
+    *c = (rl_camera){.up = {0, 0, 1}, .fov_deg = 45, .width = 640, .height = 480};
+    rl_status st = json_keys(b, j, "camera", keys);
+    for (int k = 0; k < 3 && st == RL_OK; k++) {
+        const cJSON *v = member(j, keys[k]);
+        member_elem(elem, "camera", keys[k]);
+        if (v)
+            st = json_vector(b, v, elem, 3, vectors[k]);
+        else if (k < 2)
+            st = rl__build_fail(b, "camera", "missing key '%s'", keys[k]);
+    }
+    const cJSON *f = member(j, "fov_deg");
+    if (st == RL_OK && f && (st = json_number(b, f, "camera.fov_deg", &c->fov_deg)) == RL_OK &&
+        !(c->fov_deg > 0 && c->fov_deg < 180))
+        st = rl__build_fail(b, "camera.fov_deg", "must lie strictly between 0 and 180 degrees, got %.17g", c->fov_deg);
+    for (int k = 0; k < 2 && st == RL_OK; k++) {
+        const cJSON *v = member(j, keys[4 + k]);
+        uint64_t value = 0;
+        member_elem(elem, "camera", keys[4 + k]);
+        if (v && (st = json_integer(b, v, elem, &lim_pixels, &value)) == RL_OK)
+            *sizes[k] = (uint32_t)value;
+    }
+    if (st != RL_OK)
+        return st;
+    double view[3], side[3];
+    for (int k = 0; k < 3; k++)
+        view[k] = c->look_at[k] - c->position[k];
+    side[0] = view[1] * c->up[2] - view[2] * c->up[1];
+    side[1] = view[2] * c->up[0] - view[0] * c->up[2];
+    side[2] = view[0] * c->up[1] - view[1] * c->up[0];
+    double lv = sqrt(view[0] * view[0] + view[1] * view[1] + view[2] * view[2]);
+    double lu = sqrt(c->up[0] * c->up[0] + c->up[1] * c->up[1] + c->up[2] * c->up[2]);
+    double ls = sqrt(side[0] * side[0] + side[1] * side[1] + side[2] * side[2]);
+    if (!(lv > 0 && isfinite(lv)))
+        return rl__build_fail(b, "camera", "position and look_at must be distinct points");
+    if (!(ls > 1e-9 * lv * lu) || !isfinite(ls))
+        return rl__build_fail(b, "camera", "up must not be zero or parallel to the view direction");
+    b->scene->has_camera = 1;
+    return RL_OK;
+}
+
+/* Reads the top-level object. */
+static rl_status read_scene(rl_build *b, const cJSON *root)
+{
+    static const char *const keys[] = {"materials", "polygons", "meshes", "lightfields",
+                                       "radiance_maps", "sampling", "camera", NULL};
+    typedef rl_status (*reader)(rl_build *, const cJSON *);
+    static const struct {
+        const char *key;
+        reader read;
+    } sections[] = {{"materials", read_materials}, {"radiance_maps", read_radiance_maps},
+                    {"sampling", read_sampling},   {"camera", read_camera},
+                    {"polygons", read_polygons},   {"meshes", read_meshes},
+                    {"lightfields", read_lightfields}};
+    if (!cJSON_IsObject(root))
+        return rl__build_fail(b, "", "expected a JSON object at the top level, got %s", json_kind(root));
+    rl_status st = json_keys(b, root, "", keys);
+    for (size_t k = 0; k < sizeof sections / sizeof sections[0] && st == RL_OK; k++) {
+        const cJSON *j = member(root, sections[k].key);
+        if (j)
+            st = sections[k].read(b, j);
+    }
+    return st;
+}
+
+/* -------------------------------------------------------------- files */
+
+/* Reads the whole file into a NUL-terminated buffer. @return RL_OK; RL_ERR_IO; RL_ERR_INPUT (too large); RL_ERR_NOMEM. */
+static rl_status read_file(const char *path, char **text, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return rl__fail(RL_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    struct stat sb;
+    rl_status st = RL_OK;
+    if (fstat(fileno(f), &sb) != 0)
+        st = rl__fail(RL_ERR_IO, "%s: cannot read: %s", path, strerror(errno));
+    else if (S_ISDIR(sb.st_mode))
+        st = rl__fail(RL_ERR_IO, "%s: is a directory, not a scene file", path);
+    else if (!S_ISREG(sb.st_mode))
+        st = rl__fail(RL_ERR_IO, "%s: not a regular file", path);
+    else if ((uint64_t)sb.st_size > SCENE_MAX_BYTES)
+        st = rl__fail(RL_ERR_INPUT, "%s: %lld bytes, more than the limit of 256 MiB", path, (long long)sb.st_size);
+    char *buf = st == RL_OK ? malloc((size_t)sb.st_size + 1) : NULL;
+    if (st == RL_OK && !buf)
+        st = rl__fail(RL_ERR_NOMEM, "%s: out of memory", path);
+    size_t n = st == RL_OK ? fread(buf, 1, (size_t)sb.st_size, f) : 0;
+    if (st == RL_OK && (n != (size_t)sb.st_size || ferror(f)))
+        st = rl__fail(RL_ERR_IO, "%s: cannot read: %s", path, ferror(f) ? strerror(errno) : "the file shrank");
+    fclose(f);
+    if (st != RL_OK) {
+        free(buf);
+        return st;
+    }
+    buf[n] = '\0';
+    *text = buf;
+    *len = n;
+    return RL_OK;
+}
+
+/* Sets *line and *col (from 1, col in bytes) of byte pos of text. */
+static void line_col(const char *text, size_t pos, unsigned long *line, unsigned long *col)
+{
+    *line = 1;
+    *col = 1;
+    for (size_t i = 0; i < pos; i++) {
+        if (text[i] == '\n')
+            ++*line, *col = 1;
+        else
+            ++*col;
+    }
+}
+
+/* Fails for the JSON error at byte pos of text (len bytes), quoting the text around it. @return RL_ERR_INPUT. */
+static rl_status json_error(const char *path, const char *text, size_t len, size_t pos, const char *what)
+{
+    unsigned long line, col;
+    line_col(text, pos, &line, &col);
+    size_t rest = pos;
+    while (rest < len && strchr(" \t\r\n", text[rest]))
+        rest++;
+    if (rest >= len)
+        return rl__fail(RL_ERR_INPUT, "%s:%lu:%lu: not valid JSON: %s", path, line, col,
+                        what ? what : "unexpected end of file");
+    size_t from = pos, to = pos; /* up to 12 bytes either side, within the line */
+    while (from > 0 && pos - from < 12 && text[from - 1] != '\n')
+        from--;
+    while (to < len && to - pos < 12 && text[to] != '\n')
+        to++;
+    char near[32];
+    size_t k = 0;
+    for (size_t i = from; i < to; i++)
+        near[k++] = text[i] >= 32 && text[i] < 127 ? text[i] : '?';
+    near[k] = '\0';
+    return rl__fail(RL_ERR_INPUT, "%s:%lu:%lu: not valid JSON: %s near '%s'", path, line, col,
+                    what ? what : "unexpected text", near);
+}
+
+/* Parses text (len bytes, NUL-terminated) as JSON. @return RL_OK and *root, or RL_ERR_INPUT with line:column. */
+static rl_status parse_json(const char *path, const char *text, size_t len, cJSON **root)
+{
+    size_t start = len >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0 ? 3 : 0; /* a UTF-8 byte order mark */
+    const char *nul = memchr(text, '\0', len);
+    if (nul)
+        return json_error(path, text, len, (size_t)(nul - text), "a NUL byte");
+    size_t first = start;
+    while (first < len && strchr(" \t\r\n", text[first]))
+        first++;
+    if (first == len)
+        return rl__fail(RL_ERR_INPUT, "%s: the file is empty; expected a JSON object", path);
+    const char *end = NULL;
+    *root = cJSON_ParseWithLengthOpts(text + start, len - start + 1, &end, 1);
+    if (*root)
+        return RL_OK;
+    size_t pos = end && end >= text && end <= text + len ? (size_t)(end - text) : len;
+    return json_error(path, text, len, pos, NULL);
+}
+
+/* ---------------------------------------------------------------- API */
+
+/* Releases b's name table and scratch space. */
+static void build_release(rl_build *b)
+{
+    free(b->names);
+    free(b->face);
+    free(b->keep);
+    free(b->flat);
+    free(b->link);
+    free(b->tris);
+}
+
+/* Sets up b for scene s read from path: folder, scratch space, defaults. @return RL_OK, RL_ERR_INPUT or RL_ERR_NOMEM. */
+static rl_status build_init(rl_build *b, rl_scene *s, const char *path)
+{
+    const size_t n = RL_MAX_POLYGON_VERTICES;
+    memset(b, 0, sizeof *b);
+    b->scene = s;
+    b->file = path;
+    const char *slash = strrchr(path, '/');
+    size_t dirlen = slash ? (size_t)(slash - path) + 1 : 0;
+    if (dirlen >= sizeof b->dir || strlen(path) >= sizeof s->path)
+        return rl__fail(RL_ERR_INPUT, "%.100s...: the path is too long", path);
+    memcpy(b->dir, path, dirlen);
+    memcpy(s->path, path, strlen(path) + 1);
+    s->cell_size = 0.05;
+    rl_sampling_default(&s->sampling);
+    b->face = malloc(n * sizeof *b->face);
+    b->keep = malloc(n * sizeof *b->keep);
+    b->flat = malloc(n * sizeof *b->flat);
+    b->link = malloc(2 * n * sizeof *b->link);
+    b->tris = malloc(n * sizeof *b->tris);
+    if (!b->face || !b->keep || !b->flat || !b->link || !b->tris)
+        return rl__fail(RL_ERR_NOMEM, "%s: out of memory", path);
+    return RL_OK;
+}
+
+rl_status rl_scene_load(const char *path, rl_scene **out)
+{
+    if (out)
+        *out = NULL;
+    if (!path || !out)
+        return rl__fail(RL_ERR_ARG, "rl_scene_load: path and out must not be NULL");
+    char *text = NULL;
+    size_t len = 0;
+    rl_status st = read_file(path, &text, &len);
+    if (st != RL_OK)
+        return st;
+    cJSON *root = NULL;
+    st = parse_json(path, text, len, &root);
+    free(text);
+    if (st != RL_OK)
+        return st;
+
+    rl_scene *s = calloc(1, sizeof *s);
+    rl_build b;
+    memset(&b, 0, sizeof b);
+    if (!s)
+        st = rl__fail(RL_ERR_NOMEM, "%s: out of memory", path);
+    if (st == RL_OK)
+        st = build_init(&b, s, path);
+    if (st == RL_OK)
+        st = read_scene(&b, root);
+    build_release(&b);
+    cJSON_Delete(root);
+    if (st != RL_OK) {
+        rl_scene_destroy(s);
+        return st;
+    }
+    *out = s;
+    return RL_OK;
+}
+
+void rl_scene_destroy(rl_scene *s)
+{
+    if (!s)
+        return;
+    for (size_t k = 0; k < s->nlightfields; k++)
+        lfio_lightfield_destroy(s->lightfields[k].lf);
+    free(s->lightfields);
+    free(s->materials);
+    free(s->vertices);
+    free(s->polygons);
+    free(s);
+}
+
+const rl_sampling *rl_scene_sampling(const rl_scene *s)
+{
+    return s ? &s->sampling : NULL;
+}
+
+rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
+{
+    if (!s || !x)
+        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: scene and sampling must not be NULL");
+    if ((unsigned)x->method > RL_METHOD_SOLIDANGLE)
+        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: method %d is not a method", (int)x->method);
+    const struct {
+        const char *name;
+        uint64_t value;
+        const int_limit *limit;
+    } fields[] = {{"partition_n", x->partition_n, &lim_partition},
+                  {"rays_per_solid_angle", x->rays_per_solid_angle, &lim_rays},
+                  {"samples_per_cell", x->samples_per_cell, &lim_samples},
+                  {"bounces", x->bounces, &lim_bounces},
+                  {"threads", x->threads, &lim_threads}};
+    for (size_t k = 0; k < sizeof fields / sizeof fields[0]; k++)
+        if (!limit_ok(fields[k].limit, fields[k].value)) {
+            char rule[64];
+            return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: %s must be %s, got %llu", fields[k].name,
+                            limit_rule(fields[k].limit, rule), (unsigned long long)fields[k].value);
+        }
+    s->sampling = *x;
+    return RL_OK;
+}
+
+size_t rl_scene_polygon_count(const rl_scene *s)
+{
+    return s ? s->npolygons : 0;
+}
+
+size_t rl_scene_lightfield_count(const rl_scene *s)
+{
+    return s ? s->nlightfields : 0;
+}
+
+double rl_scene_cell_size(const rl_scene *s)
+{
+    return s ? s->cell_size : 0;
+}
+
+int rl_scene_has_camera(const rl_scene *s)
+{
+    return s ? s->has_camera : 0;
+}

@@ -1,0 +1,79 @@
+/*
+ * scene_internal.h - the layout of a loaded scene, shared by the loader
+ * (scene.c, mesh.c) and the engine. Invariants established by rl_scene_load():
+ *   - every polygon has 3 .. RL_SCENE_MAX_POLY_VERTS vertices, is planar (every vertex within
+ *     1e-6 * its diameter of the plane), strictly convex (collinear vertices
+ *     removed), has area > 0 and finite coordinates; normal is the unit
+ *     right-hand-rule normal; material indexes materials;
+ *   - albedo in [0, 1], emission finite and >= 0;
+ *   - every light field emitter holds its loaded file and a borrowed slab,
+ *     and its transform is a similarity (rotation times uniform scale > 0,
+ *     plus translation), so directions map by the rotation alone;
+ *   - cell_size > 0 and finite; sampling passes rl_scene_set_sampling()'s checks.
+ */
+#ifndef RELIGHT_SCENE_INTERNAL_H
+#define RELIGHT_SCENE_INTERNAL_H
+
+#include <lfio/lightfield.h>
+
+#include "relight/scene.h"
+
+/* Most vertices one polygon may have (the engine's clipping buffers are sized by it). */
+#define RL_SCENE_MAX_POLY_VERTS 64
+
+typedef struct rl_material {
+    char name[64];
+    float albedo[3];   /* reflectance, 0..1 */
+    float emission[3]; /* exitant radiance of the front face, W sr^-1 m^-2 */
+} rl_material;
+
+typedef struct rl_polygon {
+    uint32_t first;    /* first vertex in rl_scene.vertices */
+    uint32_t count;    /* number of vertices, >= 3 */
+    uint32_t material; /* index into rl_scene.materials */
+    double normal[3];  /* unit normal of the front face */
+    double area;       /* m^2 */
+    char label[96];    /* element for messages, e.g. "polygons[3]" or "meshes[1] (room.obj) face 12" */
+} rl_polygon;
+
+typedef struct rl_lightfield {
+    char file[1024];        /* as resolved against the scene's folder */
+    lfio_lightfield *lf;    /* owned */
+    const lfio_slab *slab;  /* borrowed from lf */
+    double rot[3][3];       /* rotation part of the transform (orthonormal, det +1) */
+    double scale;           /* uniform scale of the transform, > 0 */
+    double translate[3];
+    double origin[3], u[3], v[3]; /* the slab rectangle placed in the scene */
+    char label[96];         /* e.g. "lightfields[0]" */
+} rl_lightfield;
+
+typedef struct rl_camera {
+    double position[3], look_at[3], up[3];
+    double fov_deg;         /* vertical field of view */
+    uint32_t width, height; /* pixels */
+} rl_camera;
+
+struct rl_scene {
+    char path[1024];
+    rl_material *materials;
+    size_t nmaterials;
+    double (*vertices)[3];
+    size_t nvertices;
+    rl_polygon *polygons;
+    size_t npolygons;
+    rl_lightfield *lightfields;
+    size_t nlightfields;
+    double cell_size;
+    rl_sampling sampling;
+    int has_camera;
+    rl_camera camera;
+};
+
+/* Records a formatted message for rl_errmsg(). @return status. */
+rl_status rl__fail(rl_status status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+#endif /* RELIGHT_SCENE_INTERNAL_H */

@@ -1,0 +1,185 @@
+/*
+ * tracer.c - Embree 3 behind the tracer interface.
+ *
+ * Every convex polygon is fanned into triangles of one triangle geometry;
+ * prim_polygon maps Embree's primitive ids back to scene polygons. The scene
+ * uses RTC_SCENE_FLAG_ROBUST: the engine's stratified rays often cross
+ * shared triangle edges, which the fast mode may let slip through. Only
+ * single-ray calls are used (rtcIntersect1M with the default context
+ * aborts in Debian's Embree 3.13.5).
+ */
+#include <stdlib.h>
+#include <string.h>
+#if defined(__SSE__) || defined(__x86_64__)
+#include <pmmintrin.h>
+#include <xmmintrin.h>
+#endif
+
+#include <embree3/rtcore.h>
+
+#include "tracer.h"
+
+struct rl_tracer {
+    RTCDevice device;
+    RTCScene scene;
+    uint32_t *prim_polygon;
+    v3 centre;
+    double extent;
+};
+
+void tracer_thread_init(void)
+{
+#if defined(__SSE__) || defined(__x86_64__)
+    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+#endif
+}
+
+/* Finds the bounding-box centre and the half-extent of the scene. */
+static void scene_bounds(const rl_scene *s, v3 *centre, double *extent)
+{
+    v3 lo = {INFINITY, INFINITY, INFINITY}, hi = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t k = 0; k < s->nvertices; k++) {
+        v3 p = v3_load(s->vertices[k]);
+        lo = v3_make(fmin(lo.x, p.x), fmin(lo.y, p.y), fmin(lo.z, p.z));
+        hi = v3_make(fmax(hi.x, p.x), fmax(hi.y, p.y), fmax(hi.z, p.z));
+    }
+    if (s->nvertices == 0) {
+        *centre = v3_make(0, 0, 0);
+        *extent = 1.0;
+        return;
+    }
+    *centre = v3_scale(v3_add(lo, hi), 0.5);
+    *extent = fmax(v3_maxabs(v3_sub(hi, *centre)), 1e-30);
+}
+
+/* Counts the fan triangles of every polygon. */
+static size_t triangle_count(const rl_scene *s)
+{
+    size_t n = 0;
+    for (size_t k = 0; k < s->npolygons; k++)
+        n += s->polygons[k].count - 2;
+    return n;
+}
+
+rl_status tracer_new(const rl_scene *s, rl_tracer **out)
+{
+    *out = NULL;
+    rl_tracer *t = calloc(1, sizeof *t);
+    if (!t)
+        return rl__fail(RL_ERR_NOMEM, "out of memory for the ray tracer");
+    scene_bounds(s, &t->centre, &t->extent);
+    t->device = rtcNewDevice(NULL);
+    if (!t->device) {
+        free(t);
+        return rl__fail(RL_ERR_INTERNAL, "Embree could not start (rtcNewDevice failed)");
+    }
+    t->scene = rtcNewScene(t->device);
+    rtcSetSceneFlags(t->scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(t->scene, RTC_BUILD_QUALITY_HIGH);
+    size_t ntri = triangle_count(s);
+    if (ntri > 0) {
+        RTCGeometry g = rtcNewGeometry(t->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        float *vb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                            s->nvertices);
+        unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                               ntri);
+        t->prim_polygon = malloc(ntri * sizeof *t->prim_polygon);
+        if (!vb || !ib || !t->prim_polygon) {
+            rtcReleaseGeometry(g);
+            tracer_destroy(t);
+            return rl__fail(RL_ERR_NOMEM, "out of memory for %zu triangles", ntri);
+        }
+        for (size_t k = 0; k < s->nvertices; k++)
+            for (int c = 0; c < 3; c++)
+                vb[3 * k + c] = (float)(s->vertices[k][c] - (&t->centre.x)[c]);
+        size_t tri = 0;
+        for (size_t k = 0; k < s->npolygons; k++) {
+            const rl_polygon *p = &s->polygons[k];
+            for (uint32_t i = 1; i + 1 < p->count; i++, tri++) {
+                ib[3 * tri] = p->first;
+                ib[3 * tri + 1] = p->first + i;
+                ib[3 * tri + 2] = p->first + i + 1;
+                t->prim_polygon[tri] = (uint32_t)k;
+            }
+        }
+        rtcCommitGeometry(g);
+        rtcAttachGeometry(t->scene, g);
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(t->scene);
+    if (rtcGetDeviceError(t->device) != RTC_ERROR_NONE) {
+        tracer_destroy(t);
+        return rl__fail(RL_ERR_INTERNAL, "Embree failed to build the scene");
+    }
+    *out = t;
+    return RL_OK;
+}
+
+void tracer_destroy(rl_tracer *t)
+{
+    if (!t)
+        return;
+    if (t->scene)
+        rtcReleaseScene(t->scene);
+    if (t->device)
+        rtcReleaseDevice(t->device);
+    free(t->prim_polygon);
+    free(t);
+}
+
+double tracer_extent(const rl_tracer *t)
+{
+    return t->extent;
+}
+
+v3 tracer_centre(const rl_tracer *t)
+{
+    return t->centre;
+}
+
+/* Fills an Embree ray from a world ray. */
+static void make_ray(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, struct RTCRay *r)
+{
+    v3 o = v3_sub(org, t->centre);
+    r->org_x = (float)o.x;
+    r->org_y = (float)o.y;
+    r->org_z = (float)o.z;
+    r->dir_x = (float)dir.x;
+    r->dir_y = (float)dir.y;
+    r->dir_z = (float)dir.z;
+    r->tnear = (float)tnear;
+    r->tfar = (float)tfar;
+    r->time = 0.0f;
+    r->mask = 0xffffffffu;
+    r->id = 0;
+    r->flags = 0;
+}
+
+int tracer_occluded(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar)
+{
+    if (!(tfar > tnear))
+        return 0;
+    struct RTCIntersectContext ctx;
+    struct RTCRay r;
+    rtcInitIntersectContext(&ctx);
+    make_ray(t, org, dir, tnear, tfar, &r);
+    rtcOccluded1(t->scene, &ctx, &r);
+    return r.tfar < 0.0f;
+}
+
+int tracer_hit(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon, double *dist)
+{
+    struct RTCIntersectContext ctx;
+    struct RTCRayHit rh;
+    rtcInitIntersectContext(&ctx);
+    make_ray(t, org, dir, tnear, tfar, &rh.ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(t->scene, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return 0;
+    *polygon = t->prim_polygon[rh.hit.primID];
+    *dist = rh.ray.tfar;
+    return 1;
+}

@@ -1,0 +1,43 @@
+/*
+ * tracer.h - ray queries against the scene's polygons. The only interface
+ * to Embree; nothing else in the tree includes its headers.
+ *
+ * Coordinates are world metres in double; the tracer recentres the scene
+ * on its bounding box before handing single-precision vertices to Embree,
+ * so precision follows the scene's size rather than its distance from the
+ * origin. Queries are thread-safe.
+ */
+#ifndef RELIGHT_TRACER_H
+#define RELIGHT_TRACER_H
+
+#include <stdint.h>
+
+#include "scene_internal.h"
+#include "vec.h"
+
+typedef struct rl_tracer rl_tracer;
+
+/* Builds the acceleration structure of every polygon (robust mode).
+ * @return RL_OK and *out; RL_ERR_NOMEM or RL_ERR_INTERNAL. */
+rl_status tracer_new(const rl_scene *scene, rl_tracer **out);
+
+/* Releases the tracer. NULL is a no-op. */
+void tracer_destroy(rl_tracer *t);
+
+/* @return 1 if any polygon meets the ray org + s*dir for s in [tnear, tfar] (dir unit). */
+int tracer_occluded(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar);
+
+/* Finds the first polygon hit in [tnear, tfar]. @return 1 with *polygon and *dist, or 0. */
+int tracer_hit(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon, double *dist);
+
+/* @return the largest coordinate magnitude of the recentred scene, m: the
+ * scale at which single-precision positions round. */
+double tracer_extent(const rl_tracer *t);
+
+/* @return the point the tracer recentres the scene on. */
+v3 tracer_centre(const rl_tracer *t);
+
+/* Sets flush-to-zero and denormals-are-zero for the calling thread, as Embree advises. */
+void tracer_thread_init(void);
+
+#endif /* RELIGHT_TRACER_H */

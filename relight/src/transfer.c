@@ -1,0 +1,620 @@
+/*
+ * transfer.c - culled solid-angle transfer and the three baselines.
+ *
+ * For one receiver tile R and one emitter S, `culled` walks the partition's
+ * quad-tree in S's frame (pole = S's normal, so the hemisphere S emits into
+ * is exactly ids 0 .. 4m^2-1) from level 1 down to the pair's level m. A
+ * node is culled when its cone, clipped to directions arriving at R's
+ * front, is empty; when the projected Minkowski sum (S + w)_R misses the
+ * tile; or when a light field's zero-radiance mask rules out radiance in it
+ * and in its three neighbours (whose values the interpolation reads). The
+ * kept leaves are sorted by id and each is rasterised over the tile's cells;
+ * every (cell, leaf) pair traces k rays whose origins and directions come
+ * from a low-discrepancy sequence keyed by (seed, pass, emitter, receiver,
+ * cell, level, leaf).
+ *
+ * `naive` takes every leaf and every cell and otherwise runs the same code:
+ * a culled (cell, leaf) pair contributes exactly zero, and each cell adds
+ * its leaves in id order either way, so the two are bit-identical as long
+ * as no pair descends below partition_n (see pair_level()).
+ *
+ * A pair whose emitter subtends less than a leaf from the tile descends to
+ * finer levels (pair_level()) and, under `culled`, draws origins from the
+ * part of each cell inside the region, weighted by that part's area: that
+ * is what makes small and distant emitters sampled rather than left to
+ * luck. `naive` enumerates every leaf of the pair's level, so it is only
+ * practical where pairs do not descend.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include <lfio/partition.h>
+
+#include "sampling.h"
+#include "transfer.h"
+
+#define PI 3.14159265358979323846
+#define STACK_DEPTH 512
+
+/* ----------------------------------------------------------------- emitters */
+
+/* Fills the 2D polygon and area of e from its world vertices and frame. */
+static void emitter_finish(rl_emitter *e)
+{
+    for (uint32_t i = 0; i < e->nverts; i++)
+        e->poly2[i] = frame_project(&e->frame, e->verts[i]);
+    e->area = polygon_area2(e->poly2, e->nverts);
+}
+
+void emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, rl_emitter *e)
+{
+    const rl_polygon *pg = &scene->polygons[k];
+    memset(e, 0, sizeof *e);
+    e->kind = map ? EM_MAP : EM_CONST;
+    e->polygon = (int32_t)k;
+    e->map = map;
+    e->nverts = pg->count;
+    for (uint32_t i = 0; i < pg->count; i++)
+        e->verts[i] = v3_load(scene->vertices[pg->first + i]);
+    if (map) {
+        e->frame = map->frame; /* so that frame coordinates index the map's cells */
+    } else {
+        e->frame.origin = e->verts[0];
+        e->frame.n = v3_load(pg->normal);
+        e->frame.e1 = v3_norm(v3_sub(e->verts[1], e->verts[0]));
+        e->frame.e2 = v3_cross(e->frame.n, e->frame.e1);
+    }
+    memcpy(e->emission, scene->materials[pg->material].emission, sizeof e->emission);
+    emitter_finish(e);
+}
+
+void emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e)
+{
+    memset(e, 0, sizeof *e);
+    e->kind = EM_SLAB;
+    e->polygon = -1;
+    e->lf = lf;
+    v3 o = v3_load(lf->origin), u = v3_load(lf->u), v = v3_load(lf->v);
+    e->len_u = v3_len(u);
+    e->len_v = v3_len(v);
+    e->frame.origin = o;
+    e->frame.e1 = v3_scale(u, 1.0 / e->len_u);
+    e->frame.e2 = v3_scale(v, 1.0 / e->len_v);
+    e->frame.n = v3_cross(e->frame.e1, e->frame.e2);
+    e->nverts = 4;
+    e->verts[0] = o;
+    e->verts[1] = v3_add(o, u);
+    e->verts[2] = v3_add(v3_add(o, u), v);
+    e->verts[3] = v3_add(o, v);
+    emitter_finish(e);
+}
+
+/* @return 1 if frame point q lies in e's convex polygon. */
+static int emitter_contains(const rl_emitter *e, v2 q)
+{
+    for (uint32_t i = 0; i < e->nverts; i++) {
+        v2 a = e->poly2[i], b = e->poly2[(i + 1) % e->nverts];
+        if (v2_cross(v2_sub(b, a), v2_sub(q, a)) < 0)
+            return 0;
+    }
+    return 1;
+}
+
+/* Radiance leaving e at y (frame point q) in propagation direction d. */
+static void emitter_radiance(const rl_emitter *e, v2 q, v3 d, double out[3])
+{
+    switch (e->kind) {
+    case EM_CONST:
+        for (int c = 0; c < 3; c++)
+            out[c] = e->emission[c];
+        return;
+    case EM_MAP: {
+        int64_t cell = map_cell_at(e->map, q);
+        for (int c = 0; c < 3; c++)
+            out[c] = cell < 0 ? 0.0 : e->map->albedo[c] * e->map->e_prev[cell][c] / PI;
+        return;
+    }
+    case EM_SLAB: {
+        /* back to the slab's own frame: the transform's rotation, transposed */
+        const double (*r)[3] = e->lf->rot;
+        double ds[3] = {r[0][0] * d.x + r[1][0] * d.y + r[2][0] * d.z, r[0][1] * d.x + r[1][1] * d.y + r[2][1] * d.z,
+                        r[0][2] * d.x + r[1][2] * d.y + r[2][2] * d.z};
+        float rgb[3] = {0, 0, 0};
+        lfio_slab_radiance_interp(e->lf->slab, q.x / e->len_u, q.y / e->len_v, ds, rgb);
+        for (int c = 0; c < 3; c++)
+            out[c] = rgb[c];
+        return;
+    }
+    }
+}
+
+/* @return 1 if solid angle id at level lv certainly carries no radiance of
+ * slab emitter e: the mask is clear for it and for its edge neighbours. */
+static int slab_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id)
+{
+    const lfio_slab *s = e->lf->slab;
+    uint32_t n = lfio_slab_get_desc(s)->n;
+    while (lv > n) { /* finer than the slab: its ancestor at the slab's level */
+        if (lv % 2 || !lfio_part_parent(lv, id, &id))
+            return 0;
+        lv /= 2;
+    }
+    if (lfio_slab_mask_test(s, lv, id))
+        return 0;
+    uint64_t nb[3];
+    if (!lfio_part_neighbours(lv, id, nb))
+        return 0;
+    for (int k = 0; k < 3; k++)
+        if (nb[k] < lfio_part_hemi_count(lv) && lfio_slab_mask_test(s, lv, nb[k]))
+            return 0;
+    return 1;
+}
+
+/* ------------------------------------------------------------------ one ray */
+
+/* @return the distance that single precision cannot resolve on a segment
+ * from a to b: eight ulps of the larger recentred coordinate, and at least
+ * the scene's own. */
+static double ray_eps(const rl_transfer_ctx *ctx, v3 a, v3 b)
+{
+    double m = fmax(v3_maxabs(v3_sub(a, ctx->centre)), v3_maxabs(v3_sub(b, ctx->centre)));
+    return fmax(ctx->eps, 1e-6 * m);
+}
+
+/* Shared by culled and naive: radiance arriving at receiver point x (normal
+ * nr) from emitter e along propagation direction d, times cos at x, added to
+ * acc. The ray back from x along -d must meet e's front inside e's polygon
+ * with nothing in between. */
+static void trace_back(const rl_transfer_ctx *ctx, const rl_emitter *e, v3 x, v3 nr, v3 d, double acc[3],
+                       rl_counters *cnt)
+{
+    double cos_r = -v3_dot(d, nr), dn = v3_dot(d, e->frame.n);
+    double hx = v3_dot(v3_sub(x, e->frame.origin), e->frame.n);
+    cnt->samples++;
+    if (!(cos_r > 0) || !(dn > 0) || !(hx > 0))
+        return;
+    double t = hx / dn;
+    v3 y = v3_madd(x, d, -t);
+    v2 q = frame_project(&e->frame, y);
+    if (!emitter_contains(e, q))
+        return;
+    double eps = ray_eps(ctx, x, y);
+    double tnear = eps / fmax(cos_r, 1e-3), tfar = t - eps / fmax(dn, 1e-3);
+    cnt->rays_cast++;
+    if (tracer_occluded(ctx->tracer, x, v3_scale(d, -1.0), tnear, tfar))
+        return;
+    cnt->rays_kept++;
+    double l[3];
+    emitter_radiance(e, q, d, l);
+    for (int c = 0; c < 3; c++)
+        acc[c] += l[c] * cos_r;
+}
+
+/* ----------------------------------------------------------- pair geometry */
+
+/* What one (emitter, receiver tile) pair needs, computed once. */
+typedef struct pair {
+    const rl_emitter *e;
+    v3 sclip[RL_MAX_POLY_VERTS + 2]; /* the emitter clipped to the tile's front half-space */
+    size_t ns;
+    uint32_t level;
+    int descended;
+} pair;
+
+/* The tile: the part of map m in grid rows [row0, row1), as a 2D polygon. */
+typedef struct tile {
+    rl_map *m;
+    uint32_t map_index, row0, row1;
+    v2 poly[RL_MAX_POLY_VERTS + 4];
+    size_t npoly;
+} tile;
+
+/* Chooses the pair's level: partition_n, or finer while the emitter
+ * subtends less than one leaf (a leaf is about 2*pi / (4 m^2) sr) from the
+ * farthest point of the tile. A point receiver keeps only the few
+ * leaves around its view of the emitter at every level, so it may descend
+ * to 2^20; a tile of cells stops where a leaf's footprint shrinks below a
+ * quarter of a cell, beyond which leaves multiply without new information. */
+static uint32_t pair_level(const rl_transfer_ctx *ctx, const pair *p, const tile *t)
+{
+    uint32_t m = ctx->sampling->partition_n;
+    v2 sp[RL_MAX_POLY_VERTS + 2];
+    for (size_t i = 0; i < p->ns; i++)
+        sp[i] = frame_project(&p->e->frame, p->sclip[i]);
+    double area = polygon_area2(sp, (uint32_t)p->ns), far2 = 0.0;
+    for (size_t i = 0; i < p->ns; i++)
+        for (size_t j = 0; j < t->npoly; j++) {
+            v3 r = frame_point(&t->m->frame, t->poly[j]);
+            far2 = fmax(far2, v3_dot(v3_sub(r, p->sclip[i]), v3_sub(r, p->sclip[i])));
+        }
+    double subtended = far2 > 0 ? area / far2 : INFINITY;
+    double cap = t->m->polygon < 0 ? (double)(1u << 20) : 2.5 * sqrt(far2) / t->m->cell;
+    while (m < cap && m < (1u << 20) && 1.6 / ((double)m * m) > subtended)
+        m *= 2;
+    return m;
+}
+
+/* Sets up pair p for emitter e and tile t. @return 0 if they cannot exchange light. */
+static int pair_setup(const rl_transfer_ctx *ctx, const rl_emitter *e, const tile *t, pair *p)
+{
+    const rl_frame *rf = &t->m->frame;
+    p->e = e;
+    if (e->polygon >= 0 && e->polygon == t->m->polygon)
+        return 0;
+    /* the tile must be in front of the emitter somewhere */
+    double front = -INFINITY, lift = 0.0;
+    for (size_t j = 0; j < t->npoly; j++)
+        front = fmax(front, v3_dot(v3_sub(frame_point(rf, t->poly[j]), e->frame.origin), e->frame.n));
+    if (!(front > 0))
+        return 0;
+    p->ns = clip_poly3(e->verts, e->nverts, rf->origin, rf->n, p->sclip);
+    for (size_t i = 0; i < p->ns; i++)
+        lift = fmax(lift, v3_dot(v3_sub(p->sclip[i], rf->origin), rf->n));
+    if (p->ns < 3 || !(lift > 0))
+        return 0; /* the emitter is behind, or in, the receiver's plane */
+    /* naive never descends: it is the plain enumeration of partition_n */
+    p->level = ctx->sampling->method == RL_METHOD_NAIVE ? ctx->sampling->partition_n : pair_level(ctx, p, t);
+    p->descended = p->level > ctx->sampling->partition_n;
+    return 1;
+}
+
+/* Gives the cone of solid angle id at level lv, in world directions, clipped
+ * to arrive at the receiver's front. @return the generator count (0: empty). */
+static size_t node_cone(const pair *p, const rl_frame *rf, uint32_t lv, uint64_t id, v3 *gens, v3 *clipped)
+{
+    double v[3][3];
+    lfio_part_vertices(lv, id, v);
+    for (int k = 0; k < 3; k++) {
+        const rl_frame *f = &p->e->frame;
+        gens[k] = v3_add(v3_add(v3_scale(f->e1, v[k][0]), v3_scale(f->e2, v[k][1])), v3_scale(f->n, v[k][2]));
+    }
+    return clip_cone(gens, 3, rf->n, clipped);
+}
+
+/* Computes the region of node (lv, id) and its intersection with the tile.
+ * @return the vertex count of that intersection (0: cull). */
+static size_t node_region(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t lv, uint64_t id,
+                          rl_region *reg, v2 *q)
+{
+    v3 gens[3], kc[6];
+    size_t nk = node_cone(p, &t->m->frame, lv, id, gens, kc);
+    if (nk == 0)
+        return 0;
+    region_compute(&t->m->frame, p->sclip, p->ns, kc, nk, ctx->margin, reg);
+    if (reg->empty)
+        return 0;
+    return clip_to_region(t->poly, t->npoly, reg, q, RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES);
+}
+
+/* Appends a leaf. @return 0, or -1 when memory runs out. */
+static int push_leaf(rl_scratch *s, uint64_t id)
+{
+    if (s->nleaves == s->cap) {
+        size_t cap = s->cap ? 2 * s->cap : 1024;
+        uint64_t *grown = realloc(s->leaves, cap * sizeof *grown);
+        if (!grown)
+            return -1;
+        s->leaves = grown;
+        s->cap = cap;
+    }
+    s->leaves[s->nleaves++] = id;
+    return 0;
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Walks the hierarchy top-down, keeping the leaves at p->level that survive culling. */
+static int walk(const rl_transfer_ctx *ctx, const pair *p, const tile *t, rl_scratch *s, rl_counters *cnt)
+{
+    struct node { uint32_t lv; uint64_t id; } stack[STACK_DEPTH];
+    size_t top = 0;
+    rl_region *reg = malloc(sizeof *reg);
+    v2 *q = malloc((RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES) * sizeof *q);
+    if (!reg || !q) {
+        free(reg);
+        free(q);
+        return -1;
+    }
+    for (uint64_t id = 4; id-- > 0;)
+        stack[top++] = (struct node){1, id};
+    int rc = 0;
+    while (top > 0 && rc == 0) {
+        uint32_t lv = stack[top - 1].lv;
+        uint64_t id = stack[--top].id;
+        int dark = p->e->kind == EM_SLAB && slab_node_dark(p->e, lv, id);
+        if (dark || node_region(ctx, p, t, lv, id, reg, q) == 0)
+            continue;
+        if (lv >= p->level) {
+            rc = push_leaf(s, id);
+            continue;
+        }
+        uint64_t ch[4];
+        lfio_part_children(lv, id, ch);
+        for (int k = 3; k >= 0; k--)
+            stack[top++] = (struct node){2 * lv, ch[k]};
+    }
+    free(reg);
+    free(q);
+    uint64_t total = lfio_part_hemi_count(p->level);
+    cnt->leaves_considered += total;
+    cnt->leaves_culled += total - s->nleaves;
+    return rc;
+}
+
+/* Traces the k rays of (cell, leaf) and adds their estimate to the cell.
+ * clip, when not NULL, restricts origins to the cell's part inside the region. */
+static void gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t cell, uint64_t id,
+                        const v3 g[3], double omega, uint32_t emitter_index, const v2 *clip, size_t nclip,
+                        rl_counters *cnt)
+{
+    rl_map *m = t->m;
+    v2 cp[RL_MAX_POLY_VERTS + 8];
+    uint32_t ncp = map_cell_polygon(m, &m->cells[cell], cp);
+    double weight = 1.0;
+    if (clip && m->cells[cell].area > 0) {
+        /* cell intersect region: clip the cell by the clipped region's edges */
+        v2 buf[2][RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8];
+        size_t n = ncp;
+        memcpy(buf[0], cp, n * sizeof *cp);
+        int cur = 0;
+        for (size_t e = 0; e < nclip && n > 0; e++) {
+            v2 a = clip[e], b = clip[(e + 1) % nclip];
+            rl_halfplane h = {-(b.y - a.y), b.x - a.x, 0};
+            h.c = -(h.a * a.x + h.b * a.y);
+            n = clip_poly2(buf[cur], n, h, buf[1 - cur]);
+            cur = 1 - cur;
+        }
+        double part = n >= 3 ? polygon_area2(buf[cur], (uint32_t)n) : 0.0;
+        if (!(part > 0))
+            return;
+        weight = part / m->cells[cell].area;
+        ncp = (uint32_t)(n < RL_MAX_POLY_VERTS + 8 ? n : RL_MAX_POLY_VERTS + 8);
+        memcpy(cp, buf[cur], ncp * sizeof *cp);
+    }
+    uint32_t k = ctx->sampling->rays_per_solid_angle;
+    uint64_t key = hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass),
+                                                                emitter_index), t->map_index), cell), p->level), id);
+    double acc[3] = {0, 0, 0};
+    for (uint32_t i = 0; i < k; i++) {
+        double u[4];
+        lds4(key, i, u);
+        v3 x = frame_point(&m->frame, sample_polygon(cp, ncp, u[0], u[1]));
+        v3 d = sample_spherical_triangle(g[0], g[1], g[2], omega, u[2], u[3]);
+        trace_back(ctx, p->e, x, m->frame.n, d, acc, cnt);
+    }
+    double scale = weight * omega / k;
+    for (int c = 0; c < 3; c++)
+        m->e_pass[cell][c] += acc[c] * scale;
+}
+
+/* Gives the u range [*ulo, *uhi] of convex polygon q within the band v in [va, vb]. @return 0 if none. */
+static int band_range(const v2 *q, size_t nq, double va, double vb, double *ulo, double *uhi)
+{
+    v2 a[RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8], b[RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8];
+    size_t n = clip_poly2(q, nq, (rl_halfplane){0, 1, -va}, a);
+    n = clip_poly2(a, n, (rl_halfplane){0, -1, vb}, b);
+    if (n == 0)
+        return 0;
+    *ulo = INFINITY;
+    *uhi = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        *ulo = fmin(*ulo, b[i].x);
+        *uhi = fmax(*uhi, b[i].x);
+    }
+    return 1;
+}
+
+/* Processes one kept leaf over the tile's cells. */
+static void gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint64_t id,
+                        uint32_t emitter_index, int culled, rl_region *reg, v2 *q, rl_counters *cnt)
+{
+    rl_map *m = t->m;
+    v3 g[3];
+    double v[3][3];
+    lfio_part_vertices(p->level, id, v);
+    for (int k = 0; k < 3; k++) {
+        const rl_frame *f = &p->e->frame;
+        g[k] = v3_add(v3_add(v3_scale(f->e1, v[k][0]), v3_scale(f->e2, v[k][1])), v3_scale(f->n, v[k][2]));
+    }
+    double omega = lfio_part_solid_angle(p->level, id);
+    size_t nq = 0;
+    if (culled) {
+        nq = node_region(ctx, p, t, p->level, id, reg, q);
+        if (nq == 0)
+            return;
+    }
+    const v2 *clip = culled && p->descended ? q : NULL;
+    for (uint32_t j = t->row0; j < t->row1; j++) {
+        uint32_t i0 = 0, i1 = m->nu - 1;
+        if (culled && m->polygon >= 0) {
+            double ulo, uhi, va = m->v0 + j * m->cell;
+            if (!band_range(q, nq, va, va + m->cell, &ulo, &uhi))
+                continue;
+            double fi0 = floor((ulo - m->u0) / m->cell), fi1 = floor((uhi - m->u0) / m->cell);
+            if (fi1 < 0 || fi0 > m->nu - 1)
+                continue;
+            i0 = fi0 < 0 ? 0 : (uint32_t)fi0;
+            i1 = fi1 > m->nu - 1 ? m->nu - 1 : (uint32_t)fi1;
+        }
+        for (uint32_t i = i0; i <= i1; i++) {
+            int32_t cell = m->grid[(size_t)j * m->nu + i];
+            if (cell >= 0)
+                gather_cell(ctx, p, t, (uint32_t)cell, id, g, omega, emitter_index, clip, nq, cnt);
+        }
+    }
+}
+
+/* Culled or naive transfer from emitter e to the tile. */
+static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32_t ei, rl_scratch *s,
+                               rl_counters *cnt)
+{
+    pair *p = malloc(sizeof *p);
+    rl_region *reg = malloc(sizeof *reg);
+    v2 *q = malloc((RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES) * sizeof *q);
+    int rc = (!p || !reg || !q) ? -1 : 0;
+    if (rc == 0 && pair_setup(ctx, &ctx->emitters[ei], t, p)) {
+        int culled = ctx->sampling->method == RL_METHOD_CULLED;
+        cnt->pairs++;
+        cnt->pairs_descended += p->descended;
+        s->nleaves = 0;
+        if (culled) {
+            rc = walk(ctx, p, t, s, cnt);
+            qsort(s->leaves, s->nleaves, sizeof *s->leaves, cmp_u64);
+        } else {
+            uint64_t total = lfio_part_hemi_count(p->level);
+            cnt->leaves_considered += total;
+            for (uint64_t id = 0; id < total && rc == 0; id++)
+                rc = push_leaf(s, id);
+        }
+        for (size_t k = 0; k < s->nleaves && rc == 0; k++)
+            gather_leaf(ctx, p, t, s->leaves[k], ei, culled, reg, q, cnt);
+    }
+    free(p);
+    free(reg);
+    free(q);
+    return rc;
+}
+
+/* ------------------------------------------------------------- baselines */
+
+/* The fan of convex polygon p (n vertices, n >= 3) as seen from x: unit
+ * directions and the solid angles of triangles (0, i, i+1). @return the total. */
+static double spherical_fan(const v3 *p, size_t n, v3 x, v3 *dir, double *omega)
+{
+    double total = 0.0;
+    for (size_t i = 0; i < n; i++)
+        dir[i] = v3_norm(v3_sub(p[i], x));
+    for (size_t i = 1; i + 1 < n; i++) {
+        omega[i] = spherical_triangle_area(dir[0], dir[i], dir[i + 1]);
+        total += omega[i];
+    }
+    return total;
+}
+
+/* One sample of `area` (uniform on the clipped emitter) or `solidangle`
+ * (uniform in its spherical polygon) from cell point x; adds weighted
+ * radiance * cosines to acc. */
+static void baseline_sample(const rl_transfer_ctx *ctx, const pair *p, const rl_frame *rf, v3 x,
+                            const double u[4], double s_area, double acc[3], rl_counters *cnt)
+{
+    const rl_emitter *e = p->e;
+    v3 y, to_s; /* the emitter point and the unit direction from x to it */
+    double weight, dist;
+    cnt->samples++;
+    if (ctx->sampling->method == RL_METHOD_AREA) {
+        v2 sp[RL_MAX_POLY_VERTS + 2];
+        for (size_t i = 0; i < p->ns; i++)
+            sp[i] = frame_project(&e->frame, p->sclip[i]);
+        y = frame_point(&e->frame, sample_polygon(sp, (uint32_t)p->ns, u[2], u[3]));
+        v3 r = v3_sub(y, x);
+        dist = v3_len(r);
+        if (!(dist > 0))
+            return;
+        to_s = v3_scale(r, 1.0 / dist);
+        double cos_s = -v3_dot(to_s, e->frame.n);
+        weight = cos_s > 0 ? s_area * cos_s / (dist * dist) : 0.0;
+    } else {
+        v3 dir[RL_MAX_POLY_VERTS + 2];
+        double om[RL_MAX_POLY_VERTS + 2];
+        double total = spherical_fan(p->sclip, p->ns, x, dir, om);
+        if (!(total > 0))
+            return;
+        double pick = u[2] * total, accw = 0.0;
+        size_t i = 1;
+        for (; i + 2 < p->ns && pick >= accw + om[i]; i++)
+            accw += om[i];
+        double r = om[i] > 0 ? fmin(fmax((pick - accw) / om[i], 0.0), 1.0) : 0.5;
+        to_s = sample_spherical_triangle(dir[0], dir[i], dir[i + 1], om[i], r, u[3]);
+        double dn = -v3_dot(to_s, e->frame.n);
+        if (!(dn > 0))
+            return;
+        dist = v3_dot(v3_sub(x, e->frame.origin), e->frame.n) / dn;
+        y = v3_madd(x, to_s, dist);
+        weight = total;
+    }
+    double cos_r = v3_dot(to_s, rf->n);
+    if (!(cos_r > 0) || !(weight > 0))
+        return;
+    v2 q = frame_project(&e->frame, y);
+    if (!emitter_contains(e, q))
+        return;
+    cnt->rays_cast++;
+    double eps = ray_eps(ctx, x, y);
+    if (tracer_occluded(ctx->tracer, x, to_s, eps / fmax(cos_r, 1e-3), dist - eps / fmax(v3_dot(to_s, v3_scale(e->frame.n, -1.0)), 1e-3)))
+        return;
+    cnt->rays_kept++;
+    double l[3];
+    emitter_radiance(e, q, v3_scale(to_s, -1.0), l);
+    for (int c = 0; c < 3; c++)
+        acc[c] += l[c] * cos_r * weight;
+}
+
+/* Area or solid-angle sampling of emitter ei for every cell of the tile. */
+static void gather_baseline(const rl_transfer_ctx *ctx, const tile *t, uint32_t ei, rl_counters *cnt)
+{
+    pair p;
+    if (!pair_setup(ctx, &ctx->emitters[ei], t, &p))
+        return;
+    cnt->pairs++;
+    rl_map *m = t->m;
+    v2 sp[RL_MAX_POLY_VERTS + 2];
+    for (size_t i = 0; i < p.ns; i++)
+        sp[i] = frame_project(&p.e->frame, p.sclip[i]);
+    double s_area = polygon_area2(sp, (uint32_t)p.ns);
+    uint32_t n = ctx->sampling->samples_per_cell;
+    for (uint32_t j = t->row0; j < t->row1; j++)
+        for (uint32_t i = 0; i < m->nu; i++) {
+            int32_t cell = m->grid[(size_t)j * m->nu + i];
+            if (cell < 0)
+                continue;
+            v2 cp[RL_MAX_POLY_VERTS + 8];
+            uint32_t ncp = map_cell_polygon(m, &m->cells[cell], cp);
+            uint64_t key = hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), t->map_index),
+                                    (uint64_t)cell);
+            double acc[3] = {0, 0, 0};
+            for (uint32_t s = 0; s < n; s++) {
+                double u[4];
+                lds4(key, s, u);
+                v3 x = frame_point(&m->frame, sample_polygon(cp, ncp, u[0], u[1]));
+                baseline_sample(ctx, &p, &m->frame, x, u, s_area, acc, cnt);
+            }
+            for (int c = 0; c < 3; c++)
+                m->e_pass[cell][c] += acc[c] / n;
+        }
+}
+
+/* ------------------------------------------------------------------ tiles */
+
+int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
+                  rl_scratch *scratch, rl_counters *cnt)
+{
+    tile *t = malloc(sizeof *t);
+    if (!t)
+        return -1;
+    t->m = m;
+    t->map_index = map_index;
+    t->row0 = row0;
+    t->row1 = row1;
+    if (m->polygon < 0) {
+        t->poly[0] = m->poly[0];
+        t->npoly = 1;
+    } else {
+        v2 a[RL_MAX_POLY_VERTS + 4];
+        double va = m->v0 + row0 * m->cell, vb = m->v0 + row1 * m->cell;
+        size_t n = clip_poly2(m->poly, m->npoly, (rl_halfplane){0, 1, -va}, a);
+        t->npoly = clip_poly2(a, n, (rl_halfplane){0, -1, vb}, t->poly);
+    }
+    int rc = 0;
+    for (size_t e = 0; e < ctx->nemitters && rc == 0 && t->npoly > 0; e++) {
+        if (ctx->sampling->method == RL_METHOD_CULLED || ctx->sampling->method == RL_METHOD_NAIVE)
+            rc = gather_solid_angles(ctx, t, (uint32_t)e, scratch, cnt);
+        else
+            gather_baseline(ctx, t, (uint32_t)e, cnt);
+    }
+    free(t);
+    return rc;
+}

@@ -1,0 +1,75 @@
+/*
+ * transfer.h - gathering irradiance on receivers from emitters, by the four
+ * methods (culled, naive, area, solidangle).
+ */
+#ifndef RELIGHT_TRANSFER_H
+#define RELIGHT_TRANSFER_H
+
+#include "maps.h"
+#include "tracer.h"
+
+typedef enum em_kind {
+    EM_CONST, /* polygon of constant emission */
+    EM_MAP,   /* receiving polygon re-emitting albedo * E_prev / pi (a bounce) */
+    EM_SLAB   /* light field slab */
+} em_kind;
+
+/* An emitter: its polygon in world and frame coordinates and where its radiance comes from. */
+typedef struct rl_emitter {
+    em_kind kind;
+    int32_t polygon;      /* scene polygon, -1 for a slab */
+    rl_frame frame;       /* partition frame: pole = front normal */
+    v3 verts[RL_MAX_POLY_VERTS];
+    v2 poly2[RL_MAX_POLY_VERTS];
+    uint32_t nverts;
+    double area;
+    float emission[3];         /* EM_CONST */
+    const rl_map *map;         /* EM_MAP */
+    const rl_lightfield *lf;   /* EM_SLAB */
+    double len_u, len_v;       /* EM_SLAB: edge lengths in the scene */
+} rl_emitter;
+
+/* Work counters of one pass; summed over threads. */
+typedef struct rl_counters {
+    uint64_t samples;           /* sample rays generated */
+    uint64_t rays_cast;         /* rays handed to Embree */
+    uint64_t rays_kept;         /* rays that reached the emitter unoccluded */
+    uint64_t leaves_considered; /* (pair, solid angle) leaves of the hierarchy considered */
+    uint64_t leaves_culled;     /* of those, culled before any ray */
+    uint64_t pairs;             /* (emitter, receiver tile) pairs that can exchange light */
+    uint64_t pairs_descended;   /* pairs sampled at a finer level than partition_n */
+} rl_counters;
+
+/* What every worker shares during one pass. */
+typedef struct rl_transfer_ctx {
+    const rl_scene *scene;
+    const rl_tracer *tracer;
+    const rl_sampling *sampling;
+    uint32_t pass;
+    const rl_emitter *emitters;
+    size_t nemitters;
+    v3 centre;     /* where the tracer recentres the scene */
+    double eps;    /* distance below which single precision cannot resolve the scene itself, m */
+    double margin; /* outward margin of every Minkowski region, m */
+} rl_transfer_ctx;
+
+/* Per-thread scratch space reused between tiles. */
+typedef struct rl_scratch {
+    uint64_t *leaves;
+    size_t nleaves, cap;
+} rl_scratch;
+
+/* Sets up emitter e from scene polygon k (EM_CONST, or EM_MAP when map is given). */
+void emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, rl_emitter *e);
+
+/* Sets up emitter e from light field lf. */
+void emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e);
+
+/* Adds to m->e_pass, for the cells in grid rows [row0, row1) of map m, the
+ * irradiance from every emitter of ctx, by ctx->sampling->method. map_index
+ * only keys the random sequences. Deterministic: the result depends on
+ * nothing but the arguments. @return 0, or -1 if scratch memory ran out. */
+int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
+                  rl_scratch *scratch, rl_counters *cnt);
+
+#endif /* RELIGHT_TRANSFER_H */

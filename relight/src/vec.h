@@ -1,0 +1,36 @@
+/*
+ * vec.h - small 3-vector and 2-vector helpers used across the engine.
+ * Values by copy, doubles throughout: the engine computes geometry in double
+ * and hands only ray tracing to Embree's single precision.
+ */
+#ifndef RELIGHT_VEC_H
+#define RELIGHT_VEC_H
+
+#include <math.h>
+
+typedef struct v3 { double x, y, z; } v3;
+typedef struct v2 { double x, y; } v2;
+
+static inline v3 v3_make(double x, double y, double z) { return (v3){x, y, z}; }
+static inline v3 v3_load(const double a[3]) { return (v3){a[0], a[1], a[2]}; }
+static inline void v3_store(v3 a, double out[3]) { out[0] = a.x; out[1] = a.y; out[2] = a.z; }
+static inline v3 v3_add(v3 a, v3 b) { return (v3){a.x + b.x, a.y + b.y, a.z + b.z}; }
+static inline v3 v3_sub(v3 a, v3 b) { return (v3){a.x - b.x, a.y - b.y, a.z - b.z}; }
+static inline v3 v3_scale(v3 a, double s) { return (v3){a.x * s, a.y * s, a.z * s}; }
+/* @return a + s*b */
+static inline v3 v3_madd(v3 a, v3 b, double s) { return (v3){a.x + s * b.x, a.y + s * b.y, a.z + s * b.z}; }
+static inline double v3_dot(v3 a, v3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline v3 v3_cross(v3 a, v3 b)
+{
+    return (v3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+static inline double v3_len(v3 a) { return sqrt(v3_dot(a, a)); }
+/* @return a scaled to unit length (a must be nonzero). */
+static inline v3 v3_norm(v3 a) { return v3_scale(a, 1.0 / v3_len(a)); }
+static inline double v3_maxabs(v3 a) { return fmax(fabs(a.x), fmax(fabs(a.y), fabs(a.z))); }
+
+static inline v2 v2_sub(v2 a, v2 b) { return (v2){a.x - b.x, a.y - b.y}; }
+/* @return the z component of the cross product (twice the signed area of 0, a, b). */
+static inline double v2_cross(v2 a, v2 b) { return a.x * b.y - a.y * b.x; }
+
+#endif /* RELIGHT_VEC_H */

@@ -1,0 +1,473 @@
+/*
+ * test_relight.c - the relighting engine against closed-form answers, and
+ * its promises: culled and naive are bit-identical, results do not depend
+ * on the thread count, and errors shrink as samples grow.
+ *
+ * Scenes are written as JSON into the test's temporary folder, so each
+ * test states its geometry in full. The reference is Lambert's formula for
+ * an unoccluded polygon (rl_reference_polygon_irradiance), averaged over
+ * each cell on a fine grid of points. With --extremes the test runs the
+ * stability cases instead: grazing and touching geometry, tiny, huge and
+ * distant emitters, and a light field slab seen edge-on.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <lfio/lightfield.h>
+#include <lfio/partition.h>
+#include <relight/engine.h>
+#include <relight/reference.h>
+
+#include "check.h"
+
+static char tmpdir[512];
+
+/* A polygon for a test scene. */
+typedef struct tpoly {
+    const char *material;
+    int n;
+    double v[8][3];
+} tpoly;
+
+/* An axis-aligned rectangle at height z facing up (+z) or down (-z). */
+static tpoly rect_z(const char *mat, double x0, double y0, double x1, double y1, double z, int up)
+{
+    tpoly p = {mat, 4, {{0}}};
+    double c[4][2] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+    for (int k = 0; k < 4; k++) {
+        int s = up ? k : 3 - k;
+        p.v[k][0] = c[s][0];
+        p.v[k][1] = c[s][1];
+        p.v[k][2] = z;
+    }
+    return p;
+}
+
+/* Writes a scene file: materials JSON, polygons, and the other top-level keys. */
+static void write_scene(const char *path, const char *materials, const tpoly *p, int n, const char *rest)
+{
+    FILE *f = fopen(path, "w");
+    fprintf(f, "{\"materials\": %s,\n \"polygons\": [", materials);
+    for (int k = 0; k < n; k++) {
+        fprintf(f, "%s\n  {\"material\": \"%s\", \"vertices\": [", k ? "," : "", p[k].material);
+        for (int i = 0; i < p[k].n; i++)
+            fprintf(f, "%s[%.17g, %.17g, %.17g]", i ? ", " : "", p[k].v[i][0], p[k].v[i][1], p[k].v[i][2]);
+        fprintf(f, "]}");
+    }
+    fprintf(f, "]%s%s}\n", rest && *rest ? ",\n " : "", rest ? rest : "");
+    fclose(f);
+}
+
+/* Loads a scene, failing the test with the loader's message. */
+static rl_scene *load(const char *path)
+{
+    rl_scene *s = NULL;
+    rl_status st = rl_scene_load(path, &s);
+    CHECK(st == RL_OK, "load %s: %s", path, rl_errmsg());
+    return s;
+}
+
+/* Sets method, level, rays and threads on a scene. */
+static void set_sampling(rl_scene *s, rl_method m, uint32_t n, uint32_t k, uint32_t samples, uint32_t threads)
+{
+    rl_sampling smp = *rl_scene_sampling(s);
+    smp.method = m;
+    smp.partition_n = n;
+    smp.rays_per_solid_angle = k;
+    smp.samples_per_cell = samples;
+    smp.threads = threads;
+    CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
+}
+
+/* The cells of map k: count, irradiance copy (caller frees), and centres. */
+static float *map_irradiance(const rl_solution *sol, size_t k, uint32_t *ncells, double **centre, uint32_t **ij)
+{
+    rl_map_info info;
+    rl_solution_map_info(sol, k, &info);
+    float *e = malloc((info.ncells + 1) * 3 * sizeof *e);
+    *centre = malloc((info.ncells + 1) * 3 * sizeof **centre);
+    *ij = malloc((info.ncells + 1) * 2 * sizeof **ij);
+    rl_solution_map_cells(sol, k, *ij, NULL, *centre, e, NULL);
+    *ncells = info.ncells;
+    return e;
+}
+
+/* @return the index of the map of scene polygon poly, or -1. */
+static long map_of(const rl_solution *sol, uint32_t poly)
+{
+    for (size_t k = 0; k < rl_solution_map_count(sol); k++) {
+        rl_map_info info;
+        rl_solution_map_info(sol, k, &info);
+        if (info.polygon == poly)
+            return (long)k;
+    }
+    return -1;
+}
+
+/* Mean analytic irradiance over a full square cell (8x8 points). */
+static double cell_reference(const tpoly *em, double radiance, const rl_map_info *info, uint32_t i, uint32_t j)
+{
+    double sum = 0;
+    for (int a = 0; a < 8; a++)
+        for (int b = 0; b < 8; b++) {
+            double u = info->u0 + (i + (a + 0.5) / 8) * info->cell_size;
+            double v = info->v0 + (j + (b + 0.5) / 8) * info->cell_size;
+            double x[3];
+            for (int c = 0; c < 3; c++)
+                x[c] = info->origin[c] + u * info->e1[c] + v * info->e2[c];
+            sum += rl_reference_polygon_irradiance(&em->v[0][0], em->n, x, info->normal, radiance);
+        }
+    return sum / 64;
+}
+
+/* RMSE and max error of map k of sol against the analytic answer, relative to the peak. */
+static void errors_vs_reference(const rl_solution *sol, size_t k, const tpoly *em, double radiance, double *rmse,
+                                double *maxerr)
+{
+    rl_map_info info;
+    rl_solution_map_info(sol, k, &info);
+    uint32_t n, *ij;
+    double *centre;
+    float *e = map_irradiance(sol, k, &n, &centre, &ij);
+    double peak = 0, se = 0, mx = 0;
+    double *ref = malloc((n + 1) * sizeof *ref);
+    for (uint32_t c = 0; c < n; c++) {
+        ref[c] = cell_reference(em, radiance, &info, ij[2 * c], ij[2 * c + 1]);
+        peak = fmax(peak, ref[c]);
+    }
+    for (uint32_t c = 0; c < n; c++) {
+        double d = e[3 * c + 1] - ref[c];
+        se += d * d;
+        mx = fmax(mx, fabs(d));
+    }
+    *rmse = sqrt(se / n) / peak;
+    *maxerr = mx / peak;
+    free(ref);
+    free(e);
+    free(centre);
+    free(ij);
+}
+
+static const char *MATS = "{\"light\": {\"albedo\": [0,0,0], \"emission\": [2,2,2]},"
+                          " \"grey\": {\"albedo\": [0.5,0.5,0.5]}, \"black\": {\"albedo\": [0,0,0]}}";
+
+/* A 1 m emitter 1 m above a 2 m receiver: every method against Lambert. */
+static void check_unoccluded(void)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/square.json", tmpdir);
+    tpoly p[2] = {rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0), rect_z("grey", -1, -1, 1, 1, 0.0, 1)};
+    write_scene(path, MATS, p, 2, "\"radiance_maps\": {\"cell_size\": 0.25}");
+    rl_scene *s = load(path);
+    if (!s)
+        return;
+    const rl_method methods[] = {RL_METHOD_CULLED, RL_METHOD_NAIVE, RL_METHOD_AREA, RL_METHOD_SOLIDANGLE};
+    for (int m = 0; m < 4; m++) {
+        set_sampling(s, methods[m], 32, 4, 128, 0);
+        rl_solution *sol = NULL;
+        CHECK(rl_relight(s, NULL, NULL, &sol) == RL_OK, "%s: %s", rl_method_name(methods[m]), rl_errmsg());
+        if (!sol)
+            continue;
+        long k = map_of(sol, 1);
+        double rmse, mx;
+        errors_vs_reference(sol, (size_t)k, &p[0], 2.0, &rmse, &mx);
+        printf("unoccluded %-10s defaults: RMSE %.4f%%, max %.4f%% of peak\n", rl_method_name(methods[m]),
+               100 * rmse, 100 * mx);
+        CHECK(rmse < 0.01 && mx < 0.03, "%s: RMSE %.4g, max %.4g of peak", rl_method_name(methods[m]), rmse, mx);
+        rl_pass_stats st;
+        rl_solution_pass_stats(sol, 0, &st);
+        CHECK(st.rays_kept > 0 && st.rays_kept <= st.rays_cast && st.rays_cast <= st.samples, "stats consistent");
+        if (methods[m] == RL_METHOD_CULLED)
+            CHECK(st.solid_angles_culled > 0, "culling culls: %llu of %llu",
+                  (unsigned long long)st.solid_angles_culled, (unsigned long long)st.solid_angles_considered);
+        rl_solution_destroy(sol);
+    }
+    /* error shrinks as rays per solid angle grow */
+    double prev = INFINITY;
+    const uint32_t ks[] = {1, 4, 16};
+    for (int q = 0; q < 3; q++) {
+        set_sampling(s, RL_METHOD_CULLED, 16, ks[q], 64, 0);
+        rl_solution *sol = NULL;
+        rl_relight(s, NULL, NULL, &sol);
+        double rmse, mx;
+        errors_vs_reference(sol, (size_t)map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
+        printf("culled n=16 k=%-2u: RMSE %.4f%%\n", ks[q], 100 * rmse);
+        CHECK(rmse < prev, "k=%u: RMSE %.4g not below %.4g", ks[q], rmse, prev);
+        prev = rmse;
+        rl_solution_destroy(sol);
+    }
+    /* and as samples per cell grow, for area sampling */
+    prev = INFINITY;
+    const uint32_t ns[] = {4, 64, 1024};
+    for (int q = 0; q < 3; q++) {
+        set_sampling(s, RL_METHOD_AREA, 16, 1, ns[q], 0);
+        rl_solution *sol = NULL;
+        rl_relight(s, NULL, NULL, &sol);
+        double rmse, mx;
+        errors_vs_reference(sol, (size_t)map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
+        printf("area samples=%-4u: RMSE %.4f%%\n", ns[q], 100 * rmse);
+        CHECK(rmse < prev, "samples=%u: RMSE %.4g not below %.4g", ns[q], rmse, prev);
+        prev = rmse;
+        rl_solution_destroy(sol);
+    }
+    /* points: every method agrees with Lambert at a few points */
+    double pts[4][6] = {{0, 0, 0, 0, 0, 1}, {0.7, -0.3, 0, 0, 0, 1}, {0.2, 0.1, 0.4, 0.3, 0.1, 1}, {0, 0, 2, 0, 0, 1}};
+    for (int m = 0; m < 4; m++) {
+        set_sampling(s, methods[m], 32, 16, 4096, 0);
+        double out[12];
+        CHECK(rl_irradiance(s, &pts[0][0], 4, out, NULL) == RL_OK, "irradiance: %s", rl_errmsg());
+        for (int q = 0; q < 4; q++) {
+            double nrm[3] = {pts[q][3], pts[q][4], pts[q][5]}, l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+            for (int c = 0; c < 3; c++)
+                nrm[c] /= l;
+            double ref = rl_reference_polygon_irradiance(&p[0].v[0][0], 4, pts[q], nrm, 2.0);
+            CHECK(fabs(out[3 * q] - ref) <= 0.01 * 2.0 * 3.14159 + 1e-12, "%s point %d: %.6g vs %.6g",
+                  rl_method_name(methods[m]), q, out[3 * q], ref);
+        }
+    }
+    rl_scene_destroy(s);
+}
+
+/* An occluded room: culled and naive must agree bit for bit, and thread counts must not matter. */
+static void check_identities(void)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/occluded.json", tmpdir);
+    tpoly p[] = {
+        rect_z("light", -0.4, -0.4, 0.4, 0.4, 2.0, 0),
+        rect_z("grey", -2, -2, 2, 2, 0.0, 1),
+        rect_z("grey", -2, -2, 2, 2, 2.2, 0),
+        rect_z("grey", -0.5, -0.3, 0.3, 0.5, 1.0, 0), /* a blocker facing down */
+        rect_z("grey", -0.5, -0.3, 0.3, 0.5, 1.0, 1), /* and its top */
+        {"grey", 4, {{-2, -2, 0}, {-2, 2, 0}, {-2, 2, 2.2}, {-2, -2, 2.2}}}, /* a wall facing +x */
+    };
+    write_scene(path, MATS, p, 6, "\"radiance_maps\": {\"cell_size\": 0.2}, \"sampling\": {\"bounces\": 1}");
+    rl_scene *s = load(path);
+    if (!s)
+        return;
+    rl_solution *sol[4] = {NULL};
+    set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 1);
+    rl_relight(s, NULL, NULL, &sol[0]);
+    set_sampling(s, RL_METHOD_NAIVE, 16, 2, 16, 2);
+    rl_relight(s, NULL, NULL, &sol[1]);
+    set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 3);
+    rl_relight(s, NULL, NULL, &sol[2]);
+    set_sampling(s, RL_METHOD_AREA, 16, 2, 16, 1);
+    rl_relight(s, NULL, NULL, &sol[3]);
+    if (sol[0] && sol[1] && sol[2] && sol[3]) {
+        rl_pass_stats a, b;
+        rl_solution_pass_stats(sol[0], 0, &a);
+        rl_solution_pass_stats(sol[1], 0, &b);
+        CHECK(a.solid_angles_culled > 0 && b.solid_angles_culled == 0, "culled culls, naive does not");
+        CHECK(a.samples < b.samples, "culling saves rays: %llu vs %llu", (unsigned long long)a.samples,
+              (unsigned long long)b.samples);
+        rl_pass_stats a1;
+        rl_solution_pass_stats(sol[0], 1, &a1);
+        CHECK(a.pairs_descended == 0 && a1.pairs_descended == 0, "no pair descends in this scene: %llu, %llu",
+              (unsigned long long)a.pairs_descended, (unsigned long long)a1.pairs_descended);
+        long same = 0, nonzero = 0, total = 0, thread_same = 0;
+        for (size_t k = 0; k < rl_solution_map_count(sol[0]); k++) {
+            uint32_t n0, n1, n2, *ij;
+            double *centre;
+            float *e0 = map_irradiance(sol[0], k, &n0, &centre, &ij);
+            free(centre); free(ij);
+            float *e1 = map_irradiance(sol[1], k, &n1, &centre, &ij);
+            free(centre); free(ij);
+            float *e2 = map_irradiance(sol[2], k, &n2, &centre, &ij);
+            free(centre); free(ij);
+            for (uint32_t c = 0; c < 3 * n0; c++) {
+                same += memcmp(&e0[c], &e1[c], sizeof(float)) == 0;
+                thread_same += memcmp(&e0[c], &e2[c], sizeof(float)) == 0;
+                nonzero += e0[c] != 0;
+                total++;
+            }
+            free(e0); free(e1); free(e2);
+        }
+        CHECK(same == total, "culled == naive: %ld of %ld values differ", total - same, total);
+        CHECK(thread_same == total, "1 vs 3 threads: %ld of %ld values differ", total - thread_same, total);
+        CHECK(nonzero > total / 2, "the scene is lit (%ld of %ld nonzero)", nonzero, total);
+        CHECK(rl_solution_pass_count(sol[0]) == 2, "direct pass and one bounce");
+        /* the blocker casts a shadow: the floor under it is darker than beside it */
+        long fk = map_of(sol[0], 1);
+        uint32_t n, *ij;
+        double *centre;
+        float *e = map_irradiance(sol[0], (size_t)fk, &n, &centre, &ij);
+        double under = 0, beside = 0;
+        for (uint32_t c = 0; c < n; c++) {
+            double x = centre[3 * c], y = centre[3 * c + 1];
+            if (fabs(x + 0.1) < 0.15 && fabs(y - 0.1) < 0.15)
+                under = e[3 * c];
+            if (fabs(x - 1.3) < 0.1 && fabs(y + 1.3) < 0.1)
+                beside = e[3 * c];
+        }
+        CHECK(under < 0.5 * beside, "umbra %.4g vs lit %.4g", under, beside);
+        free(e); free(centre); free(ij);
+    }
+    for (int k = 0; k < 4; k++)
+        rl_solution_destroy(sol[k]);
+    rl_scene_destroy(s);
+}
+
+/* Writes a one-slab light field: a 1 m square at the origin facing +z, constant
+ * radiance c in a cone around +z of half-angle cone_deg (every direction if >= 90). */
+static void write_lightfield(const char *path, float c, double cone_deg, uint32_t n)
+{
+    lfio_slab_desc d;
+    lfio_slab *slab = NULL;
+    lfio_lightfield *lf = NULL;
+    lfio_slab_desc_init(&d);
+    strcpy(d.name, "light");
+    d.origin[0] = d.origin[1] = -0.5;
+    d.nu = d.nv = 4;
+    d.n = n;
+    lfio_slab_new(&d, &slab);
+    uint64_t nd = lfio_slab_dir_count(slab);
+    float *rgb = calloc(nd * 3, sizeof *rgb);
+    for (uint64_t k = 0; k < nd; k++) {
+        double w[3];
+        lfio_part_centroid(n, k, w);
+        float v = (cone_deg >= 90 || w[2] > cos(cone_deg * 3.14159265358979 / 180)) ? c : 0.0f;
+        rgb[3 * k] = rgb[3 * k + 1] = rgb[3 * k + 2] = v;
+    }
+    for (uint32_t j = 0; j < 4; j++)
+        for (uint32_t i = 0; i < 4; i++)
+            lfio_slab_write_position(slab, i, j, rgb);
+    lfio_lightfield_new(&lf);
+    lfio_lightfield_take_slab(lf, slab);
+    CHECK(lfio_lightfield_write(lf, path) == LFIO_OK, "write %s: %s", path, lfio_errmsg());
+    lfio_lightfield_destroy(lf);
+    free(rgb);
+}
+
+/* A constant light field is a diffuse emitter; a sparse one is culled by its mask. */
+static void check_lightfield(void)
+{
+    char lfpath[600], path[600];
+    snprintf(lfpath, sizeof lfpath, "%s/constant_lf.h5", tmpdir);
+    write_lightfield(lfpath, 2.0f, 180, 8);
+    snprintf(path, sizeof path, "%s/lf.json", tmpdir);
+    /* the slab faces +z at the origin; turned over (180 degrees about x) and lifted to z = 1 */
+    tpoly p[1] = {rect_z("grey", -1, -1, 1, 1, 0.0, 1)};
+    char rest[1024];
+    snprintf(rest, sizeof rest,
+             "\"radiance_maps\": {\"cell_size\": 0.25}, \"lightfields\": [{\"file\": \"constant_lf.h5\", \"slab\": "
+             "\"light\", \"transform\": [[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]}]");
+    write_scene(path, MATS, p, 1, rest);
+    rl_scene *s = load(path);
+    if (!s)
+        return;
+    tpoly em = rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
+    const rl_method methods[] = {RL_METHOD_CULLED, RL_METHOD_AREA};
+    for (int m = 0; m < 2; m++) {
+        set_sampling(s, methods[m], 32, 4, 256, 0);
+        rl_solution *sol = NULL;
+        CHECK(rl_relight(s, NULL, NULL, &sol) == RL_OK, "light field relight: %s", rl_errmsg());
+        if (!sol)
+            continue;
+        double rmse, mx;
+        errors_vs_reference(sol, 0, &em, 2.0, &rmse, &mx);
+        printf("constant light field %-10s: RMSE %.4f%%, max %.4f%% of peak\n", rl_method_name(methods[m]),
+               100 * rmse, 100 * mx);
+        CHECK(rmse < 0.015, "%s: constant light field RMSE %.4g of peak", rl_method_name(methods[m]), rmse);
+        rl_solution_destroy(sol);
+    }
+    rl_scene_destroy(s);
+    /* a narrow beam: the mask culls most solid angles, and culled == naive still */
+    write_lightfield(lfpath, 5.0f, 12, 16);
+    s = load(path);
+    if (!s)
+        return;
+    rl_solution *a = NULL, *b = NULL;
+    set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 0);
+    rl_relight(s, NULL, NULL, &a);
+    set_sampling(s, RL_METHOD_NAIVE, 16, 2, 16, 0);
+    rl_relight(s, NULL, NULL, &b);
+    if (a && b) {
+        uint32_t na, nb, *ij;
+        double *centre;
+        float *ea = map_irradiance(a, 0, &na, &centre, &ij);
+        free(centre); free(ij);
+        float *eb = map_irradiance(b, 0, &nb, &centre, &ij);
+        free(centre); free(ij);
+        CHECK(na == nb && memcmp(ea, eb, 3 * na * sizeof *ea) == 0, "masked light field: culled == naive");
+        double sum = 0;
+        for (uint32_t c = 0; c < na; c++)
+            sum += ea[3 * c];
+        CHECK(sum > 0, "the beam lights the floor");
+        rl_pass_stats st;
+        rl_solution_pass_stats(a, 0, &st);
+        CHECK(st.solid_angles_culled > st.solid_angles_considered / 2, "the mask culls most solid angles: %llu/%llu",
+              (unsigned long long)st.solid_angles_culled, (unsigned long long)st.solid_angles_considered);
+        free(ea);
+        free(eb);
+    }
+    rl_solution_destroy(a);
+    rl_solution_destroy(b);
+    rl_scene_destroy(s);
+}
+
+/* Irradiance at one point from one emitter, every method, against Lambert.
+ * Area sampling is held to tol_rel only when area_ok: a uniform density on
+ * an emitter much larger than its distance, or one seen from next to it,
+ * puts almost no samples where the integrand lives (its known failure, which
+ * the other methods exist to avoid); there it must still be finite. */
+static void extreme_case(const char *name, const tpoly *em, const double pt[6], double tol_rel, int area_ok)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/extreme_%s.json", tmpdir, name);
+    write_scene(path, MATS, em, 1, "\"radiance_maps\": {\"cell_size\": 1}");
+    rl_scene *s = load(path);
+    if (!s)
+        return;
+    double nrm[3] = {pt[3], pt[4], pt[5]}, l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+    for (int c = 0; c < 3; c++)
+        nrm[c] /= l;
+    double ref = rl_reference_polygon_irradiance(&em->v[0][0], em->n, pt, nrm, 2.0);
+    const rl_method methods[] = {RL_METHOD_CULLED, RL_METHOD_AREA, RL_METHOD_SOLIDANGLE};
+    for (int m = 0; m < 3; m++) {
+        set_sampling(s, methods[m], 32, 16, 4096, 0);
+        double out[3] = {NAN, NAN, NAN};
+        CHECK(rl_irradiance(s, pt, 1, out, NULL) == RL_OK, "%s: %s", name, rl_errmsg());
+        int finite = isfinite(out[0]) && isfinite(out[1]) && isfinite(out[2]) && out[0] >= 0;
+        double err = fabs(out[0] - ref);
+        printf("extreme %-22s %-10s: %.6g vs %.6g (rel %.2g)\n", name, rl_method_name(methods[m]), out[0], ref,
+               ref > 0 ? err / ref : err);
+        int bounded = err <= tol_rel * ref + 1e-300 || (methods[m] == RL_METHOD_AREA && !area_ok);
+        CHECK(finite && bounded, "%s %s: %.6g vs reference %.6g", name, rl_method_name(methods[m]), out[0], ref);
+    }
+    rl_scene_destroy(s);
+}
+
+static void check_extremes(void)
+{
+    const double below[6] = {0.1, 0.2, 0, 0, 0, 1};
+    tpoly tiny = rect_z("light", -5e-6, -5e-6, 5e-6, 5e-6, 1.0, 0);
+    extreme_case("tiny_emitter_1e-5m", &tiny, below, 0.05, 1);
+    tpoly huge = rect_z("light", -5e3, -5e3, 5e3, 5e3, 1.0, 0);
+    extreme_case("huge_emitter_1e4m", &huge, below, 0.02, 0);
+    tpoly far = rect_z("light", -0.5, -0.5, 0.5, 0.5, 1000.0, 0);
+    extreme_case("emitter_1km_away", &far, below, 0.05, 1);
+    tpoly unit = rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
+    const double grazing[6] = {3.0, 0.0, 0.0, -1.0, 0.0, 0.02}; /* normal almost in the floor plane */
+    extreme_case("grazing_receiver", &unit, grazing, 0.05, 1);
+    const double touching[6] = {0.5, 0.0, 0.999, -1.0, 0.0, 0.0}; /* 1 mm below the emitter's edge, facing it */
+    extreme_case("touching_edge", &unit, touching, 0.05, 0);
+    const double edge_on[6] = {0.0, 0.0, 0.999999, 0.0, 0.0, 1.0}; /* just under the emitter, facing it edge-on */
+    extreme_case("point_just_below", &unit, edge_on, 0.05, 0);
+}
+
+int main(int argc, char **argv)
+{
+    const char *t = getenv("ILF_TEST_TMP");
+    snprintf(tmpdir, sizeof tmpdir, "%s", t ? t : "/tmp");
+    if (argc > 1 && strcmp(argv[1], "--extremes") == 0) {
+        check_extremes();
+    } else {
+        check_unoccluded();
+        check_identities();
+        check_lightfield();
+    }
+    return check_report();
+}
