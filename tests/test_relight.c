@@ -69,10 +69,13 @@ static rl_scene *load(const char *path)
     return s;
 }
 
+static int no_descent; /* set by the random-scene test */
+
 /* Sets method, level, rays and threads on a scene. */
 static void set_sampling(rl_scene *s, rl_method m, uint32_t n, uint32_t k, uint32_t samples, uint32_t threads)
 {
     rl_sampling smp = *rl_scene_sampling(s);
+    smp.descend = !no_descent;
     smp.method = m;
     smp.partition_n = n;
     smp.rays_per_solid_angle = k;
@@ -458,12 +461,107 @@ static void check_extremes(void)
     extreme_case("point_just_below", &unit, edge_on, 0.05, 0);
 }
 
+/* A fixed generator for the random scenes. */
+static uint64_t rnd_state = 77;
+static double rnd(void)
+{
+    rnd_state = rnd_state * 6364136223846793005ull + 1442695040888963407ull;
+    return (rnd_state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* A random quad: centre in a 4 m box, random orientation, sides 0.3..1.5 m;
+ * every third one is a closed box's face arrangement sharing edges. */
+static tpoly random_quad(const char *mat)
+{
+    double c[3] = {4 * rnd() - 2, 4 * rnd() - 2, 4 * rnd() - 2}, a[3], b[3], n[3];
+    double z = 2 * rnd() - 1, phi = 6.283185307179586 * rnd(), r = sqrt(1 - z * z);
+    n[0] = r * cos(phi);
+    n[1] = r * sin(phi);
+    n[2] = z;
+    double h[3] = {fabs(n[0]) < 0.9 ? 1 : 0, fabs(n[0]) < 0.9 ? 0 : 1, 0};
+    a[0] = h[1] * n[2] - h[2] * n[1];
+    a[1] = h[2] * n[0] - h[0] * n[2];
+    a[2] = h[0] * n[1] - h[1] * n[0];
+    double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    for (int k = 0; k < 3; k++)
+        a[k] /= la;
+    b[0] = n[1] * a[2] - n[2] * a[1];
+    b[1] = n[2] * a[0] - n[0] * a[2];
+    b[2] = n[0] * a[1] - n[1] * a[0];
+    double su = 0.3 + 1.2 * rnd(), sv = 0.3 + 1.2 * rnd();
+    tpoly p = {mat, 4, {{0}}};
+    const double corner[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+    for (int k = 0; k < 4; k++)
+        for (int q = 0; q < 3; q++)
+            p.v[k][q] = c[q] + 0.5 * su * corner[k][0] * a[q] + 0.5 * sv * corner[k][1] * b[q];
+    return p;
+}
+
+/* Random scenes of arbitrarily oriented quads: culled must equal naive bit for
+ * bit whenever no pair descends (the sharpest test that culling is conservative). */
+static void check_random_scenes(int count)
+{
+    long compared = 0;
+    for (int sc = 0; sc < count; sc++) {
+        char path[600];
+        snprintf(path, sizeof path, "%s/random_%d.json", tmpdir, sc);
+        tpoly p[16];
+        int n = 6 + sc % 6; /* plus the floor and the wall: at most 13 */
+        for (int k = 0; k < n; k++)
+            p[k] = random_quad(k < 2 ? "light" : "grey");
+        /* a floor that everything can shadow, sharing an edge with a wall */
+        p[n] = rect_z("grey", -3, -3, 3, 3, -2.5, 1);
+        tpoly wall = {"grey", 4, {{-3, -3, -2.5}, {-3, 3, -2.5}, {-3, 3, 2.5}, {-3, -3, 2.5}}};
+        p[n + 1] = wall;
+        write_scene(path, MATS, p, n + 2, "\"radiance_maps\": {\"cell_size\": 0.3}, \"sampling\": {\"bounces\": 1}");
+        rl_scene *s = load(path);
+        if (!s)
+            continue;
+        rl_solution *a = NULL, *b = NULL;
+        no_descent = sc % 2; /* half the scenes with the paper's plain method: every pair comparable */
+        set_sampling(s, RL_METHOD_CULLED, 8, 1, 16, 0);
+        rl_relight(s, NULL, NULL, &a);
+        set_sampling(s, RL_METHOD_NAIVE, 8, 1, 16, 0);
+        rl_relight(s, NULL, NULL, &b);
+        uint64_t descended = 0;
+        for (uint32_t q = 0; a && q < rl_solution_pass_count(a); q++) {
+            rl_pass_stats st;
+            rl_solution_pass_stats(a, q, &st);
+            descended += st.pairs_descended;
+        }
+        if (a && b && descended == 0) {
+            long differ = 0;
+            for (size_t k = 0; k < rl_solution_map_count(a); k++) {
+                uint32_t na, nb, *ij;
+                double *centre;
+                float *ea = map_irradiance(a, k, &na, &centre, &ij);
+                free(centre); free(ij);
+                float *eb = map_irradiance(b, k, &nb, &centre, &ij);
+                free(centre); free(ij);
+                for (uint32_t c = 0; c < 3 * na; c++)
+                    differ += memcmp(&ea[c], &eb[c], sizeof(float)) != 0;
+                free(ea);
+                free(eb);
+            }
+            CHECK(differ == 0, "random scene %d: culled and naive differ in %ld values", sc, differ);
+            compared++;
+        }
+        rl_solution_destroy(a);
+        rl_solution_destroy(b);
+        rl_scene_destroy(s);
+    }
+    no_descent = 0;
+    printf("random scenes: %ld of %d compared bit for bit (the rest had descending pairs)\n", compared, count);
+    CHECK(compared >= count / 2, "at least the plain-method half is comparable: %ld of %d", compared, count);
+}
+
 int main(int argc, char **argv)
 {
     const char *t = getenv("ILF_TEST_TMP");
     snprintf(tmpdir, sizeof tmpdir, "%s", t ? t : "/tmp");
     if (argc > 1 && strcmp(argv[1], "--extremes") == 0) {
         check_extremes();
+        check_random_scenes(24);
     } else {
         check_unoccluded();
         check_identities();

@@ -50,5 +50,6 @@ void rl_sampling_default(rl_sampling *s)
     s->samples_per_cell = 128;
     s->bounces = 0;
     s->seed = 1;
+    s->descend = 1;
     s->threads = 0;
 }

@@ -30,7 +30,9 @@
  * of which passes the same steps before it is kept. Whatever is appended
  * therefore satisfies the polygon invariants of scene_internal.h.
  */
+#ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* stat(); the build defines it too */
+#endif
 
 #include <assimp/cimport.h>
 #include <assimp/material.h>
@@ -44,41 +46,11 @@
 #include <sys/stat.h>
 
 #include "mesh.h"
+#include "vec.h"
 
 static const double plane_tol = 1e-6; /* distances, relative to the diameter */
 static const double area_tol = 1e-12; /* areas, relative to the diameter squared */
 static const double pi = 3.14159265358979323846;
-
-/* ----------------------------------------------------------- vectors */
-
-/* out = a - b. */
-static void sub3(const double a[3], const double b[3], double out[3])
-{
-    for (int k = 0; k < 3; k++)
-        out[k] = a[k] - b[k];
-}
-
-/* @return a . b. */
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-/* out = a x b; out may not alias a or b. */
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* @return |a - b|. */
-static double dist3(const double a[3], const double b[3])
-{
-    double d[3];
-    sub3(a, b, d);
-    return sqrt(dot3(d, d));
-}
 
 /* ------------------------------------------------------------ checks */
 
@@ -91,29 +63,35 @@ typedef struct poly_check {
     size_t *keep;
     size_t n;
     double diameter;
-    double tol;       /* plane_tol * diameter */
-    double normal[3]; /* unit Newell normal of the kept vertices */
+    double tol;    /* plane_tol * diameter */
+    v3 normal;     /* unit Newell normal of the kept vertices */
     double area;
-    char why[160];    /* the problem, once the verdict is not V_OK */
+    char why[160]; /* the problem, once the verdict is not V_OK */
 } poly_check;
 
-/* @return kept vertex i, counted cyclically (i may be -1 or n). */
-static const double *kept(const poly_check *c, size_t i)
+/* @return kept vertex i (0 <= i < 2n), counted cyclically. */
+static v3 kept(const poly_check *c, size_t i)
 {
-    return c->p[c->keep[(i + c->n) % c->n]];
+    return v3_load(c->p[c->keep[i % c->n]]);
 }
 
-/* @return the largest distance between two of the n vertices. */
+/* @return |a - b| for input vertices a and b. */
+static double dist(const double a[3], const double b[3])
+{
+    return v3_len(v3_sub(v3_load(a), v3_load(b)));
+}
+
+/* @return the largest distance between two of the n vertices (O(n^2), n <= RL_MAX_POLYGON_VERTICES). */
 static double diameter(const double (*p)[3], size_t n)
 {
-    double best = 0;
+    double best = 0; /* squared, so that the inner loop needs no square root */
     for (size_t i = 0; i < n; i++)
         for (size_t j = i + 1; j < n; j++) {
-            double d = dist3(p[i], p[j]);
-            if (d > best)
-                best = d;
+            v3 d = v3_sub(v3_load(p[i]), v3_load(p[j]));
+            double q = v3_dot(d, d);
+            best = q > best ? q : best;
         }
-    return best;
+    return sqrt(best);
 }
 
 /* Keeps the vertices farther than tol from the previously kept one, also across the closing edge. */
@@ -121,9 +99,9 @@ static void drop_duplicates(poly_check *c, size_t n)
 {
     size_t m = 0;
     for (size_t i = 0; i < n; i++)
-        if (m == 0 || dist3(c->p[i], c->p[c->keep[m - 1]]) > c->tol)
+        if (m == 0 || dist(c->p[i], c->p[c->keep[m - 1]]) > c->tol)
             c->keep[m++] = i;
-    while (m > 1 && dist3(c->p[c->keep[m - 1]], c->p[c->keep[0]]) <= c->tol)
+    while (m > 1 && dist(c->p[c->keep[m - 1]], c->p[c->keep[0]]) <= c->tol)
         m--;
     c->n = m;
 }
@@ -131,38 +109,27 @@ static void drop_duplicates(poly_check *c, size_t n)
 /* Sets normal and area from the Newell vector of the kept vertices. @return 1 if the area is large enough. */
 static int newell(poly_check *c)
 {
-    double sum[3] = {0, 0, 0};
-    const double *o = kept(c, 0); /* relative to a vertex, for precision far from the origin */
-    for (size_t i = 1; i + 1 < c->n; i++) {
-        double a[3], b[3], x[3];
-        sub3(kept(c, i), o, a);
-        sub3(kept(c, i + 1), o, b);
-        cross3(a, b, x);
-        for (int k = 0; k < 3; k++)
-            sum[k] += x[k];
-    }
-    double len = sqrt(dot3(sum, sum));
+    v3 sum = v3_make(0, 0, 0), o = kept(c, 0); /* relative to a vertex, for precision far from the origin */
+    for (size_t i = 1; i + 1 < c->n; i++)
+        sum = v3_add(sum, v3_cross(v3_sub(kept(c, i), o), v3_sub(kept(c, i + 1), o)));
+    double len = v3_len(sum);
     c->area = 0.5 * len;
     if (!(c->area > area_tol * c->diameter * c->diameter) || !isfinite(len))
         return 0;
-    for (int k = 0; k < 3; k++)
-        c->normal[k] = sum[k] / len;
+    c->normal = v3_scale(sum, 1 / len);
     return 1;
 }
 
 /* @return 1 if every kept vertex is within tol of the best-fit plane; else 0, naming the farthest in why. */
 static int check_plane(poly_check *c)
 {
-    double centre[3] = {0, 0, 0};
+    v3 centre = v3_make(0, 0, 0);
     for (size_t i = 0; i < c->n; i++)
-        for (int k = 0; k < 3; k++)
-            centre[k] += kept(c, i)[k] / (double)c->n;
+        centre = v3_madd(centre, kept(c, i), 1.0 / (double)c->n);
     size_t worst = 0;
     double off = 0;
     for (size_t i = 0; i < c->n; i++) {
-        double d[3];
-        sub3(kept(c, i), centre, d);
-        double h = fabs(dot3(d, c->normal));
+        double h = fabs(v3_dot(v3_sub(kept(c, i), centre), c->normal));
         if (h > off) {
             off = h;
             worst = c->keep[i];
@@ -178,18 +145,15 @@ static int check_plane(poly_check *c)
 typedef enum corner { CORNER, STRAIGHT, SPIKE } corner;
 
 /* @return STRAIGHT if v is within tol of segment ab, SPIKE if within tol of its line but outside it. */
-static corner classify(const double a[3], const double v[3], const double b[3], double tol)
+static corner classify(v3 a, v3 v, v3 b, double tol)
 {
-    double ab[3], av[3], x[3];
-    sub3(b, a, ab);
-    sub3(v, a, av);
-    double len = sqrt(dot3(ab, ab));
+    v3 ab = v3_sub(b, a), av = v3_sub(v, a);
+    double len = v3_len(ab);
     if (len <= tol)
         return SPIKE; /* the boundary goes out to v and straight back */
-    cross3(av, ab, x);
-    if (sqrt(dot3(x, x)) / len > tol)
+    if (v3_len(v3_cross(av, ab)) / len > tol)
         return CORNER;
-    double t = dot3(av, ab) / (len * len);
+    double t = v3_dot(av, ab) / (len * len);
     return t > 0 && t < 1 ? STRAIGHT : SPIKE;
 }
 
@@ -226,17 +190,14 @@ static int check_convex(poly_check *c)
 {
     double turning = 0;
     for (size_t i = 0; i < c->n; i++) {
-        double in[3], out[3], x[3];
-        sub3(kept(c, i), kept(c, i + c->n - 1), in);
-        sub3(kept(c, i + 1), kept(c, i), out);
-        cross3(in, out, x);
-        double s = dot3(x, c->normal);
+        v3 in = v3_sub(kept(c, i), kept(c, i + c->n - 1)), out = v3_sub(kept(c, i + 1), kept(c, i));
+        double s = v3_dot(v3_cross(in, out), c->normal);
         if (!(s > 0)) {
             snprintf(c->why, sizeof c->why, "not convex (the corner at vertex %zu turns the other way)",
                      c->keep[i]);
             return 0;
         }
-        turning += atan2(s, dot3(in, out));
+        turning += atan2(s, v3_dot(in, out));
     }
     if (turning > 3 * pi) {
         snprintf(c->why, sizeof c->why, "not convex (the boundary winds around %.0f times)",
@@ -293,24 +254,19 @@ static double orient(const double a[2], const double b[2], const double c[2])
 /* Writes the kept vertices of c in a right-handed basis of its plane, relative to the first one, to q. */
 static void project(const poly_check *c, double (*q)[2])
 {
-    const double *n = c->normal;
-    int axis = 0; /* the coordinate axis least aligned with the normal */
-    for (int k = 1; k < 3; k++)
-        if (fabs(n[k]) < fabs(n[axis]))
-            axis = k;
-    double e1[3] = {0, 0, 0}, e2[3];
-    e1[axis] = 1;
-    for (int k = 0; k < 3; k++)
-        e1[k] -= n[axis] * n[k];
-    double len = sqrt(dot3(e1, e1));
-    for (int k = 0; k < 3; k++)
-        e1[k] /= len;
-    cross3(n, e1, e2); /* e1 x e2 = n, so the face runs counter-clockwise in (e1, e2) */
+    v3 n = c->normal, axis = v3_make(0, 0, 0); /* the coordinate axis least aligned with the normal */
+    if (fabs(n.x) <= fabs(n.y) && fabs(n.x) <= fabs(n.z))
+        axis.x = 1;
+    else if (fabs(n.y) <= fabs(n.z))
+        axis.y = 1;
+    else
+        axis.z = 1;
+    v3 e1 = v3_norm(v3_madd(axis, n, -v3_dot(axis, n)));
+    v3 e2 = v3_cross(n, e1); /* e1 x e2 = n, so the face runs counter-clockwise in (e1, e2) */
     for (size_t i = 0; i < c->n; i++) {
-        double d[3];
-        sub3(kept(c, i), kept(c, 0), d);
-        q[i][0] = dot3(d, e1);
-        q[i][1] = dot3(d, e2);
+        v3 d = v3_sub(kept(c, i), kept(c, 0));
+        q[i][0] = v3_dot(d, e1);
+        q[i][1] = v3_dot(d, e2);
     }
 }
 
@@ -366,15 +322,17 @@ static size_t ear_clip(const double (*q)[2], size_t m, int *link, size_t (*tri)[
 
 /* ----------------------------------------------------------- appending */
 
-/* Appends the kept vertices of c as one polygon. @return RL_OK; RL_ERR_INPUT past the limits; RL_ERR_NOMEM. */
-static rl_status append_polygon(rl_build *b, const poly_check *c, uint32_t material, const char *label)
+/* Appends pts (n <= RL_SCENE_MAX_POLY_VERTS, convex, planar, normal given) as one polygon.
+ * @return RL_OK; RL_ERR_INPUT past the limits; RL_ERR_NOMEM. */
+static rl_status append_vertices(rl_build *b, const v3 *pts, size_t n, v3 normal, uint32_t material,
+                                 const char *label)
 {
     rl_scene *s = b->scene;
     if (s->npolygons >= RL_MAX_ELEMENTS)
         return rl__build_fail(b, label, "the scene has more than %zu polygons, the limit", RL_MAX_ELEMENTS);
-    if (c->n > RL_MAX_ELEMENTS - s->nvertices)
+    if (n > RL_MAX_ELEMENTS - s->nvertices)
         return rl__build_fail(b, label, "the scene has more than %zu vertices, the limit", RL_MAX_ELEMENTS);
-    void *v = rl__grow(s->vertices, &b->vertex_cap, s->nvertices + c->n, sizeof *s->vertices);
+    void *v = rl__grow(s->vertices, &b->vertex_cap, s->nvertices + n, sizeof *s->vertices);
     if (v)
         s->vertices = v;
     void *p = v ? rl__grow(s->polygons, &b->polygon_cap, s->npolygons + 1, sizeof *s->polygons) : NULL;
@@ -385,14 +343,43 @@ static rl_status append_polygon(rl_build *b, const poly_check *c, uint32_t mater
     rl_polygon *poly = &s->polygons[s->npolygons++];
     memset(poly, 0, sizeof *poly);
     poly->first = (uint32_t)s->nvertices;
-    poly->count = (uint32_t)c->n;
+    poly->count = (uint32_t)n;
     poly->material = material;
-    memcpy(poly->normal, c->normal, sizeof poly->normal);
-    poly->area = c->area;
+    v3_store(normal, poly->normal);
+    double area = 0.0;
+    for (size_t i = 1; i + 1 < n; i++)
+        area += 0.5 * v3_dot(v3_cross(v3_sub(pts[i], pts[0]), v3_sub(pts[i + 1], pts[0])), normal);
+    poly->area = area;
     rl__format(poly->label, sizeof poly->label, "%s", label);
-    for (size_t i = 0; i < c->n; i++)
-        memcpy(s->vertices[s->nvertices++], kept(c, i), sizeof *s->vertices);
+    for (size_t i = 0; i < n; i++)
+        v3_store(pts[i], s->vertices[s->nvertices++]);
     return RL_OK;
+}
+
+/* Appends the kept vertices of c as one polygon, or, past the engine's
+ * RL_SCENE_MAX_POLY_VERTS, as a fan of convex pieces that share vertex 0
+ * (labelled "piece K"). @return as append_vertices(). */
+static rl_status append_polygon(rl_build *b, const poly_check *c, uint32_t material, const char *label)
+{
+    v3 pts[RL_SCENE_MAX_POLY_VERTS];
+    if (c->n <= RL_SCENE_MAX_POLY_VERTS) {
+        for (size_t i = 0; i < c->n; i++)
+            pts[i] = kept(c, i);
+        return append_vertices(b, pts, c->n, c->normal, material, label);
+    }
+    rl_status st = RL_OK;
+    for (size_t first = 1, piece = 0; first + 1 < c->n && st == RL_OK; piece++) {
+        size_t last = first + RL_SCENE_MAX_POLY_VERTS - 2 < c->n - 1 ? first + RL_SCENE_MAX_POLY_VERTS - 2 : c->n - 1;
+        size_t m = 0;
+        pts[m++] = kept(c, 0);
+        for (size_t i = first; i <= last; i++)
+            pts[m++] = kept(c, i);
+        char name[sizeof ((rl_polygon *)0)->label];
+        rl__format(name, sizeof name, "%s piece %zu", label, piece);
+        st = append_vertices(b, pts, m, c->normal, material, name);
+        first = last;
+    }
+    return st;
 }
 
 /* Ear clips the cleaned face c and appends its non-degenerate triangles. @return as rl__build_polygon(). */
@@ -428,9 +415,6 @@ rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_
         return policy == RL_POLY_STRICT
                    ? rl__build_fail(b, label, "needs at least 3 vertices, got %zu", n)
                    : RL_OK;
-    if (n > RL_MAX_POLYGON_VERTICES)
-        return rl__build_fail(b, label, "has %zu vertices, more than the limit of %u", n,
-                              RL_MAX_POLYGON_VERTICES);
     for (size_t i = 0; i < n; i++)
         if (!isfinite(v[i][0]) || !isfinite(v[i][1]) || !isfinite(v[i][2]))
             return rl__build_fail(b, label, "vertex %zu is not finite", i);

@@ -81,7 +81,8 @@ rl_status rl__build_material(rl_build *b, const char *elem, const char *name,
 /*
  * Checks n vertices (finite, n <= RL_MAX_POLYGON_VERTICES) as one polygon
  * and appends it, or its ear-clipped parts under RL_POLY_SPLIT, labelled
- * label. @return RL_OK; RL_ERR_INPUT naming label; RL_ERR_NOMEM.
+ * label. v may be b->face but no other scratch array.
+ * @return RL_OK; RL_ERR_INPUT naming label; RL_ERR_NOMEM.
  */
 rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_t material,
                             const char *label, rl_poly_policy policy);

@@ -19,7 +19,9 @@
  * allocation is sized by a count read from a file before that count has
  * been checked against its limit; arrays grow as elements pass their checks.
  */
+#ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* fileno(), fstat(); the build defines it too */
+#endif
 
 #include <cjson/cJSON.h>
 #include <errno.h>
@@ -32,6 +34,7 @@
 #include <sys/stat.h>
 
 #include "mesh.h"
+#include "vec.h"
 
 /* Largest scene file read, in bytes. */
 #define SCENE_MAX_BYTES ((size_t)256 << 20)
@@ -55,6 +58,7 @@ static const int_limit lim_threads = {0, 1024, 0};
 static const int_limit lim_seed = {0, (uint64_t)1 << 53, 0}; /* integers a JSON number holds exactly */
 static const int_limit lim_pixels = {1, 16384, 0};
 static const int_limit lim_index = {0, UINT32_MAX, 0};
+static const int_limit lim_flag = {0, 1, 0};
 
 /* @return 1 if v is allowed by l. */
 static int limit_ok(const int_limit *l, uint64_t v)
@@ -404,9 +408,7 @@ static rl_status read_polygon(rl_build *b, const cJSON *p, const char *elem)
     if (!cJSON_IsArray(vj))
         return rl__build_fail(b, sub, "expected an array of [x, y, z] vertices, got %s", json_kind(vj));
     size_t n = (size_t)cJSON_GetArraySize(vj);
-    if (n < 3)
-        return rl__build_fail(b, elem, "needs at least 3 vertices, got %zu", n);
-    if (n > RL_MAX_POLYGON_VERTICES)
+    if (n > RL_MAX_POLYGON_VERTICES) /* before anything is read into b->face */
         return rl__build_fail(b, elem, "has %zu vertices, more than the limit of %u", n, RL_MAX_POLYGON_VERTICES);
     size_t i = 0;
     for (const cJSON *v = vj->child; v; v = v->next, i++) {
@@ -673,6 +675,18 @@ static rl_status read_sampling(rl_build *b, const cJSON *j)
     return st;
 }
 
+/* @return NULL if the camera's view is well defined, else the problem. */
+static const char *camera_problem(const rl_camera *c)
+{
+    v3 view = v3_sub(v3_load(c->look_at), v3_load(c->position)), up = v3_load(c->up);
+    double lv = v3_len(view), ls = v3_len(v3_cross(view, up));
+    if (!(lv > 0 && isfinite(lv)))
+        return "position and look_at must be distinct points";
+    if (!(ls > 1e-9 * lv * v3_len(up)) || !isfinite(ls))
+        return "up must not be zero or parallel to the view direction";
+    return NULL;
+}
+
 /* Reads "camera": position, look_at, up, fov_deg, width, height. */
 static rl_status read_camera(rl_build *b, const cJSON *j)
 {
@@ -702,23 +716,12 @@ static rl_status read_camera(rl_build *b, const cJSON *j)
         if (v && (st = json_integer(b, v, elem, &lim_pixels, &value)) == RL_OK)
             *sizes[k] = (uint32_t)value;
     }
-    if (st != RL_OK)
-        return st;
-    double view[3], side[3];
-    for (int k = 0; k < 3; k++)
-        view[k] = c->look_at[k] - c->position[k];
-    side[0] = view[1] * c->up[2] - view[2] * c->up[1];
-    side[1] = view[2] * c->up[0] - view[0] * c->up[2];
-    side[2] = view[0] * c->up[1] - view[1] * c->up[0];
-    double lv = sqrt(view[0] * view[0] + view[1] * view[1] + view[2] * view[2]);
-    double lu = sqrt(c->up[0] * c->up[0] + c->up[1] * c->up[1] + c->up[2] * c->up[2]);
-    double ls = sqrt(side[0] * side[0] + side[1] * side[1] + side[2] * side[2]);
-    if (!(lv > 0 && isfinite(lv)))
-        return rl__build_fail(b, "camera", "position and look_at must be distinct points");
-    if (!(ls > 1e-9 * lv * lu) || !isfinite(ls))
-        return rl__build_fail(b, "camera", "up must not be zero or parallel to the view direction");
-    b->scene->has_camera = 1;
-    return RL_OK;
+    const char *why = st == RL_OK ? camera_problem(c) : NULL;
+    if (why)
+        st = rl__build_fail(b, "camera", "%s", why);
+    if (st == RL_OK)
+        b->scene->has_camera = 1;
+    return st;
 }
 
 /* Reads the top-level object. */
@@ -944,6 +947,7 @@ rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
                   {"rays_per_solid_angle", x->rays_per_solid_angle, &lim_rays},
                   {"samples_per_cell", x->samples_per_cell, &lim_samples},
                   {"bounces", x->bounces, &lim_bounces},
+                  {"descend", x->descend, &lim_flag},
                   {"threads", x->threads, &lim_threads}};
     for (size_t k = 0; k < sizeof fields / sizeof fields[0]; k++)
         if (!limit_ok(fields[k].limit, fields[k].value)) {

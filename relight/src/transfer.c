@@ -253,7 +253,8 @@ static int pair_setup(const rl_transfer_ctx *ctx, const rl_emitter *e, const til
     if (p->ns < 3 || !(lift > 0))
         return 0; /* the emitter is behind, or in, the receiver's plane */
     /* naive never descends: it is the plain enumeration of partition_n */
-    p->level = ctx->sampling->method == RL_METHOD_NAIVE ? ctx->sampling->partition_n : pair_level(ctx, p, t);
+    int plain = ctx->sampling->method == RL_METHOD_NAIVE || !ctx->sampling->descend;
+    p->level = plain ? ctx->sampling->partition_n : pair_level(ctx, p, t);
     p->descended = p->level > ctx->sampling->partition_n;
     return 1;
 }

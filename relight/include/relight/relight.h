@@ -66,6 +66,8 @@ typedef struct rl_sampling {
     uint32_t samples_per_cell;     /**< shadow rays per (cell, emitter) for area and solidangle, default 128 */
     uint32_t bounces;              /**< further diffuse passes after the direct one, default 0 */
     uint64_t seed;                 /**< default 1 */
+    uint32_t descend;              /**< 1 (default): pairs whose emitter subtends less than a solid angle
+                                        use finer levels; 0: always partition_n, the paper's plain method */
     uint32_t threads;              /**< worker threads; 0 = every core (not part of the scene file) */
 } rl_sampling;
 

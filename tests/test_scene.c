@@ -1,0 +1,581 @@
+/*
+ * test_scene.c - the scene loader (relight/scene.h) against the corpus in
+ * tests/scenes and the data scenes in data/.
+ *
+ * Usage: test_scene SCENES_DIR DATA_DIR. Light field files are written at
+ * run time into $ILF_TEST_TMP (or /tmp) together with the scenes that use
+ * them. Good scenes must load with the expected counts, defaults, normals
+ * and materials, and every loaded polygon is checked here, independently of
+ * the loader, against the invariants of scene_internal.h. Bad scenes are
+ * one table: file, expected status, expected substring of the message; the
+ * message must also name the scene file.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "check.h"
+#include "relight/scene.h"
+#include "scene_internal.h"
+
+static const char *corpus; /* tests/scenes */
+static const char *datadir;
+static char tmpdir[1024];
+
+/* Writes dir/name to out. @return out. */
+static const char *join(char *out, size_t cap, const char *dir, const char *name)
+{
+    snprintf(out, cap, "%s/%s", dir, name);
+    return out;
+}
+
+/* Loads dir/name, reporting a failure. @return the scene or NULL. */
+static rl_scene *load(const char *dir, const char *name)
+{
+    char path[2048];
+    rl_scene *s = NULL;
+    rl_status st = rl_scene_load(join(path, sizeof path, dir, name), &s);
+    CHECK(st == RL_OK && s, "%s: status %d: %s", path, (int)st, rl_errmsg());
+    return st == RL_OK ? s : NULL;
+}
+
+/* @return 1 if a and b agree to tol in every component. */
+static int near3(const double a[3], double x, double y, double z, double tol)
+{
+    return fabs(a[0] - x) <= tol && fabs(a[1] - y) <= tol && fabs(a[2] - z) <= tol;
+}
+
+/* @return the index of the material called name, or -1. */
+static long material(const rl_scene *s, const char *name)
+{
+    for (size_t k = 0; k < s->nmaterials; k++)
+        if (strcmp(s->materials[k].name, name) == 0)
+            return (long)k;
+    return -1;
+}
+
+/* Checks every polygon of s against the invariants, computed here from the vertices alone. */
+static void check_invariants(const rl_scene *s, const char *name)
+{
+    for (size_t i = 0; i < s->npolygons; i++) {
+        const rl_polygon *p = &s->polygons[i];
+        CHECK(p->count >= 3 && (size_t)p->first + p->count <= s->nvertices, "%s: polygon %zu range", name, i);
+        CHECK(p->material < s->nmaterials, "%s: polygon %zu material", name, i);
+        if (p->count < 3 || (size_t)p->first + p->count > s->nvertices)
+            continue;
+        const double(*v)[3] = s->vertices + p->first;
+        size_t n = p->count;
+        double nrm[3] = {0, 0, 0}, diam = 0;
+        for (size_t k = 0; k < n; k++) {
+            const double *a = v[k], *b = v[(k + 1) % n];
+            nrm[0] += (a[1] - b[1]) * (a[2] + b[2]);
+            nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
+            nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
+            for (size_t m = 0; m < n; m++)
+                diam = fmax(diam, sqrt((v[k][0] - v[m][0]) * (v[k][0] - v[m][0]) +
+                                       (v[k][1] - v[m][1]) * (v[k][1] - v[m][1]) +
+                                       (v[k][2] - v[m][2]) * (v[k][2] - v[m][2])));
+        }
+        double len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        CHECK(fabs(len / 2 - p->area) <= 1e-9 * fmax(1, p->area), "%s: polygon %zu area %g vs %g", name, i,
+              len / 2, p->area);
+        CHECK(p->area > 1e-12 * diam * diam, "%s: polygon %zu has no area", name, i);
+        CHECK(near3(p->normal, nrm[0] / len, nrm[1] / len, nrm[2] / len, 1e-9), "%s: polygon %zu normal", name, i);
+        double worst = 0, turn_min = INFINITY;
+        for (size_t k = 0; k < n; k++) {
+            double d[3] = {v[k][0] - v[0][0], v[k][1] - v[0][1], v[k][2] - v[0][2]};
+            worst = fmax(worst, fabs(d[0] * p->normal[0] + d[1] * p->normal[1] + d[2] * p->normal[2]));
+            const double *a = v[k], *b = v[(k + 1) % n], *c = v[(k + 2) % n];
+            double e[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, f[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
+            double x[3] = {e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]};
+            turn_min = fmin(turn_min, x[0] * p->normal[0] + x[1] * p->normal[1] + x[2] * p->normal[2]);
+        }
+        CHECK(worst <= 2e-6 * diam, "%s: polygon %zu is %g off its plane", name, i, worst);
+        CHECK(turn_min > 0, "%s: polygon %zu is not strictly convex", name, i);
+    }
+}
+
+/* ------------------------------------------------------------ good scenes */
+
+static void test_minimal(void)
+{
+    rl_scene *s = load(corpus, "good_minimal.json");
+    if (!s)
+        return;
+    rl_sampling def;
+    rl_sampling_default(&def);
+    const rl_sampling *got = rl_scene_sampling(s);
+    CHECK(rl_scene_polygon_count(s) == 1, "polygons %zu", rl_scene_polygon_count(s));
+    CHECK(rl_scene_lightfield_count(s) == 0, "light fields");
+    CHECK(rl_scene_cell_size(s) == 0.05, "default cell size %g", rl_scene_cell_size(s));
+    CHECK(!rl_scene_has_camera(s), "no camera");
+    CHECK(got->method == RL_METHOD_CULLED && got->partition_n == 32 && got->rays_per_solid_angle == 4 &&
+              got->samples_per_cell == def.samples_per_cell && got->bounces == 0 && got->seed == 1 && got->threads == 0,
+          "default sampling");
+    CHECK(memcmp(got, &def, sizeof def) == 0, "sampling equals rl_sampling_default");
+    CHECK(s->nmaterials == 1 && s->materials[0].albedo[1] == 0.8f && s->materials[0].emission[2] == 0.0f,
+          "default material");
+    CHECK(near3(s->polygons[0].normal, 0, 0, 1, 1e-15), "counter-clockwise from +z faces +z");
+    CHECK(fabs(s->polygons[0].area - 1) < 1e-15, "area %g", s->polygons[0].area);
+    CHECK(strcmp(s->polygons[0].label, "polygons[0]") == 0, "label %s", s->polygons[0].label);
+    check_invariants(s, "good_minimal.json");
+    rl_scene_destroy(s);
+}
+
+static void test_full(void)
+{
+    rl_scene *s = load(corpus, "good_full.json");
+    if (!s)
+        return;
+    const rl_sampling *g = rl_scene_sampling(s);
+    CHECK(rl_scene_polygon_count(s) == 3, "polygons %zu", rl_scene_polygon_count(s));
+    CHECK(rl_scene_cell_size(s) == 0.1, "cell size");
+    CHECK(g->method == RL_METHOD_NAIVE && g->partition_n == 16 && g->rays_per_solid_angle == 8 &&
+              g->samples_per_cell == 32 && g->bounces == 3 && g->seed == 42,
+          "sampling read");
+    CHECK(rl_scene_has_camera(s), "camera");
+    CHECK(near3(s->camera.up, 0, 0, 1, 0) && s->camera.fov_deg == 60 && s->camera.width == 320 &&
+              s->camera.height == 240 && near3(s->camera.position, 0.5, -3, 1, 0),
+          "camera values and default up");
+    long lamp = material(s, "lamp");
+    CHECK(lamp >= 0 && s->materials[lamp].emission[0] == 10 && s->materials[lamp].albedo[0] == 0, "lamp");
+    if (s->npolygons == 3) {
+        CHECK(near3(s->polygons[0].normal, 0, 0, -1, 1e-15), "clockwise from +z faces -z");
+        CHECK(s->polygons[1].count == 4, "collinear and repeated vertices removed: %u", s->polygons[1].count);
+        CHECK(near3(s->polygons[1].normal, 0, 0, 1, 1e-15), "lamp faces +z");
+        CHECK((long)s->polygons[1].material == lamp, "lamp material");
+        CHECK(near3(s->polygons[2].normal, -1, 0, 0, 1e-15), "right-hand rule: z then y gives -x");
+        CHECK(fabs(s->polygons[2].area - 0.5) < 1e-15, "triangle area");
+    }
+    check_invariants(s, "good_full.json");
+    rl_scene_destroy(s);
+}
+
+static void test_meshes(void)
+{
+    rl_scene *s = load(corpus, "good_mesh_quad.json");
+    if (s) {
+        CHECK(s->npolygons == 1 && s->polygons[0].count == 4, "planar convex quad kept whole");
+        CHECK(s->npolygons == 1 && near3(s->polygons[0].normal, 0, 0, 1, 1e-15), "quad faces +z");
+        CHECK(s->npolygons == 1 && strcmp(s->polygons[0].label, "meshes[0] (quad.obj) face 0") == 0, "label '%s'",
+              s->npolygons ? s->polygons[0].label : "");
+        check_invariants(s, "good_mesh_quad.json");
+        rl_scene_destroy(s);
+    }
+    s = load(corpus, "good_mesh_nonplanar.json");
+    if (s) {
+        CHECK(s->npolygons == 2, "non-planar quad split into %zu polygons", s->npolygons);
+        for (size_t i = 0; i < s->npolygons; i++)
+            CHECK(s->polygons[i].count == 3 && s->polygons[i].normal[2] > 0.9, "triangle %zu faces up", i);
+        check_invariants(s, "good_mesh_nonplanar.json");
+        rl_scene_destroy(s);
+    }
+    s = load(corpus, "good_mesh_lshape.json");
+    if (s) {
+        double area = 0;
+        CHECK(s->npolygons == 4, "L-shaped face ear clipped into %zu polygons", s->npolygons);
+        for (size_t i = 0; i < s->npolygons; i++) {
+            area += s->polygons[i].area;
+            CHECK(s->polygons[i].count == 3 && near3(s->polygons[i].normal, 0, 0, 1, 1e-15), "part %zu", i);
+        }
+        CHECK(fabs(area - 3) < 1e-12, "parts cover the L: area %g", area);
+        check_invariants(s, "good_mesh_lshape.json");
+        rl_scene_destroy(s);
+    }
+    s = load(corpus, "good_mesh_mtl.json");
+    if (s) {
+        long red = material(s, "with_mtl.obj:Red"), lamp = material(s, "with_mtl.obj:Lamp");
+        CHECK(s->npolygons == 2 && s->nmaterials == 2, "mtl scene: %zu polygons, %zu materials", s->npolygons,
+              s->nmaterials);
+        CHECK(red >= 0 && fabsf(s->materials[red].albedo[0] - 0.7f) < 1e-6f &&
+                  fabsf(s->materials[red].albedo[1] - 0.1f) < 1e-6f && s->materials[red].emission[0] == 0,
+              "Kd becomes albedo");
+        CHECK(lamp >= 0 && s->materials[lamp].emission[0] == 5 && s->materials[lamp].emission[1] == 4 &&
+                  s->materials[lamp].emission[2] == 3 && s->materials[lamp].albedo[0] == 0,
+              "Ke becomes emission");
+        if (s->npolygons == 2) {
+            CHECK((long)s->polygons[0].material == red && (long)s->polygons[1].material == lamp, "face materials");
+            CHECK(near3(s->polygons[1].normal, 0, 0, -1, 1e-15), "lamp faces down");
+        }
+        check_invariants(s, "good_mesh_mtl.json");
+        rl_scene_destroy(s);
+    }
+    s = load(corpus, "good_mesh_ply.json");
+    if (s) {
+        CHECK(s->npolygons == 2, "PLY: %zu polygons", s->npolygons);
+        if (s->npolygons == 2) {
+            CHECK(s->polygons[0].count == 4 && near3(s->polygons[0].normal, 0, 0, 1, 1e-15), "PLY quad");
+            CHECK(s->polygons[1].count == 3 && near3(s->polygons[1].normal, 0, 0, -1, 1e-15), "PLY triangle");
+            CHECK(s->polygons[0].material == 0, "PLY without materials uses the entry's material");
+        }
+        check_invariants(s, "good_mesh_ply.json");
+        rl_scene_destroy(s);
+    }
+    s = load(corpus, "good_mixed.json");
+    if (s) {
+        CHECK(s->npolygons == 6, "mixed: %zu polygons", s->npolygons);
+        CHECK(s->nmaterials == 3, "a mesh file read twice shares its materials: %zu", s->nmaterials);
+        check_invariants(s, "good_mixed.json");
+        rl_scene_destroy(s);
+    }
+}
+
+/* ------------------------------------------------------------- bad scenes */
+
+typedef struct bad_case {
+    const char *file;
+    rl_status status;
+    const char *expect; /* substring of rl_errmsg() */
+} bad_case;
+
+static const bad_case bad_cases[] = {
+    /* structure and types */
+    {"bad_unknown_key.json", RL_ERR_INPUT, ": unknown key 'lights' (expected materials, polygons"},
+    {"bad_material_key.json", RL_ERR_INPUT, "materials.white: unknown key 'colour'"},
+    {"bad_polygon_key.json", RL_ERR_INPUT, "polygons[0]: unknown key 'normal'"},
+    {"bad_threads.json", RL_ERR_INPUT, "sampling: unknown key 'threads'"},
+    {"bad_camera_key.json", RL_ERR_INPUT, "camera: unknown key 'fov'"},
+    {"bad_duplicate_key.json", RL_ERR_INPUT, "duplicate key 'sampling'"},
+    {"bad_duplicate_material.json", RL_ERR_INPUT, "materials.a: duplicate material"},
+    {"bad_root_array.json", RL_ERR_INPUT, "expected a JSON object at the top level, got an array"},
+    {"bad_polygons_type.json", RL_ERR_INPUT, "polygons: expected an array, got an object"},
+    {"bad_vertices_type.json", RL_ERR_INPUT, "polygons[0].vertices: expected an array"},
+    {"bad_albedo_type.json", RL_ERR_INPUT, "materials.white.albedo: expected an array of 3 numbers, got a string"},
+    {"bad_albedo_range.json", RL_ERR_INPUT, "materials.white: albedo[0] is 1.5, outside [0, 1]"},
+    {"bad_emission_negative.json", RL_ERR_INPUT, "materials.lamp: emission[1] is -1"},
+    {"bad_name_long.json", RL_ERR_INPUT, "must be 1 to 63 bytes long"},
+    {"bad_huge_number.json", RL_ERR_INPUT, "polygons[0].vertices[1][0]: not a finite number"},
+    {"bad_vertex_length.json", RL_ERR_INPUT, "polygons[0].vertices[2]: expected 3 numbers, got 2"},
+    {"bad_vertex_string.json", RL_ERR_INPUT, "polygons[0].vertices[1][1]: expected a number, got a string"},
+    {"bad_two_vertices.json", RL_ERR_INPUT, "polygons[0]: needs at least 3 vertices, got 2"},
+    {"bad_missing_material.json", RL_ERR_INPUT, "polygons[0].material: unknown material 'blue'"},
+    {"bad_polygon_no_material.json", RL_ERR_INPUT, "polygons[0]: missing key 'material'"},
+    /* geometry */
+    {"bad_nonplanar.json", RL_ERR_INPUT, "polygons[1]: not planar (vertex "},
+    {"bad_nonconvex.json", RL_ERR_INPUT, "polygons[0]: not convex (the corner at vertex 3 turns the other way)"},
+    {"bad_star.json", RL_ERR_INPUT, "polygons[0]: not convex (the boundary winds around 2 times)"},
+    {"bad_spike.json", RL_ERR_INPUT, "polygons[0]: not convex (the boundary turns back on itself at vertex 1)"},
+    {"bad_collinear.json", RL_ERR_INPUT, "polygons[0]: degenerate (zero area"},
+    {"bad_coincident.json", RL_ERR_INPUT, "polygons[0]: degenerate (all vertices coincide)"},
+    {"bad_repeated.json", RL_ERR_INPUT, "polygons[0]: degenerate (fewer than 3 distinct vertices)"},
+    {"bad_retrace.json", RL_ERR_INPUT, "polygons[0]: degenerate (zero area"},
+    {"bad_tiny_area.json", RL_ERR_INPUT, "polygons[0]: degenerate (zero area"},
+    /* meshes */
+    {"bad_missing_mesh.json", RL_ERR_INPUT, "meshes[0]: cannot open '"},
+    {"bad_mesh_no_material.json", RL_ERR_INPUT, "meshes[0]: quad.obj has faces without a material"},
+    {"bad_mesh_garbage.json", RL_ERR_INPUT, "meshes[0]: cannot read '"},
+    {"bad_mesh_material.json", RL_ERR_INPUT, "meshes[0].material: unknown material 'nope'"},
+    {"bad_mesh_directory.json", RL_ERR_INPUT, "is not a regular file"},
+    /* light fields */
+    {"bad_missing_lightfield.json", RL_ERR_INPUT, "lightfields[0]: "},
+    {"bad_lightfield_not_h5.json", RL_ERR_INPUT, "lightfields[0]: "},
+    {"bad_slab_type.json", RL_ERR_INPUT, "lightfields[0].slab: expected a slab name or index, got a boolean"},
+    {"bad_transform_shear.json", RL_ERR_INPUT, "lightfields[0].transform: the upper 3x3 must be a rotation times a uniform scale (it shears"},
+    {"bad_transform_scale.json", RL_ERR_INPUT, "lightfields[0].transform: the upper 3x3 must be a rotation times a uniform scale (it shears"},
+    {"bad_transform_mirror.json", RL_ERR_INPUT, "lightfields[0].transform: the upper 3x3 must have a positive determinant"},
+    {"bad_transform_lastrow.json", RL_ERR_INPUT, "lightfields[0].transform: the last row must be [0, 0, 0, 1]"},
+    {"bad_transform_length.json", RL_ERR_INPUT, "lightfields[0].transform: expected 16 numbers, got 15"},
+    {"bad_transform_row.json", RL_ERR_INPUT, "lightfields[0].transform[1]: expected 4 numbers, got 3"},
+    {"bad_transform_zero.json", RL_ERR_INPUT, "its scale is 0"},
+    /* settings */
+    {"bad_partition_3.json", RL_ERR_INPUT, "sampling.partition_n: must be a power of two in 1..4096, got 3"},
+    {"bad_partition_0.json", RL_ERR_INPUT, "sampling.partition_n: must be a power of two in 1..4096, got 0"},
+    {"bad_partition_8192.json", RL_ERR_INPUT, "sampling.partition_n: must be a power of two in 1..4096, got 8192"},
+    {"bad_partition_fraction.json", RL_ERR_INPUT, "sampling.partition_n: must be a power of two in 1..4096, got 4.5"},
+    {"bad_rays_0.json", RL_ERR_INPUT, "sampling.rays_per_solid_angle: must be an integer in 1..65536, got 0"},
+    {"bad_samples_big.json", RL_ERR_INPUT, "sampling.samples_per_cell: must be an integer in 1..1048576"},
+    {"bad_bounces.json", RL_ERR_INPUT, "sampling.bounces: must be an integer in 0..64, got 65"},
+    {"bad_seed_negative.json", RL_ERR_INPUT, "sampling.seed: must be an integer in 0..9007199254740992, got -1"},
+    {"bad_method.json", RL_ERR_INPUT, "sampling.method: unknown method 'fast'"},
+    {"bad_method_type.json", RL_ERR_INPUT, "sampling.method: expected a string, got a number"},
+    {"bad_cell_size.json", RL_ERR_INPUT, "radiance_maps.cell_size: must be > 0 metres, got 0"},
+    {"bad_cell_size_type.json", RL_ERR_INPUT, "radiance_maps.cell_size: expected a number, got a string"},
+    {"bad_camera_same.json", RL_ERR_INPUT, "camera: position and look_at must be distinct points"},
+    {"bad_camera_up.json", RL_ERR_INPUT, "camera: up must not be zero or parallel to the view direction"},
+    {"bad_camera_fov.json", RL_ERR_INPUT, "camera.fov_deg: must lie strictly between 0 and 180 degrees, got 180"},
+    {"bad_camera_width.json", RL_ERR_INPUT, "camera.width: must be an integer in 1..16384, got 0"},
+    {"bad_camera_height.json", RL_ERR_INPUT, "camera.height: must be an integer in 1..16384, got 20000"},
+    {"bad_camera_missing.json", RL_ERR_INPUT, "camera: missing key 'position'"},
+    /* not JSON */
+    {"bad_truncated.json", RL_ERR_INPUT, "bad_truncated.json:4:1: not valid JSON: unexpected end of file"},
+    {"bad_syntax.json", RL_ERR_INPUT, "bad_syntax.json:2:30: not valid JSON"},
+    {"bad_empty.json", RL_ERR_INPUT, "the file is empty"},
+    {"bad_not_json.json", RL_ERR_INPUT, "bad_not_json.json:1:1: not valid JSON: unexpected text near 'hello, world'"},
+    {"bad_trailing.json", RL_ERR_INPUT, "bad_trailing.json:1:4: not valid JSON"},
+    {"bad_nul.json", RL_ERR_INPUT, "bad_nul.json:1:17: not valid JSON: a NUL byte"},
+    {"nothere.json", RL_ERR_IO, "nothere.json: cannot open: "},
+    {".", RL_ERR_IO, "is a directory"},
+};
+
+static void test_bad(void)
+{
+    size_t count = sizeof bad_cases / sizeof bad_cases[0];
+    for (size_t k = 0; k < count; k++) {
+        const bad_case *c = &bad_cases[k];
+        char path[2048];
+        rl_scene *s = (rl_scene *)&path; /* must be reset to NULL */
+        rl_status st = rl_scene_load(join(path, sizeof path, corpus, c->file), &s);
+        const char *msg = rl_errmsg();
+        CHECK(st == c->status, "%s: status %d, expected %d (%s)", c->file, (int)st, (int)c->status, msg);
+        CHECK(s == NULL, "%s: no scene on failure", c->file);
+        CHECK(strstr(msg, path) != NULL, "%s: message names the file: %s", c->file, msg);
+        CHECK(strstr(msg, c->expect) != NULL, "%s: message '%s' lacks '%s'", c->file, msg, c->expect);
+        if (st == RL_OK)
+            rl_scene_destroy(s);
+    }
+    CHECK(count >= 25, "corpus of %zu bad scenes", count);
+}
+
+/* ----------------------------------------------------------- light fields */
+
+/* Writes text to tmpdir/name. */
+static void write_text(const char *name, const char *text)
+{
+    char path[2048];
+    FILE *f = fopen(join(path, sizeof path, tmpdir, name), "w");
+    CHECK(f != NULL, "cannot write %s", path);
+    if (f) {
+        fputs(text, f);
+        fclose(f);
+    }
+}
+
+/* Writes tmpdir/lf.h5: slabs "a" (lfio's default 1 m square facing +z) and "light" (2 m, centred). @return 1 on success. */
+static int write_lightfield(void)
+{
+    char path[2048];
+    lfio_lightfield *lf = NULL;
+    if (lfio_lightfield_new(&lf) != LFIO_OK)
+        return 0;
+    int ok = 1;
+    for (int k = 0; k < 2 && ok; k++) {
+        lfio_slab_desc d;
+        lfio_slab_desc_init(&d);
+        strcpy(d.name, k == 0 ? "a" : "light");
+        if (k == 1) {
+            d.origin[0] = -1, d.origin[1] = -1, d.origin[2] = 0;
+            d.u[0] = 2, d.v[1] = 2;
+        }
+        lfio_slab *s = NULL;
+        ok = lfio_slab_new(&d, &s) == LFIO_OK && lfio_lightfield_take_slab(lf, s) == LFIO_OK;
+    }
+    ok = ok && lfio_lightfield_write(lf, join(path, sizeof path, tmpdir, "lf.h5")) == LFIO_OK;
+    CHECK(ok, "writing %s: %s", path, lfio_errmsg());
+    lfio_lightfield_destroy(lf);
+    return ok;
+}
+
+static void test_lightfields(void)
+{
+    if (!write_lightfield())
+        return;
+    write_text("lf_default.json", "{\"lightfields\": [{\"file\": \"lf.h5\"}]}\n");
+    write_text("lf_named.json",
+               "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": \"light\",\n"
+               "  \"transform\": [[1, 0, 0, 2.5], [0, -1, 0, 2.5], [0, 0, -1, 2.98], [0, 0, 0, 1]]}]}\n");
+    write_text("lf_scaled.json", "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": 1,\n"
+                                 "  \"transform\": [0, -2, 0, 1, 2, 0, 0, 0, 0, 0, 2, 3, 0, 0, 0, 1]}]}\n");
+    write_text("lf_two.json", "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": 0}, {\"file\": \"lf.h5\", \"slab\": \"a\"}]}\n");
+    write_text("lf_noslab.json", "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": \"nope\"}]}\n");
+    write_text("lf_index.json", "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": 2}]}\n");
+    write_text("lf_negative.json", "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": -1}]}\n");
+    write_text("lf_late.json", "{\"lightfields\": [{\"file\": \"lf.h5\"}, {\"file\": \"lf.h5\", \"slab\": \"x\"}]}\n");
+
+    rl_scene *s = load(tmpdir, "lf_default.json");
+    if (s) {
+        const rl_lightfield *lf = &s->lightfields[0];
+        CHECK(rl_scene_lightfield_count(s) == 1 && lf->lf && lf->slab, "one light field");
+        CHECK(strcmp(lfio_slab_get_desc(lf->slab)->name, "a") == 0, "slab 0 by default");
+        CHECK(lf->scale == 1 && lf->rot[0][0] == 1 && lf->rot[1][1] == 1 && lf->rot[2][2] == 1 && lf->rot[0][1] == 0,
+              "identity by default");
+        const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
+        CHECK(near3(lf->origin, d->origin[0], d->origin[1], d->origin[2], 0) && near3(lf->u, 1, 0, 0, 0) &&
+                  near3(lf->v, 0, 1, 0, 0),
+              "slab placed as stored");
+        CHECK(strcmp(lf->label, "lightfields[0]") == 0, "label %s", lf->label);
+        rl_scene_destroy(s);
+    }
+    s = load(tmpdir, "lf_named.json");
+    if (s) {
+        const rl_lightfield *lf = &s->lightfields[0];
+        CHECK(strcmp(lfio_slab_get_desc(lf->slab)->name, "light") == 0, "slab by name");
+        CHECK(near3(lf->origin, 1.5, 3.5, 2.98, 1e-15), "origin by the affine map: %g %g %g", lf->origin[0],
+              lf->origin[1], lf->origin[2]);
+        CHECK(near3(lf->u, 2, 0, 0, 0) && near3(lf->v, 0, -2, 0, 0), "u, v by the linear part");
+        double n[3] = {lf->u[1] * lf->v[2] - lf->u[2] * lf->v[1], lf->u[2] * lf->v[0] - lf->u[0] * lf->v[2],
+                       lf->u[0] * lf->v[1] - lf->u[1] * lf->v[0]};
+        CHECK(n[2] < 0, "turned over: the slab faces down");
+        CHECK(near3(lf->translate, 2.5, 2.5, 2.98, 0), "translation");
+        rl_scene_destroy(s);
+    }
+    s = load(tmpdir, "lf_scaled.json");
+    if (s) {
+        const rl_lightfield *lf = &s->lightfields[0];
+        CHECK(lf->scale == 2, "uniform scale %g", lf->scale);
+        CHECK(lf->rot[0][1] == -1 && lf->rot[1][0] == 1 && lf->rot[2][2] == 1, "rotation part");
+        CHECK(near3(lf->origin, 3, -2, 3, 1e-15) && near3(lf->u, 0, 4, 0, 0) && near3(lf->v, -4, 0, 0, 0),
+              "scaled and turned: origin %g %g %g", lf->origin[0], lf->origin[1], lf->origin[2]);
+        rl_scene_destroy(s);
+    }
+    s = load(tmpdir, "lf_two.json");
+    if (s) {
+        CHECK(rl_scene_lightfield_count(s) == 2 && s->lightfields[0].slab != NULL && s->lightfields[1].slab != NULL,
+              "two emitters from one file");
+        rl_scene_destroy(s);
+    }
+    static const bad_case bad[] = {
+        {"lf_noslab.json", RL_ERR_INPUT, "lightfields[0].slab: no slab named 'nope' in '"},
+        {"lf_index.json", RL_ERR_INPUT, "lightfields[0].slab: slab index 2 is out of range"},
+        {"lf_negative.json", RL_ERR_INPUT, "lightfields[0].slab: must be an integer in 0..4294967295, got -1"},
+        {"lf_late.json", RL_ERR_INPUT, "lf.h5' (it has 'a', 'light')"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        char path[2048];
+        rl_scene *t = NULL;
+        rl_status st = rl_scene_load(join(path, sizeof path, tmpdir, bad[k].file), &t);
+        CHECK(st == bad[k].status && !t, "%s: status %d", bad[k].file, (int)st);
+        CHECK(strstr(rl_errmsg(), path) && strstr(rl_errmsg(), bad[k].expect), "%s: '%s'", bad[k].file, rl_errmsg());
+    }
+}
+
+/* ---------------------------------------------------------- the settings */
+
+static void test_set_sampling(void)
+{
+    rl_scene *s = load(corpus, "good_minimal.json");
+    if (!s)
+        return;
+    rl_sampling x;
+    rl_sampling_default(&x);
+    x.method = RL_METHOD_AREA, x.partition_n = 4096, x.rays_per_solid_angle = 65536, x.threads = 1024;
+    x.seed = UINT64_MAX;
+    CHECK(rl_scene_set_sampling(s, &x) == RL_OK, "valid settings: %s", rl_errmsg());
+    CHECK(memcmp(rl_scene_sampling(s), &x, sizeof x) == 0, "settings replaced");
+    const struct {
+        const char *field;
+        rl_sampling value;
+    } bad[] = {
+        {"partition_n", {.partition_n = 3, .rays_per_solid_angle = 1, .samples_per_cell = 1}},
+        {"partition_n", {.partition_n = 8192, .rays_per_solid_angle = 1, .samples_per_cell = 1}},
+        {"rays_per_solid_angle", {.partition_n = 1, .rays_per_solid_angle = 0, .samples_per_cell = 1}},
+        {"samples_per_cell", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 0}},
+        {"bounces", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .bounces = 65}},
+        {"threads", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .threads = 1025}},
+        {"descend", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .descend = 2}},
+        {"method", {.method = (rl_method)7, .partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1}},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        CHECK(rl_scene_set_sampling(s, &bad[k].value) == RL_ERR_ARG, "bad %s accepted", bad[k].field);
+        CHECK(strstr(rl_errmsg(), bad[k].field) != NULL, "message '%s' names %s", rl_errmsg(), bad[k].field);
+        CHECK(memcmp(rl_scene_sampling(s), &x, sizeof x) == 0, "settings kept after a bad %s", bad[k].field);
+    }
+    CHECK(rl_scene_set_sampling(s, NULL) == RL_ERR_ARG && rl_scene_set_sampling(NULL, &x) == RL_ERR_ARG, "NULL");
+    rl_scene_destroy(s);
+
+    rl_scene *none = (rl_scene *)&x;
+    CHECK(rl_scene_load(NULL, &none) == RL_ERR_ARG && none == NULL, "NULL path");
+    CHECK(rl_scene_load("x.json", NULL) == RL_ERR_ARG, "NULL out");
+    rl_scene_destroy(NULL);
+    CHECK(rl_scene_polygon_count(NULL) == 0 && rl_scene_sampling(NULL) == NULL, "NULL scene accessors");
+}
+
+/* ----------------------------------------------------------- data scenes */
+
+/* @return 1 if path names a file that can be opened. */
+static int exists(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (f)
+        fclose(f);
+    return f != NULL;
+}
+
+/* Checks that the first five polygons (floor, ceiling, three walls) face the point c. */
+static void check_room(const rl_scene *s, const char *name, double cx, double cy, double cz)
+{
+    for (size_t i = 0; i < 5 && i < s->npolygons; i++) {
+        const rl_polygon *p = &s->polygons[i];
+        const double *v = s->vertices[p->first];
+        double d = (cx - v[0]) * p->normal[0] + (cy - v[1]) * p->normal[1] + (cz - v[2]) * p->normal[2];
+        CHECK(d > 0, "%s: room surface %zu faces away from the room", name, i);
+    }
+}
+
+static void test_data(void)
+{
+    char path[2048];
+    rl_scene *s = load(datadir, "beams_diffuse.json");
+    if (s) {
+        CHECK(s->npolygons == 43 && s->nlightfields == 0, "beams_diffuse: %zu polygons", s->npolygons);
+        CHECK(s->cell_size == 0.05 && s->sampling.partition_n == 32 && s->sampling.rays_per_solid_angle == 4 &&
+                  s->sampling.bounces == 2 && s->has_camera,
+              "beams_diffuse settings");
+        size_t emitters = 0;
+        for (size_t i = 0; i < s->npolygons; i++)
+            if (s->materials[s->polygons[i].material].emission[0] > 0) {
+                emitters++;
+                CHECK(s->polygons[i].normal[2] < -0.999, "the emitter faces down");
+            }
+        CHECK(emitters == 1, "one diffuse emitter, got %zu", emitters);
+        check_room(s, "beams_diffuse.json", 2.5, 2.5, 1.5);
+        check_invariants(s, "beams_diffuse.json");
+        rl_scene_destroy(s);
+    }
+    s = load(datadir, "classroom.json");
+    if (s) {
+        CHECK(s->npolygons >= 2800 && s->npolygons <= 3200, "classroom: %zu polygons", s->npolygons);
+        CHECK(s->cell_size == 0.1 && s->sampling.bounces == 0 && s->has_camera, "classroom settings");
+        size_t emitters = 0;
+        for (size_t i = 0; i < s->npolygons; i++)
+            emitters += s->materials[s->polygons[i].material].emission[0] > 0;
+        CHECK(emitters == 4, "four ceiling emitters, got %zu", emitters);
+        check_room(s, "classroom.json", 5, 4, 1.6);
+        check_invariants(s, "classroom.json");
+        rl_scene_destroy(s);
+    }
+    if (!exists(join(path, sizeof path, datadir, "beams_lightfield.h5"))) {
+        printf("%s missing: beams.json not loaded (see data/README.md)\n", path);
+        return;
+    }
+    s = load(datadir, "beams.json");
+    if (s) {
+        CHECK(s->npolygons == 42 && s->nlightfields == 1, "beams: %zu polygons, %zu light fields", s->npolygons,
+              s->nlightfields);
+        if (s->nlightfields == 1) {
+            const rl_lightfield *lf = &s->lightfields[0];
+            double nz = lf->u[0] * lf->v[1] - lf->u[1] * lf->v[0];
+            CHECK(nz < 0 && lf->origin[2] > 2.5 && lf->origin[2] < 3, "the light field hangs below the ceiling, facing down");
+        }
+        check_room(s, "beams.json", 2.5, 2.5, 1.5);
+        check_invariants(s, "beams.json");
+        rl_scene_destroy(s);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    if (argc != 3) {
+        fprintf(stderr, "usage: test_scene SCENES_DIR DATA_DIR\n");
+        return 2;
+    }
+    corpus = argv[1];
+    datadir = argv[2];
+    const char *base = getenv("ILF_TEST_TMP");
+    base = base && *base ? base : "/tmp";
+    snprintf(tmpdir, sizeof tmpdir, "%s/test_scene", base);
+    mkdir(base, 0777); /* either may exist already */
+    mkdir(tmpdir, 0777);
+
+    test_minimal();
+    test_full();
+    test_meshes();
+    test_bad();
+    test_lightfields();
+    test_set_sampling();
+    test_data();
+    return check_report();
+}
