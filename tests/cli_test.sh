@@ -8,7 +8,9 @@
 # synth of every kind, info as text and JSON, irradiance of a constant field,
 # verify, slice in every mode and format, and the error paths (missing,
 # foreign, truncated and corrupted inputs; bad numbers; unwritable outputs,
-# which must leave no partial file and must not clobber an existing one).
+# which must leave no partial file and must not clobber an existing one);
+# relight and irradiance on the example scenes (data/, tests/scenes/) with
+# coarse settings, against a closed form, and their error paths.
 # Every check is counted; the last line is "N passed, M failed" and the exit
 # status is nonzero when anything failed. python3 (standard library only)
 # parses the JSON and the image headers.
@@ -120,12 +122,12 @@ image_is() { py "$image_header_py" "$@"; }
 # ------------------------------------------------------------------ help
 expect 0 "ilf --help" "$ILF" --help
 check "ilf --help shows Usage" stdout_has "Usage"
-for sub in synth info verify slice; do
+for sub in synth info verify slice relight irradiance; do
     check "ilf --help lists $sub" stdout_has "^  $sub "
 done
 expect 0 "ilf --version" "$ILF" --version
 check "version line" stdout_has "^ilf (ilfkit) 0\.1\.0, lfio [0-9]"
-for sub in synth info verify slice; do
+for sub in synth info verify slice relight irradiance; do
     expect 0 "ilf $sub --help" "$ILF" "$sub" --help
     check "ilf $sub --help shows Usage" stdout_has "^Usage: ilf $sub"
     check "ilf $sub --help shows an example" stdout_has "^Example"
@@ -134,7 +136,7 @@ expect 2 "no arguments" "$ILF"
 expect 2 "unknown subcommand" "$ILF" frobnicate
 check "unknown subcommand is named" stderr_has "frobnicate"
 expect 2 "unknown top-level option" "$ILF" --frobnicate
-for sub in synth info verify slice; do
+for sub in synth info verify slice relight irradiance; do
     expect 2 "$sub: unknown option" "$ILF" "$sub" --frobnicate
     check "$sub: unknown option is named" stderr_has "--frobnicate"
 done
@@ -340,6 +342,156 @@ expect 1 "slice failing mid-write" bash -c "trap '' XFSZ; ulimit -f 8; exec \"\$
     "$ILF" slice "$RADIAL" --position 0,0 --size 1024 -o "$KEEP/existing.exr"
 check "failed slice left the existing image alone" cmp -s "$KEEP/existing.exr" "$KEEP/original.exr"
 check "failed slice left no temporary" only_files "$KEEP" existing.h5 original.h5 existing.exr original.exr
+
+# ------------------------------------------------------------------ relight, irradiance
+SRC=$(cd "$(dirname "$0")/.." && pwd)
+SQUARE=$SRC/tests/scenes/cli_square.json
+FAST=(--partition-n 8 --rays 1)
+RELIT=$TMP/relit
+# A python3 with h5py (if any) reads radiance.h5 as docs/format.md shows.
+H5PY=""
+for candidate in python3 /usr/bin/python3; do
+    if command -v "$candidate" >/dev/null && "$candidate" -c "import h5py, numpy" 2>/dev/null; then
+        H5PY=$candidate
+        break
+    fi
+done
+
+expect 0 "relight the square" "$ILF" relight "$SQUARE" -o "$RELIT/square" "${FAST[@]}" --threads 2
+check "relight wrote radiance.h5, stats.json and the view, nothing else" \
+    only_files "$RELIT/square" radiance.h5 stats.json view.exr view.png
+check "relight reports radiance.h5" stdout_has "^wrote .*radiance\.h5: 1 map, 64 cells"
+check "relight reports the direct pass" stdout_has "^pass 0 (direct)"
+check "relight reports the bounce pass" stdout_has "^pass 1 (bounce)"
+check "view.exr is float 64x48 RGB" image_is "$RELIT/square/view.exr" 64 48 3
+check "view.png is 8-bit 64x48 RGB" image_is "$RELIT/square/view.png" 64 48 3
+check "stats.json has the schema of docs/cli.md" py '
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["scene"].endswith("cli_square.json") and s["method"] == "culled", s
+assert s["settings"]["partition_n"] == 8 and s["settings"]["rays_per_solid_angle"] == 1, s["settings"]
+assert s["settings"]["bounces"] == 1 and s["threads"] == 2, s
+assert s["maps"] == 1 and s["cells"] == 64, s
+assert s["wall_seconds"] >= 0 and s["cpu_seconds"] >= 0, s
+assert len(s["passes"]) == 2 and [p["pass"] for p in s["passes"]] == [0, 1], s["passes"]
+keys = {"wall_seconds", "cpu_seconds", "samples", "rays_cast", "rays_kept", "solid_angles_considered",
+        "solid_angles_culled", "pairs", "pairs_descended", "emitters"}
+assert all(keys <= set(p) for p in s["passes"]), s["passes"]
+d = s["passes"][0]
+assert d["rays_cast"] > 0 and 0 < d["rays_kept"] <= d["rays_cast"] and d["emitters"] == 1, d
+assert d["solid_angles_culled"] <= d["solid_angles_considered"], d
+' "$RELIT/square/stats.json"
+if [ -n "$H5PY" ]; then
+    # The floor receives part of the lamp's power pi * 1 m^2 * 10 W sr^-1 m^-2.
+    check "radiance.h5 reads as docs/format.md says" "$H5PY" -c '
+import sys
+import h5py, numpy as np
+with h5py.File(sys.argv[1], "r") as f:
+    assert f.attrs["format"].decode() == "ilfkit-radiance-maps" and int(f.attrs["format_version"]) == 1
+    assert f.attrs["scene"].decode().endswith("cli_square.json") and int(f.attrs["patch_count"]) == 1
+    patch = f["patches"]["0"]
+    assert patch.attrs["label"].decode() == "polygons[1]", patch.attrs["label"]
+    E = patch["irradiance"][:].astype(np.float64)
+    A = patch["cell_area"][:]
+    P = (E * A[:, None]).sum(axis=0)
+    assert abs(A.sum() - 4.0) < 1e-9 and 5 < P[0] < np.pi * 10, (A.sum(), P)
+    assert patch["irradiance"].attrs["axes"].decode() == "cell:rgb"
+' "$RELIT/square/radiance.h5"
+fi
+
+expect 0 "relight --quiet" "$ILF" relight "$SQUARE" -o "$RELIT/quiet" "${FAST[@]}" --quiet
+check "relight --quiet prints nothing" bash -c "[ ! -s '$OUT' ] && [ ! -s '$ERR' ]"
+check "relight --quiet still writes everything" only_files "$RELIT/quiet" radiance.h5 stats.json view.exr view.png
+expect 0 "relight again over the same folder" "$ILF" relight "$SQUARE" -o "$RELIT/quiet" "${FAST[@]}" --quiet \
+    --bounces 0
+check "rewriting leaves no temporaries" only_files "$RELIT/quiet" radiance.h5 stats.json view.exr view.png
+check "--bounces 0 runs the direct pass only" py '
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["settings"]["bounces"] == 0 and len(s["passes"]) == 1, s
+' "$RELIT/quiet/stats.json"
+expect 0 "relight the minimal scene (no light, no camera)" "$ILF" relight "$SRC/tests/scenes/good_minimal.json" \
+    -o "$RELIT/minimal/a/b" --quiet
+check "relight creates missing parent folders, writes no view without a camera" \
+    only_files "$RELIT/minimal/a/b" radiance.h5 stats.json
+if [ -e "$SRC/data/beams_diffuse.json" ]; then
+    expect 0 "relight beams_diffuse" "$ILF" relight "$SRC/data/beams_diffuse.json" -o "$RELIT/beams" "${FAST[@]}" \
+        --bounces 0 --quiet
+    check "beams_diffuse: every map and a lit direct pass" py '
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["maps"] > 1 and s["cells"] > 1000 and s["passes"][0]["rays_cast"] > 0, s
+' "$RELIT/beams/stats.json"
+    check "beams_diffuse: the view was written" nonempty "$RELIT/beams/view.png"
+fi
+if [ -e "$SRC/data/classroom.json" ]; then
+    expect 0 "relight classroom" "$ILF" relight "$SRC/data/classroom.json" -o "$RELIT/classroom" "${FAST[@]}" \
+        --bounces 0 --quiet
+    check "classroom: four emitters, rays cast" py '
+import json, sys
+s = json.load(open(sys.argv[1]))
+d = s["passes"][0]
+assert d["emitters"] == 4 and d["rays_cast"] > 0 and s["maps"] > 1000, s
+' "$RELIT/classroom/stats.json"
+fi
+
+# irradiance: the centre of the floor, 1 m below a 1 m square of radiance 10,
+# receives E = 4 L X / sqrt(1 + X^2) atan(X / sqrt(1 + X^2)), X = 0.5: 7.5225 W m^-2.
+POINTS=$TMP/points.txt
+printf '# x y z nx ny nz\n1 1 0 0 0 1\n\n   # indented comment\n0.25 0.25 0 0 0 2\n1 1 0.5 0 0 1\n' >"$POINTS"
+expect 0 "irradiance of three points" "$ILF" irradiance "$SQUARE" --points "$POINTS" --method area --samples 4096
+check "irradiance prints one line per point" bash -c "[ \$(wc -l <'$OUT') -eq 3 ]"
+check "each line is three numbers" py '
+import sys
+rows = [line.split() for line in sys.stdin]
+assert all(len(r) == 3 for r in rows) and all(float(x) >= 0 for r in rows for x in r), rows
+' <"$OUT"
+check "irradiance at the centre matches the closed form" py '
+import math, sys
+e = float(sys.stdin.readline().split()[0])
+x = 0.5 / math.sqrt(1.25)
+exact = 4 * 10 * x * math.atan(x)
+assert abs(e / exact - 1) < 0.01, (e, exact)
+' <"$OUT"
+cp "$OUT" "$TMP/irradiance-2threads.txt"
+expect 0 "irradiance on one thread" "$ILF" irradiance "$SQUARE" --points "$POINTS" --method area --samples 4096 \
+    --threads 1
+check "irradiance does not depend on the thread count" cmp -s "$OUT" "$TMP/irradiance-2threads.txt"
+expect 0 "irradiance from stdin" bash -c "printf '1 1 0 0 0 1\n' | \"\$0\" irradiance \"\$1\" --points - ${FAST[*]}" \
+    "$ILF" "$SQUARE"
+check "stdin gives one line" bash -c "[ \$(wc -l <'$OUT') -eq 1 ]"
+printf '1 1 0 0 0 1\n\n1 1 0 0 0\n' >"$TMP/points_short.txt"
+expect 2 "irradiance of a line with five numbers" "$ILF" irradiance "$SQUARE" --points "$TMP/points_short.txt"
+check "the bad line is named FILE:LINE" stderr_has "points_short.txt:3:"
+printf '1 1 0 0 0 1\n1 1 zero 0 0 1\n' >"$TMP/points_word.txt"
+expect 2 "irradiance of a line with a word" "$ILF" irradiance "$SQUARE" --points "$TMP/points_word.txt"
+check "the word is named with FILE:LINE" stderr_has "points_word.txt:2:"
+printf '1 1 0 0 0 0\n' >"$TMP/points_zero.txt"
+expect 2 "irradiance with a zero normal" "$ILF" irradiance "$SQUARE" --points "$TMP/points_zero.txt"
+check "the zero normal is named FILE:LINE" stderr_has "points_zero.txt:1:"
+expect 2 "irradiance of a missing points file" "$ILF" irradiance "$SQUARE" --points "$TMP/no-points.txt"
+check "the missing points file is named" stderr_has "no-points.txt"
+expect 2 "irradiance without --points" "$ILF" irradiance "$SQUARE"
+
+# relight and irradiance: bad scenes, bad values, unwritable outputs.
+expect 2 "relight a missing scene" "$ILF" relight "$TMP/no-scene.json" -o "$RELIT/never"
+check "the missing scene is named" stderr_has "no-scene.json"
+check "a failed relight creates no folder" absent "$RELIT/never"
+expect 2 "irradiance of a missing scene" "$ILF" irradiance "$TMP/no-scene.json" --points "$POINTS"
+check "irradiance names the missing scene" stderr_has "no-scene.json"
+expect 2 "relight an invalid scene" "$ILF" relight "$SRC/tests/scenes/bad_nonconvex.json" -o "$RELIT/never"
+check "the invalid scene is named" stderr_has "bad_nonconvex.json"
+expect 2 "relight a file that is not a scene" "$ILF" relight "$TEXT" -o "$RELIT/never"
+expect 2 "relight without -o" "$ILF" relight "$SQUARE"
+expect 2 "relight --partition-n 3" "$ILF" relight "$SQUARE" -o "$RELIT/never" --partition-n 3
+check "--partition-n 3 is explained" stderr_has "power of two"
+expect 2 "relight --method fast" "$ILF" relight "$SQUARE" -o "$RELIT/never" --method fast
+expect 2 "relight --rays 0" "$ILF" relight "$SQUARE" -o "$RELIT/never" --rays 0
+expect 2 "relight --seed -1" "$ILF" relight "$SQUARE" -o "$RELIT/never" --seed -1
+expect 2 "irradiance --bounces 65" "$ILF" irradiance "$SQUARE" --points "$POINTS" --bounces 65
+check "rejected relights wrote nothing" absent "$RELIT/never"
+expect 1 "relight into a folder under a regular file" "$ILF" relight "$SQUARE" -o "$TEXT/out" "${FAST[@]}"
+check "the unusable folder is named" stderr_has "notes.txt"
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

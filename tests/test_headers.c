@@ -5,6 +5,11 @@
  */
 #include "lfio/lfio.h"
 #include "lfio/partition.h"
+#include "lfio/radmap.h"
+#include "relight/engine.h"
+#include "relight/reference.h"
+#include "relight/relight.h"
+#include "relight/scene.h"
 #include "lfio/lightfield.h"
 #include "lfio/lightfield.h"
 

@@ -2,6 +2,11 @@
 #include "lfio/lfio.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
+#include "lfio/radmap.h"
+#include "relight/engine.h"
+#include "relight/reference.h"
+#include "relight/relight.h"
+#include "relight/scene.h"
 
 int header_probe_cxx();
 int header_probe_cxx()

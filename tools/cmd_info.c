@@ -15,6 +15,7 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "jsonout.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
 
@@ -177,12 +178,6 @@ static void print_slab_text(size_t k, const slab_report *rep, const info_options
 
 /* ------------------------------------------------------------ JSON */
 
-static int add_vec(cJSON *obj, const char *key, const double *v, int count)
-{
-    cJSON *arr = cJSON_CreateDoubleArray(v, count);
-    return arr != NULL && cJSON_AddItemToObject(obj, key, arr);
-}
-
 static cJSON *mask_json(const slab_report *rep)
 {
     cJSON *mask = cJSON_CreateArray();
@@ -208,21 +203,23 @@ static cJSON *slab_json(const slab_report *rep, const info_options *o)
     if (s == NULL)
         return NULL;
     cJSON_AddStringToObject(s, "name", d->name);
-    int ok = add_vec(s, "origin", d->origin, 3) && add_vec(s, "u", d->u, 3) && add_vec(s, "v", d->v, 3);
+    int ok = json_add_doubles(s, "origin", d->origin, 3) && json_add_doubles(s, "u", d->u, 3) &&
+             json_add_doubles(s, "v", d->v, 3);
     cJSON_AddNumberToObject(s, "nu", d->nu);
     cJSON_AddNumberToObject(s, "nv", d->nv);
     cJSON_AddNumberToObject(s, "n", d->n);
     cJSON_AddNumberToObject(s, "directions", (double)rep->directions);
     cJSON_AddStringToObject(s, "units", units_name(d->units));
     cJSON_AddNumberToObject(s, "mask_threshold", d->mask_threshold);
-    ok = ok && add_vec(s, "radiance_min", rep->min, 3) && add_vec(s, "radiance_max", rep->max, 3) &&
-         add_vec(s, "radiance_mean", rep->mean, 3);
+    ok = ok && json_add_doubles(s, "radiance_min", rep->min, 3) &&
+         json_add_doubles(s, "radiance_max", rep->max, 3) && json_add_doubles(s, "radiance_mean", rep->mean, 3);
     cJSON_AddNumberToObject(s, "zero_fraction", rep->zero_fraction);
     cJSON *mask = mask_json(rep);
     ok = ok && mask != NULL && cJSON_AddItemToObject(s, "mask", mask);
     if (rep->has_irradiance) {
         double position[2] = {o->position[0], o->position[1]};
-        ok = ok && add_vec(s, "irradiance", rep->irradiance, 3) && add_vec(s, "position", position, 2);
+        ok = ok && json_add_doubles(s, "irradiance", rep->irradiance, 3) &&
+             json_add_doubles(s, "position", position, 2);
     }
     if (!ok) {
         cJSON_Delete(s);
@@ -245,18 +242,6 @@ static cJSON *file_json(const char *path, lfio_reader *r, long long bytes)
         return NULL;
     }
     return root;
-}
-
-static int print_json(cJSON *root)
-{
-    char *text = cJSON_Print(root);
-    if (text == NULL) {
-        cli_error("info", "out of memory while formatting JSON");
-        return ILF_EXIT_FAILED;
-    }
-    puts(text);
-    cJSON_free(text);
-    return ILF_EXIT_OK;
 }
 
 /* ------------------------------------------------------------ main */
@@ -319,7 +304,7 @@ static int print_json_report(lfio_reader *r, size_t count, const info_options *o
         if (!ok)
             cJSON_Delete(s);
     }
-    int code = ok ? print_json(root) : (cli_error("info", "out of memory while building JSON"), ILF_EXIT_FAILED);
+    int code = ok ? json_print("info", root) : (cli_error("info", "out of memory while building JSON"), ILF_EXIT_FAILED);
     cJSON_Delete(root);
     return code;
 }

@@ -17,7 +17,7 @@
  * Invariants: EXR receives the raw float radiance; PNG receives the same
  * pixels scaled by one factor (2^EV, or 1 / the 99th percentile of the
  * bright pixels' max(r,g,b)), sRGB-encoded and clamped; alpha is never
- * scaled. Every check of the options happens before the file is opened.
+ * scaled (tonemap.c). Every check of the options happens before the file is opened.
  */
 #include <math.h>
 #include <stdio.h>
@@ -27,6 +27,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "image.h"
+#include "tonemap.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
 
@@ -344,59 +345,6 @@ static int slice_direction(lfio_reader *r, size_t k, const slice_options *o, sli
     return ILF_EXIT_OK;
 }
 
-/* ------------------------------------------------------------ tone mapping */
-
-static int compare_floats(const void *a, const void *b)
-{
-    float x = *(const float *)a, y = *(const float *)b;
-    return (x > y) - (x < y);
-}
-
-static float pixel_peak(const float *px)
-{
-    float m = px[0] > px[1] ? px[0] : px[1];
-    return m > px[2] ? m : px[2];
-}
-
-/* 1 / the 99th percentile (nearest rank) of max(r,g,b) over pixels above 0; 1 if there are none. */
-static double auto_scale(const slice_image *img)
-{
-    size_t count = (size_t)img->width * img->height, bright = 0;
-    float *peaks = malloc(count * sizeof(float));
-    if (peaks == NULL)
-        return 1.0; /* only the automatic exposure suffers; the image is still written */
-    for (size_t k = 0; k < count; k++) {
-        float m = pixel_peak(img->pixels + k * img->channels);
-        if (m > 0.0f)
-            peaks[bright++] = m;
-    }
-    double scale = 1.0;
-    if (bright > 0) {
-        qsort(peaks, bright, sizeof(float), compare_floats);
-        size_t rank = (size_t)ceil(0.99 * (double)bright);
-        scale = 1.0 / peaks[rank > 0 ? rank - 1 : 0];
-    }
-    free(peaks);
-    return scale;
-}
-
-static float srgb_encode(double linear)
-{
-    double v = linear <= 0.0031308 ? 12.92 * linear : 1.055 * pow(linear, 1.0 / 2.4) - 0.055;
-    return (float)(v < 0.0 ? 0.0 : v > 1.0 ? 1.0 : v);
-}
-
-/* Scales colours (not alpha) and applies the sRGB transfer function in place. */
-static void tone_map(slice_image *img, double scale)
-{
-    size_t count = (size_t)img->width * img->height;
-    for (size_t k = 0; k < count; k++) {
-        float *px = img->pixels + k * img->channels;
-        for (int c = 0; c < 3; c++)
-            px[c] = srgb_encode(scale * px[c]);
-    }
-}
-
 /* ------------------------------------------------------------ main */
 
 static int write_image(const slice_image *img, const slice_options *o)
@@ -433,8 +381,10 @@ static int slice_file(lfio_reader *r, const slice_options *o)
     int code = o->mode == SLICE_POSITION ? slice_position(r, k, o, &img) : slice_direction(r, k, o, &img);
     double scale = 1.0;
     if (code == ILF_EXIT_OK && ilfimg_format_of(o->output) == ILFIMG_FORMAT_PNG) {
-        scale = o->exposure_given ? exp2(o->exposure) : auto_scale(&img);
-        tone_map(&img, scale);
+        const size_t count = (size_t)img.width * img.height;
+        scale = o->exposure_given ? exp2(o->exposure)
+                                  : tone_percentile_scale(img.pixels, count, img.channels, TONE_PEAK, 0.99, 1.0);
+        tone_apply(img.pixels, count, img.channels, scale);
     }
     if (code == ILF_EXIT_OK)
         code = write_image(&img, o);

@@ -10,5 +10,7 @@ int ilf_cmd_synth(int argc, char **argv);
 int ilf_cmd_info(int argc, char **argv);
 int ilf_cmd_verify(int argc, char **argv);
 int ilf_cmd_slice(int argc, char **argv);
+int ilf_cmd_relight(int argc, char **argv);
+int ilf_cmd_irradiance(int argc, char **argv);
 
 #endif /* ILF_COMMANDS_H */

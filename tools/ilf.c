@@ -24,6 +24,8 @@ static const ilf_command commands[] = {
     {"info", "describe a light field file: slabs, radiance statistics, mask, irradiance", ilf_cmd_info},
     {"verify", "check files completely: format, checksums, directions and masks", ilf_cmd_verify},
     {"slice", "write one position or one direction of a slab as an EXR or PNG image", ilf_cmd_slice},
+    {"relight", "relight a scene: radiance maps, statistics and the camera's view", ilf_cmd_relight},
+    {"irradiance", "print the irradiance of a scene at given points (like rtrace -I)", ilf_cmd_irradiance},
 };
 
 static const size_t command_count = sizeof commands / sizeof commands[0];
@@ -36,7 +38,7 @@ static void print_help(FILE *out)
             "Tools for incident light fields stored as sphere-plane slabs in HDF5 files.\n\n"
             "Commands:\n");
     for (size_t k = 0; k < command_count; k++)
-        fprintf(out, "  %-8s %s\n", commands[k].name, commands[k].summary);
+        fprintf(out, "  %-10s %s\n", commands[k].name, commands[k].summary);
     fprintf(out,
             "\nRun 'ilf COMMAND --help' for a command's options and examples.\n\n"
             "Exit status: 0 success; 1 failure while running (e.g. an output cannot be\n"

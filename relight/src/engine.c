@@ -120,7 +120,7 @@ static int run_job(pass_job *job, unsigned n, rl_progress_fn progress, void *use
     }
     while (progress && started > 0 && atomic_load(&job->done) < job->nitems && !atomic_load(&job->failed)) {
         progress(user, base + span * (double)atomic_load(&job->done) / (double)(job->nitems ? job->nitems : 1));
-        struct timespec ts = {0, 100 * 1000 * 1000};
+        struct timespec ts = {0, 20 * 1000 * 1000};
         nanosleep(&ts, NULL);
     }
     for (unsigned k = 0; k < started; k++)
@@ -366,6 +366,9 @@ rl_status rl_solution_map_info(const rl_solution *s, size_t k, rl_map_info *out)
     out->ncells = m->ncells;
     memcpy(out->albedo, m->albedo, sizeof out->albedo);
     memcpy(out->emission, m->emission, sizeof out->emission);
+    const rl_polygon *pg = &s->scene->polygons[m->polygon];
+    out->vertices = &s->scene->vertices[pg->first][0];
+    out->nvertices = pg->count;
     return RL_OK;
 }
 

@@ -978,3 +978,12 @@ int rl_scene_has_camera(const rl_scene *s)
 {
     return s ? s->has_camera : 0;
 }
+
+int rl_scene_camera_size(const rl_scene *s, uint32_t *width, uint32_t *height)
+{
+    if (!s || !s->has_camera)
+        return 0;
+    *width = s->camera.width;
+    *height = s->camera.height;
+    return 1;
+}

@@ -63,6 +63,8 @@ typedef struct rl_map_info {
     uint32_t nu, nv;         /**< grid size */
     uint32_t ncells;         /**< cells with area (at most nu*nv) */
     float albedo[3], emission[3];
+    const double *vertices;  /**< the polygon's vertices, [nvertices][3] world, counter-clockwise seen from the front (borrowed) */
+    uint32_t nvertices;
 } rl_map_info;
 
 /** Describes map k. @return RL_OK or RL_ERR_ARG. */

@@ -51,6 +51,9 @@ double rl_scene_cell_size(const rl_scene *s);
 /** @return 1 if the scene has a camera. */
 int rl_scene_has_camera(const rl_scene *s);
 
+/** Gives the camera's image size in pixels. @return 1, or 0 (outputs untouched) if the scene has no camera. */
+int rl_scene_camera_size(const rl_scene *s, uint32_t *width, uint32_t *height);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,120 @@
+/*
+ * radmap.h - radiance-map files: the irradiance and radiosity on the cells
+ * of every receiving polygon of a relit scene (the output of `ilf relight`),
+ * stored in HDF5 (docs/format.md, "Radiance-map files").
+ *
+ * Conventions, stated once:
+ *   - World frame right-handed, metres. One patch is one receiving polygon,
+ *     with its vertices (counter-clockwise seen from its front) and its map
+ *     frame: origin, unit orthogonal axes e1 and e2, and normal = e1 x e2,
+ *     the front.
+ *   - The map is a grid of nu x nv square cells of side cell_size; cell
+ *     (i, j) covers origin + [u0 + i*cell_size, u0 + (i+1)*cell_size] * e1
+ *     + [v0 + j*cell_size, v0 + (j+1)*cell_size] * e2, clipped to the
+ *     polygon. Only the ncells cells whose clipped area is > 0 are stored,
+ *     each with its (i, j), its area (m^2) and the world centroid of its
+ *     clipped part. A patch may have no cells at all.
+ *   - Irradiance and radiosity are W m^-2, linear Rec.709 RGB, float32,
+ *     finite and >= 0; a cell's value is the mean over its clipped area.
+ *     albedo is in [0, 1], emission (W sr^-1 m^-2) finite and >= 0.
+ *   - Arrays are flat and row-major: vertices [nverts][3], cell_ij
+ *     [ncells][2] (i then j), cell_area [ncells], cell_centre [ncells][3],
+ *     irradiance and radiosity [ncells][3].
+ *   - Every pointer in lfio_radmap_patch is borrowed: lfio_radmap_write()
+ *     only reads through them during the call; lfio_radmap_get() points
+ *     them into the reader's object, valid until lfio_radmap_destroy().
+ *   - Status codes and messages as in lfio/lfio.h.
+ *
+ * Thread safety: a radiance map is read-only once read and may be queried
+ * from any number of threads.
+ *
+ * This header is valid C99 and C++.
+ */
+#ifndef LFIO_RADMAP_H
+#define LFIO_RADMAP_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "lfio/lfio.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Longest patch label, creator or scene path stored, in bytes, without the terminating NUL. */
+#define LFIO_RADMAP_TEXT_MAX 4095u
+
+/** Most patches one file may hold. */
+#define LFIO_RADMAP_MAX_PATCHES 1048576u
+
+/** Most vertices one patch's polygon may have. */
+#define LFIO_RADMAP_MAX_VERTS 65536u
+
+/** Most cells one file may hold, over all its patches (64 bytes each in memory). */
+#define LFIO_RADMAP_MAX_CELLS ((uint64_t)1 << 26)
+
+/** One receiving polygon and its map; see the conventions above. */
+typedef struct lfio_radmap_patch {
+    const char *label;        /**< the polygon's element name in the scene file, e.g. "polygons[3]" */
+    uint32_t polygon;         /**< scene polygon index */
+    uint32_t nverts;          /**< polygon vertices, 3 .. LFIO_RADMAP_MAX_VERTS */
+    const double *vertices;   /**< [nverts][3] world, metres */
+    double origin[3];         /**< map frame origin, world */
+    double e1[3];             /**< first map axis, unit */
+    double e2[3];             /**< second map axis, unit, orthogonal to e1 */
+    double normal[3];         /**< e1 x e2, the polygon's front */
+    double cell_size;         /**< side of a cell, metres, > 0 */
+    double u0, v0;            /**< grid offset along e1 and e2, metres */
+    uint32_t nu, nv;          /**< grid size */
+    uint32_t ncells;          /**< stored cells, at most nu*nv */
+    const uint32_t *cell_ij;  /**< [ncells][2] grid indices, i < nu, j < nv */
+    const double *cell_area;  /**< [ncells] clipped area, m^2, > 0 */
+    const double *cell_centre;/**< [ncells][3] world centroid of the clipped cell */
+    const float *irradiance;  /**< [ncells][3] W m^-2 */
+    const float *radiosity;   /**< [ncells][3] W m^-2 */
+    float albedo[3];          /**< reflectance, 0 .. 1 */
+    float emission[3];        /**< exitant radiance, W sr^-1 m^-2 */
+} lfio_radmap_patch;
+
+/** The content of a radiance-map file, read whole. Opaque. */
+typedef struct lfio_radmap lfio_radmap;
+
+/**
+ * Writes count patches (count may be 0) to path atomically, as
+ * lfio_lightfield_write() does. creator names the program (NULL: "lfio
+ * VERSION"), scene the scene file it relit (NULL: ""). Every patch is checked
+ * as the reader checks it, so a written file always reads back.
+ * @return LFIO_OK; LFIO_ERR_ARG (the message names the patch and problem); LFIO_ERR_IO; LFIO_ERR_NOMEM.
+ */
+lfio_status lfio_radmap_write(const char *path, const char *creator, const char *scene,
+                              const lfio_radmap_patch *patches, size_t count);
+
+/**
+ * Reads a whole file, checking format, attributes, shapes and limits before
+ * allocating, then every checksum and value.
+ * @return LFIO_OK and *out, owned by the caller; LFIO_ERR_NOTFOUND, LFIO_ERR_IO,
+ * LFIO_ERR_FORMAT, LFIO_ERR_CHECKSUM or LFIO_ERR_NOMEM with *out = NULL.
+ */
+lfio_status lfio_radmap_read(const char *path, lfio_radmap **out);
+
+/** Releases a radiance map. NULL is a no-op. */
+void lfio_radmap_destroy(lfio_radmap *map);
+
+/** @return the number of patches; 0 for NULL. */
+size_t lfio_radmap_count(const lfio_radmap *map);
+
+/** Describes patch k in *out, its pointers borrowed from map. @return LFIO_OK or LFIO_ERR_ARG. */
+lfio_status lfio_radmap_get(const lfio_radmap *map, size_t k, lfio_radmap_patch *out);
+
+/** @return the creator string stored in the file (borrowed); "" for NULL. */
+const char *lfio_radmap_creator(const lfio_radmap *map);
+
+/** @return the scene path stored in the file (borrowed); "" for NULL. */
+const char *lfio_radmap_scene(const lfio_radmap *map);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* LFIO_RADMAP_H */

@@ -1,0 +1,737 @@
+/*
+ * h5util.c - the HDF5 plumbing shared by lfio's file formats (see h5util.h):
+ * error silencing and translation, bounded typed attributes, dataset layouts,
+ * hyperslab transfers, the in-memory atomic writer and the checked opener.
+ *
+ * Invariants:
+ *   - Every HDF5 failure is recorded with lfio__h5_fail() before any other
+ *     HDF5 call (which would clear the error stack), so messages carry
+ *     HDF5's own reason and checksum failures are recognised.
+ *   - Strings read from files are bounded before they are allocated; a
+ *     dataset is checked against its expected layout before it is read.
+ *   - A write either renames a complete, fsynced file over its target or
+ *     leaves the target untouched and removes its temporary. HDF5 builds the
+ *     file in memory and never writes to disk itself (see build_image()).
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "h5util.h"
+#include "internal.h"
+
+/* Growth step of the in-memory file image while writing. */
+#define CORE_INCREMENT ((size_t)8 << 20)
+
+/* ------------------------------------------------------------------- errors */
+
+/* The caller's HDF5 automatic error handler, saved while lfio is silent. */
+
+/* Saves the calling thread's HDF5 error printer and turns printing off. */
+void lfio__h5_quiet_begin(lfio__h5_quiet *q)
+{
+    q->func = NULL;
+    q->data = NULL;
+    H5Eget_auto2(H5E_DEFAULT, &q->func, &q->data);
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+}
+
+/* Restores the printer saved by lfio__h5_quiet_begin(). */
+void lfio__h5_quiet_end(const lfio__h5_quiet *q)
+{
+    H5Eset_auto2(H5E_DEFAULT, q->func, q->data);
+}
+
+/* What the HDF5 error stack says about the last failure. */
+struct stack_info {
+    int checksum;       /* some record reports a checksum mismatch */
+    char reason[160];   /* the innermost record's description */
+};
+
+/* @return 1 if text contains "checksum" in any letter case. */
+static int mentions_checksum(const char *text)
+{
+    static const char word[] = "checksum";
+    for (; text && *text; text++) {
+        size_t k = 0;
+        while (word[k] && text[k] && (text[k] | 0x20) == word[k])
+            k++;
+        if (!word[k])
+            return 1;
+    }
+    return 0;
+}
+
+/* H5Ewalk2 visitor: notes checksum records and keeps the innermost description. */
+static herr_t stack_visit(unsigned n, const H5E_error2_t *e, void *data)
+{
+    struct stack_info *si = data;
+    /* HDF5 1.10 reports a Fletcher32 failure as "data error detected by Fletcher32
+     * checksum" (Data storage / Read failed) and a metadata one as "incorrect
+     * metadata checksum ...": the word is the stable part of both. */
+    if (mentions_checksum(e->desc) || mentions_checksum(e->func_name))
+        si->checksum = 1;
+    if (n == 0 && e->desc)
+        snprintf(si->reason, sizeof si->reason, "%s", e->desc);
+    return 0;
+}
+
+/*
+ * Records a failure of the HDF5 call just made, as "<path>: <obj>: <what> (<reason>)".
+ * Must be called before any other HDF5 call, which would clear the stack.
+ * @return LFIO_ERR_CHECKSUM if the stack reports a checksum mismatch, else st.
+ */
+lfio_status lfio__h5_fail(lfio_status st, const char *path, const char *obj, const char *what)
+{
+    struct stack_info si = {0, ""};
+    H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, stack_visit, &si);
+    if (si.checksum)
+        return lfio__fail(LFIO_ERR_CHECKSUM, "%s: %s: checksum mismatch (%s)", path, obj, what);
+    if (si.reason[0])
+        return lfio__fail(st, "%s: %s: %s (%s)", path, obj, what, si.reason);
+    return lfio__fail(st, "%s: %s: %s", path, obj, what);
+}
+
+/* Closes any HDF5 identifier; invalid (negative) ids are ignored, which keeps cleanup paths simple. */
+void lfio__h5_close(hid_t id)
+{
+    if (id < 0)
+        return;
+    switch (H5Iget_type(id)) {
+    case H5I_FILE: H5Fclose(id); break;
+    case H5I_GROUP: H5Gclose(id); break;
+    case H5I_DATASET: H5Dclose(id); break;
+    case H5I_ATTR: H5Aclose(id); break;
+    case H5I_DATATYPE: H5Tclose(id); break;
+    case H5I_DATASPACE: H5Sclose(id); break;
+    case H5I_GENPROP_LST: H5Pclose(id); break;
+    default: break;
+    }
+}
+
+/* @return the index of the first value of v[0..count) that is negative, NaN or infinite; count if none. */
+size_t lfio__first_bad_value(const float *v, size_t count)
+{
+    for (size_t k = 0; k < count; k++)
+        if (!(v[k] >= 0.0f && v[k] <= 3.4028234663852886e38f))
+            return k;
+    return count;
+}
+
+/* Writes "[a, b, ...]" for dims into buf. */
+void lfio__h5_format_dims(char *buf, size_t size, int rank, const hsize_t *dims)
+{
+    size_t used = 0;
+    used += (size_t)snprintf(buf, size, "[");
+    for (int k = 0; k < rank && used < size; k++)
+        used += (size_t)snprintf(buf + used, size - used, "%s%llu", k ? ", " : "",
+                                 (unsigned long long)dims[k]);
+    if (used < size)
+        snprintf(buf + used, size - used, "]");
+}
+
+/* Transfers a hyperslab of dset to or from buf; an empty one transfers nothing (see h5util.h). */
+lfio_status lfio__h5_xfer(const char *path, const char *obj, hid_t dset, int write, hid_t mtype,
+                          int rank, const hsize_t *start, const hsize_t *count, void *buf)
+{
+    hsize_t nelem = 1;
+    for (int k = 0; k < rank; k++)
+        nelem *= count[k];
+    if (nelem == 0)
+        return LFIO_OK;
+    lfio_status st = LFIO_OK;
+    hid_t fspace = H5Dget_space(dset);
+    hid_t mspace = H5Screate_simple(1, &nelem, NULL);
+    herr_t rc = -1;
+    if (fspace >= 0 && mspace >= 0
+        && H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, NULL, count, NULL) >= 0)
+        rc = write ? H5Dwrite(dset, mtype, mspace, fspace, H5P_DEFAULT, buf)
+                   : H5Dread(dset, mtype, mspace, fspace, H5P_DEFAULT, buf);
+    if (rc < 0) /* before closing: any HDF5 call clears the error stack */
+        st = lfio__h5_fail(LFIO_ERR_IO, path, obj, write ? "cannot write" : "cannot read");
+    lfio__h5_close(mspace);
+    lfio__h5_close(fspace);
+    return st;
+}
+
+/* ----------------------------------------------------------------- attributes */
+
+/* Creates attribute name on id with file type ftype over space and writes buf (memory type mtype). */
+static lfio_status put_attr(const char *path, const char *obj, hid_t id, const char *name, hid_t ftype,
+                            hid_t space, hid_t mtype, const void *buf)
+{
+    lfio_status st = LFIO_OK;
+    hid_t a = H5Acreate2(id, name, ftype, space, H5P_DEFAULT, H5P_DEFAULT);
+    if (a < 0 || H5Awrite(a, mtype, buf) < 0) {
+        char what[96];
+        snprintf(what, sizeof what, "cannot write attribute '%s'", name);
+        st = lfio__h5_fail(LFIO_ERR_IO, path, obj, what);
+    }
+    lfio__h5_close(a);
+    return st;
+}
+
+/* Writes string attribute name = value as a fixed-length, NUL-terminated string (ASCII unless value is not). */
+lfio_status lfio__h5_put_str_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                  const char *value)
+{
+    int ascii = 1;
+    for (const unsigned char *c = (const unsigned char *)value; *c; c++)
+        ascii &= *c < 128;
+    hid_t t = H5Tcopy(H5T_C_S1);
+    hid_t space = H5Screate(H5S_SCALAR);
+    lfio_status st;
+    if (t < 0 || space < 0 || H5Tset_size(t, strlen(value) + 1) < 0
+        || H5Tset_strpad(t, H5T_STR_NULLTERM) < 0
+        || H5Tset_cset(t, ascii ? H5T_CSET_ASCII : H5T_CSET_UTF8) < 0)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot make a string type");
+    else
+        st = put_attr(path, obj, id, name, t, space, t, value);
+    lfio__h5_close(space);
+    lfio__h5_close(t);
+    return st;
+}
+
+/* Writes a numeric attribute: a scalar when count is 0, else a 1-D array of count values. */
+lfio_status lfio__h5_put_num_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                  hid_t ftype, hid_t mtype, hsize_t count, const void *value)
+{
+    hid_t space = count ? H5Screate_simple(1, &count, NULL) : H5Screate(H5S_SCALAR);
+    lfio_status st = space < 0 ? lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot make a dataspace")
+                               : put_attr(path, obj, id, name, ftype, space, mtype, value);
+    lfio__h5_close(space);
+    return st;
+}
+
+/*
+ * Opens attribute name of id and checks that it holds count elements (count 1:
+ * a scalar or [1]; otherwise a 1-D array) of class cls, each at most max_size bytes.
+ * @return LFIO_OK and *out; LFIO_ERR_FORMAT (or what HDF5 reports) with *out = -1.
+ */
+static lfio_status open_attr(const char *path, const char *obj, hid_t id, const char *name,
+                             H5T_class_t cls, hssize_t count, size_t max_size, hid_t *out)
+{
+    static const char *const class_names[] = {"integer", "float", "time", "string", "bitfield",
+                                              "opaque", "compound", "reference", "enum",
+                                              "variable-length", "array"};
+    *out = -1;
+    htri_t exists = H5Aexists(id, name);
+    if (exists < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot list attributes");
+    if (exists == 0)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: missing attribute '%s'", path, obj, name);
+    hid_t a = H5Aopen(id, name, H5P_DEFAULT);
+    if (a < 0) {
+        char what[96];
+        snprintf(what, sizeof what, "cannot open attribute '%s'", name);
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, what);
+    }
+    hid_t t = H5Aget_type(a), space = H5Aget_space(a);
+    H5T_class_t got = t < 0 ? H5T_NO_CLASS : H5Tget_class(t);
+    size_t size = t < 0 ? 0 : H5Tget_size(t);
+    int rank = space < 0 ? -1 : H5Sget_simple_extent_ndims(space);
+    hssize_t npoints = space < 0 ? -1 : H5Sget_simple_extent_npoints(space);
+    int is_vlen = got == H5T_STRING && H5Tis_variable_str(t) > 0;
+    lfio__h5_close(space);
+    lfio__h5_close(t);
+    lfio_status st = LFIO_OK;
+    if (got != cls) {
+        int known = got >= 0 && (size_t)got < sizeof class_names / sizeof class_names[0];
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: attribute '%s' is of class %s, expected %s", path,
+                        obj, name, known ? class_names[got] : "unknown", class_names[cls]);
+    } else if (rank < 0 || rank > 1 || npoints != count || (rank == 0 && count != 1)) {
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: attribute '%s' has %lld elements in %d dimensions, expected %lld",
+                        path, obj, name, (long long)npoints, rank, (long long)count);
+    } else if (!is_vlen && (size == 0 || size > max_size)) {
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: attribute '%s' has elements of %zu bytes, at most %zu allowed",
+                        path, obj, name, size, max_size);
+    }
+    if (st != LFIO_OK)
+        lfio__h5_close(a);
+    else
+        *out = a;
+    return st;
+}
+
+/*
+ * Reads string attribute name of id (fixed or variable length) of at most max_len bytes.
+ * @return LFIO_OK and *out (malloc'd, the caller frees); an error with *out = NULL.
+ */
+lfio_status lfio__h5_get_str_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                  size_t max_len, char **out)
+{
+    *out = NULL;
+    hid_t a;
+    /* A fixed-length string of max_len characters may carry its NUL: max_len + 1 bytes. */
+    lfio_status st = open_attr(path, obj, id, name, H5T_STRING, 1, max_len + 1, &a);
+    if (st != LFIO_OK)
+        return st;
+    hid_t ftype = H5Aget_type(a);
+    hid_t mtype = H5Tcopy(ftype);
+    char what[96];
+    snprintf(what, sizeof what, "cannot read attribute '%s'", name);
+    if (ftype < 0 || mtype < 0) {
+        st = lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, what);
+    } else if (H5Tis_variable_str(ftype) > 0) {
+        /* The memory type copies the file's character set: HDF5 refuses to convert between sets. */
+        char *text = NULL;
+        if (H5Aread(a, mtype, &text) < 0 || text == NULL)
+            st = lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, what);
+        else if (strlen(text) > max_len)
+            st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: attribute '%s' is longer than %zu bytes",
+                            path, obj, name, max_len);
+        else if ((*out = malloc(strlen(text) + 1)) == NULL)
+            st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, obj);
+        else
+            strcpy(*out, text);
+        if (text)
+            H5free_memory(text);
+    } else {
+        size_t size = H5Tget_size(ftype); /* checked <= max_len + 1 by open_attr() */
+        *out = calloc(size + 1, 1);
+        if (*out == NULL)
+            st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, obj);
+        else if (H5Aread(a, mtype, *out) < 0)
+            st = lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, what);
+        else if (strlen(*out) > max_len)
+            st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: attribute '%s' is longer than %zu bytes",
+                            path, obj, name, max_len);
+    }
+    lfio__h5_close(mtype);
+    lfio__h5_close(ftype);
+    lfio__h5_close(a);
+    if (st != LFIO_OK) {
+        free(*out);
+        *out = NULL;
+    }
+    return st;
+}
+
+/* Checks that string attribute name of id equals expected. @return LFIO_OK or LFIO_ERR_FORMAT. */
+lfio_status lfio__h5_expect_str_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                     const char *expected)
+{
+    char *text;
+    lfio_status st = lfio__h5_get_str_attr(path, obj, id, name, LFIO__H5_TEXT_MAX, &text);
+    if (st == LFIO_OK && strcmp(text, expected) != 0)
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: attribute '%s' is '%s', expected '%s'", path, obj,
+                        name, text, expected);
+    free(text);
+    return st;
+}
+
+/* Reads count doubles from float attribute name of id and checks that they are finite. */
+lfio_status lfio__h5_get_f64_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                  hssize_t count, double *out)
+{
+    hid_t a;
+    lfio_status st = open_attr(path, obj, id, name, H5T_FLOAT, count, 8, &a);
+    if (st != LFIO_OK)
+        return st;
+    if (H5Aread(a, H5T_NATIVE_DOUBLE, out) < 0) {
+        char what[96];
+        snprintf(what, sizeof what, "cannot read attribute '%s'", name);
+        st = lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, what);
+    }
+    for (hssize_t k = 0; st == LFIO_OK && k < count; k++)
+        if (!isfinite(out[k]))
+            st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: attribute '%s' is not finite", path, obj, name);
+    lfio__h5_close(a);
+    return st;
+}
+
+/* Reads scalar integer attribute name of id (any width up to 64 bits) and checks lo <= value <= hi. */
+lfio_status lfio__h5_get_int_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                  int64_t lo, int64_t hi, int64_t *out)
+{
+    hid_t a;
+    lfio_status st = open_attr(path, obj, id, name, H5T_INTEGER, 1, 8, &a);
+    if (st != LFIO_OK)
+        return st;
+    /* HDF5 clips out-of-range values on conversion, and clipped values fail the range test. */
+    if (H5Aread(a, H5T_NATIVE_INT64, out) < 0) {
+        char what[96];
+        snprintf(what, sizeof what, "cannot read attribute '%s'", name);
+        st = lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, what);
+    } else if (*out < lo || *out > hi) {
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: attribute '%s' = %lld is outside [%lld, %lld]",
+                        path, obj, name, (long long)*out, (long long)lo, (long long)hi);
+    }
+    lfio__h5_close(a);
+    return st;
+}
+
+/* ------------------------------------------------------------------ datasets */
+
+/* @return the little-endian file datatype of l: IEEE float, or unsigned integer of l's size. */
+hid_t lfio__h5_file_type(const lfio__h5_layout *l)
+{
+    if (l->cls == H5T_INTEGER)
+        return l->size == 4 ? H5T_STD_U32LE : H5T_STD_U8LE;
+    return l->size == 4 ? H5T_IEEE_F32LE : H5T_IEEE_F64LE;
+}
+
+/* Creates dataset l in group g, chunked and checksummed, with units and axes (see h5util.h). */
+lfio_status lfio__h5_create_dataset(const char *path, const char *gobj, hid_t g,
+                                    const lfio__h5_layout *l, hid_t *out)
+{
+    char obj[128];
+    snprintf(obj, sizeof obj, "%s/%s", gobj, l->name);
+    *out = -1;
+    lfio_status st = LFIO_OK;
+    /* A chunk may not exceed a fixed dimension, so an empty axis is made extensible:
+     * every dataset then keeps the same chunked, checksummed layout, also when empty. */
+    hsize_t maxdims[4];
+    for (int k = 0; k < l->rank; k++)
+        maxdims[k] = l->dims[k] == 0 ? H5S_UNLIMITED : l->dims[k];
+    hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
+    hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    hid_t space = H5Screate_simple(l->rank, l->dims, maxdims);
+    /* Fletcher32 goes last so it covers the bytes as stored and is checked first on reading. */
+    int ok = lcpl >= 0 && dcpl >= 0 && space >= 0
+             && H5Pset_create_intermediate_group(lcpl, 1) >= 0
+             && H5Pset_chunk(dcpl, l->rank, l->chunk) >= 0
+             && (!l->deflate || (H5Pset_shuffle(dcpl) >= 0 && H5Pset_deflate(dcpl, 4) >= 0))
+             && H5Pset_fletcher32(dcpl) >= 0;
+    if (ok)
+        *out = H5Dcreate2(g, l->name, lfio__h5_file_type(l), space, lcpl, dcpl, H5P_DEFAULT);
+    if (*out < 0)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot create dataset");
+    lfio__h5_close(space);
+    lfio__h5_close(dcpl);
+    lfio__h5_close(lcpl);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_str_attr(path, obj, *out, "units", l->units);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_str_attr(path, obj, *out, "axes", l->axes);
+    if (st != LFIO_OK) {
+        lfio__h5_close(*out);
+        *out = -1;
+    }
+    return st;
+}
+
+/* Describes an element type for messages, e.g. "float of 8 bytes". */
+static void describe_type(char *buf, size_t size, H5T_class_t cls, size_t elem)
+{
+    snprintf(buf, size, "%s of %zu bytes",
+             cls == H5T_FLOAT ? "float" : cls == H5T_INTEGER ? "integer" : "non-numeric type", elem);
+}
+
+/* Opens dataset l of group g and checks its type, shape, units and axes against l (see h5util.h). */
+lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, const lfio__h5_layout *l,
+                                   const char *source, hid_t dapl, hid_t *out)
+{
+    char obj[128], got[64], want[64];
+    snprintf(obj, sizeof obj, "%s/%s", gobj, l->name);
+    if (out)
+        *out = -1;
+    if (H5Lexists(g, l->name, H5P_DEFAULT) <= 0)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: missing dataset", path, obj);
+    hid_t d = H5Dopen2(g, l->name, dapl >= 0 ? dapl : H5P_DEFAULT);
+    if (d < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a dataset");
+    hid_t t = H5Dget_type(d), space = H5Dget_space(d);
+    H5T_class_t cls = t < 0 ? H5T_NO_CLASS : H5Tget_class(t);
+    size_t elem = t < 0 ? 0 : H5Tget_size(t);
+    int simple = space >= 0 && H5Sget_simple_extent_type(space) == H5S_SIMPLE;
+    int rank = simple ? H5Sget_simple_extent_ndims(space) : -1;
+    hsize_t dims[H5S_MAX_RANK];
+    if (rank >= 0 && rank <= H5S_MAX_RANK && H5Sget_simple_extent_dims(space, dims, NULL) < 0)
+        rank = -1;
+    lfio__h5_close(space);
+    lfio__h5_close(t);
+    lfio_status st = LFIO_OK;
+    int same_dims = rank == l->rank;
+    for (int k = 0; same_dims && k < rank; k++)
+        same_dims = dims[k] == l->dims[k];
+    if (cls != l->cls || elem != l->size) {
+        describe_type(got, sizeof got, cls, elem);
+        describe_type(want, sizeof want, l->cls, l->size);
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: element type is %s, expected %s", path, obj, got, want);
+    } else if (!same_dims) {
+        if (rank >= 0)
+            lfio__h5_format_dims(got, sizeof got, rank, dims);
+        else
+            snprintf(got, sizeof got, "not a simple array");
+        lfio__h5_format_dims(want, sizeof want, l->rank, l->dims);
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: dims mismatch: shape %s, expected %s from %s",
+                        path, obj, got, want, source);
+    }
+    if (st == LFIO_OK)
+        st = lfio__h5_expect_str_attr(path, obj, d, "units", l->units);
+    if (st == LFIO_OK)
+        st = lfio__h5_expect_str_attr(path, obj, d, "axes", l->axes);
+    if (st == LFIO_OK && out)
+        *out = d;
+    else
+        lfio__h5_close(d);
+    return st;
+}
+
+/* ------------------------------------------------------------------- files */
+
+/* @return x rotated left by k bits (0 < k < 32). */
+static uint32_t rotl32(uint32_t x, int k)
+{
+    return (x << k) | (x >> (32 - k));
+}
+
+/* @return the 4 bytes at p as a little-endian number. */
+static uint32_t le32(const unsigned char *p)
+{
+    return p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* @return Jenkins' lookup3 hash (hashlittle, seed 0) of len bytes: HDF5's metadata checksum. */
+static uint32_t metadata_checksum(const unsigned char *k, size_t len)
+{
+    uint32_t a, b, c;
+    a = b = c = 0xdeadbeefu + (uint32_t)len;
+    for (; len > 12; len -= 12, k += 12) {
+        a += le32(k), b += le32(k + 4), c += le32(k + 8);
+        a -= c, a ^= rotl32(c, 4), c += b;
+        b -= a, b ^= rotl32(a, 6), a += c;
+        c -= b, c ^= rotl32(b, 8), b += a;
+        a -= c, a ^= rotl32(c, 16), c += b;
+        b -= a, b ^= rotl32(a, 19), a += c;
+        c -= b, c ^= rotl32(b, 4), b += a;
+    }
+    if (len == 0)
+        return c;
+    uint32_t w[3] = {0, 0, 0}; /* the last 1..12 bytes, zero-padded */
+    for (size_t i = 0; i < len; i++)
+        w[i / 4] += (uint32_t)k[i] << (8 * (i % 4));
+    a += w[0], b += w[1], c += w[2];
+    c ^= b, c -= rotl32(b, 14);
+    a ^= c, a -= rotl32(c, 11);
+    b ^= a, b -= rotl32(a, 25);
+    c ^= b, c -= rotl32(b, 16);
+    a ^= c, a -= rotl32(c, 4);
+    b ^= a, b -= rotl32(a, 14);
+    c ^= b, c -= rotl32(b, 24);
+    return c;
+}
+
+/*
+ * Repairs the superblock of an image from H5Fget_file_image(): HDF5 1.10.8
+ * clears the "open for writing" status flags in the copy but leaves the old
+ * checksum, so the image would not open. Recomputing it gives the bytes a
+ * normal H5Fclose would have written (checked by comparing whole files).
+ * Superblocks before version 2 have no checksum and need nothing.
+ * @return LFIO_OK; LFIO_ERR_IO if the image does not start with a superblock.
+ */
+static lfio_status finish_superblock(const char *path, unsigned char *image, size_t size)
+{
+    static const unsigned char signature[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+    if (size < 12 || memcmp(image, signature, sizeof signature) != 0)
+        return lfio__fail(LFIO_ERR_IO, "%s: /: file image lacks a superblock", path);
+    /* Versions 2 and 3: signature, version, offset size O, length size, flags,
+     * four addresses of O bytes, then the checksum of everything before it. */
+    unsigned version = image[8], offset_size = image[9];
+    size_t covered = 12 + 4 * (size_t)offset_size;
+    if (version < 2)
+        return LFIO_OK;
+    if (version > 3 || (offset_size != 4 && offset_size != 8) || size < covered + 4)
+        return lfio__fail(LFIO_ERR_IO, "%s: /: unexpected superblock version %u", path, version);
+    uint32_t sum = metadata_checksum(image, covered);
+    for (int k = 0; k < 4; k++)
+        image[covered + k] = (unsigned char)(sum >> (8 * k));
+    return LFIO_OK;
+}
+
+/*
+ * Builds the whole file in memory with HDF5's core driver (no backing store)
+ * and returns its bytes. HDF5 1.10 cannot recover from a failed write to a
+ * real file: a flush failing inside H5Dclose/H5Fclose leaves a freed file
+ * registered, and the process crashes at exit (HDFFV-11052, fixed in 1.14.1).
+ * In memory nothing can fail that way; the bytes then go to disk through
+ * write_all(), whose errors are ordinary. The cost: memory about the size of
+ * the file, twice over while the image is copied out.
+ * @return LFIO_OK and *image (malloc'd), *size; an error with *image = NULL.
+ */
+static lfio_status build_image(const char *path, const char *name, lfio__h5_fill_fn fill,
+                               const void *content, unsigned char **image, size_t *size)
+{
+    *image = NULL;
+    *size = 0;
+    lfio_status st = LFIO_OK;
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    /* Version 1.8+ structures carry metadata checksums; strong close releases every
+     * object with the file, so no forgotten id outlives it. */
+    if (fapl < 0 || H5Pset_fapl_core(fapl, CORE_INCREMENT, 0) < 0
+        || H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST) < 0
+        || H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot set file access properties");
+    /* name only identifies the in-memory file: the core driver creates nothing on disk. */
+    hid_t file = st == LFIO_OK ? H5Fcreate(name, H5F_ACC_TRUNC, H5P_DEFAULT, fapl) : -1;
+    if (st == LFIO_OK && file < 0)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the file in memory");
+    lfio__h5_close(fapl);
+    if (st == LFIO_OK)
+        st = fill(path, file, content);
+    ssize_t bytes = -1;
+    /* H5Fget_file_image copies what has reached the driver: flush the metadata cache first. */
+    if (st == LFIO_OK && H5Fflush(file, H5F_SCOPE_GLOBAL) < 0)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot flush the file in memory");
+    if (st == LFIO_OK && (bytes = H5Fget_file_image(file, NULL, 0)) <= 0)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot finish the file image");
+    if (st == LFIO_OK && (*image = malloc((size_t)bytes)) == NULL)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: no memory for a file image of %zd bytes", path, bytes);
+    if (st == LFIO_OK && H5Fget_file_image(file, *image, (size_t)bytes) != bytes)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot copy the file image");
+    if (st == LFIO_OK)
+        st = finish_superblock(path, *image, (size_t)bytes);
+    if (file >= 0 && H5Fclose(file) < 0 && st == LFIO_OK)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot close the file in memory");
+    if (st != LFIO_OK) {
+        free(*image);
+        *image = NULL;
+    } else {
+        *size = (size_t)bytes;
+    }
+    return st;
+}
+
+/* Writes size bytes of data to fd, resuming after partial writes and signals. @return 0 or an errno value. */
+static int write_all(int fd, const unsigned char *data, size_t size)
+{
+    while (size > 0) {
+        ssize_t n = write(fd, data, size);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0)
+            return n < 0 ? errno : EIO;
+        data += n;
+        size -= (size_t)n;
+    }
+    return 0;
+}
+
+/* fsyncs folder dir so that a rename inside it is durable. @return 0 or an errno value. */
+static int sync_folder(const char *dir)
+{
+    int fd = open(dir, O_RDONLY | O_DIRECTORY);
+    if (fd < 0)
+        return errno;
+    int err = fsync(fd) == 0 ? 0 : errno;
+    close(fd);
+    return err;
+}
+
+/* @return the folder holding path (malloc'd; "." for a bare name), or NULL when out of memory. */
+static char *folder_of(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    size_t len = slash == NULL ? 0 : slash == path ? 1 : (size_t)(slash - path);
+    char *dir = malloc(len ? len + 1 : 2);
+    if (dir == NULL)
+        return NULL;
+    if (len)
+        memcpy(dir, path, len), dir[len] = '\0';
+    else
+        strcpy(dir, ".");
+    return dir;
+}
+
+/* Creates an empty temporary "path.tmp-XXXXXX" beside path. @return LFIO_OK, *tmp (malloc'd) and open *fd; LFIO_ERR_IO. */
+static lfio_status make_temp(const char *path, char **tmp, int *fd)
+{
+    static const char suffix[] = ".tmp-XXXXXX";
+    *fd = -1;
+    *tmp = malloc(strlen(path) + sizeof suffix);
+    if (*tmp == NULL)
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
+    strcpy(*tmp, path);
+    strcat(*tmp, suffix);
+    *fd = mkstemp(*tmp);
+    if (*fd < 0) {
+        int err = errno;
+        free(*tmp);
+        *tmp = NULL;
+        return lfio__fail(LFIO_ERR_IO, "%s: cannot create a temporary file beside it: %s", path,
+                          strerror(err));
+    }
+    /* mkstemp makes the file private (0600); a replaced file keeps its mode, a new one is 0644. */
+    struct stat old;
+    fchmod(*fd, stat(path, &old) == 0 && S_ISREG(old.st_mode) ? (old.st_mode & 0777) : 0644);
+    return LFIO_OK;
+}
+
+
+/* Builds the file in memory, writes it to a temporary beside path, fsyncs, renames it over path and fsyncs the folder. */
+lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const void *content)
+{
+    lfio__h5_quiet q;
+    lfio__h5_quiet_begin(&q);
+    char *tmp = NULL, *dir = NULL;
+    unsigned char *image = NULL;
+    size_t size = 0;
+    int fd = -1, err = 0;
+    lfio_status st = make_temp(path, &tmp, &fd);
+    if (st == LFIO_OK)
+        st = build_image(path, tmp, fill, content, &image, &size);
+    if (st == LFIO_OK && ((err = write_all(fd, image, size)) != 0 || (err = fsync(fd) ? errno : 0) != 0))
+        st = lfio__fail(LFIO_ERR_IO, "%s: cannot write the temporary file: %s", path, strerror(err));
+    free(image);
+    if (fd >= 0 && close(fd) != 0 && st == LFIO_OK)
+        st = lfio__fail(LFIO_ERR_IO, "%s: cannot close the temporary file: %s", path, strerror(errno));
+    if (st == LFIO_OK && rename(tmp, path) != 0)
+        st = lfio__fail(LFIO_ERR_IO, "%s: cannot rename the temporary file over it: %s", path,
+                        strerror(errno));
+    if (st != LFIO_OK && tmp != NULL)
+        remove(tmp);
+    /* The rename is only durable once the folder's entry is on disk. */
+    if (st == LFIO_OK && ((dir = folder_of(path)) == NULL || (err = sync_folder(dir)) != 0))
+        st = lfio__fail(LFIO_ERR_IO, "%s: written, but cannot flush its folder: %s", path,
+                        dir ? strerror(err) : "out of memory");
+    free(dir);
+    free(tmp);
+    lfio__h5_quiet_end(&q);
+    return st;
+}
+
+/* Checks that path names a readable regular file in HDF5 format, before HDF5 opens it. */
+static lfio_status check_file(const char *path)
+{
+    struct stat sb;
+    if (stat(path, &sb) != 0) {
+        int err = errno;
+        return lfio__fail(err == ENOENT || err == ENOTDIR ? LFIO_ERR_NOTFOUND : LFIO_ERR_IO,
+                          "%s: cannot open: %s", path, strerror(err));
+    }
+    if (!S_ISREG(sb.st_mode))
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: not a regular file", path);
+    int fd = open(path, O_RDONLY);
+    if (fd < 0)
+        return lfio__fail(LFIO_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    close(fd);
+    /* The file is readable, so a failing signature search means "not HDF5", not an I/O error. */
+    if (H5Fis_hdf5(path) <= 0)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: not an HDF5 file", path);
+    return LFIO_OK;
+}
+
+/* Opens path read-only after check_file(), with strong close (see h5util.h). */
+lfio_status lfio__h5_open_read(const char *path, hid_t *file)
+{
+    *file = -1;
+    lfio_status st = check_file(path);
+    if (st != LFIO_OK)
+        return st;
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    if (fapl >= 0)
+        H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
+    *file = H5Fopen(path, H5F_ACC_RDONLY, fapl >= 0 ? fapl : H5P_DEFAULT);
+    if (*file < 0)
+        st = lfio__h5_fail(LFIO_ERR_FORMAT, path, "/", "cannot open as HDF5");
+    lfio__h5_close(fapl);
+    return st;
+}

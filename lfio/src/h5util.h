@@ -1,0 +1,158 @@
+/*
+ * h5util.h - the HDF5 plumbing lfio's file formats share (light field files
+ * in h5io.c, radiance-map files in radmap_io.c): silencing HDF5 and turning
+ * its error stack into lfio messages, typed and bounded attributes, dataset
+ * layouts created and checked from one description, hyperslab transfers,
+ * and the atomic in-memory file writer.
+ *
+ * Only lfio's I/O sources include this header (it includes hdf5.h).
+ * Conventions of every function here:
+ *   - path names the file and obj the HDF5 object in messages, which read
+ *     "<path>: <obj>: <problem>"; a failing call records its message with
+ *     lfio__fail() and returns the status.
+ *   - An HDF5 error stack that mentions a checksum becomes LFIO_ERR_CHECKSUM.
+ *   - Nothing is allocated from a size read from a file: attribute strings
+ *     are bounded by the caller's maximum, datasets are checked against an
+ *     expected layout before anything is read.
+ *   - None of these functions silences HDF5 itself: public entry points wrap
+ *     their whole body in lfio__h5_quiet_begin() / lfio__h5_quiet_end().
+ */
+#ifndef LFIO_H5UTIL_H
+#define LFIO_H5UTIL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include <hdf5.h>
+
+#include "lfio/lfio.h"
+
+/* Longest free-text string attribute read from a file (units, axes, frame ...), in bytes. */
+#define LFIO__H5_TEXT_MAX 1023
+
+/* ---------------------------------------------------------------- errors */
+
+/* The caller's HDF5 automatic error handler, saved while lfio is silent. */
+typedef struct lfio__h5_quiet {
+    H5E_auto2_t func;
+    void *data;
+} lfio__h5_quiet;
+
+/* Saves the calling thread's HDF5 error printer and turns printing off. */
+void lfio__h5_quiet_begin(lfio__h5_quiet *q);
+
+/* Restores the printer saved by lfio__h5_quiet_begin(). */
+void lfio__h5_quiet_end(const lfio__h5_quiet *q);
+
+/*
+ * Records a failure of the HDF5 call just made, as "<path>: <obj>: <what> (<reason>)".
+ * Must be called before any other HDF5 call, which would clear the stack.
+ * @return LFIO_ERR_CHECKSUM if the stack reports a checksum mismatch, else st.
+ */
+lfio_status lfio__h5_fail(lfio_status st, const char *path, const char *obj, const char *what);
+
+/* Closes any HDF5 identifier; negative ids are ignored, which keeps cleanup paths simple. */
+void lfio__h5_close(hid_t id);
+
+/* Writes "[a, b, ...]" for the rank dims into buf. */
+void lfio__h5_format_dims(char *buf, size_t size, int rank, const hsize_t *dims);
+
+/* @return the index of the first of v[0..count) that is negative, NaN or infinite; count if none. */
+size_t lfio__first_bad_value(const float *v, size_t count);
+
+/* ------------------------------------------------------------ attributes */
+
+/* Writes string attribute name = value as a fixed-length, NUL-terminated string (ASCII unless value is not). */
+lfio_status lfio__h5_put_str_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                  const char *value);
+
+/* Writes a numeric attribute (file type ftype, memory type mtype): a scalar when count is 0, else count values. */
+lfio_status lfio__h5_put_num_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                  hid_t ftype, hid_t mtype, hsize_t count, const void *value);
+
+/*
+ * Reads string attribute name of id (fixed or variable length) of at most max_len bytes.
+ * @return LFIO_OK and *out (malloc'd, the caller frees); an error with *out = NULL.
+ */
+lfio_status lfio__h5_get_str_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                  size_t max_len, char **out);
+
+/* Checks that string attribute name of id (at most LFIO__H5_TEXT_MAX bytes) equals expected.
+ * @return LFIO_OK or LFIO_ERR_FORMAT. */
+lfio_status lfio__h5_expect_str_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                     const char *expected);
+
+/* Reads count finite doubles from float attribute name (count 1: scalar or [1]). @return LFIO_OK or LFIO_ERR_FORMAT. */
+lfio_status lfio__h5_get_f64_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                  hssize_t count, double *out);
+
+/* Reads scalar integer attribute name (any width up to 64 bits) and checks lo <= value <= hi. */
+lfio_status lfio__h5_get_int_attr(const char *path, const char *obj, hid_t id, const char *name,
+                                  int64_t lo, int64_t hi, int64_t *out);
+
+/* -------------------------------------------------------------- datasets */
+
+/* The stored layout of one dataset: what the writer creates and the reader expects. */
+typedef struct lfio__h5_layout {
+    char name[32];      /* path below the owning group */
+    int rank;           /* 1 .. 4 */
+    hsize_t dims[4];    /* may be 0: the dataset is then created extensible along that axis */
+    hsize_t chunk[4];   /* each >= 1 */
+    H5T_class_t cls;    /* H5T_FLOAT or H5T_INTEGER (unsigned) */
+    size_t size;        /* element size in bytes: 4 or 8 for floats, 1 or 4 for integers */
+    const char *units;  /* value of the "units" attribute */
+    const char *axes;   /* value of the "axes" attribute */
+    int deflate;        /* nonzero: shuffle and deflate (zlib level 4) before the checksum */
+} lfio__h5_layout;
+
+/* @return the little-endian file datatype of layout l. */
+hid_t lfio__h5_file_type(const lfio__h5_layout *l);
+
+/*
+ * Creates dataset l in group g (gobj), chunked with a Fletcher32 checksum,
+ * creating intermediate groups, with its units and axes attributes.
+ * @return LFIO_OK and *out open; LFIO_ERR_IO with *out = -1.
+ */
+lfio_status lfio__h5_create_dataset(const char *path, const char *gobj, hid_t g,
+                                    const lfio__h5_layout *l, hid_t *out);
+
+/*
+ * Opens dataset l of group g (gobj) with access list dapl (or the default
+ * when negative) and checks its class, element size, rank, dims, units and
+ * axes without reading data; source says in messages where the expected
+ * dims came from ("the slab's attributes").
+ * @return LFIO_OK and *out open if out is not NULL; LFIO_ERR_FORMAT.
+ */
+lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, const lfio__h5_layout *l,
+                                   const char *source, hid_t dapl, hid_t *out);
+
+/*
+ * Transfers the hyperslab [start, start+count) of dset to or from buf (packed,
+ * row-major) as memory type mtype; an empty hyperslab transfers nothing.
+ * @return LFIO_OK; LFIO_ERR_IO or LFIO_ERR_CHECKSUM with the message set.
+ */
+lfio_status lfio__h5_xfer(const char *path, const char *obj, hid_t dset, int write, hid_t mtype,
+                          int rank, const hsize_t *start, const hsize_t *count, void *buf);
+
+/* ----------------------------------------------------------------- files */
+
+/* Fills the open, empty file with its content. @return LFIO_OK or an error with the message set. */
+typedef lfio_status (*lfio__h5_fill_fn)(const char *path, hid_t file, const void *content);
+
+/*
+ * Writes a file atomically: fill() builds it in memory (HDF5's core driver,
+ * 1.10 object formats, strong close), the bytes go to a temporary beside
+ * path, which is fsynced and renamed over path, then the folder is fsynced.
+ * On failure path is untouched and the temporary removed. Silences HDF5.
+ * @return LFIO_OK; the status of fill(); LFIO_ERR_IO; LFIO_ERR_NOMEM.
+ */
+lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const void *content);
+
+/*
+ * Checks that path is a readable regular HDF5 file, then opens it read-only
+ * with strong close. Does not silence HDF5.
+ * @return LFIO_OK and *file; LFIO_ERR_NOTFOUND, LFIO_ERR_IO or LFIO_ERR_FORMAT with *file = -1.
+ */
+lfio_status lfio__h5_open_read(const char *path, hid_t *file);
+
+#endif /* LFIO_H5UTIL_H */

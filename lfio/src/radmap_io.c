@@ -1,0 +1,659 @@
+/*
+ * radmap_io.c - radiance-map files (lfio/radmap.h; docs/format.md,
+ * "Radiance-map files"): the atomic writer and the validating reader.
+ *
+ * Invariants:
+ *   - The layout of every dataset of a patch (name, type, shape, chunks,
+ *     units, axes, compression) comes from one table, map_datasets[], through
+ *     patch_layout(): the writer creates what the reader checks.
+ *   - One function, check_patch(), judges a patch's values. The writer
+ *     refuses (LFIO_ERR_ARG) exactly what the reader refuses
+ *     (LFIO_ERR_FORMAT), so every file written reads back.
+ *   - The reader allocates nothing from a number found in a file before
+ *     checking it: patch storage grows one validated group at a time, the
+ *     vertex and cell counts are bounded (per patch and, for cells, over the
+ *     file) and every dataset's type and shape are checked before any array
+ *     is allocated.
+ *   - Every public entry point silences HDF5 for its whole duration; the
+ *     HDF5 plumbing (errors, attributes, layouts, atomic writes) is shared
+ *     with light field files through h5util.h.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "h5util.h"
+#include "internal.h"
+#include "lfio/radmap.h"
+
+#define FORMAT_NAME "ilfkit-radiance-maps"
+#define FORMAT_VERSION 1
+/* Rows per chunk: a few hundred KiB of cells, a whole polygon of vertices. */
+#define CELL_CHUNK 16384
+#define VERTEX_CHUNK 1024
+/* Tolerance on the map frame's unit, orthogonal, right-handed axes. */
+#define FRAME_TOL 1e-6
+
+/* ------------------------------------------------------------- dataset layouts */
+
+/* The datasets of a patch, in file order. */
+enum map_ds { MAP_VERTICES, MAP_CELL_IJ, MAP_CELL_AREA, MAP_CELL_CENTRE, MAP_IRRADIANCE, MAP_RADIOSITY,
+              MAP_DS_COUNT };
+
+/* What one dataset of a patch holds; its rows are vertices or cells. */
+struct map_dataset {
+    const char *name;
+    int width;          /* values per row; 0 for a 1-D dataset */
+    H5T_class_t cls;    /* H5T_FLOAT or H5T_INTEGER (unsigned) */
+    size_t size;        /* bytes per value in the file and in memory */
+    const char *units;
+    const char *axes;
+    int per_vertex;     /* rows are vertices (else cells) */
+    int deflate;
+};
+
+static const struct map_dataset map_datasets[MAP_DS_COUNT] = {
+    {"vertices", 3, H5T_FLOAT, 8, "m", "vertex:xyz", 1, 0},
+    {"cell_ij", 2, H5T_INTEGER, 4, "1", "cell:ij", 0, 1},
+    {"cell_area", 0, H5T_FLOAT, 8, "m^2", "cell", 0, 1},
+    {"cell_centre", 3, H5T_FLOAT, 8, "m", "cell:xyz", 0, 1},
+    {"irradiance", 3, H5T_FLOAT, 4, "W m^-2", "cell:rgb", 0, 1},
+    {"radiosity", 3, H5T_FLOAT, 4, "W m^-2", "cell:rgb", 0, 1},
+};
+
+/* @return the smaller of a and b, but at least 1 (a chunk is never empty). */
+static hsize_t chunk_rows(hsize_t rows, hsize_t limit)
+{
+    hsize_t c = rows < limit ? rows : limit;
+    return c > 0 ? c : 1;
+}
+
+/* Fills *l with the layout of dataset which of a patch with nverts vertices and ncells cells. */
+static void patch_layout(enum map_ds which, uint32_t nverts, uint32_t ncells, lfio__h5_layout *l)
+{
+    const struct map_dataset *m = &map_datasets[which];
+    const hsize_t rows = m->per_vertex ? nverts : ncells;
+    memset(l, 0, sizeof *l);
+    snprintf(l->name, sizeof l->name, "%s", m->name);
+    l->rank = m->width ? 2 : 1;
+    l->dims[0] = rows;
+    l->chunk[0] = chunk_rows(rows, m->per_vertex ? VERTEX_CHUNK : CELL_CHUNK);
+    if (m->width) {
+        l->dims[1] = (hsize_t)m->width;
+        l->chunk[1] = (hsize_t)m->width;
+    }
+    l->cls = m->cls;
+    l->size = m->size;
+    l->units = m->units;
+    l->axes = m->axes;
+    l->deflate = m->deflate;
+}
+
+/* @return the native memory type of dataset which. */
+static hid_t memory_type(enum map_ds which)
+{
+    const struct map_dataset *m = &map_datasets[which];
+    if (m->cls == H5T_INTEGER)
+        return H5T_NATIVE_UINT32;
+    return m->size == 4 ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE;
+}
+
+/* @return the number of values dataset which holds for patch p. */
+static size_t value_count(enum map_ds which, const lfio_radmap_patch *p)
+{
+    const struct map_dataset *m = &map_datasets[which];
+    size_t rows = m->per_vertex ? p->nverts : p->ncells;
+    return rows * (size_t)(m->width ? m->width : 1);
+}
+
+/* @return patch p's array for dataset which (borrowed). */
+static const void *patch_array(const lfio_radmap_patch *p, enum map_ds which)
+{
+    switch (which) {
+    case MAP_VERTICES: return p->vertices;
+    case MAP_CELL_IJ: return p->cell_ij;
+    case MAP_CELL_AREA: return p->cell_area;
+    case MAP_CELL_CENTRE: return p->cell_centre;
+    case MAP_IRRADIANCE: return p->irradiance;
+    case MAP_RADIOSITY: return p->radiosity;
+    case MAP_DS_COUNT: break;
+    }
+    return NULL;
+}
+
+/* ---------------------------------------------------------------- checking */
+
+/* @return 1 if all count values of v are finite. */
+static int all_finite(const double *v, size_t count)
+{
+    for (size_t k = 0; k < count; k++)
+        if (!isfinite(v[k]))
+            return 0;
+    return 1;
+}
+
+/* @return a . b */
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* Checks that e1, e2 are unit and orthogonal and normal = e1 x e2. @return 1, or 0 with a reason in why. */
+static int check_frame(const lfio_radmap_patch *p, char *why, size_t why_size)
+{
+    const double cross[3] = {p->e1[1] * p->e2[2] - p->e1[2] * p->e2[1],
+                             p->e1[2] * p->e2[0] - p->e1[0] * p->e2[2],
+                             p->e1[0] * p->e2[1] - p->e1[1] * p->e2[0]};
+    if (!all_finite(p->origin, 3) || !all_finite(p->e1, 3) || !all_finite(p->e2, 3) || !all_finite(p->normal, 3))
+        snprintf(why, why_size, "map frame is not finite");
+    else if (fabs(dot3(p->e1, p->e1) - 1) > FRAME_TOL || fabs(dot3(p->e2, p->e2) - 1) > FRAME_TOL)
+        snprintf(why, why_size, "e1 and e2 must be unit vectors");
+    else if (fabs(dot3(p->e1, p->e2)) > FRAME_TOL)
+        snprintf(why, why_size, "e1 and e2 are not orthogonal (e1.e2 = %g)", dot3(p->e1, p->e2));
+    else if (fabs(p->normal[0] - cross[0]) + fabs(p->normal[1] - cross[1]) + fabs(p->normal[2] - cross[2])
+             > FRAME_TOL)
+        snprintf(why, why_size, "normal is not e1 x e2");
+    else
+        return 1;
+    return 0;
+}
+
+/* @return 1 if every albedo channel is in [0, 1] and every emission channel finite and >= 0. */
+static int material_valid(const lfio_radmap_patch *p)
+{
+    for (int c = 0; c < 3; c++)
+        if (!(p->albedo[c] >= 0 && p->albedo[c] <= 1) || !(p->emission[c] >= 0 && isfinite(p->emission[c])))
+            return 0;
+    return 1;
+}
+
+/* Checks the scalars of p: label, counts, grid and material. @return 1, or 0 with a reason in why. */
+static int check_patch_scalars(const lfio_radmap_patch *p, char *why, size_t why_size)
+{
+    if (p->label == NULL || strlen(p->label) > LFIO_RADMAP_TEXT_MAX)
+        snprintf(why, why_size, "label is missing or longer than %u bytes", LFIO_RADMAP_TEXT_MAX);
+    else if (p->nverts < 3 || p->nverts > LFIO_RADMAP_MAX_VERTS)
+        snprintf(why, why_size, "%u vertices, expected 3 to %u", p->nverts, LFIO_RADMAP_MAX_VERTS);
+    else if (!(isfinite(p->cell_size) && p->cell_size > 0) || !isfinite(p->u0) || !isfinite(p->v0))
+        snprintf(why, why_size, "cell_size must be finite and > 0, u0 and v0 finite");
+    else if ((uint64_t)p->ncells > (uint64_t)p->nu * p->nv)
+        snprintf(why, why_size, "%u cells in a grid of %u x %u", p->ncells, p->nu, p->nv);
+    else if (!check_frame(p, why, why_size))
+        return 0;
+    else if (!material_valid(p))
+        snprintf(why, why_size, "albedo must be in [0, 1] and emission finite and >= 0");
+    else
+        return 1;
+    return 0;
+}
+
+/* Checks the arrays of p (present, finite, in range). @return 1, or 0 with a reason in why. */
+static int check_patch_arrays(const lfio_radmap_patch *p, char *why, size_t why_size)
+{
+    for (int k = 0; k < MAP_DS_COUNT; k++)
+        if (value_count((enum map_ds)k, p) > 0 && patch_array(p, (enum map_ds)k) == NULL) {
+            snprintf(why, why_size, "%s is NULL", map_datasets[k].name);
+            return 0;
+        }
+    if (!all_finite(p->vertices, 3 * (size_t)p->nverts)) {
+        snprintf(why, why_size, "vertices are not finite");
+        return 0;
+    }
+    for (uint32_t c = 0; c < p->ncells; c++) {
+        const uint32_t i = p->cell_ij[2 * c], j = p->cell_ij[2 * c + 1];
+        const double area = p->cell_area[c];
+        if (i >= p->nu || j >= p->nv)
+            snprintf(why, why_size, "cell %u: (i, j) = (%u, %u) outside the %u x %u grid", c, i, j, p->nu, p->nv);
+        else if (!(isfinite(area) && area > 0))
+            snprintf(why, why_size, "cell %u: area %g is not finite and > 0", c, area);
+        else if (!all_finite(p->cell_centre + 3 * (size_t)c, 3))
+            snprintf(why, why_size, "cell %u: centre is not finite", c);
+        else
+            continue;
+        return 0;
+    }
+    const size_t n = 3 * (size_t)p->ncells;
+    size_t bad = lfio__first_bad_value(p->irradiance, n);
+    const char *name = "irradiance";
+    if (bad == n) {
+        bad = lfio__first_bad_value(p->radiosity, n);
+        name = "radiosity";
+    }
+    if (bad == n)
+        return 1;
+    const float value = name[0] == 'i' ? p->irradiance[bad] : p->radiosity[bad];
+    snprintf(why, why_size, "%s of cell %zu is %g, expected finite and >= 0", name, bad / 3, (double)value);
+    return 0;
+}
+
+/* Checks everything about patch p. @return 1, or 0 with a reason in why. */
+static int check_patch(const lfio_radmap_patch *p, char *why, size_t why_size)
+{
+    return check_patch_scalars(p, why, why_size) && check_patch_arrays(p, why, why_size);
+}
+
+/* ----------------------------------------------------------------- writing */
+
+/* What lfio_radmap_write() puts in a file. */
+struct map_content {
+    const char *creator;
+    const char *scene;
+    const lfio_radmap_patch *patches;
+    size_t count;
+};
+
+/* Writes the attributes of patch group g (obj) describing p. */
+static lfio_status write_patch_attrs(const char *path, const char *obj, hid_t g, const lfio_radmap_patch *p)
+{
+    const struct {
+        const char *name;
+        const double *value;
+        hsize_t count;
+    } doubles[] = {{"origin", p->origin, 3}, {"e1", p->e1, 3}, {"e2", p->e2, 3}, {"normal", p->normal, 3},
+                   {"cell_size", &p->cell_size, 0}, {"u0", &p->u0, 0}, {"v0", &p->v0, 0}};
+    const struct {
+        const char *name;
+        const uint32_t *value;
+    } counts[] = {{"polygon", &p->polygon}, {"nu", &p->nu}, {"nv", &p->nv}};
+    lfio_status st = lfio__h5_put_str_attr(path, obj, g, "label", p->label);
+    for (size_t k = 0; st == LFIO_OK && k < sizeof counts / sizeof counts[0]; k++)
+        st = lfio__h5_put_num_attr(path, obj, g, counts[k].name, H5T_STD_U32LE, H5T_NATIVE_UINT32, 0,
+                                   counts[k].value);
+    for (size_t k = 0; st == LFIO_OK && k < sizeof doubles / sizeof doubles[0]; k++)
+        st = lfio__h5_put_num_attr(path, obj, g, doubles[k].name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
+                                   doubles[k].count, doubles[k].value);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_str_attr(path, obj, g, "length_units", "m");
+    if (st == LFIO_OK)
+        st = lfio__h5_put_num_attr(path, obj, g, "albedo", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, 3, p->albedo);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_num_attr(path, obj, g, "emission", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, 3, p->emission);
+    return st;
+}
+
+/* Writes patch p as group /patches/k of the file whose "patches" group is patches. */
+static lfio_status write_patch(const char *path, hid_t patches, size_t k, const lfio_radmap_patch *p)
+{
+    char obj[64], name[24];
+    snprintf(name, sizeof name, "%zu", k);
+    snprintf(obj, sizeof obj, "/patches/%zu", k);
+    hid_t g = H5Gcreate2(patches, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (g < 0)
+        return lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot create group");
+    lfio_status st = write_patch_attrs(path, obj, g, p);
+    for (int t = 0; st == LFIO_OK && t < MAP_DS_COUNT; t++) {
+        lfio__h5_layout lay;
+        hid_t d;
+        char dobj[128];
+        patch_layout((enum map_ds)t, p->nverts, p->ncells, &lay);
+        snprintf(dobj, sizeof dobj, "%.63s/%s", obj, lay.name);
+        st = lfio__h5_create_dataset(path, obj, g, &lay, &d);
+        if (st != LFIO_OK)
+            break;
+        const hsize_t zero[2] = {0, 0};
+        st = lfio__h5_xfer(path, dobj, d, 1, memory_type((enum map_ds)t), lay.rank, zero, lay.dims,
+                           (void *)patch_array(p, (enum map_ds)t));
+        /* Closing flushes the chunk cache: the last chunks reach the file only here. */
+        if (H5Dclose(d) < 0 && st == LFIO_OK)
+            st = lfio__h5_fail(LFIO_ERR_IO, path, dobj, "cannot flush dataset");
+    }
+    if (H5Gclose(g) < 0 && st == LFIO_OK)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot close group");
+    return st;
+}
+
+/* Writes the root attributes and every patch of the map content into the open, empty file. */
+static lfio_status write_contents(const char *path, hid_t file, const void *content)
+{
+    const struct map_content *c = content;
+    const int32_t version = FORMAT_VERSION;
+    const uint32_t count = (uint32_t)c->count;
+    lfio_status st = lfio__h5_put_str_attr(path, "/", file, "format", FORMAT_NAME);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_num_attr(path, "/", file, "format_version", H5T_STD_I32LE, H5T_NATIVE_INT32, 0,
+                                   &version);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_str_attr(path, "/", file, "creator", c->creator);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_str_attr(path, "/", file, "scene", c->scene);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_num_attr(path, "/", file, "patch_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0, &count);
+    if (st != LFIO_OK)
+        return st;
+    hid_t patches = H5Gcreate2(file, "patches", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (patches < 0)
+        return lfio__h5_fail(LFIO_ERR_IO, path, "/patches", "cannot create group");
+    for (size_t k = 0; st == LFIO_OK && k < c->count; k++)
+        st = write_patch(path, patches, k, &c->patches[k]);
+    lfio__h5_close(patches);
+    return st;
+}
+
+/* Checks every argument of lfio_radmap_write() as the reader would check the file. */
+static lfio_status check_write_args(const char *path, const struct map_content *c)
+{
+    if (c->count > 0 && c->patches == NULL)
+        return lfio__fail(LFIO_ERR_ARG, "%s: NULL patches", path);
+    if (c->count > LFIO_RADMAP_MAX_PATCHES)
+        return lfio__fail(LFIO_ERR_ARG, "%s: %zu patches, at most %u allowed", path, c->count,
+                          LFIO_RADMAP_MAX_PATCHES);
+    if (strlen(c->creator) > LFIO_RADMAP_TEXT_MAX || strlen(c->scene) > LFIO_RADMAP_TEXT_MAX)
+        return lfio__fail(LFIO_ERR_ARG, "%s: creator or scene longer than %u bytes", path, LFIO_RADMAP_TEXT_MAX);
+    uint64_t cells = 0;
+    for (size_t k = 0; k < c->count; k++) {
+        const lfio_radmap_patch *p = &c->patches[k];
+        char why[256];
+        if (!check_patch(p, why, sizeof why))
+            return lfio__fail(LFIO_ERR_ARG, "%s: patch %zu (%s): %s", path, k, p->label ? p->label : "no label",
+                              why);
+        cells += p->ncells;
+    }
+    if (cells > LFIO_RADMAP_MAX_CELLS)
+        return lfio__fail(LFIO_ERR_ARG, "%s: %llu cells, at most %llu allowed", path, (unsigned long long)cells,
+                          (unsigned long long)LFIO_RADMAP_MAX_CELLS);
+    return LFIO_OK;
+}
+
+/* Checks the arguments, then writes the file with lfio__h5_write_atomic(). */
+lfio_status lfio_radmap_write(const char *path, const char *creator, const char *scene,
+                              const lfio_radmap_patch *patches, size_t count)
+{
+    if (path == NULL || path[0] == '\0')
+        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_write: NULL or empty path");
+    const struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", patches,
+                                  count};
+    lfio_status st = check_write_args(path, &c);
+    return st == LFIO_OK ? lfio__h5_write_atomic(path, write_contents, &c) : st;
+}
+
+/* ----------------------------------------------------------------- reading */
+
+/* One patch as read: its arrays (owned) and the description pointing into them. */
+struct map_patch {
+    char *label;
+    void *data[MAP_DS_COUNT]; /* NULL for an empty dataset */
+    lfio_radmap_patch pub;
+};
+
+struct lfio_radmap {
+    char *creator;
+    char *scene;
+    size_t count;             /* patches read so far; all of them once returned */
+    size_t capacity;
+    struct map_patch *patches;
+    uint64_t cells;           /* over all patches read, <= LFIO_RADMAP_MAX_CELLS */
+};
+
+/* Frees one patch's arrays and label. */
+static void patch_free(struct map_patch *mp)
+{
+    for (int t = 0; t < MAP_DS_COUNT; t++)
+        free(mp->data[t]);
+    free(mp->label);
+}
+
+/* Frees map and everything it owns; NULL is a no-op. */
+static void map_free(lfio_radmap *map)
+{
+    if (map == NULL)
+        return;
+    for (size_t k = 0; k < map->count; k++)
+        patch_free(&map->patches[k]);
+    free(map->patches);
+    free(map->creator);
+    free(map->scene);
+    free(map);
+}
+
+/* Reads and checks the root attributes into map. @return LFIO_OK and *count, the number of patches. */
+static lfio_status read_root(const char *path, hid_t file, lfio_radmap *map, size_t *count)
+{
+    int64_t version = 0, n = 0;
+    lfio_status st = lfio__h5_expect_str_attr(path, "/", file, "format", FORMAT_NAME);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_int_attr(path, "/", file, "format_version", INT32_MIN, INT32_MAX, &version);
+    if (st == LFIO_OK && version > FORMAT_VERSION)
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: /: format_version %lld is newer than this library reads (version %d)",
+                        path, (long long)version, FORMAT_VERSION);
+    if (st == LFIO_OK && version < 1)
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: /: invalid format_version %lld", path, (long long)version);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_str_attr(path, "/", file, "creator", LFIO_RADMAP_TEXT_MAX, &map->creator);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_str_attr(path, "/", file, "scene", LFIO_RADMAP_TEXT_MAX, &map->scene);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_int_attr(path, "/", file, "patch_count", 0, LFIO_RADMAP_MAX_PATCHES, &n);
+    *count = (size_t)n;
+    return st;
+}
+
+/* Reads count finite doubles of float attribute name of g into float out. */
+static lfio_status get_f32x3_attr(const char *path, const char *obj, hid_t g, const char *name, float out[3])
+{
+    double v[3];
+    lfio_status st = lfio__h5_get_f64_attr(path, obj, g, name, 3, v);
+    for (int c = 0; st == LFIO_OK && c < 3; c++)
+        out[c] = (float)v[c];
+    return st;
+}
+
+/* Reads the attributes of patch group g (obj) into mp (label and scalars). */
+static lfio_status read_patch_attrs(const char *path, const char *obj, hid_t g, struct map_patch *mp)
+{
+    lfio_radmap_patch *p = &mp->pub;
+    int64_t polygon = 0, nu = 0, nv = 0;
+    lfio_status st = lfio__h5_get_str_attr(path, obj, g, "label", LFIO_RADMAP_TEXT_MAX, &mp->label);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_int_attr(path, obj, g, "polygon", 0, UINT32_MAX, &polygon);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_int_attr(path, obj, g, "nu", 0, UINT32_MAX, &nu);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_int_attr(path, obj, g, "nv", 0, UINT32_MAX, &nv);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_f64_attr(path, obj, g, "origin", 3, p->origin);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_f64_attr(path, obj, g, "e1", 3, p->e1);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_f64_attr(path, obj, g, "e2", 3, p->e2);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_f64_attr(path, obj, g, "normal", 3, p->normal);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_f64_attr(path, obj, g, "cell_size", 1, &p->cell_size);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_f64_attr(path, obj, g, "u0", 1, &p->u0);
+    if (st == LFIO_OK)
+        st = lfio__h5_get_f64_attr(path, obj, g, "v0", 1, &p->v0);
+    if (st == LFIO_OK)
+        st = lfio__h5_expect_str_attr(path, obj, g, "length_units", "m");
+    if (st == LFIO_OK)
+        st = get_f32x3_attr(path, obj, g, "albedo", p->albedo);
+    if (st == LFIO_OK)
+        st = get_f32x3_attr(path, obj, g, "emission", p->emission);
+    p->label = mp->label;
+    p->polygon = (uint32_t)polygon;
+    p->nu = (uint32_t)nu;
+    p->nv = (uint32_t)nv;
+    return st;
+}
+
+/* @return the length of the first axis of dataset name of g; 0 if it is missing or not an array
+ * (the full check reports that). */
+static hsize_t first_axis_length(hid_t g, const char *name)
+{
+    hsize_t dims[H5S_MAX_RANK] = {0};
+    if (H5Lexists(g, name, H5P_DEFAULT) <= 0)
+        return 0;
+    hid_t d = H5Dopen2(g, name, H5P_DEFAULT);
+    hid_t space = d < 0 ? -1 : H5Dget_space(d);
+    int rank = space < 0 ? -1 : H5Sget_simple_extent_ndims(space);
+    if (rank < 1 || rank > H5S_MAX_RANK || H5Sget_simple_extent_dims(space, dims, NULL) < 0)
+        dims[0] = 0;
+    lfio__h5_close(space);
+    lfio__h5_close(d);
+    return dims[0];
+}
+
+/* Finds the patch's vertex and cell counts from vertices and cell_ij and checks them against the limits. */
+static lfio_status read_patch_counts(const char *path, const char *obj, hid_t g, const lfio_radmap *map,
+                                     lfio_radmap_patch *p)
+{
+    const hsize_t nverts = first_axis_length(g, "vertices"), ncells = first_axis_length(g, "cell_ij");
+    if (nverts > LFIO_RADMAP_MAX_VERTS)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s/vertices: %llu vertices, at most %u allowed", path, obj,
+                          (unsigned long long)nverts, LFIO_RADMAP_MAX_VERTS);
+    if (ncells > (hsize_t)p->nu * p->nv)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s/cell_ij: %llu cells in a grid of %u x %u", path, obj,
+                          (unsigned long long)ncells, p->nu, p->nv);
+    if (ncells > LFIO_RADMAP_MAX_CELLS - map->cells)
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: %s/cell_ij: %llu more cells exceed the limit of %llu per file", path,
+                          obj, (unsigned long long)ncells, (unsigned long long)LFIO_RADMAP_MAX_CELLS);
+    p->nverts = (uint32_t)nverts;
+    p->ncells = (uint32_t)ncells;
+    return LFIO_OK;
+}
+
+/* Checks every dataset of patch group g against its layout, then reads each into a new array of mp. */
+static lfio_status read_patch_data(const char *path, const char *obj, hid_t g, struct map_patch *mp)
+{
+    lfio_radmap_patch *p = &mp->pub;
+    lfio__h5_layout lay[MAP_DS_COUNT];
+    hid_t dset[MAP_DS_COUNT];
+    lfio_status st = LFIO_OK;
+    for (int t = 0; t < MAP_DS_COUNT; t++) {
+        dset[t] = -1;
+        patch_layout((enum map_ds)t, p->nverts, p->ncells, &lay[t]);
+        const char *source = map_datasets[t].per_vertex ? "the length of vertices" : "the length of cell_ij";
+        if (st == LFIO_OK)
+            st = lfio__h5_check_dataset(path, obj, g, &lay[t], source, -1, &dset[t]);
+    }
+    for (int t = 0; st == LFIO_OK && t < MAP_DS_COUNT; t++) {
+        const size_t bytes = value_count((enum map_ds)t, p) * map_datasets[t].size;
+        char dobj[128];
+        snprintf(dobj, sizeof dobj, "%.63s/%s", obj, map_datasets[t].name);
+        if (bytes > 0 && (mp->data[t] = malloc(bytes)) == NULL)
+            st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, dobj);
+        const hsize_t zero[2] = {0, 0};
+        if (st == LFIO_OK)
+            st = lfio__h5_xfer(path, dobj, dset[t], 0, memory_type((enum map_ds)t), lay[t].rank, zero, lay[t].dims,
+                               mp->data[t]);
+    }
+    for (int t = 0; t < MAP_DS_COUNT; t++)
+        lfio__h5_close(dset[t]);
+    p->vertices = mp->data[MAP_VERTICES];
+    p->cell_ij = mp->data[MAP_CELL_IJ];
+    p->cell_area = mp->data[MAP_CELL_AREA];
+    p->cell_centre = mp->data[MAP_CELL_CENTRE];
+    p->irradiance = mp->data[MAP_IRRADIANCE];
+    p->radiosity = mp->data[MAP_RADIOSITY];
+    return st;
+}
+
+/* Reads patch group /patches/k into a new entry of map, checking it completely. */
+static lfio_status read_patch(const char *path, hid_t patches, size_t k, lfio_radmap *map)
+{
+    char obj[64], name[24];
+    snprintf(name, sizeof name, "%zu", k);
+    snprintf(obj, sizeof obj, "/patches/%zu", k);
+    if (H5Lexists(patches, name, H5P_DEFAULT) <= 0)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: missing patch group", path, obj);
+    if (map->count == map->capacity) {
+        size_t grown = map->capacity ? 2 * map->capacity : 16;
+        struct map_patch *more = realloc(map->patches, grown * sizeof *more);
+        if (more == NULL)
+            return lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, obj);
+        map->patches = more;
+        map->capacity = grown;
+    }
+    struct map_patch *mp = &map->patches[map->count++]; /* counted now, so map_free() releases it */
+    memset(mp, 0, sizeof *mp);
+    hid_t g = H5Gopen2(patches, name, H5P_DEFAULT);
+    if (g < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a group");
+    lfio_status st = read_patch_attrs(path, obj, g, mp);
+    if (st == LFIO_OK)
+        st = read_patch_counts(path, obj, g, map, &mp->pub);
+    if (st == LFIO_OK)
+        st = read_patch_data(path, obj, g, mp);
+    lfio__h5_close(g);
+    char why[256];
+    if (st == LFIO_OK && !check_patch(&mp->pub, why, sizeof why))
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: %s", path, obj, why);
+    if (st == LFIO_OK)
+        map->cells += mp->pub.ncells;
+    return st;
+}
+
+/* lfio_radmap_read() without silencing HDF5. */
+static lfio_status radmap_read_impl(const char *path, lfio_radmap **out)
+{
+    hid_t file = -1, patches = -1;
+    size_t count = 0;
+    lfio_radmap *map = calloc(1, sizeof *map);
+    lfio_status st = map ? lfio__h5_open_read(path, &file) : lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
+    if (st == LFIO_OK)
+        st = read_root(path, file, map, &count);
+    if (st == LFIO_OK && H5Lexists(file, "patches", H5P_DEFAULT) <= 0)
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches: missing group", path);
+    if (st == LFIO_OK && (patches = H5Gopen2(file, "patches", H5P_DEFAULT)) < 0)
+        st = lfio__h5_fail(LFIO_ERR_FORMAT, path, "/patches", "cannot open as a group");
+    for (size_t k = 0; st == LFIO_OK && k < count; k++)
+        st = read_patch(path, patches, k, map);
+    lfio__h5_close(patches);
+    lfio__h5_close(file);
+    if (st != LFIO_OK)
+        map_free(map);
+    else
+        *out = map;
+    return st;
+}
+
+/* Reads path whole (see radmap_read_impl()), silently. */
+lfio_status lfio_radmap_read(const char *path, lfio_radmap **out)
+{
+    if (out == NULL)
+        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_read: NULL argument");
+    *out = NULL;
+    if (path == NULL || path[0] == '\0')
+        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_read: NULL or empty path");
+    lfio__h5_quiet q;
+    lfio__h5_quiet_begin(&q);
+    lfio_status st = radmap_read_impl(path, out);
+    lfio__h5_quiet_end(&q);
+    return st;
+}
+
+/* Frees map; NULL is a no-op. */
+void lfio_radmap_destroy(lfio_radmap *map)
+{
+    map_free(map);
+}
+
+/* @return the number of patches; 0 for NULL. */
+size_t lfio_radmap_count(const lfio_radmap *map)
+{
+    return map ? map->count : 0;
+}
+
+/* Copies patch k's description, whose pointers stay owned by map. */
+lfio_status lfio_radmap_get(const lfio_radmap *map, size_t k, lfio_radmap_patch *out)
+{
+    if (map == NULL || out == NULL)
+        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_get: NULL argument");
+    if (k >= map->count)
+        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_get: patch %zu out of range (%zu patches)", k, map->count);
+    *out = map->patches[k].pub;
+    return LFIO_OK;
+}
+
+/* @return the stored creator; "" for NULL. */
+const char *lfio_radmap_creator(const lfio_radmap *map)
+{
+    return map ? map->creator : "";
+}
+
+/* @return the stored scene path; "" for NULL. */
+const char *lfio_radmap_scene(const lfio_radmap *map)
+{
+    return map ? map->scene : "";
+}

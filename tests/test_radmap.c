@@ -1,0 +1,559 @@
+/*
+ * test_radmap.c - radiance-map files (lfio/radmap.h, lfio/src/radmap_io.c):
+ * round trips (with an empty patch, an empty file and a patch spanning
+ * several chunks), the writer's refusals, atomic writes, and every way a
+ * file can be bad.
+ *
+ * Bad files are made by writing a good file with lfio and changing one
+ * thing with the HDF5 API, or by truncating it or flipping one byte of a
+ * chunk. Each failure must give the expected status and a message naming
+ * the file (and the object where one is given), leave the output NULL and
+ * print nothing: HDF5's error printer stays on in this program and stderr
+ * is captured around each lfio call to prove that lfio silences it.
+ *
+ * Files go to $ILF_TEST_TMP/radmap (or /tmp/radmap).
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <hdf5.h>
+
+#include "check.h"
+#include "lfio/radmap.h"
+
+static char tmpdir[400];
+
+/* ------------------------------------------------------------------ files */
+
+/* Writes tmpdir/name into buf. @return buf. */
+static char *tmp_path(char *buf, size_t size, const char *name)
+{
+    snprintf(buf, size, "%s/%s", tmpdir, name);
+    return buf;
+}
+
+/* Reads a whole file. @return a malloc'd buffer and *size, or NULL. */
+static unsigned char *read_whole(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *buf = NULL;
+    long len = -1;
+    if (f && fseek(f, 0, SEEK_END) == 0 && (len = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0
+        && (buf = malloc((size_t)len + 1)) != NULL && fread(buf, 1, (size_t)len, f) != (size_t)len) {
+        free(buf);
+        buf = NULL;
+    }
+    if (f)
+        fclose(f);
+    *size = len > 0 ? (size_t)len : 0;
+    return buf;
+}
+
+/* Replaces path with size bytes of data. @return 1 on success. */
+static int write_whole(const char *path, const void *data, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    int ok = f && fwrite(data, 1, size, f) == size;
+    return f && fclose(f) == 0 && ok;
+}
+
+/* Makes tmpdir/name a copy of src. @return its path in buf. */
+static char *copy_to(char *buf, size_t size, const char *src, const char *name)
+{
+    size_t n;
+    unsigned char *data = read_whole(src, &n);
+    tmp_path(buf, size, name);
+    CHECK(data && write_whole(buf, data, n), "copy %s to %s", src, buf);
+    free(data);
+    return buf;
+}
+
+/* Removes every file of tmpdir; with only_temporaries, counts the ".tmp-" ones instead. @return that count. */
+static int sweep_tmpdir(int only_temporaries)
+{
+    DIR *dir = opendir(tmpdir);
+    int count = 0;
+    for (struct dirent *e; dir && (e = readdir(dir)) != NULL;) {
+        char p[768];
+        if (only_temporaries)
+            count += strstr(e->d_name, ".tmp-") != NULL;
+        else if (e->d_name[0] != '.')
+            unlink((snprintf(p, sizeof p, "%s/%s", tmpdir, e->d_name), p));
+    }
+    if (dir)
+        closedir(dir);
+    return count;
+}
+
+/* stderr redirection around lfio calls: they must print nothing. */
+static int saved_stderr = -1, capture_fd = -1;
+
+/* Sends stderr to a scratch file. */
+static void quiet_start(void)
+{
+    char p[512];
+    fflush(stderr);
+    saved_stderr = dup(2);
+    capture_fd = open(tmp_path(p, sizeof p, "stderr.txt"), O_CREAT | O_TRUNC | O_RDWR, 0644);
+    dup2(capture_fd, 2);
+}
+
+/* Restores stderr. @return the number of bytes written to it meanwhile. */
+static long quiet_stop(void)
+{
+    fflush(stderr);
+    long bytes = (long)lseek(capture_fd, 0, SEEK_END);
+    dup2(saved_stderr, 2);
+    close(saved_stderr);
+    close(capture_fd);
+    return bytes;
+}
+
+/* ---------------------------------------------------------------- patches */
+
+/* A patch and the arrays it borrows. */
+struct test_patch {
+    lfio_radmap_patch p;
+    double vertices[4][3];
+    uint32_t *ij;
+    double *area, *centre;
+    float *irradiance, *radiosity;
+};
+
+/*
+ * Builds a square polygon of side `side` in the plane z = height facing +z,
+ * gridded at cell_size, keeping only cells whose index sum is not divisible by
+ * skip (skip 0: keep all; a huge grid with few cells also works). Values
+ * are deterministic functions of the cell.
+ */
+static void make_patch(struct test_patch *t, const char *label, uint32_t polygon, double side, double height,
+                       double cell_size, uint32_t skip)
+{
+    memset(t, 0, sizeof *t);
+    lfio_radmap_patch *p = &t->p;
+    const double corners[4][2] = {{0, 0}, {side, 0}, {side, side}, {0, side}};
+    for (int v = 0; v < 4; v++) {
+        t->vertices[v][0] = corners[v][0];
+        t->vertices[v][1] = corners[v][1];
+        t->vertices[v][2] = height;
+    }
+    p->label = label;
+    p->polygon = polygon;
+    p->nverts = 4;
+    p->vertices = &t->vertices[0][0];
+    p->origin[2] = height;
+    p->e1[0] = 1, p->e2[1] = 1, p->normal[2] = 1;
+    p->cell_size = cell_size;
+    p->u0 = p->v0 = 0;
+    p->nu = p->nv = (uint32_t)lround(side / cell_size);
+    uint32_t total = p->nu * p->nv;
+    t->ij = malloc(2 * (size_t)total * sizeof *t->ij);
+    t->area = malloc((size_t)total * sizeof *t->area);
+    t->centre = malloc(3 * (size_t)total * sizeof *t->centre);
+    t->irradiance = malloc(3 * (size_t)total * sizeof *t->irradiance);
+    t->radiosity = malloc(3 * (size_t)total * sizeof *t->radiosity);
+    for (uint32_t j = 0; j < p->nv; j++)
+        for (uint32_t i = 0; i < p->nu; i++) {
+            if (skip && (i + j) % skip == 0)
+                continue;
+            uint32_t c = p->ncells++;
+            t->ij[2 * c] = i, t->ij[2 * c + 1] = j;
+            t->area[c] = cell_size * cell_size * (1.0 - 0.25 * ((i * 7 + j) % 3) / 2.0);
+            t->centre[3 * c] = (i + 0.5) * cell_size, t->centre[3 * c + 1] = (j + 0.5) * cell_size;
+            t->centre[3 * c + 2] = height;
+            for (int k = 0; k < 3; k++) {
+                t->irradiance[3 * c + k] = (float)(1.0 + 0.001 * c + 0.5 * k);
+                t->radiosity[3 * c + k] = 0.5f * t->irradiance[3 * c + k];
+            }
+        }
+    p->cell_ij = t->ij, p->cell_area = t->area, p->cell_centre = t->centre;
+    p->irradiance = t->irradiance, p->radiosity = t->radiosity;
+    p->albedo[0] = 0.5f, p->albedo[1] = 0.4f, p->albedo[2] = 0.3f;
+    p->emission[0] = polygon == 0 ? 2.0f : 0.0f;
+}
+
+/* Releases the arrays of t. */
+static void free_patch(struct test_patch *t)
+{
+    free(t->ij);
+    free(t->area);
+    free(t->centre);
+    free(t->irradiance);
+    free(t->radiosity);
+}
+
+/* Checks that two patches are equal field by field, arrays bit for bit. */
+static void check_patch_equal(const lfio_radmap_patch *a, const lfio_radmap_patch *b, const char *what)
+{
+    CHECK(strcmp(a->label, b->label) == 0, "%s: label '%s' vs '%s'", what, a->label, b->label);
+    CHECK(a->polygon == b->polygon && a->nverts == b->nverts && a->nu == b->nu && a->nv == b->nv
+              && a->ncells == b->ncells, "%s: counts", what);
+    CHECK(memcmp(a->origin, b->origin, sizeof a->origin) == 0 && memcmp(a->e1, b->e1, sizeof a->e1) == 0
+              && memcmp(a->e2, b->e2, sizeof a->e2) == 0 && memcmp(a->normal, b->normal, sizeof a->normal) == 0,
+          "%s: frame", what);
+    CHECK(a->cell_size == b->cell_size && a->u0 == b->u0 && a->v0 == b->v0, "%s: grid", what);
+    CHECK(memcmp(a->albedo, b->albedo, sizeof a->albedo) == 0 && memcmp(a->emission, b->emission, sizeof a->emission) == 0,
+          "%s: material", what);
+    CHECK(memcmp(a->vertices, b->vertices, 3 * sizeof(double) * a->nverts) == 0, "%s: vertices", what);
+    if (a->ncells != b->ncells || a->ncells == 0)
+        return;
+    const size_t n = a->ncells;
+    CHECK(memcmp(a->cell_ij, b->cell_ij, 2 * n * sizeof(uint32_t)) == 0, "%s: cell_ij", what);
+    CHECK(memcmp(a->cell_area, b->cell_area, n * sizeof(double)) == 0, "%s: cell_area", what);
+    CHECK(memcmp(a->cell_centre, b->cell_centre, 3 * n * sizeof(double)) == 0, "%s: cell_centre", what);
+    CHECK(memcmp(a->irradiance, b->irradiance, 3 * n * sizeof(float)) == 0, "%s: irradiance", what);
+    CHECK(memcmp(a->radiosity, b->radiosity, 3 * n * sizeof(float)) == 0, "%s: radiosity", what);
+}
+
+/* Writes count patches to path, checking success and silence. */
+static void write_ok(const char *path, const lfio_radmap_patch *patches, size_t count)
+{
+    quiet_start();
+    lfio_status st = lfio_radmap_write(path, "test_radmap", "scenes/test.json", patches, count);
+    long printed = quiet_stop();
+    CHECK(st == LFIO_OK, "write %s: %s", path, lfio_errmsg());
+    CHECK(printed == 0, "write printed %ld bytes", printed);
+}
+
+/* ------------------------------------------------------------------- tests */
+
+/* Writes patches, reads them back and compares everything. */
+static void test_round_trip(const lfio_radmap_patch *patches, size_t count, const char *path)
+{
+    write_ok(path, patches, count);
+    CHECK(sweep_tmpdir(1) == 0, "temporaries left after a good write");
+    lfio_radmap *map = NULL;
+    quiet_start();
+    lfio_status st = lfio_radmap_read(path, &map);
+    long printed = quiet_stop();
+    CHECK(st == LFIO_OK && map != NULL, "read %s: %s", path, lfio_errmsg());
+    CHECK(printed == 0, "read printed %ld bytes", printed);
+    if (map == NULL)
+        return;
+    CHECK(strcmp(lfio_radmap_creator(map), "test_radmap") == 0, "creator '%s'", lfio_radmap_creator(map));
+    CHECK(strcmp(lfio_radmap_scene(map), "scenes/test.json") == 0, "scene '%s'", lfio_radmap_scene(map));
+    CHECK(lfio_radmap_count(map) == count, "count %zu, expected %zu", lfio_radmap_count(map), count);
+    for (size_t k = 0; k < count && k < lfio_radmap_count(map); k++) {
+        lfio_radmap_patch back;
+        CHECK(lfio_radmap_get(map, k, &back) == LFIO_OK, "get %zu", k);
+        check_patch_equal(&patches[k], &back, patches[k].label);
+    }
+    lfio_radmap_patch none;
+    CHECK(lfio_radmap_get(map, count, &none) == LFIO_ERR_ARG, "get out of range");
+    CHECK(lfio_radmap_get(NULL, 0, &none) == LFIO_ERR_ARG, "get from NULL");
+    lfio_radmap_destroy(map);
+    lfio_radmap_destroy(NULL);
+    CHECK(lfio_radmap_count(NULL) == 0 && strcmp(lfio_radmap_creator(NULL), "") == 0, "NULL accessors");
+}
+
+/* Expects writing p (one patch) to be refused with LFIO_ERR_ARG, a message containing needle, and no file. */
+static void expect_refused(const lfio_radmap_patch *p, const char *needle, const char *what)
+{
+    char path[512];
+    tmp_path(path, sizeof path, "refused.h5");
+    lfio_status st = lfio_radmap_write(path, NULL, NULL, p, 1);
+    CHECK(st == LFIO_ERR_ARG, "%s: write gave %s (%s)", what, lfio_status_name(st), lfio_errmsg());
+    CHECK(strstr(lfio_errmsg(), "refused.h5") && strstr(lfio_errmsg(), needle), "%s: message: %s", what,
+          lfio_errmsg());
+    CHECK(access(path, F_OK) != 0, "%s: a file was created", what);
+}
+
+/* The writer refuses every patch the reader would refuse, and fails atomically. */
+static void test_writer_refusals(const struct test_patch *good, const char *existing)
+{
+    lfio_radmap_patch p = good->p;
+    p.label = NULL;
+    expect_refused(&p, "label", "NULL label");
+    p = good->p, p.nverts = 2;
+    expect_refused(&p, "vertices", "two vertices");
+    p = good->p, p.ncells = p.nu * p.nv + 1;
+    expect_refused(&p, "cells in a grid", "more cells than the grid");
+    p = good->p, p.cell_size = 0;
+    expect_refused(&p, "cell_size", "zero cell size");
+    p = good->p, p.e1[0] = 2;
+    expect_refused(&p, "unit", "e1 not unit");
+    p = good->p, p.normal[2] = -1;
+    expect_refused(&p, "normal", "normal not e1 x e2");
+    p = good->p, p.albedo[1] = 1.5f;
+    expect_refused(&p, "albedo", "albedo above 1");
+    p = good->p, p.irradiance = NULL;
+    expect_refused(&p, "irradiance is NULL", "NULL irradiance");
+
+    const size_t n = 3 * (size_t)good->p.ncells;
+    uint32_t *ij = malloc(2 * (size_t)good->p.ncells * sizeof *ij);
+    float *values = malloc(n * sizeof *values);
+    double *area = malloc((size_t)good->p.ncells * sizeof *area);
+    memcpy(ij, good->ij, 2 * (size_t)good->p.ncells * sizeof *ij);
+    memcpy(values, good->irradiance, n * sizeof *values);
+    memcpy(area, good->area, (size_t)good->p.ncells * sizeof *area);
+    ij[2 * 3 + 1] = good->p.nv;
+    p = good->p, p.cell_ij = ij;
+    expect_refused(&p, "cell 3", "cell outside the grid");
+    values[7] = -1.0f;
+    p = good->p, p.radiosity = values;
+    expect_refused(&p, "radiosity of cell 2", "negative radiosity");
+    values[7] = NAN;
+    p = good->p, p.irradiance = values;
+    expect_refused(&p, "irradiance of cell 2", "NaN irradiance");
+    area[1] = 0;
+    p = good->p, p.cell_area = area;
+    expect_refused(&p, "area", "zero area");
+    free(ij);
+    free(values);
+    free(area);
+
+    char path[512];
+    CHECK(lfio_radmap_write(NULL, NULL, NULL, NULL, 0) == LFIO_ERR_ARG, "NULL path");
+    CHECK(lfio_radmap_write(tmp_path(path, sizeof path, "nopatches.h5"), NULL, NULL, NULL, 2) == LFIO_ERR_ARG,
+          "NULL patches with a count");
+
+    /* A missing folder fails with LFIO_ERR_IO, silently, creating nothing. */
+    quiet_start();
+    lfio_status st = lfio_radmap_write(tmp_path(path, sizeof path, "no_such_folder/map.h5"), NULL, NULL, &good->p, 1);
+    long printed = quiet_stop();
+    CHECK(st == LFIO_ERR_IO && strstr(lfio_errmsg(), "map.h5"), "missing folder: %s: %s", lfio_status_name(st),
+          lfio_errmsg());
+    CHECK(printed == 0, "missing folder printed %ld bytes", printed);
+
+    /* A refused write over an existing file leaves it exactly as it was. */
+    size_t before_size, after_size;
+    copy_to(path, sizeof path, existing, "kept.h5");
+    unsigned char *before = read_whole(path, &before_size);
+    p = good->p, p.cell_size = NAN;
+    CHECK(lfio_radmap_write(path, NULL, NULL, &p, 1) == LFIO_ERR_ARG, "NaN cell size over a file");
+    unsigned char *after = read_whole(path, &after_size);
+    CHECK(before && after && before_size == after_size && memcmp(before, after, before_size) == 0,
+          "a refused write changed the existing file");
+    free(before);
+    free(after);
+    CHECK(sweep_tmpdir(1) == 0, "temporaries left after refused writes");
+}
+
+/* ------------------------------------------------------- HDF5 file surgery */
+
+/* Replaces attribute name of object obj of file path (scalar when count is 0). */
+static void edit_attr(const char *path, const char *obj, const char *name, hid_t ftype, hid_t mtype,
+                      hsize_t count, const void *value)
+{
+    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    hid_t o = H5Oopen(f, obj, H5P_DEFAULT);
+    if (H5Aexists(o, name) > 0)
+        H5Adelete(o, name);
+    hid_t space = count ? H5Screate_simple(1, &count, NULL) : H5Screate(H5S_SCALAR);
+    hid_t a = H5Acreate2(o, name, ftype, space, H5P_DEFAULT, H5P_DEFAULT);
+    CHECK(a >= 0 && H5Awrite(a, mtype, value) >= 0, "edit %s %s@%s", path, obj, name);
+    H5Aclose(a);
+    H5Sclose(space);
+    H5Oclose(o);
+    H5Fclose(f);
+}
+
+/* Replaces string attribute name of obj with value. */
+static void edit_attr_str(const char *path, const char *obj, const char *name, const char *value)
+{
+    hid_t t = H5Tcopy(H5T_C_S1);
+    H5Tset_size(t, strlen(value) + 1);
+    edit_attr(path, obj, name, t, t, 0, value);
+    H5Tclose(t);
+}
+
+/* Replaces dataset dset by one of type ftype and shape dims filled with `fill`, with units and axes. */
+static void edit_replace_dataset(const char *path, const char *dset, hid_t ftype, int rank, const hsize_t *dims,
+                                 double fill, const char *units, const char *axes)
+{
+    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    CHECK(H5Ldelete(f, dset, H5P_DEFAULT) >= 0, "delete %s", dset);
+    hid_t space = H5Screate_simple(rank, dims, NULL);
+    hid_t d = H5Dcreate2(f, dset, ftype, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    hsize_t count = 1;
+    for (int k = 0; k < rank; k++)
+        count *= dims[k];
+    double *values = malloc((count ? count : 1) * sizeof *values);
+    for (hsize_t k = 0; k < count; k++)
+        values[k] = fill;
+    CHECK(d >= 0 && H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values) >= 0, "create %s", dset);
+    free(values);
+    H5Sclose(space);
+    H5Dclose(d);
+    H5Fclose(f);
+    edit_attr_str(path, dset, "units", units);
+    edit_attr_str(path, dset, "axes", axes);
+}
+
+/* Overwrites element `at` (row, column) of 2-D dataset dset with value. */
+static void edit_element(const char *path, const char *dset, hsize_t row, hsize_t col, double value)
+{
+    const hsize_t at[2] = {row, col}, one[2] = {1, 1}, n1 = 1;
+    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    hid_t d = H5Dopen2(f, dset, H5P_DEFAULT);
+    hid_t fs = H5Dget_space(d), ms = H5Screate_simple(1, &n1, NULL);
+    H5Sselect_hyperslab(fs, H5S_SELECT_SET, at, NULL, one, NULL);
+    CHECK(H5Dwrite(d, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, &value) >= 0, "edit %s", dset);
+    H5Sclose(ms);
+    H5Sclose(fs);
+    H5Dclose(d);
+    H5Fclose(f);
+}
+
+/* XORs the middle byte of chunk 0 of dataset dset with 0x5a. @return 1 on success. */
+static int flip_chunk_byte(const char *path, const char *dset)
+{
+    hsize_t offset[2], size = 0;
+    haddr_t addr = 0;
+    unsigned mask;
+    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    hid_t d = H5Dopen2(f, dset, H5P_DEFAULT);
+    hid_t space = H5Dget_space(d);
+    herr_t rc = H5Dget_chunk_info(d, space, 0, offset, &mask, &addr, &size);
+    H5Sclose(space);
+    H5Dclose(d);
+    H5Fclose(f);
+    int fd = open(path, O_RDWR);
+    unsigned char c;
+    int ok = rc >= 0 && size > 8 && fd >= 0 && pread(fd, &c, 1, (off_t)(addr + size / 2)) == 1;
+    c ^= 0x5a;
+    ok = ok && pwrite(fd, &c, 1, (off_t)(addr + size / 2)) == 1;
+    if (fd >= 0)
+        close(fd);
+    return ok;
+}
+
+/* Expects reading path to fail with want, naming the file (and needle), output NULL, nothing printed. */
+static void expect_bad(const char *path, lfio_status want, const char *needle, const char *what)
+{
+    lfio_radmap *map = (lfio_radmap *)1;
+    quiet_start();
+    lfio_status st = lfio_radmap_read(path, &map);
+    long printed = quiet_stop();
+    const char *msg = lfio_errmsg();
+    const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+    CHECK(st == want, "%s: read gave %s, expected %s (%s)", what, lfio_status_name(st), lfio_status_name(want), msg);
+    CHECK(map == NULL, "%s: output not NULL", what);
+    CHECK(strstr(msg, base) != NULL, "%s: message does not name the file: %s", what, msg);
+    CHECK(needle == NULL || strstr(msg, needle) != NULL, "%s: message lacks '%s': %s", what, needle, msg);
+    CHECK(printed == 0, "%s: %ld bytes printed on stderr", what, printed);
+    if (st == LFIO_OK)
+        lfio_radmap_destroy(map);
+}
+
+/* Every documented way a file can be bad; good has patches 0 (cells), 1 (no cells), 2 (many cells). */
+static void test_bad_files(const char *good)
+{
+    char p[512];
+    expect_bad(tmp_path(p, sizeof p, "does_not_exist.h5"), LFIO_ERR_NOTFOUND, NULL, "missing file");
+    write_whole(tmp_path(p, sizeof p, "text.h5"), "not a map\n", 10);
+    expect_bad(p, LFIO_ERR_FORMAT, "not an HDF5 file", "text file");
+
+    size_t size;
+    unsigned char *data = read_whole(good, &size);
+    const size_t cuts[] = {0, size / 10, size / 2, size * 9 / 10, size - 1};
+    for (size_t c = 0; data && c < sizeof cuts / sizeof cuts[0]; c++) {
+        char what[64];
+        snprintf(what, sizeof what, "truncated to %zu of %zu bytes", cuts[c], size);
+        write_whole(tmp_path(p, sizeof p, "truncated.h5"), data, cuts[c]);
+        expect_bad(p, LFIO_ERR_FORMAT, NULL, what);
+    }
+    free(data);
+
+    copy_to(p, sizeof p, good, "flipped.h5");
+    CHECK(flip_chunk_byte(p, "/patches/2/irradiance"), "flip a byte of an irradiance chunk");
+    expect_bad(p, LFIO_ERR_CHECKSUM, "/patches/2/irradiance", "flipped irradiance byte");
+    copy_to(p, sizeof p, good, "flipped_centre.h5");
+    CHECK(flip_chunk_byte(p, "/patches/0/cell_centre"), "flip a byte of a cell_centre chunk");
+    expect_bad(p, LFIO_ERR_CHECKSUM, "/patches/0/cell_centre", "flipped cell_centre byte");
+
+    edit_attr_str(copy_to(p, sizeof p, good, "wrong_format.h5"), "/", "format", "ilfkit-lightfield");
+    expect_bad(p, LFIO_ERR_FORMAT, "'ilfkit-lightfield', expected 'ilfkit-radiance-maps'", "wrong format string");
+    const int32_t two = 2;
+    edit_attr(copy_to(p, sizeof p, good, "version2.h5"), "/", "format_version", H5T_STD_I32LE, H5T_NATIVE_INT32, 0,
+              &two);
+    expect_bad(p, LFIO_ERR_FORMAT, "format_version 2", "format_version 2");
+    const uint32_t four = 4, one = 1;
+    edit_attr(copy_to(p, sizeof p, good, "count4.h5"), "/", "patch_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0,
+              &four);
+    expect_bad(p, LFIO_ERR_FORMAT, "/patches/3", "patch_count 4 with three groups");
+    edit_attr(copy_to(p, sizeof p, good, "small_grid.h5"), "/patches/0", "nv", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0,
+              &one);
+    expect_bad(p, LFIO_ERR_FORMAT, "cells in a grid", "more cells than nu*nv");
+    const double ones[2] = {1, 1};
+    edit_attr(copy_to(p, sizeof p, good, "short_origin.h5"), "/patches/0", "origin", H5T_IEEE_F64LE,
+              H5T_NATIVE_DOUBLE, 2, ones);
+    expect_bad(p, LFIO_ERR_FORMAT, "'origin'", "origin with 2 elements");
+    edit_attr_str(copy_to(p, sizeof p, good, "feet.h5"), "/patches/1", "length_units", "ft");
+    expect_bad(p, LFIO_ERR_FORMAT, "length_units", "length units not metres");
+
+    /* Wrong shapes and types; patch 0 of good has 12 cells. */
+    const hsize_t long_rgb[2] = {13, 3}, rgb[2] = {12, 3}, ij1[1] = {12}, verts2[2] = {4, 2};
+    edit_replace_dataset(copy_to(p, sizeof p, good, "long_irr.h5"), "/patches/0/irradiance", H5T_IEEE_F32LE, 2,
+                         long_rgb, 1.0, "W m^-2", "cell:rgb");
+    expect_bad(p, LFIO_ERR_FORMAT, "dims mismatch: shape [13, 3], expected [12, 3]", "irradiance with one row too many");
+    edit_replace_dataset(copy_to(p, sizeof p, good, "f64_irr.h5"), "/patches/0/irradiance", H5T_IEEE_F64LE, 2, rgb,
+                         1.0, "W m^-2", "cell:rgb");
+    expect_bad(p, LFIO_ERR_FORMAT, "element type", "irradiance of float64");
+    edit_replace_dataset(copy_to(p, sizeof p, good, "ij_rank1.h5"), "/patches/0/cell_ij", H5T_STD_U32LE, 1, ij1, 0,
+                         "1", "cell:ij");
+    expect_bad(p, LFIO_ERR_FORMAT, "/patches/0/cell_ij: dims mismatch", "cell_ij of rank 1");
+    edit_replace_dataset(copy_to(p, sizeof p, good, "verts2.h5"), "/patches/1/vertices", H5T_IEEE_F64LE, 2, verts2,
+                         0, "m", "vertex:xyz");
+    expect_bad(p, LFIO_ERR_FORMAT, "/patches/1/vertices: dims mismatch", "vertices with 2 coordinates");
+    edit_replace_dataset(copy_to(p, sizeof p, good, "axes.h5"), "/patches/0/radiosity", H5T_IEEE_F32LE, 2, rgb, 1.0,
+                         "W m^-2", "rgb:cell");
+    expect_bad(p, LFIO_ERR_FORMAT, "axes", "radiosity with other axes");
+    edit_replace_dataset(copy_to(p, sizeof p, good, "units.h5"), "/patches/0/radiosity", H5T_IEEE_F32LE, 2, rgb, 1.0,
+                         "W sr^-1 m^-2", "cell:rgb");
+    expect_bad(p, LFIO_ERR_FORMAT, "units", "radiosity in radiance units");
+
+    /* Values the layout cannot rule out. */
+    edit_element(copy_to(p, sizeof p, good, "nan.h5"), "/patches/2/irradiance", 5, 1, NAN);
+    expect_bad(p, LFIO_ERR_FORMAT, "irradiance of cell 5", "NaN irradiance");
+    edit_element(copy_to(p, sizeof p, good, "ij_out.h5"), "/patches/0/cell_ij", 2, 0, 1000);
+    expect_bad(p, LFIO_ERR_FORMAT, "outside", "cell index outside the grid");
+    edit_element(copy_to(p, sizeof p, good, "inf_centre.h5"), "/patches/0/cell_centre", 0, 2, INFINITY);
+    expect_bad(p, LFIO_ERR_FORMAT, "centre", "infinite centre");
+
+    lfio_radmap *map = (lfio_radmap *)1;
+    CHECK(lfio_radmap_read(NULL, &map) == LFIO_ERR_ARG && map == NULL, "NULL path");
+    CHECK(lfio_radmap_read(good, NULL) == LFIO_ERR_ARG, "NULL output");
+}
+
+int main(void)
+{
+    const char *base = getenv("ILF_TEST_TMP");
+    snprintf(tmpdir, sizeof tmpdir, "%s/radmap", base && *base ? base : "/tmp");
+    mkdir(base && *base ? base : "/tmp", 0755);
+    if (mkdir(tmpdir, 0755) != 0 && errno != EEXIST) {
+        fprintf(stderr, "cannot create %s: %s\n", tmpdir, strerror(errno));
+        return 1;
+    }
+    sweep_tmpdir(0);
+
+    /* Patch 0: a 1 m square emitter at 0.25 m with some cells missing (12 of 16);
+     * patch 1: a polygon of the same frame without cells; patch 2: 40000 cells, several chunks. */
+    struct test_patch t[3];
+    make_patch(&t[0], "polygons[0]", 0, 1.0, 2.0, 0.25, 4);
+    make_patch(&t[1], "meshes[0] (room.obj) face 7", 5, 1.0, 0.0, 0.25, 1);
+    make_patch(&t[2], "polygons[1] \xc3\xa9tag\xc3\xa8re", 1, 2.0, 0.0, 0.01, 0);
+    CHECK(t[0].p.ncells == 12 && t[1].p.ncells == 0 && t[2].p.ncells == 40000, "test patch sizes %u %u %u",
+          t[0].p.ncells, t[1].p.ncells, t[2].p.ncells);
+    lfio_radmap_patch patches[3] = {t[0].p, t[1].p, t[2].p};
+
+    char good[512], empty[512], lonely[512];
+    test_round_trip(patches, 3, tmp_path(good, sizeof good, "good.h5"));
+    test_round_trip(patches, 3, good); /* replaces an existing file */
+    test_round_trip(NULL, 0, tmp_path(empty, sizeof empty, "no_patches.h5"));
+    test_round_trip(&patches[1], 1, tmp_path(lonely, sizeof lonely, "empty_patch.h5"));
+    test_writer_refusals(&t[0], good);
+    test_bad_files(good);
+    CHECK(sweep_tmpdir(1) == 0, "temporaries left at the end");
+    for (int k = 0; k < 3; k++)
+        free_patch(&t[k]);
+    return check_report();
+}

@@ -1,0 +1,525 @@
+/*
+ * cmd_relight.c - `ilf relight SCENE -o DIR`: relights a scene with the
+ * engine of relight/engine.h and writes what it found to DIR:
+ *
+ *   radiance.h5  every receiving polygon's radiance map (lfio/radmap.h)
+ *   stats.json   settings, times and per-pass counters (docs/cli.md)
+ *   view.exr     the scene camera's view, raw radiance   } only when the
+ *   view.png     the same, tone mapped and sRGB-encoded  } scene has a camera
+ *
+ * Invariants: DIR exists (it is created) before the engine runs, so a long
+ * run never ends in an output that cannot be placed; every output is written
+ * atomically (lfio, image.h, jsonout.h), so DIR never holds a partial file;
+ * stdout carries the summary (nothing with --quiet), stderr errors and the
+ * progress bar (only on a terminal, never with --quiet).
+ */
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "image.h"
+#include "jsonout.h"
+#include "lfio/radmap.h"
+#include "relight/engine.h"
+#include "relight_cli.h"
+#include "tonemap.h"
+
+/* Progress is reported to cli_progress in steps of 1/PROGRESS_STEPS of the run. */
+#define PROGRESS_STEPS 1000u
+/* The PNG maps the 99th percentile of the lit pixels' luminance to this value. */
+#define PNG_PERCENTILE 0.99
+#define PNG_TARGET 0.8
+/* The program named in radiance.h5 and stats.json. */
+#define RELIGHT_CREATOR "ilf relight (ilfkit " ILFKIT_VERSION ")"
+/* Camera size from docs/scene.md when the scene file does not give it. */
+
+typedef struct relight_options {
+    const char *scene;
+    const char *output;
+    sampling_overrides sampling;
+    int quiet;
+} relight_options;
+
+/* Options after the shared sampling ones, whose ids come first (relight_cli.h). */
+enum relight_option_id { OPT_OUTPUT = SAMPLING_OPT_COUNT, OPT_QUIET };
+
+static const cli_option relight_options_table[] = {
+    RELIGHT_SAMPLING_OPTIONS,
+    {"output", 'o', "DIR", "folder for radiance.h5, stats.json and view.exr/png (required; created)"},
+    {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
+};
+
+static const cli_usage relight_usage = {
+    "relight",
+    "SCENE -o DIR [--method M] [--threads N] [--seed S] [--partition-n N] [--rays K]\n"
+    "                   [--samples N] [--bounces B] [--quiet]",
+    "Relights the scene (docs/scene.md) and writes to DIR: radiance.h5, the irradiance\n"
+    "and radiosity of every receiving polygon's cells (docs/format.md); stats.json, the\n"
+    "settings, times and per-pass counters (docs/cli.md); and, when the scene has a\n"
+    "camera, view.exr (radiance) and view.png (exposed so that the 99th percentile of\n"
+    "the lit pixels' luminance shows as 0.8, sRGB). Sampling options replace the\n"
+    "scene's own settings.",
+    "ilf relight data/beams_diffuse.json -o out/beams\n"
+    "ilf relight data/classroom.json -o out/classroom --partition-n 16 --rays 2 --bounces 1\n"
+    "ilf relight scene.json -o out/naive --method naive --threads 4 --quiet",
+};
+
+/* Everything one run produced, for the outputs and the summary. */
+typedef struct relight_run {
+    const relight_options *o;
+    rl_scene *scene;
+    rl_solution *solution;
+    double wall_seconds, cpu_seconds;
+    size_t maps;
+    uint64_t cells;
+} relight_run;
+
+/* ------------------------------------------------------------ options */
+
+/* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
+static int parse_arguments(relight_options *o, int argc, char **argv)
+{
+    cli_parser p;
+    cli_parser_init(&p, &relight_usage, relight_options_table,
+                    sizeof relight_options_table / sizeof relight_options_table[0], argc, argv);
+    const char *value;
+    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
+        if (opt == CLI_HELP)
+            return ILF_EXIT_OK;
+        if (opt == CLI_BAD)
+            return ILF_EXIT_USAGE;
+        int ok = 1;
+        if (opt == CLI_POSITIONAL)
+            ok = cli_single_path("relight", &o->scene, value);
+        else if (opt == OPT_OUTPUT)
+            o->output = value;
+        else if (opt == OPT_QUIET)
+            o->quiet = 1;
+        else
+            ok = sampling_option_apply(&p, &o->sampling, opt, value);
+        if (!ok)
+            return ILF_EXIT_USAGE;
+    }
+    const char *problem = NULL;
+    if (o->scene == NULL)
+        problem = "no scene given (see 'ilf relight --help')";
+    else if (o->output == NULL || o->output[0] == '\0')
+        problem = "-o DIR is required";
+    if (problem != NULL) {
+        cli_error("relight", "%s", problem);
+        return ILF_EXIT_USAGE;
+    }
+    return -1;
+}
+
+/* ------------------------------------------------------------ files */
+
+/* @return "dir/name" (malloc'd), or NULL when memory runs out. */
+static char *join_path(const char *dir, const char *name)
+{
+    size_t len = strlen(dir);
+    char *path = malloc(len + strlen(name) + 2);
+    if (path != NULL)
+        sprintf(path, "%s%s%s", dir, len > 0 && dir[len - 1] == '/' ? "" : "/", name);
+    return path;
+}
+
+/* Creates folder path and any missing parents, like mkdir -p. @return 1, or 0 after reporting. */
+static int make_folder(const char *path)
+{
+    char *copy = malloc(strlen(path) + 1);
+    if (copy == NULL) {
+        cli_error("relight", "out of memory");
+        return 0;
+    }
+    strcpy(copy, path);
+    int ok = 1;
+    /* Each '/' after the first character ends a parent; the whole path ends the folder itself. */
+    for (char *at = copy + 1; ok; at++) {
+        int last = *at == '\0';
+        if (*at != '/' && !last)
+            continue;
+        *at = '\0';
+        struct stat st;
+        if (mkdir(copy, 0777) != 0 && errno != EEXIST) {
+            cli_error("relight", "cannot create folder '%s': %s", copy, strerror(errno));
+            ok = 0;
+        } else if (stat(copy, &st) != 0 || !S_ISDIR(st.st_mode)) {
+            cli_error("relight", "cannot use '%s' as a folder: it is not one", copy);
+            ok = 0;
+        }
+        if (last)
+            break;
+        *at = '/';
+    }
+    free(copy);
+    return ok;
+}
+
+/* Reports "wrote PATH: what" unless quiet. */
+static void report_written(const relight_options *o, const char *path, const char *what)
+{
+    if (!o->quiet)
+        printf("wrote %s: %s\n", path, what);
+}
+
+/* ------------------------------------------------------------ relighting */
+
+/* Progress bar state: the cli_progress and how many of its PROGRESS_STEPS are drawn. */
+typedef struct relight_progress {
+    cli_progress bar;
+    uint64_t shown;
+} relight_progress;
+
+/* rl_progress_fn: advances the bar to done (in [0, 1]). */
+static void on_progress(void *user, double done)
+{
+    relight_progress *p = user;
+    uint64_t target = done <= 0.0 ? 0 : done >= 1.0 ? PROGRESS_STEPS : (uint64_t)(done * PROGRESS_STEPS);
+    if (target > p->shown) {
+        cli_progress_add(&p->bar, target - p->shown);
+        p->shown = target;
+    }
+}
+
+/* @return the time of clock in seconds. */
+static double clock_seconds(clockid_t clock)
+{
+    struct timespec ts;
+    clock_gettime(clock, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Runs the engine on run->scene, timing it, with a progress bar unless quiet. @return an exit code. */
+static int relight(relight_run *run)
+{
+    relight_progress progress = {.shown = 0};
+    int show = !run->o->quiet;
+    if (show)
+        cli_progress_start(&progress.bar, "relight", PROGRESS_STEPS);
+    double wall0 = clock_seconds(CLOCK_MONOTONIC), cpu0 = clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
+    rl_status st = rl_relight(run->scene, show ? on_progress : NULL, &progress, &run->solution);
+    run->wall_seconds = clock_seconds(CLOCK_MONOTONIC) - wall0;
+    run->cpu_seconds = clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
+    if (show)
+        cli_progress_finish(&progress.bar);
+    if (st != RL_OK)
+        return relight_failure("relight", st);
+    run->maps = rl_solution_map_count(run->solution);
+    return ILF_EXIT_OK;
+}
+
+/* @return the worker threads a run used: the setting, or every processor for 0 (relight.h's rule). */
+static unsigned threads_used(const rl_sampling *s)
+{
+    long online = sysconf(_SC_NPROCESSORS_ONLN);
+    return s->threads > 0 ? s->threads : online > 0 ? (unsigned)online : 1u;
+}
+
+/* ------------------------------------------------------------ radiance.h5 */
+
+/* One patch for lfio_radmap_write() and the arrays it borrows. */
+typedef struct patch_arrays {
+    uint32_t *ij;
+    double *area, *centre;
+    float *irradiance, *radiosity;
+} patch_arrays;
+
+/* Describes map k of the solution in *p, with arrays in *a (freed by patch_free). @return an exit code. */
+static int fill_patch(const rl_solution *sol, size_t k, lfio_radmap_patch *p, patch_arrays *a)
+{
+    rl_map_info m;
+    rl_status st = rl_solution_map_info(sol, k, &m);
+    if (st != RL_OK)
+        return relight_failure("relight", st);
+    const size_t n = m.ncells ? m.ncells : 1;
+    a->ij = malloc(2 * n * sizeof *a->ij);
+    a->area = malloc(n * sizeof *a->area);
+    a->centre = malloc(3 * n * sizeof *a->centre);
+    a->irradiance = malloc(3 * n * sizeof *a->irradiance);
+    a->radiosity = malloc(3 * n * sizeof *a->radiosity);
+    if (!a->ij || !a->area || !a->centre || !a->irradiance || !a->radiosity) {
+        cli_error("relight", "out of memory for the %u cells of map %zu", m.ncells, k);
+        return ILF_EXIT_FAILED;
+    }
+    st = rl_solution_map_cells(sol, k, a->ij, a->area, a->centre, a->irradiance, a->radiosity);
+    if (st != RL_OK)
+        return relight_failure("relight", st);
+    memset(p, 0, sizeof *p);
+    p->label = m.label;
+    p->polygon = m.polygon;
+    p->nverts = m.nvertices;
+    p->vertices = m.vertices;
+    memcpy(p->origin, m.origin, sizeof p->origin);
+    memcpy(p->e1, m.e1, sizeof p->e1);
+    memcpy(p->e2, m.e2, sizeof p->e2);
+    memcpy(p->normal, m.normal, sizeof p->normal);
+    p->cell_size = m.cell_size;
+    p->u0 = m.u0;
+    p->v0 = m.v0;
+    p->nu = m.nu;
+    p->nv = m.nv;
+    p->ncells = m.ncells;
+    p->cell_ij = a->ij;
+    p->cell_area = a->area;
+    p->cell_centre = a->centre;
+    p->irradiance = a->irradiance;
+    p->radiosity = a->radiosity;
+    memcpy(p->albedo, m.albedo, sizeof p->albedo);
+    memcpy(p->emission, m.emission, sizeof p->emission);
+    return ILF_EXIT_OK;
+}
+
+/* Releases the arrays of a. */
+static void patch_free(patch_arrays *a)
+{
+    free(a->ij);
+    free(a->area);
+    free(a->centre);
+    free(a->irradiance);
+    free(a->radiosity);
+}
+
+/* Writes every map of the solution to DIR/radiance.h5. @return an exit code. */
+static int write_radiance(relight_run *run)
+{
+    const size_t n = run->maps;
+    lfio_radmap_patch *patches = calloc(n ? n : 1, sizeof *patches);
+    patch_arrays *arrays = calloc(n ? n : 1, sizeof *arrays);
+    char *path = join_path(run->o->output, "radiance.h5");
+    int code = ILF_EXIT_OK;
+    if (!patches || !arrays || !path) {
+        cli_error("relight", "out of memory");
+        code = ILF_EXIT_FAILED;
+    }
+    for (size_t k = 0; code == ILF_EXIT_OK && k < n; k++) {
+        code = fill_patch(run->solution, k, &patches[k], &arrays[k]);
+        run->cells += patches[k].ncells;
+    }
+    if (code == ILF_EXIT_OK) {
+        lfio_status st = lfio_radmap_write(path, RELIGHT_CREATOR, run->o->scene, patches, n);
+        code = st == LFIO_OK ? ILF_EXIT_OK : cli_lfio_failure("relight", st, CLI_OUTPUT, path);
+    }
+    if (code == ILF_EXIT_OK) {
+        char what[128], size[32];
+        snprintf(what, sizeof what, "%zu map%s, %" PRIu64 " cells, %s", n, n == 1 ? "" : "s", run->cells,
+                 cli_format_bytes(cli_file_size(path), size, sizeof size));
+        report_written(run->o, path, what);
+    }
+    for (size_t k = 0; arrays && k < n; k++)
+        patch_free(&arrays[k]);
+    free(arrays);
+    free(patches);
+    free(path);
+    return code;
+}
+
+/* ------------------------------------------------------------ view.exr, view.png */
+
+/* Writes pixels ([y][x][rgb]) to DIR/name. @return an exit code. */
+static int write_view_image(const relight_run *run, const char *name, int width, int height, const float *pixels,
+                            const char *what)
+{
+    char err[512];
+    char *path = join_path(run->o->output, name);
+    if (path == NULL) {
+        cli_error("relight", "out of memory");
+        return ILF_EXIT_FAILED;
+    }
+    ilfimg_status st = ilfimg_write(path, width, height, 3, pixels, err, sizeof err);
+    if (st != ILFIMG_OK)
+        cli_error("relight", "%s", err);
+    else
+        report_written(run->o, path, what);
+    free(path);
+    return st == ILFIMG_OK ? ILF_EXIT_OK : ILF_EXIT_FAILED;
+}
+
+/* Renders the camera's view and writes view.exr (radiance) and view.png (tone mapped). @return an exit code. */
+static int write_view(const relight_run *run)
+{
+    uint32_t w = 0, h = 0;
+    rl_scene_camera_size(run->scene, &w, &h);
+    int width = (int)w, height = (int)h;
+    const size_t count = (size_t)width * (size_t)height;
+    float *pixels = malloc(count * 3 * sizeof *pixels);
+    if (pixels == NULL) {
+        cli_error("relight", "out of memory for a %dx%d view", width, height);
+        return ILF_EXIT_FAILED;
+    }
+    rl_status rs = rl_solution_render(run->solution, pixels);
+    int code = rs == RL_OK ? ILF_EXIT_OK : relight_failure("relight", rs);
+    char what[160];
+    snprintf(what, sizeof what, "%dx%d, radiance in W sr^-1 m^-2", width, height);
+    if (code == ILF_EXIT_OK)
+        code = write_view_image(run, "view.exr", width, height, pixels, what);
+    if (code == ILF_EXIT_OK) {
+        double scale = tone_percentile_scale(pixels, count, 3, TONE_LUMINANCE, PNG_PERCENTILE, PNG_TARGET);
+        tone_apply(pixels, count, 3, scale);
+        snprintf(what, sizeof what, "%dx%d, sRGB, scale %.6g (99th percentile of luminance -> %.1f)", width, height,
+                 scale, PNG_TARGET);
+        code = write_view_image(run, "view.png", width, height, pixels, what);
+    }
+    free(pixels);
+    return code;
+}
+
+/* ------------------------------------------------------------ stats.json */
+
+/* Adds key = value for a counter; exact up to 2^53. */
+static void add_count(cJSON *obj, const char *key, uint64_t value)
+{
+    cJSON_AddNumberToObject(obj, key, (double)value);
+}
+
+/* @return pass k's statistics as a JSON object, or NULL when memory runs out. */
+static cJSON *pass_json(uint32_t k, const rl_pass_stats *s)
+{
+    cJSON *p = cJSON_CreateObject();
+    if (p == NULL)
+        return NULL;
+    add_count(p, "pass", k);
+    cJSON_AddNumberToObject(p, "wall_seconds", s->wall_seconds);
+    cJSON_AddNumberToObject(p, "cpu_seconds", s->cpu_seconds);
+    add_count(p, "samples", s->samples);
+    add_count(p, "rays_cast", s->rays_cast);
+    add_count(p, "rays_kept", s->rays_kept);
+    add_count(p, "solid_angles_considered", s->solid_angles_considered);
+    add_count(p, "solid_angles_culled", s->solid_angles_culled);
+    add_count(p, "pairs", s->pairs);
+    add_count(p, "pairs_descended", s->pairs_descended);
+    add_count(p, "emitters", s->emitters);
+    return p;
+}
+
+/* @return the sampling settings as a JSON object, or NULL when memory runs out. */
+static cJSON *settings_json(const rl_sampling *s)
+{
+    cJSON *j = cJSON_CreateObject();
+    if (j == NULL)
+        return NULL;
+    cJSON_AddStringToObject(j, "method", rl_method_name(s->method));
+    add_count(j, "partition_n", s->partition_n);
+    add_count(j, "rays_per_solid_angle", s->rays_per_solid_angle);
+    add_count(j, "samples_per_cell", s->samples_per_cell);
+    add_count(j, "bounces", s->bounces);
+    add_count(j, "seed", s->seed);
+    add_count(j, "descend", s->descend);
+    return j;
+}
+
+/* Appends every pass's statistics to array passes. @return 1, or 0 when memory runs out. */
+static int add_passes(cJSON *passes, const rl_solution *sol)
+{
+    for (uint32_t k = 0; k < rl_solution_pass_count(sol); k++) {
+        rl_pass_stats ps;
+        cJSON *p = rl_solution_pass_stats(sol, k, &ps) == RL_OK ? pass_json(k, &ps) : NULL;
+        if (p == NULL || !cJSON_AddItemToArray(passes, p)) {
+            cJSON_Delete(p);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* @return the whole stats.json document (schema in docs/cli.md), or NULL when memory runs out. */
+static cJSON *stats_json(const relight_run *run)
+{
+    const rl_sampling *s = rl_scene_sampling(run->scene);
+    cJSON *root = cJSON_CreateObject();
+    if (root == NULL)
+        return NULL;
+    cJSON_AddStringToObject(root, "scene", run->o->scene);
+    cJSON_AddStringToObject(root, "creator", RELIGHT_CREATOR);
+    cJSON_AddStringToObject(root, "method", rl_method_name(s->method));
+    cJSON *settings = settings_json(s);
+    int ok = settings != NULL && cJSON_AddItemToObject(root, "settings", settings);
+    if (settings != NULL && !ok)
+        cJSON_Delete(settings);
+    add_count(root, "threads", threads_used(s));
+    cJSON_AddNumberToObject(root, "wall_seconds", run->wall_seconds);
+    cJSON_AddNumberToObject(root, "cpu_seconds", run->cpu_seconds);
+    add_count(root, "maps", run->maps);
+    add_count(root, "cells", run->cells);
+    cJSON *passes = ok ? cJSON_AddArrayToObject(root, "passes") : NULL;
+    if (passes == NULL || !add_passes(passes, run->solution)) {
+        cJSON_Delete(root);
+        return NULL;
+    }
+    return root;
+}
+
+/* Writes DIR/stats.json. @return an exit code. */
+static int write_stats(const relight_run *run)
+{
+    char err[1024];
+    cJSON *root = stats_json(run);
+    char *path = join_path(run->o->output, "stats.json");
+    int code = ILF_EXIT_OK;
+    if (root == NULL || path == NULL) {
+        cli_error("relight", "out of memory while building stats.json");
+        code = ILF_EXIT_FAILED;
+    } else if (!json_write_file(path, root, err, sizeof err)) {
+        cli_error("relight", "%s", err);
+        code = ILF_EXIT_FAILED;
+    } else {
+        report_written(run->o, path, "settings, times and pass statistics");
+    }
+    cJSON_Delete(root);
+    free(path);
+    return code;
+}
+
+/* ------------------------------------------------------------ main */
+
+/* Prints the run's summary and every pass's statistics (not with --quiet). */
+static void print_run(const relight_run *run)
+{
+    if (run->o->quiet)
+        return;
+    const rl_sampling *s = rl_scene_sampling(run->scene);
+    printf("relit %s: method %s, partition n %" PRIu32 ", %" PRIu32 " ray%s per solid angle, %" PRIu32
+           " bounce%s, %u thread%s: %.3f s wall, %.3f s cpu\n",
+           run->o->scene, rl_method_name(s->method), s->partition_n, s->rays_per_solid_angle,
+           s->rays_per_solid_angle == 1 ? "" : "s", s->bounces, s->bounces == 1 ? "" : "s", threads_used(s),
+           threads_used(s) == 1 ? "" : "s", run->wall_seconds, run->cpu_seconds);
+    for (uint32_t k = 0; k < rl_solution_pass_count(run->solution); k++) {
+        rl_pass_stats ps;
+        if (rl_solution_pass_stats(run->solution, k, &ps) == RL_OK)
+            relight_print_pass(stdout, k, &ps);
+    }
+}
+
+int ilf_cmd_relight(int argc, char **argv)
+{
+    relight_options o = {0};
+    int code = parse_arguments(&o, argc, argv);
+    if (code >= 0)
+        return code;
+    relight_run run = {.o = &o};
+    code = relight_scene_open("relight", o.scene, &o.sampling, &run.scene);
+    if (code == ILF_EXIT_OK && !make_folder(o.output))
+        code = ILF_EXIT_FAILED;
+    if (code == ILF_EXIT_OK)
+        code = relight(&run);
+    if (code == ILF_EXIT_OK)
+        print_run(&run);
+    if (code == ILF_EXIT_OK)
+        code = write_radiance(&run);
+    if (code == ILF_EXIT_OK && rl_scene_has_camera(run.scene))
+        code = write_view(&run);
+    if (code == ILF_EXIT_OK)
+        code = write_stats(&run);
+    rl_solution_destroy(run.solution);
+    rl_scene_destroy(run.scene);
+    return code;
+}

@@ -1,0 +1,65 @@
+/*
+ * tonemap.c - exposure from a percentile of the lit pixels and the sRGB
+ * transfer function (see tonemap.h), shared by `ilf slice` and `ilf relight`.
+ *
+ * Invariants: the percentile is the nearest rank over pixels whose measure
+ * is > 0, so a dark background never drags the exposure up; encoded values
+ * are always in [0, 1]; alpha is left exactly as it was.
+ */
+#include "tonemap.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* qsort order of floats, ascending. */
+static int compare_floats(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* @return the chosen measure of one RGB pixel. */
+static float pixel_measure(const float *px, tone_measure measure)
+{
+    if (measure == TONE_LUMINANCE)
+        return 0.2126f * px[0] + 0.7152f * px[1] + 0.0722f * px[2];
+    float m = px[0] > px[1] ? px[0] : px[1];
+    return m > px[2] ? m : px[2];
+}
+
+double tone_percentile_scale(const float *pixels, size_t count, int channels, tone_measure measure,
+                             double percentile, double target)
+{
+    float *values = malloc((count ? count : 1) * sizeof(float));
+    size_t lit = 0;
+    if (values == NULL)
+        return 1.0; /* only the automatic exposure suffers; the image is still written */
+    for (size_t k = 0; k < count; k++) {
+        float m = pixel_measure(pixels + k * (size_t)channels, measure);
+        if (m > 0.0f)
+            values[lit++] = m;
+    }
+    double scale = 1.0;
+    if (lit > 0) {
+        qsort(values, lit, sizeof(float), compare_floats);
+        size_t rank = (size_t)ceil(percentile * (double)lit);
+        scale = target / values[rank > 0 ? (rank <= lit ? rank : lit) - 1 : 0];
+    }
+    free(values);
+    return scale;
+}
+
+float tone_srgb_encode(double linear)
+{
+    double v = linear <= 0.0031308 ? 12.92 * linear : 1.055 * pow(linear, 1.0 / 2.4) - 0.055;
+    return (float)(v < 0.0 ? 0.0 : v > 1.0 ? 1.0 : v);
+}
+
+void tone_apply(float *pixels, size_t count, int channels, double scale)
+{
+    for (size_t k = 0; k < count; k++) {
+        float *px = pixels + k * (size_t)channels;
+        for (int c = 0; c < 3; c++)
+            px[c] = tone_srgb_encode(scale * px[c]);
+    }
+}
