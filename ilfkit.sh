@@ -39,13 +39,13 @@ build() {
 demo() {
     ilf="$BUILD_DIR/tools/ilf"
     mkdir -p "$OUT_DIR"
-    # A 1 m square slab lit by two spotlights behind it, 32x32 positions, n = 16.
-    "$ilf" synth --kind spot --grid 32x32 --n 16 \
-        --spot 0.2,0.1,-0.6:0,0,1:35:2 --spot -0.3,-0.2,-0.4:0.3,0.2,1:25:1 \
-        --radiance 4,3.5,3 -o "$OUT_DIR/demo.h5"
-    "$ilf" slice "$OUT_DIR/demo.h5" --position 16,16 --layout unfold -o "$OUT_DIR/demo_directions.png"
-    "$ilf" slice "$OUT_DIR/demo.h5" --toward 0,0,1 -o "$OUT_DIR/demo_spatial.png"
-    "$ilf" info "$OUT_DIR/demo.h5"
+    # The paper's 'beams' room, lit by the incident light field data/beams_lightfield.h5:
+    # direct light and two bounces, radiance maps, statistics and the camera's view.
+    "$ilf" relight data/beams.json -o "$OUT_DIR/beams"
+    # The light field itself: its directions at the slab's centre, and the slab seen along its normal.
+    "$ilf" slice data/beams_lightfield.h5 --position 8,8 --layout unfold -o "$OUT_DIR/lightfield_directions.png"
+    "$ilf" slice data/beams_lightfield.h5 --toward 0,0,1 -o "$OUT_DIR/lightfield_spatial.png"
+    echo "ilfkit.sh: the relit image is $OUT_DIR/beams/view.png (radiance in $OUT_DIR/beams/view.exr)"
 }
 
 case "${1:-}" in

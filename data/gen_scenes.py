@@ -282,13 +282,18 @@ def beams_room(scene):
     scene.add("white", rect([0, 0, 0], [0, 0, Z], [left, 0, 0]), inside)
     scene.add("white", rect([right, 0, 0], [0, 0, Z], [X - right, 0, 0]), inside)
     scene.add("white", rect([left, 0, top], [0, 0, Z - top], [right - left, 0, 0]), inside)
-    # a housing around the emitter: four panels from the ceiling to 5 cm below the emitter, facing out
-    lo, hi = [X / 2 - LIGHT_HALF - 0.02, Y / 2 - LIGHT_HALF - 0.02], [X / 2 + LIGHT_HALF + 0.02, Y / 2 + LIGHT_HALF + 0.02]
-    z0, h = LIGHT_Z - 0.05, Z - (LIGHT_Z - 0.05)
-    scene.add("white", rect([lo[0], lo[1], z0], [hi[0] - lo[0], 0, 0], [0, 0, h]))  # faces -y
-    scene.add("white", rect([hi[0], hi[1], z0], [lo[0] - hi[0], 0, 0], [0, 0, h]))  # faces +y
-    scene.add("white", rect([hi[0], lo[1], z0], [0, hi[1] - lo[1], 0], [0, 0, h]))  # faces +x
-    scene.add("white", rect([lo[0], hi[1], z0], [0, lo[1] - hi[1], 0], [0, 0, h]))  # faces -x
+    # a housing around the emitter: four panels from the ceiling to 5 cm below the emitter.
+    # Surfaces are one-sided, so each panel has an outer and an inner face, 1 cm apart
+    # (coincident faces would leave a ray free to hit either).
+    for gap, inward in ((0.02, False), (0.01, True)):
+        lo = [X / 2 - LIGHT_HALF - gap, Y / 2 - LIGHT_HALF - gap]
+        hi = [X / 2 + LIGHT_HALF + gap, Y / 2 + LIGHT_HALF + gap]
+        z0, h = LIGHT_Z - 0.05, Z - (LIGHT_Z - 0.05)
+        for outward in (rect([lo[0], lo[1], z0], [hi[0] - lo[0], 0, 0], [0, 0, h]),   # faces -y
+                        rect([hi[0], hi[1], z0], [lo[0] - hi[0], 0, 0], [0, 0, h]),   # faces +y
+                        rect([hi[0], lo[1], z0], [0, hi[1] - lo[1], 0], [0, 0, h]),   # faces +x
+                        rect([lo[0], hi[1], z0], [0, lo[1] - hi[1], 0], [0, 0, h])):  # faces -x
+            scene.add("white", list(reversed(outward)) if inward else outward)
     check_beams()
     for centre, yaw, tilt in BEAMS:
         scene.add_all("beam", box(centre, beam_frame(yaw, tilt), [BEAM_LENGTH / 2, BEAM_WIDTH / 2, BEAM_WIDTH / 2]))

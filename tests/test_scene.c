@@ -510,7 +510,7 @@ static void test_data(void)
     char path[2048];
     rl_scene *s = load(datadir, "beams_diffuse.json");
     if (s) {
-        CHECK(s->npolygons == 43 && s->nlightfields == 0, "beams_diffuse: %zu polygons", s->npolygons);
+        CHECK(s->npolygons == 47 && s->nlightfields == 0, "beams_diffuse: %zu polygons", s->npolygons);
         CHECK(s->cell_size == 0.05 && s->sampling.partition_n == 32 && s->sampling.rays_per_solid_angle == 4 &&
                   s->sampling.bounces == 2 && s->has_camera,
               "beams_diffuse settings");
@@ -543,7 +543,7 @@ static void test_data(void)
     }
     s = load(datadir, "beams.json");
     if (s) {
-        CHECK(s->npolygons == 42 && s->nlightfields == 1, "beams: %zu polygons, %zu light fields", s->npolygons,
+        CHECK(s->npolygons == 46 && s->nlightfields == 1, "beams: %zu polygons, %zu light fields", s->npolygons,
               s->nlightfields);
         if (s->nlightfields == 1) {
             const rl_lightfield *lf = &s->lightfields[0];

@@ -36,10 +36,10 @@ static int parse_seed(const cli_parser *p, const char *text, uint64_t *seed)
     return 1;
 }
 
-/* Parses a partition level: a power of two from 1 to 4096. @return 1, or 0 after reporting. */
-static int parse_partition_n(const cli_parser *p, const char *text, uint32_t *n)
+/* Parses a partition level: a power of two from lo (0 or 1) to 4096. @return 1, or 0 after reporting. */
+static int parse_partition_n(const cli_parser *p, const char *text, uint32_t lo, uint32_t *n)
 {
-    if (!cli_value_u32(p, text, 1, 4096, n))
+    if (!cli_value_u32(p, text, lo, 4096, n))
         return 0;
     if ((*n & (*n - 1)) != 0)
         return cli_bad_value(p, text, "must be a power of two"), 0;
@@ -58,7 +58,9 @@ int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, c
         break;
     case SAMPLING_OPT_THREADS: ok = cli_value_u32(p, value, 0, 1024, &v->threads); break;
     case SAMPLING_OPT_SEED: ok = parse_seed(p, value, &v->seed); break;
-    case SAMPLING_OPT_PARTITION_N: ok = parse_partition_n(p, value, &v->partition_n); break;
+    case SAMPLING_OPT_PARTITION_N: ok = parse_partition_n(p, value, 1, &v->partition_n); break;
+    case SAMPLING_OPT_BOUNCE_PARTITION_N: ok = parse_partition_n(p, value, 0, &v->bounce_partition_n); break;
+    case SAMPLING_OPT_DESCEND: ok = cli_value_u32(p, value, 0, 1, &v->descend); break;
     case SAMPLING_OPT_RAYS: ok = cli_value_u32(p, value, 1, 65536, &v->rays_per_solid_angle); break;
     case SAMPLING_OPT_SAMPLES: ok = cli_value_u32(p, value, 1, 1048576, &v->samples_per_cell); break;
     case SAMPLING_OPT_BOUNCES: ok = cli_value_u32(p, value, 0, 64, &v->bounces); break;
@@ -88,6 +90,10 @@ static rl_sampling merged_sampling(const rl_sampling *scene, const sampling_over
         s.samples_per_cell = v->samples_per_cell;
     if (o->given & (1u << SAMPLING_OPT_BOUNCES))
         s.bounces = v->bounces;
+    if (o->given & (1u << SAMPLING_OPT_BOUNCE_PARTITION_N))
+        s.bounce_partition_n = v->bounce_partition_n;
+    if (o->given & (1u << SAMPLING_OPT_DESCEND))
+        s.descend = v->descend;
     return s;
 }
 

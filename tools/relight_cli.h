@@ -26,7 +26,9 @@
     {"partition-n", 0, "N", "partition level, a power of two up to 4096 (default: the scene's)"},  \
     {"rays", 0, "K", "rays per (cell, solid angle), 1 .. 65536 (default: the scene's)"},           \
     {"samples", 0, "N", "shadow rays per (cell, emitter), area and solidangle (default: scene's)"}, \
-    {"bounces", 0, "B", "diffuse passes after the direct one, 0 .. 64 (default: the scene's)"}
+    {"bounces", 0, "B", "diffuse passes after the direct one, 0 .. 64 (default: the scene's)"},    \
+    {"bounce-partition-n", 0, "N", "partition level of bounce passes, 0 = partition-n / 4 (default: scene's)"}, \
+    {"descend", 0, "0|1", "1: finer solid angles for emitters smaller than one (default: the scene's)"}
 
 enum sampling_option_id {
     SAMPLING_OPT_METHOD,
@@ -36,6 +38,8 @@ enum sampling_option_id {
     SAMPLING_OPT_RAYS,
     SAMPLING_OPT_SAMPLES,
     SAMPLING_OPT_BOUNCES,
+    SAMPLING_OPT_BOUNCE_PARTITION_N,
+    SAMPLING_OPT_DESCEND,
     SAMPLING_OPT_COUNT
 };
 

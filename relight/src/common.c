@@ -49,6 +49,7 @@ void rl_sampling_default(rl_sampling *s)
     s->rays_per_solid_angle = 4;
     s->samples_per_cell = 128;
     s->bounces = 0;
+    s->bounce_partition_n = 0;
     s->seed = 1;
     s->descend = 1;
     s->threads = 0;

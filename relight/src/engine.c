@@ -205,13 +205,28 @@ static size_t append_bounce_emitters(const rl_scene *scene, const rl_map *maps, 
     return n;
 }
 
-/* Fills the shared context of a pass. */
-static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, uint32_t pass, const rl_emitter *e, size_t n,
-                     rl_transfer_ctx *ctx)
+/* @return the sampling of pass p. Bounce passes use bounce_partition_n and
+ * never descend: their emitters are every lit surface, which at a coarse
+ * level nearly all subtend less than a solid angle, and descending for each
+ * would cost more than the smooth indirect light is worth. */
+static rl_sampling pass_sampling(const rl_sampling *s, uint32_t p)
+{
+    rl_sampling out = *s;
+    if (p > 0) {
+        out.partition_n = s->bounce_partition_n ? s->bounce_partition_n
+                          : s->partition_n >= 4 ? s->partition_n / 4 : 1;
+        out.descend = 0;
+    }
+    return out;
+}
+
+/* Fills the shared context of a pass; sampling must outlive it. */
+static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, uint32_t pass, const rl_sampling *sampling,
+                     const rl_emitter *e, size_t n, rl_transfer_ctx *ctx)
 {
     ctx->scene = scene;
     ctx->tracer = tracer;
-    ctx->sampling = &scene->sampling;
+    ctx->sampling = sampling;
     ctx->pass = pass;
     ctx->emitters = e;
     ctx->nemitters = n;
@@ -221,8 +236,10 @@ static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, uint32_t pa
     ctx->margin = 1e-9 * tracer_extent(tracer);
 }
 
-/* Runs one pass over maps with emitters e. @return RL_OK or an error. */
-static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, uint32_t pass, rl_map *maps,
+/* Runs one pass over maps with emitters e; gather_level_pass chooses the
+ * partition level (0: partition_n, else the bounce level). @return RL_OK or an error. */
+static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, uint32_t pass, uint32_t gather_level_pass,
+                          rl_map *maps,
                           size_t nmaps, const rl_emitter *e, size_t ne, rl_progress_fn progress, void *user,
                           double base, double span, rl_pass_stats *st)
 {
@@ -233,7 +250,8 @@ static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, uint32
         memset(maps[m].e_pass, 0, (maps[m].ncells ? maps[m].ncells : 1) * sizeof *maps[m].e_pass);
     pass_job job;
     memset(&job, 0, sizeof job);
-    make_ctx(scene, tracer, pass, e, ne, &job.ctx);
+    rl_sampling sampling = pass_sampling(&scene->sampling, gather_level_pass);
+    make_ctx(scene, tracer, pass, &sampling, e, ne, &job.ctx);
     job.maps = maps;
     job.items = make_tiles(maps, nmaps, &job.nitems);
     if (!job.items)
@@ -295,7 +313,7 @@ static rl_status solve(const rl_scene *scene, uint32_t passes, rl_progress_fn pr
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
         if (p > 0)
             ne = append_bounce_emitters(scene, s->maps, s->nmaps, e, 0);
-        st = run_pass(scene, s->tracer, p, s->maps, s->nmaps, e, ne, progress, user, (double)p / passes,
+        st = run_pass(scene, s->tracer, p, p, s->maps, s->nmaps, e, ne, progress, user, (double)p / passes,
                       1.0 / passes, &s->passes[p]);
         close_pass(s->maps, s->nmaps);
         s->npasses = p + 1;
@@ -541,7 +559,7 @@ rl_status rl_irradiance(const rl_scene *scene, const double *points, size_t coun
     }
     rl_pass_stats local;
     if (st == RL_OK)
-        st = run_pass(scene, sol->tracer, scene->sampling.bounces, pts, count, e, ne, NULL, NULL, 0, 1,
+        st = run_pass(scene, sol->tracer, scene->sampling.bounces, 0, pts, count, e, ne, NULL, NULL, 0, 1,
                       stats ? stats : &local);
     for (size_t k = 0; st == RL_OK && k < count; k++)
         for (int c = 0; c < 3; c++)

@@ -20,14 +20,21 @@ static double radical_inverse(uint32_t i, uint32_t b)
     return r;
 }
 
-void lds4(uint64_t key, uint32_t i, double u[4])
+lds_key lds_make(uint64_t key)
+{
+    lds_key k;
+    for (int j = 0; j < 4; j++)
+        k.shift[j] = (hash_mix(key, (uint64_t)j + 1) >> 11) * (1.0 / 9007199254740992.0);
+    return k;
+}
+
+void lds4(const lds_key *k, uint32_t i, double u[4])
 {
     static const uint32_t bases[4] = {2, 3, 5, 7};
-    for (int k = 0; k < 4; k++) {
-        double shift = (hash_mix(key, (uint64_t)k + 1) >> 11) * (1.0 / 9007199254740992.0);
-        double x = radical_inverse(i, bases[k]) + shift;
-        x -= floor(x);
-        u[k] = x < 1.0 ? x : 0x1.fffffffffffffp-1;
+    for (int j = 0; j < 4; j++) {
+        double x = radical_inverse(i, bases[j]) + k->shift[j];
+        x = x >= 1.0 ? x - 1.0 : x;
+        u[j] = x < 1.0 ? x : 0x1.fffffffffffffp-1;
     }
 }
 
@@ -50,31 +57,48 @@ static v3 orthonormal_part(v3 v, v3 w)
     return v3_norm(v3_cross(w, h));
 }
 
-v3 sample_spherical_triangle(v3 a, v3 b, v3 c, double omega, double u1, double u2)
+sph_tri sph_tri_make(v3 a, v3 b, v3 c, double omega)
 {
-    if (!(omega > 1e-9)) {
-        double su = sqrt(u1);
-        v3 p = v3_add(v3_add(v3_scale(a, 1 - su), v3_scale(b, su * (1 - u2))), v3_scale(c, su * u2));
-        return v3_norm(p);
-    }
-    /* Arvo: choose the sub-triangle a, b, c' of area u1*omega, then a point
-     * on the arc from b to c' with the right density. alpha is the interior
-     * angle at a, between the planes (a, b) and (a, c). */
+    sph_tri t = {.a = a, .b = b, .c = c, .omega = omega, .planar = 1};
+    if (!(omega > 1e-9))
+        return t;
+    /* alpha is the interior angle at a, between the planes (a, b) and (a, c) */
     v3 nab = v3_cross(a, b), nac = v3_cross(a, c);
     double lab = v3_len(nab), lac = v3_len(nac);
     if (!(lab > 0) || !(lac > 0))
-        return a;
-    double cos_alpha = fmin(1.0, fmax(-1.0, v3_dot(nab, nac) / (lab * lac)));
-    double sin_alpha = sqrt(fmax(0.0, 1.0 - cos_alpha * cos_alpha));
-    double area = u1 * omega;
-    double s = sin(area - acos(cos_alpha)), t = cos(area - acos(cos_alpha));
-    double u = t - cos_alpha, v = s + sin_alpha * v3_dot(a, b);
-    double den = (v * s + u * t) * sin_alpha;
-    double q = den != 0.0 ? ((v * t - u * s) * cos_alpha - v) / den : 1.0;
-    q = fmin(1.0, fmax(-1.0, q));
-    v3 c2 = v3_add(v3_scale(a, q), v3_scale(orthonormal_part(c, a), sqrt(fmax(0.0, 1 - q * q))));
-    double z = 1.0 - u2 * (1.0 - v3_dot(c2, b));
-    z = fmin(1.0, fmax(-1.0, z));
-    v3 p = v3_add(v3_scale(b, z), v3_scale(orthonormal_part(c2, b), sqrt(fmax(0.0, 1 - z * z))));
+        return t;
+    t.cos_alpha = fmin(1.0, fmax(-1.0, v3_dot(nab, nac) / (lab * lac)));
+    t.sin_alpha = sqrt(fmax(0.0, 1.0 - t.cos_alpha * t.cos_alpha));
+    t.alpha = acos(t.cos_alpha);
+    t.cos_ab = v3_dot(a, b);
+    t.c_perp = orthonormal_part(c, a);
+    t.planar = 0;
+    return t;
+}
+
+v3 sph_tri_sample(const sph_tri *t, double u1, double u2)
+{
+    if (t->planar) {
+        double su = sqrt(u1);
+        v3 p = v3_add(v3_add(v3_scale(t->a, 1 - su), v3_scale(t->b, su * (1 - u2))), v3_scale(t->c, su * u2));
+        return v3_norm(p);
+    }
+    /* Arvo: the sub-triangle a, b, c' of area u1*omega, then a point on the
+     * arc from b to c' with the density that makes the whole uniform */
+    double s = sin(u1 * t->omega - t->alpha), c = cos(u1 * t->omega - t->alpha);
+    double u = c - t->cos_alpha, v = s + t->sin_alpha * t->cos_ab;
+    double den = (v * s + u * c) * t->sin_alpha;
+    double q = den != 0.0 ? ((v * c - u * s) * t->cos_alpha - v) / den : 1.0;
+    q = q > 1.0 ? 1.0 : q < -1.0 ? -1.0 : q;
+    v3 c2 = v3_add(v3_scale(t->a, q), v3_scale(t->c_perp, sqrt(1.0 - q * q)));
+    double z = 1.0 - u2 * (1.0 - v3_dot(c2, t->b));
+    z = z > 1.0 ? 1.0 : z < -1.0 ? -1.0 : z;
+    v3 p = v3_add(v3_scale(t->b, z), v3_scale(orthonormal_part(c2, t->b), sqrt(1.0 - z * z)));
     return v3_norm(p);
+}
+
+v3 sample_spherical_triangle(v3 a, v3 b, v3 c, double omega, double u1, double u2)
+{
+    sph_tri t = sph_tri_make(a, b, c, omega);
+    return sph_tri_sample(&t, u1, u2);
 }

@@ -19,14 +19,38 @@ static inline uint64_t hash_mix(uint64_t h, uint64_t x)
     return z ^ (z >> 31);
 }
 
+/* The Cranley-Patterson rotation of one key: four offsets in [0, 1). */
+typedef struct lds_key {
+    double shift[4];
+} lds_key;
+
+/* @return the rotation drawn from key. */
+lds_key lds_make(uint64_t key);
+
 /* Point i of a 4-D Halton sequence (bases 2, 3, 5, 7), shifted modulo 1 by
- * offsets drawn from key (a Cranley-Patterson rotation): low discrepancy
- * within one key, independent between keys. Each u[k] is in [0, 1). */
-void lds4(uint64_t key, uint32_t i, double u[4]);
+ * k's offsets: low discrepancy within one key, independent between keys.
+ * Each u[j] is in [0, 1). */
+void lds4(const lds_key *k, uint32_t i, double u[4]);
+
+/* A spherical triangle prepared for repeated uniform sampling (Arvo 1995). */
+typedef struct sph_tri {
+    v3 a, b, c;        /* corners, unit vectors */
+    v3 c_perp;         /* c's part orthogonal to a, normalised */
+    double omega;      /* solid angle */
+    double alpha;      /* interior angle at a */
+    double cos_alpha, sin_alpha, cos_ab;
+    int planar;        /* tiny or degenerate: sample the planar triangle instead */
+} sph_tri;
+
+/* Prepares the triangle a, b, c (unit vectors) of solid angle omega. Below
+ * 1e-9 sr the planar triangle is sampled and normalised (density error < 1e-9). */
+sph_tri sph_tri_make(v3 a, v3 b, v3 c, double omega);
+
+/* A direction uniformly distributed in t, from u1, u2 in [0, 1). */
+v3 sph_tri_sample(const sph_tri *t, double u1, double u2);
 
 /* A direction uniformly distributed in the spherical triangle a, b, c (unit
- * vectors) of solid angle omega, from u1, u2 in [0, 1). Below 1e-9 sr the
- * planar triangle is sampled and normalised (density error < 1e-9). */
+ * vectors) of solid angle omega, from u1, u2 in [0, 1): sph_tri_make then sph_tri_sample. */
 v3 sample_spherical_triangle(v3 a, v3 b, v3 c, double omega, double u1, double u2);
 
 /* @return the solid angle of the spherical triangle a, b, c (unit vectors). */

@@ -51,6 +51,7 @@ typedef struct int_limit {
 } int_limit;
 
 static const int_limit lim_partition = {1, 4096, 1};
+static const int_limit lim_bounce_partition = {0, 4096, 1}; /* 0: derived from partition_n */
 static const int_limit lim_rays = {1, 65536, 0};
 static const int_limit lim_samples = {1, 1048576, 0};
 static const int_limit lim_bounces = {0, 64, 0};
@@ -650,10 +651,12 @@ static rl_status read_radiance_maps(rl_build *b, const cJSON *j)
 static rl_status read_sampling(rl_build *b, const cJSON *j)
 {
     static const char *const keys[] = {"method", "partition_n", "rays_per_solid_angle", "samples_per_cell",
-                                       "bounces", "seed", NULL};
-    static const int_limit *const limits[] = {NULL, &lim_partition, &lim_rays, &lim_samples, &lim_bounces, &lim_seed};
+                                       "bounces", "bounce_partition_n", "descend", "seed", NULL};
+    static const int_limit *const limits[] = {NULL, &lim_partition, &lim_rays, &lim_samples, &lim_bounces,
+                                              &lim_bounce_partition, &lim_flag, &lim_seed};
     rl_sampling *s = &b->scene->sampling;
-    uint32_t *const fields[] = {NULL, &s->partition_n, &s->rays_per_solid_angle, &s->samples_per_cell, &s->bounces, NULL};
+    uint32_t *const fields[] = {NULL, &s->partition_n, &s->rays_per_solid_angle, &s->samples_per_cell, &s->bounces,
+                                &s->bounce_partition_n, &s->descend, NULL};
     rl_status st = json_keys(b, j, "sampling", keys);
     const cJSON *m = member(j, "method");
     const char *name = NULL;
@@ -947,6 +950,7 @@ rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
                   {"rays_per_solid_angle", x->rays_per_solid_angle, &lim_rays},
                   {"samples_per_cell", x->samples_per_cell, &lim_samples},
                   {"bounces", x->bounces, &lim_bounces},
+                  {"bounce_partition_n", x->bounce_partition_n, &lim_bounce_partition},
                   {"descend", x->descend, &lim_flag},
                   {"threads", x->threads, &lim_threads}};
     for (size_t k = 0; k < sizeof fields / sizeof fields[0]; k++)

@@ -349,12 +349,13 @@ static int walk(const rl_transfer_ctx *ctx, const pair *p, const tile *t, rl_scr
 /* Traces the k rays of (cell, leaf) and adds their estimate to the cell.
  * clip, when not NULL, restricts origins to the cell's part inside the region. */
 static void gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t cell, uint64_t id,
-                        const v3 g[3], double omega, uint32_t emitter_index, const v2 *clip, size_t nclip,
-                        rl_counters *cnt)
+                        const sph_tri *tri, uint32_t emitter_index, const v2 *clip, size_t nclip, rl_counters *cnt)
 {
     rl_map *m = t->m;
     v2 cp[RL_MAX_POLY_VERTS + 8];
     uint32_t ncp = map_cell_polygon(m, &m->cells[cell], cp);
+    /* a full square needs no polygon sampling: its corner and side do */
+    int square = m->cells[cell].poly_count == 0 && !clip;
     double weight = 1.0;
     if (clip && m->cells[cell].area > 0) {
         /* cell intersect region: clip the cell by the clipped region's edges */
@@ -377,17 +378,18 @@ static void gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile *t
         memcpy(cp, buf[cur], ncp * sizeof *cp);
     }
     uint32_t k = ctx->sampling->rays_per_solid_angle;
-    uint64_t key = hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass),
-                                                                emitter_index), t->map_index), cell), p->level), id);
+    lds_key key = lds_make(hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass),
+                                                                        emitter_index), t->map_index), cell),
+                                         p->level), id));
     double acc[3] = {0, 0, 0};
     for (uint32_t i = 0; i < k; i++) {
         double u[4];
-        lds4(key, i, u);
-        v3 x = frame_point(&m->frame, sample_polygon(cp, ncp, u[0], u[1]));
-        v3 d = sample_spherical_triangle(g[0], g[1], g[2], omega, u[2], u[3]);
-        trace_back(ctx, p->e, x, m->frame.n, d, acc, cnt);
+        lds4(&key, i, u);
+        v2 q = square ? (v2){cp[0].x + u[0] * m->cell, cp[0].y + u[1] * m->cell} : sample_polygon(cp, ncp, u[0], u[1]);
+        v3 d = sph_tri_sample(tri, u[2], u[3]);
+        trace_back(ctx, p->e, frame_point(&m->frame, q), m->frame.n, d, acc, cnt);
     }
-    double scale = weight * omega / k;
+    double scale = weight * tri->omega / k;
     for (int c = 0; c < 3; c++)
         m->e_pass[cell][c] += acc[c] * scale;
 }
@@ -421,7 +423,7 @@ static void gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t
         const rl_frame *f = &p->e->frame;
         g[k] = v3_add(v3_add(v3_scale(f->e1, v[k][0]), v3_scale(f->e2, v[k][1])), v3_scale(f->n, v[k][2]));
     }
-    double omega = lfio_part_solid_angle(p->level, id);
+    sph_tri tri = sph_tri_make(g[0], g[1], g[2], lfio_part_solid_angle(p->level, id));
     size_t nq = 0;
     if (culled) {
         nq = node_region(ctx, p, t, p->level, id, reg, q);
@@ -444,7 +446,7 @@ static void gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t
         for (uint32_t i = i0; i <= i1; i++) {
             int32_t cell = m->grid[(size_t)j * m->nu + i];
             if (cell >= 0)
-                gather_cell(ctx, p, t, (uint32_t)cell, id, g, omega, emitter_index, clip, nq, cnt);
+                gather_cell(ctx, p, t, (uint32_t)cell, id, &tri, emitter_index, clip, nq, cnt);
         }
     }
 }
@@ -574,12 +576,12 @@ static void gather_baseline(const rl_transfer_ctx *ctx, const tile *t, uint32_t 
                 continue;
             v2 cp[RL_MAX_POLY_VERTS + 8];
             uint32_t ncp = map_cell_polygon(m, &m->cells[cell], cp);
-            uint64_t key = hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), t->map_index),
-                                    (uint64_t)cell);
+            lds_key key = lds_make(hash_mix(
+                hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), t->map_index), (uint64_t)cell));
             double acc[3] = {0, 0, 0};
             for (uint32_t s = 0; s < n; s++) {
                 double u[4];
-                lds4(key, s, u);
+                lds4(&key, s, u);
                 v3 x = frame_point(&m->frame, sample_polygon(cp, ncp, u[0], u[1]));
                 baseline_sample(ctx, &p, &m->frame, x, u, s_area, acc, cnt);
             }

@@ -65,6 +65,8 @@ typedef struct rl_sampling {
     uint32_t rays_per_solid_angle; /**< k rays per (cell, solid angle), default 4 */
     uint32_t samples_per_cell;     /**< shadow rays per (cell, emitter) for area and solidangle, default 128 */
     uint32_t bounces;              /**< further diffuse passes after the direct one, default 0 */
+    uint32_t bounce_partition_n;   /**< partition level of those passes (which never descend); 0 (default): partition_n / 4, at least 1.
+                                        Indirect light is smooth, and a bounce pass gathers from every surface */
     uint64_t seed;                 /**< default 1 */
     uint32_t descend;              /**< 1 (default): pairs whose emitter subtends less than a solid angle
                                         use finer levels; 0: always partition_n, the paper's plain method */
