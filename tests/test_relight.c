@@ -49,7 +49,7 @@ static tpoly rect_z(const char *mat, double x0, double y0, double x1, double y1,
 static void write_scene(const char *path, const char *materials, const tpoly *p, int n, const char *rest)
 {
     FILE *f = fopen(path, "w");
-    fprintf(f, "{\"materials\": %s,\n \"polygons\": [", materials);
+    fprintf(f, "{\"materials\": %s,\n \"polygons\": [", materials); /* may be empty */
     for (int k = 0; k < n; k++) {
         fprintf(f, "%s\n  {\"material\": \"%s\", \"vertices\": [", k ? "," : "", p[k].material);
         for (int i = 0; i < p[k].n; i++)
@@ -411,6 +411,41 @@ static void check_lightfield(void)
     rl_scene_destroy(s);
 }
 
+/* A constant light field slab seen edge-on: the point lies just below the
+ * slab's plane, facing across it, so every direction that reaches it from the
+ * slab grazes the slab. A constant slab is a Lambertian emitter, so Lambert's
+ * formula is the answer. */
+static void check_slab_edge_on(void)
+{
+    char lfpath[600], path[600];
+    snprintf(lfpath, sizeof lfpath, "%s/edge_lf.h5", tmpdir);
+    write_lightfield(lfpath, 2.0f, 180, 16);
+    snprintf(path, sizeof path, "%s/edge_on.json", tmpdir);
+    write_scene(path, MATS, NULL, 0,
+                "\"lightfields\": [{\"file\": \"edge_lf.h5\", \"transform\": [[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]}]");
+    rl_scene *s = load(path);
+    if (!s)
+        return;
+    tpoly em = rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
+    const double pts[3][6] = {{1.0, 0.0, 0.999, -1, 0, 0}, {0.5001, 0.2, 0.9999, -1, 0, 0.01}, {3.0, 0.0, 0.99, -1, 0, 0}};
+    const rl_method methods[] = {RL_METHOD_CULLED, RL_METHOD_SOLIDANGLE};
+    for (int m = 0; m < 2; m++)
+        for (int q = 0; q < 3; q++) {
+            set_sampling(s, methods[m], 32, 16, 4096, 0);
+            double out[3] = {NAN, NAN, NAN}, nrm[3] = {pts[q][3], pts[q][4], pts[q][5]};
+            double l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+            for (int c = 0; c < 3; c++)
+                nrm[c] /= l;
+            CHECK(rl_irradiance(s, pts[q], 1, out, NULL) == RL_OK, "edge-on: %s", rl_errmsg());
+            double ref = rl_reference_polygon_irradiance(&em.v[0][0], 4, pts[q], nrm, 2.0);
+            printf("extreme slab_edge_on[%d]          %-10s: %.6g vs %.6g (rel %.2g)\n", q, rl_method_name(methods[m]),
+                   out[0], ref, fabs(out[0] - ref) / ref);
+            CHECK(isfinite(out[0]) && fabs(out[0] - ref) <= 0.05 * ref, "slab edge-on %d %s: %.6g vs %.6g", q,
+                  rl_method_name(methods[m]), out[0], ref);
+        }
+    rl_scene_destroy(s);
+}
+
 /* Irradiance at one point from one emitter, every method, against Lambert.
  * Area sampling is held to tol_rel only when area_ok: a uniform density on
  * an emitter much larger than its distance, or one seen from next to it,
@@ -561,6 +596,7 @@ int main(int argc, char **argv)
     snprintf(tmpdir, sizeof tmpdir, "%s", t ? t : "/tmp");
     if (argc > 1 && strcmp(argv[1], "--extremes") == 0) {
         check_extremes();
+        check_slab_edge_on();
         check_random_scenes(24);
     } else {
         check_unoccluded();

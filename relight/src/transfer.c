@@ -209,27 +209,52 @@ typedef struct tile {
     size_t npoly;
 } tile;
 
+/* The fan of convex polygon p (n vertices, n >= 3) as seen from x: unit
+ * directions and the solid angles of triangles (0, i, i+1). @return the total. */
+static double spherical_fan(const v3 *p, size_t n, v3 x, v3 *dir, double *omega)
+{
+    double total = 0.0;
+    for (size_t i = 0; i < n; i++)
+        dir[i] = v3_norm(v3_sub(p[i], x));
+    for (size_t i = 1; i + 1 < n; i++) {
+        omega[i] = spherical_triangle_area(dir[0], dir[i], dir[i + 1]);
+        total += omega[i];
+    }
+    return total;
+}
+
 /* Chooses the pair's level: partition_n, or finer while the emitter
- * subtends less than one leaf (a leaf is about 2*pi / (4 m^2) sr) from the
- * farthest point of the tile. A point receiver keeps only the few
- * leaves around its view of the emitter at every level, so it may descend
- * to 2^20; a tile of cells stops where a leaf's footprint shrinks below a
- * quarter of a cell, beyond which leaves multiply without new information. */
+ * subtends less than one leaf (a leaf is about 2*pi / (4 m^2) sr, about
+ * 1.26 / m rad across) from every corner of the tile, in solid angle or in
+ * angular width -- exact solid angles, so an emitter seen edge-on counts as
+ * small. Descent stops where the leaves covering the emitter's
+ * angular extent would pass 65536, and, for a tile of cells, where a leaf's
+ * footprint shrinks below a quarter of a cell: beyond those, leaves
+ * multiply without new information. */
 static uint32_t pair_level(const rl_transfer_ctx *ctx, const pair *p, const tile *t)
 {
     uint32_t m = ctx->sampling->partition_n;
-    v2 sp[RL_MAX_POLY_VERTS + 2];
-    for (size_t i = 0; i < p->ns; i++)
-        sp[i] = frame_project(&p->e->frame, p->sclip[i]);
-    double area = polygon_area2(sp, (uint32_t)p->ns), far2 = 0.0;
-    for (size_t i = 0; i < p->ns; i++)
-        for (size_t j = 0; j < t->npoly; j++) {
-            v3 r = frame_point(&t->m->frame, t->poly[j]);
-            far2 = fmax(far2, v3_dot(v3_sub(r, p->sclip[i]), v3_sub(r, p->sclip[i])));
+    double subtended = 0.0, width = 0.0, extent = 0.0, far2 = 0.0;
+    v3 dir[RL_MAX_POLY_VERTS + 2];
+    double om[RL_MAX_POLY_VERTS + 2];
+    for (size_t j = 0; j < t->npoly; j++) {
+        v3 r = frame_point(&t->m->frame, t->poly[j]);
+        double omega = spherical_fan(p->sclip, p->ns, r, dir, om), ext = 0.0;
+        for (size_t a = 0; a < p->ns; a++) {
+            far2 = fmax(far2, v3_dot(v3_sub(r, p->sclip[a]), v3_sub(r, p->sclip[a])));
+            for (size_t b = a + 1; b < p->ns; b++)
+                ext = fmax(ext, acos(fmin(1.0, fmax(-1.0, v3_dot(dir[a], dir[b])))));
         }
-    double subtended = far2 > 0 ? area / far2 : INFINITY;
-    double cap = t->m->polygon < 0 ? (double)(1u << 20) : 2.5 * sqrt(far2) / t->m->cell;
-    while (m < cap && m < (1u << 20) && 1.6 / ((double)m * m) > subtended)
+        subtended = fmax(subtended, omega);
+        width = fmax(width, ext > 0 ? omega / ext : 0.0);
+        extent = fmax(extent, ext);
+    }
+    double cap = extent > 0 ? 324.0 / extent : (double)(1u << 20);
+    if (t->m->polygon >= 0)
+        cap = fmin(cap, 2.5 * sqrt(far2) / t->m->cell);
+    /* an emitter seen edge-on is long and thin: its angular width, not only
+     * its solid angle, must span a leaf */
+    while (m < cap && m < (1u << 20) && (1.6 / ((double)m * m) > subtended || 1.26 / m > width))
         m *= 2;
     return m;
 }
@@ -483,20 +508,6 @@ static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32
 }
 
 /* ------------------------------------------------------------- baselines */
-
-/* The fan of convex polygon p (n vertices, n >= 3) as seen from x: unit
- * directions and the solid angles of triangles (0, i, i+1). @return the total. */
-static double spherical_fan(const v3 *p, size_t n, v3 x, v3 *dir, double *omega)
-{
-    double total = 0.0;
-    for (size_t i = 0; i < n; i++)
-        dir[i] = v3_norm(v3_sub(p[i], x));
-    for (size_t i = 1; i + 1 < n; i++) {
-        omega[i] = spherical_triangle_area(dir[0], dir[i], dir[i + 1]);
-        total += omega[i];
-    }
-    return total;
-}
 
 /* One sample of `area` (uniform on the clipped emitter) or `solidangle`
  * (uniform in its spherical polygon) from cell point x; adds weighted
