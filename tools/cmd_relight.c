@@ -35,8 +35,9 @@
 
 /* Progress is reported to cli_progress in steps of 1/PROGRESS_STEPS of the run. */
 #define PROGRESS_STEPS 1000u
-/* The PNG maps the 99th percentile of the lit pixels' luminance to this value. */
-#define PNG_PERCENTILE 0.99
+/* The PNG maps the 90th percentile of the lit pixels' luminance to this value: low enough that
+ * visible emitters (a few per cent of a view) saturate instead of setting the exposure. */
+#define PNG_PERCENTILE 0.90
 #define PNG_TARGET 0.8
 /* The program named in radiance.h5 and stats.json. */
 #define RELIGHT_CREATOR "ilf relight (ilfkit " ILFKIT_VERSION ")"
@@ -65,7 +66,7 @@ static const cli_usage relight_usage = {
     "Relights the scene (docs/scene.md) and writes to DIR: radiance.h5, the irradiance\n"
     "and radiosity of every receiving polygon's cells (docs/format.md); stats.json, the\n"
     "settings, times and per-pass counters (docs/cli.md); and, when the scene has a\n"
-    "camera, view.exr (radiance) and view.png (exposed so that the 99th percentile of\n"
+    "camera, view.exr (radiance) and view.png (exposed so that the 90th percentile of\n"
     "the lit pixels' luminance shows as 0.8, sRGB). Sampling options replace the\n"
     "scene's own settings.",
     "ilf relight data/beams_diffuse.json -o out/beams\n"
@@ -365,7 +366,7 @@ static int write_view(const relight_run *run)
     if (code == ILF_EXIT_OK) {
         double scale = tone_percentile_scale(pixels, count, 3, TONE_LUMINANCE, PNG_PERCENTILE, PNG_TARGET);
         tone_apply(pixels, count, 3, scale);
-        snprintf(what, sizeof what, "%dx%d, sRGB, scale %.6g (99th percentile of luminance -> %.1f)", width, height,
+        snprintf(what, sizeof what, "%dx%d, sRGB, scale %.6g (90th percentile of luminance -> %.1f)", width, height,
                  scale, PNG_TARGET);
         code = write_view_image(run, "view.png", width, height, pixels, what);
     }

@@ -466,6 +466,16 @@ static void shade(const rl_solution *s, v3 org, v3 dir, float out[3])
         out[c] = (float)l[c];
 }
 
+rl_status rl_solution_trace(const rl_solution *s, const double org[3], const double dir[3], float rgb[3])
+{
+    v3 o = v3_load(org), d = v3_load(dir);
+    double len = v3_len(d);
+    if (!isfinite(v3_maxabs(o)) || !isfinite(len) || !(len > 0))
+        return rl__fail(RL_ERR_ARG, "rl_solution_trace: origin and direction must be finite, direction nonzero");
+    shade(s, o, v3_scale(d, 1.0 / len), rgb);
+    return RL_OK;
+}
+
 /* Renders rows until none are left. */
 static void *render_worker(void *p)
 {

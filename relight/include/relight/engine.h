@@ -81,6 +81,15 @@ rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, do
                                 float *irradiance, float *radiosity);
 
 /**
+ * Gives the radiance (W sr^-1 m^-2) arriving at org from the first surface
+ * along the ray org + t*dir, t > 0 (dir need not be unit): emission plus
+ * albedo * irradiance / pi of the cell hit; 0 for a back face or no hit.
+ * Light field slabs are not surfaces and are not seen. Thread-safe.
+ * @return RL_OK; RL_ERR_ARG if org or dir is not finite or dir is zero.
+ */
+rl_status rl_solution_trace(const rl_solution *s, const double org[3], const double dir[3], float rgb[3]);
+
+/**
  * Renders the scene camera's view: width*height*3 floats, rows top to bottom,
  * radiance (W sr^-1 m^-2) of the first surface seen: emission plus
  * albedo * irradiance / pi of its cell; back faces and the background are 0.
