@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "relight/engine.h"
+#include "sampling.h"
 #include "transfer.h"
 
 #define PI 3.14159265358979323846
@@ -436,34 +437,47 @@ rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, do
 
 typedef struct render_job {
     const rl_solution *s;
-    float *rgb;
+    float *rgb;                 /* radiance per pixel, or NULL */
+    int32_t *map_ids, *cell_ids; /* what each pixel sees, or NULL */
     v3 forward, right, up;
     double tan_half, aspect;
     atomic_uint next_row;
 } render_job;
 
-/* Shades the first surface along one camera ray. */
+/* Finds the front face first hit along a ray: its polygon, map and cell
+ * (map or cell -1 when the polygon does not receive). @return 1, or 0 for
+ * no hit or a back face. */
+static int pick(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, int32_t *map, int64_t *cell)
+{
+    double t;
+    *map = -1;
+    *cell = -1;
+    if (!tracer_hit(s->tracer, org, dir, 0.0, INFINITY, poly, &t))
+        return 0;
+    if (v3_dot(dir, v3_load(s->scene->polygons[*poly].normal)) >= 0)
+        return 0; /* the back of a one-sided surface */
+    *map = s->polygon_map[*poly];
+    if (*map >= 0)
+        *cell = map_cell_at(&s->maps[*map], frame_project(&s->maps[*map].frame, v3_madd(org, dir, t)));
+    return 1;
+}
+
+/* Shades the first surface along one camera ray: emission plus albedo * E / pi. */
 static void shade(const rl_solution *s, v3 org, v3 dir, float out[3])
 {
     uint32_t poly;
-    double t;
+    int32_t map;
+    int64_t cell;
     out[0] = out[1] = out[2] = 0.0f;
-    if (!tracer_hit(s->tracer, org, dir, 0.0, INFINITY, &poly, &t))
+    if (!pick(s, org, dir, &poly, &map, &cell))
         return;
-    const rl_polygon *pg = &s->scene->polygons[poly];
-    if (v3_dot(dir, v3_load(pg->normal)) >= 0)
-        return; /* the back of a one-sided surface */
-    const rl_material *mat = &s->scene->materials[pg->material];
-    double l[3] = {mat->emission[0], mat->emission[1], mat->emission[2]};
-    int32_t m = s->polygon_map[poly];
-    if (m >= 0) {
-        const rl_map *map = &s->maps[m];
-        int64_t cell = map_cell_at(map, frame_project(&map->frame, v3_madd(org, dir, t)));
-        for (int c = 0; cell >= 0 && c < 3; c++)
-            l[c] += map->albedo[c] * map->e_total[cell][c] / PI;
+    const rl_material *mat = &s->scene->materials[s->scene->polygons[poly].material];
+    for (int c = 0; c < 3; c++) {
+        double l = mat->emission[c];
+        if (cell >= 0)
+            l += s->maps[map].albedo[c] * s->maps[map].e_total[cell][c] / PI;
+        out[c] = (float)l;
     }
-    for (int c = 0; c < 3; c++)
-        out[c] = (float)l[c];
 }
 
 rl_status rl_solution_trace(const rl_solution *s, const double org[3], const double dir[3], float rgb[3])
@@ -490,13 +504,24 @@ static void *render_worker(void *p)
             double sx = (2.0 * (x + 0.5) / cam->width - 1.0) * job->tan_half * job->aspect;
             double sy = (1.0 - 2.0 * (y + 0.5) / cam->height) * job->tan_half;
             v3 d = v3_norm(v3_add(job->forward, v3_add(v3_scale(job->right, sx), v3_scale(job->up, sy))));
-            shade(job->s, v3_load(cam->position), d, job->rgb + 3 * ((size_t)y * cam->width + x));
+            size_t px = (size_t)y * cam->width + x;
+            if (job->rgb)
+                shade(job->s, v3_load(cam->position), d, job->rgb + 3 * px);
+            if (job->map_ids) {
+                uint32_t poly;
+                int32_t map;
+                int64_t cell;
+                pick(job->s, v3_load(cam->position), d, &poly, &map, &cell);
+                job->map_ids[px] = cell >= 0 ? map : -1;
+                job->cell_ids[px] = cell >= 0 ? (int32_t)cell : -1;
+            }
         }
     }
     return NULL;
 }
 
-rl_status rl_solution_render(const rl_solution *s, float *rgb)
+/* Runs a render job over the camera's rows on every worker thread. */
+static rl_status render(const rl_solution *s, float *rgb, int32_t *map_ids, int32_t *cell_ids)
 {
     const rl_camera *cam = &s->scene->camera;
     if (!s->scene->has_camera)
@@ -504,6 +529,8 @@ rl_status rl_solution_render(const rl_solution *s, float *rgb)
     render_job job;
     job.s = s;
     job.rgb = rgb;
+    job.map_ids = map_ids;
+    job.cell_ids = cell_ids;
     job.forward = v3_norm(v3_sub(v3_load(cam->look_at), v3_load(cam->position)));
     job.right = v3_norm(v3_cross(job.forward, v3_load(cam->up)));
     job.up = v3_cross(job.right, job.forward);
@@ -520,6 +547,110 @@ rl_status rl_solution_render(const rl_solution *s, float *rgb)
     for (unsigned k = 0; k < started; k++)
         pthread_join(threads[k], NULL);
     free(threads);
+    return RL_OK;
+}
+
+rl_status rl_solution_render(const rl_solution *s, float *rgb)
+{
+    return render(s, rgb, NULL, NULL);
+}
+
+rl_status rl_solution_render_cells(const rl_solution *s, int32_t *map_ids, int32_t *cell_ids)
+{
+    return render(s, NULL, map_ids, cell_ids);
+}
+
+/* -------------------------------------------------------------- ray bench */
+
+typedef struct ray_job {
+    const rl_scene *scene;
+    const rl_tracer *tracer;
+    const double *cdf; /* cumulative polygon areas, npolygons entries */
+    uint64_t per_thread;
+    atomic_uint_fast64_t occluded;
+} ray_job;
+
+/* @return a uniform double in [0, 1) from state. */
+static double next_unit(uint64_t *state)
+{
+    *state = hash_mix(*state, 0x632be59bd9b4e019ull);
+    return (*state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* Traces this thread's share of random shadow rays. */
+static void *ray_worker(void *p)
+{
+    ray_job *job = p;
+    const rl_scene *sc = job->scene;
+    static atomic_uint seq;
+    uint64_t state = hash_mix(0x5eed, atomic_fetch_add(&seq, 1)), hits = 0;
+    double total = job->cdf[sc->npolygons - 1], reach = 4.0 * tracer_extent(job->tracer);
+    tracer_thread_init();
+    for (uint64_t r = 0; r < job->per_thread; r++) {
+        double pick_a = next_unit(&state) * total;
+        size_t lo = 0, hi = sc->npolygons - 1;
+        while (lo < hi) {
+            size_t mid = (lo + hi) / 2;
+            if (job->cdf[mid] <= pick_a)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        const rl_polygon *pg = &sc->polygons[lo];
+        const double(*v)[3] = sc->vertices + pg->first;
+        /* a point on one fan triangle, a cosine-distributed direction about the normal */
+        uint32_t t = 1 + (uint32_t)(next_unit(&state) * (pg->count - 2));
+        double su = sqrt(next_unit(&state)), b = next_unit(&state);
+        v3 a0 = v3_load(v[0]), a1 = v3_load(v[t]), a2 = v3_load(v[t + 1]);
+        v3 x = v3_add(v3_add(v3_scale(a0, 1 - su), v3_scale(a1, su * (1 - b))), v3_scale(a2, su * b));
+        v3 n = v3_load(pg->normal), e1 = v3_norm(v3_sub(a1, a0)), e2 = v3_cross(n, e1);
+        double r1 = next_unit(&state), phi = 2 * PI * next_unit(&state), sr = sqrt(r1);
+        v3 d = v3_add(v3_scale(n, sqrt(1 - r1)), v3_add(v3_scale(e1, sr * cos(phi)), v3_scale(e2, sr * sin(phi))));
+        hits += tracer_occluded(job->tracer, x, d, 1e-6 * reach, reach);
+    }
+    atomic_fetch_add(&job->occluded, hits);
+    return NULL;
+}
+
+rl_status rl_bench_rays(const rl_scene *scene, uint64_t rays, rl_ray_bench *out)
+{
+    rl_tracer *tracer = NULL;
+    memset(out, 0, sizeof *out);
+    if (scene->npolygons == 0)
+        return rl__fail(RL_ERR_ARG, "%s: the scene has no polygons to trace against", scene->path);
+    rl_status st = tracer_new(scene, &tracer);
+    if (st != RL_OK)
+        return st;
+    double *cdf = malloc(scene->npolygons * sizeof *cdf);
+    unsigned n = thread_count(scene->sampling.threads), started = 0;
+    pthread_t *threads = malloc(n * sizeof *threads);
+    if (!cdf || !threads) {
+        free(cdf);
+        free(threads);
+        tracer_destroy(tracer);
+        return rl__fail(RL_ERR_NOMEM, "out of memory");
+    }
+    double acc = 0;
+    for (size_t k = 0; k < scene->npolygons; k++)
+        cdf[k] = acc += scene->polygons[k].area;
+    ray_job job = {scene, tracer, cdf, rays / n + 1, 0};
+    double w0 = now(CLOCK_MONOTONIC);
+    for (; started < n; started++)
+        if (pthread_create(&threads[started], NULL, ray_worker, &job) != 0)
+            break;
+    if (started == 0) {
+        ray_worker(&job);
+        started = 1;
+    } else {
+        for (unsigned k = 0; k < started; k++)
+            pthread_join(threads[k], NULL);
+    }
+    out->wall_seconds = now(CLOCK_MONOTONIC) - w0;
+    out->rays = job.per_thread * started;
+    out->occluded = atomic_load(&job.occluded);
+    free(cdf);
+    free(threads);
+    tracer_destroy(tracer);
     return RL_OK;
 }
 

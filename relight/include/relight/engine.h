@@ -98,6 +98,31 @@ rl_status rl_solution_trace(const rl_solution *s, const double org[3], const dou
 rl_status rl_solution_render(const rl_solution *s, float *rgb);
 
 /**
+ * Renders which cell each camera pixel sees: map_ids and cell_ids get
+ * width*height entries, rows top to bottom; -1 where the pixel sees no
+ * map (background, back face, a surface that does not receive).
+ * @return RL_OK; RL_ERR_ARG if the scene has no camera.
+ */
+rl_status rl_solution_render_cells(const rl_solution *s, int32_t *map_ids, int32_t *cell_ids);
+
+/** Result of rl_bench_rays(). */
+typedef struct rl_ray_bench {
+    uint64_t rays;       /**< rays traced */
+    uint64_t occluded;   /**< of those, blocked */
+    double wall_seconds; /**< elapsed, all threads */
+} rl_ray_bench;
+
+/**
+ * Measures the ray tracer alone: the same single-ray occlusion queries the
+ * engine makes, on `rays` random shadow rays from uniform points on the
+ * scene's polygons in cosine-distributed directions, on sampling.threads
+ * threads, with no sampling work around them. The ceiling the engine's ray
+ * rate is measured against.
+ * @return RL_OK and *out; RL_ERR_NOMEM or RL_ERR_INTERNAL.
+ */
+rl_status rl_bench_rays(const rl_scene *scene, uint64_t rays, rl_ray_bench *out);
+
+/**
  * Irradiance at points, as Radiance's rtrace -I: points[6*i..] = x y z nx ny nz
  * (normal need not be unit, must be nonzero); out[3*i..] = r g b in W m^-2.
  * Each point is a receiver of zero area facing its normal; with bounces > 0
