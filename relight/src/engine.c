@@ -73,7 +73,7 @@ static void *worker(void *p)
             atomic_store(&job->failed, 1);
         atomic_fetch_add(&job->done, 1);
     }
-    free(scratch.leaves);
+    scratch_free(&scratch);
     return NULL;
 }
 

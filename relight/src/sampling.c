@@ -6,6 +6,8 @@
  * (culled or naive) visits a (cell, solid angle) pair: the samples are a
  * function of the pair's key alone.
  */
+#include <pthread.h>
+
 #include "sampling.h"
 
 /* @return the radical inverse of i in base b. */
@@ -28,11 +30,28 @@ lds_key lds_make(uint64_t key)
     return k;
 }
 
+/* Radical inverses of the first points, computed once: most (cell, solid
+ * angle) pairs draw only a handful of samples, and the divisions of
+ * radical_inverse() would otherwise dominate the sequence's cost. */
+#define LDS_TABLE 256
+static double lds_table[4][LDS_TABLE];
+static pthread_once_t lds_once = PTHREAD_ONCE_INIT;
+
+/* Fills lds_table. */
+static void lds_fill(void)
+{
+    static const uint32_t bases[4] = {2, 3, 5, 7};
+    for (int j = 0; j < 4; j++)
+        for (uint32_t i = 0; i < LDS_TABLE; i++)
+            lds_table[j][i] = radical_inverse(i, bases[j]);
+}
+
 void lds4(const lds_key *k, uint32_t i, double u[4])
 {
     static const uint32_t bases[4] = {2, 3, 5, 7};
+    pthread_once(&lds_once, lds_fill);
     for (int j = 0; j < 4; j++) {
-        double x = radical_inverse(i, bases[j]) + k->shift[j];
+        double x = (i < LDS_TABLE ? lds_table[j][i] : radical_inverse(i, bases[j])) + k->shift[j];
         x = x >= 1.0 ? x - 1.0 : x;
         u[j] = x < 1.0 ? x : 0x1.fffffffffffffp-1;
     }

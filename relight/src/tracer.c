@@ -4,9 +4,9 @@
  * Every convex polygon is fanned into triangles of one triangle geometry;
  * prim_polygon maps Embree's primitive ids back to scene polygons. The scene
  * uses RTC_SCENE_FLAG_ROBUST: the engine's stratified rays often cross
- * shared triangle edges, which the fast mode may let slip through. Only
- * single-ray calls are used (rtcIntersect1M with the default context
- * aborts in Debian's Embree 3.13.5).
+ * shared triangle edges, which the fast mode may let slip through.
+ * Single rays and packets of 4, 8 and 16 are used (rtcIntersect1M with the
+ * default context aborts in Debian's Embree 3.13.5).
  */
 #include <stdlib.h>
 #include <string.h>
@@ -166,6 +166,59 @@ int tracer_occluded(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfa
     make_ray(t, org, dir, tnear, tfar, &r);
     rtcOccluded1(t->scene, &ctx, &r);
     return r.tfar < 0.0f;
+}
+
+/* Embree's packet structures RTCRay4, 8 and 16 share one layout: twelve
+ * arrays of `width` 4-byte lanes, in this order. */
+enum { F_ORG_X, F_ORG_Y, F_ORG_Z, F_TNEAR, F_DIR_X, F_DIR_Y, F_DIR_Z, F_TIME, F_TFAR, F_MASK, F_ID, F_FLAGS };
+
+/* Sets float field f of lane i in a packet of the given width. */
+static void lane_set(void *packet, size_t width, int f, size_t i, float v)
+{
+    ((float *)packet)[(size_t)f * width + i] = v;
+}
+
+void tracer_occluded_n(const rl_tracer *t, size_t n, const v3 *org, const v3 *dir, const double *tnear,
+                       const double *tfar, int *occluded)
+{
+    union {
+        struct RTCRay4 r4;
+        struct RTCRay8 r8;
+        struct RTCRay16 r16;
+    } packet;
+    _Alignas(64) int valid[16];
+    size_t width = n <= 4 ? 4 : n <= 8 ? 8 : 16;
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    for (size_t i = 0; i < width; i++) {
+        int on = i < n && tfar[i] > tnear[i];
+        valid[i] = on ? -1 : 0;
+        v3 o = on ? v3_sub(org[i], t->centre) : v3_make(0, 0, 0);
+        v3 d = on ? dir[i] : v3_make(0, 0, 1);
+        lane_set(&packet, width, F_ORG_X, i, (float)o.x);
+        lane_set(&packet, width, F_ORG_Y, i, (float)o.y);
+        lane_set(&packet, width, F_ORG_Z, i, (float)o.z);
+        lane_set(&packet, width, F_DIR_X, i, (float)d.x);
+        lane_set(&packet, width, F_DIR_Y, i, (float)d.y);
+        lane_set(&packet, width, F_DIR_Z, i, (float)d.z);
+        lane_set(&packet, width, F_TNEAR, i, on ? (float)tnear[i] : 0.0f);
+        lane_set(&packet, width, F_TFAR, i, on ? (float)tfar[i] : 0.0f);
+        lane_set(&packet, width, F_TIME, i, 0.0f);
+        unsigned *u = (unsigned *)&packet;
+        u[F_MASK * width + i] = 0xffffffffu;
+        u[F_ID * width + i] = (unsigned)i;
+        u[F_FLAGS * width + i] = 0;
+    }
+    if (width == 4)
+        rtcOccluded4(valid, t->scene, &ctx, &packet.r4);
+    else if (width == 8)
+        rtcOccluded8(valid, t->scene, &ctx, &packet.r8);
+    else
+        rtcOccluded16(valid, t->scene, &ctx, &packet.r16);
+    const float *tf = (const float *)&packet + (size_t)F_TFAR * width;
+    for (size_t i = 0; i < n; i++)
+        occluded[i] = valid[i] && tf[i] < 0.0f;
 }
 
 int tracer_hit(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon, double *dist)

@@ -27,6 +27,14 @@ void tracer_destroy(rl_tracer *t);
 /* @return 1 if any polygon meets the ray org + s*dir for s in [tnear, tfar] (dir unit). */
 int tracer_occluded(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar);
 
+/* Most rays one tracer_occluded_n() call takes. */
+#define RL_RAY_PACKET 16
+
+/* Tests n <= RL_RAY_PACKET rays at once (packets of 4, 8 or 16, as n
+ * needs): occluded[i] = tracer_occluded(t, org[i], dir[i], tnear[i], tfar[i]). */
+void tracer_occluded_n(const rl_tracer *t, size_t n, const v3 *org, const v3 *dir, const double *tnear,
+                       const double *tfar, int *occluded);
+
 /* Finds the first polygon hit in [tnear, tfar]. @return 1 with *polygon and *dist, or 0. */
 int tracer_hit(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon, double *dist);
 

@@ -161,12 +161,58 @@ static double ray_eps(const rl_transfer_ctx *ctx, v3 a, v3 b)
     return fmax(ctx->eps, 1e-6 * m);
 }
 
-/* Shared by culled and naive: radiance arriving at receiver point x (normal
- * nr) from emitter e along propagation direction d, times cos at x, added to
- * acc. The ray back from x along -d must meet e's front inside e's polygon
- * with nothing in between. */
-static void trace_back(const rl_transfer_ctx *ctx, const rl_emitter *e, v3 x, v3 nr, v3 d, double acc[3],
-                       rl_counters *cnt)
+/* Shadow rays waiting to be traced as one packet, each with the radiance
+ * it carries and the accumulator it adds to when unoccluded. Rays are added
+ * to their accumulators in the order they were pushed, so results do not
+ * depend on how rays are grouped into packets. */
+typedef struct ray_batch {
+    size_t n;
+    v3 org[RL_RAY_PACKET], dir[RL_RAY_PACKET];
+    double tnear[RL_RAY_PACKET], tfar[RL_RAY_PACKET];
+    double l[RL_RAY_PACKET][3];
+    double *acc[RL_RAY_PACKET];
+} ray_batch;
+
+/* Traces the pending rays and adds the unoccluded ones' radiance. */
+static void batch_flush(const rl_transfer_ctx *ctx, ray_batch *b, rl_counters *cnt)
+{
+    int occluded[RL_RAY_PACKET];
+    if (b->n == 0)
+        return;
+    cnt->rays_cast += b->n;
+    tracer_occluded_n(ctx->tracer, b->n, b->org, b->dir, b->tnear, b->tfar, occluded);
+    for (size_t i = 0; i < b->n; i++) {
+        if (occluded[i])
+            continue;
+        cnt->rays_kept++;
+        for (int c = 0; c < 3; c++)
+            b->acc[i][c] += b->l[i][c];
+    }
+    b->n = 0;
+}
+
+/* Queues a shadow ray from org along unit dir over [tnear, tfar] carrying l into acc. */
+static void batch_push(const rl_transfer_ctx *ctx, ray_batch *b, v3 org, v3 dir, double tnear, double tfar,
+                       const double l[3], double *acc, rl_counters *cnt)
+{
+    if (b->n == RL_RAY_PACKET)
+        batch_flush(ctx, b, cnt);
+    size_t i = b->n++;
+    b->org[i] = org;
+    b->dir[i] = dir;
+    b->tnear[i] = tnear;
+    b->tfar[i] = tfar;
+    memcpy(b->l[i], l, sizeof b->l[i]);
+    b->acc[i] = acc;
+}
+
+/* Shared by culled and naive: the radiance arriving at receiver point x
+ * (normal nr) from emitter e along propagation direction d, times cos at x,
+ * queued for acc. The ray back from x along -d must meet e's front inside
+ * e's polygon with nothing in between; a ray carrying no radiance is never
+ * traced, since it could add nothing. */
+static void shoot_back(const rl_transfer_ctx *ctx, const rl_emitter *e, v3 x, v3 nr, v3 d, double *acc,
+                       ray_batch *b, rl_counters *cnt)
 {
     double cos_r = -v3_dot(d, nr), dn = v3_dot(d, e->frame.n);
     double hx = v3_dot(v3_sub(x, e->frame.origin), e->frame.n);
@@ -178,16 +224,14 @@ static void trace_back(const rl_transfer_ctx *ctx, const rl_emitter *e, v3 x, v3
     v2 q = frame_project(&e->frame, y);
     if (!emitter_contains(e, q))
         return;
-    double eps = ray_eps(ctx, x, y);
-    double tnear = eps / fmax(cos_r, 1e-3), tfar = t - eps / fmax(dn, 1e-3);
-    cnt->rays_cast++;
-    if (tracer_occluded(ctx->tracer, x, v3_scale(d, -1.0), tnear, tfar))
-        return;
-    cnt->rays_kept++;
     double l[3];
     emitter_radiance(e, q, d, l);
+    if (!(l[0] > 0 || l[1] > 0 || l[2] > 0))
+        return;
     for (int c = 0; c < 3; c++)
-        acc[c] += l[c] * cos_r;
+        l[c] *= cos_r;
+    double eps = ray_eps(ctx, x, y);
+    batch_push(ctx, b, x, v3_scale(d, -1.0), eps / fmax(cos_r, 1e-3), t - eps / fmax(dn, 1e-3), l, acc, cnt);
 }
 
 /* ----------------------------------------------------------- pair geometry */
@@ -371,10 +415,12 @@ static int walk(const rl_transfer_ctx *ctx, const pair *p, const tile *t, rl_scr
     return rc;
 }
 
-/* Traces the k rays of (cell, leaf) and adds their estimate to the cell.
- * clip, when not NULL, restricts origins to the cell's part inside the region. */
-static void gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t cell, uint64_t id,
-                        const sph_tri *tri, uint32_t emitter_index, const v2 *clip, size_t nclip, rl_counters *cnt)
+/* Queues the k rays of (cell, leaf) into acc. clip, when not NULL,
+ * restricts origins to the cell's part inside the region.
+ * @return the factor that turns acc into the cell's irradiance (0: no rays). */
+static double gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t cell, uint64_t id,
+                          const sph_tri *tri, uint32_t emitter_index, const v2 *clip, size_t nclip, double *acc,
+                          ray_batch *batch, rl_counters *cnt)
 {
     rl_map *m = t->m;
     v2 cp[RL_MAX_POLY_VERTS + 8];
@@ -397,7 +443,7 @@ static void gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile *t
         }
         double part = n >= 3 ? polygon_area2(buf[cur], (uint32_t)n) : 0.0;
         if (!(part > 0))
-            return;
+            return 0.0;
         weight = part / m->cells[cell].area;
         ncp = (uint32_t)(n < RL_MAX_POLY_VERTS + 8 ? n : RL_MAX_POLY_VERTS + 8);
         memcpy(cp, buf[cur], ncp * sizeof *cp);
@@ -406,17 +452,14 @@ static void gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile *t
     lds_key key = lds_make(hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass),
                                                                         emitter_index), t->map_index), cell),
                                          p->level), id));
-    double acc[3] = {0, 0, 0};
     for (uint32_t i = 0; i < k; i++) {
         double u[4];
         lds4(&key, i, u);
         v2 q = square ? (v2){cp[0].x + u[0] * m->cell, cp[0].y + u[1] * m->cell} : sample_polygon(cp, ncp, u[0], u[1]);
         v3 d = sph_tri_sample(tri, u[2], u[3]);
-        trace_back(ctx, p->e, frame_point(&m->frame, q), m->frame.n, d, acc, cnt);
+        shoot_back(ctx, p->e, frame_point(&m->frame, q), m->frame.n, d, acc, batch, cnt);
     }
-    double scale = weight * tri->omega / k;
-    for (int c = 0; c < 3; c++)
-        m->e_pass[cell][c] += acc[c] * scale;
+    return weight * tri->omega / k;
 }
 
 /* Gives the u range [*ulo, *uhi] of convex polygon q within the band v in [va, vb]. @return 0 if none. */
@@ -436,9 +479,27 @@ static int band_range(const v2 *q, size_t nq, double va, double vb, double *ulo,
     return 1;
 }
 
-/* Processes one kept leaf over the tile's cells. */
-static void gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint64_t id,
-                        uint32_t emitter_index, int culled, rl_region *reg, v2 *q, rl_counters *cnt)
+/* Makes room in s for a row of n cells' accumulators. @return 0 or -1. */
+static int row_reserve(rl_scratch *s, size_t n)
+{
+    if (n <= s->row_cap)
+        return 0;
+    double (*acc)[3] = realloc(s->row_acc, n * sizeof *acc);
+    if (acc)
+        s->row_acc = acc;
+    double *scale = acc ? realloc(s->row_scale, n * sizeof *scale) : NULL;
+    if (scale)
+        s->row_scale = scale;
+    if (!acc || !scale)
+        return -1;
+    s->row_cap = n;
+    return 0;
+}
+
+/* Processes one kept leaf over the tile's cells, a row at a time: the row's
+ * rays go out in packets, then each cell adds its estimate. @return 0 or -1. */
+static int gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint64_t id,
+                       uint32_t emitter_index, int culled, rl_region *reg, v2 *q, rl_scratch *s, rl_counters *cnt)
 {
     rl_map *m = t->m;
     v3 g[3];
@@ -453,9 +514,13 @@ static void gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t
     if (culled) {
         nq = node_region(ctx, p, t, p->level, id, reg, q);
         if (nq == 0)
-            return;
+            return 0;
     }
+    if (row_reserve(s, m->nu) != 0)
+        return -1;
     const v2 *clip = culled && p->descended ? q : NULL;
+    ray_batch batch;
+    batch.n = 0;
     for (uint32_t j = t->row0; j < t->row1; j++) {
         uint32_t i0 = 0, i1 = m->nu - 1;
         if (culled && m->polygon >= 0) {
@@ -470,10 +535,20 @@ static void gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t
         }
         for (uint32_t i = i0; i <= i1; i++) {
             int32_t cell = m->grid[(size_t)j * m->nu + i];
-            if (cell >= 0)
-                gather_cell(ctx, p, t, (uint32_t)cell, id, &tri, emitter_index, clip, nq, cnt);
+            double *acc = s->row_acc[i - i0];
+            acc[0] = acc[1] = acc[2] = 0.0;
+            s->row_scale[i - i0] = cell < 0 ? 0.0
+                                   : gather_cell(ctx, p, t, (uint32_t)cell, id, &tri, emitter_index, clip, nq, acc,
+                                                 &batch, cnt);
+        }
+        batch_flush(ctx, &batch, cnt);
+        for (uint32_t i = i0; i <= i1; i++) {
+            int32_t cell = m->grid[(size_t)j * m->nu + i];
+            for (int c = 0; cell >= 0 && c < 3; c++)
+                m->e_pass[cell][c] += s->row_acc[i - i0][c] * s->row_scale[i - i0];
         }
     }
+    return 0;
 }
 
 /* Culled or naive transfer from emitter e to the tile. */
@@ -499,7 +574,7 @@ static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32
                 rc = push_leaf(s, id);
         }
         for (size_t k = 0; k < s->nleaves && rc == 0; k++)
-            gather_leaf(ctx, p, t, s->leaves[k], ei, culled, reg, q, cnt);
+            rc = gather_leaf(ctx, p, t, s->leaves[k], ei, culled, reg, q, s, cnt);
     }
     free(p);
     free(reg);
@@ -510,10 +585,10 @@ static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32
 /* ------------------------------------------------------------- baselines */
 
 /* One sample of `area` (uniform on the clipped emitter) or `solidangle`
- * (uniform in its spherical polygon) from cell point x; adds weighted
- * radiance * cosines to acc. */
+ * (uniform in its spherical polygon) from cell point x; queues the weighted
+ * radiance * cosines for acc. */
 static void baseline_sample(const rl_transfer_ctx *ctx, const pair *p, const rl_frame *rf, v3 x,
-                            const double u[4], double s_area, double acc[3], rl_counters *cnt)
+                            const double u[4], double s_area, double *acc, ray_batch *b, rl_counters *cnt)
 {
     const rl_emitter *e = p->e;
     v3 y, to_s; /* the emitter point and the unit direction from x to it */
@@ -556,15 +631,14 @@ static void baseline_sample(const rl_transfer_ctx *ctx, const pair *p, const rl_
     v2 q = frame_project(&e->frame, y);
     if (!emitter_contains(e, q))
         return;
-    cnt->rays_cast++;
-    double eps = ray_eps(ctx, x, y);
-    if (tracer_occluded(ctx->tracer, x, to_s, eps / fmax(cos_r, 1e-3), dist - eps / fmax(v3_dot(to_s, v3_scale(e->frame.n, -1.0)), 1e-3)))
-        return;
-    cnt->rays_kept++;
     double l[3];
     emitter_radiance(e, q, v3_scale(to_s, -1.0), l);
+    if (!(l[0] > 0 || l[1] > 0 || l[2] > 0))
+        return; /* nothing to carry: no ray needed */
     for (int c = 0; c < 3; c++)
-        acc[c] += l[c] * cos_r * weight;
+        l[c] *= cos_r * weight;
+    double eps = ray_eps(ctx, x, y), cos_s = -v3_dot(to_s, e->frame.n);
+    batch_push(ctx, b, x, to_s, eps / fmax(cos_r, 1e-3), dist - eps / fmax(cos_s, 1e-3), l, acc, cnt);
 }
 
 /* Area or solid-angle sampling of emitter ei for every cell of the tile. */
@@ -590,12 +664,15 @@ static void gather_baseline(const rl_transfer_ctx *ctx, const tile *t, uint32_t 
             lds_key key = lds_make(hash_mix(
                 hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), t->map_index), (uint64_t)cell));
             double acc[3] = {0, 0, 0};
+            ray_batch batch;
+            batch.n = 0;
             for (uint32_t s = 0; s < n; s++) {
                 double u[4];
                 lds4(&key, s, u);
                 v3 x = frame_point(&m->frame, sample_polygon(cp, ncp, u[0], u[1]));
-                baseline_sample(ctx, &p, &m->frame, x, u, s_area, acc, cnt);
+                baseline_sample(ctx, &p, &m->frame, x, u, s_area, acc, &batch, cnt);
             }
+            batch_flush(ctx, &batch, cnt);
             for (int c = 0; c < 3; c++)
                 m->e_pass[cell][c] += acc[c] / n;
         }
@@ -631,4 +708,11 @@ int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uin
     }
     free(t);
     return rc;
+}
+
+void scratch_free(rl_scratch *s)
+{
+    free(s->leaves);
+    free(s->row_acc);
+    free(s->row_scale);
 }

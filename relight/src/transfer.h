@@ -57,7 +57,13 @@ typedef struct rl_transfer_ctx {
 typedef struct rl_scratch {
     uint64_t *leaves;
     size_t nleaves, cap;
+    double (*row_acc)[3]; /* one grid row's accumulators */
+    double *row_scale;    /* and the factors that turn them into irradiance */
+    size_t row_cap;
 } rl_scratch;
+
+/* Frees what a scratch space holds (not the struct). */
+void scratch_free(rl_scratch *s);
 
 /* Sets up emitter e from scene polygon k (EM_CONST, or EM_MAP when map is given). */
 void emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, rl_emitter *e);
