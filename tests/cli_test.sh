@@ -493,5 +493,96 @@ check "rejected relights wrote nothing" absent "$RELIT/never"
 expect 1 "relight into a folder under a regular file" "$ILF" relight "$SQUARE" -o "$TEXT/out" "${FAST[@]}"
 check "the unusable folder is named" stderr_has "notes.txt"
 
+# ------------------------------------------------------------------ capture
+# render-probes -> capture -> reproject on the example scene (data/capture/), the real
+# probe end to end, and the documented outcomes of bad manifests, images and proxies.
+CAP=$TMP/capture
+mkdir -p "$CAP"
+for sub in capture render-probes reproject; do
+    check "ilf --help lists $sub" grep -q -e "^  $sub " <("$ILF" --help)
+    expect 0 "ilf $sub --help" "$ILF" "$sub" --help
+    check "ilf $sub --help shows Usage" stdout_has "^Usage: ilf $sub"
+    check "ilf $sub --help shows an example" stdout_has "^Example"
+    expect 2 "$sub: unknown option" "$ILF" "$sub" --frobnicate
+done
+PLANE=-0.5,0.5,1.5:1,0,0:0,-1,0
+expect 0 "render-probes on the example scene" "$ILF" render-probes "$SRC/data/capture/scene.json" --plane "$PLANE" \
+    --grid 2x2 --size 64x32 --n 8 --partition-n 8 --rays 1 -o "$CAP/probes"
+check "render-probes writes the probes and the manifest" only_files "$CAP/probes" manifest.json probe_0_0.exr \
+    probe_0_1.exr probe_1_0.exr probe_1_1.exr
+check "probes are 64x32 float EXR" image_is "$CAP/probes/probe_1_1.exr" 64 32 3
+check "the manifest names the pattern" grep -q 'probe_{i}_{j}.exr' "$CAP/probes/manifest.json"
+expect 0 "capture the rendered probes" "$ILF" capture "$CAP/probes/manifest.json" -o "$CAP/probes.h5" --threads 2
+check "capture reports energy" stdout_has "^energy: .* differs by at most"
+check "capture names the output" stdout_has "^wrote .*probes.h5: slab 'probes'"
+expect 0 "the captured file verifies" "$ILF" verify "$CAP/probes.h5"
+expect 0 "capture on one thread" "$ILF" capture "$CAP/probes/manifest.json" -o "$CAP/probes-1.h5" --threads 1 --quiet
+check "--quiet prints nothing" bash -c "[ ! -s '$OUT' ]"
+check "the capture does not depend on the thread count" \
+    diff <("$ILF" info "$CAP/probes.h5" | grep -v '^file') <("$ILF" info "$CAP/probes-1.h5" | grep -v '^file')
+expect 0 "capture the real probe" "$ILF" capture "$SRC/data/capture/studio.json" -o "$CAP/studio.h5"
+check "one warning line for the real probe's negative values" \
+    bash -c "[ \$(grep -c 'warning: .*studio.exr: 2028 negative values' '$ERR') -eq 1 ]"
+check "the real probe conserves energy within 0.5%" py '
+import re, sys
+pct = float(re.search(r"differs by at most ([0-9.]+)%", sys.stdin.read()).group(1))
+assert pct < 0.5, pct
+' <"$OUT"
+expect 0 "reproject onto the lamp" "$ILF" reproject "$CAP/probes.h5" --proxy "$SRC/data/capture/proxy.json" \
+    -o "$CAP/lamp.h5" --n 8
+check "reproject prints the coverage" stdout_has "^slab 'lamp': 12x12 positions, n 8, coverage [0-9.]*%"
+check "reproject writes the coverage file" py '
+import json, sys
+doc = json.load(open(sys.argv[1]))
+assert doc["mode"] == "depth" and doc["slabs"][0]["name"] == "lamp", doc
+assert 0 < doc["slabs"][0]["coverage"] < 1, doc
+' "$CAP/lamp.coverage.json"
+expect 0 "the reprojected file verifies" "$ILF" verify "$CAP/lamp.h5"
+printf 'v -0.3 0.3 2\nv 0.3 0.3 2\nv 0.3 -0.3 2\nv -0.3 -0.3 2\nf 1 4 3 2\n' >"$CAP/lamp.obj"
+expect 0 "reproject onto a mesh quad" "$ILF" reproject "$CAP/probes.h5" --proxy "$CAP/lamp.obj" -o "$CAP/mesh.h5" \
+    --grid 4x4 --n 4 --plain --quiet
+check "the mesh quad becomes slab face0" grep -q "^slab 0: face0" <("$ILF" info "$CAP/mesh.h5")
+
+# capture and reproject: bad inputs are named and leave no output.
+printf '{"plane": {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0]}, "grid": {"nu": 1, "nv": 1},\n' >"$CAP/m_key.json"
+printf ' "pattern": "probes/probe_0_0.exr", "colour": "srgb"}\n' >>"$CAP/m_key.json"
+expect 2 "a manifest with an unknown key" "$ILF" capture "$CAP/m_key.json" -o "$CAP/never.h5"
+check "the unknown key and file are named" stderr_has "m_key.json: unknown key 'colour'"
+sed 's/, "colour": "srgb"//; s/probe_0_0/probe_9_9/' "$CAP/m_key.json" >"$CAP/m_missing.json"
+expect 2 "a manifest naming a missing image" "$ILF" capture "$CAP/m_missing.json" -o "$CAP/never.h5"
+check "the missing image and element are named" stderr_has "m_missing.json: pattern: '$CAP/probes/probe_9_9.exr'"
+cp "$TEXT" "$CAP/fake.exr"
+sed 's/, "colour": "srgb"//; s|probes/probe_0_0.exr|fake.exr|' "$CAP/m_key.json" >"$CAP/m_fake.json"
+expect 2 "a manifest naming a file that is not an image" "$ILF" capture "$CAP/m_fake.json" -o "$CAP/never.h5"
+check "the unreadable image is named" stderr_has "fake.exr"
+printf '{"plane": {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0]}, "grid": {"nu": 1, "nv": 1},\n' \
+    >"$CAP/m_bracket.json"
+printf ' "positions": [{"i": 0, "j": 0, "bracket": [{"file": "probes/probe_0_0.exr", "exposure": 1},\n' \
+    >>"$CAP/m_bracket.json"
+printf '   {"file": "studio.exr", "exposure": 4}]}]}\n' >>"$CAP/m_bracket.json"
+cp "$SRC/data/capture/probes/studio.exr" "$CAP/studio.exr"
+expect 2 "a bracket of mismatched sizes" "$ILF" capture "$CAP/m_bracket.json" -o "$CAP/never.h5"
+check "both sizes are named" stderr_has "studio.exr is 512x256 but"
+check "failed captures wrote nothing" absent "$CAP/never.h5"
+expect 1 "capture into a missing folder" "$ILF" capture "$CAP/probes/manifest.json" -o "$CAP/no/out.h5"
+mkdir -p "$CAP/keep"
+cp "$CAP/probes.h5" "$CAP/keep/existing.h5"
+expect 1 "capture failing mid-write" bash -c "trap '' XFSZ; ulimit -f 8; exec \"\$0\" \"\$@\"" \
+    "$ILF" capture "$SRC/data/capture/studio.json" -o "$CAP/keep/existing.h5" --quiet
+check "a failed capture keeps the old file" cmp -s "$CAP/probes.h5" "$CAP/keep/existing.h5"
+check "a failed capture leaves no temporary" only_files "$CAP/keep" existing.h5
+printf '[{"origin": [0, 0, 2], "u": [1, 0, 0], "v": [0, 1, 0], "size": 3}]\n' >"$CAP/proxy_bad.json"
+expect 2 "a proxy with an unknown key" "$ILF" reproject "$CAP/probes.h5" --proxy "$CAP/proxy_bad.json" \
+    -o "$CAP/never.h5"
+check "the proxy element is named" stderr_has "proxy_bad.json: [0]: unknown key 'size'"
+printf 'v 0 0 2\nv 1 0 2\nv 0 1 2\nf 1 2 3\n' >"$CAP/tri.obj"
+expect 2 "a proxy mesh with a triangle" "$ILF" reproject "$CAP/probes.h5" --proxy "$CAP/tri.obj" -o "$CAP/never.h5"
+check "the triangle is refused by name" stderr_has "face 0 (mesh 0 face 0): 3 vertices"
+expect 2 "render-probes without --plane" "$ILF" render-probes "$SRC/data/capture/scene.json" -o "$CAP/never"
+expect 2 "render-probes with a skew plane" "$ILF" render-probes "$SRC/data/capture/scene.json" \
+    --plane 0,0,1:1,0,0:1,1,0 -o "$CAP/never"
+check "the skew plane is explained" stderr_has "orthogonal"
+check "rejected runs made no folder or file" absent "$CAP/never"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

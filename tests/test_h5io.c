@@ -643,7 +643,7 @@ static void test_bad_files(const char *good, const char *small)
     const uint32_t huger = 1u << 31;
     edit_attr(p, "/slabs/0", "nu", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0, &huger);
     edit_attr(p, "/slabs/0", "nv", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0, &huger);
-    expect_bad(p, LFIO_ERR_NOMEM, "exceeds", 0, "radiance over the size limit");
+    expect_bad(p, LFIO_ERR_FORMAT, "exceeds", 0, "radiance over the size limit");
 
     const double ones[3] = {1, 1, 1};
     edit_attr(fresh_copy(p, sizeof p, small, "float_nu.h5"), "/slabs/0", "nu", H5T_IEEE_F64LE,

@@ -166,8 +166,9 @@ static void check_unoccluded(void)
     rl_scene *s = load(path);
     if (!s)
         return;
-    const rl_method methods[] = {RL_METHOD_CULLED, RL_METHOD_NAIVE, RL_METHOD_AREA, RL_METHOD_SOLIDANGLE};
-    for (int m = 0; m < 4; m++) {
+    const rl_method methods[] = {RL_METHOD_CULLED, RL_METHOD_NAIVE, RL_METHOD_AREA, RL_METHOD_SOLIDANGLE,
+                                 RL_METHOD_ADAPTIVE};
+    for (int m = 0; m < 5; m++) {
         set_sampling(s, methods[m], 32, 4, 128, 0);
         rl_solution *sol = NULL;
         CHECK(rl_relight(s, NULL, NULL, &sol) == RL_OK, "%s: %s", rl_method_name(methods[m]), rl_errmsg());
@@ -310,6 +311,37 @@ static void check_identities(void)
     }
     for (int k = 0; k < 4; k++)
         rl_solution_destroy(sol[k]);
+    /* adaptive refines where samples disagree, deterministically, for any thread count */
+    rl_solution *ad[2] = {NULL, NULL};
+    for (int k = 0; k < 2; k++) {
+        set_sampling(s, RL_METHOD_ADAPTIVE, 16, 4, 16, k + 1);
+        rl_sampling smp = *rl_scene_sampling(s);
+        smp.target_error = 0.02;
+        smp.bounces = 0;
+        rl_scene_set_sampling(s, &smp);
+        rl_relight(s, NULL, NULL, &ad[k]);
+    }
+    if (ad[0] && ad[1]) {
+        rl_pass_stats st;
+        rl_solution_pass_stats(ad[0], 0, &st);
+        CHECK(st.refinements > 0 && st.estimated_rmse > 0 && !st.budget_reached, "adaptive refines: %llu, %.3g",
+              (unsigned long long)st.refinements, st.estimated_rmse);
+        long differ = 0;
+        for (size_t k = 0; k < rl_solution_map_count(ad[0]); k++) {
+            uint32_t n0, n1, *ij;
+            double *centre;
+            float *e0 = map_irradiance(ad[0], k, &n0, &centre, &ij);
+            free(centre); free(ij);
+            float *e1 = map_irradiance(ad[1], k, &n1, &centre, &ij);
+            free(centre); free(ij);
+            differ += memcmp(e0, e1, 3 * n0 * sizeof *e0) != 0;
+            free(e0);
+            free(e1);
+        }
+        CHECK(differ == 0, "adaptive: 1 vs 2 threads differ in %ld maps", differ);
+    }
+    rl_solution_destroy(ad[0]);
+    rl_solution_destroy(ad[1]);
     rl_scene_destroy(s);
 }
 

@@ -459,14 +459,18 @@ static void test_set_sampling(void)
         const char *field;
         rl_sampling value;
     } bad[] = {
-        {"partition_n", {.partition_n = 3, .rays_per_solid_angle = 1, .samples_per_cell = 1}},
-        {"partition_n", {.partition_n = 8192, .rays_per_solid_angle = 1, .samples_per_cell = 1}},
-        {"rays_per_solid_angle", {.partition_n = 1, .rays_per_solid_angle = 0, .samples_per_cell = 1}},
-        {"samples_per_cell", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 0}},
-        {"bounces", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .bounces = 65}},
-        {"threads", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .threads = 1025}},
-        {"descend", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .descend = 2}},
-        {"method", {.method = (rl_method)7, .partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1}},
+        {"partition_n", {.partition_n = 3, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 0.05}},
+        {"partition_n", {.partition_n = 8192, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 0.05}},
+        {"rays_per_solid_angle", {.partition_n = 1, .rays_per_solid_angle = 0, .samples_per_cell = 1, .target_error = 0.05}},
+        {"samples_per_cell", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 0, .target_error = 0.05}},
+        {"bounces", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .bounces = 65, .target_error = 0.05}},
+        {"threads", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .threads = 1025, .target_error = 0.05}},
+        {"descend", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .descend = 2, .target_error = 0.05}},
+        {"target_error", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 0}},
+        {"target_error", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 2}},
+        {"time_budget", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 0.05,
+                         .time_budget = -1}},
+        {"method", {.method = (rl_method)7, .partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 0.05}},
     };
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
         CHECK(rl_scene_set_sampling(s, &bad[k].value) == RL_ERR_ARG, "bad %s accepted", bad[k].field);

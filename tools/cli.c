@@ -1,17 +1,22 @@
 /*
  * cli.c - the pieces every `ilf` subcommand shares (see cli.h): error
  * reporting and exit codes, the option parser and help printer, strict
- * number parsing, slab selection and the progress bar.
+ * number parsing, slab selection, the progress bar, and the removal of
+ * in-flight temporaries when the command is interrupted.
  *
  * Invariants: parsers never accept part of a value; nothing here exits the
- * process (subcommands return exit codes up to main); stdout carries only
- * help text, stderr carries errors and the progress bar.
+ * process (subcommands return exit codes up to main), except the
+ * interruption watcher, which ends it by the signal that interrupted it;
+ * stdout carries only help text, stderr carries errors and the progress bar.
  */
 #include "cli.h"
 
 #include <ctype.h>
+#include <dirent.h>
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -479,4 +484,124 @@ void cli_progress_finish(cli_progress *p)
         return;
     progress_draw(p, atomic_load(&p->done));
     fputc('\n', stderr);
+}
+
+/* --------------------------------------------------------- interruption */
+
+/*
+ * The writers (lfio, jsonout.c, the image writer) build each output under a
+ * temporary name beside it: "<name>.tmp-XXXXXX", or ".<name>.tmp-XXXXXX.<ext>"
+ * for images. A handler for SIGINT, SIGTERM and SIGHUP only writes the signal
+ * number to a pipe, which is all a handler may safely do; a watcher thread
+ * reading the pipe then removes the temporaries of every registered output
+ * and ends the process by the same signal, its default action restored.
+ */
+
+#define MAX_WATCHED 16
+
+static const int watched_signals[] = {SIGINT, SIGTERM, SIGHUP};
+static pthread_mutex_t watched_lock = PTHREAD_MUTEX_INITIALIZER;
+static char *watched[MAX_WATCHED];
+static size_t watched_count;
+static int signal_pipe[2] = {-1, -1};
+
+/* Signal handler: hands the signal to the watcher thread. */
+static void on_interrupt(int sig)
+{
+    unsigned char byte = (unsigned char)sig;
+    int saved = errno;
+    if (write(signal_pipe[1], &byte, 1) < 0) {
+        /* the pipe is full: a signal is already on its way to the watcher */
+    }
+    errno = saved;
+}
+
+/* @return 1 if entry is a temporary of the output called name (see above). */
+static int is_temporary_of(const char *entry, const char *name)
+{
+    static const char mark[] = ".tmp-";
+    const char *rest = entry[0] == '.' && strncmp(entry + 1, name, strlen(name)) == 0 ? entry + 1 + strlen(name)
+                       : strncmp(entry, name, strlen(name)) == 0                   ? entry + strlen(name)
+                                                                                    : NULL;
+    return rest != NULL && strncmp(rest, mark, sizeof mark - 1) == 0;
+}
+
+/* Removes the temporaries of output path from its folder. */
+static void remove_temporaries(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    char folder[4096];
+    size_t len = slash == NULL ? 1 : slash == path ? 1 : (size_t)(slash - path);
+    if (len >= sizeof folder)
+        return;
+    memcpy(folder, slash == NULL ? "." : path, len);
+    folder[len] = '\0';
+    const char *name = slash == NULL ? path : slash + 1;
+    DIR *dir = opendir(folder);
+    if (dir == NULL)
+        return;
+    for (struct dirent *e; (e = readdir(dir)) != NULL;) {
+        char victim[8192];
+        if (is_temporary_of(e->d_name, name)
+            && snprintf(victim, sizeof victim, "%s/%s", folder, e->d_name) < (int)sizeof victim)
+            unlink(victim);
+    }
+    closedir(dir);
+}
+
+/* Watcher thread: waits for a signal, removes every registered output's temporaries, ends the process. */
+static void *watch_interrupts(void *unused)
+{
+    (void)unused;
+    unsigned char sig = 0;
+    while (read(signal_pipe[0], &sig, 1) != 1) {
+        if (errno != EINTR)
+            return NULL;
+    }
+    pthread_mutex_lock(&watched_lock);
+    for (size_t k = 0; k < watched_count; k++)
+        remove_temporaries(watched[k]);
+    signal(sig, SIG_DFL);
+    kill(getpid(), sig);
+    pause(); /* the signal ends the process; the lock stays held so no output is registered meanwhile */
+    return NULL;
+}
+
+/* Installs the handlers and starts the watcher, once. @return 1 when they run. */
+static int start_watcher(void)
+{
+    static int started;
+    if (started)
+        return started > 0;
+    pthread_t thread;
+    started = -1;
+    if (pipe(signal_pipe) != 0)
+        return 0;
+    if (pthread_create(&thread, NULL, watch_interrupts, NULL) != 0)
+        return 0;
+    pthread_detach(thread);
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_interrupt;
+    sa.sa_flags = SA_RESTART;
+    sigemptyset(&sa.sa_mask);
+    /* A signal ignored on entry (nohup, a background job of a script) stays ignored. */
+    for (size_t k = 0; k < sizeof watched_signals / sizeof watched_signals[0]; k++) {
+        struct sigaction old;
+        if (sigaction(watched_signals[k], NULL, &old) == 0 && old.sa_handler != SIG_IGN)
+            sigaction(watched_signals[k], &sa, NULL);
+    }
+    started = 1;
+    return 1;
+}
+
+void cli_output_watch(const char *path)
+{
+    pthread_mutex_lock(&watched_lock);
+    char *copy = watched_count < MAX_WATCHED && start_watcher() ? malloc(strlen(path) + 1) : NULL;
+    if (copy != NULL) {
+        strcpy(copy, path);
+        watched[watched_count++] = copy;
+    }
+    pthread_mutex_unlock(&watched_lock);
 }

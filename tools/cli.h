@@ -172,6 +172,19 @@ const char *cli_format_bytes(long long bytes, char *buf, size_t size);
 /** Number of processors to use by default (at least 1). */
 unsigned cli_default_threads(void);
 
+/* -------------------------------------------------------- interruption */
+
+/**
+ * Registers path as an output this command is about to write. The first call
+ * installs handlers for SIGINT, SIGTERM and SIGHUP: on any of them the
+ * temporaries the atomic writers keep beside every registered output
+ * ("<name>.tmp-XXXXXX", ".<name>.tmp-XXXXXX.<ext>") are removed, then the
+ * process ends by that signal. Outputs under their final names are always
+ * complete, so an interrupted command leaves either the old file, the new
+ * one, or nothing. At most 16 outputs; later ones are not watched.
+ */
+void cli_output_watch(const char *path);
+
 /* ------------------------------------------------------------ progress */
 
 /**

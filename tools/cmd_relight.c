@@ -9,7 +9,7 @@
  *
  * Invariants: DIR exists (it is created) before the engine runs, so a long
  * run never ends in an output that cannot be placed; every output is written
- * atomically (lfio, image.h, jsonout.h), so DIR never holds a partial file;
+ * atomically (lfio, capture/image.h, jsonout.h), so DIR never holds a partial file;
  * stdout carries the summary (nothing with --quiet), stderr errors and the
  * progress bar (only on a terminal, never with --quiet).
  */
@@ -26,7 +26,7 @@
 
 #include "cli.h"
 #include "commands.h"
-#include "image.h"
+#include "capture/image.h"
 #include "jsonout.h"
 #include "lfio/radmap.h"
 #include "relight/engine.h"
@@ -164,6 +164,18 @@ static int make_folder(const char *path)
     }
     free(copy);
     return ok;
+}
+
+/* Registers the outputs DIR may receive, so that an interruption removes their temporaries (cli.h). */
+static void watch_outputs(const char *dir)
+{
+    static const char *const names[] = {"radiance.h5", "stats.json", "view.exr", "view.png"};
+    for (size_t k = 0; k < sizeof names / sizeof names[0]; k++) {
+        char *path = join_path(dir, names[k]);
+        if (path != NULL)
+            cli_output_watch(path);
+        free(path);
+    }
 }
 
 /* Reports "wrote PATH: what" unless quiet. */
@@ -336,13 +348,13 @@ static int write_view_image(const relight_run *run, const char *name, int width,
         cli_error("relight", "out of memory");
         return ILF_EXIT_FAILED;
     }
-    ilfimg_status st = ilfimg_write(path, width, height, 3, pixels, err, sizeof err);
-    if (st != ILFIMG_OK)
+    cap_status st = cap_image_write(path, width, height, 3, pixels, err, sizeof err);
+    if (st != CAP_OK)
         cli_error("relight", "%s", err);
     else
         report_written(run->o, path, what);
     free(path);
-    return st == ILFIMG_OK ? ILF_EXIT_OK : ILF_EXIT_FAILED;
+    return st == CAP_OK ? ILF_EXIT_OK : ILF_EXIT_FAILED;
 }
 
 /* Renders the camera's view and writes view.exr (radiance) and view.png (tone mapped). @return an exit code. */
@@ -399,6 +411,9 @@ static cJSON *pass_json(uint32_t k, const rl_pass_stats *s)
     add_count(p, "pairs", s->pairs);
     add_count(p, "pairs_descended", s->pairs_descended);
     add_count(p, "emitters", s->emitters);
+    add_count(p, "refinements", s->refinements);
+    cJSON_AddNumberToObject(p, "estimated_rmse", s->estimated_rmse);
+    cJSON_AddBoolToObject(p, "budget_reached", s->budget_reached != 0);
     return p;
 }
 
@@ -510,6 +525,8 @@ int ilf_cmd_relight(int argc, char **argv)
     code = relight_scene_open("relight", o.scene, &o.sampling, &run.scene);
     if (code == ILF_EXIT_OK && !make_folder(o.output))
         code = ILF_EXIT_FAILED;
+    if (code == ILF_EXIT_OK)
+        watch_outputs(o.output);
     if (code == ILF_EXIT_OK)
         code = relight(&run);
     if (code == ILF_EXIT_OK)

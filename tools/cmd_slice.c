@@ -26,7 +26,7 @@
 
 #include "cli.h"
 #include "commands.h"
-#include "image.h"
+#include "capture/image.h"
 #include "tonemap.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
@@ -159,7 +159,7 @@ static int check_combination(const slice_options *o)
         problem = "give exactly one of --position, --direction and --toward";
     else if (o->output == NULL)
         problem = "-o OUT.exr|OUT.png is required";
-    else if (ilfimg_format_of(o->output) == ILFIMG_FORMAT_UNKNOWN)
+    else if (cap_image_guess_format(o->output) == CAP_IMAGE_FORMAT_UNKNOWN)
         problem = "the output must end in .exr or .png";
     else if (o->mode != SLICE_POSITION && (o->layout_given || o->size_given))
         problem = "--layout and --size apply to --position only";
@@ -350,11 +350,11 @@ static int slice_direction(lfio_reader *r, size_t k, const slice_options *o, sli
 static int write_image(const slice_image *img, const slice_options *o)
 {
     char err[512];
-    ilfimg_status st = ilfimg_write(o->output, img->width, img->height, img->channels, img->pixels, err, sizeof err);
-    if (st == ILFIMG_OK)
+    cap_status st = cap_image_write(o->output, img->width, img->height, img->channels, img->pixels, err, sizeof err);
+    if (st == CAP_OK)
         return ILF_EXIT_OK;
     cli_error("slice", "%s", err);
-    return st == ILFIMG_ERR_ARG ? ILF_EXIT_USAGE : ILF_EXIT_FAILED;
+    return st == CAP_ERR_ARG ? ILF_EXIT_USAGE : ILF_EXIT_FAILED;
 }
 
 static void describe_result(const slice_image *img, const slice_options *o, const char *slab, double scale)
@@ -366,7 +366,7 @@ static void describe_result(const slice_image *img, const slice_options *o, cons
     else
         printf("positions for one direction");
     printf(" of slab '%s'; ", slab);
-    if (ilfimg_format_of(o->output) == ILFIMG_FORMAT_EXR)
+    if (cap_image_guess_format(o->output) == CAP_IMAGE_FORMAT_EXR)
         printf("raw radiance (scale 1)%s\n", o->exposure_given ? ", --exposure applies to PNG only" : "");
     else
         printf("scale %.6g (%s)\n", scale, o->exposure_given ? "from --exposure" : "auto: 1/99th percentile");
@@ -380,7 +380,7 @@ static int slice_file(lfio_reader *r, const slice_options *o)
     slice_image img = {0, 0, 0, NULL};
     int code = o->mode == SLICE_POSITION ? slice_position(r, k, o, &img) : slice_direction(r, k, o, &img);
     double scale = 1.0;
-    if (code == ILF_EXIT_OK && ilfimg_format_of(o->output) == ILFIMG_FORMAT_PNG) {
+    if (code == ILF_EXIT_OK && cap_image_guess_format(o->output) == CAP_IMAGE_FORMAT_PNG) {
         const size_t count = (size_t)img.width * img.height;
         scale = o->exposure_given ? exp2(o->exposure)
                                   : tone_percentile_scale(img.pixels, count, img.channels, TONE_PEAK, 0.99, 1.0);
@@ -405,6 +405,7 @@ int ilf_cmd_slice(int argc, char **argv)
     lfio_status st = lfio_reader_open(o.path, &r);
     if (st != LFIO_OK)
         return cli_lfio_failure("slice", st, CLI_INPUT, o.path);
+    cli_output_watch(o.output);
     /* Checked after the input, so that bad input is reported as such first. */
     code = cli_output_folder_exists("slice", o.output) ? slice_file(r, &o) : ILF_EXIT_FAILED;
     lfio_reader_close(r);

@@ -680,6 +680,7 @@ int ilf_cmd_synth(int argc, char **argv)
         return ILF_EXIT_USAGE;
     if (!cli_output_folder_exists("synth", o.output))
         return ILF_EXIT_FAILED;
+    cli_output_watch(o.output);
     lfio_slab *slab = NULL;
     lfio_status st = lfio_slab_new(&o.desc, &slab);
     if (st != LFIO_OK) /* the description came from the options: bad input unless memory ran out */

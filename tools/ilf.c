@@ -26,6 +26,11 @@ static const ilf_command commands[] = {
     {"slice", "write one position or one direction of a slab as an EXR or PNG image", ilf_cmd_slice},
     {"relight", "relight a scene: radiance maps, statistics and the camera's view", ilf_cmd_relight},
     {"irradiance", "print the irradiance of a scene at given points (like rtrace -I)", ilf_cmd_irradiance},
+    {"capture", "turn light probe images (a manifest) into a light field file", ilf_cmd_capture},
+    {"render-probes", "render the light probes a scene gives on a grid of a plane, and their manifest",
+     ilf_cmd_render_probes},
+    {"reproject", "depth correction: move a captured light field onto proxy rectangles", ilf_cmd_reproject},
+    {"bench", "measure speed against accuracy: sweeps, references, plots, ray ceiling", ilf_cmd_bench},
 };
 
 static const size_t command_count = sizeof commands / sizeof commands[0];

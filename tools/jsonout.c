@@ -75,9 +75,9 @@ static int sync_parent_folder(const char *path)
     return err;
 }
 
-/* Writes text to a new temporary beside path and renames it over path.
+/* Writes size bytes of data to a new temporary beside path and renames it over path.
  * @return 0, or an errno value with *step saying what failed. */
-static int replace_file(const char *path, const char *text, const char **step)
+static int replace_file(const char *path, const void *data, size_t size, const char **step)
 {
     static const char suffix[] = ".tmp-XXXXXX";
     char *tmp = malloc(strlen(path) + sizeof suffix);
@@ -92,7 +92,7 @@ static int replace_file(const char *path, const char *text, const char **step)
     if (fd >= 0) {
         fchmod(fd, 0644); /* mkstemp makes it private; outputs are ordinary files */
         *step = "cannot write the temporary file";
-        if ((err = write_fully(fd, text, strlen(text))) == 0 && fsync(fd) != 0)
+        if ((err = write_fully(fd, data, size)) == 0 && fsync(fd) != 0)
             err = errno;
         if (close(fd) != 0 && err == 0)
             err = errno;
@@ -124,12 +124,21 @@ int json_write_file(const char *path, const cJSON *root, char *err, size_t errle
     if (line != NULL) {
         memcpy(line, text, len);
         strcpy(line + len, "\n");
-        code = replace_file(path, line, &step);
+        code = replace_file(path, line, len + 1, &step);
     } else {
         step = "out of memory";
     }
     cJSON_free(text);
     free(line);
+    if (code != 0)
+        snprintf(err, errlen, "%s: %s: %s", path, step, strerror(code));
+    return code == 0;
+}
+
+int file_write_atomic(const char *path, const void *data, size_t size, char *err, size_t errlen)
+{
+    const char *step = "";
+    int code = replace_file(path, data, size, &step);
     if (code != 0)
         snprintf(err, errlen, "%s: %s: %s", path, step, strerror(code));
     return code == 0;

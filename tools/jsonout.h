@@ -1,6 +1,7 @@
 /*
  * jsonout.h - JSON output for `ilf` subcommands (cJSON): number arrays,
- * printing a document to stdout, and writing one to a file atomically.
+ * printing a document to stdout, and writing one (or any bytes) to a file
+ * atomically.
  *
  * Invariants: documents are printed formatted and end with a newline; a
  * file is either replaced whole (a flushed temporary renamed over it) or
@@ -24,5 +25,11 @@ int json_print(const char *sub, const cJSON *root);
  * @return 1; 0 with a one-line message naming path in err (errlen bytes).
  */
 int json_write_file(const char *path, const cJSON *root, char *err, size_t errlen);
+
+/**
+ * Writes size bytes of data (any file: CSV, text, raw arrays) to path atomically, as json_write_file().
+ * @return 1; 0 with a one-line message naming path in err (errlen bytes).
+ */
+int file_write_atomic(const char *path, const void *data, size_t size, char *err, size_t errlen);
 
 #endif /* ILF_JSONOUT_H */

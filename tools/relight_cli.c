@@ -54,13 +54,23 @@ int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, c
     case SAMPLING_OPT_METHOD:
         ok = rl_method_parse(value, &v->method);
         if (!ok)
-            cli_bad_value(p, value, "expected culled, naive, area or solidangle");
+            cli_bad_value(p, value, "expected culled, naive, area, solidangle or adaptive");
         break;
     case SAMPLING_OPT_THREADS: ok = cli_value_u32(p, value, 0, 1024, &v->threads); break;
     case SAMPLING_OPT_SEED: ok = parse_seed(p, value, &v->seed); break;
     case SAMPLING_OPT_PARTITION_N: ok = parse_partition_n(p, value, 1, &v->partition_n); break;
     case SAMPLING_OPT_BOUNCE_PARTITION_N: ok = parse_partition_n(p, value, 0, &v->bounce_partition_n); break;
     case SAMPLING_OPT_DESCEND: ok = cli_value_u32(p, value, 0, 1, &v->descend); break;
+    case SAMPLING_OPT_TARGET_ERROR:
+        ok = cli_value_double(p, value, &v->target_error);
+        if (ok && !(v->target_error > 0 && v->target_error <= 1))
+            ok = 0, cli_bad_value(p, value, "must be in (0, 1]");
+        break;
+    case SAMPLING_OPT_TIME_BUDGET:
+        ok = cli_value_double(p, value, &v->time_budget);
+        if (ok && !(v->time_budget >= 0))
+            ok = 0, cli_bad_value(p, value, "must be >= 0 seconds");
+        break;
     case SAMPLING_OPT_RAYS: ok = cli_value_u32(p, value, 1, 65536, &v->rays_per_solid_angle); break;
     case SAMPLING_OPT_SAMPLES: ok = cli_value_u32(p, value, 1, 1048576, &v->samples_per_cell); break;
     case SAMPLING_OPT_BOUNCES: ok = cli_value_u32(p, value, 0, 64, &v->bounces); break;
@@ -94,6 +104,10 @@ static rl_sampling merged_sampling(const rl_sampling *scene, const sampling_over
         s.bounce_partition_n = v->bounce_partition_n;
     if (o->given & (1u << SAMPLING_OPT_DESCEND))
         s.descend = v->descend;
+    if (o->given & (1u << SAMPLING_OPT_TARGET_ERROR))
+        s.target_error = v->target_error;
+    if (o->given & (1u << SAMPLING_OPT_TIME_BUDGET))
+        s.time_budget = v->time_budget;
     return s;
 }
 
@@ -140,4 +154,7 @@ void relight_print_pass(FILE *out, uint32_t k, const rl_pass_stats *s)
     fprintf(out, "  solid angles considered %" PRIu64 ", culled %" PRIu64 "; pairs %" PRIu64 ", descended %" PRIu64
                  "\n",
             s->solid_angles_considered, s->solid_angles_culled, s->pairs, s->pairs_descended);
+    if (s->refinements > 0 || s->estimated_rmse > 0)
+        fprintf(out, "  adaptive: %" PRIu64 " refinements, estimated RMSE %.4g W m^-2%s\n", s->refinements,
+                s->estimated_rmse, s->budget_reached ? ", time budget reached" : "");
 }

@@ -20,7 +20,7 @@
 /* The sampling options, in the order of enum sampling_option_id. Commands
  * put them first in their option tables, so an option's index is its id. */
 #define RELIGHT_SAMPLING_OPTIONS                                                                  \
-    {"method", 0, "M", "culled, naive, area or solidangle (default: the scene's)"},                \
+    {"method", 0, "M", "culled, naive, area, solidangle or adaptive (default: the scene's)"},       \
     {"threads", 0, "N", "worker threads, 0 = every processor (default 0)"},                        \
     {"seed", 0, "S", "random seed, 0 .. 2^53 (default: the scene's)"},                             \
     {"partition-n", 0, "N", "partition level, a power of two up to 4096 (default: the scene's)"},  \
@@ -28,7 +28,9 @@
     {"samples", 0, "N", "shadow rays per (cell, emitter), area and solidangle (default: scene's)"}, \
     {"bounces", 0, "B", "diffuse passes after the direct one, 0 .. 64 (default: the scene's)"},    \
     {"bounce-partition-n", 0, "N", "partition level of bounce passes, 0 = partition-n / 4 (default: scene's)"}, \
-    {"descend", 0, "0|1", "1: finer solid angles for emitters smaller than one (default: the scene's)"}
+    {"descend", 0, "0|1", "1: finer solid angles for emitters smaller than one (default: the scene's)"}, \
+    {"target-error", 0, "E", "adaptive: refine while a cell's error exceeds E of it, (0, 1] (default: scene's)"}, \
+    {"time-budget", 0, "S", "adaptive: stop refining after S seconds, 0 = never (default: the scene's)"}
 
 enum sampling_option_id {
     SAMPLING_OPT_METHOD,
@@ -40,6 +42,8 @@ enum sampling_option_id {
     SAMPLING_OPT_BOUNCES,
     SAMPLING_OPT_BOUNCE_PARTITION_N,
     SAMPLING_OPT_DESCEND,
+    SAMPLING_OPT_TARGET_ERROR,
+    SAMPLING_OPT_TIME_BUDGET,
     SAMPLING_OPT_COUNT
 };
 

@@ -370,9 +370,9 @@ static lfio_status write_slab(const char *path, hid_t slabs, size_t k, const lfi
                             m, lfio_slab_mask_n(s, m), specs[5 + m].mask_n);
     if (st != LFIO_OK)
         return st;
-    hid_t g = H5Gcreate2(slabs, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    if (g < 0)
-        return lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot create group");
+    hid_t g;
+    if ((st = lfio__h5_create_group(path, obj, slabs, name, &g)) != LFIO_OK)
+        return st;
     st = write_slab_attrs(path, obj, g, s);
     for (int t = 0; st == LFIO_OK && t < nspecs; t++) {
         hid_t d;
@@ -527,14 +527,16 @@ static lfio_status read_desc(const char *path, const char *obj, hid_t g, lfio_sl
     return st;
 }
 
-/* Checks desc d of slab obj against the radiance size limit, then lfio__check_desc(). */
+/* Checks desc d of slab obj against the radiance size limit, then lfio__check_desc().
+ * A file over the limit breaks the format's rules (docs/format.md, section 4): LFIO_ERR_FORMAT,
+ * so that it counts as bad input and not as the reader running out of memory. */
 static lfio_status check_slab_desc(const char *path, const char *obj, const lfio_slab_desc *d)
 {
     uint64_t bytes = 0;
     int fits = lfio__mul_u64(4 * (uint64_t)d->n, d->n, &bytes) && lfio__mul_u64(bytes, d->nu, &bytes)
                && lfio__mul_u64(bytes, d->nv, &bytes) && lfio__mul_u64(bytes, 3 * sizeof(float), &bytes);
     if (!fits || bytes > LFIO_SLAB_MAX_BYTES)
-        return lfio__fail(LFIO_ERR_NOMEM,
+        return lfio__fail(LFIO_ERR_FORMAT,
                           "%s: %s: radiance of %u x %u positions at level %u exceeds the limit of %llu bytes",
                           path, obj, d->nu, d->nv, d->n, (unsigned long long)LFIO_SLAB_MAX_BYTES);
     char why[256] = "";
@@ -575,12 +577,14 @@ static lfio_status check_dataset(const char *path, const char *gobj, hid_t g, co
                                  hid_t dapl, hid_t *out)
 {
     /* H5Lexists fails rather than answering 0 when an intermediate group is missing. */
-    if (sp->kind == DS_MASK && H5Lexists(g, "mask", H5P_DEFAULT) <= 0)
-        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s/mask: missing group", path, gobj);
+    char obj[128];
+    snprintf(obj, sizeof obj, "%s/mask", gobj);
+    lfio_status st = sp->kind == DS_MASK ? lfio__h5_expect_link(path, obj, g, "mask", "group") : LFIO_OK;
+    if (st != LFIO_OK)
+        return st;
     hid_t d = -1;
-    lfio_status st = lfio__h5_check_dataset(path, gobj, g, &sp->lay, "the slab's attributes", dapl, &d);
+    st = lfio__h5_check_dataset(path, gobj, g, &sp->lay, "the slab's attributes", dapl, &d);
     if (st == LFIO_OK && sp->kind == DS_MASK) {
-        char obj[128];
         int64_t m;
         snprintf(obj, sizeof obj, "%s/%s", gobj, sp->lay.name);
         st = lfio__h5_get_int_attr(path, obj, d, "n", sp->mask_n, sp->mask_n, &m);
@@ -598,13 +602,15 @@ static lfio_status open_slab(lfio_reader *r, hid_t slabs, size_t k)
     char obj[64], name[24];
     snprintf(name, sizeof name, "%zu", k);
     snprintf(obj, sizeof obj, "/slabs/%zu", k);
-    if (H5Lexists(slabs, name, H5P_DEFAULT) <= 0)
-        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: missing slab group (slab_count is %zu)", r->path,
-                          obj, r->nslabs);
+    char what[64];
+    snprintf(what, sizeof what, "slab group (slab_count is %zu)", r->nslabs);
+    lfio_status st = lfio__h5_expect_link(r->path, obj, slabs, name, what);
+    if (st != LFIO_OK)
+        return st;
     hid_t g = H5Gopen2(slabs, name, H5P_DEFAULT);
     if (g < 0)
         return lfio__h5_fail(LFIO_ERR_FORMAT, r->path, obj, "cannot open as a group");
-    lfio_status st = read_desc(r->path, obj, g, &r->desc[k]);
+    st = read_desc(r->path, obj, g, &r->desc[k]);
     if (st == LFIO_OK)
         st = check_slab_desc(r->path, obj, &r->desc[k]);
     struct ds_spec specs[MAX_SPECS];
@@ -616,6 +622,33 @@ static lfio_status open_slab(lfio_reader *r, hid_t slabs, size_t k)
         lfio__h5_close(dapl);
     }
     lfio__h5_close(g);
+    return st;
+}
+
+/* qsort comparator: slab descriptions by name, equal names by place, so a repeat follows its first use. */
+static int compare_names(const void *a, const void *b)
+{
+    const lfio_slab_desc *da = *(const lfio_slab_desc *const *)a, *db = *(const lfio_slab_desc *const *)b;
+    int c = strcmp(da->name, db->name);
+    return c != 0 ? c : (da > db) - (da < db);
+}
+
+/* Checks that no two slabs of r share a name (sorting, so 65536 slabs stay cheap). @return LFIO_OK,
+ * LFIO_ERR_FORMAT naming both slabs, or LFIO_ERR_NOMEM. */
+static lfio_status check_unique_names(const lfio_reader *r)
+{
+    const lfio_slab_desc **sorted = malloc(r->nslabs * sizeof *sorted);
+    if (sorted == NULL)
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", r->path);
+    for (size_t k = 0; k < r->nslabs; k++)
+        sorted[k] = &r->desc[k];
+    qsort(sorted, r->nslabs, sizeof *sorted, compare_names);
+    lfio_status st = LFIO_OK;
+    for (size_t k = 1; st == LFIO_OK && k < r->nslabs; k++)
+        if (strcmp(sorted[k - 1]->name, sorted[k]->name) == 0)
+            st = lfio__fail(LFIO_ERR_FORMAT, "%s: /slabs/%td and /slabs/%td: slab name '%s' is used twice", r->path,
+                            sorted[k - 1] - r->desc, sorted[k] - r->desc, sorted[k]->name);
+    free(sorted);
     return st;
 }
 
@@ -658,13 +691,15 @@ static lfio_status reader_open_impl(const char *path, lfio_reader **out)
     for (size_t k = 0; st == LFIO_OK && k < r->nslabs; k++)
         r->radiance[k] = -1;
     hid_t slabs = -1;
-    if (st == LFIO_OK && H5Lexists(r->file, "slabs", H5P_DEFAULT) <= 0)
-        st = lfio__fail(LFIO_ERR_FORMAT, "%s: /slabs: missing group", path);
+    if (st == LFIO_OK)
+        st = lfio__h5_expect_link(path, "/slabs", r->file, "slabs", "group");
     if (st == LFIO_OK && (slabs = H5Gopen2(r->file, "slabs", H5P_DEFAULT)) < 0)
         st = lfio__h5_fail(LFIO_ERR_FORMAT, path, "/slabs", "cannot open as a group");
     for (size_t k = 0; st == LFIO_OK && k < r->nslabs; k++)
         st = open_slab(r, slabs, k);
     lfio__h5_close(slabs);
+    if (st == LFIO_OK)
+        st = check_unique_names(r);
     if (st != LFIO_OK)
         reader_free(r);
     else
@@ -840,10 +875,9 @@ static lfio_status lightfield_read_impl(const char *path, lfio_lightfield **out)
     for (size_t k = 0; st == LFIO_OK && k < r->nslabs; k++) {
         lfio_slab *s;
         st = read_slab_impl(r, k, &s);
-        /* Names were checked one by one; only a repeat is left for take_slab to refuse. */
+        /* Names, and that they differ, were checked on opening: take_slab can only run out of memory. */
         if (st == LFIO_OK && lfio_lightfield_take_slab(lf, s) != LFIO_OK)
-            st = lfio__fail(LFIO_ERR_FORMAT, "%s: /slabs/%zu: slab name '%s' is used twice", path, k,
-                            r->desc[k].name);
+            st = lfio__fail(LFIO_ERR_NOMEM, "%s: /slabs/%zu: out of memory", path, k);
     }
     reader_free(r);
     if (st != LFIO_OK)

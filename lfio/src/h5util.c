@@ -368,6 +368,29 @@ lfio_status lfio__h5_get_int_attr(const char *path, const char *obj, hid_t id, c
     return st;
 }
 
+/* -------------------------------------------------------------------- groups */
+
+/* Checks that link name of g exists, telling a damaged group from a missing link (see h5util.h). */
+lfio_status lfio__h5_expect_link(const char *path, const char *obj, hid_t g, const char *name, const char *what)
+{
+    htri_t exists = H5Lexists(g, name, H5P_DEFAULT);
+    if (exists < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot look it up");
+    return exists ? LFIO_OK : lfio__fail(LFIO_ERR_FORMAT, "%s: %s: missing %s", path, obj, what);
+}
+
+/* Creates group name in parent with its attributes in its checksummed object header (see h5util.h). */
+lfio_status lfio__h5_create_group(const char *path, const char *obj, hid_t parent, const char *name, hid_t *out)
+{
+    hid_t gcpl = H5Pcreate(H5P_GROUP_CREATE);
+    *out = gcpl >= 0 && H5Pset_attr_phase_change(gcpl, 64, 64) >= 0
+               ? H5Gcreate2(parent, name, H5P_DEFAULT, gcpl, H5P_DEFAULT)
+               : -1;
+    lfio_status st = *out < 0 ? lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot create group") : LFIO_OK;
+    lfio__h5_close(gcpl);
+    return st;
+}
+
 /* ------------------------------------------------------------------ datasets */
 
 /* @return the little-endian file datatype of l: IEEE float, or unsigned integer of l's size. */
@@ -433,8 +456,9 @@ lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, 
     snprintf(obj, sizeof obj, "%s/%s", gobj, l->name);
     if (out)
         *out = -1;
-    if (H5Lexists(g, l->name, H5P_DEFAULT) <= 0)
-        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: missing dataset", path, obj);
+    lfio_status st = lfio__h5_expect_link(path, obj, g, l->name, "dataset");
+    if (st != LFIO_OK)
+        return st;
     hid_t d = H5Dopen2(g, l->name, dapl >= 0 ? dapl : H5P_DEFAULT);
     if (d < 0)
         return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a dataset");
@@ -448,7 +472,7 @@ lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, 
         rank = -1;
     lfio__h5_close(space);
     lfio__h5_close(t);
-    lfio_status st = LFIO_OK;
+    st = LFIO_OK;
     int same_dims = rank == l->rank;
     for (int k = 0; same_dims && k < rank; k++)
         same_dims = dims[k] == l->dims[k];

@@ -90,6 +90,25 @@ lfio_status lfio__h5_get_f64_attr(const char *path, const char *obj, hid_t id, c
 lfio_status lfio__h5_get_int_attr(const char *path, const char *obj, hid_t id, const char *name,
                                   int64_t lo, int64_t hi, int64_t *out);
 
+/* ---------------------------------------------------------------- groups */
+
+/*
+ * Checks that link name of group g exists; obj is the linked object's full
+ * name and what its kind ("dataset") for messages.
+ * @return LFIO_OK; LFIO_ERR_FORMAT "<path>: <obj>: missing <what>"; or, when
+ * HDF5 cannot tell because g itself is damaged, what its error stack says
+ * (LFIO_ERR_CHECKSUM for a checksum mismatch).
+ */
+lfio_status lfio__h5_expect_link(const char *path, const char *obj, hid_t g, const char *name, const char *what);
+
+/*
+ * Creates group name in parent (obj names it in messages) with up to 64
+ * attributes kept in its object header. HDF5 moves more than 8 into a
+ * fractal heap, whose blocks carry no checksum: a damaged slab origin would
+ * then read back silently. @return LFIO_OK and *out open; LFIO_ERR_IO with *out = -1.
+ */
+lfio_status lfio__h5_create_group(const char *path, const char *obj, hid_t parent, const char *name, hid_t *out);
+
 /* -------------------------------------------------------------- datasets */
 
 /* The stored layout of one dataset: what the writer creates and the reader expects. */

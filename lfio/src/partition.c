@@ -384,6 +384,8 @@ int lfio_part_interp(uint32_t n, const double d[3], uint64_t ids[4], double w[4]
         uint64_t ti = ids[2]; ids[2] = ids[3]; ids[3] = ti;
         double tw = w[2]; w[2] = w[3]; w[3] = tw;
     }
-    w[0] = 1.0 - w[1] - w[2] - w[3];
+    /* rounding must not leave the centre a negative weight: interpolated
+     * radiance has to stay >= 0 */
+    w[0] = fmax(0.0, 1.0 - w[1] - w[2] - w[3]);
     return 1;
 }

@@ -278,10 +278,11 @@ static lfio_status write_patch(const char *path, hid_t patches, size_t k, const 
     char obj[64], name[24];
     snprintf(name, sizeof name, "%zu", k);
     snprintf(obj, sizeof obj, "/patches/%zu", k);
-    hid_t g = H5Gcreate2(patches, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    if (g < 0)
-        return lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot create group");
-    lfio_status st = write_patch_attrs(path, obj, g, p);
+    hid_t g;
+    lfio_status st = lfio__h5_create_group(path, obj, patches, name, &g);
+    if (st != LFIO_OK)
+        return st;
+    st = write_patch_attrs(path, obj, g, p);
     for (int t = 0; st == LFIO_OK && t < MAP_DS_COUNT; t++) {
         lfio__h5_layout lay;
         hid_t d;
@@ -506,7 +507,7 @@ static lfio_status read_patch_counts(const char *path, const char *obj, hid_t g,
         return lfio__fail(LFIO_ERR_FORMAT, "%s: %s/cell_ij: %llu cells in a grid of %u x %u", path, obj,
                           (unsigned long long)ncells, p->nu, p->nv);
     if (ncells > LFIO_RADMAP_MAX_CELLS - map->cells)
-        return lfio__fail(LFIO_ERR_NOMEM, "%s: %s/cell_ij: %llu more cells exceed the limit of %llu per file", path,
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s/cell_ij: %llu more cells exceed the limit of %llu per file", path,
                           obj, (unsigned long long)ncells, (unsigned long long)LFIO_RADMAP_MAX_CELLS);
     p->nverts = (uint32_t)nverts;
     p->ncells = (uint32_t)ncells;
@@ -555,8 +556,9 @@ static lfio_status read_patch(const char *path, hid_t patches, size_t k, lfio_ra
     char obj[64], name[24];
     snprintf(name, sizeof name, "%zu", k);
     snprintf(obj, sizeof obj, "/patches/%zu", k);
-    if (H5Lexists(patches, name, H5P_DEFAULT) <= 0)
-        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: missing patch group", path, obj);
+    lfio_status st = lfio__h5_expect_link(path, obj, patches, name, "patch group");
+    if (st != LFIO_OK)
+        return st;
     if (map->count == map->capacity) {
         size_t grown = map->capacity ? 2 * map->capacity : 16;
         struct map_patch *more = realloc(map->patches, grown * sizeof *more);
@@ -570,7 +572,7 @@ static lfio_status read_patch(const char *path, hid_t patches, size_t k, lfio_ra
     hid_t g = H5Gopen2(patches, name, H5P_DEFAULT);
     if (g < 0)
         return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a group");
-    lfio_status st = read_patch_attrs(path, obj, g, mp);
+    st = read_patch_attrs(path, obj, g, mp);
     if (st == LFIO_OK)
         st = read_patch_counts(path, obj, g, map, &mp->pub);
     if (st == LFIO_OK)
@@ -593,8 +595,8 @@ static lfio_status radmap_read_impl(const char *path, lfio_radmap **out)
     lfio_status st = map ? lfio__h5_open_read(path, &file) : lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
     if (st == LFIO_OK)
         st = read_root(path, file, map, &count);
-    if (st == LFIO_OK && H5Lexists(file, "patches", H5P_DEFAULT) <= 0)
-        st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches: missing group", path);
+    if (st == LFIO_OK)
+        st = lfio__h5_expect_link(path, "/patches", file, "patches", "group");
     if (st == LFIO_OK && (patches = H5Gopen2(file, "patches", H5P_DEFAULT)) < 0)
         st = lfio__h5_fail(LFIO_ERR_FORMAT, path, "/patches", "cannot open as a group");
     for (size_t k = 0; st == LFIO_OK && k < count; k++)

@@ -24,7 +24,7 @@ rl_status rl__fail(rl_status status, const char *fmt, ...)
     return status;
 }
 
-static const char *const method_names[] = {"culled", "naive", "area", "solidangle"};
+static const char *const method_names[] = {"culled", "naive", "area", "solidangle", "adaptive"};
 
 const char *rl_method_name(rl_method m)
 {
@@ -53,4 +53,6 @@ void rl_sampling_default(rl_sampling *s)
     s->seed = 1;
     s->descend = 1;
     s->threads = 0;
+    s->target_error = 0.05;
+    s->time_budget = 0.0;
 }

@@ -142,6 +142,9 @@ static void sum_counters(const rl_counters *c, unsigned n, rl_pass_stats *st)
         st->solid_angles_culled += c[k].leaves_culled;
         st->pairs += c[k].pairs;
         st->pairs_descended += c[k].pairs_descended;
+        st->refinements += c[k].refinements;
+        st->estimated_rmse += c[k].variance; /* a sum of variances until run_pass divides */
+        st->budget_reached |= c[k].budget_reached;
     }
 }
 
@@ -235,6 +238,7 @@ static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, uint32_t pa
     ctx->centre = tracer_centre(tracer);
     ctx->eps = 1e-6 * tracer_extent(tracer);
     ctx->margin = 1e-9 * tracer_extent(tracer);
+    ctx->deadline = sampling->time_budget > 0 ? now(CLOCK_MONOTONIC) + sampling->time_budget : 0.0;
 }
 
 /* Runs one pass over maps with emitters e; gather_level_pass chooses the
@@ -261,6 +265,10 @@ static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, uint32
     int rc = ne > 0 ? run_job(&job, threads, progress, user, base, span) : 0;
     if (job.counters)
         sum_counters(job.counters, threads, st);
+    size_t cells = 0;
+    for (size_t m = 0; m < nmaps; m++)
+        cells += maps[m].ncells;
+    st->estimated_rmse = cells ? sqrt(st->estimated_rmse / (double)cells) : 0.0;
     free(job.counters);
     free((void *)job.items);
     if (rc != 0)

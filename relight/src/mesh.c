@@ -23,6 +23,9 @@
  * The normal stored is the unit Newell vector of what is kept: the
  * right-hand rule normal, so counter-clockwise vertices face the viewer.
  *
+ * Mesh files are read with assimp, PLY files after plycheck.c has checked
+ * their declared counts against their size (assimp allocates from them).
+ *
  * Scene polygons (RL_POLY_STRICT) failing any step are errors whose message
  * names the input vertex at fault. Mesh faces (RL_POLY_SPLIT) failing steps
  * 1-3 are dropped, as they carry no area; failing step 4 or 6 they are
@@ -46,6 +49,7 @@
 #include <sys/stat.h>
 
 #include "mesh.h"
+#include "plycheck.h"
 #include "vec.h"
 
 static const double plane_tol = 1e-6; /* distances, relative to the diameter */
@@ -505,7 +509,10 @@ static rl_status add_faces(rl_build *b, const struct aiScene *sc, uint32_t *mate
             if (f->mNumIndices < 3)
                 continue; /* points and lines carry no light */
             char label[sizeof ((rl_polygon *)0)->label];
-            rl__format(label, sizeof label, "%s (%.40s) face %zu", elem, shown, face_no);
+            /* A long name keeps its end, where the file's own name is. */
+            size_t len = strlen(shown);
+            rl__format(label, sizeof label, "%s (%s%s) face %zu", elem, len > 40 ? "..." : "",
+                       len > 40 ? shown + len - 37 : shown, face_no);
             rl_status st = gather_face(b, m, f, label);
             unsigned k = m->mMaterialIndex < sc->mNumMaterials ? m->mMaterialIndex : sc->mNumMaterials;
             if (st == RL_OK && materials[k] == MATERIAL_UNSET)
@@ -528,6 +535,9 @@ rl_status rl__build_mesh(rl_build *b, const char *path, const char *elem, const 
         return rl__build_fail(b, elem, "cannot open '%s': %s", path, strerror(errno));
     if (!S_ISREG(sb.st_mode))
         return rl__build_fail(b, elem, "'%s' is not a regular file", path);
+    char why[256];
+    if (!rl__ply_check(path, why, sizeof why)) /* assimp would trust its counts (plycheck.h) */
+        return rl__build_fail(b, elem, "cannot read '%s': %s", path, why);
     const struct aiScene *sc =
         aiImportFile(path, aiProcess_PreTransformVertices | aiProcess_ValidateDataStructure);
     if (!sc)

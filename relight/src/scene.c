@@ -652,17 +652,20 @@ static rl_status read_sampling(rl_build *b, const cJSON *j)
 {
     static const char *const keys[] = {"method", "partition_n", "rays_per_solid_angle", "samples_per_cell",
                                        "bounces", "bounce_partition_n", "descend", "seed", NULL};
+    static const char *const all_keys[] = {"method", "partition_n", "rays_per_solid_angle", "samples_per_cell",
+                                           "bounces", "bounce_partition_n", "descend", "seed", "target_error",
+                                           "time_budget", NULL};
     static const int_limit *const limits[] = {NULL, &lim_partition, &lim_rays, &lim_samples, &lim_bounces,
                                               &lim_bounce_partition, &lim_flag, &lim_seed};
     rl_sampling *s = &b->scene->sampling;
     uint32_t *const fields[] = {NULL, &s->partition_n, &s->rays_per_solid_angle, &s->samples_per_cell, &s->bounces,
                                 &s->bounce_partition_n, &s->descend, NULL};
-    rl_status st = json_keys(b, j, "sampling", keys);
+    rl_status st = json_keys(b, j, "sampling", all_keys);
     const cJSON *m = member(j, "method");
     const char *name = NULL;
     if (st == RL_OK && m && (st = json_string(b, m, "sampling.method", &name)) == RL_OK &&
         !rl_method_parse(name, &s->method))
-        st = rl__build_fail(b, "sampling.method", "unknown method '%.64s' (expected culled, naive, area or solidangle)", name);
+        st = rl__build_fail(b, "sampling.method", "unknown method '%.64s' (expected culled, naive, area, solidangle or adaptive)", name);
     for (size_t k = 1; keys[k] && st == RL_OK; k++) {
         const cJSON *v = member(j, keys[k]);
         char elem[ELEM_MAX];
@@ -675,6 +678,14 @@ static rl_status read_sampling(rl_build *b, const cJSON *j)
                 s->seed = value;
         }
     }
+    /* the adaptive method's two real-valued settings */
+    const cJSON *te = member(j, "target_error"), *tb = member(j, "time_budget");
+    if (st == RL_OK && te && (st = json_number(b, te, "sampling.target_error", &s->target_error)) == RL_OK &&
+        !(s->target_error > 0 && s->target_error <= 1))
+        st = rl__build_fail(b, "sampling.target_error", "must be in (0, 1], got %.17g", s->target_error);
+    if (st == RL_OK && tb && (st = json_number(b, tb, "sampling.time_budget", &s->time_budget)) == RL_OK &&
+        !(s->time_budget >= 0))
+        st = rl__build_fail(b, "sampling.time_budget", "must be >= 0 seconds, got %.17g", s->time_budget);
     return st;
 }
 
@@ -824,6 +835,24 @@ static rl_status json_error(const char *path, const char *text, size_t len, size
                     what ? what : "unexpected text", near);
 }
 
+/* @return how many arrays and objects are open at byte pos of text, strings skipped. */
+static size_t json_depth(const char *text, size_t pos)
+{
+    size_t depth = 0;
+    int in_string = 0;
+    for (size_t i = 0; i < pos; i++) {
+        if (in_string && text[i] == '\\')
+            i++;
+        else if (text[i] == '"')
+            in_string = !in_string;
+        else if (!in_string && (text[i] == '[' || text[i] == '{'))
+            depth++;
+        else if (!in_string && (text[i] == ']' || text[i] == '}') && depth > 0)
+            depth--;
+    }
+    return depth;
+}
+
 /* Parses text (len bytes, NUL-terminated) as JSON. @return RL_OK and *root, or RL_ERR_INPUT with line:column. */
 static rl_status parse_json(const char *path, const char *text, size_t len, cJSON **root)
 {
@@ -841,6 +870,12 @@ static rl_status parse_json(const char *path, const char *text, size_t len, cJSO
     if (*root)
         return RL_OK;
     size_t pos = end && end >= text && end <= text + len ? (size_t)(end - text) : len;
+    /* cJSON stops at its nesting limit without saying so. */
+    if (json_depth(text, pos) >= CJSON_NESTING_LIMIT) {
+        char what[80];
+        snprintf(what, sizeof what, "arrays and objects nested more than %d deep", CJSON_NESTING_LIMIT);
+        return json_error(path, text, len, pos, what);
+    }
     return json_error(path, text, len, pos, NULL);
 }
 
@@ -940,7 +975,7 @@ rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
 {
     if (!s || !x)
         return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: scene and sampling must not be NULL");
-    if ((unsigned)x->method > RL_METHOD_SOLIDANGLE)
+    if ((unsigned)x->method > RL_METHOD_ADAPTIVE)
         return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: method %d is not a method", (int)x->method);
     const struct {
         const char *name;
@@ -959,6 +994,11 @@ rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
             return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: %s must be %s, got %llu", fields[k].name,
                             limit_rule(fields[k].limit, rule), (unsigned long long)fields[k].value);
         }
+    if (!(x->target_error > 0) || !(x->target_error <= 1))
+        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: target_error must be in (0, 1], got %g", x->target_error);
+    if (!(x->time_budget >= 0) || !isfinite(x->time_budget))
+        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: time_budget must be finite and >= 0, got %g",
+                        x->time_budget);
     s->sampling = *x;
     return RL_OK;
 }

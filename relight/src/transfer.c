@@ -27,6 +27,7 @@
  */
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <lfio/partition.h>
 
@@ -415,51 +416,187 @@ static int walk(const rl_transfer_ctx *ctx, const pair *p, const tile *t, rl_scr
     return rc;
 }
 
-/* Queues the k rays of (cell, leaf) into acc. clip, when not NULL,
- * restricts origins to the cell's part inside the region.
+/* Where the origins of one (cell, leaf) pair are drawn: the cell's polygon,
+ * or for a descended pair its part inside the region, and that part's
+ * share of the cell's area. */
+typedef struct origin_domain {
+    v2 poly[RL_MAX_POLY_VERTS + 8];
+    uint32_t n;
+    int square;    /* a full square: sampled from its corner and side alone */
+    double weight; /* area of the part / area of the cell */
+} origin_domain;
+
+/* Fills d for cell of map m; clip (nclip vertices), when not NULL, is the
+ * region to restrict origins to. @return 0 if the domain is empty. */
+static int cell_domain(const rl_map *m, uint32_t cell, const v2 *clip, size_t nclip, origin_domain *d)
+{
+    d->n = map_cell_polygon(m, &m->cells[cell], d->poly);
+    d->square = m->cells[cell].poly_count == 0 && !clip;
+    d->weight = 1.0;
+    if (!clip || !(m->cells[cell].area > 0))
+        return 1;
+    /* cell intersect region: clip the cell by the clipped region's edges */
+    v2 buf[2][RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8];
+    size_t n = d->n;
+    memcpy(buf[0], d->poly, n * sizeof *d->poly);
+    int cur = 0;
+    for (size_t e = 0; e < nclip && n > 0; e++) {
+        v2 a = clip[e], b = clip[(e + 1) % nclip];
+        rl_halfplane h = {-(b.y - a.y), b.x - a.x, 0};
+        h.c = -(h.a * a.x + h.b * a.y);
+        n = clip_poly2(buf[cur], n, h, buf[1 - cur]);
+        cur = 1 - cur;
+    }
+    double part = n >= 3 ? polygon_area2(buf[cur], (uint32_t)n) : 0.0;
+    if (!(part > 0))
+        return 0;
+    d->weight = part / m->cells[cell].area;
+    d->n = (uint32_t)(n < RL_MAX_POLY_VERTS + 8 ? n : RL_MAX_POLY_VERTS + 8);
+    memcpy(d->poly, buf[cur], d->n * sizeof *d->poly);
+    return 1;
+}
+
+/* @return a world origin in domain d of map m from two numbers in [0, 1). */
+static v3 domain_point(const rl_map *m, const origin_domain *d, double a, double b)
+{
+    v2 q = d->square ? (v2){d->poly[0].x + a * m->cell, d->poly[0].y + b * m->cell}
+                     : sample_polygon(d->poly, d->n, a, b);
+    return frame_point(&m->frame, q);
+}
+
+/* @return the sample key of (cell, solid angle id at level lv) in this pass, for emitter ei. */
+static uint64_t sample_key(const rl_transfer_ctx *ctx, uint32_t ei, uint32_t map_index, uint32_t cell, uint32_t lv,
+                           uint64_t id)
+{
+    return hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), map_index),
+                                      cell), lv), id);
+}
+
+/* Queues the k rays of (cell, leaf) into acc.
  * @return the factor that turns acc into the cell's irradiance (0: no rays). */
 static double gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t cell, uint64_t id,
                           const sph_tri *tri, uint32_t emitter_index, const v2 *clip, size_t nclip, double *acc,
                           ray_batch *batch, rl_counters *cnt)
 {
     rl_map *m = t->m;
-    v2 cp[RL_MAX_POLY_VERTS + 8];
-    uint32_t ncp = map_cell_polygon(m, &m->cells[cell], cp);
-    /* a full square needs no polygon sampling: its corner and side do */
-    int square = m->cells[cell].poly_count == 0 && !clip;
-    double weight = 1.0;
-    if (clip && m->cells[cell].area > 0) {
-        /* cell intersect region: clip the cell by the clipped region's edges */
-        v2 buf[2][RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8];
-        size_t n = ncp;
-        memcpy(buf[0], cp, n * sizeof *cp);
-        int cur = 0;
-        for (size_t e = 0; e < nclip && n > 0; e++) {
-            v2 a = clip[e], b = clip[(e + 1) % nclip];
-            rl_halfplane h = {-(b.y - a.y), b.x - a.x, 0};
-            h.c = -(h.a * a.x + h.b * a.y);
-            n = clip_poly2(buf[cur], n, h, buf[1 - cur]);
-            cur = 1 - cur;
-        }
-        double part = n >= 3 ? polygon_area2(buf[cur], (uint32_t)n) : 0.0;
-        if (!(part > 0))
-            return 0.0;
-        weight = part / m->cells[cell].area;
-        ncp = (uint32_t)(n < RL_MAX_POLY_VERTS + 8 ? n : RL_MAX_POLY_VERTS + 8);
-        memcpy(cp, buf[cur], ncp * sizeof *cp);
-    }
+    origin_domain dom;
+    if (!cell_domain(m, cell, clip, nclip, &dom))
+        return 0.0;
     uint32_t k = ctx->sampling->rays_per_solid_angle;
-    lds_key key = lds_make(hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass),
-                                                                        emitter_index), t->map_index), cell),
-                                         p->level), id));
+    lds_key key = lds_make(sample_key(ctx, emitter_index, t->map_index, cell, p->level, id));
     for (uint32_t i = 0; i < k; i++) {
         double u[4];
         lds4(&key, i, u);
-        v2 q = square ? (v2){cp[0].x + u[0] * m->cell, cp[0].y + u[1] * m->cell} : sample_polygon(cp, ncp, u[0], u[1]);
         v3 d = sph_tri_sample(tri, u[2], u[3]);
-        shoot_back(ctx, p->e, frame_point(&m->frame, q), m->frame.n, d, acc, batch, cnt);
+        shoot_back(ctx, p->e, domain_point(m, &dom, u[0], u[1]), m->frame.n, d, acc, batch, cnt);
     }
-    return weight * tri->omega / k;
+    return dom.weight * tri->omega / k;
+}
+
+/* ---------------------------------------------------------------- adaptive */
+
+/* Most samples one adaptive node draws. */
+#define ADAPTIVE_MAX_SAMPLES 256
+
+/* An adaptive estimate: irradiance, its variance (of the mean channel), and the samples behind it. */
+typedef struct estimate {
+    double e[3];
+    double var;
+    double samples;
+} estimate;
+
+/* @return the spherical triangle of solid angle id at level lv in emitter e's frame, ready to sample. */
+static sph_tri leaf_triangle(const rl_emitter *e, uint32_t lv, uint64_t id)
+{
+    double v[3][3];
+    v3 g[3];
+    lfio_part_vertices(lv, id, v);
+    for (int k = 0; k < 3; k++)
+        g[k] = v3_add(v3_add(v3_scale(e->frame.e1, v[k][0]), v3_scale(e->frame.e2, v[k][1])),
+                      v3_scale(e->frame.n, v[k][2]));
+    return sph_tri_make(g[0], g[1], g[2], lfio_part_solid_angle(lv, id));
+}
+
+/* @return 1 once the adaptive time budget has run out. */
+static int budget_spent(const rl_transfer_ctx *ctx)
+{
+    if (!(ctx->deadline > 0))
+        return 0;
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + ts.tv_nsec * 1e-9 > ctx->deadline;
+}
+
+/* Estimates what solid angle id at level lv sends into one cell's domain
+ * with k samples of the same low-discrepancy sequence culled uses, so an
+ * unrefined adaptive leaf equals culled's estimate; the variance comes from
+ * the spread of the k samples. */
+static estimate node_estimate(const rl_transfer_ctx *ctx, const pair *p, const tile *t, const origin_domain *dom,
+                              uint32_t cell, uint32_t ei, uint32_t lv, uint64_t id, const sph_tri *tri,
+                              rl_counters *cnt)
+{
+    const rl_map *m = t->m;
+    uint32_t k = ctx->sampling->rays_per_solid_angle;
+    k = k > ADAPTIVE_MAX_SAMPLES ? ADAPTIVE_MAX_SAMPLES : k;
+    double acc[ADAPTIVE_MAX_SAMPLES][3];
+    ray_batch batch;
+    batch.n = 0;
+    lds_key key = lds_make(sample_key(ctx, ei, t->map_index, cell, lv, id));
+    for (uint32_t i = 0; i < k; i++) {
+        double u[4];
+        lds4(&key, i, u);
+        acc[i][0] = acc[i][1] = acc[i][2] = 0.0;
+        shoot_back(ctx, p->e, domain_point(m, dom, u[0], u[1]), m->frame.n, sph_tri_sample(tri, u[2], u[3]), acc[i],
+                   &batch, cnt);
+    }
+    batch_flush(ctx, &batch, cnt);
+    estimate est = {{0, 0, 0}, 0, k};
+    double lum = 0.0, sq = 0.0;
+    for (uint32_t i = 0; i < k; i++) {
+        double y = (acc[i][0] + acc[i][1] + acc[i][2]) / 3;
+        for (int c = 0; c < 3; c++)
+            est.e[c] += tri->omega * acc[i][c] / k;
+        lum += y / k;
+        sq += y * y / k;
+    }
+    est.var = k > 1 ? tri->omega * tri->omega * fmax(0.0, sq - lum * lum) / (k - 1) : 0.0;
+    return est;
+}
+
+/* Estimates solid angle id at level lv for one cell and, while its standard
+ * error exceeds tol (W m^-2), refines it: its four children are estimated
+ * (recursively, each held to tol / 2) and the two estimates of the solid
+ * angle are combined weighted by their sample counts, which keeps the
+ * combination unbiased and reuses the samples already drawn. */
+static estimate adaptive_node(const rl_transfer_ctx *ctx, const pair *p, const tile *t, const origin_domain *dom,
+                              uint32_t cell, uint32_t ei, uint32_t lv, uint64_t id, const sph_tri *tri,
+                              uint32_t max_level, double tol, rl_counters *cnt)
+{
+    estimate est = node_estimate(ctx, p, t, dom, cell, ei, lv, id, tri, cnt);
+    if (2 * lv > max_level || !(sqrt(est.var) > tol))
+        return est;
+    if (budget_spent(ctx)) {
+        cnt->budget_reached = 1;
+        return est;
+    }
+    cnt->refinements++;
+    uint64_t ch[4];
+    lfio_part_children(lv, id, ch);
+    estimate fine = {{0, 0, 0}, 0, 0};
+    for (int c = 0; c < 4; c++) {
+        sph_tri ct = leaf_triangle(p->e, 2 * lv, ch[c]);
+        estimate r = adaptive_node(ctx, p, t, dom, cell, ei, 2 * lv, ch[c], &ct, max_level, tol / 2, cnt);
+        for (int k = 0; k < 3; k++)
+            fine.e[k] += r.e[k];
+        fine.var += r.var;
+        fine.samples += r.samples;
+    }
+    double n = est.samples + fine.samples, a = est.samples / n, b = fine.samples / n;
+    for (int k = 0; k < 3; k++)
+        est.e[k] = a * est.e[k] + b * fine.e[k];
+    est.var = a * a * est.var + b * b * fine.var;
+    est.samples = n;
+    return est;
 }
 
 /* Gives the u range [*ulo, *uhi] of convex polygon q within the band v in [va, vb]. @return 0 if none. */
@@ -477,6 +614,43 @@ static int band_range(const v2 *q, size_t nq, double va, double vb, double *ulo,
         *uhi = fmax(*uhi, b[i].x);
     }
     return 1;
+}
+
+/* The adaptive method's work on one row of cells for one kept leaf. Stage
+ * 0 only measures: each cell's total from this emitter and the number of
+ * leaves that carry light into it (s->pair_total, s->pair_leaves, indexed
+ * from the tile's first cell). Stage 1 estimates with refinement, holding
+ * each (cell, leaf) node to an equal share of the cell's error budget:
+ * target_error * total / sqrt(leaves). */
+static void adaptive_row(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint64_t id, uint32_t ei,
+                         const v2 *clip, size_t nq, uint32_t j, uint32_t i0, uint32_t i1, rl_scratch *s, int stage,
+                         rl_counters *cnt)
+{
+    rl_map *m = t->m;
+    uint32_t max_level = p->level >= (1u << 18) ? (1u << 20) : 4 * p->level;
+    sph_tri tri = leaf_triangle(p->e, p->level, id); /* shared by the row's cells */
+    for (uint32_t i = i0; i <= i1; i++) {
+        int32_t cell = m->grid[(size_t)j * m->nu + i];
+        origin_domain dom;
+        if (cell < 0 || !cell_domain(m, (uint32_t)cell, clip, nq, &dom))
+            continue;
+        size_t slot = (size_t)cell - s->first_cell;
+        double tol = INFINITY;
+        if (stage == 1 && s->pair_leaves[slot] > 0)
+            tol = ctx->sampling->target_error * s->pair_total[slot] / sqrt(s->pair_leaves[slot]);
+        estimate est = stage == 0 ? node_estimate(ctx, p, t, &dom, (uint32_t)cell, ei, p->level, id, &tri, cnt)
+                                  : adaptive_node(ctx, p, t, &dom, (uint32_t)cell, ei, p->level, id, &tri, max_level,
+                                                  tol, cnt);
+        double y = dom.weight * (est.e[0] + est.e[1] + est.e[2]) / 3;
+        if (stage == 0) {
+            s->pair_total[slot] += y;
+            s->pair_leaves[slot] += y > 0;
+            continue;
+        }
+        for (int c = 0; c < 3; c++)
+            m->e_pass[cell][c] += dom.weight * est.e[c];
+        cnt->variance += dom.weight * dom.weight * est.var;
+    }
 }
 
 /* Makes room in s for a row of n cells' accumulators. @return 0 or -1. */
@@ -499,7 +673,8 @@ static int row_reserve(rl_scratch *s, size_t n)
 /* Processes one kept leaf over the tile's cells, a row at a time: the row's
  * rays go out in packets, then each cell adds its estimate. @return 0 or -1. */
 static int gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint64_t id,
-                       uint32_t emitter_index, int culled, rl_region *reg, v2 *q, rl_scratch *s, rl_counters *cnt)
+                       uint32_t emitter_index, int culled, rl_region *reg, v2 *q, rl_scratch *s, int stage,
+                       rl_counters *cnt)
 {
     rl_map *m = t->m;
     v3 g[3];
@@ -533,6 +708,10 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t,
             i0 = fi0 < 0 ? 0 : (uint32_t)fi0;
             i1 = fi1 > m->nu - 1 ? m->nu - 1 : (uint32_t)fi1;
         }
+        if (ctx->sampling->method == RL_METHOD_ADAPTIVE) {
+            adaptive_row(ctx, p, t, id, emitter_index, clip, nq, j, i0, i1, s, stage, cnt);
+            continue;
+        }
         for (uint32_t i = i0; i <= i1; i++) {
             int32_t cell = m->grid[(size_t)j * m->nu + i];
             double *acc = s->row_acc[i - i0];
@@ -551,6 +730,37 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t,
     return 0;
 }
 
+/* Zeroes the adaptive per-cell measures for the tile's cells, growing them as needed. @return 0 or -1. */
+static int adaptive_reserve(rl_scratch *s, const tile *t)
+{
+    const rl_map *m = t->m;
+    uint32_t c0 = UINT32_MAX, c1 = 0; /* a tile's cells are numbered consecutively, row by row */
+    for (uint32_t j = t->row0; j < t->row1; j++)
+        for (uint32_t i = 0; i < m->nu; i++) {
+            int32_t c = m->grid[(size_t)j * m->nu + i];
+            if (c >= 0) {
+                c0 = (uint32_t)c < c0 ? (uint32_t)c : c0;
+                c1 = (uint32_t)c + 1 > c1 ? (uint32_t)c + 1 : c1;
+            }
+        }
+    size_t n = c1 > c0 ? c1 - c0 : 1;
+    if (n > s->pair_cap) {
+        double *tot = realloc(s->pair_total, n * sizeof *tot);
+        if (tot)
+            s->pair_total = tot;
+        uint32_t *lv = tot ? realloc(s->pair_leaves, n * sizeof *lv) : NULL;
+        if (lv)
+            s->pair_leaves = lv;
+        if (!tot || !lv)
+            return -1;
+        s->pair_cap = n;
+    }
+    memset(s->pair_total, 0, n * sizeof *s->pair_total);
+    memset(s->pair_leaves, 0, n * sizeof *s->pair_leaves);
+    s->first_cell = c0 == UINT32_MAX ? 0 : c0;
+    return 0;
+}
+
 /* Culled or naive transfer from emitter e to the tile. */
 static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32_t ei, rl_scratch *s,
                                rl_counters *cnt)
@@ -560,7 +770,7 @@ static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32
     v2 *q = malloc((RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES) * sizeof *q);
     int rc = (!p || !reg || !q) ? -1 : 0;
     if (rc == 0 && pair_setup(ctx, &ctx->emitters[ei], t, p)) {
-        int culled = ctx->sampling->method == RL_METHOD_CULLED;
+        int culled = ctx->sampling->method == RL_METHOD_CULLED || ctx->sampling->method == RL_METHOD_ADAPTIVE;
         cnt->pairs++;
         cnt->pairs_descended += p->descended;
         s->nleaves = 0;
@@ -573,8 +783,13 @@ static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32
             for (uint64_t id = 0; id < total && rc == 0; id++)
                 rc = push_leaf(s, id);
         }
-        for (size_t k = 0; k < s->nleaves && rc == 0; k++)
-            rc = gather_leaf(ctx, p, t, s->leaves[k], ei, culled, reg, q, s, cnt);
+        /* adaptive first measures every cell's total (stage 0), then estimates (stage 1) */
+        int adaptive = ctx->sampling->method == RL_METHOD_ADAPTIVE;
+        if (adaptive)
+            rc = adaptive_reserve(s, t);
+        for (int stage = adaptive ? 0 : 1; stage <= 1 && rc == 0; stage++)
+            for (size_t k = 0; k < s->nleaves && rc == 0; k++)
+                rc = gather_leaf(ctx, p, t, s->leaves[k], ei, culled, reg, q, s, stage, cnt);
     }
     free(p);
     free(reg);
@@ -701,7 +916,7 @@ int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uin
     }
     int rc = 0;
     for (size_t e = 0; e < ctx->nemitters && rc == 0 && t->npoly > 0; e++) {
-        if (ctx->sampling->method == RL_METHOD_CULLED || ctx->sampling->method == RL_METHOD_NAIVE)
+        if (ctx->sampling->method != RL_METHOD_AREA && ctx->sampling->method != RL_METHOD_SOLIDANGLE)
             rc = gather_solid_angles(ctx, t, (uint32_t)e, scratch, cnt);
         else
             gather_baseline(ctx, t, (uint32_t)e, cnt);
@@ -712,6 +927,8 @@ int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uin
 
 void scratch_free(rl_scratch *s)
 {
+    free(s->pair_total);
+    free(s->pair_leaves);
     free(s->leaves);
     free(s->row_acc);
     free(s->row_scale);

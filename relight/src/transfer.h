@@ -38,6 +38,9 @@ typedef struct rl_counters {
     uint64_t leaves_culled;     /* of those, culled before any ray */
     uint64_t pairs;             /* (emitter, receiver tile) pairs that can exchange light */
     uint64_t pairs_descended;   /* pairs sampled at a finer level than partition_n */
+    uint64_t refinements;       /* adaptive: nodes split into their children */
+    double variance;            /* adaptive: summed variance of the cells' estimates, (W m^-2)^2 */
+    int budget_reached;         /* adaptive: the time budget stopped a refinement */
 } rl_counters;
 
 /* What every worker shares during one pass. */
@@ -51,6 +54,7 @@ typedef struct rl_transfer_ctx {
     v3 centre;     /* where the tracer recentres the scene */
     double eps;    /* distance below which single precision cannot resolve the scene itself, m */
     double margin; /* outward margin of every Minkowski region, m */
+    double deadline; /* adaptive: CLOCK_MONOTONIC seconds after which nothing is refined; 0 = none */
 } rl_transfer_ctx;
 
 /* Per-thread scratch space reused between tiles. */
@@ -60,6 +64,10 @@ typedef struct rl_scratch {
     double (*row_acc)[3]; /* one grid row's accumulators */
     double *row_scale;    /* and the factors that turn them into irradiance */
     size_t row_cap;
+    double *pair_total;   /* adaptive: each tile cell's total from the current emitter */
+    uint32_t *pair_leaves; /* adaptive: and the leaves carrying it */
+    size_t pair_cap;
+    uint32_t first_cell;  /* the tile's first cell index */
 } rl_scratch;
 
 /* Frees what a scratch space holds (not the struct). */

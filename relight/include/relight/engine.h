@@ -26,6 +26,9 @@ typedef struct rl_pass_stats {
     uint64_t pairs;               /**< (emitter, receiver tile) pairs that can exchange light */
     uint64_t pairs_descended;     /**< pairs sampled at a finer level than partition_n */
     uint32_t emitters;            /**< emitters in this pass */
+    uint64_t refinements;         /**< adaptive: (cell, solid angle) nodes split into their children */
+    double estimated_rmse;        /**< adaptive: the estimator's own RMSE over cells, W m^-2 (0 otherwise) */
+    int budget_reached;           /**< adaptive: 1 if the time budget stopped refinement */
 } rl_pass_stats;
 
 /** Progress callback: done in [0, 1] over the whole run. Called from the calling thread only. */

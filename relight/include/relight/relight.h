@@ -49,10 +49,12 @@ typedef enum rl_method {
     RL_METHOD_CULLED = 0,    /**< solid angles culled by projected Minkowski sums and the mask */
     RL_METHOD_NAIVE = 1,     /**< every solid angle of the emitter's hemisphere, every cell */
     RL_METHOD_AREA = 2,      /**< uniform points on the emitter with shadow rays */
-    RL_METHOD_SOLIDANGLE = 3 /**< uniform directions in the emitter's spherical polygon */
+    RL_METHOD_SOLIDANGLE = 3, /**< uniform directions in the emitter's spherical polygon */
+    RL_METHOD_ADAPTIVE = 4    /**< culled, then each (cell, solid angle) refined into its four children
+                                   where its estimate is uncertain, down to 4 x partition_n */
 } rl_method;
 
-/** @return the method's name ("culled", "naive", "area", "solidangle"). */
+/** @return the method's name ("culled", "naive", "area", "solidangle", "adaptive"). */
 const char *rl_method_name(rl_method m);
 
 /** Parses a method name. @return 1 and *m on success, 0 if name is unknown. */
@@ -71,6 +73,10 @@ typedef struct rl_sampling {
     uint32_t descend;              /**< 1 (default): pairs whose emitter subtends less than a solid angle
                                         use finer levels; 0: always partition_n, the paper's plain method */
     uint32_t threads;              /**< worker threads; 0 = every core (not part of the scene file) */
+    double target_error;           /**< adaptive: refine a (cell, solid angle) while its estimated standard
+                                        error exceeds this fraction of its estimate; default 0.05 */
+    double time_budget;            /**< adaptive: seconds after which no solid angle is refined further
+                                        (the result then depends on timing); 0 (default) = none */
 } rl_sampling;
 
 /** Fills *s with the defaults above. */

@@ -1,0 +1,131 @@
+/*
+ * reproject.h - depth correction: moving a captured light field onto proxy
+ * geometry standing where the light really comes from (Unger et al. 2003,
+ * the "pre-process stage of depth-correction" of Khanna et al., section 6).
+ *
+ * Conventions, stated once:
+ *   - A proxy is a list of rectangles, each becoming one slab (lfio frames:
+ *     origin + s*u + t*v, front e3 = u x v / |u x v|, positions at cell
+ *     centres, 4n^2 front directions). The light stored on a proxy slab is
+ *     the light leaving its front.
+ *   - For a proxy position y and direction w (front hemisphere of the proxy
+ *     slab), the line y + t*w meets the captured slab's plane at p (line-plane
+ *     intersection; no occlusion is considered: light travels in free space
+ *     between the proxy and the capture plane). The ray is covered when
+ *     w.e3_captured > 0 (the captured slab stores that direction) and p
+ *     lies on the captured rectangle (s, t in [0, 1]); an uncovered ray
+ *     carries zero radiance.
+ *   - CAP_REPROJECT_DEPTH (the default): the captured probes around p (the
+ *     bilinear cell of position centres, clamped at the border) are each
+ *     asked for the radiance they saw in the direction from y to
+ *     themselves, w_k = unit(w + (x_k - p) / t), interpolated over
+ *     directions by lfio_slab_radiance_interp() at their own centre, and the
+ *     answers are blended with the bilinear weights of p. When the proxy is
+ *     at the true depth of the light, every probe looks at the same point y,
+ *     so the blend does not smear the source across the probe spacing.
+ *     CAP_REPROJECT_PLAIN: lfio_slab_radiance_interp() at p in direction w
+ *     (the same direction for every probe), for comparison. The two agree
+ *     as the proxy recedes to infinity (|t| -> infinity).
+ *   - Each stored value is the mean over strata*strata rays: ray k leaves
+ *     the centre of sub-cell k of a strata x strata split of the position's
+ *     cell along direction k of cap_partition_samples() for its solid angle,
+ *     so the value estimates the mean over the cell and the solid angle
+ *     together (a box filter in position and direction), which keeps the
+ *     slab's power where a sample at the cell centre alone would not.
+ *   - Coverage of a proxy slab: the share of its etendue whose rays are
+ *     covered, weighting each sampled ray by its share of the projected
+ *     solid angle (about e3) of its solid angle, and positions equally.
+ *
+ * Thread safety: a proxy is immutable once loaded; reprojection only reads
+ * the captured slab (which must not be written meanwhile).
+ *
+ * This header is valid C99 and C++.
+ */
+#ifndef CAPTURE_REPROJECT_H
+#define CAPTURE_REPROJECT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "capture/common.h"
+#include "lfio/lightfield.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Most proxy rectangles one proxy may hold. */
+#define CAP_PROXY_MAX 4096u
+
+/** A loaded proxy: named rectangles with their sampling. Opaque, immutable. */
+typedef struct cap_proxy cap_proxy;
+
+/** Sampling for rectangles whose proxy file does not give it. */
+typedef struct cap_proxy_defaults {
+    uint32_t nu, nv; /**< positions along u and v, 1 .. 65536 */
+    uint32_t n;      /**< partition level, 1 .. LFIO_SLAB_MAX_N */
+} cap_proxy_defaults;
+
+/**
+ * Reads a proxy. A file ending in .json (any case) is a JSON array of
+ * rectangles {"name", "origin", "u", "v", "grid": {"nu", "nv"}, "n"}, of
+ * which origin, u and v are required (u and v orthogonal) and grid and n
+ * default to *defaults; names default to "proxy<k>". Any other file is a
+ * mesh read with assimp (node transforms applied): every face must be a
+ * planar rectangle of 4 vertices v0..v3, counter-clockwise seen from its
+ * front, becoming origin v0, u = v1 - v0, v = v3 - v0, named "face<k>"
+ * (k counting faces over the file's meshes); triangles and other polygons
+ * are refused (only rectangular quads are supported). Rectangles with the
+ * defaults' grid and n. Names are unique; the units of the slabs are set
+ * when reprojecting.
+ * @return CAP_OK and *out; CAP_ERR_INPUT (the message names the file and the
+ * rectangle or face); CAP_ERR_NOMEM; CAP_ERR_ARG for NULL or invalid defaults.
+ */
+cap_status cap_proxy_load(const char *path, const cap_proxy_defaults *defaults, cap_proxy **out);
+
+/** Releases a proxy. NULL is a no-op. */
+void cap_proxy_destroy(cap_proxy *p);
+
+/** @return the number of rectangles (0 for NULL). */
+size_t cap_proxy_count(const cap_proxy *p);
+
+/** @return rectangle k's slab description (borrowed, valid for p's life); NULL if p is NULL or k is out of range. */
+const lfio_slab_desc *cap_proxy_get_desc(const cap_proxy *p, size_t k);
+
+/** How rays are looked up in the captured field (see above). */
+typedef enum cap_reproject_mode {
+    CAP_REPROJECT_DEPTH = 0, /**< each probe looks at the proxy point: depth-corrected */
+    CAP_REPROJECT_PLAIN = 1  /**< every probe looks along the ray's direction */
+} cap_reproject_mode;
+
+/** Options of a reprojection; all zero means depth-corrected, 2x2 strata, one thread per processor. */
+typedef struct cap_reproject_options {
+    cap_reproject_mode mode;
+    uint32_t strata;          /**< s: s*s directions per solid angle, 1 .. 16; 0 means 2 */
+    unsigned threads;         /**< worker threads, 0 = one per processor; the result does not depend on it */
+    cap_progress_fn progress; /**< counts finished positions; may be NULL */
+    void *progress_user;
+} cap_reproject_options;
+
+/** How much of a proxy slab the capture covers. */
+typedef struct cap_coverage {
+    double fraction;  /**< covered share of the etendue, 0 .. 1 */
+    uint64_t rays;    /**< rays sampled: positions x directions x strata^2 */
+    uint64_t covered; /**< of those, covered */
+} cap_coverage;
+
+/**
+ * Makes the slab target (its units and mask threshold replaced by the
+ * captured slab's) from the captured slab, on worker threads. o may be
+ * NULL (all defaults).
+ * @return CAP_OK, *out (owned by the caller) and *coverage (may be NULL);
+ * CAP_ERR_ARG (NULL, invalid target or options); CAP_ERR_NOMEM. *out is NULL on failure.
+ */
+cap_status cap_reproject_slab(const lfio_slab *captured, const lfio_slab_desc *target,
+                              const cap_reproject_options *o, lfio_slab **out, cap_coverage *coverage);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CAPTURE_REPROJECT_H */

@@ -1,0 +1,75 @@
+/*
+ * error.c - the capture library's status names and per-thread error
+ * messages (capture/common.h).
+ *
+ * Invariants: each thread has its own message buffer, so concurrent
+ * failures never mix; a message is always one NUL-terminated line (newlines
+ * from other libraries' messages become spaces); success leaves it as it was.
+ */
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "internal.h"
+
+static _Thread_local char message[1024];
+
+/* Replaces line breaks in message by spaces, so a message is one line. */
+static void flatten_message(void)
+{
+    for (char *c = message; *c != '\0'; c++)
+        if (*c == '\n' || *c == '\r')
+            *c = ' ';
+}
+
+cap_status cap__fail(cap_status status, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(message, sizeof message, fmt, ap);
+    va_end(ap);
+    flatten_message();
+    return status;
+}
+
+cap_status cap__fail_prefix(cap_status status, const char *fmt, ...)
+{
+    char old[sizeof message], prefix[512];
+    memcpy(old, message, sizeof old);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(prefix, sizeof prefix, fmt, ap);
+    va_end(ap);
+    snprintf(message, sizeof message, "%s: %s", prefix, old);
+    flatten_message();
+    return status;
+}
+
+cap_status cap__fail_text(cap_status status, const char *text)
+{
+    snprintf(message, sizeof message, "%s", text != NULL ? text : "");
+    flatten_message();
+    return status;
+}
+
+const char *cap_error_message(void)
+{
+    return message;
+}
+
+const char *cap_status_name(cap_status s)
+{
+    switch (s) {
+    case CAP_OK:
+        return "ok";
+    case CAP_ERR_ARG:
+        return "bad argument";
+    case CAP_ERR_INPUT:
+        return "bad input";
+    case CAP_ERR_OUTPUT:
+        return "cannot write";
+    case CAP_ERR_NOMEM:
+        return "out of memory";
+    }
+    return "unknown status";
+}

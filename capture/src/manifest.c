@@ -1,0 +1,566 @@
+/*
+ * manifest.c - reading and validating capture manifests (capture/capture.h,
+ * docs/capture.md): JSON with cJSON, every key checked, every value
+ * range-checked, every image file checked to exist.
+ *
+ * Invariants: loading either returns a manifest meeting manifest.h's
+ * invariants or fails with one message "FILE: ELEMENT: problem" and frees
+ * everything; unknown and repeated keys are errors at every level; nothing
+ * is allocated from a count in the file before the count is checked (the
+ * grid is bounded by CAP__MAX_POSITIONS and lfio's slab size limit first).
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "internal.h"
+#include "json.h"
+#include "manifest.h"
+
+#define PATH_MAX_BYTES 4095
+#define DEFAULT_N 16u
+#define DEFAULT_SLAB "capture"
+
+/* What is being parsed: the file, its folder (for relative paths), the manifest being built
+ * and the settings given at the top level, which positions inherit. */
+typedef struct parser {
+    const char *path;
+    char dir[PATH_MAX_BYTES + 1];
+    cap_manifest *m;
+    cap__entry shared;
+} parser;
+
+static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+
+/* ------------------------------------------------------------ settings */
+
+static cap_status get_projection(const parser *p, const cJSON *j, const char *elem, cap_projection *out)
+{
+    const char *name = "";
+    cap_status st = cap__json_string(p->path, j, elem, &name);
+    if (st == CAP_OK && !cap_projection_parse(name, out))
+        return cap__json_bad(p->path, elem,
+                             "unknown projection '%s' (expected equirectangular, mirror_ball or angular_map)", name);
+    return st;
+}
+
+static cap_status get_colour_space(const parser *p, const cJSON *j, const char *elem, cap_colour_space *out)
+{
+    static const cap_colour_space all[] = {CAP_COLOUR_AUTO, CAP_COLOUR_LINEAR, CAP_COLOUR_SRGB};
+    const char *name = "";
+    cap_status st = cap__json_string(p->path, j, elem, &name);
+    if (st != CAP_OK)
+        return st;
+    for (size_t k = 0; k < sizeof all / sizeof all[0]; k++)
+        if (strcmp(name, cap_colour_space_name(all[k])) == 0) {
+            *out = all[k];
+            return CAP_OK;
+        }
+    return cap__json_bad(p->path, elem, "unknown colour space '%s' (expected auto, linear or srgb)", name);
+}
+
+/* R from {"forward": f, "up": u}: columns forward, up x forward, up (orthogonalised). */
+static cap_status get_forward_up(const parser *p, const cJSON *j, const char *elem, double R[9])
+{
+    static const char *const keys[] = {"forward", "up", NULL};
+    const cJSON *fj, *uj;
+    double f[3], u[3], l[3];
+    char fe[CAP__ELEM_MAX], ue[CAP__ELEM_MAX];
+    cap__json_member_name(fe, elem, "forward");
+    cap__json_member_name(ue, elem, "up");
+    cap_status st = cap__json_keys(p->path, j, elem, keys);
+    if (st == CAP_OK)
+        st = cap__json_member(p->path, j, elem, "forward", 1, &fj);
+    if (st == CAP_OK)
+        st = cap__json_member(p->path, j, elem, "up", 1, &uj);
+    if (st == CAP_OK)
+        st = cap__json_vector3(p->path, fj, fe, f);
+    if (st == CAP_OK)
+        st = cap__json_vector3(p->path, uj, ue, u);
+    if (st != CAP_OK)
+        return st;
+    if (!cap__normalise(f))
+        return cap__json_bad(p->path, fe, "must not be zero");
+    double along = cap__dot(u, f);
+    for (int a = 0; a < 3; a++)
+        u[a] -= along * f[a];
+    if (!(cap__norm(u) > 1e-9 * (1.0 + fabs(along))) || !cap__normalise(u))
+        return cap__json_bad(p->path, elem, "up must not be zero or parallel to forward");
+    cap__cross(u, f, l);
+    for (int r = 0; r < 3; r++) {
+        R[3 * r + 0] = f[r];
+        R[3 * r + 1] = l[r];
+        R[3 * r + 2] = u[r];
+    }
+    return CAP_OK;
+}
+
+/* An orientation: 3 rows of 3 numbers forming a rotation, or {"forward", "up"}. */
+static cap_status get_orientation(const parser *p, const cJSON *j, const char *elem, double R[9])
+{
+    if (cJSON_IsObject(j))
+        return get_forward_up(p, j, elem, R);
+    if (!cJSON_IsArray(j) || cJSON_GetArraySize(j) != 3)
+        return cap__json_bad(p->path, elem, "expected 3 rows of 3 numbers or {\"forward\": ..., \"up\": ...}, got %s",
+                   cap__json_kind(j));
+    char e[CAP__ELEM_MAX];
+    for (int r = 0; r < 3; r++) {
+        cap__json_item_name(e, elem, (size_t)r);
+        cap_status st = cap__json_vector3(p->path, cJSON_GetArrayItem(j, r), e, &R[3 * r]);
+        if (st != CAP_OK)
+            return st;
+    }
+    if (!cap_rotation_check(R))
+        return cap__json_bad(p->path, elem, "not a rotation (rows must be orthonormal within 1e-6, determinant +1)");
+    return CAP_OK;
+}
+
+/* Reads the optional settings keys of obj into e (projection, orientation, colour_space, scale). */
+static cap_status get_settings(const parser *p, const cJSON *obj, const char *elem, cap__entry *e)
+{
+    char sub[4][CAP__ELEM_MAX];
+    const cJSON *j[4];
+    static const char *const keys[4] = {"projection", "orientation", "colour_space", "scale"};
+    for (int k = 0; k < 4; k++) {
+        cap__json_member_name(sub[k], elem, keys[k]);
+        j[k] = cJSON_GetObjectItemCaseSensitive(obj, keys[k]);
+    }
+    cap_status st = CAP_OK;
+    if (j[0] != NULL)
+        st = get_projection(p, j[0], sub[0], &e->projection);
+    if (st == CAP_OK && j[1] != NULL)
+        st = get_orientation(p, j[1], sub[1], e->R);
+    if (st == CAP_OK && j[2] != NULL)
+        st = get_colour_space(p, j[2], sub[2], &e->colour);
+    if (st == CAP_OK && j[3] != NULL)
+        st = cap__json_positive(p->path, j[3], sub[3], &e->scale);
+    return st;
+}
+
+/* ------------------------------------------------------------ files */
+
+/* Resolves file against the manifest's folder into out and checks it is an existing regular file. */
+static cap_status resolve_file(const parser *p, const char *elem, const char *file, char out[PATH_MAX_BYTES + 1])
+{
+    if (file[0] == '\0')
+        return cap__json_bad(p->path, elem, "empty file name");
+    int len = snprintf(out, PATH_MAX_BYTES + 1, "%s%s", file[0] == '/' ? "" : p->dir, file);
+    if (len < 0 || len > PATH_MAX_BYTES)
+        return cap__json_bad(p->path, elem, "'%s': path longer than %d bytes", file, PATH_MAX_BYTES);
+    struct stat st;
+    if (stat(out, &st) != 0)
+        return cap__json_bad(p->path, elem, "'%s': %s", out, strerror(errno));
+    if (S_ISDIR(st.st_mode))
+        return cap__json_bad(p->path, elem, "'%s': is a folder, not an image", out);
+    if (!S_ISREG(st.st_mode))
+        return cap__json_bad(p->path, elem, "'%s': not a regular file", out);
+    return CAP_OK;
+}
+
+/* Gives entry e room for count images. */
+static cap_status entry_reserve(cap__entry *e, uint32_t count)
+{
+    e->files = calloc(count, sizeof *e->files);
+    e->exposures = calloc(count, sizeof *e->exposures);
+    if (e->files == NULL || e->exposures == NULL)
+        return cap__fail(CAP_ERR_NOMEM, "out of memory for the manifest");
+    e->count = count;
+    return CAP_OK;
+}
+
+/* Stores image k of entry e: the file resolved and checked, and its exposure. */
+static cap_status entry_set_image(const parser *p, cap__entry *e, uint32_t k, const char *elem, const char *file,
+                                  double exposure)
+{
+    char path[PATH_MAX_BYTES + 1];
+    cap_status st = resolve_file(p, elem, file, path);
+    if (st != CAP_OK)
+        return st;
+    e->files[k] = malloc(strlen(path) + 1);
+    if (e->files[k] == NULL)
+        return cap__fail(CAP_ERR_NOMEM, "out of memory for the manifest");
+    strcpy(e->files[k], path);
+    e->exposures[k] = exposure;
+    return CAP_OK;
+}
+
+static void entry_free(cap__entry *e)
+{
+    for (uint32_t k = 0; e->files != NULL && k < e->count; k++)
+        free(e->files[k]);
+    free(e->files);
+    free(e->exposures);
+}
+
+/* ------------------------------------------------------------ positions */
+
+/* One bracket image {"file", "exposure"}. */
+static cap_status read_bracket_item(const parser *p, const cJSON *j, const char *elem, cap__entry *e, uint32_t k)
+{
+    static const char *const keys[] = {"file", "exposure", NULL};
+    const cJSON *fj, *xj;
+    const char *file;
+    double exposure;
+    char fe[CAP__ELEM_MAX], xe[CAP__ELEM_MAX];
+    cap__json_member_name(fe, elem, "file");
+    cap__json_member_name(xe, elem, "exposure");
+    cap_status st = cap__json_keys(p->path, j, elem, keys);
+    if (st == CAP_OK)
+        st = cap__json_member(p->path, j, elem, "file", 1, &fj);
+    if (st == CAP_OK)
+        st = cap__json_member(p->path, j, elem, "exposure", 1, &xj);
+    if (st == CAP_OK)
+        st = cap__json_string(p->path, fj, fe, &file);
+    if (st == CAP_OK)
+        st = cap__json_positive(p->path, xj, xe, &exposure);
+    if (st == CAP_OK)
+        st = entry_set_image(p, e, k, fe, file, exposure);
+    return st;
+}
+
+static cap_status read_bracket(const parser *p, const cJSON *j, const char *elem, cap__entry *e)
+{
+    if (!cJSON_IsArray(j))
+        return cap__json_bad(p->path, elem, "expected an array of {\"file\", \"exposure\"}, got %s", cap__json_kind(j));
+    int count = cJSON_GetArraySize(j);
+    if (count < 1 || count > (int)CAP_BRACKET_MAX)
+        return cap__json_bad(p->path, elem, "%d images; a bracket holds 1 to %u", count, CAP_BRACKET_MAX);
+    cap_status st = entry_reserve(e, (uint32_t)count);
+    e->bracket = 1;
+    char sub[CAP__ELEM_MAX];
+    for (int k = 0; st == CAP_OK && k < count; k++) {
+        cap__json_item_name(sub, elem, (size_t)k);
+        st = read_bracket_item(p, cJSON_GetArrayItem(j, k), sub, e, (uint32_t)k);
+    }
+    return st;
+}
+
+/* "image" with an optional "exposure", or "bracket": exactly one of the two. */
+static cap_status read_images(const parser *p, const cJSON *j, const char *elem, cap__entry *e)
+{
+    const cJSON *ij = cJSON_GetObjectItemCaseSensitive(j, "image");
+    const cJSON *bj = cJSON_GetObjectItemCaseSensitive(j, "bracket");
+    const cJSON *xj = cJSON_GetObjectItemCaseSensitive(j, "exposure");
+    char ie[CAP__ELEM_MAX], be[CAP__ELEM_MAX], xe[CAP__ELEM_MAX];
+    cap__json_member_name(ie, elem, "image");
+    cap__json_member_name(be, elem, "bracket");
+    cap__json_member_name(xe, elem, "exposure");
+    if ((ij == NULL) == (bj == NULL))
+        return cap__json_bad(p->path, elem, "give exactly one of 'image' and 'bracket'");
+    if (bj != NULL && xj != NULL)
+        return cap__json_bad(p->path, elem, "'exposure' goes inside each bracket item, not beside 'bracket'");
+    if (bj != NULL)
+        return read_bracket(p, bj, be, e);
+    const char *file;
+    double exposure = 1.0;
+    cap_status st = xj != NULL ? cap__json_positive(p->path, xj, xe, &exposure) : CAP_OK;
+    if (st == CAP_OK)
+        st = cap__json_string(p->path, ij, ie, &file);
+    if (st == CAP_OK)
+        st = entry_reserve(e, 1);
+    if (st == CAP_OK)
+        st = entry_set_image(p, e, 0, ie, file, exposure);
+    return st;
+}
+
+/* Claims the entry of position (i, j) for element elem. */
+static cap_status claim_entry(const parser *p, const char *elem, uint32_t i, uint32_t j, cap__entry **out)
+{
+    const lfio_slab_desc *d = &p->m->desc;
+    cap__entry *e = &p->m->entries[(size_t)j * d->nu + i];
+    if (e->given)
+        return cap__json_bad(p->path, elem, "position (%u, %u) is already given by %s", i, j, e->element);
+    *e = p->shared;
+    e->given = 1;
+    e->files = NULL;
+    e->exposures = NULL;
+    e->count = 0;
+    snprintf(e->element, sizeof e->element, "%.*s", (int)sizeof e->element - 1, elem);
+    *out = e;
+    return CAP_OK;
+}
+
+static cap_status read_position(const parser *p, const cJSON *j, const char *elem)
+{
+    static const char *const keys[] = {"i", "j", "image", "exposure", "bracket", "projection",
+                                       "orientation", "colour_space", "scale", NULL};
+    const lfio_slab_desc *d = &p->m->desc;
+    const cJSON *ij, *jj;
+    uint32_t i = 0, jv = 0;
+    char ie[CAP__ELEM_MAX], je[CAP__ELEM_MAX];
+    cap__json_member_name(ie, elem, "i");
+    cap__json_member_name(je, elem, "j");
+    cap__entry *e = NULL;
+    cap_status st = cap__json_keys(p->path, j, elem, keys);
+    if (st == CAP_OK)
+        st = cap__json_member(p->path, j, elem, "i", 1, &ij);
+    if (st == CAP_OK)
+        st = cap__json_member(p->path, j, elem, "j", 1, &jj);
+    if (st == CAP_OK)
+        st = cap__json_uint(p->path, ij, ie, 0, d->nu - 1, &i);
+    if (st == CAP_OK)
+        st = cap__json_uint(p->path, jj, je, 0, d->nv - 1, &jv);
+    if (st == CAP_OK)
+        st = claim_entry(p, elem, i, jv, &e);
+    if (st == CAP_OK)
+        st = get_settings(p, j, elem, e);
+    if (st == CAP_OK)
+        st = read_images(p, j, elem, e);
+    return st;
+}
+
+static cap_status read_positions(const parser *p, const cJSON *j)
+{
+    if (!cJSON_IsArray(j))
+        return cap__json_bad(p->path, "positions", "expected an array, got %s", cap__json_kind(j));
+    char elem[CAP__ELEM_MAX];
+    size_t k = 0;
+    for (const cJSON *c = j->child; c != NULL; c = c->next, k++) {
+        cap__json_item_name(elem, "positions", k);
+        cap_status st = read_position(p, c, elem);
+        if (st != CAP_OK)
+            return st;
+    }
+    return CAP_OK;
+}
+
+/* Expands the pattern's {i} and {j} for position (i, j) into out. */
+static cap_status expand_pattern(const parser *p, const char *pattern, uint32_t i, uint32_t j,
+                                 char out[PATH_MAX_BYTES + 1])
+{
+    size_t len = 0;
+    for (const char *c = pattern; *c != '\0';) {
+        char piece[16];
+        if (strncmp(c, "{i}", 3) == 0 || strncmp(c, "{j}", 3) == 0) {
+            snprintf(piece, sizeof piece, "%u", c[1] == 'i' ? i : j);
+            c += 3;
+        } else if (*c == '{' || *c == '}') {
+            return cap__json_bad(p->path, "pattern", "unknown placeholder near '%.8s' (only {i} and {j} are replaced)",
+                                 c);
+        } else {
+            piece[0] = *c++;
+            piece[1] = '\0';
+        }
+        size_t add = strlen(piece);
+        if (len + add > PATH_MAX_BYTES)
+            return cap__json_bad(p->path, "pattern", "expands to more than %d bytes", PATH_MAX_BYTES);
+        memcpy(out + len, piece, add);
+        len += add;
+    }
+    out[len] = '\0';
+    return CAP_OK;
+}
+
+static cap_status read_pattern(const parser *p, const cJSON *j)
+{
+    const lfio_slab_desc *d = &p->m->desc;
+    const char *pattern;
+    cap_status st = cap__json_string(p->path, j, "pattern", &pattern);
+    if (st != CAP_OK)
+        return st;
+    if (d->nu > 1 && strstr(pattern, "{i}") == NULL)
+        return cap__json_bad(p->path, "pattern", "must contain {i}: the grid has %u positions along u", d->nu);
+    if (d->nv > 1 && strstr(pattern, "{j}") == NULL)
+        return cap__json_bad(p->path, "pattern", "must contain {j}: the grid has %u positions along v", d->nv);
+    char file[PATH_MAX_BYTES + 1];
+    for (uint32_t jj = 0; st == CAP_OK && jj < d->nv; jj++)
+        for (uint32_t i = 0; st == CAP_OK && i < d->nu; i++) {
+            cap__entry *e = NULL;
+            st = expand_pattern(p, pattern, i, jj, file);
+            if (st == CAP_OK)
+                st = claim_entry(p, "pattern", i, jj, &e);
+            if (st == CAP_OK)
+                st = entry_reserve(e, 1);
+            if (st == CAP_OK)
+                st = entry_set_image(p, e, 0, "pattern", file, 1.0);
+        }
+    return st;
+}
+
+/* ------------------------------------------------------------ the slab */
+
+static cap_status read_units(const parser *p, const cJSON *j, lfio_slab_desc *d)
+{
+    const char *name;
+    cap_status st = cap__json_string(p->path, j, "units", &name);
+    if (st != CAP_OK)
+        return st;
+    if (strcmp(name, "radiance") == 0)
+        d->units = LFIO_UNITS_RADIANCE;
+    else if (strcmp(name, "relative") == 0)
+        d->units = LFIO_UNITS_RELATIVE;
+    else
+        return cap__json_bad(p->path, "units", "unknown units '%s' (expected radiance or relative)", name);
+    return CAP_OK;
+}
+
+/* The slab: plane, grid, n, name, units, within lfio's size limit. */
+static cap_status read_slab(const parser *p, const cJSON *root, lfio_slab_desc *d)
+{
+    static const char *const plane_keys[] = {"origin", "u", "v", NULL};
+    const cJSON *j;
+    lfio_slab_desc_init(d);
+    snprintf(d->name, sizeof d->name, "%s", DEFAULT_SLAB);
+    d->n = DEFAULT_N;
+    cap_status st = cap__json_member(p->path, root, "", "plane", 1, &j);
+    if (st == CAP_OK)
+        st = cap__json_keys(p->path, j, "plane", plane_keys);
+    if (st == CAP_OK)
+        st = cap__json_rectangle(p->path, j, "plane", d);
+    if (st == CAP_OK)
+        st = cap__json_member(p->path, root, "", "grid", 1, &j);
+    if (st == CAP_OK)
+        st = cap__json_grid(p->path, j, "grid", d);
+    if (st == CAP_OK && (uint64_t)d->nu * d->nv > CAP__MAX_POSITIONS)
+        return cap__json_bad(p->path, "grid", "%u x %u positions; at most %llu are supported", d->nu, d->nv,
+                   (unsigned long long)CAP__MAX_POSITIONS);
+    if (st == CAP_OK && (j = cJSON_GetObjectItemCaseSensitive(root, "n")) != NULL)
+        st = cap__json_uint(p->path, j, "n", 1, LFIO_SLAB_MAX_N, &d->n);
+    if (st == CAP_OK && (j = cJSON_GetObjectItemCaseSensitive(root, "slab")) != NULL)
+        st = cap__json_slab_name(p->path, j, "slab", d->name);
+    if (st == CAP_OK && (j = cJSON_GetObjectItemCaseSensitive(root, "units")) != NULL)
+        st = read_units(p, j, d);
+    if (st != CAP_OK)
+        return st;
+    double bytes = (double)d->nu * d->nv * 4.0 * d->n * d->n * 12.0;
+    if (bytes > (double)LFIO_SLAB_MAX_BYTES)
+        return cap__json_bad(p->path, "", "the slab would hold %.3g bytes of radiance, over lfio's limit of %.3g",
+                             bytes, (double)LFIO_SLAB_MAX_BYTES);
+    return CAP_OK;
+}
+
+/* ------------------------------------------------------------ the file */
+
+static cap_status read_root(parser *p, const cJSON *root)
+{
+    static const char *const keys[] = {"plane", "grid", "n", "slab", "units", "projection", "orientation",
+                                       "colour_space", "scale", "pattern", "positions", NULL};
+    cap_manifest *m = p->m;
+    cap_status st = cap__json_keys(p->path, root, "", keys);
+    if (st == CAP_OK)
+        st = read_slab(p, root, &m->desc);
+    memset(&p->shared, 0, sizeof p->shared);
+    p->shared.projection = CAP_PROJECTION_EQUIRECTANGULAR;
+    memcpy(p->shared.R, identity, sizeof identity);
+    p->shared.colour = CAP_COLOUR_AUTO;
+    p->shared.scale = 1.0;
+    if (st == CAP_OK)
+        st = get_settings(p, root, "", &p->shared);
+    if (st != CAP_OK)
+        return st;
+    const cJSON *pattern = cJSON_GetObjectItemCaseSensitive(root, "pattern");
+    const cJSON *positions = cJSON_GetObjectItemCaseSensitive(root, "positions");
+    if ((pattern == NULL) == (positions == NULL))
+        return cap__json_bad(p->path, "", "give exactly one of 'pattern' and 'positions'");
+    size_t count = (size_t)m->desc.nu * m->desc.nv;
+    m->entries = calloc(count, sizeof *m->entries);
+    if (m->entries == NULL)
+        return cap__fail(CAP_ERR_NOMEM, "%s: out of memory for %zu positions", p->path, count);
+    st = pattern != NULL ? read_pattern(p, pattern) : read_positions(p, positions);
+    for (size_t k = 0; st == CAP_OK && k < count; k++) {
+        if (!m->entries[k].given)
+            return cap__json_bad(p->path, "positions", "no image for position (%zu, %zu)", k % m->desc.nu,
+                                 k / m->desc.nu);
+        m->images += m->entries[k].count;
+    }
+    return st;
+}
+
+/* Sets p->dir to path's folder with a trailing '/', or "" for a bare file name. */
+static cap_status set_folder(parser *p, const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    size_t len = slash != NULL ? (size_t)(slash - path) + 1 : 0;
+    if (len > PATH_MAX_BYTES)
+        return cap__fail(CAP_ERR_INPUT, "%s: path too long", path);
+    memcpy(p->dir, path, len);
+    p->dir[len] = '\0';
+    return CAP_OK;
+}
+
+cap_status cap_manifest_load(const char *path, cap_manifest **out)
+{
+    if (out != NULL)
+        *out = NULL;
+    if (path == NULL || out == NULL)
+        return cap__fail(CAP_ERR_ARG, "cap_manifest_load: path or out is NULL");
+    parser p;
+    memset(&p, 0, sizeof p);
+    p.path = path;
+    cJSON *root = NULL;
+    cap_status st = set_folder(&p, path);
+    if (st == CAP_OK)
+        st = cap__json_load(path, CAP_MANIFEST_MAX_BYTES, &root);
+    if (st == CAP_OK && (p.m = calloc(1, sizeof *p.m)) == NULL)
+        st = cap__fail(CAP_ERR_NOMEM, "%s: out of memory", path);
+    if (st == CAP_OK && (p.m->path = malloc(strlen(path) + 1)) == NULL)
+        st = cap__fail(CAP_ERR_NOMEM, "%s: out of memory", path);
+    if (st == CAP_OK) {
+        strcpy(p.m->path, path);
+        st = read_root(&p, root);
+    }
+    cJSON_Delete(root);
+    if (st != CAP_OK) {
+        cap_manifest_destroy(p.m);
+        return st;
+    }
+    *out = p.m;
+    return CAP_OK;
+}
+
+void cap_manifest_destroy(cap_manifest *m)
+{
+    if (m == NULL)
+        return;
+    size_t count = (size_t)m->desc.nu * m->desc.nv;
+    for (size_t k = 0; m->entries != NULL && k < count; k++)
+        entry_free(&m->entries[k]);
+    free(m->entries);
+    free(m->path);
+    free(m);
+}
+
+const lfio_slab_desc *cap_manifest_get_desc(const cap_manifest *m)
+{
+    return m != NULL ? &m->desc : NULL;
+}
+
+uint64_t cap_manifest_image_count(const cap_manifest *m)
+{
+    return m != NULL ? m->images : 0;
+}
+
+cap_status cap_manifest_get_position(const cap_manifest *m, uint32_t i, uint32_t j, cap_position_info *out)
+{
+    if (m == NULL || out == NULL || i >= m->desc.nu || j >= m->desc.nv)
+        return cap__fail(CAP_ERR_ARG, "cap_manifest_get_position: no position (%u, %u)", i, j);
+    const cap__entry *e = &m->entries[(size_t)j * m->desc.nu + i];
+    out->i = i;
+    out->j = j;
+    out->element = e->element;
+    out->projection = e->projection;
+    memcpy(out->orientation, e->R, sizeof out->orientation);
+    out->colour_space = e->colour;
+    out->scale = e->scale;
+    out->image_count = e->count;
+    out->bracket = e->bracket;
+    out->files = (const char *const *)e->files;
+    out->exposures = e->exposures;
+    return CAP_OK;
+}
+
+const char *cap_colour_space_name(cap_colour_space c)
+{
+    switch (c) {
+    case CAP_COLOUR_AUTO:
+        return "auto";
+    case CAP_COLOUR_LINEAR:
+        return "linear";
+    case CAP_COLOUR_SRGB:
+        return "srgb";
+    }
+    return "";
+}

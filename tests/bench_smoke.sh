@@ -1,0 +1,120 @@
+#!/usr/bin/env bash
+# bench_smoke.sh - a smoke run of `ilf bench` (seconds): the sweep writes its
+# CSV, JSON, summary and plots, the reference is cached and reused, and
+# `--rays` reports a ray rate.
+#
+# Usage: bash bench_smoke.sh ILF_BINARY [TMPDIR]
+#
+# The scene is written here: a 4 m floor, a 1 m blocker 1 m above it and a
+# 1 m emitter 2 m above it, cells of 0.25 m (272 cells). Every check is
+# counted; the last line is "N passed, M failed" and the exit status is
+# nonzero when anything failed. Needs bash and awk only; the PNG check runs
+# when gnuplot is installed.
+set -u
+
+if [ $# -lt 1 ] || [ $# -gt 2 ]; then
+    echo "usage: bash bench_smoke.sh ILF_BINARY [TMPDIR]" >&2
+    exit 2
+fi
+ILF=$1
+TMP=${2:-$(mktemp -d "${TMPDIR:-/tmp}/bench_smoke.XXXXXX")}
+rm -rf "$TMP"
+mkdir -p "$TMP"
+
+passed=0
+failed=0
+
+# check DESCRIPTION COMMAND...: one check that passes when COMMAND succeeds.
+check() {
+    local what=$1
+    shift
+    if "$@"; then
+        passed=$((passed + 1))
+    else
+        failed=$((failed + 1))
+        echo "FAIL: $what"
+    fi
+}
+
+# csv_ok FILE MIN_ROWS: the header names the columns and at least MIN_ROWS rows follow,
+# each with a method name and then only finite numbers.
+csv_ok() {
+    awk -F, -v min="$2" '
+        NR == 1 { ok = ($1 == "method" && $0 ~ /wall_seconds/ && $0 ~ /rmse/ && $0 ~ /snr_db/); cols = NF; next }
+        {
+            rows++
+            if (NF != cols || $1 !~ /^[a-z]+$/) ok = 0
+            for (i = 2; i <= NF; i++)
+                if ($i !~ /^-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?$/) ok = 0
+        }
+        END { exit !(ok && rows >= min) }' "$1"
+}
+
+cat >"$TMP/tiny.json" <<'EOF'
+{
+  "materials": {
+    "floor": {"albedo": [0.5, 0.5, 0.5]},
+    "lamp": {"albedo": [0, 0, 0], "emission": [10, 10, 10]}
+  },
+  "polygons": [
+    {"material": "floor", "vertices": [[0, 0, 0], [4, 0, 0], [4, 4, 0], [0, 4, 0]]},
+    {"material": "floor", "vertices": [[1.5, 1.5, 1], [1.5, 2.5, 1], [2.5, 2.5, 1], [2.5, 1.5, 1]]},
+    {"material": "lamp", "vertices": [[1.5, 1.5, 2], [1.5, 2.5, 2], [2.5, 2.5, 2], [2.5, 1.5, 2]]}
+  ],
+  "radiance_maps": {"cell_size": 0.25},
+  "sampling": {"partition_n": 16, "rays_per_solid_angle": 4, "seed": 1},
+  "camera": {"position": [2, -3, 3], "look_at": [2, 2, 0], "fov_deg": 60, "width": 160, "height": 120}
+}
+EOF
+
+OUT=$TMP/out
+CACHE=$TMP/cache
+bench() {
+    "$ILF" bench "$TMP/tiny.json" -o "$OUT" --quick --methods culled,area --time-limit 5 --cache "$CACHE" "$@"
+}
+
+# First run: computes and caches the reference.
+bench >"$TMP/run1.out" 2>"$TMP/run1.err"
+code=$?
+check "first run exits 0 (got $code)" [ "$code" -eq 0 ]
+check "first run computes the reference" grep -q '^reference: computing' "$TMP/run1.out"
+check "bench.csv has a header and >= 4 rows of finite numbers" csv_ok "$OUT/bench.csv" 4
+check "bench.json written" [ -s "$OUT/bench.json" ]
+check "summary.md has the comparisons" grep -q '^## Comparisons' "$OUT/summary.md"
+check "the reference is cached" compgen -G "$CACHE/ref-*.h5" >/dev/null
+check "error_vs_time.gp written" [ -s "$OUT/error_vs_time.gp" ]
+check "error images' data written" [ -s "$OUT/error_culled.bin" ]
+if command -v gnuplot >/dev/null 2>&1; then
+    check "error_vs_time.png drawn" [ -s "$OUT/error_vs_time.png" ]
+    check "error_area.png drawn" [ -s "$OUT/error_area.png" ]
+else
+    echo "note: gnuplot not installed: PNG checks skipped"
+fi
+check "no temporaries left" bash -c "! compgen -G '$OUT/*tmp*' >/dev/null && ! compgen -G '$OUT/.error-run*' >/dev/null"
+
+# Second run: the reference comes from the cache.
+bench >"$TMP/run2.out" 2>"$TMP/run2.err"
+code=$?
+check "second run exits 0 (got $code)" [ "$code" -eq 0 ]
+check "second run reuses the cached reference" grep -q '^reference: cached' "$TMP/run2.out"
+check "second run does not compute it" bash -c "! grep -q '^reference: computing' '$TMP/run2.out'"
+
+# The ray ceiling.
+"$ILF" bench --rays "$TMP/tiny.json" --rays-count 100000 -o "$TMP/rays" >"$TMP/rays.out" 2>&1
+code=$?
+check "--rays exits 0 (got $code)" [ "$code" -eq 0 ]
+check "--rays prints a rate" grep -Eq 'rays: [0-9]+ in .* rays/s' "$TMP/rays.out"
+check "--rays writes rays.json" grep -q '"rays_per_second"' "$TMP/rays/rays.json"
+
+# Bad usage is exit 2.
+"$ILF" bench "$TMP/tiny.json" >/dev/null 2>&1
+code=$?
+check "a sweep without -o is bad usage (got $code)" [ "$code" -eq 2 ]
+
+if [ "$failed" -gt 0 ]; then
+    for f in run1.err run2.err rays.out; do
+        sed "s/^/    $f: /" "$TMP/$f" | head -n 10
+    done
+fi
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]

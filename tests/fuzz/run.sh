@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# run.sh - runs one libFuzzer target of tests/fuzz for a while on its corpus.
+#
+# Usage: tests/fuzz/run.sh TARGET SECONDS [BUILD_DIR]
+#
+#   TARGET     fuzz_scene, fuzz_lightfield or fuzz_radmap
+#   SECONDS    how long to fuzz
+#   BUILD_DIR  a build configured with ILFKIT_FUZZ=ON (default build-fuzz):
+#                CC=clang CXX=clang++ cmake -S . -B build-fuzz -DILFKIT_FUZZ=ON
+#                cmake --build build-fuzz --target TARGET
+#
+# The committed seeds (tests/fuzz/corpus/TARGET) are only read: new inputs go
+# to BUILD_DIR/fuzz/TARGET/corpus, which later runs start from, and any input
+# that crashes, leaks, overflows or hangs (10 s) is saved in
+# BUILD_DIR/fuzz/TARGET/ as crash-*, leak-* or timeout-*, named in the log.
+# Exit status: 0 when the time ran out without a finding, nonzero otherwise.
+set -eu
+
+if [ $# -lt 2 ] || [ $# -gt 3 ]; then
+    echo "usage: tests/fuzz/run.sh TARGET SECONDS [BUILD_DIR]" >&2
+    exit 2
+fi
+TARGET=$1
+SECONDS_TO_RUN=$2
+HERE=$(cd "$(dirname "$0")" && pwd)
+BUILD=${3:-$HERE/../../build-fuzz}
+BINARY=$BUILD/tests/fuzz/$TARGET
+SEEDS=$HERE/corpus/$TARGET
+WORK=$BUILD/fuzz/$TARGET
+
+if [ ! -x "$BINARY" ]; then
+    echo "run.sh: $BINARY not found; build it with ILFKIT_FUZZ=ON (see the top of this script)" >&2
+    exit 2
+fi
+if [ ! -d "$SEEDS" ]; then
+    echo "run.sh: no seed corpus $SEEDS" >&2
+    exit 2
+fi
+mkdir -p "$WORK/corpus"
+# Leaks inside HDF5 and assimp are theirs (see tests/lsan.supp); ours are still findings.
+export LSAN_OPTIONS="suppressions=$HERE/../lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+DICT=()
+[ -f "$HERE/$TARGET.dict" ] && DICT=(-dict="$HERE/$TARGET.dict")
+# One worker: the machine is shared. rss_limit keeps a runaway allocation a finding, not an OOM kill.
+exec "$BINARY" "$WORK/corpus" "$SEEDS" -max_total_time="$SECONDS_TO_RUN" -timeout=10 -rss_limit_mb=2048 \
+    -max_len=65536 -artifact_prefix="$WORK/" -print_final_stats=1 "${DICT[@]}"

@@ -1,0 +1,282 @@
+#!/usr/bin/env python3
+"""gen_hostile.py - writes the hostile inputs too big or too binary to commit.
+
+Usage: gen_hostile.py OUTDIR BASE_H5
+
+OUTDIR receives scene/, mesh/, lf/, manifest/ and image/ folders of broken
+inputs that tests/hostile_test.sh runs through `ilf` as
+tests/hostile/cases.txt lists them: deeply nested and huge JSON, binary
+garbage, truncated and absurd PLY files, directories where files belong,
+images claiming absurd sizes, and light field files derived from BASE_H5 (a
+small valid file from `ilf synth`): truncated, garbage, and, when h5py can be
+imported, edited to carry absurd sizes, wrong types and shapes, NaN and Inf,
+duplicated slab names, huge strings and link cycles. The EXR cases are cut
+and patched from OUTDIR/image/valid.exr when the driver has written one.
+Without h5py (or valid.exr) those files are not written, and the driver skips
+their cases with a message. Everything is deterministic (a fixed random seed).
+"""
+import os
+import random
+import shutil
+import struct
+import sys
+import zlib
+
+try:
+    import h5py
+    import numpy as np
+except ImportError:  # the driver reports the skipped cases
+    h5py = None
+
+RNG = random.Random(20240606)
+
+
+def write(path, data):
+    """Writes bytes or text to path, creating its folder."""
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "wb") as f:
+        f.write(data.encode() if isinstance(data, str) else data)
+
+
+def garbage(size, allow_nul=True):
+    """size random bytes; without NUL bytes unless allow_nul."""
+    low = 0 if allow_nul else 1
+    return bytes(RNG.randint(low, 255) for _ in range(size))
+
+
+def folder(path):
+    """A directory where a file is expected."""
+    os.makedirs(path, exist_ok=True)
+
+
+# ---------------------------------------------------------------- scenes
+
+def scenes(out):
+    d = os.path.join(out, "scene")
+    depth = 100000
+    write(os.path.join(d, "deep_arrays.json"), "[" * depth + "]" * depth)
+    write(os.path.join(d, "deep_in_section.json"), '{"materials": ' + '{"a": ' * depth + "{}" + "}" * depth + "}")
+    write(os.path.join(d, "garbage.json"), garbage(4096))
+    write(os.path.join(d, "garbage_no_nul.json"), garbage(4096, allow_nul=False))
+    write(os.path.join(d, "huge_material_name.json"), '{"materials": {"' + "m" * (10 << 20) + '": {}}}')
+    write(os.path.join(d, "huge_key.json"), '{"' + "k" * (1 << 20) + '": 1}')
+    write(os.path.join(d, "huge_mesh_path.json"),
+          '{"materials": {"g": {}}, "meshes": [{"file": "' + "p/" * 50000 + 'x.obj", "material": "g"}]}')
+    write(os.path.join(d, "huge_method.json"), '{"sampling": {"method": "' + "x" * (10 << 20) + '"}}')
+    write(os.path.join(d, "huge_number.json"), '{"radiance_maps": {"cell_size": ' + "9" * 100000 + "}}")
+    vertices = ", ".join("[%d, 0, 0]" % k for k in range(100000))
+    write(os.path.join(d, "many_vertices.json"),
+          '{"materials": {"g": {}}, "polygons": [{"material": "g", "vertices": [' + vertices + "]}]}")
+    folder(os.path.join(d, "directory.json"))
+
+
+# ---------------------------------------------------------------- meshes
+
+PLY_BINARY_HEADER = (b"ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\n"
+                     b"property float y\nproperty float z\nelement face %d\n"
+                     b"property list uchar int vertex_indices\nend_header\n")
+
+
+def meshes(out):
+    d = os.path.join(out, "mesh")
+    body = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 1, 1, 0) + bytes([3]) + struct.pack("<3i", 0, 1, 2)
+    write(os.path.join(d, "truncated_binary.ply"), PLY_BINARY_HEADER % (3, 1) + body[:-5])
+    write(os.path.join(d, "vertices_absurd_binary.ply"), PLY_BINARY_HEADER % (10 ** 9, 10 ** 9) + body)
+    write(os.path.join(d, "garbage.ply"), b"ply\n" + garbage(4096))
+    write(os.path.join(d, "garbage.obj"), garbage(4096))
+    write(os.path.join(d, "deep.gltf"), "[" * 100000 + "]" * 100000)
+    face = " ".join(str(k + 1) for k in range(100000))
+    ring = "".join("v %d %d 0\n" % (k % 300, k // 300) for k in range(100000))
+    write(os.path.join(d, "huge_face.obj"), ring + "f " + face + "\n")
+    folder(os.path.join(d, "directory.obj"))
+
+
+# ---------------------------------------------------------------- capture manifests and images
+
+def manifests(out):
+    d = os.path.join(out, "manifest")
+    depth = 100000
+    write(os.path.join(d, "deep.json"), '{"plane": ' + "[" * depth + "]" * depth + "}")
+    write(os.path.join(d, "garbage.json"), garbage(4096, allow_nul=False))
+    write(os.path.join(d, "huge_slab_name.json"),
+          '{"plane": {"origin": [0, 0, 1], "u": [1, 0, 0], "v": [0, -1, 0]}, "grid": {"nu": 1, "nv": 1}, '
+          '"slab": "' + "s" * (10 << 20) + '", "pattern": "../image/valid.exr"}')
+    folder(os.path.join(d, "directory.json"))
+
+
+def png_chunk(kind, data):
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+
+def png(width, height, raw):
+    """An 8-bit RGB PNG whose header claims width x height, holding the pixel rows raw."""
+    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    return (b"\x89PNG\r\n\x1a\n" + png_chunk(b"IHDR", header) + png_chunk(b"IDAT", zlib.compress(raw))
+            + png_chunk(b"IEND", b""))
+
+
+def exr_windows(data, xmax, ymax):
+    """data, an EXR file, with its data and display windows set to [0, xmax] x [0, ymax]."""
+    out, pos = bytearray(data), 8
+    while data[pos] != 0:  # header attributes: name, type, size, value
+        name_end = data.index(b"\0", pos)
+        type_end = data.index(b"\0", name_end + 1)
+        size, = struct.unpack("<i", data[type_end + 1:type_end + 5])
+        if data[pos:name_end] in (b"dataWindow", b"displayWindow"):
+            out[type_end + 5:type_end + 21] = struct.pack("<iiii", 0, 0, xmax, ymax)
+        pos = type_end + 5 + size
+    return bytes(out)
+
+
+def images(out):
+    d = os.path.join(out, "image")
+    small = png(2, 2, b"\0" * 14)
+    write(os.path.join(d, "empty.exr"), b"")
+    write(os.path.join(d, "text.exr"), "this is not an image\n")
+    write(os.path.join(d, "garbage.png"), b"\x89PNG\r\n\x1a\n" + garbage(2000))
+    write(os.path.join(d, "garbage.exr"), b"\x76\x2f\x31\x01" + garbage(2000))
+    write(os.path.join(d, "truncated.png"), small[:len(small) - 20])
+    write(os.path.join(d, "dims_absurd.png"), png(1000000, 1000000, b"\0" * 100))
+    write(os.path.join(d, "dims_max.png"), png(2 ** 31 - 1, 2 ** 31 - 1, b"\0" * 100))
+    write(os.path.join(d, "dims_absurd.hdr"),
+          b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1000000 +X 1000000\n" + b"\x02\x02\x00\x10" * 10)
+    folder(os.path.join(d, "directory.exr"))
+    valid = os.path.join(d, "valid.exr")
+    if os.path.exists(valid):
+        data = open(valid, "rb").read()
+        write(os.path.join(d, "truncated.exr"), data[:len(data) // 2])
+        write(os.path.join(d, "window_absurd.exr"), exr_windows(data, 2 ** 30, 2 ** 30))
+        write(os.path.join(d, "window_negative.exr"), exr_windows(data, -5, -5))
+
+
+# ---------------------------------------------------------------- light fields
+
+def stdlib_lightfields(out, base):
+    d = os.path.join(out, "lf")
+    data = open(base, "rb").read()
+    write(os.path.join(d, "empty.h5"), b"")
+    write(os.path.join(d, "garbage.h5"), garbage(len(data)))
+    write(os.path.join(d, "text.h5"), "this is a text file, not a light field\n")
+    for name, cut in (("truncated_10", len(data) // 10), ("truncated_50", len(data) // 2),
+                      ("truncated_90", len(data) * 9 // 10), ("truncated_last", len(data) - 1)):
+        write(os.path.join(d, name + ".h5"), data[:cut])
+    # HDF5's signature kept, the superblock behind it scrambled.
+    write(os.path.join(d, "superblock_garbage.h5"), data[:8] + garbage(56) + data[64:])
+    folder(os.path.join(d, "directory.h5"))
+
+
+def edited(d, base, name, edit):
+    """Copies base to d/name and applies edit(h5py.File) to the copy."""
+    path = os.path.join(d, name)
+    shutil.copyfile(base, path)
+    with h5py.File(path, "r+") as f:
+        edit(f)
+
+
+def set_attr(obj, name, value, dtype=None):
+    """Replaces attribute name of obj (a group or file) by value, optionally of dtype."""
+    if name in obj.attrs:
+        del obj.attrs[name]
+    if dtype is None:
+        obj.attrs[name] = value
+    else:
+        obj.attrs.create(name, value, dtype=dtype)
+
+
+def fixed_string(text):
+    """text as a fixed-length ASCII HDF5 string, the way lfio writes strings."""
+    return np.bytes_(text.encode())
+
+
+def replace_dataset(group, name, data):
+    """Replaces dataset name of group by data, keeping its units and axes attributes."""
+    old = group[name]
+    attrs = {k: old.attrs[k] for k in old.attrs}
+    del group[name]
+    new = group.create_dataset(name, data=data, chunks=True, fletcher32=True)
+    for k, v in attrs.items():
+        new.attrs[k] = v
+
+
+def poke_radiance(value):
+    """An edit that writes value into one radiance sample, through HDF5 (checksums stay valid)."""
+    def edit(f):
+        f["slabs/0/radiance"][0, 0, 0, 1] = value
+    return edit
+
+
+def h5py_lightfields(out, base):
+    d = os.path.join(out, "lf")
+    u32, i32 = np.uint32, np.int32
+    cases = {
+        "positions_2e40.h5": lambda f: (set_attr(f["slabs/0"], "nu", u32(1 << 20)),
+                                        set_attr(f["slabs/0"], "nv", u32(1 << 20))),
+        "n_2e20.h5": lambda f: set_attr(f["slabs/0"], "n", u32(1 << 20)),
+        "slab_count_huge.h5": lambda f: set_attr(f, "slab_count", i32(2 ** 31 - 1)),
+        "slab_count_zero.h5": lambda f: set_attr(f, "slab_count", i32(0)),
+        "slab_count_negative.h5": lambda f: set_attr(f, "slab_count", i32(-5)),
+        "format_version_2.h5": lambda f: set_attr(f, "format_version", i32(2)),
+        "format_other.h5": lambda f: set_attr(f, "format", fixed_string("ilfkit-radiance-maps")),
+        "nu_float.h5": lambda f: set_attr(f["slabs/0"], "nu", np.float64(4.0)),
+        "nu_array.h5": lambda f: set_attr(f["slabs/0"], "nu", np.array([4, 4], dtype=u32)),
+        "name_integer.h5": lambda f: set_attr(f["slabs/0"], "name", i32(7)),
+        "origin_2.h5": lambda f: set_attr(f["slabs/0"], "origin", np.array([0.0, 0.0])),
+        "origin_nan.h5": lambda f: set_attr(f["slabs/0"], "origin", np.array([np.nan, 0.0, 0.0])),
+        "u_inf.h5": lambda f: set_attr(f["slabs/0"], "u", np.array([np.inf, 0.0, 0.0])),
+        "threshold_nan.h5": lambda f: set_attr(f["slabs/0"], "mask_threshold", np.float32(np.nan)),
+        "radiance_nan.h5": poke_radiance(np.nan),
+        "radiance_inf.h5": poke_radiance(np.inf),
+        "radiance_negative.h5": poke_radiance(-1.0),
+        "radiance_float64.h5": lambda f: replace_dataset(f["slabs/0"], "radiance",
+                                                         f["slabs/0/radiance"][...].astype(np.float64)),
+        "radiance_shape.h5": lambda f: replace_dataset(f["slabs/0"], "radiance",
+                                                       f["slabs/0/radiance"][...].reshape(-1, 3)),
+        "radiance_missing.h5": lambda f: f["slabs/0"].__delitem__("radiance"),
+        "radiance_group.h5": lambda f: (f["slabs/0"].__delitem__("radiance"),
+                                        f["slabs/0"].create_group("radiance")),
+        "creator_huge.h5": lambda f: set_attr(f, "creator", fixed_string("c" * (1 << 20))),
+        "name_huge.h5": lambda f: set_attr(f["slabs/0"], "name", fixed_string("s" * 10000)),
+        "frame_huge_vlen.h5": lambda f: set_attr(f["slabs/0"], "frame", "f" * (10 << 20),
+                                                 dtype=h5py.string_dtype()),
+        "units_huge.h5": lambda f: set_attr(f["slabs/0/radiance"], "units", fixed_string("u" * 100000)),
+        "duplicate_slab_names.h5": duplicate_slab,
+        "slab_link_loop.h5": lambda f: (f["slabs"].__delitem__("0"),
+                                        f["slabs"].__setitem__("0", h5py.SoftLink("/slabs/0"))),
+        "slabs_link_root.h5": lambda f: (f.__delitem__("slabs"), f.__setitem__("slabs", h5py.SoftLink("/"))),
+        "slab_external_self.h5": lambda f: (f["slabs"].__delitem__("0"),
+                                            f["slabs"].__setitem__("0", h5py.ExternalLink(
+                                                "slab_external_self.h5", "/slabs/0"))),
+        "mask_level_n.h5": lambda f: set_attr(f["slabs/0/mask/level_2"], "n", u32(3)),
+    }
+    for name, edit in cases.items():
+        edited(d, base, name, edit)
+    # Only a complete check sees these: stored derived data that lies, a cycle inside a slab.
+    edited(d, base, "verify_solid_angle.h5",
+           lambda f: f["slabs/0/solid_angle"].__setitem__(0, f["slabs/0/solid_angle"][0] * 2))
+    edited(d, base, "verify_mask_cycle.h5",
+           lambda f: f["slabs/0/mask"].__setitem__("loop", f["slabs/0"]))
+
+
+def duplicate_slab(f):
+    """A second slab, a copy of the first under the same name."""
+    f.copy(f["slabs/0"], f["slabs"], name="1")
+    set_attr(f, "slab_count", np.int32(2))
+
+
+def main():
+    if len(sys.argv) != 3:
+        sys.exit("usage: gen_hostile.py OUTDIR BASE_H5")
+    out, base = sys.argv[1], sys.argv[2]
+    scenes(out)
+    meshes(out)
+    manifests(out)
+    images(out)
+    stdlib_lightfields(out, base)
+    if h5py is None:
+        print("gen_hostile.py: h5py not available: the edited light field files are not written")
+    else:
+        h5py_lightfields(out, base)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1018 @@
+/*
+ * test_capture.c - the capture library (capture/ headers) against closed forms,
+ * synthetic images, a real light probe, a relit scene and a depth test.
+ *
+ * Usage: test_capture DATA_DIR   (the project's data/ folder; scratch files
+ * go to $ILF_TEST_TMP/capture). What is checked:
+ *   - projections: frames as documented, inverse maps, pixel solid angles
+ *     summing to 4 pi; partition samples inside their solid angle;
+ *   - synthetic environments in all three projections (one with a rotated
+ *     orientation): the captured field against the environment's exact box
+ *     mean, and energy (irradiance from the field vs from the image) within
+ *     0.5%; a constant image stays constant; a too-coarse image is
+ *     interpolated; bad values are repaired and counted; LDR brackets merge
+ *     to the HDR truth better than one clipped exposure; the result does not
+ *     depend on the thread count;
+ *   - manifest, image and proxy errors: status and a message naming the file
+ *     and the element;
+ *   - the real probe data/capture/probes/studio.exr end to end: energy
+ *     within 0.5% and the count of its negative values;
+ *   - closed loop: capture(render-probes(scene)) against the radiance the
+ *     relit scene sends through the plane;
+ *   - depth correction: a small emitter captured on a plane in front of it,
+ *     reprojected onto its true plane: the energy concentrates on its
+ *     footprint, and relighting with the reprojected field is closer to
+ *     relighting with the true emitter than relighting with the raw capture.
+ * Measured errors are printed; the last line is "N passed, M failed".
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "capture/capture.h"
+#include "capture/image.h"
+#include "capture/projection.h"
+#include "capture/reproject.h"
+#include "check.h"
+#include "lfio/partition.h"
+#include "relight/engine.h"
+#include "relight/reference.h"
+
+#define PI 3.14159265358979323846
+#define PATH_BYTES 1024
+
+static char tmp_dir[PATH_BYTES - 64];
+static const char *data_dir;
+
+/* ------------------------------------------------------------ helpers */
+
+/* @return tmp_dir/name in a static rotating buffer (8 live at a time). */
+static const char *tmp_path(const char *name)
+{
+    static char bufs[8][PATH_BYTES];
+    static int next;
+    char *b = bufs[next++ % 8];
+    if (snprintf(b, PATH_BYTES, "%s/%s", tmp_dir, name) >= PATH_BYTES) {
+        fprintf(stderr, "path too long: %s/%s\n", tmp_dir, name);
+        exit(2);
+    }
+    return b;
+}
+
+static void write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (f == NULL) {
+        fprintf(stderr, "cannot write %s\n", path);
+        exit(2);
+    }
+    fputs(text, f);
+    fclose(f);
+}
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void normalise3(double a[3])
+{
+    double l = sqrt(dot3(a, a));
+    a[0] /= l;
+    a[1] /= l;
+    a[2] /= l;
+}
+
+/* A radiance function of the world direction one looks in. */
+typedef void (*env_fn)(const double d[3], double rgb[3]);
+
+/* A smooth sky brighter towards +z with a soft lobe of 20 around s (15 degree cone). */
+static void sky_env(const double d[3], double rgb[3])
+{
+    static const double tint[3] = {1.0, 0.8, 0.6};
+    double s[3] = {0.3, -0.2, 0.9};
+    normalise3(s);
+    double base = 0.5 + 0.3 * d[0] + 0.2 * d[2];
+    double c15 = cos(15.0 * PI / 180.0), lobe = (dot3(d, s) - c15) / (1.0 - c15);
+    lobe = lobe > 0.0 ? 20.0 * lobe : 0.0;
+    for (int c = 0; c < 3; c++)
+        rgb[c] = base * tint[c] + lobe;
+}
+
+/* The sky without its lobe: smooth enough for an 8x4 image. */
+static void smooth_env(const double d[3], double rgb[3])
+{
+    double base = 0.5 + 0.3 * d[0] + 0.2 * d[2];
+    rgb[0] = base;
+    rgb[1] = 0.8 * base;
+    rgb[2] = 0.6 * base;
+}
+
+static void constant_env(const double d[3], double rgb[3])
+{
+    (void)d;
+    rgb[0] = 2.0;
+    rgb[1] = 3.0;
+    rgb[2] = 4.0;
+}
+
+/* Renders env into a width x height image of projection p, orientation R (pixel centres). */
+static float *env_image(env_fn env, cap_projection p, int width, int height, const double R[9])
+{
+    float *px = calloc((size_t)width * height * 3, sizeof *px);
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++) {
+            double d[3], w[3], rgb[3];
+            if (!cap_projection_direction(p, width, height, x + 0.5, y + 0.5, d))
+                continue;
+            for (int r = 0; r < 3; r++)
+                w[r] = R[3 * r] * d[0] + R[3 * r + 1] * d[1] + R[3 * r + 2] * d[2];
+            env(w, rgb);
+            for (int c = 0; c < 3; c++)
+                px[3 * ((size_t)y * width + x) + c] = (float)rgb[c];
+        }
+    return px;
+}
+
+static void write_env_image(const char *path, env_fn env, cap_projection p, int width, int height, const double R[9])
+{
+    float *px = env_image(env, p, width, height, R);
+    char err[512];
+    CHECK(cap_image_write(path, width, height, 3, px, err, sizeof err) == CAP_OK, "%s", err);
+    free(px);
+}
+
+static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+
+/* Loads and captures a manifest. @return the light field, or NULL after a failed check. */
+static lfio_lightfield *capture_file(const char *manifest, unsigned threads, cap_report *report)
+{
+    cap_manifest *m = NULL;
+    lfio_lightfield *lf = NULL;
+    cap_status st = cap_manifest_load(manifest, &m);
+    CHECK(st == CAP_OK, "%s", cap_error_message());
+    if (st != CAP_OK)
+        return NULL;
+    cap_capture_options o = {threads, NULL, NULL};
+    st = cap_capture_run(m, &o, &lf, report);
+    CHECK(st == CAP_OK, "%s", cap_error_message());
+    cap_manifest_destroy(m);
+    return lf;
+}
+
+/* Relative L1 difference between the stored field at (i, j) and the box mean of env over each solid angle. */
+static double field_error(const lfio_slab *s, uint32_t i, uint32_t j, env_fn env)
+{
+    const uint32_t n = lfio_slab_get_desc(s)->n, k = 6;
+    double dirs[6 * 6 * 3], weights[6 * 6], diff = 0.0, total = 0.0;
+    float *rgb = malloc(lfio_slab_dir_count(s) * 3 * sizeof *rgb);
+    lfio_slab_read_position(s, i, j, rgb);
+    for (uint64_t id = 0; id < lfio_slab_dir_count(s); id++) {
+        double ref[3] = {0, 0, 0};
+        cap_partition_samples(n, id, k, dirs, weights);
+        for (uint32_t q = 0; q < k * k; q++) {
+            double w[3], d[3], v[3];
+            lfio_slab_to_world(s, &dirs[3 * q], w);
+            d[0] = -w[0], d[1] = -w[1], d[2] = -w[2];
+            env(d, v);
+            for (int c = 0; c < 3; c++)
+                ref[c] += weights[q] * v[c];
+        }
+        for (int c = 0; c < 3; c++) {
+            diff += fabs(rgb[3 * id + c] - ref[c]);
+            total += ref[c];
+        }
+    }
+    free(rgb);
+    return diff / total;
+}
+
+/* ------------------------------------------------------------ projections */
+
+static void test_projection_frames(void)
+{
+    double d[3];
+    cap_projection_direction(CAP_PROJECTION_EQUIRECTANGULAR, 64, 32, 32, 16, d);
+    CHECK(fabs(d[0] - 1) < 1e-12, "equirect centre looks +x: %g %g %g", d[0], d[1], d[2]);
+    cap_projection_direction(CAP_PROJECTION_EQUIRECTANGULAR, 64, 32, 32, 0, d);
+    CHECK(fabs(d[2] - 1) < 1e-12, "equirect top row looks +z");
+    cap_projection_direction(CAP_PROJECTION_EQUIRECTANGULAR, 64, 32, 48, 16, d);
+    CHECK(fabs(d[1] + 1) < 1e-12, "equirect: right of centre turns right (-y): %g", d[1]);
+    cap_projection_direction(CAP_PROJECTION_MIRROR_BALL, 64, 64, 32, 32, d);
+    CHECK(fabs(d[0] + 1) < 1e-12, "mirror ball centre shows -x (behind the camera)");
+    cap_projection_direction(CAP_PROJECTION_MIRROR_BALL, 64, 64, 32, 16, d);
+    CHECK(d[2] > 0.5, "mirror ball: above the centre shows up");
+    cap_projection_direction(CAP_PROJECTION_MIRROR_BALL, 64, 64, 48, 32, d);
+    CHECK(d[1] < -0.5, "mirror ball: right of the centre shows right");
+    cap_projection_direction(CAP_PROJECTION_ANGULAR_MAP, 64, 64, 32, 32, d);
+    CHECK(fabs(d[0] - 1) < 1e-12, "angular map centre shows +x");
+    cap_projection_direction(CAP_PROJECTION_ANGULAR_MAP, 64, 64, 32, 16, d);
+    CHECK(fabs(d[2] - 1) < 1e-12, "angular map: halfway up shows +z (90 degrees)");
+    cap_projection_direction(CAP_PROJECTION_ANGULAR_MAP, 64, 64, 48, 32, d);
+    CHECK(fabs(d[1] + 1) < 1e-12, "angular map: halfway right shows -y");
+    CHECK(!cap_projection_direction(CAP_PROJECTION_MIRROR_BALL, 64, 64, 1, 1, d), "corner is outside the disc");
+    CHECK(cap_projection_check_size(CAP_PROJECTION_MIRROR_BALL, 64, 32) != NULL, "mirror balls must be square");
+    CHECK(cap_projection_check_size(CAP_PROJECTION_EQUIRECTANGULAR, 64, 32) == NULL, "any equirect size");
+}
+
+/* Sum of pixel solid angles over a whole image. */
+static double image_solid_angle(cap_projection p, int width, int height)
+{
+    double sum = 0.0;
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++)
+            sum += cap_projection_solid_angle(p, width, height, x, y);
+    return sum;
+}
+
+static void test_projection_maps(void)
+{
+    CHECK(fabs(image_solid_angle(CAP_PROJECTION_EQUIRECTANGULAR, 64, 32) - 4 * PI) < 1e-12, "equirect sums to 4pi");
+    double mb = image_solid_angle(CAP_PROJECTION_MIRROR_BALL, 64, 64);
+    double am = image_solid_angle(CAP_PROJECTION_ANGULAR_MAP, 64, 64);
+    CHECK(fabs(mb / (4 * PI) - 1) < 1e-3, "mirror ball sums to 4pi: %.9g", mb);
+    CHECK(fabs(am / (4 * PI) - 1) < 1e-3, "angular map sums to 4pi: %.9g", am);
+    static const cap_projection all[3] = {CAP_PROJECTION_EQUIRECTANGULAR, CAP_PROJECTION_MIRROR_BALL,
+                                          CAP_PROJECTION_ANGULAR_MAP};
+    double worst = 0.0;
+    unsigned seed = 7;
+    for (int t = 0; t < 3000; t++) {
+        double d[3], back[3], px, py;
+        for (int a = 0; a < 3; a++)
+            d[a] = (seed = seed * 1103515245u + 12345u, (seed >> 8) / 8388608.0 - 1.0);
+        normalise3(d);
+        cap_projection p = all[t % 3];
+        if ((p == CAP_PROJECTION_MIRROR_BALL && d[0] > 0.999) || (p == CAP_PROJECTION_ANGULAR_MAP && d[0] < -0.999))
+            continue; /* the rim maps one direction to a circle: ill-conditioned */
+        int w = p == CAP_PROJECTION_EQUIRECTANGULAR ? 128 : 96, h = p == CAP_PROJECTION_EQUIRECTANGULAR ? 64 : 96;
+        cap_projection_locate(p, w, h, d, &px, &py);
+        CHECK(cap_projection_direction(p, w, h, px, py, back), "locate gives a point with a direction");
+        for (int a = 0; a < 3; a++)
+            worst = fmax(worst, fabs(back[a] - d[a]));
+    }
+    CHECK(worst < 1e-7, "direction(locate(d)) = d: worst %g", worst);
+}
+
+static void test_partition_samples(void)
+{
+    const uint32_t n = 4;
+    double dirs[8 * 8 * 3], w[8 * 8], worst = 0.0;
+    int inside = 1;
+    for (uint64_t id = 0; id < lfio_part_count(n); id++) {
+        double sum = 0.0, mean_z = 0.0;
+        CHECK(cap_partition_samples(n, id, 8, dirs, w), "samples of id %llu", (unsigned long long)id);
+        for (int q = 0; q < 64; q++) {
+            uint64_t got;
+            sum += w[q];
+            mean_z += w[q] * dirs[3 * q + 2];
+            inside &= lfio_part_id(n, &dirs[3 * q], &got) && got == id;
+        }
+        CHECK(fabs(sum - 1) < 1e-12, "weights sum to 1");
+        if (id < lfio_part_hemi_count(n)) {
+            const double pole[3] = {0, 0, 1};
+            double exact = lfio_part_projected_solid_angle(n, id, pole) / lfio_part_solid_angle(n, id);
+            worst = fmax(worst, fabs(mean_z - exact));
+        }
+    }
+    CHECK(inside, "every sample lies in its own solid angle");
+    CHECK(worst < 2e-3, "weighted mean of cos = projected / solid angle: worst %g", worst);
+    CHECK(!cap_partition_samples(n, lfio_part_count(n), 2, dirs, w), "bad id refused");
+    CHECK(!cap_partition_samples(n, 0, 65, dirs, w), "k = 65 refused");
+}
+
+/* ------------------------------------------------------------ synthetic captures */
+
+/* A plane facing down (e3 = -z): it stores the light coming from above. */
+#define DOWN_PLANE "\"plane\": {\"origin\": [-0.5, 0.5, 0], \"u\": [1, 0, 0], \"v\": [0, -1, 0]}"
+
+static void test_three_projections(void)
+{
+    /* the angular map is taken facing +y: its orientation maps camera forward to +y */
+    static const double facing_y[9] = {0, -1, 0, 1, 0, 0, 0, 0, 1};
+    write_env_image(tmp_path("sky_equirect.exr"), sky_env, CAP_PROJECTION_EQUIRECTANGULAR, 256, 128, identity);
+    write_env_image(tmp_path("sky_ball.exr"), sky_env, CAP_PROJECTION_MIRROR_BALL, 256, 256, identity);
+    write_env_image(tmp_path("sky_angular.exr"), sky_env, CAP_PROJECTION_ANGULAR_MAP, 256, 256, facing_y);
+    write_text(tmp_path("sky.json"),
+               "{" DOWN_PLANE ", \"grid\": {\"nu\": 3, \"nv\": 1}, \"n\": 16, \"slab\": \"sky\",\n"
+               " \"positions\": [\n"
+               "  {\"i\": 0, \"j\": 0, \"image\": \"sky_equirect.exr\"},\n"
+               "  {\"i\": 1, \"j\": 0, \"image\": \"sky_ball.exr\", \"projection\": \"mirror_ball\"},\n"
+               "  {\"i\": 2, \"j\": 0, \"image\": \"sky_angular.exr\", \"projection\": \"angular_map\",\n"
+               "   \"orientation\": {\"forward\": [0, 1, 0], \"up\": [0, 0, 1]}}]}\n");
+    cap_report r1, r3;
+    lfio_lightfield *one = capture_file(tmp_path("sky.json"), 1, &r1);
+    lfio_lightfield *three = capture_file(tmp_path("sky.json"), 3, &r3);
+    if (one == NULL || three == NULL)
+        return;
+    const lfio_slab *s = lfio_lightfield_slab(one, 0);
+    static const char *names[3] = {"equirectangular", "mirror ball", "angular map"};
+    for (uint32_t i = 0; i < 3; i++) {
+        double err = field_error(s, i, 0, sky_env);
+        printf("sky, %s: field vs exact box mean %.3f%% (relative L1)\n", names[i], 100 * err);
+        CHECK(err < 0.02, "%s field error %g", names[i], err);
+    }
+    printf("sky: energy error %.4f%% (position %u), sub-pixels %u..%u\n", 100 * r1.energy_error, r1.energy_i,
+           r1.subdivision_min, r1.subdivision_max);
+    CHECK(r1.energy_error < 0.005, "energy within 0.5%%: %g", r1.energy_error);
+    const lfio_slab *t = lfio_lightfield_slab(three, 0);
+    CHECK(memcmp(lfio_slab_radiance(s), lfio_slab_radiance(t), lfio_slab_dir_count(s) * 3 * 3 * sizeof(float)) == 0,
+          "1 and 3 threads give identical fields");
+    CHECK(r1.energy_error == r3.energy_error && r1.interpolated == r3.interpolated, "identical reports");
+    cap_report_free(&r1);
+    cap_report_free(&r3);
+    lfio_lightfield_destroy(one);
+    lfio_lightfield_destroy(three);
+}
+
+static void test_constant_and_coarse(void)
+{
+    write_env_image(tmp_path("constant.exr"), constant_env, CAP_PROJECTION_EQUIRECTANGULAR, 64, 32, identity);
+    write_env_image(tmp_path("coarse.exr"), smooth_env, CAP_PROJECTION_EQUIRECTANGULAR, 8, 4, identity);
+    write_text(tmp_path("constant.json"), "{" DOWN_PLANE ", \"grid\": {\"nu\": 1, \"nv\": 1}, \"n\": 8,"
+                                          " \"pattern\": \"constant.exr\"}");
+    write_text(tmp_path("coarse.json"), "{" DOWN_PLANE ", \"grid\": {\"nu\": 1, \"nv\": 1}, \"n\": 16,"
+                                        " \"pattern\": \"coarse.exr\"}");
+    cap_report r;
+    lfio_lightfield *lf = capture_file(tmp_path("constant.json"), 0, &r);
+    if (lf != NULL) {
+        const lfio_slab *s = lfio_lightfield_slab(lf, 0);
+        const float *v = lfio_slab_radiance(s);
+        double worst = 0.0;
+        for (uint64_t k = 0; k < lfio_slab_dir_count(s); k++)
+            for (int c = 0; c < 3; c++)
+                worst = fmax(worst, fabs(v[3 * k + c] / (2.0 + c) - 1.0));
+        CHECK(worst < 1e-5, "a constant image gives a constant field: worst %g", worst);
+        printf("constant image: energy error %.5f%%\n", 100 * r.energy_error);
+        CHECK(r.energy_error < 1e-3, "constant image energy %g", r.energy_error);
+        CHECK(r.interpolated == 0, "no solid angle interpolated");
+        cap_report_free(&r);
+        lfio_lightfield_destroy(lf);
+    }
+    lf = capture_file(tmp_path("coarse.json"), 0, &r);
+    if (lf != NULL) {
+        const lfio_slab *s = lfio_lightfield_slab(lf, 0);
+        double err = field_error(s, 0, 0, smooth_env);
+        printf("coarse 8x4 image at n=16: %llu of 1024 solid angles interpolated, field error %.2f%%, energy error"
+               " %.3f%%\n", (unsigned long long)r.interpolated, 100 * err, 100 * r.energy_error);
+        CHECK(r.interpolated > 0, "a coarse image is interpolated");
+        CHECK(err < 0.05, "interpolated field close to the environment: %g", err);
+        CHECK(r.subdivision_max == 16, "the largest sub-pixel factor is used");
+        cap_report_free(&r);
+        lfio_lightfield_destroy(lf);
+    }
+}
+
+static void test_repairs(void)
+{
+    const int w = 32, h = 16;
+    float *px = env_image(constant_env, CAP_PROJECTION_EQUIRECTANGULAR, w, h, identity);
+    px[3 * (5 * w + 5) + 0] = NAN;
+    px[3 * (3 * w + 10) + 1] = INFINITY;
+    px[3 * (8 * w + 20) + 2] = -7.0f;
+    px[3 * (8 * w + 21) + 2] = -3.0f;
+    char err[256];
+    CHECK(cap_image_write(tmp_path("bad_values.exr"), w, h, 3, px, err, sizeof err) == CAP_OK, "%s", err);
+    free(px);
+    write_text(tmp_path("bad_values.json"), "{" DOWN_PLANE ", \"grid\": {\"nu\": 1, \"nv\": 1}, \"n\": 4,"
+                                            " \"pattern\": \"bad_values.exr\"}");
+    cap_report r;
+    lfio_lightfield *lf = capture_file(tmp_path("bad_values.json"), 0, &r);
+    if (lf == NULL)
+        return;
+    CHECK(r.negative == 2 && r.nan == 1 && r.infinite == 1, "counts %llu %llu %llu", (unsigned long long)r.negative,
+          (unsigned long long)r.nan, (unsigned long long)r.infinite);
+    CHECK(r.repair_count == 1 && strstr(r.repairs[0].file, "bad_values.exr") != NULL, "one image named");
+    CHECK(r.repair_count == 1 && r.repairs[0].lowest == -7.0f, "lowest value kept");
+    const lfio_slab *s = lfio_lightfield_slab(lf, 0);
+    const float *v = lfio_slab_radiance(s);
+    int sane = 1;
+    for (uint64_t k = 0; k < 3 * lfio_slab_dir_count(s); k++)
+        sane &= isfinite(v[k]) && v[k] >= 0.0f && v[k] <= 4.0f + 1e-5f;
+    CHECK(sane, "repaired values are finite, >= 0 and no larger than the neighbours'");
+    cap_report_free(&r);
+    lfio_lightfield_destroy(lf);
+}
+
+/* sRGB encoding, to make 8-bit brackets. */
+static float srgb_encode(double v)
+{
+    v = v < 0 ? 0 : v > 1 ? 1 : v;
+    return (float)(v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1 / 2.4) - 0.055);
+}
+
+static void test_brackets(void)
+{
+    const int w = 128, h = 64;
+    static const double exposures[3] = {1.0, 0.125, 1.0 / 64};
+    float *truth = env_image(sky_env, CAP_PROJECTION_EQUIRECTANGULAR, w, h, identity);
+    float *ldr = malloc((size_t)w * h * 3 * sizeof *ldr);
+    char err[256], name[64];
+    CHECK(cap_image_write(tmp_path("truth.exr"), w, h, 3, truth, err, sizeof err) == CAP_OK, "%s", err);
+    for (int e = 0; e < 3; e++) {
+        for (size_t k = 0; k < (size_t)w * h * 3; k++)
+            ldr[k] = srgb_encode(truth[k] * exposures[e]);
+        snprintf(name, sizeof name, "bracket_%d.png", e);
+        CHECK(cap_image_write(tmp_path(name), w, h, 3, ldr, err, sizeof err) == CAP_OK, "%s", err);
+    }
+    write_text(tmp_path("bracket.json"),
+               "{" DOWN_PLANE ", \"grid\": {\"nu\": 3, \"nv\": 1}, \"n\": 16, \"positions\": [\n"
+               " {\"i\": 0, \"j\": 0, \"bracket\": [{\"file\": \"bracket_0.png\", \"exposure\": 1},\n"
+               "   {\"file\": \"bracket_1.png\", \"exposure\": 0.125}, {\"file\": \"bracket_2.png\", \"exposure\": "
+               "0.015625}]},\n"
+               " {\"i\": 1, \"j\": 0, \"image\": \"bracket_0.png\"},\n"
+               " {\"i\": 2, \"j\": 0, \"image\": \"truth.exr\"}]}");
+    cap_report r;
+    lfio_lightfield *lf = capture_file(tmp_path("bracket.json"), 0, &r);
+    free(truth);
+    free(ldr);
+    if (lf == NULL)
+        return;
+    const lfio_slab *s = lfio_lightfield_slab(lf, 0);
+    double merged = field_error(s, 0, 0, sky_env), single = field_error(s, 1, 0, sky_env);
+    double exact = field_error(s, 2, 0, sky_env);
+    printf("brackets: merged 8-bit bracket %.2f%%, one clipped 8-bit exposure %.2f%%, float truth %.2f%%"
+           " (field vs exact, relative L1); %llu pixels unmerged\n",
+           100 * merged, 100 * single, 100 * exact, (unsigned long long)r.unmerged);
+    CHECK(merged < 0.03, "merged bracket close to the truth: %g", merged);
+    CHECK(merged < 0.5 * single, "merging beats one clipped exposure: %g vs %g", merged, single);
+    CHECK(r.images == 5, "five images read");
+    cap_report_free(&r);
+    lfio_lightfield_destroy(lf);
+}
+
+/* ------------------------------------------------------------ errors */
+
+/* Loads a manifest (text) that must fail, with a message containing every string of want. */
+static void expect_manifest_error(const char *text, const char *want1, const char *want2)
+{
+    const char *path = tmp_path("bad.json");
+    write_text(path, text);
+    cap_manifest *m = NULL;
+    cap_status st = cap_manifest_load(path, &m);
+    const char *msg = cap_error_message();
+    CHECK(st == CAP_ERR_INPUT && m == NULL, "should fail: %s", text);
+    CHECK(strstr(msg, "bad.json") != NULL && strstr(msg, want1) != NULL && (want2 == NULL || strstr(msg, want2)),
+          "message '%s' should name the file, '%s' and '%s'", msg, want1, want2 ? want2 : "");
+    cap_manifest_destroy(m);
+}
+
+#define GRID1 "\"grid\": {\"nu\": 1, \"nv\": 1}"
+
+static void test_manifest_errors(void)
+{
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"constant.exr\", \"colour\": \"srgb\"}",
+                          "unknown key 'colour'", NULL);
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"nothere.exr\"}", "pattern", "nothere.exr");
+    expect_manifest_error("{" DOWN_PLANE ", \"grid\": {\"nu\": 2, \"nv\": 1}, \"positions\": ["
+                          "{\"i\": 0, \"j\": 0, \"image\": \"constant.exr\"},"
+                          "{\"i\": 0, \"j\": 0, \"image\": \"constant.exr\"}]}",
+                          "positions[1]", "already given by positions[0]");
+    expect_manifest_error("{" DOWN_PLANE ", \"grid\": {\"nu\": 2, \"nv\": 1}, \"positions\": ["
+                          "{\"i\": 0, \"j\": 0, \"image\": \"constant.exr\"}]}",
+                          "no image for position (1, 0)", NULL);
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"positions\": [{\"i\": 0, \"j\": 0, \"image\": "
+                          "\"constant.exr\", \"orientation\": [[1, 0, 0], [0, 1, 0], [0, 0, 2]]}]}",
+                          "positions[0].orientation", "not a rotation");
+    expect_manifest_error("{" DOWN_PLANE ",\n " GRID1 ",\n \"pattern\": \"constant.exr\",\n}\n", "bad.json:4:",
+                          "not valid JSON");
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"positions\": [{\"i\": 0, \"j\": 0, \"bracket\": ["
+                          "{\"file\": \"constant.exr\", \"exposure\": 1}, {\"file\": \"constant.exr\", \"exposure\": 0}"
+                          "]}]}",
+                          "positions[0].bracket[1].exposure", "must be > 0");
+    expect_manifest_error("{\"plane\": {\"origin\": [0, 0, 0], \"u\": [1, 0, 0], \"v\": [1, 1, 0]}, " GRID1
+                          ", \"pattern\": \"constant.exr\"}",
+                          "plane", "orthogonal");
+    expect_manifest_error("{" DOWN_PLANE ", \"grid\": {\"nu\": 2, \"nv\": 1}, \"pattern\": \"constant.exr\"}",
+                          "pattern", "{i}");
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"projection\": \"fisheye\", \"pattern\": \"constant.exr\"}",
+                          "projection", "fisheye");
+}
+
+/* Captures a manifest (text) whose images must fail at run time, with a message containing want1 and want2. */
+static void expect_capture_error(const char *text, const char *want1, const char *want2)
+{
+    const char *path = tmp_path("bad_run.json");
+    write_text(path, text);
+    cap_manifest *m = NULL;
+    lfio_lightfield *lf = NULL;
+    CHECK(cap_manifest_load(path, &m) == CAP_OK, "%s", cap_error_message());
+    cap_status st = cap_capture_run(m, NULL, &lf, NULL);
+    const char *msg = cap_error_message();
+    CHECK(st == CAP_ERR_INPUT && lf == NULL, "capture should fail: %s", text);
+    CHECK(strstr(msg, "bad_run.json") != NULL && strstr(msg, want1) != NULL && strstr(msg, want2) != NULL,
+          "message '%s' should name the manifest, '%s' and '%s'", msg, want1, want2);
+    cap_manifest_destroy(m);
+}
+
+static void test_capture_errors(void)
+{
+    write_text(tmp_path("not_an_image.exr"), "this is text, not an image\n");
+    expect_capture_error("{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"not_an_image.exr\"}", "pattern",
+                         "not_an_image.exr");
+    expect_capture_error("{" DOWN_PLANE ", " GRID1 ", \"positions\": [{\"i\": 0, \"j\": 0, \"bracket\": ["
+                         "{\"file\": \"constant.exr\", \"exposure\": 1}, "
+                         "{\"file\": \"coarse.exr\", \"exposure\": 2}]}]}",
+                         "coarse.exr is 8x4 but", "constant.exr is 64x32");
+    expect_capture_error("{" DOWN_PLANE ", " GRID1 ", \"projection\": \"mirror_ball\", \"pattern\": \"constant.exr\"}",
+                         "64x32", "square");
+}
+
+/* ------------------------------------------------------------ the real probe */
+
+static void test_real_probe(void)
+{
+    char manifest[PATH_BYTES], image[PATH_BYTES];
+    snprintf(manifest, sizeof manifest, "%s/capture/studio.json", data_dir);
+    snprintf(image, sizeof image, "%s/capture/probes/studio.exr", data_dir);
+    cap_image img;
+    char err[256];
+    uint64_t negative = 0;
+    CHECK(cap_image_read(image, &img, err, sizeof err) == CAP_OK, "%s", err);
+    for (size_t p = 0; p < (size_t)img.width * img.height; p++)
+        for (int c = 0; c < 3; c++)
+            negative += img.pixels[p * img.channels + c] < 0.0f;
+    CHECK(!img.integer && img.bits == 16, "studio.exr is half float");
+    cap_image_free(&img);
+    cap_report r;
+    lfio_lightfield *lf = capture_file(manifest, 2, &r);
+    if (lf == NULL)
+        return;
+    printf("real probe studio.exr (n=%u): energy error %.4f%% (field %.4f vs image %.4f, green), %llu negative values"
+           " repaired (lowest %g)\n",
+           lfio_slab_get_desc(lfio_lightfield_slab(lf, 0))->n, 100 * r.energy_error, r.energy_field[1],
+           r.energy_image[1], (unsigned long long)r.negative, r.repair_count ? (double)r.repairs[0].lowest : 0.0);
+    CHECK(r.energy_error < 0.005, "real probe energy within 0.5%%: %g", r.energy_error);
+    CHECK(r.negative == negative && negative == 2028, "negative values %llu, counted %llu",
+          (unsigned long long)r.negative, (unsigned long long)negative);
+    CHECK(r.nan == 0 && r.infinite == 0 && r.repair_count == 1, "one image repaired");
+    CHECK(r.repair_count == 1 && r.repairs[0].lowest < -149.0f && r.repairs[0].lowest > -150.0f, "lowest about -149");
+    cap_report_free(&r);
+    lfio_lightfield_destroy(lf);
+}
+
+/* ------------------------------------------------------------ closed loop */
+
+/* cap_radiance_fn over a relit scene. */
+static int trace_scene(void *user, const double org[3], const double dir[3], float rgb[3])
+{
+    return rl_solution_trace(user, org, dir, rgb) == RL_OK;
+}
+
+/* The scene's box-mean radiance through position x of slab s, per solid angle, vs the stored field:
+ * relative L1 error; irradiance of the reference and of the field in *e_ref, *e_field (green). */
+static double loop_error(const rl_solution *sol, const lfio_slab *s, uint32_t i, uint32_t j, double *e_ref,
+                         double *e_field)
+{
+    const uint32_t n = lfio_slab_get_desc(s)->n, k = 4;
+    const double pole[3] = {0, 0, 1};
+    double x[3], dirs[4 * 4 * 3], weights[16], diff = 0.0, total = 0.0;
+    float *rgb = malloc(lfio_slab_dir_count(s) * 3 * sizeof *rgb);
+    lfio_slab_read_position(s, i, j, rgb);
+    lfio_slab_position(s, i, j, x);
+    *e_ref = *e_field = 0.0;
+    for (uint64_t id = 0; id < lfio_slab_dir_count(s); id++) {
+        double ref[3] = {0, 0, 0}, proj = lfio_part_projected_solid_angle(n, id, pole);
+        cap_partition_samples(n, id, k, dirs, weights);
+        for (uint32_t q = 0; q < k * k; q++) {
+            double w[3], d[3];
+            float v[3];
+            lfio_slab_to_world(s, &dirs[3 * q], w);
+            d[0] = -w[0], d[1] = -w[1], d[2] = -w[2];
+            rl_solution_trace(sol, x, d, v);
+            for (int c = 0; c < 3; c++)
+                ref[c] += weights[q] * v[c];
+        }
+        for (int c = 0; c < 3; c++) {
+            diff += fabs(rgb[3 * id + c] - ref[c]);
+            total += ref[c];
+        }
+        *e_ref += ref[1] * proj;
+        *e_field += rgb[3 * id + 1] * proj;
+    }
+    free(rgb);
+    return diff / total;
+}
+
+/* Renders the probes of a 2x2 grid into tmp and writes their manifest. */
+static void render_loop_probes(const rl_solution *sol, const lfio_slab_desc *d)
+{
+    cap_probe_settings ps = {256, 128, 2, 1, 0, NULL, NULL};
+    float *px = malloc((size_t)ps.width * ps.height * 3 * sizeof *px);
+    char name[64], err[256];
+    for (uint32_t j = 0; j < d->nv; j++)
+        for (uint32_t i = 0; i < d->nu; i++) {
+            double x[3];
+            for (int a = 0; a < 3; a++)
+                x[a] = d->origin[a] + (i + 0.5) / d->nu * d->u[a] + (j + 0.5) / d->nv * d->v[a];
+            CHECK(cap_probe_render(&ps, trace_scene, (void *)sol, x, NULL, px) == CAP_OK, "%s", cap_error_message());
+            snprintf(name, sizeof name, "loop_%u_%u.exr", i, j);
+            CHECK(cap_image_write(tmp_path(name), ps.width, ps.height, 3, px, err, sizeof err) == CAP_OK, "%s", err);
+        }
+    free(px);
+    write_text(tmp_path("loop.json"), "{\"plane\": {\"origin\": [-0.5, 0.5, 1.5], \"u\": [1, 0, 0], \"v\": [0, -1, 0]},"
+                                      " \"grid\": {\"nu\": 2, \"nv\": 2}, \"n\": 16, \"colour_space\": \"linear\","
+                                      " \"pattern\": \"loop_{i}_{j}.exr\"}");
+}
+
+static void test_closed_loop(void)
+{
+    char scene_path[PATH_BYTES];
+    snprintf(scene_path, sizeof scene_path, "%s/capture/scene.json", data_dir);
+    rl_scene *scene = NULL;
+    rl_solution *sol = NULL;
+    CHECK(rl_scene_load(scene_path, &scene) == RL_OK, "%s", rl_errmsg());
+    CHECK(scene == NULL || rl_relight(scene, NULL, NULL, &sol) == RL_OK, "%s", rl_errmsg());
+    if (sol == NULL) {
+        rl_scene_destroy(scene);
+        return;
+    }
+    lfio_slab_desc d;
+    lfio_slab_desc_init(&d);
+    const double origin[3] = {-0.5, 0.5, 1.5}, u[3] = {1, 0, 0}, v[3] = {0, -1, 0};
+    memcpy(d.origin, origin, sizeof origin);
+    memcpy(d.u, u, sizeof u);
+    memcpy(d.v, v, sizeof v);
+    d.nu = d.nv = 2;
+    render_loop_probes(sol, &d);
+    cap_report r;
+    lfio_lightfield *lf = capture_file(tmp_path("loop.json"), 0, &r);
+    if (lf != NULL) {
+        const lfio_slab *s = lfio_lightfield_slab(lf, 0);
+        double worst = 0.0, worst_e = 0.0;
+        for (uint32_t j = 0; j < 2; j++)
+            for (uint32_t i = 0; i < 2; i++) {
+                double e_ref, e_field, err = loop_error(sol, s, i, j, &e_ref, &e_field);
+                worst = fmax(worst, err);
+                worst_e = fmax(worst_e, fabs(e_field / e_ref - 1));
+            }
+        printf("closed loop capture(render-probes(scene)) vs the scene's radiance through the plane: relative L1 "
+               "%.2f%% (worst position), irradiance %.3f%%; capture energy check %.3f%%\n",
+               100 * worst, 100 * worst_e, 100 * r.energy_error);
+        CHECK(worst < 0.08, "closed-loop radiance error %g", worst);
+        CHECK(worst_e < 0.015, "closed-loop irradiance error %g", worst_e);
+        CHECK(r.energy_error < 0.005, "energy %g", r.energy_error);
+        cap_report_free(&r);
+        lfio_lightfield_destroy(lf);
+    }
+    rl_solution_destroy(sol);
+    rl_scene_destroy(scene);
+}
+
+/* ------------------------------------------------------------ depth correction */
+
+/* A 0.2 m square emitter of radiance 10 at z = 1, facing down; captured on the plane z = 0.6. */
+#define EMITTER_HALF 0.1
+#define EMITTER_Z 1.0
+#define EMITTER_L 10.0
+
+/* Radiance seen from x looking along d (world, unit) when only the emitter is there. */
+static double emitter_seen(const double x[3], const double d[3])
+{
+    if (d[2] <= 0.0)
+        return 0.0;
+    double t = (EMITTER_Z - x[2]) / d[2];
+    double qx = x[0] + t * d[0], qy = x[1] + t * d[1];
+    return t > 0.0 && fabs(qx) <= EMITTER_HALF && fabs(qy) <= EMITTER_HALF ? EMITTER_L : 0.0;
+}
+
+/* The capture of the emitter made directly: each solid angle's box mean over 5x5 directions. */
+static lfio_slab *emitter_capture(void)
+{
+    lfio_slab_desc d;
+    lfio_slab_desc_init(&d);
+    snprintf(d.name, sizeof d.name, "capture");
+    const double origin[3] = {-1, 1, 0.6}, u[3] = {2, 0, 0}, v[3] = {0, -2, 0};
+    memcpy(d.origin, origin, sizeof origin);
+    memcpy(d.u, u, sizeof u);
+    memcpy(d.v, v, sizeof v);
+    d.nu = d.nv = 16;
+    d.n = 16;
+    lfio_slab *s = NULL;
+    CHECK(lfio_slab_new(&d, &s) == LFIO_OK, "%s", lfio_errmsg());
+    float *rgb = malloc(lfio_slab_dir_count(s) * 3 * sizeof *rgb);
+    double dirs[5 * 5 * 3], weights[25];
+    for (uint32_t j = 0; j < d.nv; j++)
+        for (uint32_t i = 0; i < d.nu; i++) {
+            double x[3];
+            lfio_slab_position(s, i, j, x);
+            for (uint64_t id = 0; id < lfio_slab_dir_count(s); id++) {
+                double sum = 0.0;
+                cap_partition_samples(d.n, id, 5, dirs, weights);
+                for (int q = 0; q < 25; q++) {
+                    double w[3], look[3];
+                    lfio_slab_to_world(s, &dirs[3 * q], w);
+                    look[0] = -w[0], look[1] = -w[1], look[2] = -w[2];
+                    sum += weights[q] * emitter_seen(x, look);
+                }
+                rgb[3 * id] = rgb[3 * id + 1] = rgb[3 * id + 2] = (float)sum;
+            }
+            lfio_slab_write_position(s, i, j, rgb);
+        }
+    free(rgb);
+    return s;
+}
+
+/* Writes slab s (ownership taken) alone to tmp/name. */
+static void write_slab(lfio_slab *s, const char *name)
+{
+    lfio_lightfield *lf = NULL;
+    lfio_lightfield_new(&lf);
+    lfio_lightfield_take_slab(lf, s);
+    CHECK(lfio_lightfield_write(lf, tmp_path(name)) == LFIO_OK, "%s", lfio_errmsg());
+    lfio_lightfield_destroy(lf);
+}
+
+/* Share of a proxy slab's power (radiance times projected solid angle times cell area, summed over
+ * positions and over the directions within acos(cos_min) of its normal) leaving from the emitter's
+ * footprint; *total: that power over the whole slab, W. */
+static double cap_norm_product(const lfio_slab_desc *d)
+{
+    return sqrt(dot3(d->u, d->u)) * sqrt(dot3(d->v, d->v));
+}
+
+static double footprint_share(const lfio_slab *s, double cos_min, double *total)
+{
+    const lfio_slab_desc *d = lfio_slab_get_desc(s);
+    const double pole[3] = {0, 0, 1};
+    float *rgb = malloc(lfio_slab_dir_count(s) * 3 * sizeof *rgb);
+    double in = 0.0, all = 0.0, cell = cap_norm_product(d) / ((double)d->nu * d->nv);
+    for (uint32_t j = 0; j < d->nv; j++)
+        for (uint32_t i = 0; i < d->nu; i++) {
+            double x[3], power = 0.0;
+            lfio_slab_position(s, i, j, x);
+            lfio_slab_read_position(s, i, j, rgb);
+            for (uint64_t id = 0; id < lfio_slab_dir_count(s); id++) {
+                double c[3];
+                lfio_part_centroid(d->n, id, c);
+                if (c[2] >= cos_min)
+                    power += rgb[3 * id + 1] * lfio_part_projected_solid_angle(d->n, id, pole);
+            }
+            all += power;
+            if (fabs(x[0]) < EMITTER_HALF && fabs(x[1]) < EMITTER_HALF)
+                in += power;
+        }
+    free(rgb);
+    *total = all * cell;
+    return in / all;
+}
+
+/* Reprojects the capture onto the emitter's plane (0.6 m square, 24x24, n = 8) in mode. */
+static lfio_slab *reproject_onto_emitter(const lfio_slab *captured, cap_reproject_mode mode, cap_coverage *cov)
+{
+    lfio_slab_desc d;
+    lfio_slab_desc_init(&d);
+    snprintf(d.name, sizeof d.name, "lamp");
+    const double origin[3] = {-0.3, 0.3, EMITTER_Z}, u[3] = {0.6, 0, 0}, v[3] = {0, -0.6, 0};
+    memcpy(d.origin, origin, sizeof origin);
+    memcpy(d.u, u, sizeof u);
+    memcpy(d.v, v, sizeof v);
+    d.nu = d.nv = 24;
+    d.n = 8;
+    cap_reproject_options o = {mode, 2, 0, NULL, NULL};
+    lfio_slab *out = NULL;
+    CHECK(cap_reproject_slab(captured, &d, &o, &out, cov) == CAP_OK, "%s", cap_error_message());
+    return out;
+}
+
+#define FLOOR                                                                                                         \
+    "{\"material\": \"floor\", \"vertices\": [[-0.5, -0.5, 0], [0.5, -0.5, 0], [0.5, 0.5, 0], [-0.5, 0.5, 0]]}"
+/* Relighting accurate enough (about 2% per cell) that the fields, not the sampling, make the differences. */
+#define SCENE_REST                                                                                                    \
+    "\"radiance_maps\": {\"cell_size\": 0.1}, \"sampling\": {\"partition_n\": 64, \"rays_per_solid_angle\": 4}"
+
+/* Relights tmp/scene_name (written from text) and copies the floor's irradiance (green) per cell. @return cells. */
+static uint32_t floor_irradiance(const char *scene_name, const char *text, double *out, double *centres)
+{
+    write_text(tmp_path(scene_name), text);
+    rl_scene *scene = NULL;
+    rl_solution *sol = NULL;
+    uint32_t count = 0;
+    CHECK(rl_scene_load(tmp_path(scene_name), &scene) == RL_OK, "%s", rl_errmsg());
+    CHECK(scene == NULL || rl_relight(scene, NULL, NULL, &sol) == RL_OK, "%s", rl_errmsg());
+    for (size_t k = 0; sol != NULL && k < rl_solution_map_count(sol); k++) {
+        rl_map_info m;
+        rl_solution_map_info(sol, k, &m);
+        if (m.polygon != 0)
+            continue;
+        float *e = malloc((size_t)m.ncells * 3 * sizeof *e);
+        rl_solution_map_cells(sol, k, NULL, NULL, centres, e, NULL);
+        for (uint32_t c = 0; c < m.ncells; c++)
+            out[c] = e[3 * c + 1];
+        count = m.ncells;
+        free(e);
+    }
+    rl_solution_destroy(sol);
+    rl_scene_destroy(scene);
+    return count;
+}
+
+/* Relative RMS difference of b against a over count cells. */
+static double rms_error(const double *a, const double *b, uint32_t count)
+{
+    double num = 0.0, den = 0.0;
+    for (uint32_t c = 0; c < count; c++) {
+        num += (b[c] - a[c]) * (b[c] - a[c]);
+        den += a[c] * a[c];
+    }
+    return sqrt(num / den);
+}
+
+static void test_depth_correction(void)
+{
+    lfio_slab *captured = emitter_capture();
+    cap_coverage cov_depth, cov_plain;
+    lfio_slab *depth = reproject_onto_emitter(captured, CAP_REPROJECT_DEPTH, &cov_depth);
+    lfio_slab *plain = reproject_onto_emitter(captured, CAP_REPROJECT_PLAIN, &cov_plain);
+    if (depth == NULL || plain == NULL)
+        return;
+    double all_depth, all_plain, near_power, unused;
+    double share_depth = footprint_share(depth, 0.0, &all_depth), share_plain = footprint_share(plain, 0.0, &all_plain);
+    double near_depth = footprint_share(depth, cos(PI / 4), &near_power);
+    double near_plain = footprint_share(plain, cos(PI / 4), &unused);
+    /* a Lambertian square of side 0.2 m and radiance L sends L * pi * sin^2(45 deg) * area within 45 degrees */
+    double near_true = EMITTER_L * PI * 0.5 * 0.04;
+    printf("depth correction: share of the reprojected field's power leaving the emitter's footprint (11%% of the "
+           "proxy): all directions %.1f%% depth-corrected, %.1f%% plain; within 45 degrees of the normal %.1f%% and "
+           "%.1f%%; power within 45 degrees %.4f W (true %.4f); coverage %.1f%%\n",
+           100 * share_depth, 100 * share_plain, 100 * near_depth, 100 * near_plain, near_power, near_true,
+           100 * cov_depth.fraction);
+    CHECK(near_depth > 0.8, "depth-corrected field concentrates on the footprint: %g", near_depth);
+    CHECK(share_depth > share_plain + 0.1 && near_depth > near_plain + 0.1, "depth correction concentrates more");
+    CHECK(fabs(near_power / near_true - 1) < 0.03, "power within 45 degrees kept: %g W", near_power);
+    CHECK(cov_depth.fraction > 0.5 && cov_depth.fraction < 1.0 && cov_depth.covered < cov_depth.rays,
+          "coverage %g", cov_depth.fraction);
+    write_slab(captured, "depth_capture.h5");
+    write_slab(depth, "depth_depth.h5");
+    write_slab(plain, "depth_plain.h5");
+
+    static double e_a[256], e_b[256], e_c[256], e_p[256], centres[3 * 256];
+    const char *mats = "{\"materials\": {\"floor\": {\"albedo\": [0.5, 0.5, 0.5]}, \"lamp\": {\"albedo\": [0, 0, 0],"
+                       " \"emission\": [10, 10, 10]}},\n";
+    char text[2048];
+    snprintf(text, sizeof text, "%s\"polygons\": [" FLOOR ", {\"material\": \"lamp\", \"vertices\": [[-0.1, -0.1, 1],"
+             " [-0.1, 0.1, 1], [0.1, 0.1, 1], [0.1, -0.1, 1]]}],\n" SCENE_REST "}", mats);
+    uint32_t cells = floor_irradiance("depth_a.json", text, e_a, centres);
+    const char *fields[3] = {"depth_capture.h5", "depth_depth.h5", "depth_plain.h5"};
+    double *outs[3] = {e_b, e_c, e_p};
+    for (int k = 0; k < 3; k++) {
+        char name[32];
+        snprintf(text, sizeof text,
+                 "%s\"polygons\": [" FLOOR "], \"lightfields\": [{\"file\": \"%s\"}],\n" SCENE_REST "}", mats,
+                 fields[k]);
+        snprintf(name, sizeof name, "depth_%d.json", k);
+        CHECK(floor_irradiance(name, text, outs[k], centres) == cells, "same floor cells");
+    }
+    /* Lambert's formula averaged over each 0.1 m cell (4 x 4 points): the truth all three are measured against */
+    double exact[256] = {0};
+    const double lamp[12] = {-0.1, -0.1, 1, -0.1, 0.1, 1, 0.1, 0.1, 1, 0.1, -0.1, 1}, up[3] = {0, 0, 1};
+    for (uint32_t c = 0; c < cells; c++)
+        for (int q = 0; q < 16; q++) {
+            double x[3] = {centres[3 * c] + 0.1 * ((q % 4 + 0.5) / 4 - 0.5),
+                           centres[3 * c + 1] + 0.1 * ((q / 4 + 0.5) / 4 - 0.5), 0.0};
+            exact[c] += rl_reference_polygon_irradiance(lamp, 4, x, up, EMITTER_L) / 16;
+        }
+    double err_b = rms_error(e_a, e_b, cells), err_c = rms_error(e_a, e_c, cells), err_p = rms_error(e_a, e_p, cells);
+    printf("depth correction, floor irradiance (relative RMS over %u cells) vs relighting with the true emitter: raw "
+           "capture plane %.2f%%, reprojected %.2f%% (plain lookup %.2f%%); vs Lambert cell means: true emitter "
+           "%.2f%%, raw %.2f%%, reprojected %.2f%%\n",
+           cells, 100 * err_b, 100 * err_c, 100 * err_p, 100 * rms_error(exact, e_a, cells),
+           100 * rms_error(exact, e_b, cells), 100 * rms_error(exact, e_c, cells));
+    CHECK(cells == 100, "the floor has 100 cells: %u", cells);
+    CHECK(err_c < err_b, "reprojected field closer to the true emitter than the raw capture: %g vs %g", err_c, err_b);
+    CHECK(err_c < 0.04, "reprojected field within 4%% of the true emitter's: %g", err_c);
+    CHECK(rms_error(exact, e_c, cells) < rms_error(exact, e_b, cells), "also against Lambert");
+}
+
+/* ------------------------------------------------------------ proxies and rendering */
+
+static void expect_proxy_error(const char *name, const char *text, const char *want1, const char *want2)
+{
+    cap_proxy_defaults def = {8, 8, 4};
+    cap_proxy *p = NULL;
+    write_text(tmp_path(name), text);
+    cap_status st = cap_proxy_load(tmp_path(name), &def, &p);
+    const char *msg = cap_error_message();
+    CHECK(st == CAP_ERR_INPUT && p == NULL, "proxy %s should fail", name);
+    CHECK(strstr(msg, name) != NULL && strstr(msg, want1) != NULL && strstr(msg, want2) != NULL,
+          "message '%s' should name %s, '%s' and '%s'", msg, name, want1, want2);
+}
+
+static void test_proxies(void)
+{
+    cap_proxy_defaults def = {8, 6, 4};
+    cap_proxy *p = NULL;
+    write_text(tmp_path("quads.obj"), "v 0 0 1\nv 1 0 1\nv 1 2 1\nv 0 2 1\nv 0 0 0\nv 0 1 0\nv 0 1 1\nv 0 0 1\n"
+                                      "f 1 2 3 4\nf 5 6 7 8\n");
+    CHECK(cap_proxy_load(tmp_path("quads.obj"), &def, &p) == CAP_OK, "%s", cap_error_message());
+    CHECK(cap_proxy_count(p) == 2, "two quads");
+    const lfio_slab_desc *d = cap_proxy_get_desc(p, 0);
+    CHECK(d != NULL && strcmp(d->name, "face0") == 0 && d->u[0] == 1 && d->v[1] == 2 && d->origin[2] == 1 &&
+              d->nu == 8 && d->nv == 6 && d->n == 4,
+          "first quad as a slab");
+    CHECK(cap_proxy_get_desc(p, 2) == NULL, "no third quad");
+    cap_proxy_destroy(p);
+    write_text(tmp_path("quads.json"), "[{\"name\": \"lamp\", \"origin\": [0, 0, 1], \"u\": [1, 0, 0], "
+                                       "\"v\": [0, -1, 0], \"grid\": {\"nu\": 3, \"nv\": 2}, \"n\": 2}, "
+                                       "{\"origin\": [0, 0, 0], \"u\": [0, 1, 0], \"v\": [0, 0, 1]}]");
+    CHECK(cap_proxy_load(tmp_path("quads.json"), &def, &p) == CAP_OK, "%s", cap_error_message());
+    CHECK(cap_proxy_count(p) == 2 && strcmp(cap_proxy_get_desc(p, 0)->name, "lamp") == 0 &&
+              cap_proxy_get_desc(p, 0)->nu == 3 && cap_proxy_get_desc(p, 1)->nu == 8 &&
+              strcmp(cap_proxy_get_desc(p, 1)->name, "proxy1") == 0,
+          "JSON quads with and without their own grid");
+    cap_proxy_destroy(p);
+    expect_proxy_error("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\nf 1 2 3\n", "face 1",
+                       "only rectangular quads");
+    expect_proxy_error("skew.obj", "v 0 0 0\nv 1 0 0\nv 1.5 1 0\nv 0 1 0\nf 1 2 3 4\n", "face 0", "not a rectangle");
+    expect_proxy_error("bad.json", "[{\"origin\": [0, 0, 0], \"u\": [1, 0, 0], \"v\": [0, 1, 0], \"size\": 2}]",
+                       "[0]", "unknown key 'size'");
+    expect_proxy_error("twice.json", "[{\"name\": \"a\", \"origin\": [0, 0, 0], \"u\": [1, 0, 0], \"v\": [0, 1, 0]},"
+                                     " {\"name\": \"a\", \"origin\": [0, 0, 1], \"u\": [1, 0, 0], \"v\": [0, 1, 0]}]",
+                       "[1]", "used twice");
+}
+
+/* cap_radiance_fn: the sky environment, ignoring the origin. */
+static int sky_radiance(void *user, const double org[3], const double dir[3], float rgb[3])
+{
+    double v[3];
+    (void)user;
+    (void)org;
+    sky_env(dir, v);
+    for (int c = 0; c < 3; c++)
+        rgb[c] = (float)v[c];
+    return 1;
+}
+
+/* cap_radiance_fn: radiance 1.5 everywhere. */
+static int one_and_a_half(void *user, const double org[3], const double dir[3], float rgb[3])
+{
+    (void)user, (void)org, (void)dir;
+    rgb[0] = rgb[1] = rgb[2] = 1.5f;
+    return 1;
+}
+
+/* @return the relative L1 difference of two images of count floats. */
+static double image_difference(const float *a, const float *b, size_t count)
+{
+    double diff = 0.0, total = 0.0;
+    for (size_t k = 0; k < count; k++) {
+        diff += fabs(a[k] - b[k]);
+        total += fabs(b[k]);
+    }
+    return diff / total;
+}
+
+static void test_render(void)
+{
+    const double org[3] = {0, 0, 0};
+    const size_t count = 64 * 32 * 3;
+    cap_probe_settings one = {64, 32, 3, 5, 1, NULL, NULL}, two = {64, 32, 3, 5, 2, NULL, NULL};
+    cap_probe_settings fine = {64, 32, 12, 9, 0, NULL, NULL};
+    float *a = malloc(count * sizeof *a), *b = malloc(count * sizeof *b), *c = malloc(count * sizeof *c);
+    CHECK(cap_probe_render(&one, sky_radiance, NULL, org, NULL, a) == CAP_OK, "%s", cap_error_message());
+    CHECK(cap_probe_render(&two, sky_radiance, NULL, org, NULL, b) == CAP_OK, "%s", cap_error_message());
+    CHECK(memcmp(a, b, count * sizeof *a) == 0, "rendering does not depend on the thread count");
+    CHECK(cap_probe_render(&fine, sky_radiance, NULL, org, NULL, c) == CAP_OK, "%s", cap_error_message());
+    double err = image_difference(a, c, count);
+    printf("render: 3x3 jittered directions per pixel vs 12x12: %.3f%% (relative L1)\n", 100 * err);
+    CHECK(err < 0.01, "pixels estimate their mean radiance: %g", err);
+    CHECK(cap_probe_render(&one, one_and_a_half, NULL, org, NULL, a) == CAP_OK, "%s", cap_error_message());
+    int exact = 1;
+    for (size_t k = 0; k < count; k++)
+        exact &= a[k] == 1.5f;
+    CHECK(exact, "a constant radiance renders exactly");
+    cap_probe_settings bad = {0, 32, 3, 5, 1, NULL, NULL};
+    CHECK(cap_probe_render(&bad, sky_radiance, NULL, org, NULL, a) == CAP_ERR_ARG, "zero width refused");
+    free(a);
+    free(b);
+    free(c);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc != 2) {
+        fprintf(stderr, "usage: test_capture DATA_DIR\n");
+        return 2;
+    }
+    data_dir = argv[1];
+    const char *base = getenv("ILF_TEST_TMP");
+    snprintf(tmp_dir, sizeof tmp_dir, "%s/capture", base != NULL ? base : "/tmp");
+    mkdir(base != NULL ? base : "/tmp", 0777);
+    mkdir(tmp_dir, 0777);
+    test_projection_frames();
+    test_projection_maps();
+    test_partition_samples();
+    test_three_projections();
+    test_constant_and_coarse();
+    test_repairs();
+    test_brackets();
+    test_manifest_errors();
+    test_capture_errors();
+    test_real_probe();
+    test_render();
+    test_proxies();
+    test_closed_loop();
+    test_depth_correction();
+    return check_report();
+}

@@ -1,0 +1,211 @@
+/*
+ * cmd_capture.c - `ilf capture MANIFEST -o OUT.h5`: turns the light probe
+ * images a manifest lists (docs/capture.md) into a light field file with
+ * one slab, using the capture library (capture/capture.h).
+ *
+ * It also holds the two helpers the capture commands share (commands.h):
+ * mapping a capture failure to a message and exit code, and feeding the
+ * library's progress callbacks to a progress bar.
+ *
+ * Invariants: the output folder is checked before any image is read, so a
+ * long capture never ends in an output that cannot be placed; the file is
+ * written atomically by lfio; stdout carries the summary (nothing with
+ * --quiet); stderr carries errors, one warning line per repaired image and
+ * the progress bar (only on a terminal, never with --quiet).
+ */
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "capture/capture.h"
+#include "cli.h"
+#include "commands.h"
+
+#define CAPTURE_CREATOR "ilf capture (ilfkit " ILFKIT_VERSION ")"
+/* The energy budget: a larger difference is reported as a warning. */
+#define ENERGY_BUDGET 0.005
+
+typedef struct capture_options {
+    const char *manifest;
+    const char *output;
+    unsigned threads;
+    int quiet;
+} capture_options;
+
+enum capture_option_id { OPT_OUTPUT, OPT_THREADS, OPT_QUIET };
+
+static const cli_option capture_options_table[] = {
+    {"output", 'o', "OUT.h5", "light field file to write (required)"},
+    {"threads", 0, "N", "worker threads, 0 = every processor (default 0); the result does not depend on it"},
+    {"quiet", 'q', NULL, "no progress bar and no summary on stdout (warnings are still printed)"},
+};
+
+static const cli_usage capture_usage = {
+    "capture",
+    "MANIFEST -o OUT.h5 [--threads N] [--quiet]",
+    "Reads the light probe images a manifest lists (equirectangular, mirror ball or\n"
+    "angular map; EXR, HDR, TIFF, PNG, JPEG; single images or exposure brackets) and\n"
+    "box-filters each position's images onto the slab's solid angles (docs/capture.md).\n"
+    "Negative, NaN and infinite pixel values are repaired and reported, one warning\n"
+    "per image. Prints the largest difference between the irradiance computed from the\n"
+    "light field and from the images at any position (budget 0.5%).",
+    "ilf capture data/capture/studio.json -o studio.h5\n"
+    "ilf render-probes data/capture/scene.json --plane -0.5,0.5,1.5:1,0,0:0,-1,0 --grid 2x2 -o probes\n"
+    "ilf capture probes/manifest.json -o probes.h5 --threads 2",
+};
+
+/* ------------------------------------------------------------ shared helpers */
+
+int ilf_capture_failure(const char *sub, int status)
+{
+    char line[1024];
+    const char *msg = cli_one_line(cap_error_message(), line, sizeof line);
+    cli_error(sub, "%s", msg[0] != '\0' ? msg : cap_status_name((cap_status)status));
+    return status == CAP_ERR_INPUT || status == CAP_ERR_ARG ? ILF_EXIT_USAGE : ILF_EXIT_FAILED;
+}
+
+void ilf_capture_progress(void *bar, uint64_t done, uint64_t total)
+{
+    cli_progress *p = bar;
+    (void)total;
+    uint64_t shown = atomic_load(&p->done);
+    if (done > shown)
+        cli_progress_add(p, done - shown);
+}
+
+/* ------------------------------------------------------------ options */
+
+/* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
+static int parse_arguments(capture_options *o, int argc, char **argv)
+{
+    cli_parser p;
+    cli_parser_init(&p, &capture_usage, capture_options_table,
+                    sizeof capture_options_table / sizeof capture_options_table[0], argc, argv);
+    const char *value;
+    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
+        if (opt == CLI_HELP)
+            return ILF_EXIT_OK;
+        if (opt == CLI_BAD)
+            return ILF_EXIT_USAGE;
+        int ok = 1;
+        if (opt == CLI_POSITIONAL)
+            ok = cli_single_path("capture", &o->manifest, value);
+        else if (opt == OPT_OUTPUT)
+            o->output = value;
+        else if (opt == OPT_THREADS)
+            ok = cli_value_u32(&p, value, 0, 1024, &o->threads);
+        else if (opt == OPT_QUIET)
+            o->quiet = 1;
+        if (!ok)
+            return ILF_EXIT_USAGE;
+    }
+    if (o->manifest == NULL) {
+        cli_error("capture", "no manifest given (see 'ilf capture --help')");
+        return ILF_EXIT_USAGE;
+    }
+    if (o->output == NULL || o->output[0] == '\0') {
+        cli_error("capture", "-o OUT.h5 is required");
+        return ILF_EXIT_USAGE;
+    }
+    return -1;
+}
+
+/* ------------------------------------------------------------ reporting */
+
+/* One warning line for an image whose values were repaired. */
+static void warn_repair(const cap_repair *r)
+{
+    char text[512] = "";
+    size_t len = 0;
+    if (r->negative > 0)
+        len += (size_t)snprintf(text + len, sizeof text - len, "%" PRIu64 " negative value%s (lowest %g) set to 0",
+                                r->negative, r->negative == 1 ? "" : "s", (double)r->lowest);
+    if (r->nan + r->infinite > 0 && len < sizeof text)
+        snprintf(text + len, sizeof text - len, "%s%" PRIu64 " NaN and %" PRIu64
+                 " infinite value%s replaced by their neighbours' mean", len > 0 ? "; " : "", r->nan, r->infinite,
+                 r->infinite == 1 ? "" : "s");
+    fprintf(stderr, "ilf capture: warning: %s: %s\n", r->file, text);
+}
+
+/* Warnings: repaired images, unmerged bracket pixels, energy over budget. */
+static void print_warnings(const cap_report *r)
+{
+    for (size_t k = 0; k < r->repair_count; k++)
+        warn_repair(&r->repairs[k]);
+    if (r->unmerged > 0)
+        fprintf(stderr,
+                "ilf capture: warning: %" PRIu64 " bracket pixel%s clipped or noisy in every exposure (each taken "
+                "from the exposure nearest mid-grey)\n", r->unmerged, r->unmerged == 1 ? " was" : "s were");
+    if (r->energy_error > ENERGY_BUDGET)
+        fprintf(stderr,
+                "ilf capture: warning: energy differs by %.3f%% at position %" PRIu32 ",%" PRIu32
+                " (budget %.1f%%): the partition level n may be too coarse for the images\n",
+                100.0 * r->energy_error, r->energy_i, r->energy_j, 100.0 * ENERGY_BUDGET);
+}
+
+static void print_summary(const capture_options *o, const lfio_slab_desc *d, const cap_report *r)
+{
+    char size[32];
+    printf("captured %s: %" PRIu32 "x%" PRIu32 " position%s, %" PRIu64 " image%s, n %" PRIu32 " (%" PRIu64
+           " directions), sub-pixels %" PRIu32 "..%" PRIu32 " per side\n",
+           o->manifest, d->nu, d->nv, r->positions == 1 ? "" : "s", r->images, r->images == 1 ? "" : "s", d->n,
+           (uint64_t)4 * d->n * d->n, r->subdivision_min, r->subdivision_max);
+    printf("energy: irradiance from the light field vs from the images differs by at most %.4f%% "
+           "(position %" PRIu32 ",%" PRIu32 ": %.6g vs %.6g in green)\n",
+           100.0 * r->energy_error, r->energy_i, r->energy_j, r->energy_field[1], r->energy_image[1]);
+    printf("repairs: %" PRIu64 " negative, %" PRIu64 " NaN, %" PRIu64 " infinite values; %" PRIu64
+           " solid angle%s interpolated (image too coarse)\n",
+           r->negative, r->nan, r->infinite, r->interpolated, r->interpolated == 1 ? "" : "s");
+    printf("wrote %s: slab '%s', %s\n", o->output, d->name,
+           cli_format_bytes(cli_file_size(o->output), size, sizeof size));
+}
+
+/* ------------------------------------------------------------ main */
+
+/* Runs the capture with a progress bar unless quiet. @return an exit code. */
+static int run_capture(const capture_options *o, const cap_manifest *m, lfio_lightfield **lf, cap_report *r)
+{
+    const lfio_slab_desc *d = cap_manifest_get_desc(m);
+    cli_progress bar;
+    cap_capture_options co = {o->threads, NULL, NULL};
+    if (!o->quiet) {
+        cli_progress_start(&bar, "capture", (uint64_t)d->nu * d->nv);
+        co.progress = ilf_capture_progress;
+        co.progress_user = &bar;
+    }
+    cap_status st = cap_capture_run(m, &co, lf, r);
+    if (!o->quiet)
+        cli_progress_finish(&bar);
+    return st == CAP_OK ? ILF_EXIT_OK : ilf_capture_failure("capture", st);
+}
+
+int ilf_cmd_capture(int argc, char **argv)
+{
+    capture_options o = {0};
+    int code = parse_arguments(&o, argc, argv);
+    if (code >= 0)
+        return code;
+    if (!cli_output_folder_exists("capture", o.output))
+        return ILF_EXIT_FAILED;
+    cap_manifest *m = NULL;
+    cap_status st = cap_manifest_load(o.manifest, &m);
+    if (st != CAP_OK)
+        return ilf_capture_failure("capture", st);
+    lfio_lightfield *lf = NULL;
+    cap_report report;
+    code = run_capture(&o, m, &lf, &report);
+    if (code == ILF_EXIT_OK) {
+        print_warnings(&report);
+        lfio_status ls = lfio_lightfield_set_creator(lf, CAPTURE_CREATOR);
+        if (ls == LFIO_OK)
+            ls = lfio_lightfield_write(lf, o.output);
+        code = ls == LFIO_OK ? ILF_EXIT_OK : cli_lfio_failure("capture", ls, CLI_OUTPUT, o.output);
+    }
+    if (code == ILF_EXIT_OK && !o.quiet)
+        print_summary(&o, cap_manifest_get_desc(m), &report);
+    cap_report_free(&report);
+    lfio_lightfield_destroy(lf);
+    cap_manifest_destroy(m);
+    return code;
+}

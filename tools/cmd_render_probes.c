@@ -1,0 +1,377 @@
+/*
+ * cmd_render_probes.c - `ilf render-probes SCENE --plane O:U:V --grid NUxNV
+ * --size WxH -o DIR`: a synthetic capture. The scene is relit with the
+ * engine (relight/engine.h, its own settings unless overridden), then at
+ * every grid position of the plane the equirectangular probe image of the
+ * radiance arriving there is rendered (cap_probe_render with
+ * rl_solution_trace) and written as DIR/probe_I_J.exr, and DIR/manifest.json
+ * describes them for `ilf capture`.
+ *
+ * Invariants: every option is checked before the scene is relit; DIR is
+ * created (its parent must exist) before any work; images and the manifest
+ * are written atomically, the manifest last, so a DIR with a manifest holds
+ * every image it names; probes use the identity orientation (camera forward
+ * +x, up +z) and the jitter seed is the scene's (or --seed's) seed.
+ */
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "capture/image.h"
+#include "capture/projection.h"
+#include "cli.h"
+#include "commands.h"
+#include "jsonout.h"
+#include "relight/engine.h"
+#include "relight_cli.h"
+
+#define PATH_BYTES 4096
+#define MAX_GRID 1024u
+#define MAX_SIDE 16384u
+
+typedef struct probes_options {
+    const char *scene;
+    const char *output;
+    sampling_overrides sampling;
+    lfio_slab_desc desc; /* plane, grid, n and name for the manifest */
+    int plane_given;
+    uint32_t size[2];
+    uint32_t strata;
+    int quiet;
+} probes_options;
+
+/* Options after the shared sampling ones, whose ids come first (relight_cli.h). */
+enum probes_option_id { OPT_PLANE = SAMPLING_OPT_COUNT, OPT_GRID, OPT_SIZE, OPT_STRATA, OPT_N, OPT_NAME,
+                        OPT_OUTPUT, OPT_QUIET };
+
+static const cli_option probes_options_table[] = {
+    RELIGHT_SAMPLING_OPTIONS,
+    {"plane", 0, "O:U:V", "capture plane origin:u:v, each X,Y,Z in metres, u and v orthogonal (required)"},
+    {"grid", 0, "NUxNV", "probe positions along u and v, at cell centres (default 1x1, up to 1024 each)"},
+    {"size", 0, "WxH", "equirectangular probe image size (default 256x128)"},
+    {"strata", 0, "S", "S*S jittered directions per pixel, 1 .. 64 (default 2)"},
+    {"n", 0, "N", "partition level written in the manifest for `ilf capture` (default 16)"},
+    {"name", 0, "NAME", "slab name written in the manifest (default probes)"},
+    {"output", 'o', "DIR", "folder for probe_I_J.exr and manifest.json (required; created)"},
+    {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
+};
+
+static const cli_usage probes_usage = {
+    "render-probes",
+    "SCENE --plane O:U:V -o DIR [--grid NUxNV] [--size WxH] [--strata S] [--n N]\n"
+    "                         [--name NAME] [relight options] [--quiet]",
+    "Relights the scene (docs/scene.md), then renders the equirectangular light probe\n"
+    "each grid position of the plane would see (radiance of the first surface along\n"
+    "each direction; light field emitters are not surfaces and are not seen), writes\n"
+    "them to DIR/probe_I_J.exr and a manifest for `ilf capture` to DIR/manifest.json\n"
+    "(docs/capture.md). The light field captured from it stores the light crossing the\n"
+    "plane towards its front e3 = u x v.",
+    "ilf render-probes data/capture/scene.json --plane -0.5,0.5,1.5:1,0,0:0,-1,0 --grid 2x2 -o probes\n"
+    "ilf capture probes/manifest.json -o probes.h5",
+};
+
+/* ------------------------------------------------------------ options */
+
+/* Parses "ox,oy,oz:ux,uy,uz:vx,vy,vz" into d. @return NULL, or why the text is not a plane. */
+static const char *plane_problem(const char *text, lfio_slab_desc *d, char why[128])
+{
+    char buf[256];
+    double *dest[3] = {d->origin, d->u, d->v};
+    if (strlen(text) >= sizeof buf)
+        return "too long";
+    strcpy(buf, text);
+    char *part = buf;
+    for (int k = 0; k < 3; k++) {
+        char *colon = strchr(part, ':');
+        if ((colon == NULL) != (k == 2))
+            return "expected origin:u:v, three X,Y,Z separated by ':'";
+        if (colon != NULL)
+            *colon = '\0';
+        if (!cli_parse_doubles(part, dest[k], 3, why, 128))
+            return why;
+        part = colon + 1;
+    }
+    double lu = sqrt(d->u[0] * d->u[0] + d->u[1] * d->u[1] + d->u[2] * d->u[2]);
+    double lv = sqrt(d->v[0] * d->v[0] + d->v[1] * d->v[1] + d->v[2] * d->v[2]);
+    double uv = d->u[0] * d->v[0] + d->u[1] * d->v[1] + d->u[2] * d->v[2];
+    if (!(lu > 0.0) || !(lv > 0.0) || fabs(uv) > 1e-9 * lu * lv)
+        return "u and v must be nonzero and orthogonal";
+    return NULL;
+}
+
+static int parse_plane(const cli_parser *p, const char *text, lfio_slab_desc *d)
+{
+    char why[128];
+    const char *problem = plane_problem(text, d, why);
+    if (problem != NULL) {
+        cli_bad_value(p, text, problem);
+        return 0;
+    }
+    return 1;
+}
+
+/* A slab name for the manifest: 1 to 63 of A-Z a-z 0-9 _ - . */
+static int parse_name(const cli_parser *p, const char *text, char name[LFIO_NAME_MAX + 1])
+{
+    size_t len = strlen(text);
+    int ok = len >= 1 && len <= LFIO_NAME_MAX && strspn(text, "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                                                             "0123456789_-.") == len;
+    if (!ok) {
+        cli_bad_value(p, text, "use 1 to 63 of A-Z a-z 0-9 _ - .");
+        return 0;
+    }
+    memcpy(name, text, len + 1);
+    return 1;
+}
+
+/* Applies one non-sampling option. @return 1, or 0 after reporting. */
+static int apply_option(const cli_parser *p, probes_options *o, int opt, const char *value)
+{
+    uint32_t pair[2];
+    switch (opt) {
+    case OPT_PLANE:
+        o->plane_given = 1;
+        return parse_plane(p, value, &o->desc);
+    case OPT_GRID:
+        if (!cli_value_u32_pair(p, value, 'x', 1, MAX_GRID, pair))
+            return 0;
+        o->desc.nu = pair[0];
+        o->desc.nv = pair[1];
+        return 1;
+    case OPT_SIZE:
+        return cli_value_u32_pair(p, value, 'x', 1, MAX_SIDE, o->size);
+    case OPT_STRATA:
+        return cli_value_u32(p, value, 1, 64, &o->strata);
+    case OPT_N:
+        return cli_value_u32(p, value, 1, LFIO_SLAB_MAX_N, &o->desc.n);
+    case OPT_NAME:
+        return parse_name(p, value, o->desc.name);
+    case OPT_OUTPUT:
+        o->output = value;
+        return 1;
+    case OPT_QUIET:
+        o->quiet = 1;
+        return 1;
+    default:
+        return sampling_option_apply(p, &o->sampling, opt, value);
+    }
+}
+
+static void set_defaults(probes_options *o)
+{
+    memset(o, 0, sizeof *o);
+    lfio_slab_desc_init(&o->desc);
+    snprintf(o->desc.name, sizeof o->desc.name, "probes");
+    o->desc.n = 16;
+    o->size[0] = 256;
+    o->size[1] = 128;
+    o->strata = 2;
+}
+
+/* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
+static int parse_arguments(probes_options *o, int argc, char **argv)
+{
+    cli_parser p;
+    cli_parser_init(&p, &probes_usage, probes_options_table,
+                    sizeof probes_options_table / sizeof probes_options_table[0], argc, argv);
+    const char *value;
+    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
+        if (opt == CLI_HELP)
+            return ILF_EXIT_OK;
+        if (opt == CLI_BAD)
+            return ILF_EXIT_USAGE;
+        int ok = opt == CLI_POSITIONAL ? cli_single_path("render-probes", &o->scene, value)
+                                       : apply_option(&p, o, opt, value);
+        if (!ok)
+            return ILF_EXIT_USAGE;
+    }
+    const char *problem = NULL;
+    if (o->scene == NULL)
+        problem = "no scene given (see 'ilf render-probes --help')";
+    else if (!o->plane_given)
+        problem = "--plane O:U:V is required";
+    else if (o->output == NULL || o->output[0] == '\0')
+        problem = "-o DIR is required";
+    if (problem != NULL) {
+        cli_error("render-probes", "%s", problem);
+        return ILF_EXIT_USAGE;
+    }
+    return -1;
+}
+
+/* ------------------------------------------------------------ files */
+
+/* Creates DIR (not its parents). @return 1, or 0 after reporting. */
+static int make_output_folder(const char *dir)
+{
+    struct stat st;
+    if (mkdir(dir, 0777) != 0 && errno != EEXIST) {
+        cli_error("render-probes", "cannot create folder '%s': %s", dir, strerror(errno));
+        return 0;
+    }
+    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        cli_error("render-probes", "cannot use '%s' as a folder: it is not one", dir);
+        return 0;
+    }
+    return 1;
+}
+
+/* out = "DIR/name" (PATH_BYTES). @return 1, or 0 after reporting that it is too long. */
+static int output_path(const char *dir, const char *name, char out[PATH_BYTES])
+{
+    size_t len = strlen(dir);
+    int n = snprintf(out, PATH_BYTES, "%s%s%s", dir, len > 0 && dir[len - 1] == '/' ? "" : "/", name);
+    if (n < 0 || n >= PATH_BYTES) {
+        cli_error("render-probes", "%s/%s: path too long", dir, name);
+        return 0;
+    }
+    return 1;
+}
+
+/* The manifest `ilf capture` reads back (docs/capture.md). @return it, or NULL when memory runs out. */
+static cJSON *manifest_json(const lfio_slab_desc *d)
+{
+    cJSON *root = cJSON_CreateObject();
+    cJSON *plane = root != NULL ? cJSON_AddObjectToObject(root, "plane") : NULL;
+    cJSON *grid = root != NULL ? cJSON_AddObjectToObject(root, "grid") : NULL;
+    int ok = plane != NULL && grid != NULL && json_add_doubles(plane, "origin", d->origin, 3) &&
+             json_add_doubles(plane, "u", d->u, 3) && json_add_doubles(plane, "v", d->v, 3) &&
+             cJSON_AddNumberToObject(grid, "nu", d->nu) && cJSON_AddNumberToObject(grid, "nv", d->nv) &&
+             cJSON_AddNumberToObject(root, "n", d->n) && cJSON_AddStringToObject(root, "slab", d->name) &&
+             cJSON_AddStringToObject(root, "units", "radiance") &&
+             cJSON_AddStringToObject(root, "projection", "equirectangular") &&
+             cJSON_AddStringToObject(root, "colour_space", "linear") &&
+             cJSON_AddStringToObject(root, "pattern", "probe_{i}_{j}.exr");
+    if (!ok) {
+        cJSON_Delete(root);
+        return NULL;
+    }
+    return root;
+}
+
+static int write_manifest(const probes_options *o)
+{
+    char path[PATH_BYTES], err[1024];
+    if (!output_path(o->output, "manifest.json", path))
+        return ILF_EXIT_FAILED;
+    cJSON *root = manifest_json(&o->desc);
+    int code = ILF_EXIT_OK;
+    if (root == NULL) {
+        cli_error("render-probes", "out of memory while building the manifest");
+        code = ILF_EXIT_FAILED;
+    } else if (!json_write_file(path, root, err, sizeof err)) {
+        cli_error("render-probes", "%s", err);
+        code = ILF_EXIT_FAILED;
+    } else if (!o->quiet) {
+        printf("wrote %s: %" PRIu32 "x%" PRIu32 " positions, n %" PRIu32 ", slab '%s'\n", path, o->desc.nu,
+               o->desc.nv, o->desc.n, o->desc.name);
+    }
+    cJSON_Delete(root);
+    return code;
+}
+
+/* ------------------------------------------------------------ rendering */
+
+/* cap_radiance_fn over rl_solution_trace. */
+static int trace(void *user, const double org[3], const double dir[3], float rgb[3])
+{
+    return rl_solution_trace(user, org, dir, rgb) == RL_OK;
+}
+
+/* rl_progress_fn: the relighting's fraction done, on a bar of 1000 steps. */
+static void on_relight_progress(void *bar, double done)
+{
+    double steps = done <= 0.0 ? 0.0 : done >= 1.0 ? 1000.0 : 1000.0 * done;
+    ilf_capture_progress(bar, (uint64_t)steps, 1000);
+}
+
+static int relight(const probes_options *o, const rl_scene *scene, rl_solution **sol)
+{
+    cli_progress bar;
+    if (!o->quiet)
+        cli_progress_start(&bar, "relight", 1000);
+    rl_status st = rl_relight(scene, o->quiet ? NULL : on_relight_progress, &bar, sol);
+    if (!o->quiet)
+        cli_progress_finish(&bar);
+    return st == RL_OK ? ILF_EXIT_OK : relight_failure("render-probes", st);
+}
+
+/* Renders the probe of position (i, j) into pixels and writes it. @return an exit code. */
+static int render_probe(const probes_options *o, const rl_solution *sol, const cap_probe_settings *s, uint32_t i,
+                        uint32_t j, float *pixels)
+{
+    const lfio_slab_desc *d = &o->desc;
+    double x[3];
+    for (int a = 0; a < 3; a++)
+        x[a] = d->origin[a] + (i + 0.5) / d->nu * d->u[a] + (j + 0.5) / d->nv * d->v[a];
+    cap_status st = cap_probe_render(s, trace, (void *)sol, x, NULL, pixels);
+    if (st != CAP_OK)
+        return ilf_capture_failure("render-probes", st);
+    char name[64], path[PATH_BYTES], err[1024];
+    snprintf(name, sizeof name, "probe_%" PRIu32 "_%" PRIu32 ".exr", i, j);
+    if (!output_path(o->output, name, path))
+        return ILF_EXIT_FAILED;
+    if (cap_image_write(path, s->width, s->height, 3, pixels, err, sizeof err) != CAP_OK) {
+        cli_error("render-probes", "%s", err);
+        return ILF_EXIT_FAILED;
+    }
+    return ILF_EXIT_OK;
+}
+
+static int render_all(const probes_options *o, const rl_scene *scene, const rl_solution *sol)
+{
+    const rl_sampling *rs = rl_scene_sampling(scene);
+    cap_probe_settings s = {(int)o->size[0], (int)o->size[1], o->strata, rs->seed, rs->threads, NULL, NULL};
+    float *pixels = malloc((size_t)s.width * s.height * 3 * sizeof *pixels);
+    if (pixels == NULL) {
+        cli_error("render-probes", "out of memory for a %dx%d probe", s.width, s.height);
+        return ILF_EXIT_FAILED;
+    }
+    cli_progress bar;
+    if (!o->quiet)
+        cli_progress_start(&bar, "probes", (uint64_t)o->desc.nu * o->desc.nv);
+    int code = ILF_EXIT_OK;
+    for (uint32_t j = 0; code == ILF_EXIT_OK && j < o->desc.nv; j++)
+        for (uint32_t i = 0; code == ILF_EXIT_OK && i < o->desc.nu; i++) {
+            code = render_probe(o, sol, &s, i, j, pixels);
+            if (!o->quiet)
+                cli_progress_add(&bar, 1);
+        }
+    if (!o->quiet)
+        cli_progress_finish(&bar);
+    free(pixels);
+    return code;
+}
+
+int ilf_cmd_render_probes(int argc, char **argv)
+{
+    probes_options o;
+    set_defaults(&o);
+    int code = parse_arguments(&o, argc, argv);
+    if (code >= 0)
+        return code;
+    rl_scene *scene = NULL;
+    rl_solution *sol = NULL;
+    code = relight_scene_open("render-probes", o.scene, &o.sampling, &scene);
+    if (code == ILF_EXIT_OK && !make_output_folder(o.output))
+        code = ILF_EXIT_FAILED;
+    if (code == ILF_EXIT_OK)
+        code = relight(&o, scene, &sol);
+    if (code == ILF_EXIT_OK)
+        code = render_all(&o, scene, sol);
+    if (code == ILF_EXIT_OK)
+        code = write_manifest(&o);
+    if (code == ILF_EXIT_OK && !o.quiet)
+        printf("rendered %" PRIu32 " probe%s of %" PRIu32 "x%" PRIu32 " pixels, %" PRIu32
+               " directions per pixel, from %s into %s\n",
+               o.desc.nu * o.desc.nv, o.desc.nu * o.desc.nv == 1 ? "" : "s", o.size[0], o.size[1],
+               o.strata * o.strata, o.scene, o.output);
+    rl_solution_destroy(sol);
+    rl_scene_destroy(scene);
+    return code;
+}

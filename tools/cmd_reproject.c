@@ -1,0 +1,302 @@
+/*
+ * cmd_reproject.c - `ilf reproject IN.h5 --proxy PROXY -o OUT.h5`: depth
+ * correction. One slab of IN (a captured light field) is moved onto proxy
+ * geometry (a JSON list of rectangles, or a mesh of rectangular quads read
+ * with assimp), one output slab per rectangle (capture/reproject.h). The
+ * share of each proxy slab's rays that the capture covers is printed and
+ * written beside the output as OUT.coverage.json (OUT minus a final ".h5").
+ *
+ * Invariants: the output folder is checked and the input read before any
+ * work; OUT.h5 is written atomically by lfio, then the coverage file
+ * atomically (jsonout.h); a failure leaves no partial file; stdout carries
+ * the summary (nothing with --quiet), stderr errors and the progress bar.
+ */
+#include <cjson/cJSON.h>
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "capture/reproject.h"
+#include "cli.h"
+#include "commands.h"
+#include "jsonout.h"
+
+#define REPROJECT_CREATOR "ilf reproject (ilfkit " ILFKIT_VERSION ")"
+#define PATH_BYTES 4096
+
+typedef struct reproject_options {
+    const char *input;
+    const char *proxy;
+    const char *output;
+    const char *slab;
+    uint32_t n;          /* 0: the captured slab's */
+    uint32_t grid[2];
+    uint32_t strata;
+    unsigned threads;
+    int plain;
+    int quiet;
+} reproject_options;
+
+enum reproject_option_id { OPT_PROXY, OPT_OUTPUT, OPT_SLAB, OPT_N, OPT_GRID, OPT_STRATA, OPT_PLAIN, OPT_THREADS,
+                           OPT_QUIET };
+
+static const cli_option reproject_options_table[] = {
+    {"proxy", 0, "PROXY", "rectangles: a .json list, or a mesh of rectangular quads (required)"},
+    {"output", 'o', "OUT.h5", "light field file to write, one slab per rectangle (required)"},
+    {"slab", 0, "NAME|INDEX", "the captured slab of IN.h5 (default 0)"},
+    {"n", 0, "N", "partition level of rectangles that do not give one (default: the captured slab's)"},
+    {"grid", 0, "NUxNV", "positions of rectangles that do not give them (default 16x16)"},
+    {"strata", 0, "S", "S*S rays per solid angle, 1 .. 16 (default 2)"},
+    {"plain", 0, NULL, "look every probe up along the ray's direction (no depth correction), to compare"},
+    {"threads", 0, "N", "worker threads, 0 = every processor (default 0); the result does not depend on it"},
+    {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
+};
+
+static const cli_usage reproject_usage = {
+    "reproject",
+    "IN.h5 --proxy PROXY -o OUT.h5 [--slab S] [--n N] [--grid NUxNV] [--strata S]\n"
+    "                     [--plain] [--threads N] [--quiet]",
+    "Depth correction: each ray leaving a proxy rectangle's front is traced back, as a\n"
+    "line, to the captured slab's plane; the probes around the crossing are asked for\n"
+    "the light they saw coming from the ray's point on the proxy (docs/capture.md).\n"
+    "Rays the capture does not cover carry no light; the covered share of each proxy\n"
+    "slab is printed and written to OUT.coverage.json.",
+    "ilf reproject probes.h5 --proxy data/capture/proxy.json -o lamp.h5\n"
+    "ilf reproject probes.h5 --proxy quads.obj --grid 32x32 --n 16 -o proxy.h5",
+};
+
+/* ------------------------------------------------------------ options */
+
+static int apply_option(const cli_parser *p, reproject_options *o, int opt, const char *value)
+{
+    switch (opt) {
+    case OPT_PROXY:
+        o->proxy = value;
+        return 1;
+    case OPT_OUTPUT:
+        o->output = value;
+        return 1;
+    case OPT_SLAB:
+        o->slab = value;
+        return 1;
+    case OPT_N:
+        return cli_value_u32(p, value, 1, LFIO_SLAB_MAX_N, &o->n);
+    case OPT_GRID:
+        return cli_value_u32_pair(p, value, 'x', 1, 65536, o->grid);
+    case OPT_STRATA:
+        return cli_value_u32(p, value, 1, 16, &o->strata);
+    case OPT_PLAIN:
+        o->plain = 1;
+        return 1;
+    case OPT_THREADS:
+        return cli_value_u32(p, value, 0, 1024, &o->threads);
+    default:
+        o->quiet = 1;
+        return 1;
+    }
+}
+
+/* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
+static int parse_arguments(reproject_options *o, int argc, char **argv)
+{
+    cli_parser p;
+    cli_parser_init(&p, &reproject_usage, reproject_options_table,
+                    sizeof reproject_options_table / sizeof reproject_options_table[0], argc, argv);
+    const char *value;
+    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
+        if (opt == CLI_HELP)
+            return ILF_EXIT_OK;
+        if (opt == CLI_BAD)
+            return ILF_EXIT_USAGE;
+        int ok = opt == CLI_POSITIONAL ? cli_single_path("reproject", &o->input, value)
+                                       : apply_option(&p, o, opt, value);
+        if (!ok)
+            return ILF_EXIT_USAGE;
+    }
+    const char *problem = NULL;
+    if (o->input == NULL)
+        problem = "no input light field given (see 'ilf reproject --help')";
+    else if (o->proxy == NULL)
+        problem = "--proxy PROXY is required";
+    else if (o->output == NULL || o->output[0] == '\0')
+        problem = "-o OUT.h5 is required";
+    if (problem != NULL) {
+        cli_error("reproject", "%s", problem);
+        return ILF_EXIT_USAGE;
+    }
+    return -1;
+}
+
+/* ------------------------------------------------------------ work */
+
+/* Reads the selected slab of the input. @return an exit code, and *slab on success. */
+static int read_captured(const reproject_options *o, lfio_slab **slab)
+{
+    lfio_reader *r = NULL;
+    size_t index = 0;
+    lfio_status st = lfio_reader_open(o->input, &r);
+    if (st != LFIO_OK)
+        return cli_lfio_failure("reproject", st, CLI_INPUT, o->input);
+    int code = cli_select_slab("reproject", o->input, r, o->slab, &index) ? ILF_EXIT_OK : ILF_EXIT_USAGE;
+    if (code == ILF_EXIT_OK && (st = lfio_reader_read_slab(r, index, slab)) != LFIO_OK)
+        code = cli_lfio_failure("reproject", st, CLI_INPUT, o->input);
+    lfio_reader_close(r);
+    return code;
+}
+
+/* @return the total positions over the proxy's rectangles. */
+static uint64_t proxy_positions(const cap_proxy *proxy)
+{
+    uint64_t total = 0;
+    for (size_t k = 0; k < cap_proxy_count(proxy); k++)
+        total += (uint64_t)cap_proxy_get_desc(proxy, k)->nu * cap_proxy_get_desc(proxy, k)->nv;
+    return total;
+}
+
+/* The shared bar and the positions of the slabs already made, for one slab's progress. */
+typedef struct slab_progress {
+    cli_progress *bar;
+    uint64_t offset;
+} slab_progress;
+
+/* cap_progress_fn: a slab's positions done, shown after those of the earlier slabs. */
+static void on_slab_progress(void *user, uint64_t done, uint64_t total)
+{
+    const slab_progress *sp = user;
+    ilf_capture_progress(sp->bar, sp->offset + done, total);
+}
+
+/* Makes one output slab per rectangle into lf, coverage in cov[k]. @return an exit code. */
+static int reproject_all(const reproject_options *o, const lfio_slab *captured, const cap_proxy *proxy,
+                         lfio_lightfield *lf, cap_coverage *cov)
+{
+    cli_progress bar;
+    slab_progress sp = {&bar, 0};
+    cap_reproject_options ro = {o->plain ? CAP_REPROJECT_PLAIN : CAP_REPROJECT_DEPTH, o->strata, o->threads,
+                                o->quiet ? NULL : on_slab_progress, &sp};
+    if (!o->quiet)
+        cli_progress_start(&bar, "reproject", proxy_positions(proxy));
+    int code = ILF_EXIT_OK;
+    for (size_t k = 0; code == ILF_EXIT_OK && k < cap_proxy_count(proxy); k++) {
+        const lfio_slab_desc *d = cap_proxy_get_desc(proxy, k);
+        lfio_slab *slab = NULL;
+        cap_status st = cap_reproject_slab(captured, d, &ro, &slab, &cov[k]);
+        if (st != CAP_OK) {
+            code = ilf_capture_failure("reproject", st);
+            break;
+        }
+        sp.offset += (uint64_t)d->nu * d->nv;
+        lfio_status ls = lfio_lightfield_take_slab(lf, slab);
+        if (ls != LFIO_OK)
+            code = cli_lfio_failure("reproject", ls, CLI_OUTPUT, o->output);
+    }
+    if (!o->quiet)
+        cli_progress_finish(&bar);
+    return code;
+}
+
+/* out = OUT minus a final ".h5", plus ".coverage.json". @return 1, or 0 if too long. */
+static int coverage_path(const char *output, char out[PATH_BYTES])
+{
+    size_t len = strlen(output);
+    if (len >= 3 && strcmp(output + len - 3, ".h5") == 0)
+        len -= 3;
+    int n = snprintf(out, PATH_BYTES, "%.*s.coverage.json", (int)len, output);
+    return n > 0 && n < PATH_BYTES;
+}
+
+/* The coverage document (docs/capture.md). @return it, or NULL when memory runs out. */
+static cJSON *coverage_json(const reproject_options *o, const char *slab, const lfio_lightfield *lf,
+                            const cap_coverage *cov)
+{
+    cJSON *root = cJSON_CreateObject(), *slabs = NULL;
+    int ok = root != NULL && cJSON_AddStringToObject(root, "input", o->input) &&
+             cJSON_AddStringToObject(root, "slab", slab) && cJSON_AddStringToObject(root, "proxy", o->proxy) &&
+             cJSON_AddStringToObject(root, "output", o->output) &&
+             cJSON_AddStringToObject(root, "mode", o->plain ? "plain" : "depth") &&
+             (slabs = cJSON_AddArrayToObject(root, "slabs")) != NULL;
+    for (size_t k = 0; ok && k < lfio_lightfield_slab_count(lf); k++) {
+        cJSON *item = cJSON_CreateObject();
+        ok = item != NULL && cJSON_AddItemToArray(slabs, item) &&
+             cJSON_AddStringToObject(item, "name", lfio_slab_get_desc(lfio_lightfield_slab(lf, k))->name) &&
+             cJSON_AddNumberToObject(item, "coverage", cov[k].fraction) &&
+             cJSON_AddNumberToObject(item, "rays", (double)cov[k].rays) &&
+             cJSON_AddNumberToObject(item, "covered", (double)cov[k].covered);
+    }
+    if (!ok) {
+        cJSON_Delete(root);
+        return NULL;
+    }
+    return root;
+}
+
+/* Writes OUT.h5 and its coverage file, and prints what was written. @return an exit code. */
+static int write_outputs(const reproject_options *o, const lfio_slab *captured, lfio_lightfield *lf,
+                         const cap_coverage *cov)
+{
+    char path[PATH_BYTES], err[1024], size[32];
+    if (!coverage_path(o->output, path)) {
+        cli_error("reproject", "%s: path too long", o->output);
+        return ILF_EXIT_FAILED;
+    }
+    lfio_status ls = lfio_lightfield_set_creator(lf, REPROJECT_CREATOR);
+    if (ls == LFIO_OK)
+        ls = lfio_lightfield_write(lf, o->output);
+    if (ls != LFIO_OK)
+        return cli_lfio_failure("reproject", ls, CLI_OUTPUT, o->output);
+    cJSON *root = coverage_json(o, lfio_slab_get_desc(captured)->name, lf, cov);
+    int ok = root != NULL && json_write_file(path, root, err, sizeof err);
+    cJSON_Delete(root);
+    if (!ok) {
+        cli_error("reproject", "%s", root == NULL ? "out of memory for the coverage file" : err);
+        return ILF_EXIT_FAILED;
+    }
+    if (o->quiet)
+        return ILF_EXIT_OK;
+    for (size_t k = 0; k < lfio_lightfield_slab_count(lf); k++) {
+        const lfio_slab_desc *d = lfio_slab_get_desc(lfio_lightfield_slab(lf, k));
+        printf("slab '%s': %" PRIu32 "x%" PRIu32 " positions, n %" PRIu32 ", coverage %.2f%% (%" PRIu64 " of %" PRIu64
+               " rays)\n", d->name, d->nu, d->nv, d->n, 100.0 * cov[k].fraction, cov[k].covered, cov[k].rays);
+    }
+    size_t count = lfio_lightfield_slab_count(lf);
+    printf("wrote %s: %zu slab%s, %s (%s)\nwrote %s\n", o->output, count, count == 1 ? "" : "s",
+           cli_format_bytes(cli_file_size(o->output), size, sizeof size), o->plain ? "plain lookup" : "depth-corrected",
+           path);
+    return ILF_EXIT_OK;
+}
+
+int ilf_cmd_reproject(int argc, char **argv)
+{
+    reproject_options o = {0};
+    o.grid[0] = o.grid[1] = 16;
+    int code = parse_arguments(&o, argc, argv);
+    if (code >= 0)
+        return code;
+    if (!cli_output_folder_exists("reproject", o.output))
+        return ILF_EXIT_FAILED;
+    lfio_slab *captured = NULL;
+    cap_proxy *proxy = NULL;
+    lfio_lightfield *lf = NULL;
+    cap_coverage *cov = NULL;
+    code = read_captured(&o, &captured);
+    if (code == ILF_EXIT_OK) {
+        cap_proxy_defaults def = {o.grid[0], o.grid[1], o.n ? o.n : lfio_slab_get_desc(captured)->n};
+        cap_status st = cap_proxy_load(o.proxy, &def, &proxy);
+        code = st == CAP_OK ? ILF_EXIT_OK : ilf_capture_failure("reproject", st);
+    }
+    if (code == ILF_EXIT_OK && (lfio_lightfield_new(&lf) != LFIO_OK ||
+                                (cov = calloc(cap_proxy_count(proxy), sizeof *cov)) == NULL)) {
+        cli_error("reproject", "out of memory");
+        code = ILF_EXIT_FAILED;
+    }
+    if (code == ILF_EXIT_OK)
+        code = reproject_all(&o, captured, proxy, lf, cov);
+    if (code == ILF_EXIT_OK)
+        code = write_outputs(&o, captured, lf, cov);
+    free(cov);
+    lfio_lightfield_destroy(lf);
+    cap_proxy_destroy(proxy);
+    lfio_slab_destroy(captured);
+    return code;
+}
