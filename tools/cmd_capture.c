@@ -188,6 +188,7 @@ int ilf_cmd_capture(int argc, char **argv)
         return code;
     if (!cli_output_folder_exists("capture", o.output))
         return ILF_EXIT_FAILED;
+    cli_output_watch(o.output);
     cap_manifest *m = NULL;
     cap_status st = cap_manifest_load(o.manifest, &m);
     if (st != CAP_OK)

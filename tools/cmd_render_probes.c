@@ -259,6 +259,7 @@ static int write_manifest(const probes_options *o)
     char path[PATH_BYTES], err[1024];
     if (!output_path(o->output, "manifest.json", path))
         return ILF_EXIT_FAILED;
+    cli_output_watch(path);
     cJSON *root = manifest_json(&o->desc);
     int code = ILF_EXIT_OK;
     if (root == NULL) {
@@ -316,6 +317,7 @@ static int render_probe(const probes_options *o, const rl_solution *sol, const c
     snprintf(name, sizeof name, "probe_%" PRIu32 "_%" PRIu32 ".exr", i, j);
     if (!output_path(o->output, name, path))
         return ILF_EXIT_FAILED;
+    cli_output_watch(path);
     if (cap_image_write(path, s->width, s->height, 3, pixels, err, sizeof err) != CAP_OK) {
         cli_error("render-probes", "%s", err);
         return ILF_EXIT_FAILED;

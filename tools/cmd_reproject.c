@@ -240,6 +240,7 @@ static int write_outputs(const reproject_options *o, const lfio_slab *captured, 
         cli_error("reproject", "%s: path too long", o->output);
         return ILF_EXIT_FAILED;
     }
+    cli_output_watch(path);
     lfio_status ls = lfio_lightfield_set_creator(lf, REPROJECT_CREATOR);
     if (ls == LFIO_OK)
         ls = lfio_lightfield_write(lf, o->output);
@@ -275,6 +276,7 @@ int ilf_cmd_reproject(int argc, char **argv)
         return code;
     if (!cli_output_folder_exists("reproject", o.output))
         return ILF_EXIT_FAILED;
+    cli_output_watch(o.output);
     lfio_slab *captured = NULL;
     cap_proxy *proxy = NULL;
     lfio_lightfield *lf = NULL;
