@@ -337,55 +337,72 @@ int lfio_part_neighbours(uint32_t n, uint64_t id, uint64_t nb[3])
     return 1;
 }
 
-int lfio_part_interp(uint32_t n, const double d[3], uint64_t ids[4], double w[4])
+/* Gives the interpolation weights at barycentric coordinates lam of one
+ * triangle: w[0] for the triangle, w[k+1] for its neighbour across the edge
+ * opposite corner k. The formulas are symmetric in the corners, so any
+ * corner order serves as long as lam and the neighbours share it. */
+static void interp_weights(const double lam_in[3], double w[4])
 {
-    cell c, cn[3];
-    double x, z;
-    if (!locate(n, d, &c, &x, &z))
-        return 0;
-    /* Barycentric coordinates on the planar lattice triangle, in canonical
-     * corner order, clamped against rounding at edges. */
-    double fx = x - c.xi, fz = z - c.zi, lam[3];
-    if (!c.upper) {
-        lam[0] = 1.0 - fx - fz; lam[1] = fx; lam[2] = fz;
-    } else {
-        lam[0] = fx + fz - 1.0; lam[1] = 1.0 - fx; lam[2] = 1.0 - fz;
-    }
-    double sum = 0.0;
+    double lam[3], sum = 0.0;
     for (int k = 0; k < 3; k++) {
-        lam[k] = fmin(fmax(lam[k], 0.0), 1.0);
+        /* clamped against rounding at edges (NaN becomes 0); comparisons
+         * rather than fmin/fmax, which are calls in this hot path */
+        double x = lam_in[k];
+        lam[k] = x > 0.0 ? (x < 1.0 ? x : 1.0) : 0.0;
         sum += lam[k];
     }
+    if (!(sum > 0.0)) {
+        lam[0] = lam[1] = lam[2] = 1.0;
+        sum = 3.0;
+    }
+    double inv = 1.0 / sum;
     for (int k = 0; k < 3; k++)
-        lam[k] /= sum;
+        lam[k] *= inv;
     /* Edge k's neighbour gets half weight on edge k (where lam[k] = 0) and
      * none on the other edges: g[k] = product of the other two coordinates.
      * The factor h vanishes at the centroid, so the centre value is exact. */
     double g[3] = {lam[1] * lam[2], lam[0] * lam[2], lam[0] * lam[1]};
     double gsum = g[0] + g[1] + g[2];
     double h = 1.0 - 27.0 * lam[0] * lam[1] * lam[2];
-    double wk[3];
-    if (gsum > 0.0) {
-        for (int k = 0; k < 3; k++)
-            wk[k] = 0.5 * h * g[k] / gsum;
-    } else {
-        /* at a corner: the two edges meeting there share the value */
-        for (int k = 0; k < 3; k++)
-            wk[k] = lam[k] > 0.5 ? 0.0 : 0.25;
+    double scale = gsum > 0.0 ? 0.5 * h / gsum : 0.0;
+    for (int k = 0; k < 3; k++) {
+        if (gsum > 0.0)
+            w[k + 1] = scale * g[k];
+        else /* at a corner: the two edges meeting there share the value */
+            w[k + 1] = lam[k] > 0.5 ? 0.0 : 0.25;
     }
+    /* rounding must not leave the centre a negative weight: interpolated
+     * radiance has to stay >= 0 */
+    double w0 = 1.0 - w[1] - w[2] - w[3];
+    w[0] = w0 > 0.0 ? w0 : 0.0;
+}
+
+void lfio_part_interp_weights(const double lam[3], double w[4])
+{
+    interp_weights(lam, w);
+}
+
+int lfio_part_interp(uint32_t n, const double d[3], uint64_t ids[4], double w[4])
+{
+    cell c, cn[3];
+    double x, z;
+    if (!locate(n, d, &c, &x, &z))
+        return 0;
+    /* barycentric coordinates on the planar lattice triangle, canonical corner order */
+    double fx = x - c.xi, fz = z - c.zi, lam[3];
+    if (!c.upper) {
+        lam[0] = 1.0 - fx - fz; lam[1] = fx; lam[2] = fz;
+    } else {
+        lam[0] = fx + fz - 1.0; lam[1] = 1.0 - fx; lam[2] = 1.0 - fz;
+    }
+    interp_weights(lam, w);
     canonical_neighbours(n, c, cn);
     ids[0] = encode(n, c);
     for (int k = 0; k < 3; k++)
         ids[k + 1] = encode(n, cn[k]);
-    w[1] = wk[0];
-    w[2] = wk[1];
-    w[3] = wk[2];
     if (needs_swap(c)) {
         uint64_t ti = ids[2]; ids[2] = ids[3]; ids[3] = ti;
         double tw = w[2]; w[2] = w[3]; w[3] = tw;
     }
-    /* rounding must not leave the centre a negative weight: interpolated
-     * radiance has to stay >= 0 */
-    w[0] = fmax(0.0, 1.0 - w[1] - w[2] - w[3]);
     return 1;
 }

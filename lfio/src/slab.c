@@ -296,9 +296,10 @@ typedef struct footprint {
 static footprint bilinear(const lfio_slab *s, double a, double b)
 {
     footprint f;
-    double gu = a * s->desc.nu - 0.5, gv = b * s->desc.nv - 0.5;
-    gu = fmin(fmax(gu, 0.0), (double)(s->desc.nu - 1));
-    gv = fmin(fmax(gv, 0.0), (double)(s->desc.nv - 1));
+    double gu = a * s->desc.nu - 0.5, gv = b * s->desc.nv - 0.5, mu = s->desc.nu - 1, mv = s->desc.nv - 1;
+    /* clamped by comparisons, not fmin/fmax: this is the hot path of relighting */
+    gu = gu > 0.0 ? (gu < mu ? gu : mu) : 0.0;
+    gv = gv > 0.0 ? (gv < mv ? gv : mv) : 0.0;
     uint32_t i0 = (uint32_t)gu, j0 = (uint32_t)gv;
     uint32_t i1 = i0 + 1 < s->desc.nu ? i0 + 1 : i0, j1 = j0 + 1 < s->desc.nv ? j0 + 1 : j0;
     double fu = gu - i0, fv = gv - j0;
@@ -348,22 +349,18 @@ lfio_status lfio_slab_radiance_nearest(const lfio_slab *s, double st_s, double s
     return LFIO_OK;
 }
 
-lfio_status lfio_slab_radiance_interp(const lfio_slab *s, double st_s, double st_t, const double w[3],
-                                      float rgb[3])
+/* Mixes directions ids (weights wd) at footprint f; a direction beyond the
+ * stored hemisphere has no data, so its share goes to ids[0]. */
+static void mix_directions(const lfio_slab *s, footprint f, const uint64_t ids[4], const double wd[4], float rgb[3])
 {
-    double local[3], wd[4], acc[3] = {0, 0, 0};
-    uint64_t ids[4];
-    if (query_args(s, st_s, st_t, w, local) != LFIO_OK)
-        return LFIO_ERR_ARG;
-    rgb[0] = rgb[1] = rgb[2] = 0.0f;
-    if (local[2] < 0.0 || !lfio_part_interp(s->desc.n, local, ids, wd) || ids[0] >= s->ndir)
-        return LFIO_OK;
-    footprint f = bilinear(s, st_s, st_t);
+    double acc[3] = {0, 0, 0};
     for (int k = 0; k < 4; k++) {
-        /* a neighbour behind the slab has no data: its share goes to the centre */
+        if (!(wd[k] > 0.0))
+            continue;
         uint64_t id = ids[k] < s->ndir ? ids[k] : ids[0];
+        const float *base = s->radiance + id * s->npos * 3;
         for (int q = 0; q < 4; q++) {
-            const float *p = s->radiance + (id * s->npos + f.pos[q]) * 3;
+            const float *p = base + f.pos[q] * 3;
             double wt = wd[k] * f.w[q];
             acc[0] += wt * p[0];
             acc[1] += wt * p[1];
@@ -372,6 +369,29 @@ lfio_status lfio_slab_radiance_interp(const lfio_slab *s, double st_s, double st
     }
     for (int c = 0; c < 3; c++)
         rgb[c] = (float)acc[c];
+}
+
+lfio_status lfio_slab_radiance_interp(const lfio_slab *s, double st_s, double st_t, const double w[3],
+                                      float rgb[3])
+{
+    double local[3], wd[4];
+    uint64_t ids[4];
+    if (query_args(s, st_s, st_t, w, local) != LFIO_OK)
+        return LFIO_ERR_ARG;
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    if (local[2] < 0.0 || !lfio_part_interp(s->desc.n, local, ids, wd) || ids[0] >= s->ndir)
+        return LFIO_OK;
+    mix_directions(s, bilinear(s, st_s, st_t), ids, wd, rgb);
+    return LFIO_OK;
+}
+
+lfio_status lfio_slab_radiance_mix(const lfio_slab *s, double st_s, double st_t, const uint64_t ids[4],
+                                   const double w[4], float rgb[3])
+{
+    if (!isfinite(st_s) || !isfinite(st_t) || ids[0] >= s->ndir)
+        return lfio__fail(LFIO_ERR_ARG, "slab '%s': mix needs finite (s, t) and a stored direction first",
+                          s->desc.name);
+    mix_directions(s, bilinear(s, st_s, st_t), ids, w, rgb);
     return LFIO_OK;
 }
 

@@ -22,11 +22,18 @@ static double radical_inverse(uint32_t i, uint32_t b)
     return r;
 }
 
+static void lds_fill(void);
+static pthread_once_t lds_once = PTHREAD_ONCE_INIT;
+
 lds_key lds_make(uint64_t key)
 {
+    pthread_once(&lds_once, lds_fill); /* every key is made here, so lds4() may assume the table */
+    /* two hashes, each split into two 32-bit offsets: ample resolution for
+     * a rotation, at half the hashing */
     lds_key k;
+    uint64_t h[2] = {hash_mix(key, 1), hash_mix(key, 2)};
     for (int j = 0; j < 4; j++)
-        k.shift[j] = (hash_mix(key, (uint64_t)j + 1) >> 11) * (1.0 / 9007199254740992.0);
+        k.shift[j] = (double)((h[j / 2] >> (32 * (j % 2))) & 0xffffffffu) * (1.0 / 4294967296.0);
     return k;
 }
 
@@ -35,7 +42,6 @@ lds_key lds_make(uint64_t key)
  * radical_inverse() would otherwise dominate the sequence's cost. */
 #define LDS_TABLE 256
 static double lds_table[4][LDS_TABLE];
-static pthread_once_t lds_once = PTHREAD_ONCE_INIT;
 
 /* Fills lds_table. */
 static void lds_fill(void)
@@ -49,7 +55,6 @@ static void lds_fill(void)
 void lds4(const lds_key *k, uint32_t i, double u[4])
 {
     static const uint32_t bases[4] = {2, 3, 5, 7};
-    pthread_once(&lds_once, lds_fill);
     for (int j = 0; j < 4; j++) {
         double x = (i < LDS_TABLE ? lds_table[j][i] : radical_inverse(i, bases[j])) + k->shift[j];
         x = x >= 1.0 ? x - 1.0 : x;

@@ -538,6 +538,36 @@ static void slab_names(const lfio_lightfield *lf, char *buf, size_t cap)
                  lfio_slab_get_desc(lfio_lightfield_slab(lf, k))->name);
 }
 
+/* @return a new table of the boxes of positions holding each stored
+ * direction's nonzero radiance (see rl_lightfield.support), or NULL when
+ * memory runs out. */
+static uint32_t (*slab_support_new(const lfio_slab *slab))[4]
+{
+    const lfio_slab_desc *d = lfio_slab_get_desc(slab);
+    uint64_t ndir = lfio_slab_dir_count(slab);
+    uint32_t (*box)[4] = malloc((ndir ? ndir : 1) * sizeof *box);
+    if (!box)
+        return NULL;
+    const float *rad = lfio_slab_radiance(slab);
+    for (uint64_t k = 0; k < ndir; k++) {
+        uint32_t b[4] = {UINT32_MAX, 0, UINT32_MAX, 0};
+        for (uint32_t j = 0; j < d->nv; j++)
+            for (uint32_t i = 0; i < d->nu; i++) {
+                const float *p = rad + ((k * d->nv + j) * (uint64_t)d->nu + i) * 3;
+                if (p[0] != 0.0f || p[1] != 0.0f || p[2] != 0.0f) {
+                    b[0] = i < b[0] ? i : b[0];
+                    b[1] = i > b[1] ? i : b[1];
+                    b[2] = j < b[2] ? j : b[2];
+                    b[3] = j > b[3] ? j : b[3];
+                }
+            }
+        if (b[0] == UINT32_MAX)
+            b[0] = 1, b[1] = 0; /* empty */
+        memcpy(box[k], b, sizeof b);
+    }
+    return box;
+}
+
 /* Picks lf's slab given by sj: a name, an index, or NULL for slab 0. @return RL_OK or RL_ERR_INPUT. */
 static rl_status pick_slab(const rl_build *b, const cJSON *sj, const char *elem, rl_lightfield *lf)
 {
@@ -598,6 +628,8 @@ static rl_status read_lightfield(rl_build *b, const cJSON *j, const char *elem, 
     if ((st = pick_slab(b, sj, sub, lf)) != RL_OK)
         return st;
     const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
+    if (!(lf->support = slab_support_new(lf->slab)))
+        return rl__fail(RL_ERR_NOMEM, "%s: %s: out of memory", b->file, elem);
     transform_vector(lf, d->origin, lf->origin);
     for (int i = 0; i < 3; i++)
         lf->origin[i] += lf->translate[i];
@@ -957,8 +989,10 @@ void rl_scene_destroy(rl_scene *s)
 {
     if (!s)
         return;
-    for (size_t k = 0; k < s->nlightfields; k++)
+    for (size_t k = 0; k < s->nlightfields; k++) {
         lfio_lightfield_destroy(s->lightfields[k].lf);
+        free(s->lightfields[k].support);
+    }
     free(s->lightfields);
     free(s->materials);
     free(s->vertices);

@@ -45,6 +45,10 @@ typedef struct rl_lightfield {
     double translate[3];
     double origin[3], u[3], v[3]; /* the slab rectangle placed in the scene */
     char label[96];         /* e.g. "lightfields[0]" */
+    /* Per stored direction of the slab, the box of positions [i0, i1] x
+     * [j0, j1] holding all its nonzero radiance (i0 > i1: none). Owned.
+     * The engine shrinks each solid angle's emitter to it. */
+    uint32_t (*support)[4];
 } rl_lightfield;
 
 typedef struct rl_camera {

@@ -93,16 +93,160 @@ void emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e)
 /* @return 1 if frame point q lies in e's convex polygon. */
 static int emitter_contains(const rl_emitter *e, v2 q)
 {
-    for (uint32_t i = 0; i < e->nverts; i++) {
-        v2 a = e->poly2[i], b = e->poly2[(i + 1) % e->nverts];
+    for (uint32_t i = 0, j = e->nverts - 1; i < e->nverts; j = i++) {
+        v2 a = e->poly2[j], b = e->poly2[i];
         if (v2_cross(v2_sub(b, a), v2_sub(q, a)) < 0)
             return 0;
     }
     return 1;
 }
 
-/* Radiance leaving e at y (frame point q) in propagation direction d. */
-static void emitter_radiance(const rl_emitter *e, v2 q, v3 d, double out[3])
+/* ------------------------------------------------------------------ leaves */
+
+/* Leaves from this level on are sampled on their planar lattice triangle and
+ * weighted by the Jacobian to the sphere, which varies by less than 1.5x
+ * within one of them: far cheaper than Arvo's warp (no trigonometry) for
+ * a negligible rise in variance. Coarser leaves (an octant's Jacobian
+ * spans 5.2x) keep the uniform warp. */
+#define PLANAR_MIN_LEVEL 4
+
+/* A solid angle of emitter e's partition prepared for sampling: its
+ * directions and their weights, its sample key, and for a light field the
+ * slab-level interpolation its samples read. */
+typedef struct leaf {
+    uint32_t lv;
+    uint64_t id;
+    double omega;         /* exact solid angle, sr */
+    uint64_t key;         /* hash of (seed, pass, emitter, receiver, level, id) */
+    int planar;
+    sph_tri tri;          /* !planar: Arvo's warp; every sample weighs omega */
+    v3 p[3];              /* planar: the lattice triangle's corners (|x|+|y|+|z| = 1 in e's frame), world */
+    double jac;           /* planar: |det(p0, p1, p2)| / 2; a sample through point P weighs jac / |P|^3 */
+    int mix;              /* planar, light field, at or below the slab's level: lfio_slab_radiance_mix() */
+    double to_slab[3][3]; /* mix: the slab-level triangle's barycentrics from the leaf's */
+    uint64_t ids[4];      /* mix: the slab-level solid angle holding the leaf, then its neighbours */
+} leaf;
+
+/* Gives the barycentric coordinates of p in the triangle a (coplanar points). */
+static void barycentric(const double a[3][3], const double p[3], double lam[3])
+{
+    v3 a0 = v3_load(a[0]), a1 = v3_load(a[1]), a2 = v3_load(a[2]), x = v3_load(p);
+    v3 nrm = v3_cross(v3_sub(a1, a0), v3_sub(a2, a0));
+    double nn = v3_dot(nrm, nrm);
+    lam[0] = v3_dot(v3_cross(v3_sub(a1, x), v3_sub(a2, x)), nrm) / nn;
+    lam[1] = v3_dot(v3_cross(v3_sub(a2, x), v3_sub(a0, x)), nrm) / nn;
+    lam[2] = 1.0 - lam[0] - lam[1];
+}
+
+/* Gives the corners of solid angle id at level lv scaled onto |x|+|y|+|z| = 1. */
+static void lattice_triangle(uint32_t lv, uint64_t id, double v[3][3])
+{
+    lfio_part_vertices(lv, id, v);
+    for (int k = 0; k < 3; k++) {
+        double l1 = fabs(v[k][0]) + fabs(v[k][1]) + fabs(v[k][2]);
+        for (int c = 0; c < 3; c++)
+            v[k][c] /= l1;
+    }
+}
+
+/* Prepares solid angle id at level lv of emitter e for the receiver map map_index, emitter ei. */
+static void leaf_make(const rl_transfer_ctx *ctx, const rl_emitter *e, uint32_t ei, uint32_t map_index, uint32_t lv,
+                      uint64_t id, leaf *L)
+{
+    double v[3][3];
+    lattice_triangle(lv, id, v);
+    L->lv = lv;
+    L->id = id;
+    L->omega = lfio_part_solid_angle(lv, id);
+    L->key = hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), map_index), lv), id);
+    const rl_frame *f = &e->frame;
+    for (int k = 0; k < 3; k++)
+        L->p[k] = v3_add(v3_add(v3_scale(f->e1, v[k][0]), v3_scale(f->e2, v[k][1])), v3_scale(f->n, v[k][2]));
+    L->planar = lv >= PLANAR_MIN_LEVEL;
+    L->mix = 0;
+    if (!L->planar) {
+        L->tri = sph_tri_make(v3_norm(L->p[0]), v3_norm(L->p[1]), v3_norm(L->p[2]), L->omega);
+        return;
+    }
+    L->jac = 0.5 * fabs(v3_dot(L->p[0], v3_cross(L->p[1], L->p[2])));
+    if (e->kind != EM_SLAB)
+        return;
+    /* the slab-level ancestor; levels that are not a power-of-two multiple of
+     * the slab's n do not nest in it and take the general path */
+    uint32_t n = lfio_slab_get_desc(e->lf->slab)->n, al = lv;
+    uint64_t anc = id;
+    while (al > n && al % 2 == 0 && lfio_part_parent(al, anc, &anc))
+        al /= 2;
+    if (al != n)
+        return;
+    double a[3][3], lam[3];
+    lattice_triangle(n, anc, a);
+    for (int k = 0; k < 3; k++) {
+        barycentric(a, v[k], lam);
+        for (int r = 0; r < 3; r++)
+            L->to_slab[r][k] = lam[r];
+    }
+    L->ids[0] = anc;
+    lfio_part_neighbours(n, anc, L->ids + 1);
+    L->mix = 1;
+}
+
+/* @return a direction in leaf L from u1, u2 in [0, 1); *w its weight (the
+ * inverse of its density, so that the mean of w is the solid angle) and,
+ * for planar leaves, lam its barycentric coordinates on the triangle. */
+static v3 leaf_sample(const leaf *L, double u1, double u2, double *w, double lam[3])
+{
+    if (!L->planar) {
+        *w = L->omega;
+        return sph_tri_sample(&L->tri, u1, u2);
+    }
+    double su = sqrt(u1);
+    lam[0] = 1.0 - su;
+    lam[1] = su * (1.0 - u2);
+    lam[2] = su * u2;
+    v3 p = v3_add(v3_add(v3_scale(L->p[0], lam[0]), v3_scale(L->p[1], lam[1])), v3_scale(L->p[2], lam[2]));
+    double inv = 1.0 / sqrt(v3_dot(p, p));
+    *w = L->jac * inv * inv * inv;
+    return v3_scale(p, inv);
+}
+
+/* For a mixing leaf of light field e: the rectangle of the slab outside which every
+ * sample of L reads zero radiance, as 4 world corners (e's vertex order).
+ * @return 1, 0 when L cannot say (use the whole emitter), -1 when L reads only zeros. */
+static int leaf_support(const rl_emitter *e, const leaf *L, v3 out[4])
+{
+    if (!L->mix)
+        return 0;
+    const lfio_slab *slab = e->lf->slab;
+    const lfio_slab_desc *d = lfio_slab_get_desc(slab);
+    uint64_t ndir = lfio_slab_dir_count(slab);
+    uint32_t b[4] = {UINT32_MAX, 0, UINT32_MAX, 0};
+    for (int k = 0; k < 4; k++) {
+        const uint32_t *s = e->lf->support[L->ids[k] < ndir ? L->ids[k] : L->ids[0]];
+        if (s[0] > s[1])
+            continue;
+        b[0] = s[0] < b[0] ? s[0] : b[0];
+        b[1] = s[1] > b[1] ? s[1] : b[1];
+        b[2] = s[2] < b[2] ? s[2] : b[2];
+        b[3] = s[3] > b[3] ? s[3] : b[3];
+    }
+    if (b[0] == UINT32_MAX)
+        return -1;
+    /* bilinear interpolation between position centres reaches half a
+     * position past the last nonzero centre, and the border clamps */
+    double s0 = b[0] == 0 ? 0.0 : (b[0] - 0.5) / d->nu, s1 = b[1] + 1 >= d->nu ? 1.0 : (b[1] + 1.5) / d->nu;
+    double t0 = b[2] == 0 ? 0.0 : (b[2] - 0.5) / d->nv, t1 = b[3] + 1 >= d->nv ? 1.0 : (b[3] + 1.5) / d->nv;
+    s0 *= e->len_u, s1 *= e->len_u, t0 *= e->len_v, t1 *= e->len_v;
+    out[0] = frame_point(&e->frame, (v2){s0, t0});
+    out[1] = frame_point(&e->frame, (v2){s1, t0});
+    out[2] = frame_point(&e->frame, (v2){s1, t1});
+    out[3] = frame_point(&e->frame, (v2){s0, t1});
+    return 1;
+}
+
+/* Radiance leaving e at y (frame point q) in propagation direction d; L
+ * and lam, when L mixes, give the direction's slab interpolation directly. */
+static void emitter_radiance(const rl_emitter *e, v2 q, v3 d, const leaf *L, const double lam[3], double out[3])
 {
     switch (e->kind) {
     case EM_CONST:
@@ -116,11 +260,21 @@ static void emitter_radiance(const rl_emitter *e, v2 q, v3 d, double out[3])
         return;
     }
     case EM_SLAB: {
+        float rgb[3] = {0, 0, 0};
+        if (L && L->mix) {
+            double ls[3], w[4];
+            for (int r = 0; r < 3; r++)
+                ls[r] = L->to_slab[r][0] * lam[0] + L->to_slab[r][1] * lam[1] + L->to_slab[r][2] * lam[2];
+            lfio_part_interp_weights(ls, w);
+            lfio_slab_radiance_mix(e->lf->slab, q.x / e->len_u, q.y / e->len_v, L->ids, w, rgb);
+            for (int c = 0; c < 3; c++)
+                out[c] = rgb[c];
+            return;
+        }
         /* back to the slab's own frame: the transform's rotation, transposed */
         const double (*r)[3] = e->lf->rot;
         double ds[3] = {r[0][0] * d.x + r[1][0] * d.y + r[2][0] * d.z, r[0][1] * d.x + r[1][1] * d.y + r[2][1] * d.z,
                         r[0][2] * d.x + r[1][2] * d.y + r[2][2] * d.z};
-        float rgb[3] = {0, 0, 0};
         lfio_slab_radiance_interp(e->lf->slab, q.x / e->len_u, q.y / e->len_v, ds, rgb);
         for (int c = 0; c < 3; c++)
             out[c] = rgb[c];
@@ -153,13 +307,28 @@ static int slab_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id)
 
 /* ------------------------------------------------------------------ one ray */
 
-/* @return the distance that single precision cannot resolve on a segment
- * from a to b: eight ulps of the larger recentred coordinate, and at least
- * the scene's own. */
-static double ray_eps(const rl_transfer_ctx *ctx, v3 a, v3 b)
+/* What one (emitter, receiver tile) pair needs, computed once. */
+typedef struct pair {
+    const rl_emitter *e;
+    v3 sclip[RL_MAX_POLY_VERTS + 2]; /* the emitter clipped to the tile's front half-space */
+    size_t ns;
+    uint32_t level;
+    int descended;
+    double eps; /* ray offset at both ends, m (pair_eps()) */
+} pair;
+
+/* @return the distance that single precision cannot resolve on segments
+ * between the pair's tile and emitter: eight ulps of the largest recentred
+ * coordinate among their corners, and at least the scene's own. Once per
+ * pair rather than per ray: a bound over the corners bounds every point. */
+static double pair_eps(const rl_transfer_ctx *ctx, const pair *p, const rl_map *m, const v2 *poly, size_t npoly)
 {
-    double m = fmax(v3_maxabs(v3_sub(a, ctx->centre)), v3_maxabs(v3_sub(b, ctx->centre)));
-    return fmax(ctx->eps, 1e-6 * m);
+    double r = 0.0;
+    for (size_t i = 0; i < p->ns; i++)
+        r = dmax(r, v3_maxabs(v3_sub(p->sclip[i], ctx->centre)));
+    for (size_t j = 0; j < npoly; j++)
+        r = dmax(r, v3_maxabs(v3_sub(frame_point(&m->frame, poly[j]), ctx->centre)));
+    return dmax(1e-6 * r, ctx->eps);
 }
 
 /* Shadow rays waiting to be traced as one packet, each with the radiance
@@ -208,13 +377,14 @@ static void batch_push(const rl_transfer_ctx *ctx, ray_batch *b, v3 org, v3 dir,
 }
 
 /* Shared by culled and naive: the radiance arriving at receiver point x
- * (normal nr) from emitter e along propagation direction d, times cos at x,
- * queued for acc. The ray back from x along -d must meet e's front inside
+ * (normal nr) from emitter e along propagation direction d, sampled in leaf
+ * L at barycentrics lam with weight w, times w and cos at x, queued for acc. The ray back from x along -d must meet e's front inside
  * e's polygon with nothing in between; a ray carrying no radiance is never
  * traced, since it could add nothing. */
-static void shoot_back(const rl_transfer_ctx *ctx, const rl_emitter *e, v3 x, v3 nr, v3 d, double *acc,
-                       ray_batch *b, rl_counters *cnt)
+static void shoot_back(const rl_transfer_ctx *ctx, const pair *p, v3 x, v3 nr, v3 d, double w, const leaf *L,
+                       const double lam[3], double *acc, ray_batch *b, rl_counters *cnt)
 {
+    const rl_emitter *e = p->e;
     double cos_r = -v3_dot(d, nr), dn = v3_dot(d, e->frame.n);
     double hx = v3_dot(v3_sub(x, e->frame.origin), e->frame.n);
     cnt->samples++;
@@ -226,25 +396,17 @@ static void shoot_back(const rl_transfer_ctx *ctx, const rl_emitter *e, v3 x, v3
     if (!emitter_contains(e, q))
         return;
     double l[3];
-    emitter_radiance(e, q, d, l);
+    emitter_radiance(e, q, d, L, lam, l);
     if (!(l[0] > 0 || l[1] > 0 || l[2] > 0))
         return;
     for (int c = 0; c < 3; c++)
-        l[c] *= cos_r;
-    double eps = ray_eps(ctx, x, y);
-    batch_push(ctx, b, x, v3_scale(d, -1.0), eps / fmax(cos_r, 1e-3), t - eps / fmax(dn, 1e-3), l, acc, cnt);
+        l[c] *= cos_r * w;
+    double eps = p->eps;
+    batch_push(ctx, b, x, v3_scale(d, -1.0), eps / dmax(cos_r, 1e-3), t - eps / dmax(dn, 1e-3), l, acc, cnt);
 }
 
 /* ----------------------------------------------------------- pair geometry */
 
-/* What one (emitter, receiver tile) pair needs, computed once. */
-typedef struct pair {
-    const rl_emitter *e;
-    v3 sclip[RL_MAX_POLY_VERTS + 2]; /* the emitter clipped to the tile's front half-space */
-    size_t ns;
-    uint32_t level;
-    int descended;
-} pair;
 
 /* The tile: the part of map m in grid rows [row0, row1), as a 2D polygon. */
 typedef struct tile {
@@ -326,6 +488,7 @@ static int pair_setup(const rl_transfer_ctx *ctx, const rl_emitter *e, const til
     int plain = ctx->sampling->method == RL_METHOD_NAIVE || !ctx->sampling->descend;
     p->level = plain ? ctx->sampling->partition_n : pair_level(ctx, p, t);
     p->descended = p->level > ctx->sampling->partition_n;
+    p->eps = pair_eps(ctx, p, t->m, t->poly, t->npoly);
     return 1;
 }
 
@@ -342,16 +505,17 @@ static size_t node_cone(const pair *p, const rl_frame *rf, uint32_t lv, uint64_t
     return clip_cone(gens, 3, rf->n, clipped);
 }
 
-/* Computes the region of node (lv, id) and its intersection with the tile.
+/* Computes the region of node (lv, id) for the emitter polygon src (ns
+ * vertices, in front of the tile's plane) and its intersection with the tile.
  * @return the vertex count of that intersection (0: cull). */
-static size_t node_region(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t lv, uint64_t id,
-                          rl_region *reg, v2 *q)
+static size_t node_region(const rl_transfer_ctx *ctx, const pair *p, const v3 *src, size_t ns, const tile *t,
+                          uint32_t lv, uint64_t id, rl_region *reg, v2 *q)
 {
     v3 gens[3], kc[6];
     size_t nk = node_cone(p, &t->m->frame, lv, id, gens, kc);
     if (nk == 0)
         return 0;
-    region_compute(&t->m->frame, p->sclip, p->ns, kc, nk, ctx->margin, reg);
+    region_compute(&t->m->frame, src, ns, kc, nk, ctx->margin, reg);
     if (reg->empty)
         return 0;
     return clip_to_region(t->poly, t->npoly, reg, q, RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES);
@@ -397,7 +561,7 @@ static int walk(const rl_transfer_ctx *ctx, const pair *p, const tile *t, rl_scr
         uint32_t lv = stack[top - 1].lv;
         uint64_t id = stack[--top].id;
         int dark = p->e->kind == EM_SLAB && slab_node_dark(p->e, lv, id);
-        if (dark || node_region(ctx, p, t, lv, id, reg, q) == 0)
+        if (dark || node_region(ctx, p, p->sclip, p->ns, t, lv, id, reg, q) == 0)
             continue;
         if (lv >= p->level) {
             rc = push_leaf(s, id);
@@ -464,33 +628,35 @@ static v3 domain_point(const rl_map *m, const origin_domain *d, double a, double
     return frame_point(&m->frame, q);
 }
 
-/* @return the sample key of (cell, solid angle id at level lv) in this pass, for emitter ei. */
-static uint64_t sample_key(const rl_transfer_ctx *ctx, uint32_t ei, uint32_t map_index, uint32_t cell, uint32_t lv,
-                           uint64_t id)
-{
-    return hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), map_index),
-                                      cell), lv), id);
-}
-
-/* Queues the k rays of (cell, leaf) into acc.
+/* Queues the k rays of (cell, leaf L) into acc.
  * @return the factor that turns acc into the cell's irradiance (0: no rays). */
-static double gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t cell, uint64_t id,
-                          const sph_tri *tri, uint32_t emitter_index, const v2 *clip, size_t nclip, double *acc,
-                          ray_batch *batch, rl_counters *cnt)
+static double gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t cell, const leaf *L,
+                          const v2 *clip, size_t nclip, double *acc, ray_batch *batch, rl_counters *cnt)
 {
     rl_map *m = t->m;
     origin_domain dom;
     if (!cell_domain(m, cell, clip, nclip, &dom))
         return 0.0;
     uint32_t k = ctx->sampling->rays_per_solid_angle;
-    lds_key key = lds_make(sample_key(ctx, emitter_index, t->map_index, cell, p->level, id));
-    for (uint32_t i = 0; i < k; i++) {
-        double u[4];
-        lds4(&key, i, u);
-        v3 d = sph_tri_sample(tri, u[2], u[3]);
-        shoot_back(ctx, p->e, domain_point(m, &dom, u[0], u[1]), m->frame.n, d, acc, batch, cnt);
+    lds_key key = lds_make(hash_mix(L->key, cell));
+    /* draw a group of samples before shooting any: their square roots and
+     * divisions are independent and overlap, where one sample at a time
+     * would wait for each */
+    enum { GROUP = 8 };
+    for (uint32_t i0 = 0; i0 < k; i0 += GROUP) {
+        uint32_t g = k - i0 < GROUP ? k - i0 : GROUP;
+        double w[GROUP], lam[GROUP][3];
+        v3 x[GROUP], d[GROUP];
+        for (uint32_t i = 0; i < g; i++) {
+            double u[4];
+            lds4(&key, i0 + i, u);
+            d[i] = leaf_sample(L, u[2], u[3], &w[i], lam[i]);
+            x[i] = domain_point(m, &dom, u[0], u[1]);
+        }
+        for (uint32_t i = 0; i < g; i++)
+            shoot_back(ctx, p, x[i], m->frame.n, d[i], w[i], L, lam[i], acc, batch, cnt);
     }
-    return dom.weight * tri->omega / k;
+    return dom.weight / k;
 }
 
 /* ---------------------------------------------------------------- adaptive */
@@ -504,18 +670,6 @@ typedef struct estimate {
     double var;
     double samples;
 } estimate;
-
-/* @return the spherical triangle of solid angle id at level lv in emitter e's frame, ready to sample. */
-static sph_tri leaf_triangle(const rl_emitter *e, uint32_t lv, uint64_t id)
-{
-    double v[3][3];
-    v3 g[3];
-    lfio_part_vertices(lv, id, v);
-    for (int k = 0; k < 3; k++)
-        g[k] = v3_add(v3_add(v3_scale(e->frame.e1, v[k][0]), v3_scale(e->frame.e2, v[k][1])),
-                      v3_scale(e->frame.n, v[k][2]));
-    return sph_tri_make(g[0], g[1], g[2], lfio_part_solid_angle(lv, id));
-}
 
 /* @return 1 once the adaptive time budget has run out. */
 static int budget_spent(const rl_transfer_ctx *ctx)
@@ -532,8 +686,7 @@ static int budget_spent(const rl_transfer_ctx *ctx)
  * unrefined adaptive leaf equals culled's estimate; the variance comes from
  * the spread of the k samples. */
 static estimate node_estimate(const rl_transfer_ctx *ctx, const pair *p, const tile *t, const origin_domain *dom,
-                              uint32_t cell, uint32_t ei, uint32_t lv, uint64_t id, const sph_tri *tri,
-                              rl_counters *cnt)
+                              uint32_t cell, const leaf *L, rl_counters *cnt)
 {
     const rl_map *m = t->m;
     uint32_t k = ctx->sampling->rays_per_solid_angle;
@@ -541,13 +694,13 @@ static estimate node_estimate(const rl_transfer_ctx *ctx, const pair *p, const t
     double acc[ADAPTIVE_MAX_SAMPLES][3];
     ray_batch batch;
     batch.n = 0;
-    lds_key key = lds_make(sample_key(ctx, ei, t->map_index, cell, lv, id));
+    lds_key key = lds_make(hash_mix(L->key, cell));
     for (uint32_t i = 0; i < k; i++) {
-        double u[4];
+        double u[4], w, lam[3];
         lds4(&key, i, u);
         acc[i][0] = acc[i][1] = acc[i][2] = 0.0;
-        shoot_back(ctx, p->e, domain_point(m, dom, u[0], u[1]), m->frame.n, sph_tri_sample(tri, u[2], u[3]), acc[i],
-                   &batch, cnt);
+        v3 d = leaf_sample(L, u[2], u[3], &w, lam);
+        shoot_back(ctx, p, domain_point(m, dom, u[0], u[1]), m->frame.n, d, w, L, lam, acc[i], &batch, cnt);
     }
     batch_flush(ctx, &batch, cnt);
     estimate est = {{0, 0, 0}, 0, k};
@@ -555,11 +708,11 @@ static estimate node_estimate(const rl_transfer_ctx *ctx, const pair *p, const t
     for (uint32_t i = 0; i < k; i++) {
         double y = (acc[i][0] + acc[i][1] + acc[i][2]) / 3;
         for (int c = 0; c < 3; c++)
-            est.e[c] += tri->omega * acc[i][c] / k;
+            est.e[c] += acc[i][c] / k;
         lum += y / k;
         sq += y * y / k;
     }
-    est.var = k > 1 ? tri->omega * tri->omega * fmax(0.0, sq - lum * lum) / (k - 1) : 0.0;
+    est.var = k > 1 ? fmax(0.0, sq - lum * lum) / (k - 1) : 0.0;
     return est;
 }
 
@@ -569,11 +722,11 @@ static estimate node_estimate(const rl_transfer_ctx *ctx, const pair *p, const t
  * angle are combined weighted by their sample counts, which keeps the
  * combination unbiased and reuses the samples already drawn. */
 static estimate adaptive_node(const rl_transfer_ctx *ctx, const pair *p, const tile *t, const origin_domain *dom,
-                              uint32_t cell, uint32_t ei, uint32_t lv, uint64_t id, const sph_tri *tri,
-                              uint32_t max_level, double tol, rl_counters *cnt)
+                              uint32_t cell, uint32_t ei, const leaf *L, uint32_t max_level, double tol,
+                              rl_counters *cnt)
 {
-    estimate est = node_estimate(ctx, p, t, dom, cell, ei, lv, id, tri, cnt);
-    if (2 * lv > max_level || !(sqrt(est.var) > tol))
+    estimate est = node_estimate(ctx, p, t, dom, cell, L, cnt);
+    if (2 * L->lv > max_level || !(sqrt(est.var) > tol))
         return est;
     if (budget_spent(ctx)) {
         cnt->budget_reached = 1;
@@ -581,11 +734,12 @@ static estimate adaptive_node(const rl_transfer_ctx *ctx, const pair *p, const t
     }
     cnt->refinements++;
     uint64_t ch[4];
-    lfio_part_children(lv, id, ch);
+    lfio_part_children(L->lv, L->id, ch);
     estimate fine = {{0, 0, 0}, 0, 0};
     for (int c = 0; c < 4; c++) {
-        sph_tri ct = leaf_triangle(p->e, 2 * lv, ch[c]);
-        estimate r = adaptive_node(ctx, p, t, dom, cell, ei, 2 * lv, ch[c], &ct, max_level, tol / 2, cnt);
+        leaf child;
+        leaf_make(ctx, p->e, ei, t->map_index, 2 * L->lv, ch[c], &child);
+        estimate r = adaptive_node(ctx, p, t, dom, cell, ei, &child, max_level, tol / 2, cnt);
         for (int k = 0; k < 3; k++)
             fine.e[k] += r.e[k];
         fine.var += r.var;
@@ -622,13 +776,12 @@ static int band_range(const v2 *q, size_t nq, double va, double vb, double *ulo,
  * from the tile's first cell). Stage 1 estimates with refinement, holding
  * each (cell, leaf) node to an equal share of the cell's error budget:
  * target_error * total / sqrt(leaves). */
-static void adaptive_row(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint64_t id, uint32_t ei,
+static void adaptive_row(const rl_transfer_ctx *ctx, const pair *p, const tile *t, const leaf *L, uint32_t ei,
                          const v2 *clip, size_t nq, uint32_t j, uint32_t i0, uint32_t i1, rl_scratch *s, int stage,
                          rl_counters *cnt)
 {
     rl_map *m = t->m;
     uint32_t max_level = p->level >= (1u << 18) ? (1u << 20) : 4 * p->level;
-    sph_tri tri = leaf_triangle(p->e, p->level, id); /* shared by the row's cells */
     for (uint32_t i = i0; i <= i1; i++) {
         int32_t cell = m->grid[(size_t)j * m->nu + i];
         origin_domain dom;
@@ -638,9 +791,8 @@ static void adaptive_row(const rl_transfer_ctx *ctx, const pair *p, const tile *
         double tol = INFINITY;
         if (stage == 1 && s->pair_leaves[slot] > 0)
             tol = ctx->sampling->target_error * s->pair_total[slot] / sqrt(s->pair_leaves[slot]);
-        estimate est = stage == 0 ? node_estimate(ctx, p, t, &dom, (uint32_t)cell, ei, p->level, id, &tri, cnt)
-                                  : adaptive_node(ctx, p, t, &dom, (uint32_t)cell, ei, p->level, id, &tri, max_level,
-                                                  tol, cnt);
+        estimate est = stage == 0 ? node_estimate(ctx, p, t, &dom, (uint32_t)cell, L, cnt)
+                                  : adaptive_node(ctx, p, t, &dom, (uint32_t)cell, ei, L, max_level, tol, cnt);
         double y = dom.weight * (est.e[0] + est.e[1] + est.e[2]) / 3;
         if (stage == 0) {
             s->pair_total[slot] += y;
@@ -677,17 +829,23 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t,
                        rl_counters *cnt)
 {
     rl_map *m = t->m;
-    v3 g[3];
-    double v[3][3];
-    lfio_part_vertices(p->level, id, v);
-    for (int k = 0; k < 3; k++) {
-        const rl_frame *f = &p->e->frame;
-        g[k] = v3_add(v3_add(v3_scale(f->e1, v[k][0]), v3_scale(f->e2, v[k][1])), v3_scale(f->n, v[k][2]));
-    }
-    sph_tri tri = sph_tri_make(g[0], g[1], g[2], lfio_part_solid_angle(p->level, id));
+    leaf L;
+    leaf_make(ctx, p->e, emitter_index, t->map_index, p->level, id, &L);
     size_t nq = 0;
     if (culled) {
-        nq = node_region(ctx, p, t, p->level, id, reg, q);
+        /* a light field's solid angle is culled against the part of the
+         * slab where its radiance is nonzero; cells outside that region
+         * would only have drawn zeros */
+        v3 box[4], src[RL_MAX_POLY_VERTS + 2];
+        int sup = leaf_support(p->e, &L, box);
+        size_t ns = sup > 0 ? clip_poly3(box, 4, m->frame.origin, m->frame.n, src) : 0;
+        double lift = 0.0;
+        for (size_t k = 0; k < ns; k++)
+            lift = fmax(lift, v3_dot(v3_sub(src[k], m->frame.origin), m->frame.n));
+        if (sup < 0 || (sup > 0 && (ns < 3 || !(lift > 0))))
+            return 0;
+        nq = sup > 0 ? node_region(ctx, p, src, ns, t, p->level, id, reg, q)
+                     : node_region(ctx, p, p->sclip, p->ns, t, p->level, id, reg, q);
         if (nq == 0)
             return 0;
     }
@@ -709,7 +867,7 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t,
             i1 = fi1 > m->nu - 1 ? m->nu - 1 : (uint32_t)fi1;
         }
         if (ctx->sampling->method == RL_METHOD_ADAPTIVE) {
-            adaptive_row(ctx, p, t, id, emitter_index, clip, nq, j, i0, i1, s, stage, cnt);
+            adaptive_row(ctx, p, t, &L, emitter_index, clip, nq, j, i0, i1, s, stage, cnt);
             continue;
         }
         for (uint32_t i = i0; i <= i1; i++) {
@@ -717,8 +875,7 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t,
             double *acc = s->row_acc[i - i0];
             acc[0] = acc[1] = acc[2] = 0.0;
             s->row_scale[i - i0] = cell < 0 ? 0.0
-                                   : gather_cell(ctx, p, t, (uint32_t)cell, id, &tri, emitter_index, clip, nq, acc,
-                                                 &batch, cnt);
+                                   : gather_cell(ctx, p, t, (uint32_t)cell, &L, clip, nq, acc, &batch, cnt);
         }
         batch_flush(ctx, &batch, cnt);
         for (uint32_t i = i0; i <= i1; i++) {
@@ -847,12 +1004,12 @@ static void baseline_sample(const rl_transfer_ctx *ctx, const pair *p, const rl_
     if (!emitter_contains(e, q))
         return;
     double l[3];
-    emitter_radiance(e, q, v3_scale(to_s, -1.0), l);
+    emitter_radiance(e, q, v3_scale(to_s, -1.0), NULL, NULL, l);
     if (!(l[0] > 0 || l[1] > 0 || l[2] > 0))
         return; /* nothing to carry: no ray needed */
     for (int c = 0; c < 3; c++)
         l[c] *= cos_r * weight;
-    double eps = ray_eps(ctx, x, y), cos_s = -v3_dot(to_s, e->frame.n);
+    double eps = p->eps, cos_s = -v3_dot(to_s, e->frame.n);
     batch_push(ctx, b, x, to_s, eps / fmax(cos_r, 1e-3), dist - eps / fmax(cos_s, 1e-3), l, acc, cnt);
 }
 

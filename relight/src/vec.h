@@ -27,7 +27,11 @@ static inline v3 v3_cross(v3 a, v3 b)
 static inline double v3_len(v3 a) { return sqrt(v3_dot(a, a)); }
 /* @return a scaled to unit length (a must be nonzero). */
 static inline v3 v3_norm(v3 a) { return v3_scale(a, 1.0 / v3_len(a)); }
-static inline double v3_maxabs(v3 a) { return fmax(fabs(a.x), fmax(fabs(a.y), fabs(a.z))); }
+/* max and min for hot paths: compiled inline (fmax is a library call
+ * unless NaN semantics are waived); a NaN argument yields b. */
+static inline double dmax(double a, double b) { return a > b ? a : b; }
+static inline double dmin(double a, double b) { return a < b ? a : b; }
+static inline double v3_maxabs(v3 a) { return dmax(fabs(a.x), dmax(fabs(a.y), fabs(a.z))); }
 
 static inline v2 v2_sub(v2 a, v2 b) { return (v2){a.x - b.x, a.y - b.y}; }
 /* @return the z component of the cross product (twice the signed area of 0, a, b). */

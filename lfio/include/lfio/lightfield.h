@@ -159,6 +159,17 @@ lfio_status lfio_slab_radiance_interp(const lfio_slab *s, double st_s, double st
                                       const double w[3], float rgb[3]);
 
 /**
+ * Radiance at (s, t), bilinear between position centres as
+ * lfio_slab_radiance_interp(), mixing the given directions with weights w
+ * (as lfio_part_interp() or lfio_part_interp_weights() give them at the
+ * slab's n): the interpolation for a caller that already knows them.
+ * ids[1..3] beyond the stored hemisphere count as ids[0]. Thread-safe.
+ * @return LFIO_OK; LFIO_ERR_ARG if s, t are not finite or ids[0] is not stored.
+ */
+lfio_status lfio_slab_radiance_mix(const lfio_slab *s, double st_s, double st_t, const uint64_t ids[4],
+                                   const double w[4], float rgb[3]);
+
+/**
  * Irradiance at (s, t) on a surface facing -e3 that receives the light
  * crossing the slab: sum over dirs of L * projected solid angle about e3,
  * radiance bilinear over positions, piecewise constant over solid angles.

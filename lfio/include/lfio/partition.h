@@ -107,6 +107,15 @@ int lfio_part_neighbours(uint32_t n, uint64_t id, uint64_t nb[3]);
  */
 int lfio_part_interp(uint32_t n, const double d[3], uint64_t ids[4], double w[4]);
 
+/**
+ * The weights of lfio_part_interp() at the point of a solid angle's planar
+ * lattice triangle with barycentric coordinates lam (corners in the order of
+ * lfio_part_vertices(); clamped to >= 0 and normalised): w[0] for the solid
+ * angle, w[k] for neighbour k-1 of lfio_part_neighbours(). For callers that
+ * sample a triangle and so know where they are without locating.
+ */
+void lfio_part_interp_weights(const double lam[3], double w[4]);
+
 #ifdef __cplusplus
 }
 #endif
