@@ -287,6 +287,42 @@ static void check_interp(uint32_t n)
             bad++;
     }
     CHECK(bad == 0, "n=%u: %ld bad weight sets", n, bad);
+    /* the weights from barycentric coordinates (corners as lfio_part_vertices)
+     * are those of the located direction */
+    bad = 0;
+    for (int k = 0; k < 5000; k++) {
+        double d[3], w[4], wb[4], v[3][3], p[3], lam[3], a[3], b[3], c[3], nrm[3];
+        uint64_t ids[4];
+        random_dir(d);
+        lfio_part_interp(n, d, ids, w);
+        lfio_part_vertices(n, ids[0], v);
+        double l1 = fabs(d[0]) + fabs(d[1]) + fabs(d[2]);
+        for (int q = 0; q < 3; q++) {
+            double vl1 = fabs(v[q][0]) + fabs(v[q][1]) + fabs(v[q][2]);
+            for (int r = 0; r < 3; r++)
+                v[q][r] /= vl1;
+            p[q] = d[q] / l1;
+        }
+        for (int r = 0; r < 3; r++) {
+            a[r] = v[1][r] - v[0][r];
+            b[r] = v[2][r] - v[0][r];
+        }
+        cross(a, b, nrm);
+        double nn = dot(nrm, nrm);
+        for (int q = 0; q < 3; q++) { /* lam[q]: the sub-triangle opposite corner q */
+            double e1[3], e2[3];
+            for (int r = 0; r < 3; r++) {
+                e1[r] = v[(q + 1) % 3][r] - p[r];
+                e2[r] = v[(q + 2) % 3][r] - p[r];
+            }
+            cross(e1, e2, c);
+            lam[q] = dot(c, nrm) / nn;
+        }
+        lfio_part_interp_weights(lam, wb);
+        for (int q = 0; q < 4; q++)
+            bad += fabs(wb[q] - w[q]) > 1e-9;
+    }
+    CHECK(bad == 0, "n=%u: %ld weights from barycentrics differ from located ones", n, bad);
     /* at a centroid the containing solid angle has all the weight */
     bad = 0;
     for (uint64_t id = 0; id < lfio_part_count(n); id += 7 + lfio_part_count(n) / 100000) {

@@ -346,8 +346,10 @@ static void check_identities(void)
 }
 
 /* Writes a one-slab light field: a 1 m square at the origin facing +z, constant
- * radiance c in a cone around +z of half-angle cone_deg (every direction if >= 90). */
-static void write_lightfield(const char *path, float c, double cone_deg, uint32_t n)
+ * radiance c in a cone around +z of half-angle cone_deg (every direction if >= 90).
+ * sparse: each direction lights only one column of positions, a different
+ * one per direction, so that each solid angle's support is a strip of the slab. */
+static void write_lightfield(const char *path, float c, double cone_deg, uint32_t n, int sparse)
 {
     lfio_slab_desc d;
     lfio_slab *slab = NULL;
@@ -369,6 +371,11 @@ static void write_lightfield(const char *path, float c, double cone_deg, uint32_
     for (uint32_t j = 0; j < 4; j++)
         for (uint32_t i = 0; i < 4; i++)
             lfio_slab_write_position(slab, i, j, rgb);
+    for (uint64_t k = 0; sparse && k < nd; k++)
+        for (uint32_t j = 0; j < 4; j++)
+            for (uint32_t i = 0; i < 4; i++)
+                if (i != k % 4)
+                    lfio_slab_write(slab, k, i, j, (const float[3]){0, 0, 0});
     lfio_lightfield_new(&lf);
     lfio_lightfield_take_slab(lf, slab);
     CHECK(lfio_lightfield_write(lf, path) == LFIO_OK, "write %s: %s", path, lfio_errmsg());
@@ -376,12 +383,47 @@ static void write_lightfield(const char *path, float c, double cone_deg, uint32_
     free(rgb);
 }
 
+/* Relights s culled and naive: the two must agree bit for bit, the floor be
+ * lit, and the mask cull most solid angles. @return culled's sample count. */
+static uint64_t check_culled_naive(rl_scene *s, const char *what)
+{
+    rl_solution *a = NULL, *b = NULL;
+    uint64_t samples = 0;
+    set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 0);
+    rl_relight(s, NULL, NULL, &a);
+    set_sampling(s, RL_METHOD_NAIVE, 16, 2, 16, 0);
+    rl_relight(s, NULL, NULL, &b);
+    if (a && b) {
+        uint32_t na, nb, *ij;
+        double *centre;
+        float *ea = map_irradiance(a, 0, &na, &centre, &ij);
+        free(centre); free(ij);
+        float *eb = map_irradiance(b, 0, &nb, &centre, &ij);
+        free(centre); free(ij);
+        CHECK(na == nb && memcmp(ea, eb, 3 * na * sizeof *ea) == 0, "%s: culled == naive", what);
+        double sum = 0;
+        for (uint32_t c = 0; c < na; c++)
+            sum += ea[3 * c];
+        CHECK(sum > 0, "%s: the beam lights the floor", what);
+        rl_pass_stats st;
+        rl_solution_pass_stats(a, 0, &st);
+        samples = st.samples;
+        CHECK(st.solid_angles_culled > st.solid_angles_considered / 2, "%s: the mask culls most solid angles: %llu/%llu",
+              what, (unsigned long long)st.solid_angles_culled, (unsigned long long)st.solid_angles_considered);
+        free(ea);
+        free(eb);
+    }
+    rl_solution_destroy(a);
+    rl_solution_destroy(b);
+    return samples;
+}
+
 /* A constant light field is a diffuse emitter; a sparse one is culled by its mask. */
 static void check_lightfield(void)
 {
     char lfpath[600], path[600];
     snprintf(lfpath, sizeof lfpath, "%s/constant_lf.h5", tmpdir);
-    write_lightfield(lfpath, 2.0f, 180, 8);
+    write_lightfield(lfpath, 2.0f, 180, 8, 0);
     snprintf(path, sizeof path, "%s/lf.json", tmpdir);
     /* the slab faces +z at the origin; turned over (180 degrees about x) and lifted to z = 1 */
     tpoly p[1] = {rect_z("grey", -1, -1, 1, 1, 0.0, 1)};
@@ -409,38 +451,23 @@ static void check_lightfield(void)
         rl_solution_destroy(sol);
     }
     rl_scene_destroy(s);
-    /* a narrow beam: the mask culls most solid angles, and culled == naive still */
-    write_lightfield(lfpath, 5.0f, 12, 16);
-    s = load(path);
-    if (!s)
-        return;
-    rl_solution *a = NULL, *b = NULL;
-    set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 0);
-    rl_relight(s, NULL, NULL, &a);
-    set_sampling(s, RL_METHOD_NAIVE, 16, 2, 16, 0);
-    rl_relight(s, NULL, NULL, &b);
-    if (a && b) {
-        uint32_t na, nb, *ij;
-        double *centre;
-        float *ea = map_irradiance(a, 0, &na, &centre, &ij);
-        free(centre); free(ij);
-        float *eb = map_irradiance(b, 0, &nb, &centre, &ij);
-        free(centre); free(ij);
-        CHECK(na == nb && memcmp(ea, eb, 3 * na * sizeof *ea) == 0, "masked light field: culled == naive");
-        double sum = 0;
-        for (uint32_t c = 0; c < na; c++)
-            sum += ea[3 * c];
-        CHECK(sum > 0, "the beam lights the floor");
-        rl_pass_stats st;
-        rl_solution_pass_stats(a, 0, &st);
-        CHECK(st.solid_angles_culled > st.solid_angles_considered / 2, "the mask culls most solid angles: %llu/%llu",
-              (unsigned long long)st.solid_angles_culled, (unsigned long long)st.solid_angles_considered);
-        free(ea);
-        free(eb);
+    /* a narrow beam: the mask culls most solid angles, and culled == naive
+     * still; then the same beam lit from one strip of the slab per
+     * direction, culled against each solid angle's strip */
+    uint64_t samples[2] = {0, 0};
+    for (int sparse = 0; sparse < 2; sparse++) {
+        write_lightfield(lfpath, 5.0f, 12, 16, sparse);
+        s = load(path);
+        if (!s)
+            return;
+        samples[sparse] = check_culled_naive(s, sparse ? "sparse light field" : "masked light field");
+        rl_scene_destroy(s);
     }
-    rl_solution_destroy(a);
-    rl_solution_destroy(b);
-    rl_scene_destroy(s);
+    printf("light field samples, culled: %llu dense, %llu one strip per direction\n",
+           (unsigned long long)samples[0], (unsigned long long)samples[1]);
+    /* without the support both would draw exactly as many samples */
+    CHECK(samples[1] < 0.9 * samples[0], "the support culls the sparse field's cells: %llu vs %llu samples",
+          (unsigned long long)samples[1], (unsigned long long)samples[0]);
 }
 
 /* A constant light field slab seen edge-on: the point lies just below the
@@ -451,7 +478,7 @@ static void check_slab_edge_on(void)
 {
     char lfpath[600], path[600];
     snprintf(lfpath, sizeof lfpath, "%s/edge_lf.h5", tmpdir);
-    write_lightfield(lfpath, 2.0f, 180, 16);
+    write_lightfield(lfpath, 2.0f, 180, 16, 0);
     snprintf(path, sizeof path, "%s/edge_on.json", tmpdir);
     write_scene(path, MATS, NULL, 0,
                 "\"lightfields\": [{\"file\": \"edge_lf.h5\", \"transform\": [[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]}]");

@@ -127,6 +127,25 @@ static void check_writes_and_queries(void)
     CHECK(got[0] == 1 && got[1] == 2 && got[2] == 3, "nearest %g %g %g", got[0], got[1], got[2]);
     lfio_slab_radiance_interp(s, 1.5 / 4, 2.5 / 3, w, got);
     CHECK(fabs(got[1] - 2) < 1e-5, "interp exact at centroid and centre: %g", got[1]);
+    /* mix with the weights interp finds gives what interp gives */
+    for (int k = 0; k < 200; k++) {
+        double d[3] = {rng_unit() - 0.5, rng_unit() - 0.5, rng_unit() + 0.01}, wd[4], dw[3];
+        double a = rng_unit() * 1.2 - 0.1, b = rng_unit();
+        uint64_t ids[4];
+        float gi[3], gm[3];
+        lfio_part_interp(4, d, ids, wd);
+        lfio_slab_to_world(s, d, dw);
+        lfio_slab_radiance_interp(s, a, b, dw, gi);
+        CHECK(lfio_slab_radiance_mix(s, a, b, ids, wd, gm) == LFIO_OK, "mix");
+        CHECK(gi[0] == gm[0] && gi[1] == gm[1] && gi[2] == gm[2], "mix == interp: %g %g", gi[1], gm[1]);
+    }
+    {
+        uint64_t ids[4] = {64, 0, 0, 0};
+        double wd[4] = {1, 0, 0, 0};
+        CHECK(lfio_slab_radiance_mix(s, 0.5, 0.5, ids, wd, got) == LFIO_ERR_ARG, "mix: unstored direction refused");
+        ids[0] = 9;
+        CHECK(lfio_slab_radiance_mix(s, INFINITY, 0.5, ids, wd, got) == LFIO_ERR_ARG, "mix: infinite s refused");
+    }
     double behind[3] = {-w[0], -w[1], -w[2]}, lb[3];
     lfio_slab_to_local(s, behind, lb);
     if (lb[2] < 0) {
