@@ -576,6 +576,7 @@ typedef struct ray_job {
     const double *cdf; /* cumulative polygon areas, npolygons entries */
     uint64_t per_thread;
     atomic_uint_fast64_t occluded;
+    _Atomic double trace_cpu, trace_wall; /* summed over threads; the longest thread */
 } ray_job;
 
 /* @return a uniform double in [0, 1) from state. */
@@ -585,38 +586,73 @@ static double next_unit(uint64_t *state)
     return (*state >> 11) * (1.0 / 9007199254740992.0);
 }
 
-/* Traces this thread's share of random shadow rays. */
+/* Gives a random shadow ray: from a point uniform on the scene's polygons
+ * (by area) in a cosine-distributed direction about the polygon's normal. */
+static void random_ray(const ray_job *job, uint64_t *state, v3 *org, v3 *dir)
+{
+    const rl_scene *sc = job->scene;
+    double pick_a = next_unit(state) * job->cdf[sc->npolygons - 1];
+    size_t lo = 0, hi = sc->npolygons - 1;
+    while (lo < hi) {
+        size_t mid = (lo + hi) / 2;
+        if (job->cdf[mid] <= pick_a)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    const rl_polygon *pg = &sc->polygons[lo];
+    const double(*v)[3] = sc->vertices + pg->first;
+    /* a point on one fan triangle, a cosine-distributed direction about the normal */
+    uint32_t t = 1 + (uint32_t)(next_unit(state) * (pg->count - 2));
+    double su = sqrt(next_unit(state)), b = next_unit(state);
+    v3 a0 = v3_load(v[0]), a1 = v3_load(v[t]), a2 = v3_load(v[t + 1]);
+    *org = v3_add(v3_add(v3_scale(a0, 1 - su), v3_scale(a1, su * (1 - b))), v3_scale(a2, su * b));
+    v3 n = v3_load(pg->normal), e1 = v3_norm(v3_sub(a1, a0)), e2 = v3_cross(n, e1);
+    double r1 = next_unit(state), phi = 2 * PI * next_unit(state), sr = sqrt(r1);
+    *dir = v3_add(v3_scale(n, sqrt(1 - r1)), v3_add(v3_scale(e1, sr * cos(phi)), v3_scale(e2, sr * sin(phi))));
+}
+
+/* Traces this thread's share of random shadow rays: a chunk is drawn, then
+ * traced in packets as the engine traces, and only the tracing is timed. */
 static void *ray_worker(void *p)
 {
+    enum { CHUNK = 4096 };
     ray_job *job = p;
-    const rl_scene *sc = job->scene;
     static atomic_uint seq;
     uint64_t state = hash_mix(0x5eed, atomic_fetch_add(&seq, 1)), hits = 0;
-    double total = job->cdf[sc->npolygons - 1], reach = 4.0 * tracer_extent(job->tracer);
+    double reach = 4.0 * tracer_extent(job->tracer), cpu = 0.0, wall = 0.0;
+    v3 *org = malloc(CHUNK * sizeof *org), *dir = malloc(CHUNK * sizeof *dir);
+    double *tn = malloc(CHUNK * sizeof *tn), *tf = malloc(CHUNK * sizeof *tf);
     tracer_thread_init();
-    for (uint64_t r = 0; r < job->per_thread; r++) {
-        double pick_a = next_unit(&state) * total;
-        size_t lo = 0, hi = sc->npolygons - 1;
-        while (lo < hi) {
-            size_t mid = (lo + hi) / 2;
-            if (job->cdf[mid] <= pick_a)
-                lo = mid + 1;
-            else
-                hi = mid;
+    for (uint64_t done = 0; org && dir && tn && tf && done < job->per_thread; done += CHUNK) {
+        size_t n = job->per_thread - done < CHUNK ? (size_t)(job->per_thread - done) : CHUNK;
+        for (size_t i = 0; i < n; i++) {
+            random_ray(job, &state, &org[i], &dir[i]);
+            tn[i] = 1e-6 * reach;
+            tf[i] = reach;
         }
-        const rl_polygon *pg = &sc->polygons[lo];
-        const double(*v)[3] = sc->vertices + pg->first;
-        /* a point on one fan triangle, a cosine-distributed direction about the normal */
-        uint32_t t = 1 + (uint32_t)(next_unit(&state) * (pg->count - 2));
-        double su = sqrt(next_unit(&state)), b = next_unit(&state);
-        v3 a0 = v3_load(v[0]), a1 = v3_load(v[t]), a2 = v3_load(v[t + 1]);
-        v3 x = v3_add(v3_add(v3_scale(a0, 1 - su), v3_scale(a1, su * (1 - b))), v3_scale(a2, su * b));
-        v3 n = v3_load(pg->normal), e1 = v3_norm(v3_sub(a1, a0)), e2 = v3_cross(n, e1);
-        double r1 = next_unit(&state), phi = 2 * PI * next_unit(&state), sr = sqrt(r1);
-        v3 d = v3_add(v3_scale(n, sqrt(1 - r1)), v3_add(v3_scale(e1, sr * cos(phi)), v3_scale(e2, sr * sin(phi))));
-        hits += tracer_occluded(job->tracer, x, d, 1e-6 * reach, reach);
+        double c0 = now(CLOCK_THREAD_CPUTIME_ID), w0 = now(CLOCK_MONOTONIC);
+        for (size_t i = 0; i < n; i += RL_RAY_PACKET) {
+            int occ[RL_RAY_PACKET];
+            size_t m = n - i < RL_RAY_PACKET ? n - i : RL_RAY_PACKET;
+            tracer_occluded_n(job->tracer, m, org + i, dir + i, tn + i, tf + i, occ);
+            for (size_t k = 0; k < m; k++)
+                hits += occ[k] != 0;
+        }
+        cpu += now(CLOCK_THREAD_CPUTIME_ID) - c0;
+        wall += now(CLOCK_MONOTONIC) - w0;
     }
+    free(org);
+    free(dir);
+    free(tn);
+    free(tf);
     atomic_fetch_add(&job->occluded, hits);
+    double c = atomic_load(&job->trace_cpu);
+    while (!atomic_compare_exchange_weak(&job->trace_cpu, &c, c + cpu))
+        ;
+    double w = atomic_load(&job->trace_wall);
+    while (w < wall && !atomic_compare_exchange_weak(&job->trace_wall, &w, wall))
+        ;
     return NULL;
 }
 
@@ -641,8 +677,7 @@ rl_status rl_bench_rays(const rl_scene *scene, uint64_t rays, rl_ray_bench *out)
     double acc = 0;
     for (size_t k = 0; k < scene->npolygons; k++)
         cdf[k] = acc += scene->polygons[k].area;
-    ray_job job = {scene, tracer, cdf, rays / n + 1, 0};
-    double w0 = now(CLOCK_MONOTONIC);
+    ray_job job = {scene, tracer, cdf, rays / n + 1, 0, 0.0, 0.0};
     for (; started < n; started++)
         if (pthread_create(&threads[started], NULL, ray_worker, &job) != 0)
             break;
@@ -653,7 +688,8 @@ rl_status rl_bench_rays(const rl_scene *scene, uint64_t rays, rl_ray_bench *out)
         for (unsigned k = 0; k < started; k++)
             pthread_join(threads[k], NULL);
     }
-    out->wall_seconds = now(CLOCK_MONOTONIC) - w0;
+    out->wall_seconds = atomic_load(&job.trace_wall);
+    out->cpu_seconds = atomic_load(&job.trace_cpu);
     out->rays = job.per_thread * started;
     out->occluded = atomic_load(&job.occluded);
     free(cdf);

@@ -112,15 +112,17 @@ rl_status rl_solution_render_cells(const rl_solution *s, int32_t *map_ids, int32
 typedef struct rl_ray_bench {
     uint64_t rays;       /**< rays traced */
     uint64_t occluded;   /**< of those, blocked */
-    double wall_seconds; /**< elapsed, all threads */
+    double wall_seconds; /**< tracing only: the longest thread's */
+    double cpu_seconds;  /**< tracing only: CPU time summed over threads */
 } rl_ray_bench;
 
 /**
- * Measures the ray tracer alone: the same single-ray occlusion queries the
- * engine makes, on `rays` random shadow rays from uniform points on the
- * scene's polygons in cosine-distributed directions, on sampling.threads
- * threads, with no sampling work around them. The ceiling the engine's ray
- * rate is measured against.
+ * Measures the ray tracer alone: the same packet occlusion queries the
+ * engine makes (up to 16 rays, coherent flag), on `rays` random shadow rays
+ * from uniform points on the scene's polygons in cosine-distributed
+ * directions, on sampling.threads threads. Rays are drawn in chunks before
+ * they are traced and only the tracing is timed, so no sampling work is
+ * counted. The ceiling the engine's ray rate is measured against.
  * @return RL_OK and *out; RL_ERR_NOMEM or RL_ERR_INTERNAL.
  */
 rl_status rl_bench_rays(const rl_scene *scene, uint64_t rays, rl_ray_bench *out);
