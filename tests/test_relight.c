@@ -383,16 +383,41 @@ static void write_lightfield(const char *path, float c, double cone_deg, uint32_
     free(rgb);
 }
 
-/* Relights s culled and naive: the two must agree bit for bit, the floor be
- * lit, and the mask cull most solid angles. @return culled's sample count. */
+/* Relights s culled and naive, and culled without zero-radiance culling:
+ * the three must agree bit for bit, the floor be lit, and the mask cull
+ * most solid angles. @return culled's sample count. */
 static uint64_t check_culled_naive(rl_scene *s, const char *what)
 {
-    rl_solution *a = NULL, *b = NULL;
+    rl_solution *a = NULL, *b = NULL, *c = NULL;
     uint64_t samples = 0;
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 0);
     rl_relight(s, NULL, NULL, &a);
     set_sampling(s, RL_METHOD_NAIVE, 16, 2, 16, 0);
     rl_relight(s, NULL, NULL, &b);
+    set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 0);
+    rl_sampling smp = *rl_scene_sampling(s);
+    smp.zero_culling = 0;
+    CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "zero_culling 0: %s", rl_errmsg());
+    rl_relight(s, NULL, NULL, &c);
+    smp.zero_culling = 1;
+    rl_scene_set_sampling(s, &smp);
+    if (a && c) {
+        uint32_t na, nc, *ij;
+        double *centre;
+        float *ea = map_irradiance(a, 0, &na, &centre, &ij);
+        free(centre); free(ij);
+        float *ec = map_irradiance(c, 0, &nc, &centre, &ij);
+        free(centre); free(ij);
+        CHECK(na == nc && memcmp(ea, ec, 3 * na * sizeof *ea) == 0, "%s: zero culling changes nothing", what);
+        rl_pass_stats sa, sc;
+        rl_solution_pass_stats(a, 0, &sa);
+        rl_solution_pass_stats(c, 0, &sc);
+        CHECK(sa.samples < sc.samples, "%s: zero culling saves samples: %llu vs %llu", what,
+              (unsigned long long)sa.samples, (unsigned long long)sc.samples);
+        free(ea);
+        free(ec);
+    }
+    rl_solution_destroy(c);
     if (a && b) {
         uint32_t na, nb, *ij;
         double *centre;
@@ -402,8 +427,8 @@ static uint64_t check_culled_naive(rl_scene *s, const char *what)
         free(centre); free(ij);
         CHECK(na == nb && memcmp(ea, eb, 3 * na * sizeof *ea) == 0, "%s: culled == naive", what);
         double sum = 0;
-        for (uint32_t c = 0; c < na; c++)
-            sum += ea[3 * c];
+        for (uint32_t q = 0; q < na; q++)
+            sum += ea[3 * q];
         CHECK(sum > 0, "%s: the beam lights the floor", what);
         rl_pass_stats st;
         rl_solution_pass_stats(a, 0, &st);

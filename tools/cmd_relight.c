@@ -430,6 +430,7 @@ static cJSON *settings_json(const rl_sampling *s)
     add_count(j, "bounces", s->bounces);
     add_count(j, "seed", s->seed);
     add_count(j, "descend", s->descend);
+    add_count(j, "zero_culling", s->zero_culling);
     return j;
 }
 

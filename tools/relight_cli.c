@@ -61,6 +61,7 @@ int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, c
     case SAMPLING_OPT_PARTITION_N: ok = parse_partition_n(p, value, 1, &v->partition_n); break;
     case SAMPLING_OPT_BOUNCE_PARTITION_N: ok = parse_partition_n(p, value, 0, &v->bounce_partition_n); break;
     case SAMPLING_OPT_DESCEND: ok = cli_value_u32(p, value, 0, 1, &v->descend); break;
+    case SAMPLING_OPT_ZERO_CULLING: ok = cli_value_u32(p, value, 0, 1, &v->zero_culling); break;
     case SAMPLING_OPT_TARGET_ERROR:
         ok = cli_value_double(p, value, &v->target_error);
         if (ok && !(v->target_error > 0 && v->target_error <= 1))
@@ -104,6 +105,8 @@ static rl_sampling merged_sampling(const rl_sampling *scene, const sampling_over
         s.bounce_partition_n = v->bounce_partition_n;
     if (o->given & (1u << SAMPLING_OPT_DESCEND))
         s.descend = v->descend;
+    if (o->given & (1u << SAMPLING_OPT_ZERO_CULLING))
+        s.zero_culling = v->zero_culling;
     if (o->given & (1u << SAMPLING_OPT_TARGET_ERROR))
         s.target_error = v->target_error;
     if (o->given & (1u << SAMPLING_OPT_TIME_BUDGET))

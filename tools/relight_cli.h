@@ -29,6 +29,7 @@
     {"bounces", 0, "B", "diffuse passes after the direct one, 0 .. 64 (default: the scene's)"},    \
     {"bounce-partition-n", 0, "N", "partition level of bounce passes, 0 = partition-n / 4 (default: scene's)"}, \
     {"descend", 0, "0|1", "1: finer solid angles for emitters smaller than one (default: the scene's)"}, \
+    {"zero-culling", 0, "0|1", "1: cull light field directions and cells by zero radiance (default: scene's)"}, \
     {"target-error", 0, "E", "adaptive: refine while a cell's error exceeds E of it, (0, 1] (default: scene's)"}, \
     {"time-budget", 0, "S", "adaptive: stop refining after S seconds, 0 = never (default: the scene's)"}
 
@@ -42,6 +43,7 @@ enum sampling_option_id {
     SAMPLING_OPT_BOUNCES,
     SAMPLING_OPT_BOUNCE_PARTITION_N,
     SAMPLING_OPT_DESCEND,
+    SAMPLING_OPT_ZERO_CULLING,
     SAMPLING_OPT_TARGET_ERROR,
     SAMPLING_OPT_TIME_BUDGET,
     SAMPLING_OPT_COUNT

@@ -683,15 +683,15 @@ static rl_status read_radiance_maps(rl_build *b, const cJSON *j)
 static rl_status read_sampling(rl_build *b, const cJSON *j)
 {
     static const char *const keys[] = {"method", "partition_n", "rays_per_solid_angle", "samples_per_cell",
-                                       "bounces", "bounce_partition_n", "descend", "seed", NULL};
+                                       "bounces", "bounce_partition_n", "descend", "zero_culling", "seed", NULL};
     static const char *const all_keys[] = {"method", "partition_n", "rays_per_solid_angle", "samples_per_cell",
-                                           "bounces", "bounce_partition_n", "descend", "seed", "target_error",
-                                           "time_budget", NULL};
+                                           "bounces", "bounce_partition_n", "descend", "zero_culling", "seed",
+                                           "target_error", "time_budget", NULL};
     static const int_limit *const limits[] = {NULL, &lim_partition, &lim_rays, &lim_samples, &lim_bounces,
-                                              &lim_bounce_partition, &lim_flag, &lim_seed};
+                                              &lim_bounce_partition, &lim_flag, &lim_flag, &lim_seed};
     rl_sampling *s = &b->scene->sampling;
     uint32_t *const fields[] = {NULL, &s->partition_n, &s->rays_per_solid_angle, &s->samples_per_cell, &s->bounces,
-                                &s->bounce_partition_n, &s->descend, NULL};
+                                &s->bounce_partition_n, &s->descend, &s->zero_culling, NULL};
     rl_status st = json_keys(b, j, "sampling", all_keys);
     const cJSON *m = member(j, "method");
     const char *name = NULL;
@@ -1021,6 +1021,7 @@ rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
                   {"bounces", x->bounces, &lim_bounces},
                   {"bounce_partition_n", x->bounce_partition_n, &lim_bounce_partition},
                   {"descend", x->descend, &lim_flag},
+                  {"zero_culling", x->zero_culling, &lim_flag},
                   {"threads", x->threads, &lim_threads}};
     for (size_t k = 0; k < sizeof fields / sizeof fields[0]; k++)
         if (!limit_ok(fields[k].limit, fields[k].value)) {

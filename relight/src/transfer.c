@@ -560,7 +560,7 @@ static int walk(const rl_transfer_ctx *ctx, const pair *p, const tile *t, rl_scr
     while (top > 0 && rc == 0) {
         uint32_t lv = stack[top - 1].lv;
         uint64_t id = stack[--top].id;
-        int dark = p->e->kind == EM_SLAB && slab_node_dark(p->e, lv, id);
+        int dark = p->e->kind == EM_SLAB && ctx->sampling->zero_culling && slab_node_dark(p->e, lv, id);
         if (dark || node_region(ctx, p, p->sclip, p->ns, t, lv, id, reg, q) == 0)
             continue;
         if (lv >= p->level) {
@@ -837,7 +837,7 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t,
          * slab where its radiance is nonzero; cells outside that region
          * would only have drawn zeros */
         v3 box[4], src[RL_MAX_POLY_VERTS + 2];
-        int sup = leaf_support(p->e, &L, box);
+        int sup = ctx->sampling->zero_culling ? leaf_support(p->e, &L, box) : 0;
         size_t ns = sup > 0 ? clip_poly3(box, 4, m->frame.origin, m->frame.n, src) : 0;
         double lift = 0.0;
         for (size_t k = 0; k < ns; k++)

@@ -72,6 +72,9 @@ typedef struct rl_sampling {
     uint64_t seed;                 /**< default 1 */
     uint32_t descend;              /**< 1 (default): pairs whose emitter subtends less than a solid angle
                                         use finer levels; 0: always partition_n, the paper's plain method */
+    uint32_t zero_culling;         /**< 1 (default): culled and adaptive skip light field solid angles that the
+                                        zero-radiance mask rules out, and cells that only the slab's dark
+                                        positions could light; 0: no culling by radiance, only by geometry */
     uint32_t threads;              /**< worker threads; 0 = every core (not part of the scene file) */
     double target_error;           /**< adaptive: refine a (cell, solid angle) while its estimated standard
                                         error exceeds this fraction of its estimate; default 0.05 */
