@@ -70,7 +70,7 @@ EOF
 OUT=$TMP/out
 CACHE=$TMP/cache
 bench() {
-    "$ILF" bench "$TMP/tiny.json" -o "$OUT" --quick --methods culled,area --time-limit 5 --cache "$CACHE" "$@"
+    "$ILF" bench "$TMP/tiny.json" -o "$OUT" --quick --methods culled,area,adaptive --time-limit 5 --cache "$CACHE" "$@"
 }
 
 # First run: computes and caches the reference.
@@ -78,7 +78,7 @@ bench >"$TMP/run1.out" 2>"$TMP/run1.err"
 code=$?
 check "first run exits 0 (got $code)" [ "$code" -eq 0 ]
 check "first run computes the reference" grep -q '^reference: computing' "$TMP/run1.out"
-check "bench.csv has a header and >= 4 rows of finite numbers" csv_ok "$OUT/bench.csv" 4
+check "bench.csv has a header and >= 6 rows of finite numbers (adaptive too)" csv_ok "$OUT/bench.csv" 6
 check "bench.json written" [ -s "$OUT/bench.json" ]
 check "summary.md has the comparisons" grep -q '^## Comparisons' "$OUT/summary.md"
 check "the reference is cached" compgen -G "$CACHE/ref-*.h5" >/dev/null

@@ -97,6 +97,7 @@ typedef struct bench_setting {
     uint32_t partition_n;  /**< culled, naive */
     uint32_t rays;         /**< rays per solid angle: culled, naive */
     uint32_t samples;      /**< samples per (cell, emitter): area, solidangle */
+    double target_error;   /**< adaptive: refine while a cell's error exceeds this fraction of it */
     double cost;           /**< nominal relative cost, for predicting times within one method */
 } bench_setting;
 

@@ -235,7 +235,7 @@ static void for_each_pair(const bench_sweep *s, void (*visit)(void *user, rl_met
 
 /* The CSV's columns, in order. */
 static const char CSV_HEADER[] =
-    "method,partition_n,rays_per_solid_angle,samples_per_cell,bounces,threads,wall_seconds,cpu_seconds,"
+    "method,partition_n,rays_per_solid_angle,samples_per_cell,target_error,bounces,threads,wall_seconds,cpu_seconds,"
     "samples,rays_cast,rays_kept,solid_angles_considered,solid_angles_culled,cells,peak_mib,rays_per_cpu_second,"
     "rmse,rel_rmse,snr_db,pareto,ref_error_rmse,ref_adequate\n";
 
@@ -244,8 +244,9 @@ static void csv_row(bench_text *t, const bench_sweep *s, const bench_entry *e)
 {
     const bench_setting *st = &e->setting;
     const bench_result *r = &e->result;
-    bench_printf(t, "%s,%" PRIu32 ",%" PRIu32 ",%" PRIu32 ",%" PRIu32 ",%u,%.6f,%.6f,", rl_method_name(st->method),
-                 st->partition_n, st->rays, st->samples, s->bounces, s->threads, r->wall_seconds, r->cpu_seconds);
+    bench_printf(t, "%s,%" PRIu32 ",%" PRIu32 ",%" PRIu32 ",%g,%" PRIu32 ",%u,%.6f,%.6f,", rl_method_name(st->method),
+                 st->partition_n, st->rays, st->samples, st->target_error, s->bounces, s->threads, r->wall_seconds,
+                 r->cpu_seconds);
     bench_printf(t, "%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%.2f,%.6g,", r->samples,
                  r->rays_cast, r->rays_kept, r->solid_angles_considered, r->solid_angles_culled, r->cells, r->peak_mib,
                  rays_per_cpu_second(r));
@@ -294,6 +295,7 @@ static cJSON *entry_json(const bench_sweep *s, const bench_entry *e)
     cJSON_AddNumberToObject(j, "partition_n", e->setting.partition_n);
     cJSON_AddNumberToObject(j, "rays_per_solid_angle", e->setting.rays);
     cJSON_AddNumberToObject(j, "samples_per_cell", e->setting.samples);
+    cJSON_AddNumberToObject(j, "target_error", e->setting.target_error);
     cJSON_AddStringToObject(j, "status", entry_status(e));
     if (!e->ran) {
         add_number(j, "predicted_seconds", e->predicted);

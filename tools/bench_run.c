@@ -42,6 +42,8 @@ const char *bench_setting_label(const bench_setting *s, char *buf, size_t size)
 {
     if (s->method == RL_METHOD_CULLED || s->method == RL_METHOD_NAIVE)
         snprintf(buf, size, "%s n=%" PRIu32 " k=%" PRIu32, rl_method_name(s->method), s->partition_n, s->rays);
+    else if (s->method == RL_METHOD_ADAPTIVE)
+        snprintf(buf, size, "%s n=%" PRIu32 " e=%g", rl_method_name(s->method), s->partition_n, s->target_error);
     else
         snprintf(buf, size, "%s s=%" PRIu32, rl_method_name(s->method), s->samples);
     return buf;
@@ -188,6 +190,8 @@ static int apply_setting(rl_scene *scene, const bench_setting *s, bench_result *
         smp.rays_per_solid_angle = s->rays;
     if (s->samples > 0)
         smp.samples_per_cell = s->samples;
+    if (s->target_error > 0)
+        smp.target_error = s->target_error;
     if (rl_scene_set_sampling(scene, &smp) != RL_OK) {
         engine_failed(r, "invalid settings");
         return 0;

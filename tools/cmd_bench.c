@@ -33,6 +33,9 @@
 static const uint32_t PARTITION_NS[] = {8, 16, 32}, PARTITION_NS_QUICK[] = {8, 16};
 static const uint32_t RAYS[] = {1, 4, 16}, RAYS_QUICK[] = {1, 4};
 static const uint32_t SAMPLES[] = {16, 64, 256, 1024}, SAMPLES_QUICK[] = {16, 64};
+/* adaptive: partition n (PARTITION_NS) x these target errors, at 4 rays per solid angle */
+static const double TARGETS[] = {0.3, 0.1, 0.03}, TARGETS_QUICK[] = {0.3};
+#define ADAPTIVE_RAYS 4u
 #define COUNT(a) (sizeof(a) / sizeof((a)[0]))
 /* Most settings a sweep may hold. */
 #define MAX_SETTINGS 256
@@ -65,7 +68,7 @@ enum bench_option_id {
 static const cli_option bench_options_table[] = {
     {"output", 'o', "DIR", "folder for the results (created; its parent must exist)"},
     {"quick", 0, NULL, "small sweep, 256-sample reference: a smoke run"},
-    {"methods", 0, "LIST", "methods to sweep, comma-separated (default culled,naive,area,solidangle)"},
+    {"methods", 0, "LIST", "methods to sweep, comma-separated (default culled,naive,area,solidangle,adaptive)"},
     {"threads", 0, "N", "worker threads, 0 = every processor (default 0)"},
     {"bounces", 0, "B", "diffuse passes after the direct one (default 0, not the scene's)"},
     {"cache", 0, "DIR", "reference cache (default $XDG_CACHE_HOME/ilfkit, else DIR/../ilf-cache)"},
@@ -84,8 +87,9 @@ static const cli_usage bench_usage = {
     "       ilf bench --rays SCENE [-o DIR] [--rays-count N] [--threads N]\n"
     "       ilf bench --scaling SCENE -o DIR [--threads N] [--time-limit S]",
     "Measures speed against accuracy. The sweep runs culled and naive over partition n\n"
-    "{8,16,32} x rays {1,4,16}, area and solidangle over samples {16,64,256,1024}\n"
-    "(--quick: {8,16} x {1,4}, {16,64}), each in a child process, against a reference\n"
+    "{8,16,32} x rays {1,4,16}, area and solidangle over samples {16,64,256,1024},\n"
+    "adaptive over partition n x target error {0.3,0.1,0.03} (--quick: {8,16} x {1,4},\n"
+    "{16,64}, {8,16} x {0.3}), each in a child process, against a reference\n"
     "(two converged solidangle runs, cached), and writes bench.csv, bench.json,\n"
     "summary.md, error_vs_time.png and error_<method>.png (plots need gnuplot).\n"
     "Errors are on the luminance of irradiance over every cell (docs/bench.md).",
@@ -252,10 +256,19 @@ static size_t build_settings(const bench_config *cfg, bench_setting *out)
             for (size_t i = 0; i < nn; i++)
                 for (size_t j = 0; j < nk; j++)
                     add_setting(out, &count, first,
-                                (bench_setting){method, ns[i], ks[j], 0, (double)ns[i] * ns[i] * ks[j]});
+                                (bench_setting){method, ns[i], ks[j], 0, 0.0, (double)ns[i] * ns[i] * ks[j]});
         } else if (method == RL_METHOD_AREA || method == RL_METHOD_SOLIDANGLE) {
             for (size_t i = 0; i < ns_count; i++)
-                add_setting(out, &count, first, (bench_setting){method, 0, 0, ss[i], (double)ss[i]});
+                add_setting(out, &count, first, (bench_setting){method, 0, 0, ss[i], 0.0, (double)ss[i]});
+        } else if (method == RL_METHOD_ADAPTIVE) {
+            const double *ts = cfg->quick ? TARGETS_QUICK : TARGETS;
+            size_t nt = cfg->quick ? COUNT(TARGETS_QUICK) : COUNT(TARGETS);
+            /* nominal cost: twice culled's (the measuring stage), more as the target tightens */
+            for (size_t i = 0; i < nn; i++)
+                for (size_t j = 0; j < nt; j++)
+                    add_setting(out, &count, first,
+                                (bench_setting){method, ns[i], ADAPTIVE_RAYS, 0, ts[j],
+                                                2.0 * ns[i] * ns[i] * ADAPTIVE_RAYS / sqrt(ts[j] / ts[0])});
         } else {
             cli_error(BENCH_SUB, "--methods: no sweep is defined for '%s'", rl_method_name(method));
             return 0;
@@ -473,7 +486,8 @@ int ilf_cmd_bench(int argc, char **argv)
     cfg.methods[1] = RL_METHOD_NAIVE;
     cfg.methods[2] = RL_METHOD_AREA;
     cfg.methods[3] = RL_METHOD_SOLIDANGLE;
-    cfg.nmethods = 4;
+    cfg.methods[4] = RL_METHOD_ADAPTIVE;
+    cfg.nmethods = 5;
     cfg.sampling.given = 1u << SAMPLING_OPT_BOUNCES; /* bounces 0 unless --bounces */
     enum bench_mode mode = MODE_SWEEP;
     int code = parse_arguments(&cfg, &mode, argc, argv);
