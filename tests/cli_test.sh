@@ -531,17 +531,32 @@ assert pct < 0.5, pct
 expect 0 "reproject onto the lamp" "$ILF" reproject "$CAP/probes.h5" --proxy "$SRC/data/capture/proxy.json" \
     -o "$CAP/lamp.h5" --n 8
 check "reproject prints the coverage" stdout_has "^slab 'lamp': 12x12 positions, n 8, coverage [0-9.]*%"
-check "reproject writes the coverage file" py '
-import json, sys
-doc = json.load(open(sys.argv[1]))
-assert doc["mode"] == "depth" and doc["slabs"][0]["name"] == "lamp", doc
-assert 0 < doc["slabs"][0]["coverage"] < 1, doc
-' "$CAP/lamp.coverage.json"
+check "reproject writes no sidecar file" absent "$CAP/lamp.coverage.json"
+cp "$OUT" "$CAP/lamp.stdout"
 expect 0 "the reprojected file verifies" "$ILF" verify "$CAP/lamp.h5"
+expect 0 "info on the reprojected file" "$ILF" info "$CAP/lamp.h5" --json
+check "info reads the coverage stored in the file" py '
+import json, re, sys
+info = json.load(open(sys.argv[1]))
+rays = float(re.search(r"coverage ([0-9.]+)%", open(sys.argv[2]).read()).group(1)) / 100
+cov = info["slabs"][0]["coverage"]
+assert cov["samples"] == 12 * 12 * 256 and 0 < cov["covered"] < cov["samples"], cov
+# a sample is covered when any of its rays is: at least the share of covered rays, and close to it
+assert rays <= cov["fraction"] + 1e-4 and cov["fraction"] < rays + 0.1, (cov, rays)
+' "$OUT" "$CAP/lamp.stdout"
+expect 0 "info text shows the coverage" "$ILF" info "$CAP/lamp.h5"
+check "info text has a coverage line" stdout_has "^  coverage: .*% of the etendue"
+expect 0 "info on a captured file" "$ILF" info "$CAP/probes.h5"
+check "a file without coverage shows none" bash -c "! grep -q coverage '$OUT'"
 printf 'v -0.3 0.3 2\nv 0.3 0.3 2\nv 0.3 -0.3 2\nv -0.3 -0.3 2\nf 1 4 3 2\n' >"$CAP/lamp.obj"
 expect 0 "reproject onto a mesh quad" "$ILF" reproject "$CAP/probes.h5" --proxy "$CAP/lamp.obj" -o "$CAP/mesh.h5" \
     --grid 4x4 --n 4 --plain --quiet
 check "the mesh quad becomes slab face0" grep -q "^slab 0: face0" <("$ILF" info "$CAP/mesh.h5")
+printf 'v -0.3 0.3 2\nv 0.3 0.3 2\nv 0.3 -0.3 2\nv -0.3 -0.3 2\nf 1 4 3\nf 1 3 2\n' >"$CAP/lamp_tri.obj"
+expect 0 "reproject onto the triangulated quad" "$ILF" reproject "$CAP/probes.h5" --proxy "$CAP/lamp_tri.obj" \
+    -o "$CAP/mesh_tri.h5" --grid 4x4 --n 4 --plain --quiet
+check "two triangles make the quad's slab, radiance and coverage alike" \
+    diff <("$ILF" info "$CAP/mesh.h5" | grep -v '^file') <("$ILF" info "$CAP/mesh_tri.h5" | grep -v '^file')
 
 # capture and reproject: bad inputs are named and leave no output.
 printf '{"plane": {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0]}, "grid": {"nu": 1, "nv": 1},\n' >"$CAP/m_key.json"
@@ -576,8 +591,8 @@ expect 2 "a proxy with an unknown key" "$ILF" reproject "$CAP/probes.h5" --proxy
     -o "$CAP/never.h5"
 check "the proxy element is named" stderr_has "proxy_bad.json: [0]: unknown key 'size'"
 printf 'v 0 0 2\nv 1 0 2\nv 0 1 2\nf 1 2 3\n' >"$CAP/tri.obj"
-expect 2 "a proxy mesh with a triangle" "$ILF" reproject "$CAP/probes.h5" --proxy "$CAP/tri.obj" -o "$CAP/never.h5"
-check "the triangle is refused by name" stderr_has "face 0 (mesh 0 face 0): 3 vertices"
+expect 2 "a proxy mesh with a lone triangle" "$ILF" reproject "$CAP/probes.h5" --proxy "$CAP/tri.obj" -o "$CAP/never.h5"
+check "the lone triangle is refused by name" stderr_has "face 0 (mesh 0 face 0): 3 vertices: is a triangle without"
 expect 2 "render-probes without --plane" "$ILF" render-probes "$SRC/data/capture/scene.json" -o "$CAP/never"
 expect 2 "render-probes with a skew plane" "$ILF" render-probes "$SRC/data/capture/scene.json" \
     --plane 0,0,1:1,0,0:1,1,0 -o "$CAP/never"

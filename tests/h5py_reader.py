@@ -10,8 +10,11 @@ format page lists (type, shape, units, axes, filters), recomputes the derived
 data from the page's formulas (partition ids, lattice triangles, centroids,
 solid angles, projected solid angles, positions, mask), and compares the
 irradiance computed from the file alone with `ILF info --json --irradiance`
-and, for a constant field c, with pi * c. Prints "N passed, M failed" and
-exits nonzero on any failure.
+and, for a constant field c, with pi * c. It also captures the synthetic
+probes of data/capture and reprojects them onto data/capture/proxy.json, and
+checks the optional coverage dataset such a file holds (and that files
+without one have none). Prints "N passed, M failed" and exits nonzero on
+any failure.
 """
 import json
 import math
@@ -218,7 +221,15 @@ def check_slab(g, where, expect):
         want_bits = np.zeros(4 * m * m, dtype=np.uint8)
         want_bits[partition_id(m, local[lit])] = 1
         check(bool(np.array_equal(ds[...], want_bits)), f"{where}/mask/level_{m}: bits differ from the radiance")
-    return {"nu": nu, "nv": nv, "L": L, "psa": PSA, "units": units}
+    cov = None
+    if "coverage" in g:
+        ds = check_dataset(g, "coverage", np.uint8, (D, nv, nu), "1", "dir:v:u", where)
+        if ds is not None:
+            check(ds.compression == "gzip" and ds.compression_opts == 4 and ds.shuffle,
+                  f"{where}/coverage: shuffle + deflate 4")
+            cov = ds[...]
+            check(bool(np.all(cov <= 1)), f"{where}/coverage: values are 0 or 1")
+    return {"nu": nu, "nv": nv, "L": L, "psa": PSA, "units": units, "coverage": cov}
 
 
 def irradiance(slab_group, i, j):
@@ -274,6 +285,7 @@ def main():
             check(f.attrs.get_id("slab_count").dtype == np.int32, f"{where}: slab_count is int32")
             check(count == 1 and sorted(f["slabs"].keys()) == ["0"], f"{where}: one slab group")
             slab = f["slabs"]["0"]
+            check("coverage" not in slab, f"{where}: synth writes no coverage")
             facts = check_slab(slab, f"{where}:/slabs/0", case)
             if facts is None:
                 continue
@@ -292,8 +304,40 @@ def main():
                 if case["kind"] == "constant":
                     check(close(E, math.pi * np.array(case["radiance"]), rel=1e-6),
                           f"{where}: constant field irradiance {E} vs pi*c")
+    check_reprojected(ilf, tmp)
     print(f"{passed} passed, {failed} failed")
     return 1 if failed else 0
+
+
+def check_reprojected(ilf, tmp):
+    """A file with coverage: the synthetic probes of data/capture reprojected onto its proxy."""
+    data = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "capture")
+    room, lamp = os.path.join(tmp, "room.h5"), os.path.join(tmp, "lamp.h5")
+    status, _ = run([ilf, "capture", os.path.join(data, "synthetic", "manifest.json"), "-o", room, "--quiet"])
+    check(status == 0, "capture the synthetic probes")
+    status, out = run([ilf, "reproject", room, "--proxy", os.path.join(data, "proxy.json"), "-o", lamp, "--n", "8"])
+    check(status == 0, "reproject onto the proxy")
+    if status != 0:
+        return
+    with open(os.path.join(data, "proxy.json")) as pf:
+        rect = json.load(pf)[0]
+    expect = dict(name=rect["name"], origin=rect["origin"], u=rect["u"], v=rect["v"], nu=rect["grid"]["nu"],
+                  nv=rect["grid"]["nv"], n=8, units="W sr^-1 m^-2", threshold=0.0)
+    with h5py.File(lamp, "r") as f:
+        facts = check_slab(f["slabs"]["0"], "lamp.h5:/slabs/0", expect)
+    if facts is None or facts["coverage"] is None:
+        check(False, "lamp.h5: a reprojected slab has a coverage dataset")
+        return
+    cov, L, psa = facts["coverage"], facts["L"], facts["psa"]
+    # ilf reproject stores zero radiance where no ray of a sample meets the capture.
+    check(bool(np.all(L[cov == 0] == 0)), "lamp.h5: uncovered samples carry zero radiance")
+    check(0 < int(cov.sum()) < cov.size, "lamp.h5: some samples covered, some not")
+    # The covered share of the etendue, from the file alone, as `ilf info --json` reports it.
+    share = float((cov * psa[:, None, None]).sum() / (psa.sum() * cov.shape[1] * cov.shape[2]))
+    status, out = run([ilf, "info", lamp, "--json"])
+    got = json.loads(out)["slabs"][0].get("coverage", {}) if status == 0 else {}
+    check(close(share, got.get("fraction", -1), rel=1e-9) and got.get("covered") == int(cov.sum()),
+          f"lamp.h5: covered share {share} vs ilf info {got}")
 
 
 if __name__ == "__main__":

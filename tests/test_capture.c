@@ -439,6 +439,23 @@ static void test_brackets(void)
     CHECK(merged < 0.5 * single, "merging beats one clipped exposure: %g vs %g", merged, single);
     CHECK(r.images == 5, "five images read");
     cap_report_free(&r);
+
+    /* The same bracket through a pattern with {k} and "exposures": the same field, bit for bit. */
+    write_text(tmp_path("bracket_pattern.json"), "{" DOWN_PLANE ", \"grid\": {\"nu\": 1, \"nv\": 1}, \"n\": 16, "
+                                                 "\"pattern\": \"bracket_{k}.png\", \"exposures\": [1, 0.125, 0.015625]}");
+    lfio_lightfield *pf = capture_file(tmp_path("bracket_pattern.json"), 0, &r);
+    if (pf != NULL) {
+        const size_t count = lfio_slab_dir_count(s) * 3;
+        float *a = malloc(count * sizeof *a), *b = malloc(count * sizeof *b);
+        lfio_slab_read_position(s, 0, 0, a);
+        lfio_slab_read_position(lfio_lightfield_slab(pf, 0), 0, 0, b);
+        CHECK(memcmp(a, b, count * sizeof *a) == 0, "a pattern bracket equals the listed bracket");
+        CHECK(r.images == 3, "three images read: %llu", (unsigned long long)r.images);
+        free(a);
+        free(b);
+        cap_report_free(&r);
+        lfio_lightfield_destroy(pf);
+    }
     lfio_lightfield_destroy(lf);
 }
 
@@ -462,6 +479,18 @@ static void expect_manifest_error(const char *text, const char *want1, const cha
 
 static void test_manifest_errors(void)
 {
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"bracket_{k}.png\"}", "pattern",
+                          "{k} needs 'exposures'");
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"bracket_0.png\", \"exposures\": [1, 2]}",
+                          "pattern", "must contain {k}");
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"bracket_{k}.png\", \"exposures\": [1, 0]}",
+                          "exposures[1]", NULL);
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"bracket_{k}.png\", \"exposures\": []}",
+                          "exposures", "0 exposures");
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"bracket_{k}.png\", \"exposures\": [1, 2, 4, 8]}",
+                          "pattern", "bracket_3.png");
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"exposures\": [1], \"positions\": [{\"i\": 0, \"j\": 0, "
+                          "\"image\": \"constant.exr\"}]}", "exposures", "goes with 'pattern'");
     expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"constant.exr\", \"colour\": \"srgb\"}",
                           "unknown key 'colour'", NULL);
     expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"nothere.exr\"}", "pattern", "nothere.exr");
@@ -770,7 +799,7 @@ static lfio_slab *reproject_onto_emitter(const lfio_slab *captured, cap_reprojec
     memcpy(d.v, v, sizeof v);
     d.nu = d.nv = 24;
     d.n = 8;
-    cap_reproject_options o = {mode, 2, 0, NULL, NULL};
+    cap_reproject_options o = {mode, 2, 0, NULL, NULL, NULL};
     lfio_slab *out = NULL;
     CHECK(cap_reproject_slab(captured, &d, &o, &out, cov) == CAP_OK, "%s", cap_error_message());
     return out;
@@ -819,6 +848,90 @@ static double rms_error(const double *a, const double *b, uint32_t count)
     return sqrt(num / den);
 }
 
+/*
+ * The emitter's rectangle as a mesh proxy: an OBJ quad, the quad as two triangles split along its first
+ * diagonal (the fan exporters and assimp write), and split along the other one. Also each sample's coverage:
+ * 0 exactly where the radiance has no covered ray, kept through a file.
+ */
+static void test_triangulated_proxy(const lfio_slab *captured)
+{
+    static const char *const files[3][2] = {
+        {"lamp_quad.obj", "f 1 2 3 4\n"}, {"lamp_fan.obj", "f 1 2 3\nf 1 3 4\n"}, {"lamp_diag.obj", "f 1 2 4\nf 2 3 4\n"}};
+    const cap_proxy_defaults def = {24, 24, 8};
+    const size_t samples = 4 * 8 * 8 * 24 * 24;
+    lfio_slab *out[3] = {NULL, NULL, NULL};
+    uint8_t *covered[3];
+    cap_coverage cov[3];
+    double power[3] = {0, 0, 0};
+    for (int k = 0; k < 3; k++) {
+        char text[256];
+        snprintf(text, sizeof text, "v -0.3 0.3 %g\nv 0.3 0.3 %g\nv 0.3 -0.3 %g\nv -0.3 -0.3 %g\n%s", EMITTER_Z,
+                 EMITTER_Z, EMITTER_Z, EMITTER_Z, files[k][1]);
+        write_text(tmp_path(files[k][0]), text);
+        cap_proxy *p = NULL;
+        CHECK(cap_proxy_load(tmp_path(files[k][0]), &def, &p) == CAP_OK && cap_proxy_count(p) == 1, "%s: %s",
+              files[k][0], cap_error_message());
+        covered[k] = malloc(samples);
+        memset(covered[k], 7, samples);
+        cap_reproject_options o = {CAP_REPROJECT_DEPTH, 2, 0, NULL, NULL, covered[k]};
+        if (p != NULL)
+            CHECK(cap_reproject_slab(captured, cap_proxy_get_desc(p, 0), &o, &out[k], &cov[k]) == CAP_OK, "%s: %s",
+                  files[k][0], cap_error_message());
+        cap_proxy_destroy(p);
+        if (out[k] != NULL)
+            footprint_share(out[k], cos(PI / 4), &power[k]);
+    }
+    if (out[0] != NULL && out[1] != NULL && out[2] != NULL) {
+        const size_t bytes = samples * 3 * sizeof(float);
+        CHECK(memcmp(lfio_slab_radiance(out[0]), lfio_slab_radiance(out[1]), bytes) == 0 &&
+                  memcmp(covered[0], covered[1], samples) == 0 && cov[0].covered == cov[1].covered,
+              "a quad triangulated along its first diagonal reprojects bit for bit as the quad");
+        printf("triangulated proxy: other diagonal: coverage %.3f%% vs %.3f%%, power within 45 degrees %.5f W vs "
+               "%.5f W (quad)\n", 100 * cov[2].fraction, 100 * cov[0].fraction, power[2], power[0]);
+        CHECK(fabs(cov[2].fraction - cov[0].fraction) < 0.002, "other diagonal: coverage %g vs %g", cov[2].fraction,
+              cov[0].fraction);
+        CHECK(fabs(power[2] / power[0] - 1) < 0.01, "other diagonal: power %g vs %g", power[2], power[0]);
+
+        /* Each sample's coverage: 0 or 1, 0 only where the radiance is exactly 0, and its etendue-weighted share
+         * at least the exact share of covered rays (a sample counts once any of its rays is covered). */
+        const float *rad = lfio_slab_radiance(out[0]);
+        const double pole[3] = {0, 0, 1};
+        size_t bad = 0, ones = 0;
+        double share = 0.0;
+        for (size_t e = 0; e < samples; e++) {
+            bad += covered[0][e] > 1 || (covered[0][e] == 0 && (rad[3 * e] != 0 || rad[3 * e + 1] != 0 ||
+                                                                 rad[3 * e + 2] != 0));
+            ones += covered[0][e];
+            share += covered[0][e] * lfio_part_projected_solid_angle(8, e / (24 * 24), pole);
+        }
+        share /= PI * 24 * 24;
+        printf("sample coverage: %zu of %zu samples, %.2f%% of the etendue (rays: %.2f%%)\n", ones, samples,
+               100 * share, 100 * cov[0].fraction);
+        CHECK(bad == 0, "%zu samples not 0/1 or uncovered with radiance", bad);
+        CHECK(ones > 0 && ones < samples, "some samples covered, some not: %zu", ones);
+        CHECK(share >= cov[0].fraction && share < cov[0].fraction + 0.05, "sample share %g vs ray share %g", share,
+              cov[0].fraction);
+
+        /* Through a file: the coverage dataset comes back as written. */
+        lfio_lightfield *lf = NULL, *back = NULL;
+        lfio_lightfield_new(&lf);
+        lfio_lightfield_take_slab(lf, out[0]);
+        out[0] = NULL;
+        CHECK(lfio_lightfield_set_coverage(lf, 0, covered[0]) == LFIO_OK, "%s", lfio_errmsg());
+        CHECK(lfio_lightfield_write(lf, tmp_path("lamp_coverage.h5")) == LFIO_OK, "%s", lfio_errmsg());
+        CHECK(lfio_lightfield_read(tmp_path("lamp_coverage.h5"), &back) == LFIO_OK, "%s", lfio_errmsg());
+        CHECK(back != NULL && lfio_lightfield_coverage(back, 0) != NULL &&
+                  memcmp(lfio_lightfield_coverage(back, 0), covered[0], samples) == 0,
+              "coverage read back");
+        lfio_lightfield_destroy(back);
+        lfio_lightfield_destroy(lf);
+    }
+    for (int k = 0; k < 3; k++) {
+        lfio_slab_destroy(out[k]);
+        free(covered[k]);
+    }
+}
+
 static void test_depth_correction(void)
 {
     lfio_slab *captured = emitter_capture();
@@ -843,6 +956,7 @@ static void test_depth_correction(void)
     CHECK(fabs(near_power / near_true - 1) < 0.03, "power within 45 degrees kept: %g W", near_power);
     CHECK(cov_depth.fraction > 0.5 && cov_depth.fraction < 1.0 && cov_depth.covered < cov_depth.rays,
           "coverage %g", cov_depth.fraction);
+    test_triangulated_proxy(captured);
     write_slab(captured, "depth_capture.h5");
     write_slab(depth, "depth_depth.h5");
     write_slab(plain, "depth_plain.h5");
@@ -922,8 +1036,41 @@ static void test_proxies(void)
               strcmp(cap_proxy_get_desc(p, 1)->name, "proxy1") == 0,
           "JSON quads with and without their own grid");
     cap_proxy_destroy(p);
+    /* The same two quads, triangulated as a fan from their first corner: the same rectangles, bit for bit,
+     * named after their first triangle. */
+    write_text(tmp_path("quads_tri.obj"), "v 0 0 1\nv 1 0 1\nv 1 2 1\nv 0 2 1\nv 0 0 0\nv 0 1 0\nv 0 1 1\nv 0 0 1\n"
+                                          "f 1 2 3\nf 1 3 4\nf 5 6 7\nf 5 7 8\n");
+    cap_proxy *q = NULL;
+    CHECK(cap_proxy_load(tmp_path("quads.obj"), &def, &p) == CAP_OK, "%s", cap_error_message());
+    CHECK(cap_proxy_load(tmp_path("quads_tri.obj"), &def, &q) == CAP_OK, "%s", cap_error_message());
+    CHECK(cap_proxy_count(q) == 2, "two triangle pairs make two rectangles: %zu", cap_proxy_count(q));
+    for (size_t k = 0; k < 2 && cap_proxy_count(q) == 2; k++) {
+        const lfio_slab_desc *a = cap_proxy_get_desc(p, k), *b = cap_proxy_get_desc(q, k);
+        CHECK(memcmp(a->origin, b->origin, sizeof a->origin) == 0 && memcmp(a->u, b->u, sizeof a->u) == 0 &&
+                  memcmp(a->v, b->v, sizeof a->v) == 0 && a->nu == b->nu && a->n == b->n,
+              "triangulated quad %zu is the quad's rectangle", k);
+    }
+    CHECK(cap_proxy_count(q) == 2 && strcmp(cap_proxy_get_desc(q, 1)->name, "face2") == 0,
+          "a merged pair is named after its first face");
+    cap_proxy_destroy(p);
+    cap_proxy_destroy(q);
+    /* Triangulated along the other diagonal, in the other order: the same rectangle from another corner. */
+    write_text(tmp_path("diag.obj"), "v 0 0 1\nv 1 0 1\nv 1 2 1\nv 0 2 1\nf 2 3 4\nf 1 2 4\n");
+    CHECK(cap_proxy_load(tmp_path("diag.obj"), &def, &q) == CAP_OK, "%s", cap_error_message());
+    d = cap_proxy_get_desc(q, 0);
+    CHECK(cap_proxy_count(q) == 1 && d->origin[0] == 1 && d->origin[1] == 0 && d->u[0] == 0 && d->u[1] == 2 &&
+              d->v[0] == -1 && d->v[1] == 0,
+          "other diagonal: origin %g %g, u %g %g, v %g %g", d->origin[0], d->origin[1], d->u[0], d->u[1], d->v[0],
+          d->v[1]);
+    cap_proxy_destroy(q);
     expect_proxy_error("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\nf 1 2 3\n", "face 1",
-                       "only rectangular quads");
+                       "3 vertices: is a triangle without a later triangle sharing its longest edge");
+    expect_proxy_error("twisted.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 4 3\n", "face 0",
+                       "without a later triangle"); /* wound the other way: not one surface's front */
+    expect_proxy_error("rhomb.obj", "v 0 0 0\nv 1 0 0\nv 1.5 1 0\nv 0.5 1 0\nf 1 2 3\nf 1 3 4\n", "face 0",
+                       "does not form a rectangle");
+    expect_proxy_error("penta.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0.5 1.5 0\nv 0 1 0\nf 1 2 3 4 5\n", "face 0",
+                       "neither a quad nor a triangle");
     expect_proxy_error("skew.obj", "v 0 0 0\nv 1 0 0\nv 1.5 1 0\nv 0 1 0\nf 1 2 3 4\n", "face 0", "not a rectangle");
     expect_proxy_error("bad.json", "[{\"origin\": [0, 0, 0], \"u\": [1, 0, 0], \"v\": [0, 1, 0], \"size\": 2}]",
                        "[0]", "unknown key 'size'");

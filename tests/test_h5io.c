@@ -682,6 +682,116 @@ static void test_bad_files(const char *good, const char *small)
     expect_bad(p, LFIO_ERR_FORMAT, "orthogonal", 0, "non-orthogonal u, v");
 }
 
+/* @return 1 if dataset dset of path is stored with filter id. */
+static int has_filter(const char *path, const char *dset, H5Z_filter_t id)
+{
+    unsigned flags = 0, conf = 0;
+    size_t nvals = 0;
+    char name[16];
+    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    hid_t d = H5Dopen2(f, dset, H5P_DEFAULT);
+    hid_t dcpl = H5Dget_create_plist(d);
+    herr_t rc = H5Pget_filter_by_id2(dcpl, id, &flags, &nvals, NULL, sizeof name, name, &conf);
+    H5Pclose(dcpl);
+    H5Dclose(d);
+    H5Fclose(f);
+    return rc >= 0;
+}
+
+/* @return a malloc'd coverage pattern for slab s: 0/1 values that differ with dir and position. */
+static uint8_t *coverage_pattern(const lfio_slab *s, unsigned seed)
+{
+    const lfio_slab_desc *d = lfio_slab_get_desc(s);
+    size_t total = (size_t)lfio_slab_dir_count(s) * d->nu * d->nv;
+    uint8_t *c = malloc(total);
+    for (size_t e = 0; e < total; e++)
+        c[e] = (uint8_t)((e * 7 + seed) % 3 == 0);
+    return c;
+}
+
+/* Optional coverage: set, replaced, removed, refused values; written and read back (whole and through a
+ * reader) bit for bit next to slabs without it; stored chunked, deflated and checksummed; bad datasets refused. */
+static void test_coverage(const char *path)
+{
+    lfio_lightfield *lf = make_lightfield(0);
+    const lfio_slab *s1 = lfio_lightfield_slab(lf, 1), *s3 = lfio_lightfield_slab(lf, 3);
+    const lfio_slab_desc *d1 = lfio_slab_get_desc(s1);
+    size_t total1 = (size_t)lfio_slab_dir_count(s1) * d1->nu * d1->nv;
+    size_t total3 = (size_t)lfio_slab_dir_count(s3) * lfio_slab_get_desc(s3)->nu * lfio_slab_get_desc(s3)->nv;
+    uint8_t *c1 = coverage_pattern(s1, 1), *c3 = coverage_pattern(s3, 2);
+
+    CHECK(lfio_lightfield_coverage(lf, 1) == NULL, "a new slab has no coverage");
+    c1[total1 - 1] = 2;
+    CHECK(lfio_lightfield_set_coverage(lf, 1, c1) == LFIO_ERR_ARG && strstr(lfio_errmsg(), "expected 0 or 1")
+              && strstr(lfio_errmsg(), "three"),
+          "value 2 refused: %s", lfio_errmsg());
+    CHECK(lfio_lightfield_coverage(lf, 1) == NULL, "a refused coverage leaves none");
+    c1[total1 - 1] = 1;
+    CHECK(lfio_lightfield_set_coverage(lf, 4, c1) == LFIO_ERR_ARG, "slab out of range");
+    CHECK(lfio_lightfield_coverage(lf, 4) == NULL, "coverage of a slab out of range");
+    /* Set, replace, remove, set again: the copy is what was given last. */
+    uint8_t *first = coverage_pattern(s1, 0);
+    CHECK(lfio_lightfield_set_coverage(lf, 1, first) == LFIO_OK, "set: %s", lfio_errmsg());
+    free(first);
+    CHECK(lfio_lightfield_set_coverage(lf, 1, c1) == LFIO_OK, "replace: %s", lfio_errmsg());
+    CHECK(lfio_lightfield_coverage(lf, 1) != c1 && memcmp(lfio_lightfield_coverage(lf, 1), c1, total1) == 0,
+          "coverage is copied");
+    CHECK(lfio_lightfield_set_coverage(lf, 3, c3) == LFIO_OK && lfio_lightfield_set_coverage(lf, 3, NULL) == LFIO_OK
+              && lfio_lightfield_coverage(lf, 3) == NULL, "NULL removes coverage");
+    CHECK(lfio_lightfield_set_coverage(lf, 3, c3) == LFIO_OK, "set again: %s", lfio_errmsg());
+
+    write_ok(lf, path);
+    lfio_lightfield *back = NULL;
+    CHECK(lfio_lightfield_read(path, &back) == LFIO_OK, "read with coverage: %s", lfio_errmsg());
+    for (size_t k = 0; back && k < 4; k++) {
+        const uint8_t *want = k == 1 ? c1 : k == 3 ? c3 : NULL, *got = lfio_lightfield_coverage(back, k);
+        size_t total = k == 1 ? total1 : total3;
+        CHECK(want ? got && memcmp(want, got, total) == 0 : got == NULL, "slab %zu: coverage read back", k);
+        check_slab_equal(lfio_lightfield_slab(lf, k), lfio_lightfield_slab(back, k), "slab beside coverage");
+    }
+    lfio_lightfield_destroy(back);
+
+    lfio_reader *r = NULL;
+    CHECK(lfio_reader_open(path, &r) == LFIO_OK, "reader: %s", lfio_errmsg());
+    uint8_t *got = malloc(total1 > total3 ? total1 : total3);
+    for (size_t k = 0; r && k < 4; k++) {
+        int has = k == 1 || k == 3;
+        CHECK(lfio_reader_has_coverage(r, k) == has, "slab %zu: has_coverage", k);
+        lfio_status st = lfio_reader_read_coverage(r, k, got);
+        CHECK(has ? st == LFIO_OK && memcmp(got, k == 1 ? c1 : c3, k == 1 ? total1 : total3) == 0
+                  : st == LFIO_ERR_ARG && strstr(lfio_errmsg(), "no coverage"),
+              "slab %zu: read_coverage: %s", k, lfio_errmsg());
+    }
+    CHECK(!lfio_reader_has_coverage(r, 4) && !lfio_reader_has_coverage(NULL, 0), "has_coverage out of range");
+    CHECK(lfio_reader_read_coverage(r, 1, NULL) == LFIO_ERR_ARG, "read_coverage into NULL");
+    lfio_reader_close(r);
+    free(got);
+    CHECK(lfio_verify(path, NULL) == LFIO_OK, "verify a file with coverage: %s", lfio_errmsg());
+    CHECK(has_filter(path, "/slabs/1/coverage", H5Z_FILTER_FLETCHER32)
+              && has_filter(path, "/slabs/1/coverage", H5Z_FILTER_DEFLATE),
+          "coverage is checksummed and deflated");
+
+    /* Bad coverage datasets: wrong shape, wrong type (metadata: refused on opening), a value of 2 (data). */
+    char p[512];
+    const hsize_t wrong_shape[3] = {lfio_slab_dir_count(s1), d1->nv, d1->nu + 1};
+    const hsize_t right_shape[3] = {lfio_slab_dir_count(s1), d1->nv, d1->nu};
+    edit_replace_dataset(fresh_copy(p, sizeof p, path, "cov_shape.h5"), "/slabs/1/coverage", H5T_STD_U8LE, 3,
+                         wrong_shape, "1", "dir:v:u");
+    expect_bad(p, LFIO_ERR_FORMAT, "/slabs/1/coverage: dims mismatch", 0, "coverage of the wrong shape");
+    edit_replace_dataset(fresh_copy(p, sizeof p, path, "cov_rank.h5"), "/slabs/1/coverage", H5T_STD_U8LE, 2,
+                         right_shape, "1", "dir:v");
+    expect_bad(p, LFIO_ERR_FORMAT, "/slabs/1/coverage: dims mismatch", 0, "coverage of rank 2");
+    edit_replace_dataset(fresh_copy(p, sizeof p, path, "cov_type.h5"), "/slabs/1/coverage", H5T_IEEE_F32LE, 3,
+                         right_shape, "1", "dir:v:u");
+    expect_bad(p, LFIO_ERR_FORMAT, "/slabs/1/coverage: element type", 0, "coverage of float32");
+    const hsize_t at[3] = {2, 5, 3};
+    edit_element(fresh_copy(p, sizeof p, path, "cov_value.h5"), "/slabs/1/coverage", 3, at, 2.0);
+    expect_bad(p, LFIO_ERR_FORMAT, "/slabs/1/coverage: value 2 at dir 2, i 3, j 5", 1, "coverage value 2");
+    free(c1);
+    free(c3);
+    lfio_lightfield_destroy(lf);
+}
+
 /* lfio_verify finds derived data that no longer matches the geometry and radiance. */
 static void test_verify_tampered(const char *good)
 {
@@ -766,6 +876,8 @@ int main(void)
     lfio_lightfield_destroy(one);
 
     test_bad_files(mid, small);
+    char cov[512];
+    test_coverage(tmp_path(cov, sizeof cov, "coverage.h5"));
     test_verify_tampered(mid);
     CHECK(count_temporaries() == 0, "temporaries left at the end");
     return check_report();

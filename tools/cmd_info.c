@@ -2,7 +2,8 @@
  * cmd_info.c - `ilf info FILE [--json] [--slab NAME|INDEX] [--irradiance I,J]`:
  * describes a light field file: its format version, creator and size, and for
  * each slab its geometry, sampling, units, radiance statistics, zero-radiance
- * mask occupancy and, on request, the irradiance at one position centre.
+ * mask occupancy, the covered share when the slab has a coverage dataset
+ * and, on request, the irradiance at one position centre.
  *
  * Invariants: slabs are read one at a time (the memory needed is one slab,
  * not the file); the same slab_report feeds the text and the JSON output, so
@@ -40,6 +41,9 @@ typedef struct slab_report {
     uint64_t mask_set[INFO_MAX_MASK_LEVELS];
     int has_irradiance;
     double irradiance[3];
+    int has_coverage;
+    double covered_fraction;  /* etendue-weighted share of covered samples, positions equally */
+    uint64_t covered, samples;
 } slab_report;
 
 enum info_option_id { OPT_JSON, OPT_SLAB, OPT_IRRADIANCE };
@@ -55,8 +59,9 @@ static const cli_usage info_usage = {
     "FILE [--json] [--slab NAME|INDEX] [--irradiance I,J]",
     "Describes a light field file: format version, creator, file size and, per slab,\n"
     "name, origin, u, v, grid, partition level n, directions, units, mask threshold,\n"
-    "radiance min/max/mean per channel over all samples, the fraction of zero samples\n"
-    "and the mask's set/total bits per level. --irradiance I,J adds the irradiance at\n"
+    "radiance min/max/mean per channel over all samples, the fraction of zero samples,\n"
+    "the mask's set/total bits per level and, for a slab with a coverage dataset (as\n"
+    "'ilf reproject' writes), the covered share of its etendue. --irradiance I,J adds the irradiance at\n"
     "s=(I+0.5)/nu, t=(J+0.5)/nv on a surface facing -e3 (lfio_slab_irradiance).",
     "ilf info scene.h5\n"
     "ilf info scene.h5 --json --irradiance 16,16 | python3 -m json.tool",
@@ -98,6 +103,41 @@ static void gather_mask(const lfio_slab *slab, slab_report *rep)
     }
 }
 
+/* Reads slab k's coverage, if it has one, into the report: the share of the slab's etendue (each sample weighted by
+ * its solid angle's projected solid angle, positions equally) that is covered. @return an exit code. */
+static int gather_coverage(lfio_reader *r, size_t k, const info_options *o, slab_report *rep)
+{
+    if (!lfio_reader_has_coverage(r, k))
+        return ILF_EXIT_OK;
+    const uint64_t npos = (uint64_t)rep->desc.nu * rep->desc.nv;
+    rep->samples = rep->directions * npos;
+    uint8_t *cov = malloc((size_t)rep->samples);
+    if (cov == NULL) {
+        cli_error("info", "%s: out of memory for the coverage of slab '%s'", o->path, rep->desc.name);
+        return ILF_EXIT_FAILED;
+    }
+    lfio_status st = lfio_reader_read_coverage(r, k, cov);
+    if (st != LFIO_OK) {
+        free(cov);
+        return cli_lfio_failure("info", st, CLI_INPUT, o->path);
+    }
+    const double pole[3] = {0.0, 0.0, 1.0};
+    double share = 0.0, total = 0.0;
+    for (uint64_t dir = 0; dir < rep->directions; dir++) {
+        uint64_t count = 0;
+        for (uint64_t p = 0; p < npos; p++)
+            count += cov[dir * npos + p];
+        double etendue = lfio_part_projected_solid_angle(rep->desc.n, dir, pole);
+        share += etendue * (double)count;
+        total += etendue * (double)npos;
+        rep->covered += count;
+    }
+    free(cov);
+    rep->has_coverage = 1;
+    rep->covered_fraction = total > 0.0 ? share / total : 0.0;
+    return ILF_EXIT_OK;
+}
+
 /* Reads slab k whole and fills its report. @return an exit code. */
 static int gather_slab(lfio_reader *r, size_t k, const info_options *o, slab_report *rep)
 {
@@ -110,8 +150,8 @@ static int gather_slab(lfio_reader *r, size_t k, const info_options *o, slab_rep
     rep->directions = lfio_slab_dir_count(slab);
     gather_radiance_stats(slab, rep);
     gather_mask(slab, rep);
-    int code = ILF_EXIT_OK;
-    if (o->want_irradiance) {
+    int code = gather_coverage(r, k, o, rep);
+    if (code == ILF_EXIT_OK && o->want_irradiance) {
         uint32_t i = o->position[0], j = o->position[1];
         if (i >= rep->desc.nu || j >= rep->desc.nv) {
             cli_error("info", "%s: slab '%s' has %ux%u positions; --irradiance %u,%u is outside", o->path,
@@ -169,6 +209,9 @@ static void print_slab_text(size_t k, const slab_report *rep, const info_options
     for (uint32_t l = 0; l < rep->mask_levels; l++)
         printf("  %-16s n=%u: %llu/%llu set\n", l == 0 ? "mask:" : "", (unsigned)rep->mask_n[l],
                (unsigned long long)rep->mask_set[l], (unsigned long long)lfio_part_hemi_count(rep->mask_n[l]));
+    if (rep->has_coverage)
+        printf("  %-16s %.2f%% of the etendue (%llu of %llu samples)\n", "coverage:", 100.0 * rep->covered_fraction,
+               (unsigned long long)rep->covered, (unsigned long long)rep->samples);
     if (rep->has_irradiance) {
         char label[64];
         snprintf(label, sizeof label, "irradiance (%u,%u):", (unsigned)o->position[0], (unsigned)o->position[1]);
@@ -216,6 +259,12 @@ static cJSON *slab_json(const slab_report *rep, const info_options *o)
     cJSON_AddNumberToObject(s, "zero_fraction", rep->zero_fraction);
     cJSON *mask = mask_json(rep);
     ok = ok && mask != NULL && cJSON_AddItemToObject(s, "mask", mask);
+    if (rep->has_coverage) {
+        cJSON *c = cJSON_AddObjectToObject(s, "coverage");
+        ok = ok && c != NULL && cJSON_AddNumberToObject(c, "fraction", rep->covered_fraction) &&
+             cJSON_AddNumberToObject(c, "covered", (double)rep->covered) &&
+             cJSON_AddNumberToObject(c, "samples", (double)rep->samples);
+    }
     if (rep->has_irradiance) {
         double position[2] = {o->position[0], o->position[1]};
         ok = ok && json_add_doubles(s, "irradiance", rep->irradiance, 3) &&

@@ -1,17 +1,17 @@
 /*
  * cmd_reproject.c - `ilf reproject IN.h5 --proxy PROXY -o OUT.h5`: depth
  * correction. One slab of IN (a captured light field) is moved onto proxy
- * geometry (a JSON list of rectangles, or a mesh of rectangular quads read
- * with assimp), one output slab per rectangle (capture/reproject.h). The
- * share of each proxy slab's rays that the capture covers is printed and
- * written beside the output as OUT.coverage.json (OUT minus a final ".h5").
+ * geometry (a JSON list of rectangles, or a mesh read with assimp whose
+ * faces are rectangular quads or triangles paired into rectangles), one
+ * output slab per rectangle (capture/reproject.h). The share of each proxy
+ * slab's rays that the capture covers is printed, and which samples it
+ * covers is stored in OUT.h5 as each slab's coverage dataset.
  *
  * Invariants: the output folder is checked and the input read before any
- * work; OUT.h5 is written atomically by lfio, then the coverage file
- * atomically (jsonout.h); a failure leaves no partial file; stdout carries
- * the summary (nothing with --quiet), stderr errors and the progress bar.
+ * work; OUT.h5, coverage included, is written atomically by lfio, so a
+ * failure leaves no partial file; stdout carries the summary (nothing with
+ * --quiet), stderr errors and the progress bar.
  */
-#include <cjson/cJSON.h>
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,10 +20,8 @@
 #include "capture/reproject.h"
 #include "cli.h"
 #include "commands.h"
-#include "jsonout.h"
 
 #define REPROJECT_CREATOR "ilf reproject (ilfkit " ILFKIT_VERSION ")"
-#define PATH_BYTES 4096
 
 typedef struct reproject_options {
     const char *input;
@@ -42,7 +40,7 @@ enum reproject_option_id { OPT_PROXY, OPT_OUTPUT, OPT_SLAB, OPT_N, OPT_GRID, OPT
                            OPT_QUIET };
 
 static const cli_option reproject_options_table[] = {
-    {"proxy", 0, "PROXY", "rectangles: a .json list, or a mesh of rectangular quads (required)"},
+    {"proxy", 0, "PROXY", "rectangles: a .json list, or a mesh of rectangles (quads, or triangle pairs) (required)"},
     {"output", 'o', "OUT.h5", "light field file to write, one slab per rectangle (required)"},
     {"slab", 0, "NAME|INDEX", "the captured slab of IN.h5 (default 0)"},
     {"n", 0, "N", "partition level of rectangles that do not give one (default: the captured slab's)"},
@@ -61,7 +59,8 @@ static const cli_usage reproject_usage = {
     "line, to the captured slab's plane; the probes around the crossing are asked for\n"
     "the light they saw coming from the ray's point on the proxy (docs/capture.md).\n"
     "Rays the capture does not cover carry no light; the covered share of each proxy\n"
-    "slab is printed and written to OUT.coverage.json.",
+    "slab is printed, and which samples the capture covers is stored in OUT.h5\n"
+    "(dataset /slabs/K/coverage; 'ilf info' shows it).",
     "ilf reproject probes.h5 --proxy data/capture/proxy.json -o lamp.h5\n"
     "ilf reproject probes.h5 --proxy quads.obj --grid 32x32 --n 16 -o proxy.h5",
 };
@@ -174,85 +173,46 @@ static int reproject_all(const reproject_options *o, const lfio_slab *captured, 
     cli_progress bar;
     slab_progress sp = {&bar, 0};
     cap_reproject_options ro = {o->plain ? CAP_REPROJECT_PLAIN : CAP_REPROJECT_DEPTH, o->strata, o->threads,
-                                o->quiet ? NULL : on_slab_progress, &sp};
+                                o->quiet ? NULL : on_slab_progress, &sp, NULL};
     if (!o->quiet)
         cli_progress_start(&bar, "reproject", proxy_positions(proxy));
     int code = ILF_EXIT_OK;
     for (size_t k = 0; code == ILF_EXIT_OK && k < cap_proxy_count(proxy); k++) {
         const lfio_slab_desc *d = cap_proxy_get_desc(proxy, k);
         lfio_slab *slab = NULL;
-        cap_status st = cap_reproject_slab(captured, d, &ro, &slab, &cov[k]);
-        if (st != CAP_OK) {
-            code = ilf_capture_failure("reproject", st);
+        /* The proxy's sizes passed lfio's 64 GiB radiance limit, so this count fits in size_t. */
+        ro.covered = malloc((size_t)(4 * (uint64_t)d->n * d->n * d->nu * d->nv));
+        if (ro.covered == NULL) {
+            cli_error("reproject", "out of memory for the coverage of '%s'", d->name);
+            code = ILF_EXIT_FAILED;
             break;
         }
+        cap_status st = cap_reproject_slab(captured, d, &ro, &slab, &cov[k]);
+        if (st != CAP_OK)
+            code = ilf_capture_failure("reproject", st);
         sp.offset += (uint64_t)d->nu * d->nv;
-        lfio_status ls = lfio_lightfield_take_slab(lf, slab);
+        lfio_status ls = code == ILF_EXIT_OK ? lfio_lightfield_take_slab(lf, slab) : LFIO_OK;
+        if (ls == LFIO_OK && code == ILF_EXIT_OK)
+            ls = lfio_lightfield_set_coverage(lf, k, ro.covered);
         if (ls != LFIO_OK)
             code = cli_lfio_failure("reproject", ls, CLI_OUTPUT, o->output);
+        free(ro.covered);
+        ro.covered = NULL;
     }
     if (!o->quiet)
         cli_progress_finish(&bar);
     return code;
 }
 
-/* out = OUT minus a final ".h5", plus ".coverage.json". @return 1, or 0 if too long. */
-static int coverage_path(const char *output, char out[PATH_BYTES])
+/* Writes OUT.h5 (radiance and coverage) and prints what was written. @return an exit code. */
+static int write_outputs(const reproject_options *o, lfio_lightfield *lf, const cap_coverage *cov)
 {
-    size_t len = strlen(output);
-    if (len >= 3 && strcmp(output + len - 3, ".h5") == 0)
-        len -= 3;
-    int n = snprintf(out, PATH_BYTES, "%.*s.coverage.json", (int)len, output);
-    return n > 0 && n < PATH_BYTES;
-}
-
-/* The coverage document (docs/capture.md). @return it, or NULL when memory runs out. */
-static cJSON *coverage_json(const reproject_options *o, const char *slab, const lfio_lightfield *lf,
-                            const cap_coverage *cov)
-{
-    cJSON *root = cJSON_CreateObject(), *slabs = NULL;
-    int ok = root != NULL && cJSON_AddStringToObject(root, "input", o->input) &&
-             cJSON_AddStringToObject(root, "slab", slab) && cJSON_AddStringToObject(root, "proxy", o->proxy) &&
-             cJSON_AddStringToObject(root, "output", o->output) &&
-             cJSON_AddStringToObject(root, "mode", o->plain ? "plain" : "depth") &&
-             (slabs = cJSON_AddArrayToObject(root, "slabs")) != NULL;
-    for (size_t k = 0; ok && k < lfio_lightfield_slab_count(lf); k++) {
-        cJSON *item = cJSON_CreateObject();
-        ok = item != NULL && cJSON_AddItemToArray(slabs, item) &&
-             cJSON_AddStringToObject(item, "name", lfio_slab_get_desc(lfio_lightfield_slab(lf, k))->name) &&
-             cJSON_AddNumberToObject(item, "coverage", cov[k].fraction) &&
-             cJSON_AddNumberToObject(item, "rays", (double)cov[k].rays) &&
-             cJSON_AddNumberToObject(item, "covered", (double)cov[k].covered);
-    }
-    if (!ok) {
-        cJSON_Delete(root);
-        return NULL;
-    }
-    return root;
-}
-
-/* Writes OUT.h5 and its coverage file, and prints what was written. @return an exit code. */
-static int write_outputs(const reproject_options *o, const lfio_slab *captured, lfio_lightfield *lf,
-                         const cap_coverage *cov)
-{
-    char path[PATH_BYTES], err[1024], size[32];
-    if (!coverage_path(o->output, path)) {
-        cli_error("reproject", "%s: path too long", o->output);
-        return ILF_EXIT_FAILED;
-    }
-    cli_output_watch(path);
+    char size[32];
     lfio_status ls = lfio_lightfield_set_creator(lf, REPROJECT_CREATOR);
     if (ls == LFIO_OK)
         ls = lfio_lightfield_write(lf, o->output);
     if (ls != LFIO_OK)
         return cli_lfio_failure("reproject", ls, CLI_OUTPUT, o->output);
-    cJSON *root = coverage_json(o, lfio_slab_get_desc(captured)->name, lf, cov);
-    int ok = root != NULL && json_write_file(path, root, err, sizeof err);
-    cJSON_Delete(root);
-    if (!ok) {
-        cli_error("reproject", "%s", root == NULL ? "out of memory for the coverage file" : err);
-        return ILF_EXIT_FAILED;
-    }
     if (o->quiet)
         return ILF_EXIT_OK;
     for (size_t k = 0; k < lfio_lightfield_slab_count(lf); k++) {
@@ -261,9 +221,8 @@ static int write_outputs(const reproject_options *o, const lfio_slab *captured, 
                " rays)\n", d->name, d->nu, d->nv, d->n, 100.0 * cov[k].fraction, cov[k].covered, cov[k].rays);
     }
     size_t count = lfio_lightfield_slab_count(lf);
-    printf("wrote %s: %zu slab%s, %s (%s)\nwrote %s\n", o->output, count, count == 1 ? "" : "s",
-           cli_format_bytes(cli_file_size(o->output), size, sizeof size), o->plain ? "plain lookup" : "depth-corrected",
-           path);
+    printf("wrote %s: %zu slab%s with coverage, %s (%s)\n", o->output, count, count == 1 ? "" : "s",
+           cli_format_bytes(cli_file_size(o->output), size, sizeof size), o->plain ? "plain lookup" : "depth-corrected");
     return ILF_EXIT_OK;
 }
 
@@ -295,7 +254,7 @@ int ilf_cmd_reproject(int argc, char **argv)
     if (code == ILF_EXIT_OK)
         code = reproject_all(&o, captured, proxy, lf, cov);
     if (code == ILF_EXIT_OK)
-        code = write_outputs(&o, captured, lf, cov);
+        code = write_outputs(&o, lf, cov);
     free(cov);
     lfio_lightfield_destroy(lf);
     cap_proxy_destroy(proxy);

@@ -327,19 +327,21 @@ static cap_status read_positions(const parser *p, const cJSON *j)
     return CAP_OK;
 }
 
-/* Expands the pattern's {i} and {j} for position (i, j) into out. */
-static cap_status expand_pattern(const parser *p, const char *pattern, uint32_t i, uint32_t j,
-                                 char out[PATH_MAX_BYTES + 1])
+/* Expands the pattern's {i} and {j} for position (i, j), and {k} for bracket image k when brackets is
+ * nonzero, into out. */
+static cap_status expand_pattern(const parser *p, const char *pattern, uint32_t i, uint32_t j, uint32_t k,
+                                 int brackets, char out[PATH_MAX_BYTES + 1])
 {
     size_t len = 0;
     for (const char *c = pattern; *c != '\0';) {
         char piece[16];
-        if (strncmp(c, "{i}", 3) == 0 || strncmp(c, "{j}", 3) == 0) {
-            snprintf(piece, sizeof piece, "%u", c[1] == 'i' ? i : j);
+        if (strncmp(c, "{i}", 3) == 0 || strncmp(c, "{j}", 3) == 0 || (brackets && strncmp(c, "{k}", 3) == 0)) {
+            snprintf(piece, sizeof piece, "%u", c[1] == 'i' ? i : c[1] == 'j' ? j : k);
             c += 3;
         } else if (*c == '{' || *c == '}') {
-            return cap__json_bad(p->path, "pattern", "unknown placeholder near '%.8s' (only {i} and {j} are replaced)",
-                                 c);
+            return cap__json_bad(p->path, "pattern", "unknown placeholder near '%.8s' (%s)", c,
+                                 brackets ? "only {i}, {j} and {k} are replaced"
+                                          : "only {i} and {j} are replaced; {k} needs 'exposures'");
         } else {
             piece[0] = *c++;
             piece[1] = '\0';
@@ -354,13 +356,38 @@ static cap_status expand_pattern(const parser *p, const char *pattern, uint32_t 
     return CAP_OK;
 }
 
-static cap_status read_pattern(const parser *p, const cJSON *j)
+/* "exposures": 1 .. CAP_BRACKET_MAX numbers > 0 into ex. @return CAP_OK and *count. */
+static cap_status read_exposures(const parser *p, const cJSON *j, double ex[CAP_BRACKET_MAX], uint32_t *count)
+{
+    int n = cJSON_IsArray(j) ? cJSON_GetArraySize(j) : -1;
+    if (n < 1 || n > (int)CAP_BRACKET_MAX)
+        return n < 0 ? cap__json_bad(p->path, "exposures", "expected an array of numbers, got %s", cap__json_kind(j))
+                     : cap__json_bad(p->path, "exposures", "%d exposures; a bracket holds 1 to %u", n, CAP_BRACKET_MAX);
+    char elem[CAP__ELEM_MAX];
+    cap_status st = CAP_OK;
+    for (int k = 0; st == CAP_OK && k < n; k++) {
+        cap__json_item_name(elem, "exposures", (size_t)k);
+        st = cap__json_positive(p->path, cJSON_GetArrayItem(j, k), elem, &ex[k]);
+    }
+    *count = (uint32_t)n;
+    return st;
+}
+
+/* "pattern", one image per position, or with "exposures" (jx, else NULL) a bracket per position: image k of the
+ * bracket is the pattern with {k} replaced by k, at exposure k. */
+static cap_status read_pattern(const parser *p, const cJSON *j, const cJSON *jx)
 {
     const lfio_slab_desc *d = &p->m->desc;
     const char *pattern;
+    double exposures[CAP_BRACKET_MAX] = {1.0};
+    uint32_t count = 1;
     cap_status st = cap__json_string(p->path, j, "pattern", &pattern);
+    if (st == CAP_OK && jx != NULL)
+        st = read_exposures(p, jx, exposures, &count);
     if (st != CAP_OK)
         return st;
+    if (jx != NULL && strstr(pattern, "{k}") == NULL)
+        return cap__json_bad(p->path, "pattern", "must contain {k}: 'exposures' gives a bracket of %u images", count);
     if (d->nu > 1 && strstr(pattern, "{i}") == NULL)
         return cap__json_bad(p->path, "pattern", "must contain {i}: the grid has %u positions along u", d->nu);
     if (d->nv > 1 && strstr(pattern, "{j}") == NULL)
@@ -369,13 +396,16 @@ static cap_status read_pattern(const parser *p, const cJSON *j)
     for (uint32_t jj = 0; st == CAP_OK && jj < d->nv; jj++)
         for (uint32_t i = 0; st == CAP_OK && i < d->nu; i++) {
             cap__entry *e = NULL;
-            st = expand_pattern(p, pattern, i, jj, file);
+            st = claim_entry(p, "pattern", i, jj, &e);
             if (st == CAP_OK)
-                st = claim_entry(p, "pattern", i, jj, &e);
+                st = entry_reserve(e, count);
             if (st == CAP_OK)
-                st = entry_reserve(e, 1);
-            if (st == CAP_OK)
-                st = entry_set_image(p, e, 0, "pattern", file, 1.0);
+                e->bracket = jx != NULL;
+            for (uint32_t k = 0; st == CAP_OK && k < count; k++) {
+                st = expand_pattern(p, pattern, i, jj, k, jx != NULL, file);
+                if (st == CAP_OK)
+                    st = entry_set_image(p, e, k, "pattern", file, exposures[k]);
+            }
         }
     return st;
 }
@@ -437,7 +467,7 @@ static cap_status read_slab(const parser *p, const cJSON *root, lfio_slab_desc *
 static cap_status read_root(parser *p, const cJSON *root)
 {
     static const char *const keys[] = {"plane", "grid", "n", "slab", "units", "projection", "orientation",
-                                       "colour_space", "scale", "pattern", "positions", NULL};
+                                       "colour_space", "scale", "pattern", "exposures", "positions", NULL};
     cap_manifest *m = p->m;
     cap_status st = cap__json_keys(p->path, root, "", keys);
     if (st == CAP_OK)
@@ -453,13 +483,16 @@ static cap_status read_root(parser *p, const cJSON *root)
         return st;
     const cJSON *pattern = cJSON_GetObjectItemCaseSensitive(root, "pattern");
     const cJSON *positions = cJSON_GetObjectItemCaseSensitive(root, "positions");
+    const cJSON *exposures = cJSON_GetObjectItemCaseSensitive(root, "exposures");
     if ((pattern == NULL) == (positions == NULL))
         return cap__json_bad(p->path, "", "give exactly one of 'pattern' and 'positions'");
+    if (exposures != NULL && pattern == NULL)
+        return cap__json_bad(p->path, "exposures", "goes with 'pattern'; a position's bracket lists its own exposures");
     size_t count = (size_t)m->desc.nu * m->desc.nv;
     m->entries = calloc(count, sizeof *m->entries);
     if (m->entries == NULL)
         return cap__fail(CAP_ERR_NOMEM, "%s: out of memory for %zu positions", p->path, count);
-    st = pattern != NULL ? read_pattern(p, pattern) : read_positions(p, positions);
+    st = pattern != NULL ? read_pattern(p, pattern, exposures) : read_positions(p, positions);
     for (size_t k = 0; st == CAP_OK && k < count; k++) {
         if (!m->entries[k].given)
             return cap__json_bad(p->path, "positions", "no image for position (%zu, %zu)", k % m->desc.nu,

@@ -1,12 +1,19 @@
 /*
  * proxy.c - loading proxy geometry for reprojection (cap_proxy_load in
  * capture/reproject.h): a JSON list of rectangles, or a mesh file read with
- * assimp whose faces must all be rectangles (only quads are supported).
+ * assimp whose faces are rectangles: quads, or triangles that pair up into
+ * rectangles (a triangulated quad, as exporters and assimp write them).
+ *
+ * Triangles are merged, not given slabs of their own: a slab is a
+ * rectangle, and two slabs over one triangulated rectangle, each zeroed
+ * outside its half, would sample the diagonal twice or not at all, whereas
+ * the merged rectangle is exactly the slab of the quad it came from.
  *
  * Invariants: every rectangle of a loaded proxy has finite, nonzero,
  * orthogonal edges, a valid unique name, a grid and level within lfio's
- * limits; a mesh face that is not a planar rectangle is an error naming the
- * face, never silently dropped or split.
+ * limits; a mesh face that is not a planar rectangle or half of one is an
+ * error naming the face, never silently dropped or split; one function,
+ * corners_rectangle(), turns both quads and merged pairs into rectangles.
  */
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
@@ -120,14 +127,10 @@ static void vertex(const struct aiMesh *mesh, unsigned index, double out[3])
     out[2] = mesh->mVertices[index].z;
 }
 
-/* Makes d's rectangle from face f of mesh. @return NULL, or why the face is not a rectangle. */
-static const char *face_rectangle(const struct aiMesh *mesh, const struct aiFace *f, lfio_slab_desc *d)
+/* Makes d's rectangle from corners c[0..3], in order around it: origin c0, u = c1 - c0, v = c3 - c0.
+ * @return NULL, or why the corners are not a rectangle. */
+static const char *corners_rectangle(const double c[4][3], lfio_slab_desc *d)
 {
-    if (f->mNumIndices != 4)
-        return "is not a quad (only rectangular quads are supported)";
-    double c[4][3];
-    for (int k = 0; k < 4; k++)
-        vertex(mesh, f->mIndices[k], c[k]);
     double diag = 0.0;
     for (int a = 0; a < 3; a++) {
         d->origin[a] = c[0][a];
@@ -149,6 +152,95 @@ static const char *face_rectangle(const struct aiMesh *mesh, const struct aiFace
     return NULL;
 }
 
+/* One face of the mesh file: where it is, for messages and names. */
+typedef struct face_ref {
+    unsigned mesh, face;
+    size_t index; /* over the file's meshes */
+    int used;     /* a triangle already merged into an earlier one's rectangle */
+} face_ref;
+
+/* @return the face's aiFace. */
+static const struct aiFace *face_of(const struct aiScene *sc, const face_ref *f)
+{
+    return &sc->mMeshes[f->mesh]->mFaces[f->face];
+}
+
+/* @return 1 if points a and b are within tol of each other in every coordinate. */
+static int same_point(const double a[3], const double b[3], double tol)
+{
+    return fabs(a[0] - b[0]) <= tol && fabs(a[1] - b[1]) <= tol && fabs(a[2] - b[2]) <= tol;
+}
+
+/*
+ * Completes triangle t (vertices counter-clockwise from its front) into a rectangle with a later unused
+ * triangle: t is rotated so that its corner opposite its longest edge is c[1]; a partner has the directed
+ * edge c[0] -> c[2] (t's longest edge, run the other way, as in a consistently wound mesh) and its third
+ * vertex becomes c[3]. @return the partner's index in faces, or 0 if there is none (c[3] undefined).
+ */
+static size_t find_partner(const struct aiScene *sc, face_ref *faces, size_t count, size_t t, double c[4][3])
+{
+    const struct aiMesh *mesh = sc->mMeshes[faces[t].mesh];
+    double v[3][3], longest = -1.0;
+    int opposite = 0;
+    for (int k = 0; k < 3; k++)
+        vertex(mesh, face_of(sc, &faces[t])->mIndices[k], v[k]);
+    for (int k = 0; k < 3; k++) {
+        double e[3] = {v[(k + 2) % 3][0] - v[(k + 1) % 3][0], v[(k + 2) % 3][1] - v[(k + 1) % 3][1],
+                       v[(k + 2) % 3][2] - v[(k + 1) % 3][2]};
+        if (cap__norm(e) > longest) {
+            longest = cap__norm(e);
+            opposite = k;
+        }
+    }
+    for (int k = 0; k < 3; k++)
+        memcpy(c[k], v[(opposite + 2 + k) % 3], sizeof c[k]);
+    const double tol = RECT_TOL * longest;
+    for (size_t b = t + 1; b < count; b++) {
+        const struct aiFace *f = face_of(sc, &faces[b]);
+        if (faces[b].used || f->mNumIndices != 3)
+            continue;
+        double w[3][3];
+        for (int k = 0; k < 3; k++)
+            vertex(sc->mMeshes[faces[b].mesh], f->mIndices[k], w[k]);
+        for (int k = 0; k < 3; k++)
+            if (same_point(w[k], c[0], tol) && same_point(w[(k + 1) % 3], c[2], tol)) {
+                memcpy(c[3], w[(k + 2) % 3], sizeof c[3]);
+                return b;
+            }
+    }
+    return 0;
+}
+
+/*
+ * Makes rectangle d from face t (a quad, or a triangle merged with its partner, which is marked used) and
+ * names the face(s) in elem. @return NULL, or why no rectangle can be made.
+ */
+static const char *face_rectangle(const struct aiScene *sc, face_ref *faces, size_t count, size_t t,
+                                  lfio_slab_desc *d, char elem[CAP__ELEM_MAX])
+{
+    const struct aiFace *f = face_of(sc, &faces[t]);
+    snprintf(elem, CAP__ELEM_MAX, "face %zu (mesh %u face %u)", faces[t].index, faces[t].mesh, faces[t].face);
+    double c[4][3];
+    if (f->mNumIndices == 4) {
+        for (int k = 0; k < 4; k++)
+            vertex(sc->mMeshes[faces[t].mesh], f->mIndices[k], c[k]);
+        return corners_rectangle(c, d);
+    }
+    if (f->mNumIndices != 3)
+        return "is neither a quad nor a triangle (proxy faces must be rectangles)";
+    size_t b = find_partner(sc, faces, count, t, c);
+    if (b == 0)
+        return "is a triangle without a later triangle sharing its longest edge (triangles are accepted in "
+               "pairs that form a rectangle)";
+    const char *why = corners_rectangle(c, d);
+    if (why != NULL)
+        return "is a triangle that does not form a rectangle with the triangle sharing its longest edge";
+    faces[b].used = 1;
+    snprintf(elem, CAP__ELEM_MAX, "faces %zu and %zu (mesh %u faces %u and %u)", faces[t].index, faces[b].index,
+             faces[t].mesh, faces[t].face, faces[b].face);
+    return NULL;
+}
+
 /* @return the number of faces over the scene's meshes. */
 static size_t face_total(const struct aiScene *sc)
 {
@@ -158,30 +250,42 @@ static size_t face_total(const struct aiScene *sc)
     return total;
 }
 
+/* Makes one rectangle per quad or merged triangle pair, in the order of their first faces, each named
+ * "face<k>" after it (k counting faces over the file's meshes). */
 static cap_status mesh_rects(const char *path, const struct aiScene *sc, const cap_proxy_defaults *def,
                              cap_proxy *p)
 {
     size_t total = face_total(sc);
-    if (total < 1 || total > CAP_PROXY_MAX)
-        return cap__json_bad(path, "", "%zu faces; a proxy holds 1 to %u", total, CAP_PROXY_MAX);
+    if (total < 1 || total > 2 * (size_t)CAP_PROXY_MAX)
+        return cap__json_bad(path, "", "%zu faces; a proxy holds 1 to %u rectangles", total, CAP_PROXY_MAX);
+    face_ref *faces = calloc(total, sizeof *faces);
     p->rects = calloc(total, sizeof *p->rects);
-    if (p->rects == NULL)
+    if (faces == NULL || p->rects == NULL) {
+        free(faces);
         return cap__fail(CAP_ERR_NOMEM, "%s: out of memory", path);
+    }
+    size_t count = 0;
     for (unsigned m = 0; m < sc->mNumMeshes; m++)
-        for (unsigned f = 0; f < sc->mMeshes[m]->mNumFaces; f++) {
-            lfio_slab_desc *d = &p->rects[p->count];
-            char elem[CAP__ELEM_MAX];
-            snprintf(elem, sizeof elem, "face %zu (mesh %u face %u)", p->count, m, f);
-            rect_init(d, def, "face", p->count);
-            const char *why = face_rectangle(sc->mMeshes[m], &sc->mMeshes[m]->mFaces[f], d);
-            if (why != NULL)
-                return cap__json_bad(path, elem, "%u vertices: %s", sc->mMeshes[m]->mFaces[f].mNumIndices, why);
-            p->count++;
-            cap_status st = check_size(path, elem, d);
-            if (st != CAP_OK)
-                return st;
-        }
-    return CAP_OK;
+        for (unsigned f = 0; f < sc->mMeshes[m]->mNumFaces; f++, count++)
+            faces[count] = (face_ref){m, f, count, 0};
+    cap_status st = CAP_OK;
+    for (size_t t = 0; st == CAP_OK && t < count; t++) {
+        if (faces[t].used)
+            continue;
+        lfio_slab_desc *d = &p->rects[p->count];
+        char elem[CAP__ELEM_MAX];
+        rect_init(d, def, "face", faces[t].index);
+        const char *why = face_rectangle(sc, faces, count, t, d, elem);
+        if (why != NULL)
+            st = cap__json_bad(path, elem, "%u vertices: %s", face_of(sc, &faces[t])->mNumIndices, why);
+        else if (++p->count > CAP_PROXY_MAX)
+            st = cap__json_bad(path, elem, "more than %u rectangles; a proxy holds 1 to %u", CAP_PROXY_MAX,
+                               CAP_PROXY_MAX);
+        else
+            st = check_size(path, elem, d);
+    }
+    free(faces);
+    return st;
 }
 
 static cap_status load_mesh(const char *path, const cap_proxy_defaults *def, cap_proxy *p)

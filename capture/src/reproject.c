@@ -14,7 +14,9 @@
  * slab may run concurrently), the new slab is filled by the runner; each
  * stored value is a convex combination of captured values, hence finite and
  * >= 0; coverage is summed per position into its own slot and added up in
- * position order afterwards, so it does not depend on the thread count.
+ * position order afterwards, so it does not depend on the thread count;
+ * each sample's coverage byte is written by the one worker that owns its
+ * position.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -45,6 +47,7 @@ typedef struct reproject_job {
     double *etendue;               /* [dirs] projected solid angle about the proxy's e3 */
     double *covered_share;         /* [positions] covered etendue */
     uint64_t *covered_rays;        /* [positions] */
+    uint8_t *covered;              /* NULL, or [dirs][positions]: 1 if some ray of the sample is covered */
 } reproject_job;
 
 /* ------------------------------------------------------------ lookups */
@@ -150,8 +153,10 @@ static cap_status reproject_position(void *arg, uint32_t i, uint32_t j, float *r
         ray_origin(job, i, j, k, origins[k]);
     double share = 0.0;
     uint64_t rays = 0;
+    const size_t slot = (size_t)j * job->td->nu + i, positions = (size_t)job->td->nu * job->td->nv;
     for (uint64_t id = 0; id < job->dirs; id++) {
         double sum[3] = {0.0, 0.0, 0.0};
+        uint8_t any = 0;
         for (uint32_t k = 0; k < job->samples; k++) {
             double value[3], weight = job->ray_weight[id * job->samples + k];
             if (!trace_back(job, origins[k], &job->ray_dir[3 * (id * job->samples + k)], value))
@@ -160,11 +165,13 @@ static cap_status reproject_position(void *arg, uint32_t i, uint32_t j, float *r
                 sum[c] += weight * value[c];
             share += weight * job->etendue[id];
             rays++;
+            any = 1;
         }
         for (int c = 0; c < 3; c++)
             rgb[3 * id + c] = (float)sum[c];
+        if (job->covered != NULL)
+            job->covered[id * positions + slot] = any;
     }
-    size_t slot = (size_t)j * job->td->nu + i;
     job->covered_share[slot] = share;
     job->covered_rays[slot] = rays;
     return CAP_OK;
@@ -208,6 +215,7 @@ static cap_status job_init(reproject_job *job, const lfio_slab *captured, const 
     job->cd = lfio_slab_get_desc(captured);
     job->td = lfio_slab_get_desc(target);
     job->mode = o->mode;
+    job->covered = o->covered;
     job->strata = strata;
     job->samples = strata * strata;
     job->dirs = lfio_slab_dir_count(target);
@@ -261,7 +269,7 @@ static cap_status check_options(const lfio_slab *captured, const lfio_slab_desc 
 cap_status cap_reproject_slab(const lfio_slab *captured, const lfio_slab_desc *target,
                               const cap_reproject_options *o, lfio_slab **out, cap_coverage *coverage)
 {
-    static const cap_reproject_options defaults = {CAP_REPROJECT_DEPTH, 0, 0, NULL, NULL};
+    static const cap_reproject_options defaults = {CAP_REPROJECT_DEPTH, 0, 0, NULL, NULL, NULL};
     if (out != NULL)
         *out = NULL;
     if (o == NULL)

@@ -15,15 +15,18 @@
  *   - The layout of every dataset (name, type, shape, chunks, units, axes)
  *     comes from one function, ds_spec_make(), which the writer, the
  *     reader's checks and lfio_verify() all use, so they cannot disagree.
+ *   - A slab's coverage dataset is optional: written when the light field
+ *     has coverage for the slab, checked (type, shape, values 0 or 1) when a
+ *     file has one, never required, so files without it stay valid.
  *   - The derived datasets (direction, solid angles, position, mask) are
  *     produced and checked by one block-streaming function, so writing and
  *     verifying use the same recomputation and bounded memory.
  *   - A write either renames a complete, fsynced file over its target or
  *     leaves the target untouched and removes its temporary
  *     (lfio__h5_write_atomic()).
- *   - An lfio_reader keeps one open radiance dataset per slab and nothing
- *     else mutable, so reads on one reader only make HDF5 calls, which
- *     HDF5 serialises.
+ *   - An lfio_reader keeps one open radiance dataset per slab (and its
+ *     coverage dataset, if any) and nothing else mutable, so reads on one
+ *     reader only make HDF5 calls, which HDF5 serialises.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -55,7 +58,7 @@
 
 /* ------------------------------------------------------------ dataset layouts */
 
-enum ds_kind { DS_RADIANCE, DS_DIRECTION, DS_SOLID_ANGLE, DS_PROJ_SOLID_ANGLE, DS_POSITION, DS_MASK };
+enum ds_kind { DS_RADIANCE, DS_DIRECTION, DS_SOLID_ANGLE, DS_PROJ_SOLID_ANGLE, DS_POSITION, DS_MASK, DS_COVERAGE };
 
 /* One dataset of a slab: what it holds and how it is stored. */
 struct ds_spec {
@@ -64,7 +67,8 @@ struct ds_spec {
     lfio__h5_layout lay;    /* name below the slab's group, type, shape, chunks, units, axes */
 };
 
-#define MAX_SPECS (5 + LFIO_MAX_MASK_LEVELS)
+/* The five fixed datasets, the mask levels, and the optional coverage. */
+#define MAX_SPECS (6 + LFIO_MAX_MASK_LEVELS)
 
 /* @return the smaller of a and b. */
 static hsize_t min_h(hsize_t a, hsize_t b)
@@ -113,6 +117,18 @@ static void ds_spec_make(const lfio_slab_desc *d, enum ds_kind kind, uint32_t ma
         sp->lay.size = 4;
         sp->lay.units = units_name(d->units);
         sp->lay.axes = "dir:v:u:rgb";
+        sp->lay.deflate = 1;
+        break;
+    case DS_COVERAGE:
+        /* Radiance's layout without its channels, chunked alike so the same reads stay cheap. */
+        snprintf(sp->lay.name, sizeof sp->lay.name, "coverage");
+        sp->lay.rank = 3;
+        sp->lay.dims[0] = ndir, sp->lay.dims[1] = d->nv, sp->lay.dims[2] = d->nu;
+        sp->lay.chunk[0] = min_h(ndir, 32), sp->lay.chunk[1] = min_h(d->nv, 16), sp->lay.chunk[2] = min_h(d->nu, 16);
+        sp->lay.cls = H5T_INTEGER;
+        sp->lay.size = 1;
+        sp->lay.units = "1";
+        sp->lay.axes = "dir:v:u";
         sp->lay.deflate = 1;
         break;
     case DS_DIRECTION:
@@ -213,6 +229,7 @@ static void fill_expected(const lfio_slab *s, const struct ds_spec *sp, const hs
             out[r] = lfio_slab_mask_test(s, sp->mask_n, id) ? 1.0 : 0.0;
             break;
         case DS_RADIANCE: /* stored, not derived */
+        case DS_COVERAGE:
             break;
         }
     }
@@ -349,8 +366,8 @@ static lfio_status check_radiance(lfio_status st, const char *path, size_t k, co
     return bad_value_fail(st, path, k, dir, ij % s->desc.nu, ij / s->desc.nu, s->radiance[p]);
 }
 
-/* Writes slab s as group /slabs/k of the file whose "slabs" group is slabs. */
-static lfio_status write_slab(const char *path, hid_t slabs, size_t k, const lfio_slab *s)
+/* Writes slab s, with its coverage unless that is NULL, as group /slabs/k of the file whose "slabs" group is slabs. */
+static lfio_status write_slab(const char *path, hid_t slabs, size_t k, const lfio_slab *s, const uint8_t *coverage)
 {
     char obj[64], name[24];
     snprintf(name, sizeof name, "%zu", k);
@@ -370,6 +387,8 @@ static lfio_status write_slab(const char *path, hid_t slabs, size_t k, const lfi
                             m, lfio_slab_mask_n(s, m), specs[5 + m].mask_n);
     if (st != LFIO_OK)
         return st;
+    if (coverage)
+        ds_spec_make(&s->desc, DS_COVERAGE, 0, &specs[nspecs++]);
     hid_t g;
     if ((st = lfio__h5_create_group(path, obj, slabs, name, &g)) != LFIO_OK)
         return st;
@@ -381,9 +400,11 @@ static lfio_status write_slab(const char *path, hid_t slabs, size_t k, const lfi
         st = create_dataset(path, obj, g, &specs[t], &d);
         if (st != LFIO_OK)
             break;
+        const hsize_t zero[4] = {0, 0, 0, 0};
         if (specs[t].kind == DS_RADIANCE) {
-            const hsize_t zero[4] = {0, 0, 0, 0};
             st = lfio__h5_xfer(path, dobj, d, 1, H5T_NATIVE_FLOAT, 4, zero, specs[t].lay.dims, s->radiance);
+        } else if (specs[t].kind == DS_COVERAGE) {
+            st = lfio__h5_xfer(path, dobj, d, 1, H5T_NATIVE_UINT8, 3, zero, specs[t].lay.dims, (void *)coverage);
         } else {
             struct stream j = {path, dobj, s, &specs[t], d, 0, 0, ""};
             st = stream_derived(&j);
@@ -416,7 +437,7 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
     if (slabs < 0)
         return lfio__h5_fail(LFIO_ERR_IO, path, "/slabs", "cannot create group");
     for (size_t k = 0; st == LFIO_OK && k < (size_t)count; k++)
-        st = write_slab(path, slabs, k, lfio_lightfield_slab(lf, k));
+        st = write_slab(path, slabs, k, lfio_lightfield_slab(lf, k), lfio_lightfield_coverage(lf, k));
     lfio__h5_close(slabs);
     return st;
 }
@@ -446,6 +467,7 @@ struct lfio_reader {
     size_t nslabs;
     lfio_slab_desc *desc;     /* nslabs, each passed lfio__check_desc() */
     hid_t *radiance;          /* nslabs open radiance datasets, shapes checked */
+    hid_t *coverage;          /* nslabs open coverage datasets, shapes checked; -1 where a slab has none */
 };
 
 /* Reads and checks the root attributes into r (version, creator, slab count). */
@@ -621,6 +643,15 @@ static lfio_status open_slab(lfio_reader *r, hid_t slabs, size_t k)
         st = check_dataset(r->path, obj, g, &specs[t], dapl, keep ? &r->radiance[k] : NULL);
         lfio__h5_close(dapl);
     }
+    /* Coverage is optional: absent is fine, present must have the layout the slab's attributes imply. */
+    htri_t has = st == LFIO_OK ? H5Lexists(g, "coverage", H5P_DEFAULT) : 0;
+    if (has < 0)
+        st = lfio__h5_fail(LFIO_ERR_FORMAT, r->path, obj, "cannot look for a coverage dataset");
+    if (has > 0) {
+        struct ds_spec sp;
+        ds_spec_make(&r->desc[k], DS_COVERAGE, 0, &sp);
+        st = check_dataset(r->path, obj, g, &sp, -1, &r->coverage[k]);
+    }
     lfio__h5_close(g);
     return st;
 }
@@ -659,8 +690,11 @@ static void reader_free(lfio_reader *r)
         return;
     for (size_t k = 0; r->radiance && k < r->nslabs; k++)
         lfio__h5_close(r->radiance[k]);
+    for (size_t k = 0; r->coverage && k < r->nslabs; k++)
+        lfio__h5_close(r->coverage[k]);
     lfio__h5_close(r->file);
     free(r->radiance);
+    free(r->coverage);
     free(r->desc);
     free(r->creator);
     free(r->path);
@@ -686,10 +720,13 @@ static lfio_status reader_open_impl(const char *path, lfio_reader **out)
     st = read_root(r);
     /* nslabs <= MAX_SLABS here, so these allocations are bounded. */
     if (st == LFIO_OK && ((r->desc = calloc(r->nslabs, sizeof *r->desc)) == NULL
-                          || (r->radiance = malloc(r->nslabs * sizeof *r->radiance)) == NULL))
+                          || (r->radiance = malloc(r->nslabs * sizeof *r->radiance)) == NULL
+                          || (r->coverage = malloc(r->nslabs * sizeof *r->coverage)) == NULL))
         st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
-    for (size_t k = 0; st == LFIO_OK && k < r->nslabs; k++)
+    for (size_t k = 0; r->radiance && k < r->nslabs; k++)
         r->radiance[k] = -1;
+    for (size_t k = 0; r->coverage && k < r->nslabs; k++)
+        r->coverage[k] = -1;
     hid_t slabs = -1;
     if (st == LFIO_OK)
         st = lfio__h5_expect_link(path, "/slabs", r->file, "slabs", "group");
@@ -744,6 +781,25 @@ static lfio_status read_slab_impl(lfio_reader *r, size_t k, lfio_slab **out)
     lfio__slab_rebuild_mask(s);
     *out = s;
     return LFIO_OK;
+}
+
+/* Reads slab k's coverage (which it must have) into buf and checks its values (HDF5 not silenced). */
+static lfio_status read_coverage_impl(lfio_reader *r, size_t k, uint8_t *buf)
+{
+    char obj[64];
+    snprintf(obj, sizeof obj, "/slabs/%zu/coverage", k);
+    struct ds_spec sp;
+    ds_spec_make(&r->desc[k], DS_COVERAGE, 0, &sp);
+    const hsize_t zero[3] = {0, 0, 0};
+    lfio_status st = lfio__h5_xfer(r->path, obj, r->coverage[k], 0, H5T_NATIVE_UINT8, 3, zero, sp.lay.dims, buf);
+    const uint64_t npos = (uint64_t)r->desc[k].nu * r->desc[k].nv;
+    const size_t total = (size_t)(sp.lay.dims[0] * npos);
+    for (size_t e = 0; st == LFIO_OK && e < total; e++)
+        if (buf[e] > 1)
+            st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: value %u at dir %llu, i %llu, j %llu (expected 0 or 1)", r->path,
+                            obj, buf[e], (unsigned long long)(e / npos),
+                            (unsigned long long)(e % npos % r->desc[k].nu), (unsigned long long)(e % npos / r->desc[k].nu));
+    return st;
 }
 
 /* Opens path and checks all its metadata (see reader_open_impl()), silently. */
@@ -862,6 +918,43 @@ lfio_status lfio_reader_read_slab(lfio_reader *r, size_t k, lfio_slab **out)
     return st;
 }
 
+/* @return 1 if slab k has a coverage dataset; 0 otherwise or for bad arguments. */
+int lfio_reader_has_coverage(const lfio_reader *r, size_t k)
+{
+    return r != NULL && k < r->nslabs && r->coverage[k] >= 0;
+}
+
+/* Reads slab k's coverage whole (see read_coverage_impl()), silently. */
+lfio_status lfio_reader_read_coverage(lfio_reader *r, size_t k, uint8_t *coverage)
+{
+    lfio_status st = check_slab_arg(r, k, coverage, "lfio_reader_read_coverage");
+    if (st != LFIO_OK)
+        return st;
+    if (r->coverage[k] < 0)
+        return lfio__fail(LFIO_ERR_ARG, "%s: /slabs/%zu: the slab has no coverage dataset", r->path, k);
+    lfio__h5_quiet q;
+    lfio__h5_quiet_begin(&q);
+    st = read_coverage_impl(r, k, coverage);
+    lfio__h5_quiet_end(&q);
+    return st;
+}
+
+/* Reads slab k's coverage, if it has one, into slab k of lf (HDF5 not silenced). */
+static lfio_status read_coverage_into(lfio_reader *r, size_t k, lfio_lightfield *lf)
+{
+    if (r->coverage[k] < 0)
+        return LFIO_OK;
+    const lfio_slab *s = lfio_lightfield_slab(lf, k);
+    uint8_t *buf = malloc((size_t)(s->ndir * s->npos));
+    lfio_status st = buf ? read_coverage_impl(r, k, buf)
+                         : lfio__fail(LFIO_ERR_NOMEM, "%s: /slabs/%zu/coverage: out of memory", r->path, k);
+    /* Values were checked: set_coverage can only run out of memory. */
+    if (st == LFIO_OK && lfio_lightfield_set_coverage(lf, k, buf) != LFIO_OK)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: /slabs/%zu/coverage: out of memory", r->path, k);
+    free(buf);
+    return st;
+}
+
 /* lfio_lightfield_read() without silencing HDF5. */
 static lfio_status lightfield_read_impl(const char *path, lfio_lightfield **out)
 {
@@ -878,6 +971,8 @@ static lfio_status lightfield_read_impl(const char *path, lfio_lightfield **out)
         /* Names, and that they differ, were checked on opening: take_slab can only run out of memory. */
         if (st == LFIO_OK && lfio_lightfield_take_slab(lf, s) != LFIO_OK)
             st = lfio__fail(LFIO_ERR_NOMEM, "%s: /slabs/%zu: out of memory", path, k);
+        if (st == LFIO_OK)
+            st = read_coverage_into(r, k, lf);
     }
     reader_free(r);
     if (st != LFIO_OK)
@@ -973,6 +1068,16 @@ static void verify_slab(struct vstate *v, lfio_reader *r, size_t k)
                                    r->path, obj, (unsigned long long)j.mismatches, j.first));
         }
         lfio__h5_close(d);
+    }
+    if (r->coverage[k] >= 0) {
+        char obj[128];
+        snprintf(obj, sizeof obj, "%s/coverage", gobj);
+        verify_checksummed(v, r->path, obj, r->coverage[k]);
+        uint8_t *buf = malloc((size_t)(s->ndir * s->npos));
+        st = buf ? read_coverage_impl(r, k, buf) : lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", r->path, obj);
+        if (st != LFIO_OK)
+            note(v, st);
+        free(buf);
     }
     H5G_info_t info;
     uint32_t nlev = (uint32_t)nspecs - 5;

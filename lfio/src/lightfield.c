@@ -1,9 +1,13 @@
 /*
- * lightfield.c - an ordered collection of slabs with unique names and a
- * creator string: the in-memory content of one light field file.
+ * lightfield.c - an ordered collection of slabs with unique names, their
+ * optional coverage, and a creator string: the in-memory content of one
+ * light field file.
  *
  * Invariants: every slab has a valid, unique name; the collection owns its
- * slabs and frees them with itself.
+ * slabs and frees them with itself. coverage[k] is NULL or holds
+ * dir_count*nu*nv bytes, each 0 or 1, for slab k. Coverage lives here rather
+ * than in the slab because it belongs to a slab's place in a file (what the
+ * data behind it covers), not to the radiance queries a slab answers.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,6 +17,7 @@
 
 struct lfio_lightfield {
     lfio_slab **slabs;
+    uint8_t **coverage; /* [capacity], NULL where a slab has none */
     size_t count, capacity;
     char creator[256];
 };
@@ -32,9 +37,12 @@ void lfio_lightfield_destroy(lfio_lightfield *lf)
 {
     if (!lf)
         return;
-    for (size_t k = 0; k < lf->count; k++)
+    for (size_t k = 0; k < lf->count; k++) {
         lfio_slab_destroy(lf->slabs[k]);
+        free(lf->coverage[k]);
+    }
     free(lf->slabs);
+    free(lf->coverage);
     free(lf);
 }
 
@@ -58,13 +66,17 @@ lfio_status lfio_lightfield_take_slab(lfio_lightfield *lf, lfio_slab *s)
     if (lf->count == lf->capacity) {
         size_t cap = lf->capacity ? 2 * lf->capacity : 4;
         lfio_slab **grown = realloc(lf->slabs, cap * sizeof *grown);
-        if (!grown) {
+        if (grown)
+            lf->slabs = grown;
+        uint8_t **cgrown = grown ? realloc(lf->coverage, cap * sizeof *cgrown) : NULL;
+        if (!cgrown) {
             lfio_slab_destroy(s);
             return lfio__fail(LFIO_ERR_NOMEM, "lfio_lightfield_take_slab: out of memory");
         }
-        lf->slabs = grown;
+        lf->coverage = cgrown;
         lf->capacity = cap;
     }
+    lf->coverage[lf->count] = NULL;
     lf->slabs[lf->count++] = s;
     return LFIO_OK;
 }
@@ -99,4 +111,35 @@ lfio_status lfio_lightfield_set_creator(lfio_lightfield *lf, const char *creator
 const char *lfio_lightfield_creator(const lfio_lightfield *lf)
 {
     return lf->creator;
+}
+
+lfio_status lfio_lightfield_set_coverage(lfio_lightfield *lf, size_t k, const uint8_t *coverage)
+{
+    if (!lf || k >= lf->count)
+        return lfio__fail(LFIO_ERR_ARG, "lfio_lightfield_set_coverage: slab %zu out of range (%zu slabs)", k,
+                          lf ? lf->count : 0);
+    const lfio_slab *s = lf->slabs[k];
+    uint8_t *copy = NULL;
+    if (coverage) {
+        /* The slab exists, so ndir*npos*12 bytes fit in memory: the product cannot overflow. */
+        size_t total = (size_t)(s->ndir * s->npos);
+        for (size_t e = 0; e < total; e++)
+            if (coverage[e] > 1)
+                return lfio__fail(LFIO_ERR_ARG, "slab '%s': coverage value %u at dir %llu, i %llu, j %llu "
+                                  "(expected 0 or 1)", s->desc.name, coverage[e],
+                                  (unsigned long long)(e / s->npos), (unsigned long long)(e % s->npos % s->desc.nu),
+                                  (unsigned long long)(e % s->npos / s->desc.nu));
+        copy = malloc(total ? total : 1);
+        if (!copy)
+            return lfio__fail(LFIO_ERR_NOMEM, "slab '%s': out of memory for its coverage", s->desc.name);
+        memcpy(copy, coverage, total);
+    }
+    free(lf->coverage[k]);
+    lf->coverage[k] = copy;
+    return LFIO_OK;
+}
+
+const uint8_t *lfio_lightfield_coverage(const lfio_lightfield *lf, size_t k)
+{
+    return lf && k < lf->count ? lf->coverage[k] : NULL;
 }

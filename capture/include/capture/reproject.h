@@ -35,6 +35,9 @@
  *   - Coverage of a proxy slab: the share of its etendue whose rays are
  *     covered, weighting each sampled ray by its share of the projected
  *     solid angle (about e3) of its solid angle, and positions equally.
+ *     Coverage of a sample (one solid angle at one position): 1 when at
+ *     least one of its rays is covered, 0 when none is (its radiance is then
+ *     exactly 0); the layout of lfio_lightfield_set_coverage().
  *
  * Thread safety: a proxy is immutable once loaded; reprojection only reads
  * the captured slab (which must not be written meanwhile).
@@ -71,12 +74,17 @@ typedef struct cap_proxy_defaults {
  * rectangles {"name", "origin", "u", "v", "grid": {"nu", "nv"}, "n"}, of
  * which origin, u and v are required (u and v orthogonal) and grid and n
  * default to *defaults; names default to "proxy<k>". Any other file is a
- * mesh read with assimp (node transforms applied): every face must be a
- * planar rectangle of 4 vertices v0..v3, counter-clockwise seen from its
- * front, becoming origin v0, u = v1 - v0, v = v3 - v0, named "face<k>"
- * (k counting faces over the file's meshes); triangles and other polygons
- * are refused (only rectangular quads are supported). Rectangles with the
- * defaults' grid and n. Names are unique; the units of the slabs are set
+ * mesh read with assimp (node transforms applied) whose faces are
+ * rectangles: a quad v0..v3, counter-clockwise seen from its front,
+ * becomes origin v0, u = v1 - v0, v = v3 - v0; a triangle is merged with
+ * the later triangle that shares its longest edge (run the other way) into
+ * the rectangle c0 c1 c2 c3, where c0 c1 c2 is the first triangle rotated
+ * so that c1 is its corner opposite that edge and c3 is the partner's third
+ * vertex (a quad v0 v1 v2 v3 split into v0 v1 v2 and v0 v2 v3 gives the
+ * quad's own rectangle). Each is named "face<k>" after its first face (k
+ * counting faces over the file's meshes); a triangle without a partner,
+ * a pair or quad that is not a rectangle (relative tolerance 1e-5), and
+ * any other polygon are refused. Rectangles get the defaults' grid and n. Names are unique; the units of the slabs are set
  * when reprojecting.
  * @return CAP_OK and *out; CAP_ERR_INPUT (the message names the file and the
  * rectangle or face); CAP_ERR_NOMEM; CAP_ERR_ARG for NULL or invalid defaults.
@@ -105,6 +113,7 @@ typedef struct cap_reproject_options {
     unsigned threads;         /**< worker threads, 0 = one per processor; the result does not depend on it */
     cap_progress_fn progress; /**< counts finished positions; may be NULL */
     void *progress_user;
+    uint8_t *covered;         /**< NULL, or an output of 4n^2*nu*nv bytes ([dir][j][i] of the target): each sample's coverage */
 } cap_reproject_options;
 
 /** How much of a proxy slab the capture covers. */
@@ -116,8 +125,9 @@ typedef struct cap_coverage {
 
 /**
  * Makes the slab target (its units and mask threshold replaced by the
- * captured slab's) from the captured slab, on worker threads. o may be
- * NULL (all defaults).
+ * captured slab's) from the captured slab, on worker threads, and each
+ * sample's coverage into o->covered when that is not NULL. o may be NULL
+ * (all defaults).
  * @return CAP_OK, *out (owned by the caller) and *coverage (may be NULL);
  * CAP_ERR_ARG (NULL, invalid target or options); CAP_ERR_NOMEM. *out is NULL on failure.
  */

@@ -244,6 +244,31 @@ lfio_status lfio_lightfield_write(const lfio_lightfield *lf, const char *path);
  */
 lfio_status lfio_lightfield_read(const char *path, lfio_lightfield **out);
 
+/* --------------------------------------------------------------- coverage */
+
+/*
+ * Coverage is optional, per slab of a light field: one byte per sample,
+ * laid out like the radiance without its channels, [dir][j][i]; 1 where the
+ * data behind the sample is known (for example, the capture covers the ray),
+ * 0 where it is not and the radiance is only a placeholder (usually 0).
+ * Files store it as /slabs/<k>/coverage (docs/format.md); files without it
+ * stay valid.
+ */
+
+/**
+ * Attaches a copy of coverage ([dir][j][i], 4n^2*nu*nv values, each 0 or 1)
+ * to slab k of lf, replacing any it had; NULL removes it.
+ * @return LFIO_OK; LFIO_ERR_ARG (lf unchanged) if k is out of range or a
+ * value is neither 0 nor 1; LFIO_ERR_NOMEM (lf unchanged).
+ */
+lfio_status lfio_lightfield_set_coverage(lfio_lightfield *lf, size_t k, const uint8_t *coverage);
+
+/**
+ * @return the coverage of slab k, [dir][j][i] (borrowed, valid until it is
+ * replaced or lf destroyed); NULL if the slab has none or k is out of range.
+ */
+const uint8_t *lfio_lightfield_coverage(const lfio_lightfield *lf, size_t k);
+
 /** An open file whose slabs can be read in part. Opaque. */
 typedef struct lfio_reader lfio_reader;
 
@@ -286,6 +311,17 @@ lfio_status lfio_reader_read_position(lfio_reader *r, size_t k, uint32_t i, uint
  */
 lfio_status lfio_reader_read_slab(lfio_reader *r, size_t k, lfio_slab **out);
 
+/** @return 1 if slab k of the file has a coverage dataset (its type and shape were checked on opening), else 0. */
+int lfio_reader_has_coverage(const lfio_reader *r, size_t k);
+
+/**
+ * Reads the coverage of slab k into coverage ([dir][j][i], 4n^2*nu*nv bytes)
+ * and checks that every value is 0 or 1.
+ * @return LFIO_OK; LFIO_ERR_ARG (also when the slab has no coverage);
+ * LFIO_ERR_IO, LFIO_ERR_FORMAT or LFIO_ERR_CHECKSUM.
+ */
+lfio_status lfio_reader_read_coverage(lfio_reader *r, size_t k, uint8_t *coverage);
+
 /** Result of lfio_verify(). */
 typedef struct lfio_verify_report {
     uint32_t problems;   /**< number of problems found */
@@ -295,7 +331,7 @@ typedef struct lfio_verify_report {
 /**
  * Checks a file completely: format, every attribute and shape, every checksum
  * (by reading all data), the stored directions, solid angles and mask against
- * values recomputed from the geometry and radiance.
+ * values recomputed from the geometry and radiance, and coverage values (0 or 1).
  * @return LFIO_OK if the file is valid; otherwise the first problem's status,
  * with details in lfio_errmsg() and *report (which may be NULL).
  */
