@@ -15,8 +15,9 @@
 #     temporary may remain, but only under a temporary name.
 # (b) A full disk: a 200 KiB tmpfs when running as root and mount works,
 #     else a file size limit (ulimit -f). Writing a light field, the radiance
-#     maps, and a view image must each fail with exit 1 and a message naming
-#     the cause, leave no temporary, and leave an existing file untouched.
+#     maps, a view image and a captured light field must each fail with exit
+#     1 and a message naming the cause, leave no temporary, and leave an
+#     existing file untouched.
 # (c) Damaged files: one byte flipped in the superblock, object headers and
 #     data chunks (located with h5py when present, else spread over a
 #     radiance-heavy file) must make `ilf verify` exit 2 naming a checksum.
@@ -298,6 +299,18 @@ sed -e 's/"cell_size": 0.02/"cell_size": 0.5/' -e 's/"width": 320, "height": 240
 full 40 "cannot write image" "the view image" "$ILF" relight "$TMP/room_view.json" -o "$DISK/view" --quiet
 check "full disk: no partial view image" test ! -e "$DISK/view/view.exr"
 check "full disk: the radiance maps written before are complete" every_output_complete "$DISK/view"
+# ilf capture writes its light field through the same atomic writer: the message must give the
+# cause. A probe image (outside the disk) becomes an n = 64 slab of about 800 KiB.
+if "$ILF" --help | grep -q '^  capture '; then
+    "$ILF" synth --kind radial --cone 180 --grid 2x2 --n 8 -o "$TMP/probe_src.h5" >/dev/null
+    "$ILF" slice "$TMP/probe_src.h5" --position 0,0 --layout latlong -o "$TMP/probe.exr" >/dev/null
+    printf '{"plane": {"origin": [0, 0, 1], "u": [1, 0, 0], "v": [0, -1, 0]}, "grid": {"nu": 1, "nv": 1}, %s\n' \
+        '"n": 64, "pattern": "probe.exr"}' >"$TMP/probe.json"
+    full 100 "$FULL_TEXT" "a captured light field" "$ILF" capture "$TMP/probe.json" -o "$DISK/captured.h5" --quiet
+    check "full disk: no partial captured light field" test ! -e "$DISK/captured.h5"
+else
+    echo "note: this ilf has no capture command: its full-disk case is skipped"
+fi
 check "full disk: no temporaries anywhere ($(find "$DISK" -name '*.tmp-*' | tr '\n' ' '))" \
     test -z "$(find "$DISK" -name '*.tmp-*')"
 if [ "$MOUNTED" -eq 1 ]; then

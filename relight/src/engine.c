@@ -10,6 +10,7 @@
  * the tile, in an order fixed by the tile alone. So the output does not
  * depend on the number of threads or on scheduling.
  */
+#include <float.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -412,6 +413,14 @@ static v2 polygon_centroid(const v2 *p, uint32_t count)
     return a > 0 ? (v2){cx / a, cy / a} : p[0];
 }
 
+/* @return x as a float, FLT_MAX where it is beyond float's range: a light
+ * field may hold radiance near FLT_MAX, whose irradiance is pi times more,
+ * and a map must never hold inf. */
+static float saturate_float(double x)
+{
+    return x > FLT_MAX ? FLT_MAX : (float)x;
+}
+
 rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, double *area, double *centre,
                                 float *irradiance, float *radiosity)
 {
@@ -433,9 +442,9 @@ rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, do
         }
         for (int ch = 0; ch < 3; ch++) {
             if (irradiance)
-                irradiance[3 * c + ch] = (float)m->e_total[c][ch];
+                irradiance[3 * c + ch] = saturate_float(m->e_total[c][ch]);
             if (radiosity)
-                radiosity[3 * c + ch] = (float)(PI * m->emission[ch] + m->albedo[ch] * m->e_total[c][ch]);
+                radiosity[3 * c + ch] = saturate_float(PI * m->emission[ch] + m->albedo[ch] * m->e_total[c][ch]);
         }
     }
     return RL_OK;

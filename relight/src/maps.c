@@ -107,7 +107,9 @@ static rl_status map_cells(rl_map *m)
     m->pool = malloc(pool_cap * sizeof *m->pool);
     if (!m->grid || !m->cells || !m->pool)
         return RL_ERR_NOMEM;
-    const double full = m->cell * m->cell, tiny = 1e-12 * full;
+    /* Cells below tiny are clipping slivers along the border. Relative to the
+     * polygon too: a polygon much smaller than a cell is one small cell, not none. */
+    const double full = m->cell * m->cell, tiny = 1e-12 * fmin(full, polygon_area2(m->poly, m->npoly));
     v2 poly[RL_MAX_POLY_VERTS + 8];
     size_t npool = 0;
     m->ncells = 0;

@@ -24,7 +24,12 @@
  * right-hand rule normal, so counter-clockwise vertices face the viewer.
  *
  * Mesh files are read with assimp, PLY files after plycheck.c has checked
- * their declared counts against their size (assimp allocates from them).
+ * their declared counts against their size (assimp allocates from them),
+ * glTF 2.0 files after their accessors' types are checked here (assimp
+ * copies positions of any type as raw bytes into its vertices: a position
+ * accessor of another type would load silently as garbage or nothing). A
+ * mesh file that yields no polygon at all is an error rather than an empty
+ * contribution: it is almost certainly the wrong file or a broken one.
  *
  * Scene polygons (RL_POLY_STRICT) failing any step are errors whose message
  * names the input vertex at fault. Mesh faces (RL_POLY_SPLIT) failing steps
@@ -38,6 +43,8 @@
 #endif
 
 #include <assimp/cimport.h>
+#include <cjson/cJSON.h>
+#include <strings.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -436,6 +443,113 @@ rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_
 
 /* ----------------------------------------------------------- mesh files */
 
+/* glTF 2.0 accessor component types. */
+enum { GLTF_UBYTE = 5121, GLTF_USHORT = 5123, GLTF_UINT = 5125, GLTF_FLOAT = 5126 };
+
+/* Largest glTF JSON read for the check; larger ones are left to assimp. */
+#define GLTF_JSON_MAX ((size_t)1 << 28)
+
+/* @return the name of glTF component type t. */
+static const char *gltf_type_name(int t)
+{
+    switch (t) {
+    case 5120: return "byte";
+    case GLTF_UBYTE: return "unsigned byte";
+    case 5122: return "short";
+    case GLTF_USHORT: return "unsigned short";
+    case GLTF_UINT: return "unsigned int";
+    case GLTF_FLOAT: return "float";
+    default: return "unknown";
+    }
+}
+
+/*
+ * Checks accessor number `at` of the glTF accessors array, used by `use` of
+ * meshes[mi].primitives[prim]: positions must be FLOAT VEC3 (glTF 2.0, 3.7.2.1),
+ * indices SCALAR of an unsigned integer type. @return 1, or 0 with why.
+ */
+static int gltf_accessor_ok(const cJSON *accessors, const cJSON *at, int indices, int mi, int prim, char *why,
+                            size_t size)
+{
+    const char *use = indices ? "indices" : "POSITION";
+    int n = cJSON_GetArraySize(accessors);
+    if (!cJSON_IsNumber(at) || at->valuedouble < 0 || at->valuedouble >= n || at->valuedouble != (int)at->valuedouble) {
+        snprintf(why, size, "meshes[%d].primitives[%d]: %s refers to accessor %g of %d", mi, prim, use,
+                 cJSON_IsNumber(at) ? at->valuedouble : -1.0, n);
+        return 0;
+    }
+    const cJSON *acc = cJSON_GetArrayItem(accessors, (int)at->valuedouble);
+    const cJSON *ct = cJSON_GetObjectItemCaseSensitive(acc, "componentType");
+    const cJSON *type = cJSON_GetObjectItemCaseSensitive(acc, "type");
+    int t = cJSON_IsNumber(ct) ? (int)ct->valuedouble : 0;
+    const char *ty = cJSON_IsString(type) ? type->valuestring : "(none)";
+    int ok = indices ? (t == GLTF_UBYTE || t == GLTF_USHORT || t == GLTF_UINT) && strcmp(ty, "SCALAR") == 0
+                     : t == GLTF_FLOAT && strcmp(ty, "VEC3") == 0;
+    if (!ok)
+        snprintf(why, size,
+                 "meshes[%d].primitives[%d]: %s accessor %d has componentType %d (%s) and type %s; glTF 2.0 %s",
+                 mi, prim, use, (int)at->valuedouble, t, gltf_type_name(t), ty,
+                 indices ? "indices are SCALAR unsigned byte, short or int" : "positions are VEC3 float (5126)");
+    return ok;
+}
+
+/*
+ * Reads the JSON of a glTF 2.0 file (.gltf: the file; .glb: its first
+ * chunk) and checks every mesh primitive's POSITION and indices accessors.
+ * Anything it cannot make sense of is left to assimp, which reports it.
+ * @return 1 (fine, or not a glTF 2.0 file), or 0 with why.
+ */
+static int gltf_check(const char *path, char *why, size_t size)
+{
+    const char *dot = strrchr(path, '.');
+    int glb = dot && strcasecmp(dot, ".glb") == 0;
+    if (!dot || (!glb && strcasecmp(dot, ".gltf") != 0))
+        return 1;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 1;
+    size_t len = 0;
+    if (glb) { /* header: magic, version, length; then a chunk: length, type "JSON" */
+        unsigned char h[20];
+        if (fread(h, 1, sizeof h, f) != sizeof h || memcmp(h, "glTF", 4) != 0 || memcmp(h + 16, "JSON", 4) != 0) {
+            fclose(f);
+            return 1;
+        }
+        len = (size_t)h[12] | (size_t)h[13] << 8 | (size_t)h[14] << 16 | (size_t)h[15] << 24;
+    } else if (fseek(f, 0, SEEK_END) == 0) {
+        long end = ftell(f);
+        len = end > 0 ? (size_t)end : 0;
+        rewind(f);
+    }
+    char *text = len > 0 && len <= GLTF_JSON_MAX ? malloc(len) : NULL;
+    size_t got = text ? fread(text, 1, len, f) : 0;
+    fclose(f);
+    cJSON *root = got == len && text ? cJSON_ParseWithLength(text, len) : NULL;
+    free(text);
+    const cJSON *version = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(root, "asset"), "version");
+    const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
+    const cJSON *accessors = cJSON_GetObjectItemCaseSensitive(root, "accessors");
+    int ok = 1;
+    if (cJSON_IsString(version) && version->valuestring[0] == '2' && cJSON_IsArray(meshes)) {
+        int mi = 0;
+        for (const cJSON *m = meshes->child; m && ok; m = m->next, mi++) {
+            const cJSON *prims = cJSON_GetObjectItemCaseSensitive(m, "primitives");
+            int prim = 0;
+            for (const cJSON *p = cJSON_IsArray(prims) ? prims->child : NULL; p && ok; p = p->next, prim++) {
+                const cJSON *attrs = cJSON_GetObjectItemCaseSensitive(p, "attributes");
+                const cJSON *pos = cJSON_GetObjectItemCaseSensitive(attrs, "POSITION");
+                const cJSON *idx = cJSON_GetObjectItemCaseSensitive(p, "indices");
+                if (pos)
+                    ok = gltf_accessor_ok(accessors, pos, 0, mi, prim, why, size);
+                if (ok && idx)
+                    ok = gltf_accessor_ok(accessors, idx, 1, mi, prim, why, size);
+            }
+        }
+    }
+    cJSON_Delete(root);
+    return ok;
+}
+
 /* Marks a file material not yet turned into a scene material. */
 #define MATERIAL_UNSET UINT32_MAX
 
@@ -538,6 +652,8 @@ rl_status rl__build_mesh(rl_build *b, const char *path, const char *elem, const 
     char why[256];
     if (!rl__ply_check(path, why, sizeof why)) /* assimp would trust its counts (plycheck.h) */
         return rl__build_fail(b, elem, "cannot read '%s': %s", path, why);
+    if (!gltf_check(path, why, sizeof why)) /* assimp would copy any type as positions */
+        return rl__build_fail(b, elem, "cannot read '%s': %s", path, why);
     const struct aiScene *sc =
         aiImportFile(path, aiProcess_PreTransformVertices | aiProcess_ValidateDataStructure);
     if (!sc)
@@ -554,8 +670,15 @@ rl_status rl__build_mesh(rl_build *b, const char *path, const char *elem, const 
     }
     for (size_t k = 0; k <= sc->mNumMaterials; k++)
         materials[k] = MATERIAL_UNSET;
+    size_t before = b->scene->npolygons, faces = 0;
+    for (unsigned mi = 0; mi < sc->mNumMeshes; mi++)
+        faces += sc->mMeshes[mi]->mNumFaces;
     rl_status st = add_faces(b, sc, materials, elem, shown, fallback);
     free(materials);
     aiReleaseImport(sc);
+    /* Every face dropped (points, lines, no area): nothing to light or be lit, almost surely a broken file. */
+    if (st == RL_OK && b->scene->npolygons == before)
+        return rl__build_fail(b, elem, "'%s' has no face with area (%zu faces, all points, lines or degenerate)",
+                              path, faces);
     return st;
 }

@@ -309,9 +309,11 @@ rl_status rl__build_material(rl_build *b, const char *elem, const char *name, co
     for (int k = 0; k < 3; k++) {
         if (!(albedo[k] >= 0 && albedo[k] <= 1))
             return rl__build_fail(b, elem, "albedo[%d] is %.6g, outside [0, 1]", k, albedo[k]);
-        if (!(emission[k] >= 0 && emission[k] <= FLT_MAX))
-            return rl__build_fail(b, elem, "emission[%d] is %.6g; it must be >= 0 and at most %.3g", k,
-                                  emission[k], (double)FLT_MAX);
+        /* at most RL_MAX_EMISSION, so that irradiance and radiosity (pi L
+         * per emitter, summed over emitters and bounces) fit in the float32 maps */
+        if (!(emission[k] >= 0 && emission[k] <= RL_MAX_EMISSION))
+            return rl__build_fail(b, elem, "emission[%d] is %.6g; it must be >= 0 and at most %.0e W sr^-1 m^-2", k,
+                                  emission[k], RL_MAX_EMISSION);
         m.albedo[k] = (float)albedo[k];
         m.emission[k] = (float)emission[k];
     }

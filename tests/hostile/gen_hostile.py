@@ -91,6 +91,49 @@ def meshes(out):
     folder(os.path.join(d, "directory.obj"))
 
 
+def glb(gltf_json, buffer):
+    """A binary glTF: header, a JSON chunk and a BIN chunk, each padded to 4 bytes."""
+    js = gltf_json.encode()
+    js += b" " * (-len(js) % 4)
+    bn = buffer + b"\0" * (-len(buffer) % 4)
+    body = struct.pack("<I", len(js)) + b"JSON" + js + struct.pack("<I", len(bn)) + b"BIN\0" + bn
+    return b"glTF" + struct.pack("<II", 2, 12 + len(body)) + body
+
+
+GLB_JSON = ('{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "scene": 0, "nodes": [{"mesh": 0}], '
+            '"meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}], '
+            '"buffers": [{"byteLength": 44}], "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, '
+            '{"buffer": 0, "byteOffset": 36, "byteLength": 6}], "accessors": [{"bufferView": 0, '
+            '"componentType": 5126, "count": 3, "type": "VEC3", "max": [1, 1, 0], "min": [0, 0, 0]}, '
+            '{"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]}')
+
+
+def other_formats(out):
+    """Broken files of the other formats assimp reads: STL, glTF binary, 3DS, FBX, Collada.
+    Its own generator, so that these cases do not move the others' random bytes."""
+    rng = random.Random(20240607)
+    d = os.path.join(out, "mesh")
+    facet = struct.pack("<12fH", 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0)
+    write(os.path.join(d, "truncated_binary.stl"), b"x" * 80 + struct.pack("<I", 1) + facet[:16])
+    write(os.path.join(d, "count_absurd.stl"), b"x" * 80 + struct.pack("<I", 4000000000) + facet)
+    write(os.path.join(d, "garbage.stl"), bytes(rng.randint(1, 255) for _ in range(3000)))
+    vertices = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack("<3H", 0, 1, 2) + b"\0\0"
+    whole = glb(GLB_JSON, vertices)
+    write(os.path.join(d, "truncated.glb"), whole[:len(whole) // 2])
+    write(os.path.join(d, "chunk_absurd.glb"), whole[:12] + struct.pack("<I", 0x7FFFFFFF) + whole[16:])
+    write(os.path.join(d, "position_ushort.glb"),
+          glb(GLB_JSON.replace('"componentType": 5126', '"componentType": 5123'), vertices))
+    # 3DS: a main chunk and an editor chunk claiming a megabyte in a 22-byte file
+    write(os.path.join(d, "truncated.3ds"),
+          struct.pack("<HI", 0x4D4D, 1000000) + struct.pack("<HI", 0x3D3D, 999990) + b"\0" * 10)
+    write(os.path.join(d, "garbage.3ds"), bytes(rng.randint(0, 255) for _ in range(3000)))
+    # FBX binary: the header and the start of a node record, then the end of the file
+    write(os.path.join(d, "truncated.fbx"),
+          b"Kaydara FBX Binary  \x00\x1a\x00" + struct.pack("<I", 7400) + struct.pack("<I", 16))
+    write(os.path.join(d, "garbage.fbx"), bytes(rng.randint(1, 255) for _ in range(3000)))
+    write(os.path.join(d, "garbage.dae"), bytes(rng.randint(1, 255) for _ in range(3000)))
+
+
 # ---------------------------------------------------------------- capture manifests and images
 
 def manifests(out):
@@ -271,6 +314,7 @@ def main():
     meshes(out)
     manifests(out)
     images(out)
+    other_formats(out)
     stdlib_lightfields(out, base)
     if h5py is None:
         print("gen_hostile.py: h5py not available: the edited light field files are not written")

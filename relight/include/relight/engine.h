@@ -77,7 +77,8 @@ rl_status rl_solution_map_info(const rl_solution *s, size_t k, rl_map_info *out)
  * Copies map k's cells; any output may be NULL. ij: [ncells][2] grid indices;
  * area: [ncells] m^2; centre: [ncells][3] world centroid of the clipped cell;
  * irradiance: [ncells][3] W m^-2 summed over passes; radiosity: [ncells][3]
- * W m^-2, pi * emission + albedo * irradiance.
+ * W m^-2, pi * emission + albedo * irradiance; values beyond float range
+ * (only from light fields near FLT_MAX) are clamped to FLT_MAX, never inf.
  * @return RL_OK or RL_ERR_ARG.
  */
 rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, double *area, double *centre,

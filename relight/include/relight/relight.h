@@ -60,6 +60,10 @@ const char *rl_method_name(rl_method m);
 /** Parses a method name. @return 1 and *m on success, 0 if name is unknown. */
 int rl_method_parse(const char *name, rl_method *m);
 
+/** Largest emission a material may have, W sr^-1 m^-2: irradiance sums of
+ * such emitters stay far inside float32, the type of the radiance maps. */
+#define RL_MAX_EMISSION 1e30
+
 /** Sampling settings (scene key "sampling"). */
 typedef struct rl_sampling {
     rl_method method;              /**< default culled */

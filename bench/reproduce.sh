@@ -1,0 +1,110 @@
+#!/bin/sh
+# bench/reproduce.sh - every measurement behind BENCHMARKS.md, in one run.
+#
+#   bench/reproduce.sh [OUT]      (default OUT = out/benchmarks; needs a built build/tools/ilf)
+#
+# Environment: ILF (default build/tools/ilf), QUICK=1 for a fast rehearsal
+# (fewer repeats, small sweeps). Every number BENCHMARKS.md quotes is in
+# OUT/results.txt or in the bench folders below it. Runs that are compared
+# run alternately, so machine noise hits both sides alike; the medians of
+# the repeats are reported. Takes about half an hour on 2 cores.
+set -eu
+cd "$(dirname "$0")/.."
+ILF=${ILF:-build/tools/ilf}
+OUT=${1:-out/benchmarks}
+QUICK=${QUICK:-0}
+REPEATS=5
+[ "$QUICK" = 1 ] && REPEATS=1
+mkdir -p "$OUT/relight"
+RES="$OUT/results.txt"
+: > "$RES"
+say() { echo "$*" | tee -a "$RES"; }
+py=/usr/bin/python3
+
+say "# ilfkit benchmarks, $(date -u +%Y-%m-%dT%H:%MZ), commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
+say "machine: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores, $(free -g | awk '/Mem:/ {print $2}') GiB"
+
+# scene variants at the paper's cell counts: a copy with another cell size, beside the original
+# so that relative file names still resolve
+variant() { # SRC CELL_SIZE DST
+    sed "s/\"cell_size\": *[0-9.]*/\"cell_size\": $2/" "$1" > "$3"
+}
+variant data/beams.json 0.0325 data/.bench_beams_paper.json
+variant data/beams_diffuse.json 0.0325 data/.bench_beams_diffuse_paper.json
+variant data/classroom.json 0.018 data/.bench_classroom_paper.json
+trap 'rm -f data/.bench_*.json' EXIT
+
+# stat FILE KEY...: a number from a stats.json
+stat() { $py -c "import json,sys; d=json.load(open(sys.argv[1])); [d := d[k] if not k.isdigit() else d[int(k)] for k in sys.argv[2:]]; print(d)" "$@"; }
+# median of the arguments
+median() { $py -c "import sys,statistics; print('%.4g' % statistics.median(map(float, sys.argv[1:])))" "$@"; }
+
+# relight_pair NAME SCENE OPTS_A -- OPTS_B: REPEATS alternating runs of A and B;
+# prints the median direct-pass and total wall and CPU seconds of each
+relight_pair() {
+    name=$1 scene=$2
+    shift 2
+    a="" b="" side=a
+    for x in "$@"; do
+        if [ "$x" = "--" ]; then side=b; continue; fi
+        if [ $side = a ]; then a="$a $x"; else b="$b $x"; fi
+    done
+    for s in a b; do eval "w_$s='' c_$s='' d_$s='' p_$s=''"; done
+    i=0
+    while [ $i -lt $REPEATS ]; do
+        for s in a b; do
+            eval "opts=\$$s"
+            dir="$OUT/relight/$name-$s-$i"
+            # shellcheck disable=SC2086
+            /usr/bin/time -f %M -o "$dir.rss" "$ILF" relight "$scene" -o "$dir" --quiet $opts
+            eval "w_$s=\"\$w_$s $(stat "$dir/stats.json" wall_seconds)\""
+            eval "c_$s=\"\$c_$s $(stat "$dir/stats.json" cpu_seconds)\""
+            eval "d_$s=\"\$d_$s $(stat "$dir/stats.json" passes 0 wall_seconds)\""
+            eval "p_$s=\"\$p_$s $(cat "$dir.rss")\""
+        done
+        i=$((i + 1))
+    done
+    for s in a b; do
+        eval "opts=\$$s; w=\$w_$s; c=\$c_$s; d=\$d_$s; p=\$p_$s"
+        dir="$OUT/relight/$name-$s-0"
+        # shellcheck disable=SC2086
+        say "$name [$opts ]: cells $(stat "$dir/stats.json" cells); median of $REPEATS: direct pass $(median $d) s wall;" \
+            "total $(median $w) s wall, $(median $c) s cpu; samples $(stat "$dir/stats.json" passes 0 samples)," \
+            "rays $(stat "$dir/stats.json" passes 0 rays_cast) (direct); peak RSS $(median $p) KiB"
+    done
+}
+
+say ""
+say "## 1. Paper settings, direct light (culled, n = 32, 4 rays), with and without zero-radiance culling"
+relight_pair beams_direct data/.bench_beams_paper.json --bounces 0 -- --bounces 0 --zero-culling 0
+say ""
+say "## 2. Paper settings, 2 bounces (the paper's 36.85 s -> 20.39 s run)"
+[ "$QUICK" = 1 ] || relight_pair beams_bounces data/.bench_beams_paper.json --bounces 2 -- --bounces 2 --zero-culling 0
+say ""
+say "## 3. classroom, direct: default cells, and the paper's 1.5 million"
+relight_pair classroom data/classroom.json --bounces 0 -- --bounces 0 --threads 1
+[ "$QUICK" = 1 ] || { REPEATS=1 relight_pair classroom_paper data/.bench_classroom_paper.json --bounces 0 -- --bounces 0 --partition-n 16; }
+
+say ""
+say "## 4. The ray ceiling"
+for s in beams classroom; do
+    "$ILF" bench --rays "data/$s.json" -o "$OUT/rays_$s" --rays-count 10000000 | tee -a "$RES"
+done
+"$ILF" bench --rays data/beams.json -o "$OUT/rays_beams_1thread" --rays-count 10000000 --threads 1 | tee -a "$RES"
+
+say ""
+say "## 5. Sweeps (speed against accuracy)"
+SWEEP_OPTS="--time-limit 60 --reference-samples 2048"
+[ "$QUICK" = 1 ] && SWEEP_OPTS="--quick --time-limit 10"
+for s in beams_diffuse beams classroom; do
+    # shellcheck disable=SC2086
+    "$ILF" bench "data/$s.json" -o "$OUT/sweep_$s" --cache "$OUT/cache" --quiet $SWEEP_OPTS || true
+    say "sweep $s: $OUT/sweep_$s/summary.md"
+done
+
+say ""
+say "## 6. Scaling"
+# shellcheck disable=SC2086
+"$ILF" bench --scaling data/beams.json -o "$OUT/scaling_beams" --quiet --time-limit 120 || true
+say "scaling: $OUT/scaling_beams"
+say "done"
