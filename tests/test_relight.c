@@ -21,53 +21,9 @@
 #include <relight/reference.h>
 
 #include "check.h"
+#include "relight_scenes.h"
 
 static char tmpdir[512];
-
-/* A polygon for a test scene. */
-typedef struct tpoly {
-    const char *material;
-    int n;
-    double v[8][3];
-} tpoly;
-
-/* An axis-aligned rectangle at height z facing up (+z) or down (-z). */
-static tpoly rect_z(const char *mat, double x0, double y0, double x1, double y1, double z, int up)
-{
-    tpoly p = {mat, 4, {{0}}};
-    double c[4][2] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
-    for (int k = 0; k < 4; k++) {
-        int s = up ? k : 3 - k;
-        p.v[k][0] = c[s][0];
-        p.v[k][1] = c[s][1];
-        p.v[k][2] = z;
-    }
-    return p;
-}
-
-/* Writes a scene file: materials JSON, polygons, and the other top-level keys. */
-static void write_scene(const char *path, const char *materials, const tpoly *p, int n, const char *rest)
-{
-    FILE *f = fopen(path, "w");
-    fprintf(f, "{\"materials\": %s,\n \"polygons\": [", materials); /* may be empty */
-    for (int k = 0; k < n; k++) {
-        fprintf(f, "%s\n  {\"material\": \"%s\", \"vertices\": [", k ? "," : "", p[k].material);
-        for (int i = 0; i < p[k].n; i++)
-            fprintf(f, "%s[%.17g, %.17g, %.17g]", i ? ", " : "", p[k].v[i][0], p[k].v[i][1], p[k].v[i][2]);
-        fprintf(f, "]}");
-    }
-    fprintf(f, "]%s%s}\n", rest && *rest ? ",\n " : "", rest ? rest : "");
-    fclose(f);
-}
-
-/* Loads a scene, failing the test with the loader's message. */
-static rl_scene *load(const char *path)
-{
-    rl_scene *s = NULL;
-    rl_status st = rl_scene_load(path, &s);
-    CHECK(st == RL_OK, "load %s: %s", path, rl_errmsg());
-    return s;
-}
 
 static int no_descent; /* set by the random-scene test */
 
@@ -161,9 +117,9 @@ static void check_unoccluded(void)
 {
     char path[600];
     snprintf(path, sizeof path, "%s/square.json", tmpdir);
-    tpoly p[2] = {rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0), rect_z("grey", -1, -1, 1, 1, 0.0, 1)};
-    write_scene(path, MATS, p, 2, "\"radiance_maps\": {\"cell_size\": 0.25}");
-    rl_scene *s = load(path);
+    tpoly p[2] = {ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0), ts_rect_z("grey", -1, -1, 1, 1, 0.0, 1)};
+    ts_write_scene(path, MATS, p, 2, "\"radiance_maps\": {\"cell_size\": 0.25}");
+    rl_scene *s = ts_load(path);
     if (!s)
         return;
     const rl_method methods[] = {RL_METHOD_CULLED, RL_METHOD_NAIVE, RL_METHOD_AREA, RL_METHOD_SOLIDANGLE,
@@ -240,15 +196,15 @@ static void check_identities(void)
     char path[600];
     snprintf(path, sizeof path, "%s/occluded.json", tmpdir);
     tpoly p[] = {
-        rect_z("light", -0.4, -0.4, 0.4, 0.4, 2.0, 0),
-        rect_z("grey", -2, -2, 2, 2, 0.0, 1),
-        rect_z("grey", -2, -2, 2, 2, 2.2, 0),
-        rect_z("grey", -0.5, -0.3, 0.3, 0.5, 1.0, 0), /* a blocker facing down */
-        rect_z("grey", -0.5, -0.3, 0.3, 0.5, 1.0, 1), /* and its top */
+        ts_rect_z("light", -0.4, -0.4, 0.4, 0.4, 2.0, 0),
+        ts_rect_z("grey", -2, -2, 2, 2, 0.0, 1),
+        ts_rect_z("grey", -2, -2, 2, 2, 2.2, 0),
+        ts_rect_z("grey", -0.5, -0.3, 0.3, 0.5, 1.0, 0), /* a blocker facing down */
+        ts_rect_z("grey", -0.5, -0.3, 0.3, 0.5, 1.0, 1), /* and its top */
         {"grey", 4, {{-2, -2, 0}, {-2, 2, 0}, {-2, 2, 2.2}, {-2, -2, 2.2}}}, /* a wall facing +x */
     };
-    write_scene(path, MATS, p, 6, "\"radiance_maps\": {\"cell_size\": 0.2}, \"sampling\": {\"bounces\": 1}");
-    rl_scene *s = load(path);
+    ts_write_scene(path, MATS, p, 6, "\"radiance_maps\": {\"cell_size\": 0.2}, \"sampling\": {\"bounces\": 1}");
+    rl_scene *s = ts_load(path);
     if (!s)
         return;
     rl_solution *sol[4] = {NULL};
@@ -451,16 +407,16 @@ static void check_lightfield(void)
     write_lightfield(lfpath, 2.0f, 180, 8, 0);
     snprintf(path, sizeof path, "%s/lf.json", tmpdir);
     /* the slab faces +z at the origin; turned over (180 degrees about x) and lifted to z = 1 */
-    tpoly p[1] = {rect_z("grey", -1, -1, 1, 1, 0.0, 1)};
+    tpoly p[1] = {ts_rect_z("grey", -1, -1, 1, 1, 0.0, 1)};
     char rest[1024];
     snprintf(rest, sizeof rest,
              "\"radiance_maps\": {\"cell_size\": 0.25}, \"lightfields\": [{\"file\": \"constant_lf.h5\", \"slab\": "
              "\"light\", \"transform\": [[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]}]");
-    write_scene(path, MATS, p, 1, rest);
-    rl_scene *s = load(path);
+    ts_write_scene(path, MATS, p, 1, rest);
+    rl_scene *s = ts_load(path);
     if (!s)
         return;
-    tpoly em = rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
+    tpoly em = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
     const rl_method methods[] = {RL_METHOD_CULLED, RL_METHOD_AREA};
     for (int m = 0; m < 2; m++) {
         set_sampling(s, methods[m], 32, 4, 256, 0);
@@ -482,7 +438,7 @@ static void check_lightfield(void)
     uint64_t samples[2] = {0, 0};
     for (int sparse = 0; sparse < 2; sparse++) {
         write_lightfield(lfpath, 5.0f, 12, 16, sparse);
-        s = load(path);
+        s = ts_load(path);
         if (!s)
             return;
         samples[sparse] = check_culled_naive(s, sparse ? "sparse light field" : "masked light field");
@@ -505,12 +461,12 @@ static void check_slab_edge_on(void)
     snprintf(lfpath, sizeof lfpath, "%s/edge_lf.h5", tmpdir);
     write_lightfield(lfpath, 2.0f, 180, 16, 0);
     snprintf(path, sizeof path, "%s/edge_on.json", tmpdir);
-    write_scene(path, MATS, NULL, 0,
+    ts_write_scene(path, MATS, NULL, 0,
                 "\"lightfields\": [{\"file\": \"edge_lf.h5\", \"transform\": [[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]}]");
-    rl_scene *s = load(path);
+    rl_scene *s = ts_load(path);
     if (!s)
         return;
-    tpoly em = rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
+    tpoly em = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
     const double pts[3][6] = {{1.0, 0.0, 0.999, -1, 0, 0}, {0.5001, 0.2, 0.9999, -1, 0, 0.01}, {3.0, 0.0, 0.99, -1, 0, 0}};
     const rl_method methods[] = {RL_METHOD_CULLED, RL_METHOD_SOLIDANGLE};
     for (int m = 0; m < 2; m++)
@@ -539,8 +495,8 @@ static void extreme_case(const char *name, const tpoly *em, const double pt[6], 
 {
     char path[600];
     snprintf(path, sizeof path, "%s/extreme_%s.json", tmpdir, name);
-    write_scene(path, MATS, em, 1, "\"radiance_maps\": {\"cell_size\": 1}");
-    rl_scene *s = load(path);
+    ts_write_scene(path, MATS, em, 1, "\"radiance_maps\": {\"cell_size\": 1}");
+    rl_scene *s = ts_load(path);
     if (!s)
         return;
     double nrm[3] = {pt[3], pt[4], pt[5]}, l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
@@ -565,13 +521,13 @@ static void extreme_case(const char *name, const tpoly *em, const double pt[6], 
 static void check_extremes(void)
 {
     const double below[6] = {0.1, 0.2, 0, 0, 0, 1};
-    tpoly tiny = rect_z("light", -5e-6, -5e-6, 5e-6, 5e-6, 1.0, 0);
+    tpoly tiny = ts_rect_z("light", -5e-6, -5e-6, 5e-6, 5e-6, 1.0, 0);
     extreme_case("tiny_emitter_1e-5m", &tiny, below, 0.05, 1);
-    tpoly huge = rect_z("light", -5e3, -5e3, 5e3, 5e3, 1.0, 0);
+    tpoly huge = ts_rect_z("light", -5e3, -5e3, 5e3, 5e3, 1.0, 0);
     extreme_case("huge_emitter_1e4m", &huge, below, 0.02, 0);
-    tpoly far = rect_z("light", -0.5, -0.5, 0.5, 0.5, 1000.0, 0);
+    tpoly far = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1000.0, 0);
     extreme_case("emitter_1km_away", &far, below, 0.05, 1);
-    tpoly unit = rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
+    tpoly unit = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
     const double grazing[6] = {3.0, 0.0, 0.0, -1.0, 0.0, 0.02}; /* normal almost in the floor plane */
     extreme_case("grazing_receiver", &unit, grazing, 0.05, 1);
     const double touching[6] = {0.5, 0.0, 0.999, -1.0, 0.0, 0.0}; /* 1 mm below the emitter's edge, facing it */
@@ -629,11 +585,11 @@ static void check_random_scenes(int count)
         for (int k = 0; k < n; k++)
             p[k] = random_quad(k < 2 ? "light" : "grey");
         /* a floor that everything can shadow, sharing an edge with a wall */
-        p[n] = rect_z("grey", -3, -3, 3, 3, -2.5, 1);
+        p[n] = ts_rect_z("grey", -3, -3, 3, 3, -2.5, 1);
         tpoly wall = {"grey", 4, {{-3, -3, -2.5}, {-3, 3, -2.5}, {-3, 3, 2.5}, {-3, -3, 2.5}}};
         p[n + 1] = wall;
-        write_scene(path, MATS, p, n + 2, "\"radiance_maps\": {\"cell_size\": 0.3}, \"sampling\": {\"bounces\": 1}");
-        rl_scene *s = load(path);
+        ts_write_scene(path, MATS, p, n + 2, "\"radiance_maps\": {\"cell_size\": 0.3}, \"sampling\": {\"bounces\": 1}");
+        rl_scene *s = ts_load(path);
         if (!s)
             continue;
         rl_solution *a = NULL, *b = NULL;
