@@ -44,7 +44,6 @@
 
 #include <assimp/cimport.h>
 #include <cjson/cJSON.h>
-#include <strings.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -53,6 +52,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 
 #include "mesh.h"
@@ -641,6 +641,25 @@ static rl_status add_faces(rl_build *b, const struct aiScene *sc, uint32_t *mate
     return RL_OK;
 }
 
+/* The mesh formats read: each is in the hostile-input corpus, and each
+ * reader either checks its counts against the file or is checked first
+ * (PLY, glTF). Others of assimp's readers (OFF, Collada, DirectX among
+ * them) allocate whatever a header's count claims, gigabytes for a few
+ * bytes, so they are refused rather than trusted. */
+static const char *const MESH_FORMATS[] = {"obj", "ply", "gltf", "glb", "stl", "fbx", "3ds", NULL};
+
+/* @return 1 if path's extension names a format of MESH_FORMATS (any case). */
+static int mesh_format_supported(const char *path)
+{
+    const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+    if (!dot || (slash && dot < slash))
+        return 0;
+    for (size_t k = 0; MESH_FORMATS[k]; k++)
+        if (strcasecmp(dot + 1, MESH_FORMATS[k]) == 0)
+            return 1;
+    return 0;
+}
+
 rl_status rl__build_mesh(rl_build *b, const char *path, const char *elem, const char *shown,
                          const uint32_t *fallback)
 {
@@ -649,6 +668,9 @@ rl_status rl__build_mesh(rl_build *b, const char *path, const char *elem, const 
         return rl__build_fail(b, elem, "cannot open '%s': %s", path, strerror(errno));
     if (!S_ISREG(sb.st_mode))
         return rl__build_fail(b, elem, "'%s' is not a regular file", path);
+    if (!mesh_format_supported(path))
+        return rl__build_fail(b, elem, "cannot read '%s': mesh format not supported (OBJ, PLY, glTF, GLB, STL, FBX "
+                              "and 3DS are: their readers check their counts)", path);
     char why[256];
     if (!rl__ply_check(path, why, sizeof why)) /* assimp would trust its counts (plycheck.h) */
         return rl__build_fail(b, elem, "cannot read '%s': %s", path, why);
