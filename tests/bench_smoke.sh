@@ -106,13 +106,21 @@ check "--rays exits 0 (got $code)" [ "$code" -eq 0 ]
 check "--rays prints a rate" grep -Eq 'rays: [0-9]+ in .* rays/s' "$TMP/rays.out"
 check "--rays writes rays.json" grep -q '"rays_per_second"' "$TMP/rays/rays.json"
 
+# Scaling: both series run (five cell sizes and the partition levels), and both fits are written.
+"$ILF" bench --scaling "$TMP/tiny.json" -o "$TMP/scaling" --time-limit 5 --quiet >"$TMP/scaling.out" 2>&1
+code=$?
+check "--scaling exits 0 (got $code)" [ "$code" -eq 0 ]
+check "--scaling runs every cell size" test "$(grep -c '^cells,' "$TMP/scaling/scaling.csv")" -eq 5
+check "--scaling runs the partition series" grep -q '^partition_n,' "$TMP/scaling/scaling.csv"
+check "--scaling fits both series" grep -q '"time_exponent"' "$TMP/scaling/scaling.json"
+
 # Bad usage is exit 2.
 "$ILF" bench "$TMP/tiny.json" >/dev/null 2>&1
 code=$?
 check "a sweep without -o is bad usage (got $code)" [ "$code" -eq 2 ]
 
 if [ "$failed" -gt 0 ]; then
-    for f in run1.err run2.err rays.out; do
+    for f in run1.err run2.err rays.out scaling.out; do
         sed "s/^/    $f: /" "$TMP/$f" | head -n 10
     done
 fi

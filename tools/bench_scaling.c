@@ -130,7 +130,7 @@ static void run_point(const scaling_run *run, scaling_point *p, const scaling_po
     }
     bench_relight_job job = {.scene_path = scene_path,
                              .overrides = &cfg->sampling,
-                             .setting = {RL_METHOD_CULLED, p->partition_n, 0, 0, p->cost},
+                             .setting = {.method = RL_METHOD_CULLED, .partition_n = p->partition_n, .cost = p->cost},
                              .label = cfg->quiet ? NULL : label};
     p->ran = 1;
     if (!bench_fork(bench_relight_child, &job, &p->result))

@@ -256,10 +256,11 @@ static size_t build_settings(const bench_config *cfg, bench_setting *out)
             for (size_t i = 0; i < nn; i++)
                 for (size_t j = 0; j < nk; j++)
                     add_setting(out, &count, first,
-                                (bench_setting){method, ns[i], ks[j], 0, 0.0, (double)ns[i] * ns[i] * ks[j]});
+                                (bench_setting){.method = method, .partition_n = ns[i], .rays = ks[j],
+                                                .cost = (double)ns[i] * ns[i] * ks[j]});
         } else if (method == RL_METHOD_AREA || method == RL_METHOD_SOLIDANGLE) {
             for (size_t i = 0; i < ns_count; i++)
-                add_setting(out, &count, first, (bench_setting){method, 0, 0, ss[i], 0.0, (double)ss[i]});
+                add_setting(out, &count, first, (bench_setting){.method = method, .samples = ss[i], .cost = (double)ss[i]});
         } else if (method == RL_METHOD_ADAPTIVE) {
             const double *ts = cfg->quick ? TARGETS_QUICK : TARGETS;
             size_t nt = cfg->quick ? COUNT(TARGETS_QUICK) : COUNT(TARGETS);
@@ -267,7 +268,8 @@ static size_t build_settings(const bench_config *cfg, bench_setting *out)
             for (size_t i = 0; i < nn; i++)
                 for (size_t j = 0; j < nt; j++)
                     add_setting(out, &count, first,
-                                (bench_setting){method, ns[i], ADAPTIVE_RAYS, 0, ts[j],
+                                (bench_setting){.method = method, .partition_n = ns[i], .rays = ADAPTIVE_RAYS,
+                                                .target_error = ts[j], .cost =
                                                 2.0 * ns[i] * ns[i] * ADAPTIVE_RAYS / sqrt(ts[j] / ts[0])});
         } else {
             cli_error(BENCH_SUB, "--methods: no sweep is defined for '%s'", rl_method_name(method));
