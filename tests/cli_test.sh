@@ -593,6 +593,10 @@ check "the proxy element is named" stderr_has "proxy_bad.json: [0]: unknown key 
 printf 'v 0 0 2\nv 1 0 2\nv 0 1 2\nf 1 2 3\n' >"$CAP/tri.obj"
 expect 2 "a proxy mesh with a lone triangle" "$ILF" reproject "$CAP/probes.h5" --proxy "$CAP/tri.obj" -o "$CAP/never.h5"
 check "the lone triangle is refused by name" stderr_has "face 0 (mesh 0 face 0): 3 vertices: is a triangle without"
+printf 'ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nend_header\n' >"$CAP/huge.ply"
+expect 2 "a PLY proxy (its header's counts would be trusted)" "$ILF" reproject "$CAP/probes.h5" \
+    --proxy "$CAP/huge.ply" -o "$CAP/never.h5"
+check "the proxy format is refused by name" stderr_has "huge.ply: proxy format not supported"
 expect 2 "render-probes without --plane" "$ILF" render-probes "$SRC/data/capture/scene.json" -o "$CAP/never"
 expect 2 "render-probes with a skew plane" "$ILF" render-probes "$SRC/data/capture/scene.json" \
     --plane 0,0,1:1,0,0:1,1,0 -o "$CAP/never"

@@ -300,15 +300,16 @@ static cap_status load_mesh(const char *path, const cap_proxy_defaults *def, cap
 
 /* ------------------------------------------------------------ public */
 
-/* @return 1 if path ends in ".json", any case. */
-static int is_json(const char *path)
+/* @return 1 if path ends in extension ext (".json"), any case. */
+static int has_extension(const char *path, const char *ext)
 {
-    size_t len = strlen(path);
-    if (len < 5)
+    size_t len = strlen(path), n = strlen(ext);
+    if (len < n)
         return 0;
-    const char *ext = path + len - 5;
-    return ext[0] == '.' && tolower((unsigned char)ext[1]) == 'j' && tolower((unsigned char)ext[2]) == 's' &&
-           tolower((unsigned char)ext[3]) == 'o' && tolower((unsigned char)ext[4]) == 'n';
+    for (size_t k = 0; k < n; k++)
+        if (tolower((unsigned char)path[len - n + k]) != ext[k])
+            return 0;
+    return 1;
 }
 
 cap_status cap_proxy_load(const char *path, const cap_proxy_defaults *defaults, cap_proxy **out)
@@ -324,7 +325,14 @@ cap_status cap_proxy_load(const char *path, const cap_proxy_defaults *defaults, 
     cap_proxy *p = calloc(1, sizeof *p);
     if (p == NULL)
         return cap__fail(CAP_ERR_NOMEM, "%s: out of memory", path);
-    cap_status st = is_json(path) ? load_json(path, defaults, p) : load_mesh(path, defaults, p);
+    /* Meshes only as OBJ: a line-based format whose reader allocates as it
+     * reads. assimp's readers of formats with counts in their headers (PLY,
+     * OFF, Collada and more) allocate whatever a header claims. */
+    cap_status st = has_extension(path, ".json") ? load_json(path, defaults, p)
+                    : has_extension(path, ".obj")
+                        ? load_mesh(path, defaults, p)
+                        : cap__fail(CAP_ERR_INPUT, "%s: proxy format not supported: give planar quads in JSON or a "
+                                                   "mesh in OBJ", path);
     if (st != CAP_OK) {
         cap_proxy_destroy(p);
         return st;
