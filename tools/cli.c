@@ -203,6 +203,25 @@ void cli_print_help(FILE *out, const cli_usage *usage, const cli_option *options
     }
 }
 
+int cli_parse(const cli_usage *usage, const cli_option *options, size_t option_count, int argc, char **argv,
+              const char **path, cli_apply_fn apply, void *ctx)
+{
+    cli_parser p;
+    cli_parser_init(&p, usage, options, option_count, argc, argv);
+    const char *value;
+    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
+        if (opt == CLI_HELP)
+            return ILF_EXIT_OK;
+        if (opt == CLI_BAD)
+            return ILF_EXIT_USAGE;
+        int ok = opt == CLI_POSITIONAL && path != NULL ? cli_single_path(usage->sub, path, value)
+                                                       : apply(&p, opt, value, ctx);
+        if (!ok)
+            return ILF_EXIT_USAGE;
+    }
+    return -1;
+}
+
 int cli_single_path(const char *sub, const char **path, const char *value)
 {
     if (*path != NULL) {

@@ -104,6 +104,23 @@ void cli_parser_init(cli_parser *p, const cli_usage *usage, const cli_option *op
  */
 int cli_next(cli_parser *p, const char **value);
 
+/**
+ * Applies option opt (an index in the option table, or CLI_POSITIONAL when
+ * the subcommand takes no FILE) with its value to ctx.
+ * @return 1, or 0 after reporting.
+ */
+typedef int (*cli_apply_fn)(const cli_parser *p, int opt, const char *value, void *ctx);
+
+/**
+ * Parses a subcommand's arguments: a positional one is its single FILE,
+ * kept in *path (with path NULL, positional arguments go to apply as
+ * CLI_POSITIONAL), and every option goes to apply with ctx.
+ * @return -1 when every argument was taken; ILF_EXIT_OK after --help
+ * (printed); ILF_EXIT_USAGE after a reported error.
+ */
+int cli_parse(const cli_usage *usage, const cli_option *options, size_t option_count, int argc, char **argv,
+              const char **path, cli_apply_fn apply, void *ctx);
+
 /** Prints the usage line, summary, option table and examples. */
 void cli_print_help(FILE *out, const cli_usage *usage, const cli_option *options, size_t option_count);
 

@@ -137,10 +137,19 @@ static void record_command(bench_config *cfg, int argc, char **argv)
         at += (size_t)snprintf(cfg->command + at, sizeof cfg->command - at, " %s", argv[k]);
 }
 
-/* Applies one option to cfg. @return 1, or 0 after reporting. */
-static int apply_option(const cli_parser *p, int opt, const char *value, bench_config *cfg, enum bench_mode *mode,
-                        int *samples_given)
+/* What parsing fills: the configuration, the mode, and whether --reference-samples was given. */
+typedef struct bench_args {
+    bench_config *cfg;
+    enum bench_mode *mode;
+    int samples_given;
+} bench_args;
+
+/* Applies one option to the bench_args ctx. @return 1, or 0 after reporting. */
+static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
 {
+    bench_args *a = ctx;
+    bench_config *cfg = a->cfg;
+    enum bench_mode *mode = a->mode;
     switch (opt) {
     case OPT_OUTPUT: cfg->output = value; return 1;
     case OPT_QUICK: cfg->quick = 1; return 1;
@@ -152,7 +161,7 @@ static int apply_option(const cli_parser *p, int opt, const char *value, bench_c
             return cli_bad_value(p, value, "path too long"), 0;
         return 1;
     case OPT_REFERENCE_SAMPLES:
-        *samples_given = 1;
+        a->samples_given = 1;
         return cli_value_u32(p, value, 1, 1048576, &cfg->reference_samples);
     case OPT_TIME_LIMIT:
         if (!cli_value_double(p, value, &cfg->time_limit))
@@ -200,20 +209,11 @@ static int finish_defaults(bench_config *cfg, int samples_given)
 /* Parses argv into cfg and mode. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(bench_config *cfg, enum bench_mode *mode, int argc, char **argv)
 {
-    cli_parser p;
-    cli_parser_init(&p, &bench_usage, bench_options_table, COUNT(bench_options_table), argc, argv);
-    int samples_given = 0;
-    const char *value;
-    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
-        if (opt == CLI_HELP)
-            return ILF_EXIT_OK;
-        if (opt == CLI_BAD)
-            return ILF_EXIT_USAGE;
-        int ok = opt == CLI_POSITIONAL ? cli_single_path(BENCH_SUB, &cfg->scene, value)
-                                       : apply_option(&p, opt, value, cfg, mode, &samples_given);
-        if (!ok)
-            return ILF_EXIT_USAGE;
-    }
+    bench_args args = {cfg, mode, 0};
+    int code = cli_parse(&bench_usage, bench_options_table, COUNT(bench_options_table), argc, argv, &cfg->scene,
+                         apply_option, &args);
+    if (code != -1)
+        return code;
     const char *problem = NULL;
     if (cfg->scene == NULL)
         problem = "no scene given (see 'ilf bench --help')";
@@ -223,7 +223,7 @@ static int parse_arguments(bench_config *cfg, enum bench_mode *mode, int argc, c
         cli_error(BENCH_SUB, "%s", problem);
         return ILF_EXIT_USAGE;
     }
-    return finish_defaults(cfg, samples_given) ? -1 : ILF_EXIT_USAGE;
+    return finish_defaults(cfg, args.samples_given) ? -1 : ILF_EXIT_USAGE;
 }
 
 /* ------------------------------------------------------------ settings */

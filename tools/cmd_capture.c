@@ -76,30 +76,27 @@ void ilf_capture_progress(void *bar, uint64_t done, uint64_t total)
 
 /* ------------------------------------------------------------ options */
 
+/* Applies one option to the capture_options ctx. @return 1, or 0 after reporting. */
+static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
+{
+    capture_options *o = ctx;
+    if (opt == OPT_OUTPUT)
+        o->output = value;
+    else if (opt == OPT_THREADS)
+        return cli_value_u32(p, value, 0, 1024, &o->threads);
+    else if (opt == OPT_QUIET)
+        o->quiet = 1;
+    return 1;
+}
+
 /* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(capture_options *o, int argc, char **argv)
 {
-    cli_parser p;
-    cli_parser_init(&p, &capture_usage, capture_options_table,
-                    sizeof capture_options_table / sizeof capture_options_table[0], argc, argv);
-    const char *value;
-    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
-        if (opt == CLI_HELP)
-            return ILF_EXIT_OK;
-        if (opt == CLI_BAD)
-            return ILF_EXIT_USAGE;
-        int ok = 1;
-        if (opt == CLI_POSITIONAL)
-            ok = cli_single_path("capture", &o->manifest, value);
-        else if (opt == OPT_OUTPUT)
-            o->output = value;
-        else if (opt == OPT_THREADS)
-            ok = cli_value_u32(&p, value, 0, 1024, &o->threads);
-        else if (opt == OPT_QUIET)
-            o->quiet = 1;
-        if (!ok)
-            return ILF_EXIT_USAGE;
-    }
+    int code = cli_parse(&capture_usage, capture_options_table,
+                         sizeof capture_options_table / sizeof capture_options_table[0], argc, argv, &o->manifest,
+                         apply_option, o);
+    if (code != -1)
+        return code;
     if (o->manifest == NULL) {
         cli_error("capture", "no manifest given (see 'ilf capture --help')");
         return ILF_EXIT_USAGE;

@@ -295,29 +295,26 @@ static cJSON *file_json(const char *path, lfio_reader *r, long long bytes)
 
 /* ------------------------------------------------------------ main */
 
+/* Applies one option to the info_options ctx. @return 1, or 0 after reporting. */
+static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
+{
+    info_options *o = ctx;
+    if (opt == OPT_JSON)
+        o->json = 1;
+    else if (opt == OPT_SLAB)
+        o->slab = value;
+    else
+        return o->want_irradiance = cli_value_u32_pair(p, value, ',', 0, UINT32_MAX, o->position);
+    return 1;
+}
+
+/* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(info_options *o, int argc, char **argv)
 {
-    cli_parser p;
-    cli_parser_init(&p, &info_usage, info_options_table, sizeof info_options_table / sizeof info_options_table[0],
-                    argc, argv);
-    const char *value;
-    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
-        if (opt == CLI_HELP)
-            return ILF_EXIT_OK;
-        if (opt == CLI_BAD)
-            return ILF_EXIT_USAGE;
-        int ok = 1;
-        if (opt == CLI_POSITIONAL)
-            ok = cli_single_path("info", &o->path, value);
-        else if (opt == OPT_JSON)
-            o->json = 1;
-        else if (opt == OPT_SLAB)
-            o->slab = value;
-        else
-            ok = o->want_irradiance = cli_value_u32_pair(&p, value, ',', 0, UINT32_MAX, o->position);
-        if (!ok)
-            return ILF_EXIT_USAGE;
-    }
+    int code = cli_parse(&info_usage, info_options_table, sizeof info_options_table / sizeof info_options_table[0],
+                         argc, argv, &o->path, apply_option, o);
+    if (code != -1)
+        return code;
     if (o->path == NULL) {
         cli_error("info", "no file given (see 'ilf info --help')");
         return ILF_EXIT_USAGE;

@@ -56,28 +56,24 @@ typedef struct point_list {
 
 /* ------------------------------------------------------------ options */
 
+/* Applies one option to the irradiance_options ctx. @return 1, or 0 after reporting. */
+static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
+{
+    irradiance_options *o = ctx;
+    if (opt != OPT_POINTS)
+        return sampling_option_apply(p, &o->sampling, opt, value);
+    o->points = value;
+    return 1;
+}
+
 /* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(irradiance_options *o, int argc, char **argv)
 {
-    cli_parser p;
-    cli_parser_init(&p, &irradiance_usage, irradiance_options_table,
-                    sizeof irradiance_options_table / sizeof irradiance_options_table[0], argc, argv);
-    const char *value;
-    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
-        if (opt == CLI_HELP)
-            return ILF_EXIT_OK;
-        if (opt == CLI_BAD)
-            return ILF_EXIT_USAGE;
-        int ok = 1;
-        if (opt == CLI_POSITIONAL)
-            ok = cli_single_path("irradiance", &o->scene, value);
-        else if (opt == OPT_POINTS)
-            o->points = value;
-        else
-            ok = sampling_option_apply(&p, &o->sampling, opt, value);
-        if (!ok)
-            return ILF_EXIT_USAGE;
-    }
+    int code = cli_parse(&irradiance_usage, irradiance_options_table,
+                         sizeof irradiance_options_table / sizeof irradiance_options_table[0], argc, argv,
+                         &o->scene, apply_option, o);
+    if (code != -1)
+        return code;
     const char *problem = o->scene == NULL    ? "no scene given (see 'ilf irradiance --help')"
                           : o->points == NULL ? "--points FILE is required"
                                               : NULL;

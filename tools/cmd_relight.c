@@ -86,30 +86,27 @@ typedef struct relight_run {
 
 /* ------------------------------------------------------------ options */
 
+/* Applies one option to the relight_options ctx. @return 1, or 0 after reporting. */
+static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
+{
+    relight_options *o = ctx;
+    if (opt == OPT_OUTPUT)
+        o->output = value;
+    else if (opt == OPT_QUIET)
+        o->quiet = 1;
+    else
+        return sampling_option_apply(p, &o->sampling, opt, value);
+    return 1;
+}
+
 /* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(relight_options *o, int argc, char **argv)
 {
-    cli_parser p;
-    cli_parser_init(&p, &relight_usage, relight_options_table,
-                    sizeof relight_options_table / sizeof relight_options_table[0], argc, argv);
-    const char *value;
-    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
-        if (opt == CLI_HELP)
-            return ILF_EXIT_OK;
-        if (opt == CLI_BAD)
-            return ILF_EXIT_USAGE;
-        int ok = 1;
-        if (opt == CLI_POSITIONAL)
-            ok = cli_single_path("relight", &o->scene, value);
-        else if (opt == OPT_OUTPUT)
-            o->output = value;
-        else if (opt == OPT_QUIET)
-            o->quiet = 1;
-        else
-            ok = sampling_option_apply(&p, &o->sampling, opt, value);
-        if (!ok)
-            return ILF_EXIT_USAGE;
-    }
+    int code = cli_parse(&relight_usage, relight_options_table,
+                         sizeof relight_options_table / sizeof relight_options_table[0], argc, argv, &o->scene,
+                         apply_option, o);
+    if (code != -1)
+        return code;
     const char *problem = NULL;
     if (o->scene == NULL)
         problem = "no scene given (see 'ilf relight --help')";

@@ -130,8 +130,9 @@ static int parse_name(const cli_parser *p, const char *text, char name[LFIO_NAME
 }
 
 /* Applies one non-sampling option. @return 1, or 0 after reporting. */
-static int apply_option(const cli_parser *p, probes_options *o, int opt, const char *value)
+static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
 {
+    probes_options *o = ctx;
     uint32_t pair[2];
     switch (opt) {
     case OPT_PLANE:
@@ -176,20 +177,11 @@ static void set_defaults(probes_options *o)
 /* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(probes_options *o, int argc, char **argv)
 {
-    cli_parser p;
-    cli_parser_init(&p, &probes_usage, probes_options_table,
-                    sizeof probes_options_table / sizeof probes_options_table[0], argc, argv);
-    const char *value;
-    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
-        if (opt == CLI_HELP)
-            return ILF_EXIT_OK;
-        if (opt == CLI_BAD)
-            return ILF_EXIT_USAGE;
-        int ok = opt == CLI_POSITIONAL ? cli_single_path("render-probes", &o->scene, value)
-                                       : apply_option(&p, o, opt, value);
-        if (!ok)
-            return ILF_EXIT_USAGE;
-    }
+    int code = cli_parse(&probes_usage, probes_options_table,
+                         sizeof probes_options_table / sizeof probes_options_table[0], argc, argv, &o->scene,
+                         apply_option, o);
+    if (code != -1)
+        return code;
     const char *problem = NULL;
     if (o->scene == NULL)
         problem = "no scene given (see 'ilf render-probes --help')";

@@ -67,8 +67,9 @@ static const cli_usage reproject_usage = {
 
 /* ------------------------------------------------------------ options */
 
-static int apply_option(const cli_parser *p, reproject_options *o, int opt, const char *value)
+static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
 {
+    reproject_options *o = ctx;
     switch (opt) {
     case OPT_PROXY:
         o->proxy = value;
@@ -99,20 +100,11 @@ static int apply_option(const cli_parser *p, reproject_options *o, int opt, cons
 /* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(reproject_options *o, int argc, char **argv)
 {
-    cli_parser p;
-    cli_parser_init(&p, &reproject_usage, reproject_options_table,
-                    sizeof reproject_options_table / sizeof reproject_options_table[0], argc, argv);
-    const char *value;
-    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
-        if (opt == CLI_HELP)
-            return ILF_EXIT_OK;
-        if (opt == CLI_BAD)
-            return ILF_EXIT_USAGE;
-        int ok = opt == CLI_POSITIONAL ? cli_single_path("reproject", &o->input, value)
-                                       : apply_option(&p, o, opt, value);
-        if (!ok)
-            return ILF_EXIT_USAGE;
-    }
+    int code = cli_parse(&reproject_usage, reproject_options_table,
+                         sizeof reproject_options_table / sizeof reproject_options_table[0], argc, argv, &o->input,
+                         apply_option, o);
+    if (code != -1)
+        return code;
     const char *problem = NULL;
     if (o->input == NULL)
         problem = "no input light field given (see 'ilf reproject --help')";

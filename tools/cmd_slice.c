@@ -130,8 +130,9 @@ static void count_mode(slice_options *o, slice_mode mode)
 }
 
 /* Applies one option. @return 1, or 0 after reporting. */
-static int apply_option(const cli_parser *p, slice_options *o, int opt, const char *value)
+static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
 {
+    slice_options *o = ctx;
     switch (opt) {
     case OPT_OUTPUT: o->output = value; return 1;
     case OPT_SLAB: o->slab = value; return 1;
@@ -172,19 +173,11 @@ static int check_combination(const slice_options *o)
 
 static int parse_arguments(slice_options *o, int argc, char **argv)
 {
-    cli_parser p;
-    cli_parser_init(&p, &slice_usage, slice_options_table,
-                    sizeof slice_options_table / sizeof slice_options_table[0], argc, argv);
-    const char *value;
-    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
-        if (opt == CLI_HELP)
-            return ILF_EXIT_OK;
-        if (opt == CLI_BAD)
-            return ILF_EXIT_USAGE;
-        int ok = opt == CLI_POSITIONAL ? cli_single_path("slice", &o->path, value) : apply_option(&p, o, opt, value);
-        if (!ok)
-            return ILF_EXIT_USAGE;
-    }
+    int code = cli_parse(&slice_usage, slice_options_table,
+                         sizeof slice_options_table / sizeof slice_options_table[0], argc, argv, &o->path,
+                         apply_option, o);
+    if (code != -1)
+        return code;
     return check_combination(o) ? -1 : ILF_EXIT_USAGE;
 }
 

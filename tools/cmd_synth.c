@@ -506,9 +506,18 @@ static int parse_name(const cli_parser *p, const char *text, char name[LFIO_NAME
     return 1;
 }
 
-/* Applies one option other than a vector. @return 1, or 0 after reporting. */
-static int apply_option(const cli_parser *p, synth_options *o, int opt, const char *value)
+/* Applies one option (or a stray positional argument) to the synth_options
+ * ctx. @return 1, or 0 after reporting. */
+static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
 {
+    synth_options *o = ctx;
+    if (opt == CLI_POSITIONAL) {
+        cli_error("synth", "unexpected argument '%s' (the output is given with -o)", value);
+        return 0;
+    }
+    double *vector = vector_target(o, opt);
+    if (vector != NULL)
+        return cli_value_doubles(p, value, vector, 3);
     uint32_t grid[2];
     double x;
     switch (opt) {
@@ -551,25 +560,8 @@ static int apply_option(const cli_parser *p, synth_options *o, int opt, const ch
 /* Reads argv into o. @return -1 to go on, or an exit code (help, bad usage). */
 static int parse_arguments(synth_options *o, int argc, char **argv)
 {
-    cli_parser p;
-    cli_parser_init(&p, &synth_usage, synth_options_table,
-                    sizeof synth_options_table / sizeof synth_options_table[0], argc, argv);
-    const char *value;
-    for (int opt; (opt = cli_next(&p, &value)) != CLI_DONE;) {
-        if (opt == CLI_HELP)
-            return ILF_EXIT_OK;
-        if (opt == CLI_BAD)
-            return ILF_EXIT_USAGE;
-        if (opt == CLI_POSITIONAL) {
-            cli_error("synth", "unexpected argument '%s' (the output is given with -o)", value);
-            return ILF_EXIT_USAGE;
-        }
-        double *vector = vector_target(o, opt);
-        int ok = vector != NULL ? cli_value_doubles(&p, value, vector, 3) : apply_option(&p, o, opt, value);
-        if (!ok)
-            return ILF_EXIT_USAGE;
-    }
-    return -1;
+    return cli_parse(&synth_usage, synth_options_table, sizeof synth_options_table / sizeof synth_options_table[0],
+                     argc, argv, NULL, apply_option, o);
 }
 
 /* Checks what single options cannot: required options and combinations. */
