@@ -53,18 +53,6 @@ static float *map_irradiance(const rl_solution *sol, size_t k, uint32_t *ncells,
     return e;
 }
 
-/* @return the index of the map of scene polygon poly, or -1. */
-static long map_of(const rl_solution *sol, uint32_t poly)
-{
-    for (size_t k = 0; k < rl_solution_map_count(sol); k++) {
-        rl_map_info info;
-        rl_solution_map_info(sol, k, &info);
-        if (info.polygon == poly)
-            return (long)k;
-    }
-    return -1;
-}
-
 /* Mean analytic irradiance over a full square cell (8x8 points). */
 static double cell_reference(const tpoly *em, double radiance, const rl_map_info *info, uint32_t i, uint32_t j)
 {
@@ -130,7 +118,7 @@ static void check_unoccluded(void)
         CHECK(rl_relight(s, NULL, NULL, &sol) == RL_OK, "%s: %s", rl_method_name(methods[m]), rl_errmsg());
         if (!sol)
             continue;
-        long k = map_of(sol, 1);
+        long k = ts_map_of(sol, 1);
         double rmse, mx;
         errors_vs_reference(sol, (size_t)k, &p[0], 2.0, &rmse, &mx);
         printf("unoccluded %-10s defaults: RMSE %.4f%%, max %.4f%% of peak\n", rl_method_name(methods[m]),
@@ -152,7 +140,7 @@ static void check_unoccluded(void)
         rl_solution *sol = NULL;
         rl_relight(s, NULL, NULL, &sol);
         double rmse, mx;
-        errors_vs_reference(sol, (size_t)map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
+        errors_vs_reference(sol, (size_t)ts_map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
         printf("culled n=16 k=%-2u: RMSE %.4f%%\n", ks[q], 100 * rmse);
         CHECK(rmse < prev, "k=%u: RMSE %.4g not below %.4g", ks[q], rmse, prev);
         prev = rmse;
@@ -166,7 +154,7 @@ static void check_unoccluded(void)
         rl_solution *sol = NULL;
         rl_relight(s, NULL, NULL, &sol);
         double rmse, mx;
-        errors_vs_reference(sol, (size_t)map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
+        errors_vs_reference(sol, (size_t)ts_map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
         printf("area samples=%-4u: RMSE %.4f%%\n", ns[q], 100 * rmse);
         CHECK(rmse < prev, "samples=%u: RMSE %.4g not below %.4g", ns[q], rmse, prev);
         prev = rmse;
@@ -250,7 +238,7 @@ static void check_identities(void)
         CHECK(nonzero > total / 2, "the scene is lit (%ld of %ld nonzero)", nonzero, total);
         CHECK(rl_solution_pass_count(sol[0]) == 2, "direct pass and one bounce");
         /* the blocker casts a shadow: the floor under it is darker than beside it */
-        long fk = map_of(sol[0], 1);
+        long fk = ts_map_of(sol[0], 1);
         uint32_t n, *ij;
         double *centre;
         float *e = map_irradiance(sol[0], (size_t)fk, &n, &centre, &ij);
@@ -357,42 +345,29 @@ static uint64_t check_culled_naive(rl_scene *s, const char *what)
     rl_relight(s, NULL, NULL, &c);
     smp.zero_culling = 1;
     rl_scene_set_sampling(s, &smp);
+    long total;
     if (a && c) {
-        uint32_t na, nc, *ij;
-        double *centre;
-        float *ea = map_irradiance(a, 0, &na, &centre, &ij);
-        free(centre); free(ij);
-        float *ec = map_irradiance(c, 0, &nc, &centre, &ij);
-        free(centre); free(ij);
-        CHECK(na == nc && memcmp(ea, ec, 3 * na * sizeof *ea) == 0, "%s: zero culling changes nothing", what);
+        CHECK(ts_differing(a, c, &total) == 0, "%s: zero culling changes nothing", what);
         rl_pass_stats sa, sc;
         rl_solution_pass_stats(a, 0, &sa);
         rl_solution_pass_stats(c, 0, &sc);
         CHECK(sa.samples < sc.samples, "%s: zero culling saves samples: %llu vs %llu", what,
               (unsigned long long)sa.samples, (unsigned long long)sc.samples);
-        free(ea);
-        free(ec);
     }
     rl_solution_destroy(c);
     if (a && b) {
-        uint32_t na, nb, *ij;
-        double *centre;
-        float *ea = map_irradiance(a, 0, &na, &centre, &ij);
-        free(centre); free(ij);
-        float *eb = map_irradiance(b, 0, &nb, &centre, &ij);
-        free(centre); free(ij);
-        CHECK(na == nb && memcmp(ea, eb, 3 * na * sizeof *ea) == 0, "%s: culled == naive", what);
+        CHECK(ts_differing(a, b, &total) == 0, "%s: culled == naive", what);
+        ts_cells floor = ts_cells_get(a, 0);
         double sum = 0;
-        for (uint32_t q = 0; q < na; q++)
-            sum += ea[3 * q];
+        for (uint32_t q = 0; q < floor.n; q++)
+            sum += floor.e[3 * q];
+        ts_cells_free(&floor);
         CHECK(sum > 0, "%s: the beam lights the floor", what);
         rl_pass_stats st;
         rl_solution_pass_stats(a, 0, &st);
         samples = st.samples;
         CHECK(st.solid_angles_culled > st.solid_angles_considered / 2, "%s: the mask culls most solid angles: %llu/%llu",
               what, (unsigned long long)st.solid_angles_culled, (unsigned long long)st.solid_angles_considered);
-        free(ea);
-        free(eb);
     }
     rl_solution_destroy(a);
     rl_solution_destroy(b);
