@@ -32,6 +32,13 @@ static inline v3 frame_point(const rl_frame *f, v2 q)
     return v3_madd(v3_madd(f->origin, f->e1, q.x), f->e2, q.y);
 }
 
+/* @return the world vector of frame coordinates v (along e1, e2, n): how
+ * partition directions, given in an emitter's frame, reach the world. */
+static inline v3 frame_vector(const rl_frame *f, const double v[3])
+{
+    return v3_add(v3_add(v3_scale(f->e1, v[0]), v3_scale(f->e2, v[1])), v3_scale(f->n, v[2]));
+}
+
 /* A half-plane a*x + b*y + c >= 0. */
 typedef struct rl_halfplane {
     double a, b, c;

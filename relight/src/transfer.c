@@ -159,9 +159,8 @@ static void leaf_make(const rl_transfer_ctx *ctx, const rl_emitter *e, uint32_t 
     L->id = id;
     L->omega = lfio_part_solid_angle(lv, id);
     L->key = hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), map_index), lv), id);
-    const rl_frame *f = &e->frame;
     for (int k = 0; k < 3; k++)
-        L->p[k] = v3_add(v3_add(v3_scale(f->e1, v[k][0]), v3_scale(f->e2, v[k][1])), v3_scale(f->n, v[k][2]));
+        L->p[k] = frame_vector(&e->frame, v[k]);
     L->planar = lv >= PLANAR_MIN_LEVEL;
     L->mix = 0;
     if (!L->planar) {
@@ -498,10 +497,8 @@ static size_t node_cone(const pair *p, const rl_frame *rf, uint32_t lv, uint64_t
 {
     double v[3][3];
     lfio_part_vertices(lv, id, v);
-    for (int k = 0; k < 3; k++) {
-        const rl_frame *f = &p->e->frame;
-        gens[k] = v3_add(v3_add(v3_scale(f->e1, v[k][0]), v3_scale(f->e2, v[k][1])), v3_scale(f->n, v[k][2]));
-    }
+    for (int k = 0; k < 3; k++)
+        gens[k] = frame_vector(&p->e->frame, v[k]);
     return clip_cone(gens, 3, rf->n, clipped);
 }
 
