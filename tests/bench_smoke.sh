@@ -99,6 +99,22 @@ check "second run exits 0 (got $code)" [ "$code" -eq 0 ]
 check "second run reuses the cached reference" grep -q '^reference: cached' "$TMP/run2.out"
 check "second run does not compute it" bash -c "! grep -q '^reference: computing' '$TMP/run2.out'"
 
+# pareto_resolved FILE: no row on a front has a reference that does not resolve it.
+pareto_resolved() {
+    awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) col[$i] = i; next }
+             $col["pareto"] == 1 && $col["ref_adequate"] != 1 { bad = 1 }
+             END { exit bad }' "$1"
+}
+check "fronts hold only runs the reference resolves" pareto_resolved "$OUT/bench.csv"
+
+# A coarse reference (2 samples) resolves none of the runs: they are listed, not compared.
+bench --reference-samples 2 --methods culled -o "$TMP/coarse" >"$TMP/coarse.out" 2>&1
+code=$?
+check "coarse-reference run exits 0 (got $code)" [ "$code" -eq 0 ]
+check "coarse reference: runs marked unresolved" grep -q 'unresolved' "$TMP/coarse/summary.md"
+check "coarse reference: no run on a front" awk -F, 'NR > 1 && $21 == 1 { bad = 1 } END { exit bad }' \
+    "$TMP/coarse/bench.csv"
+
 # The ray ceiling.
 "$ILF" bench --rays "$TMP/tiny.json" --rays-count 100000 -o "$TMP/rays" >"$TMP/rays.out" 2>&1
 code=$?

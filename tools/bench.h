@@ -214,7 +214,7 @@ typedef struct bench_sweep {
     int best[BENCH_MAX_METHODS]; /**< entry of each method's most accurate run, -1 if none */
 } bench_sweep;
 
-/** Marks each method's Pareto front (wall time against RMSE) in s->entries. */
+/** Marks each method's Pareto front (wall time against RMSE) in s->entries, among runs whose RMSE is at least 10x the reference's error estimate. */
 void bench_mark_fronts(bench_sweep *s);
 
 /** Writes bench.csv, bench.json and summary.md into the output folder. @return an exit code. */
