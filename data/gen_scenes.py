@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the example scenes of ilfkit: beams.json, beams_diffuse.json, classroom.json.
+"""Writes the example scenes of ilfkit: beams, beams_diffuse, classroom, classroom_lightfield.
 
 The scenes follow docs/scene.md. Everything is computed from the constants
 below, so the output is the same on every run (Python 3 standard library
@@ -15,6 +15,10 @@ area) after the coordinates are rounded, before anything is written.
                       light field's place (43 polygons).
   classroom.json      10 m x 8 m x 3.2 m room, 42 desks and chairs, four
                       diffuse ceiling emitters, direct light only.
+  classroom_lightfield.json
+                      the same classroom, its four lamps replaced by four
+                      incident light fields in their places, facing down (the
+                      paper's classroom was lit by four light fields).
 
 In each scene the first five polygons are the floor, the ceiling and three
 walls, all facing into the room (the test program relies on it).
@@ -28,6 +32,13 @@ beams.json needs beams_lightfield.h5 beside it. It is made by `ilf synth`:
 which `--ilf PATH/TO/ilf` runs too. The slab lies in the z = 0 plane facing
 +z; the scene's transform turns it over (180 degrees about x) and lifts it to
 just below the ceiling, facing down.
+
+classroom_lightfield.json needs classroom_lightfield.h5 beside it, one slab
+that its four entries reference with four transforms; `--ilf` writes it too:
+
+  ilf synth --kind radial --grid 16x16 --n 16 --name lamp \
+      --origin -0.4,-0.4,0 --u 0.8,0,0 --v 0,0.8,0 --radiance 100,100,100 \
+      --cone 35 --seed 1 -o data/classroom_lightfield.h5
 
 Usage: python3 data/gen_scenes.py [--out DIR] [--ilf PATH]
 """
@@ -336,6 +347,18 @@ ROW_X0, ROW_STEP = 2.0, 1.1
 COLUMN_Y0, COLUMN_STEP = 0.875, 1.25
 LAMPS = [(3.5, 2.5), (3.5, 5.5), (7.0, 2.5), (7.0, 5.5)]
 LAMP_SIZE = 0.8
+LAMP_DROP = 0.01  # the lamps hang this far below the ceiling
+
+# classroom_lightfield.json: one slab, the size of a lamp, in the z = 0 plane facing +z, centred
+# on the origin; each lamp's transform turns it over and moves it to the lamp's place. Its radial
+# light leaves each position within 35 degrees of the direction away from a point 0.57 m behind
+# the slab's centre (half its diagonal), so about four fifths of the directions carry nothing.
+CLASSROOM_LIGHTFIELD = "classroom_lightfield.h5"
+CLASSROOM_LIGHTFIELD_COMMAND = [
+    "synth", "--kind", "radial", "--grid", "16x16", "--n", "16", "--name", "lamp",
+    "--origin", "%g,%g,0" % (-LAMP_SIZE / 2, -LAMP_SIZE / 2), "--u", "%g,0,0" % LAMP_SIZE,
+    "--v", "0,%g,0" % LAMP_SIZE, "--radiance", "100,100,100", "--cone", "35", "--seed", "1", "-o",
+]
 
 
 def desk(scene, x, y):
@@ -362,7 +385,9 @@ def chair(scene, x, y):
             scene.add_all("metal", aabox([cx - leg / 2, cy - leg / 2, 0], [cx + leg / 2, cy + leg / 2, seat - thick]))
 
 
-def classroom_scene():
+def classroom_scene(lightfield=False):
+    """classroom.json, or with lightfield classroom_lightfield.json: the same polygons but the
+    four lamps, which become light field slabs in their places."""
     X, Y, Z = CLASS
     inside = [X / 2, Y / 2, Z / 2]
     scene = Scene()
@@ -373,7 +398,8 @@ def classroom_scene():
     scene.material("desk", albedo=[0.6, 0.45, 0.3])
     scene.material("chair", albedo=[0.2, 0.3, 0.5])
     scene.material("metal", albedo=[0.5, 0.5, 0.5])
-    scene.material("lamp", albedo=[0.8, 0.8, 0.8], emission=[15, 15, 15])
+    if not lightfield:
+        scene.material("lamp", albedo=[0.8, 0.8, 0.8], emission=[15, 15, 15])
     scene.add("floor", rect([0, 0, 0], [X, 0, 0], [0, Y, 0]), inside)
     scene.add("ceiling", rect([0, 0, Z], [0, Y, 0], [X, 0, 0]), inside)
     scene.add("wall", rect([0, 0, 0], [0, Y, 0], [0, 0, Z]), inside)  # front (blackboard) wall, faces +x
@@ -381,20 +407,29 @@ def classroom_scene():
     scene.add("wall", rect([0, 0, 0], [0, 0, Z], [X, 0, 0]), inside)  # faces +y
     scene.add("wall", rect([0, Y, 0], [X, 0, 0], [0, 0, Z]), inside)  # faces -y
     scene.add("board", rect([0.01, 1.5, 0.9], [0, Y - 3.0, 0], [0, 0, 1.2]), inside)
+    lightfields = []
     for lx, ly in LAMPS:
-        c = [lx - LAMP_SIZE / 2, ly - LAMP_SIZE / 2, Z - 0.01]
+        if lightfield:
+            # 180 degrees about x, then up to the lamp: the slab faces -z
+            transform = [[1, 0, 0, lx], [0, -1, 0, ly], [0, 0, -1, round(Z - LAMP_DROP, DIGITS)], [0, 0, 0, 1]]
+            lightfields.append({"file": CLASSROOM_LIGHTFIELD, "slab": "lamp", "transform": transform})
+            continue
+        c = [lx - LAMP_SIZE / 2, ly - LAMP_SIZE / 2, Z - LAMP_DROP]
         scene.add("lamp", rect(c, [0, LAMP_SIZE, 0], [LAMP_SIZE, 0, 0]), [lx, ly, 0])  # faces -z
     for r in range(ROWS):
         for c in range(COLUMNS):
             x, y = ROW_X0 + r * ROW_STEP, COLUMN_Y0 + c * COLUMN_STEP
             desk(scene, x, y)
             chair(scene, x + 0.55, y)
-    out = {"materials": scene.materials, "polygons": scene.polygons,
+    out = {"materials": scene.materials, "polygons": scene.polygons}
+    if lightfield:
+        out["lightfields"] = lightfields
+    out.update({
            "radiance_maps": {"cell_size": 0.1},
            "sampling": {"method": "culled", "partition_n": 32, "rays_per_solid_angle": 4,
                         "bounces": 0, "seed": 1},
            "camera": {"position": [9.7, 7.6, 2.6], "look_at": [1.0, 2.0, 0.8], "up": [0, 0, 1],
-                      "fov_deg": 60, "width": 800, "height": 600}}
+                      "fov_deg": 60, "width": 800, "height": 600}})
     return out
 
 
@@ -405,18 +440,22 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)),
                         help="folder to write into (default: this script's folder)")
-    parser.add_argument("--ilf", help="path of the ilf command: also write beams_lightfield.h5 with it")
+    parser.add_argument("--ilf", help="path of the ilf command: also write the light field files with it "
+                        "(beams_lightfield.h5, classroom_lightfield.h5)")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
     beams, beams_diffuse = beams_scenes()
-    scenes = {"beams.json": beams, "beams_diffuse.json": beams_diffuse, "classroom.json": classroom_scene()}
+    scenes = {"beams.json": beams, "beams_diffuse.json": beams_diffuse, "classroom.json": classroom_scene(),
+              "classroom_lightfield.json": classroom_scene(lightfield=True)}
     for name, sections in scenes.items():
         path = os.path.join(args.out, name)
         write_scene(path, sections)
         print("%s: %d polygons" % (path, len(sections["polygons"])))
     if args.ilf:
-        target = os.path.join(args.out, "beams_lightfield.h5")
-        subprocess.run([args.ilf] + LIGHTFIELD_COMMAND + [target], check=True)
+        for name, command in (("beams_lightfield.h5", LIGHTFIELD_COMMAND),
+                              (CLASSROOM_LIGHTFIELD, CLASSROOM_LIGHTFIELD_COMMAND)):
+            target = os.path.join(args.out, name)
+            subprocess.run([args.ilf] + command + [target], check=True)
     return 0
 
 

@@ -434,6 +434,40 @@ d = s["passes"][0]
 assert d["emitters"] == 4 and d["rays_cast"] > 0 and s["maps"] > 1000, s
 ' "$RELIT/classroom/stats.json"
 fi
+# classroom_lightfield.json: one slab referenced four times. Its file is generated, not kept in
+# data/, so it is made here with the command gen_scenes.py runs, beside a copy of the scene.
+if [ -e "$SRC/data/classroom_lightfield.json" ] && [ -n "$PYTHON" ]; then
+    LFROOM=$TMP/classroom_lightfield
+    mkdir -p "$LFROOM"
+    cp "$SRC/data/classroom_lightfield.json" "$LFROOM/"
+    mapfile -t SYNTH < <("$PYTHON" -B -c 'import sys; sys.path.insert(0, sys.argv[1]); import gen_scenes
+print("\n".join(gen_scenes.CLASSROOM_LIGHTFIELD_COMMAND))' "$SRC/data")
+    expect 0 "synth classroom_lightfield.h5 as gen_scenes.py does" "$ILF" "${SYNTH[@]}" \
+        "$LFROOM/classroom_lightfield.h5"
+    # 1.19 m below the centre of each lamp (at z = 3.19), facing up: desks and chairs are lower
+    printf '3.5 2.5 2 0 0 1\n3.5 5.5 2 0 0 1\n7 2.5 2 0 0 1\n7 5.5 2 0 0 1\n' >"$LFROOM/points.txt"
+    expect 0 "irradiance below the four light field lamps" "$ILF" irradiance "$LFROOM/classroom_lightfield.json" \
+        --points "$LFROOM/points.txt"
+    cp "$OUT" "$LFROOM/culled.txt"
+    expect 0 "the same without zero-radiance culling" "$ILF" irradiance "$LFROOM/classroom_lightfield.json" \
+        --points "$LFROOM/points.txt" --zero-culling 0
+    check "zero-radiance culling does not change the irradiance" cmp -s "$OUT" "$LFROOM/culled.txt"
+    # The slab's radial model (ilf synth --help), integrated over the slab: c = 100, cone 35
+    # degrees, p half the diagonal behind the centre; the other lamps are outside their cones.
+    check "each of the four slabs lights the point below it as its radial light field does" py '
+import math, sys
+c, ca, h, depth, n = 100.0, math.cos(math.radians(35)), 1.19, 0.4 * math.sqrt(2), 100
+e = 0.0
+for i in range(n):
+    for j in range(n):
+        x, y = 0.8 * ((i + 0.5) / n - 0.5), 0.8 * ((j + 0.5) / n - 0.5)
+        d2 = x * x + y * y + h * h
+        cosine = (h * depth - x * x - y * y) / math.sqrt((x * x + y * y + depth * depth) * d2)
+        e += c * max(0.0, (cosine - ca) / (1 - ca)) * h * h / (d2 * d2) * 0.64 / (n * n)
+got = [float(line.split()[1]) for line in sys.stdin]
+assert len(got) == 4 and all(abs(g / e - 1) < 0.02 for g in got), (got, e)
+' <"$LFROOM/culled.txt"
+fi
 
 # irradiance: the centre of the floor, 1 m below a 1 m square of radiance 10,
 # receives E = 4 L X / sqrt(1 + X^2) atan(X / sqrt(1 + X^2)), X = 0.5: 7.5225 W m^-2.
