@@ -379,7 +379,8 @@ static void test_lightfields(void)
                "  \"transform\": [[1, 0, 0, 2.5], [0, -1, 0, 2.5], [0, 0, -1, 2.98], [0, 0, 0, 1]]}]}\n");
     write_text("lf_scaled.json", "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": 1,\n"
                                  "  \"transform\": [0, -2, 0, 1, 2, 0, 0, 0, 0, 0, 2, 3, 0, 0, 0, 1]}]}\n");
-    write_text("lf_two.json", "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": 0}, {\"file\": \"lf.h5\", \"slab\": \"a\"}]}\n");
+    write_text("lf_two.json", "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": 0}, {\"file\": \"lf.h5\", \"slab\": \"a\"},\n"
+                              "  {\"file\": \"lf.h5\", \"slab\": \"light\"}]}\n");
     write_text("lf_noslab.json", "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": \"nope\"}]}\n");
     write_text("lf_index.json", "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": 2}]}\n");
     write_text("lf_negative.json", "{\"lightfields\": [{\"file\": \"lf.h5\", \"slab\": -1}]}\n");
@@ -423,8 +424,15 @@ static void test_lightfields(void)
     }
     s = load(tmpdir, "lf_two.json");
     if (s) {
-        CHECK(rl_scene_lightfield_count(s) == 2 && s->lightfields[0].slab != NULL && s->lightfields[1].slab != NULL,
-              "two emitters from one file");
+        const rl_lightfield *l = s->lightfields;
+        CHECK(rl_scene_lightfield_count(s) == 3 && l[0].slab && l[0].slab == l[1].slab && l[2].slab &&
+                  l[2].slab != l[0].slab,
+              "three emitters from one file, two of them one slab");
+        CHECK(l[0].owns_lf && !l[1].owns_lf && !l[2].owns_lf && l[1].lf == l[0].lf && l[2].lf == l[0].lf,
+              "the file is read once and shared");
+        CHECK(l[0].owns_support && !l[1].owns_support && l[1].support == l[0].support && l[2].owns_support &&
+                  l[2].support != l[0].support,
+              "a slab's support table is shared, another slab's is its own");
         rl_scene_destroy(s);
     }
     static const bad_case bad[] = {

@@ -25,7 +25,7 @@ struct lfio_slab {
     lfio_slab_desc desc;
     uint64_t ndir;              /* 4*n*n */
     uint64_t npos;              /* nu*nv */
-    float *radiance;            /* ndir*npos*3 */
+    float *radiance;            /* ndir*npos*3, then one padding float (mix_directions) */
     double e1[3], e2[3], e3[3]; /* slab frame, world coordinates */
     double len_u, len_v;        /* |u|, |v| in metres */
     double *solid_angle;        /* ndir, steradians */

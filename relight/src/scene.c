@@ -592,7 +592,18 @@ static rl_status pick_slab(const rl_build *b, const cJSON *sj, const char *elem,
     return st;
 }
 
-/* Reads one entry of "lightfields" into lf, whose lf->lf the caller releases. */
+/* @return the first entry of s->lightfields before lf that names file (when
+ * not NULL) or uses slab (when not NULL), or NULL. */
+static const rl_lightfield *earlier_lightfield(const rl_scene *s, const rl_lightfield *lf, const char *file,
+                                               const lfio_slab *slab)
+{
+    for (const rl_lightfield *k = s->lightfields; k < lf; k++)
+        if ((file && strcmp(k->file, file) == 0) || (slab && k->slab == slab))
+            return k;
+    return NULL;
+}
+
+/* Reads one entry of "lightfields" into lf; the scene's destroy releases what it owns. */
 static rl_status read_lightfield(rl_build *b, const cJSON *j, const char *elem, rl_lightfield *lf)
 {
     static const char *const keys[] = {"file", "slab", "transform", NULL};
@@ -622,16 +633,28 @@ static rl_status read_lightfield(rl_build *b, const cJSON *j, const char *elem, 
     if (st != RL_OK)
         return st;
 
-    lfio_status ls = lfio_lightfield_read(lf->file, &lf->lf);
-    if (ls != LFIO_OK)
-        return ls == LFIO_ERR_NOMEM ? rl__fail(RL_ERR_NOMEM, "%s: %s: %s", b->file, elem, lfio_errmsg())
-                                    : rl__build_fail(b, elem, "%s", lfio_errmsg());
+    /* a file placed several times (lamps of one kind) is read once */
+    const rl_lightfield *same = earlier_lightfield(b->scene, lf, lf->file, NULL);
+    if (same) {
+        lf->lf = same->lf;
+    } else {
+        lfio_status ls = lfio_lightfield_read(lf->file, &lf->lf);
+        if (ls != LFIO_OK)
+            return ls == LFIO_ERR_NOMEM ? rl__fail(RL_ERR_NOMEM, "%s: %s: %s", b->file, elem, lfio_errmsg())
+                                        : rl__build_fail(b, elem, "%s", lfio_errmsg());
+        lf->owns_lf = 1;
+    }
     member_elem(sub, elem, "slab");
     if ((st = pick_slab(b, sj, sub, lf)) != RL_OK)
         return st;
     const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
-    if (!(lf->support = slab_support_new(lf->slab)))
-        return rl__fail(RL_ERR_NOMEM, "%s: %s: out of memory", b->file, elem);
+    if ((same = earlier_lightfield(b->scene, lf, NULL, lf->slab)) != NULL) {
+        lf->support = same->support;
+    } else {
+        if (!(lf->support = slab_support_new(lf->slab)))
+            return rl__fail(RL_ERR_NOMEM, "%s: %s: out of memory", b->file, elem);
+        lf->owns_support = 1;
+    }
     transform_vector(lf, d->origin, lf->origin);
     for (int i = 0; i < 3; i++)
         lf->origin[i] += lf->translate[i];
@@ -992,8 +1015,10 @@ void rl_scene_destroy(rl_scene *s)
     if (!s)
         return;
     for (size_t k = 0; k < s->nlightfields; k++) {
-        lfio_lightfield_destroy(s->lightfields[k].lf);
-        free(s->lightfields[k].support);
+        if (s->lightfields[k].owns_lf)
+            lfio_lightfield_destroy(s->lightfields[k].lf);
+        if (s->lightfields[k].owns_support)
+            free(s->lightfields[k].support);
     }
     free(s->lightfields);
     free(s->materials);

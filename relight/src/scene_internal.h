@@ -38,8 +38,9 @@ typedef struct rl_polygon {
 
 typedef struct rl_lightfield {
     char file[1024];        /* as resolved against the scene's folder */
-    lfio_lightfield *lf;    /* owned */
+    lfio_lightfield *lf;    /* owned when owns_lf, else borrowed from an earlier entry naming the same file */
     const lfio_slab *slab;  /* borrowed from lf */
+    int owns_lf, owns_support; /* entries naming the same file (slab) share one copy: the first owns it */
     double rot[3][3];       /* rotation part of the transform (orthonormal, det +1) */
     double scale;           /* uniform scale of the transform, > 0 */
     double translate[3];
@@ -47,7 +48,7 @@ typedef struct rl_lightfield {
     char label[96];         /* e.g. "lightfields[0]" */
     /* Per stored direction of the slab, the box of positions [i0, i1] x
      * [j0, j1] holding all its nonzero radiance (i0 > i1: none). Owned.
-     * The engine shrinks each solid angle's emitter to it. */
+     * The engine shrinks each solid angle's emitter to it. Owned when owns_support. */
     uint32_t (*support)[4];
 } rl_lightfield;
 

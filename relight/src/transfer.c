@@ -39,11 +39,18 @@
 
 /* ----------------------------------------------------------------- emitters */
 
-/* Fills the 2D polygon and area of e from its world vertices and frame. */
+/* Fills the 2D polygon, its edge half-planes and area of e from its world vertices and frame. */
 static void emitter_finish(rl_emitter *e)
 {
     for (uint32_t i = 0; i < e->nverts; i++)
         e->poly2[i] = frame_project(&e->frame, e->verts[i]);
+    for (uint32_t i = 0, j = e->nverts - 1; i < e->nverts; j = i++) {
+        v2 a = e->poly2[j], b = e->poly2[i]; /* counter-clockwise: inside is left of a -> b */
+        rl_halfplane *h = &e->edge[i];
+        h->a = -(b.y - a.y);
+        h->b = b.x - a.x;
+        h->c = -(h->a * a.x + h->b * a.y);
+    }
     e->area = polygon_area2(e->poly2, e->nverts);
 }
 
@@ -93,12 +100,10 @@ void emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e)
 /* @return 1 if frame point q lies in e's convex polygon. */
 static int emitter_contains(const rl_emitter *e, v2 q)
 {
-    for (uint32_t i = 0, j = e->nverts - 1; i < e->nverts; j = i++) {
-        v2 a = e->poly2[j], b = e->poly2[i];
-        if (v2_cross(v2_sub(b, a), v2_sub(q, a)) < 0)
-            return 0;
-    }
-    return 1;
+    int inside = 1;
+    for (uint32_t i = 0; i < e->nverts; i++) /* no early exit: one branch per sample, not one per edge */
+        inside &= e->edge[i].a * q.x + e->edge[i].b * q.y + e->edge[i].c >= 0;
+    return inside;
 }
 
 /* ------------------------------------------------------------------ leaves */

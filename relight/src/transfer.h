@@ -21,6 +21,7 @@ typedef struct rl_emitter {
     rl_frame frame;       /* partition frame: pole = front normal */
     v3 verts[RL_MAX_POLY_VERTS];
     v2 poly2[RL_MAX_POLY_VERTS];
+    rl_halfplane edge[RL_MAX_POLY_VERTS]; /* inside: a x + b y + c >= 0 for each edge of poly2 */
     uint32_t nverts;
     double area;
     float emission[3];         /* EM_CONST */
