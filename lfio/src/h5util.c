@@ -29,6 +29,11 @@
 
 /* Growth step of the in-memory file image while writing. */
 #define CORE_INCREMENT ((size_t)8 << 20)
+/* Most bytes HDF5's metadata cache holds per open file. Its default (32 MiB,
+ * grown on demand) kept tens of MiB of object headers alive while a
+ * radiance-map file of thousands of maps was written; lfio touches each
+ * object once, in order, so a small cache costs no extra I/O worth noting. */
+#define METADATA_CACHE_MAX ((size_t)2 << 20)
 
 /* ------------------------------------------------------------------- errors */
 
@@ -571,6 +576,20 @@ static lfio_status finish_superblock(const char *path, unsigned char *image, siz
     return LFIO_OK;
 }
 
+/* Bounds fapl's metadata cache to METADATA_CACHE_MAX. @return 0, or -1 if HDF5 refuses. */
+static int small_metadata_cache(hid_t fapl)
+{
+    H5AC_cache_config_t cfg;
+    cfg.version = H5AC__CURR_CACHE_CONFIG_VERSION;
+    if (H5Pget_mdc_config(fapl, &cfg) < 0)
+        return -1;
+    cfg.set_initial_size = 1;
+    cfg.initial_size = METADATA_CACHE_MAX / 2;
+    cfg.min_size = METADATA_CACHE_MAX / 4;
+    cfg.max_size = METADATA_CACHE_MAX;
+    return H5Pset_mdc_config(fapl, &cfg) < 0 ? -1 : 0;
+}
+
 /*
  * Builds the whole file in memory with HDF5's core driver (no backing store)
  * and returns its bytes. HDF5 1.10 cannot recover from a failed write to a
@@ -592,7 +611,7 @@ static lfio_status build_image(const char *path, const char *name, lfio__h5_fill
      * object with the file, so no forgotten id outlives it. */
     if (fapl < 0 || H5Pset_fapl_core(fapl, CORE_INCREMENT, 0) < 0
         || H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST) < 0
-        || H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0)
+        || H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0 || small_metadata_cache(fapl) < 0)
         st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot set file access properties");
     /* name only identifies the in-memory file: the core driver creates nothing on disk. */
     hid_t file = st == LFIO_OK ? H5Fcreate(name, H5F_ACC_TRUNC, H5P_DEFAULT, fapl) : -1;
@@ -751,8 +770,10 @@ lfio_status lfio__h5_open_read(const char *path, hid_t *file)
     if (st != LFIO_OK)
         return st;
     hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-    if (fapl >= 0)
+    if (fapl >= 0) {
         H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
+        small_metadata_cache(fapl); /* an optimisation: on failure the default cache serves */
+    }
     *file = H5Fopen(path, H5F_ACC_RDONLY, fapl >= 0 ? fapl : H5P_DEFAULT);
     if (*file < 0)
         st = lfio__h5_fail(LFIO_ERR_FORMAT, path, "/", "cannot open as HDF5");
