@@ -7,7 +7,7 @@
 # (fewer repeats, small sweeps). Every number BENCHMARKS.md quotes is in
 # OUT/results.txt or in the bench folders below it. Runs that are compared
 # run alternately, so machine noise hits both sides alike; the medians of
-# the repeats are reported. Takes about half an hour on 2 cores.
+# the repeats are reported. Takes about 50 minutes on 2 cores.
 set -eu
 cd "$(dirname "$0")/.."
 ILF=${ILF:-build/tools/ilf}
@@ -105,7 +105,7 @@ done
 
 say ""
 say "## 5. Sweeps (speed against accuracy)"
-SWEEP_OPTS="--time-limit 60 --reference-samples 2048"
+SWEEP_OPTS="--time-limit 60 --reference-samples 8192"
 [ "$QUICK" = 1 ] && SWEEP_OPTS="--quick --time-limit 10"
 for s in beams_diffuse beams classroom; do
     # shellcheck disable=SC2086
