@@ -1,7 +1,9 @@
 #!/bin/bash
 # install_test.sh BUILD_DIR CONSUMER_SRC WORK_DIR
 # Installs the build into a fresh prefix, then builds and runs a consumer of
-# liblfio twice: through find_package(lfio) and through pkg-config.
+# liblfio twice: through find_package(lfio) and through pkg-config. The
+# installed ilf does not link OpenImageIO and finds the installed image module
+# (LIBDIR/ilfkit/libilfkit_oiio.so) to write a PNG and an EXR.
 set -eu
 build=$1 src=$2 work=$3
 rm -rf "$work"
@@ -24,5 +26,13 @@ flags=$(PKG_CONFIG_PATH="$libdir/pkgconfig" pkg-config --cflags --libs lfio)
 check cc -std=c99 -o "$work/consumer_pc" "$src/consumer.c" $flags
 check env LD_LIBRARY_PATH="$libdir" "$work/consumer_pc" "$work/b.h5"
 check env LD_LIBRARY_PATH="$libdir" "$prefix/bin/ilf" --version
+# the image module: installed, loaded by the installed ilf on its first image, never linked
+check test -f "$libdir/ilfkit/libilfkit_oiio.so"
+check test "$(ldd "$prefix/bin/ilf" | grep -c OpenImageIO)" -eq 0
+ilf() { env -u ILFKIT_IMAGE_MODULE LD_LIBRARY_PATH="$libdir" "$prefix/bin/ilf" "$@" >>"$work/ilf.log" 2>&1; }
+check ilf synth --kind constant --grid 2x2 --n 2 -o "$work/c.h5"
+check ilf slice "$work/c.h5" --toward 0,0,1 -o "$work/c.png"
+check ilf slice "$work/c.h5" --position 0,0 --layout latlong -o "$work/c.exr"
+check test -s "$work/c.png" -a -s "$work/c.exr"
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

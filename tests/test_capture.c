@@ -13,6 +13,11 @@
  *     interpolated; bad values are repaired and counted; LDR brackets merge
  *     to the HDR truth better than one clipped exposure; the result does not
  *     depend on the thread count;
+ *   - the image module (OpenImageIO) loads lazily: nothing of it is mapped
+ *     before the first image call, it is after; pinned by ILFKIT_IMAGE_MODULE
+ *     to a missing file or to a module of another version (child processes,
+ *     as the module loads once per process), writes and reads fail with
+ *     their status and a message naming the image and the module;
  *   - manifest, image and proxy errors: status and a message naming the file
  *     and the element;
  *   - the real probe data/capture/probes/studio.exr end to end: energy
@@ -30,6 +35,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "capture/capture.h"
 #include "capture/image.h"
@@ -546,6 +553,104 @@ static void test_capture_errors(void)
                          "coarse.exr is 8x4 but", "constant.exr is 64x32");
     expect_capture_error("{" DOWN_PLANE ", " GRID1 ", \"projection\": \"mirror_ball\", \"pattern\": \"constant.exr\"}",
                          "64x32", "square");
+}
+
+/* ------------------------------------------------------------ the image module */
+
+/* @return 1 if a line of /proc/self/maps contains name, 0 if none does, -1 if the maps cannot be read. */
+static int mapped(const char *name)
+{
+    FILE *f = fopen("/proc/self/maps", "r");
+    if (f == NULL)
+        return -1;
+    char line[PATH_BYTES + 128];
+    int found = 0;
+    while (!found && fgets(line, sizeof line, f) != NULL)
+        found = strstr(line, name) != NULL;
+    fclose(f);
+    return found;
+}
+
+/* @return whether text contains every one of the NULL-terminated list of parts. */
+static int names_all(const char *text, const char *const *parts)
+{
+    for (; *parts != NULL; parts++)
+        if (strstr(text, *parts) == NULL)
+            return 0;
+    return 1;
+}
+
+/* With the module pinned to module_path (which cannot serve), a write and a read fail with their
+ * status and a message naming the image, module_path and why (NULL: not checked); nothing is
+ * written and OpenImageIO is not mapped. Argument errors are reported as before. */
+static void expect_unavailable(const char *module_path, const char *why)
+{
+    const char *image = tmp_path("unavailable.png");
+    char probe[PATH_BYTES], err[1024];
+    snprintf(probe, sizeof probe, "%s/capture/probes/studio.exr", data_dir);
+    const float px[3] = {0.5f, 0.25f, 1.0f};
+    remove(image);
+    CHECK(cap_image_write(image, 1, 1, 3, px, err, sizeof err) == CAP_ERR_OUTPUT, "write without a module: %s", err);
+    const char *write_parts[] = {image, module_path, "cannot write", "not available", why, NULL};
+    CHECK(names_all(err, write_parts), "the message names image, module and cause: %s", err);
+    CHECK(strcmp(err, cap_error_message()) == 0, "err and cap_error_message() agree: %s", cap_error_message());
+    CHECK(access(image, F_OK) != 0, "a failed write leaves no file");
+    cap_image img;
+    CHECK(cap_image_read(probe, &img, err, sizeof err) == CAP_ERR_INPUT, "read without a module: %s", err);
+    const char *read_parts[] = {probe, module_path, "cannot read", "not available", why, NULL};
+    CHECK(names_all(err, read_parts), "the message names image, module and cause: %s", err);
+    CHECK(img.pixels == NULL && img.width == 0, "a failed read leaves the image zeroed");
+    CHECK(cap_image_write(tmp_path("unavailable.tif"), 1, 1, 3, px, err, sizeof err) == CAP_ERR_ARG,
+          "a bad extension is still a bad argument: %s", err);
+    CHECK(mapped("libOpenImageIO") == 0, "no OpenImageIO mapped after a failed load");
+}
+
+/* Runs expect_unavailable(module_path, why) in a child process whose module is pinned to
+ * module_path; the module loads once per process, so this process must not have loaded it yet. */
+static void in_child_without_module(const char *module_path, const char *why)
+{
+    fflush(stdout);
+    fflush(stderr);
+    long failed_before = check_failed;
+    pid_t pid = fork();
+    if (pid == 0) {
+        setenv("ILFKIT_IMAGE_MODULE", module_path, 1);
+        expect_unavailable(module_path, why);
+        fflush(stdout);
+        _exit(check_failed > failed_before ? 1 : 0);
+    }
+    int status = -1;
+    CHECK(pid > 0 && waitpid(pid, &status, 0) == pid && WIFEXITED(status) && WEXITSTATUS(status) == 0,
+          "the child pinned to %s passed its checks (wait status %d)", module_path, status);
+}
+
+static void test_unavailable_module(void)
+{
+    in_child_without_module(tmp_path("no-such-dir/libilfkit_oiio.so"), NULL);
+    in_child_without_module(STALE_IMAGE_MODULE, "module version");
+}
+
+/* Must be this process's first image call. */
+static void test_lazy_module(void)
+{
+    CHECK(mapped("libOpenImageIO") == 0, "OpenImageIO is not mapped before the first image call");
+    CHECK(mapped("libilfkit_oiio") == 0, "the image module is not mapped before the first image call");
+    cap_image img = {1, 1, 1, NULL, 0, 8};
+    cap_image_free(&img);
+    CHECK(cap_image_guess_format("a/b.Exr") == CAP_IMAGE_FORMAT_EXR && cap_image_guess_format("b.PNG") ==
+          CAP_IMAGE_FORMAT_PNG && cap_image_guess_format("b.exr/c") == CAP_IMAGE_FORMAT_UNKNOWN,
+          "formats by extension");
+    CHECK(mapped("libOpenImageIO") == 0, "guessing formats and freeing images load nothing");
+    const float px[2 * 2 * 3] = {0, 0.5f, 1, 2, 3, 4, -1, 1e6f, 0.25f, 7, 8, 9};
+    char err[512];
+    CHECK(cap_image_write(tmp_path("lazy.exr"), 2, 2, 3, px, err, sizeof err) == CAP_OK, "%s", err);
+    CHECK(mapped("libilfkit_oiio") == 1, "the image module is mapped after the first write");
+    CHECK(mapped("libOpenImageIO") == 1, "OpenImageIO is mapped after the first write");
+    CHECK(cap_image_read(tmp_path("lazy.exr"), &img, err, sizeof err) == CAP_OK, "%s", err);
+    CHECK(img.width == 2 && img.height == 2 && img.channels == 3 && !img.integer && img.bits == 32 &&
+              memcmp(img.pixels, px, sizeof px) == 0,
+          "32-bit float EXR read back exactly");
+    cap_image_free(&img);
 }
 
 /* ------------------------------------------------------------ the real probe */
@@ -1147,6 +1252,10 @@ int main(int argc, char **argv)
     snprintf(tmp_dir, sizeof tmp_dir, "%s/capture", base != NULL ? base : "/tmp");
     mkdir(base != NULL ? base : "/tmp", 0777);
     mkdir(tmp_dir, 0777);
+    /* The image module loads once per process: the children that pin it elsewhere are forked
+     * before this process's first image call, which is test_lazy_module's. */
+    test_unavailable_module();
+    test_lazy_module();
     test_projection_frames();
     test_projection_maps();
     test_partition_samples();

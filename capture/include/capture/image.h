@@ -1,8 +1,22 @@
 /*
- * image.h - reading and writing images: a C interface over OpenImageIO,
- * implemented in capture/src/image_oiio.cpp, the only file of ilfkit that
- * includes OpenImageIO headers. The `ilf` command writes its images with it
- * and the capture reads light probes with it.
+ * image.h - reading and writing images: a C interface over OpenImageIO.
+ * The `ilf` command writes its images with it and the capture reads light
+ * probes with it.
+ *
+ * OpenImageIO is loaded lazily: capture/src/image.c implements these
+ * functions and, on the first cap_image_write() or cap_image_read() of the
+ * process, loads the image module libilfkit_oiio.so (capture/src/image_oiio.cpp,
+ * the only file of ilfkit that includes OpenImageIO headers) with dlopen(),
+ * once, thread-safely; programs that never read or write an image never map
+ * OpenImageIO. The module is taken from $ILFKIT_IMAGE_MODULE (a full path)
+ * if that is set and not empty, and then from there only; otherwise from
+ * <folder of the program>/../LIBDIR/ilfkit/ (the build tree and a relocated
+ * install), then from the configured install's LIBDIR/ilfkit/. A module of
+ * another build (a different entry table version) is refused. If no module
+ * loads, every read and write fails with its usual status (CAP_ERR_INPUT,
+ * CAP_ERR_OUTPUT) and a message naming the image, each module path tried
+ * and why it failed; the process does not try again. cap_image_guess_format()
+ * and cap_image_free() never load anything.
  *
  * Conventions:
  *   - Pixels are float, interleaved, rows top to bottom: [y][x][channel].
@@ -59,7 +73,7 @@ cap_image_format cap_image_guess_format(const char *path);
 /**
  * Writes a width x height image with 1 to 4 channels (3 = RGB, 4 = RGBA),
  * pixels [y][x][channel], atomically.
- * @return CAP_OK; CAP_ERR_ARG (bad size, channel count, NULL or unknown extension); CAP_ERR_OUTPUT; CAP_ERR_NOMEM.
+ * @return CAP_OK; CAP_ERR_ARG (bad size, channel count, NULL or unknown extension); CAP_ERR_OUTPUT (also: no image module); CAP_ERR_NOMEM.
  */
 cap_status cap_image_write(const char *path, int width, int height, int channels, const float *pixels, char *err,
                            size_t errlen);
@@ -67,7 +81,7 @@ cap_status cap_image_write(const char *path, int width, int height, int channels
 /**
  * Reads the first subimage of path whole (see the conventions above).
  * @return CAP_OK and *img filled; CAP_ERR_INPUT (missing, a folder, unreadable,
- * not an image, too large) or CAP_ERR_NOMEM with *img zeroed; CAP_ERR_ARG if path or img is NULL.
+ * not an image, too large, no image module) or CAP_ERR_NOMEM with *img zeroed; CAP_ERR_ARG if path or img is NULL.
  */
 cap_status cap_image_read(const char *path, cap_image *img, char *err, size_t errlen);
 
