@@ -405,6 +405,8 @@ check "relight --quiet still writes everything" only_files "$RELIT/quiet" radian
 expect 0 "relight again over the same folder" "$ILF" relight "$SQUARE" -o "$RELIT/quiet" "${FAST[@]}" --quiet \
     --bounces 0
 check "rewriting leaves no temporaries" only_files "$RELIT/quiet" radiance.h5 stats.json view.exr view.png
+expect 0 "relight --no-view" "$ILF" relight "$SQUARE" -o "$RELIT/noview" "${FAST[@]}" --quiet --no-view
+check "relight --no-view writes no view" only_files "$RELIT/noview" radiance.h5 stats.json
 check "--bounces 0 runs the direct pass only" py '
 import json, sys
 s = json.load(open(sys.argv[1]))

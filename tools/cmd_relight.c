@@ -48,21 +48,23 @@ typedef struct relight_options {
     const char *output;
     sampling_overrides sampling;
     int quiet;
+    int no_view; /* skip view.exr/png: no image is written, so OpenImageIO is never loaded */
 } relight_options;
 
 /* Options after the shared sampling ones, whose ids come first (relight_cli.h). */
-enum relight_option_id { OPT_OUTPUT = SAMPLING_OPT_COUNT, OPT_QUIET };
+enum relight_option_id { OPT_OUTPUT = SAMPLING_OPT_COUNT, OPT_QUIET, OPT_NO_VIEW };
 
 static const cli_option relight_options_table[] = {
     RELIGHT_SAMPLING_OPTIONS,
     {"output", 'o', "DIR", "folder for radiance.h5, stats.json and view.exr/png (required; created)"},
     {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
+    {"no-view", 0, NULL, "write no view.exr/png even when the scene has a camera"},
 };
 
 static const cli_usage relight_usage = {
     "relight",
     "SCENE -o DIR [--method M] [--threads N] [--seed S] [--partition-n N] [--rays K]\n"
-    "                   [--samples N] [--bounces B] [--quiet]",
+    "                   [--samples N] [--bounces B] [--no-view] [--quiet]",
     "Relights the scene (docs/scene.md) and writes to DIR: radiance.h5, the irradiance\n"
     "and radiosity of every receiving polygon's cells (docs/format.md); stats.json, the\n"
     "settings, times and per-pass counters (docs/cli.md); and, when the scene has a\n"
@@ -94,6 +96,8 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
         o->output = value;
     else if (opt == OPT_QUIET)
         o->quiet = 1;
+    else if (opt == OPT_NO_VIEW)
+        o->no_view = 1;
     else
         return sampling_option_apply(p, &o->sampling, opt, value);
     return 1;
@@ -531,7 +535,7 @@ int ilf_cmd_relight(int argc, char **argv)
         print_run(&run);
     if (code == ILF_EXIT_OK)
         code = write_radiance(&run);
-    if (code == ILF_EXIT_OK && rl_scene_has_camera(run.scene))
+    if (code == ILF_EXIT_OK && rl_scene_has_camera(run.scene) && !o.no_view)
         code = write_view(&run);
     if (code == ILF_EXIT_OK)
         code = write_stats(&run);
