@@ -40,7 +40,7 @@ stat() { $py -c "import json,sys; d=json.load(open(sys.argv[1])); [d := d[k] if 
 # median of the arguments
 median() { $py -c "import sys,statistics; print('%.4g' % statistics.median(map(float, sys.argv[1:])))" "$@"; }
 
-# relight_pair NAME SCENE OPTS_A -- OPTS_B: REPEATS alternating runs of A and B;
+# relight_pair NAME SCENE OPTS_A -- OPTS_B: REPEATS alternating runs of A and B (no view images);
 # prints the median direct-pass and total wall and CPU seconds of each
 relight_pair() {
     name=$1 scene=$2
@@ -57,7 +57,7 @@ relight_pair() {
             eval "opts=\$$s"
             dir="$OUT/relight/$name-$s-$i"
             # shellcheck disable=SC2086
-            /usr/bin/time -f %M -o "$dir.rss" "$ILF" relight "$scene" -o "$dir" --quiet $opts
+            /usr/bin/time -f %M -o "$dir.rss" "$ILF" relight "$scene" -o "$dir" --quiet --no-view $opts
             eval "w_$s=\"\$w_$s $(stat "$dir/stats.json" wall_seconds)\""
             eval "c_$s=\"\$c_$s $(stat "$dir/stats.json" cpu_seconds)\""
             eval "d_$s=\"\$d_$s $(stat "$dir/stats.json" passes 0 wall_seconds)\""
@@ -78,6 +78,11 @@ relight_pair() {
 say ""
 say "## 1. Paper settings, direct light (culled, n = 32, 4 rays), with and without zero-radiance culling"
 relight_pair beams_direct data/.bench_beams_paper.json --bounces 0 -- --bounces 0 --zero-culling 0
+# the same run as a user makes it, writing the camera's view (which loads OpenImageIO): peak memory
+/usr/bin/time -f %M -o "$OUT/relight/beams_view.rss" "$ILF" relight data/.bench_beams_paper.json \
+    -o "$OUT/relight/beams_view" --quiet --bounces 0
+say "beams_direct with view.exr/png: peak RSS $(cat "$OUT/relight/beams_view.rss") KiB"
+say "ilf info (no image, no scene): peak RSS $( /usr/bin/time -f %M "$ILF" info data/beams_lightfield.h5 2>&1 >/dev/null | tail -1) KiB"
 say ""
 say "## 2. Paper settings, 2 bounces (the paper's 36.85 s -> 20.39 s run)"
 [ "$QUICK" = 1 ] || relight_pair beams_bounces data/.bench_beams_paper.json --bounces 2 -- --bounces 2 --zero-culling 0
