@@ -65,21 +65,9 @@ static void map_frame(const rl_scene *scene, uint32_t k, rl_map *m)
 static uint32_t clip_square(const rl_map *m, uint32_t i, uint32_t j, v2 *out)
 {
     double x0 = m->u0 + i * m->cell, y0 = m->v0 + j * m->cell, x1 = x0 + m->cell, y1 = y0 + m->cell;
-    v2 a[RL_MAX_POLY_VERTS + 8] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}, b[RL_MAX_POLY_VERTS + 8];
-    size_t count = 4;
-    v2 *cur = a, *next = b;
-    for (uint32_t e = 0; e < m->npoly && count > 0; e++) {
-        v2 p = m->poly[e], q = m->poly[(e + 1) % m->npoly];
-        /* inside is to the left of each counter-clockwise edge */
-        rl_halfplane h = {-(q.y - p.y), q.x - p.x, 0};
-        h.c = -(h.a * p.x + h.b * p.y);
-        count = clip_poly2(cur, count, h, next);
-        v2 *t = cur;
-        cur = next;
-        next = t;
-    }
-    memcpy(out, cur, count * sizeof *cur);
-    return (uint32_t)count;
+    const v2 square[4] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+    v2 scratch[RL_MAX_POLY_VERTS + 8];
+    return (uint32_t)clip_to_polygon(square, 4, m->poly, m->npoly, out, scratch);
 }
 
 /* Fills the grid and cells of m. @return RL_OK, RL_ERR_NOMEM, or RL_ERR_INPUT

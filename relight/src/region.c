@@ -50,6 +50,22 @@ size_t clip_poly2(const v2 *p, size_t count, rl_halfplane h, v2 *out)
     return m;
 }
 
+size_t clip_to_polygon(const v2 *p, size_t count, const v2 *clip, size_t nclip, v2 *out, v2 *scratch)
+{
+    v2 *cur = out, *next = scratch;
+    if (p != out)
+        memmove(out, p, count * sizeof *p);
+    for (size_t e = 0; e < nclip && count > 0; e++) {
+        count = clip_poly2(cur, count, edge_halfplane(clip[e], clip[(e + 1) % nclip]), next);
+        v2 *t = cur;
+        cur = next;
+        next = t;
+    }
+    if (cur != out)
+        memcpy(out, cur, count * sizeof *cur);
+    return count;
+}
+
 size_t clip_to_region(const v2 *p, size_t count, const rl_region *r, v2 *out, size_t out_cap)
 {
     if (r->empty)

@@ -44,6 +44,15 @@ typedef struct rl_halfplane {
     double a, b, c;
 } rl_halfplane;
 
+/* @return the half-plane left of the directed edge p -> q, its line included:
+ * the inside of a counter-clockwise convex polygon, one edge at a time. */
+static inline rl_halfplane edge_halfplane(v2 p, v2 q)
+{
+    rl_halfplane h = {-(q.y - p.y), q.x - p.x, 0};
+    h.c = -(h.a * p.x + h.b * p.y);
+    return h;
+}
+
 /* The region of R's plane that may receive from S through a cone of
  * directions: the intersection of its half-planes. all = 1 means "the whole
  * plane" (a conservative answer when the geometry is degenerate); empty = 1
@@ -62,6 +71,12 @@ size_t clip_poly3(const v3 *p, size_t count, v3 o, v3 n, v3 *out);
 /* Clips the convex 2D polygon p to half-plane h, writing at most count+1 vertices.
  * @return the vertex count of the result. */
 size_t clip_poly2(const v2 *p, size_t count, rl_halfplane h, v2 *out);
+
+/* Clips the convex 2D polygon p (count vertices) to the counter-clockwise
+ * convex polygon clip (nclip vertices), into out; scratch is working space.
+ * out and scratch each need room for count + nclip vertices; p may be out.
+ * @return the vertex count of the result (0 if they do not overlap). */
+size_t clip_to_polygon(const v2 *p, size_t count, const v2 *clip, size_t nclip, v2 *out, v2 *scratch);
 
 /* Clips the convex 2D polygon p (count vertices, at most RL_MAX_POLY_VERTS) to every
  * half-plane of region r, into out (room for RL_MAX_POLY_VERTS + r->count vertices).

@@ -44,13 +44,8 @@ static void emitter_finish(rl_emitter *e)
 {
     for (uint32_t i = 0; i < e->nverts; i++)
         e->poly2[i] = frame_project(&e->frame, e->verts[i]);
-    for (uint32_t i = 0, j = e->nverts - 1; i < e->nverts; j = i++) {
-        v2 a = e->poly2[j], b = e->poly2[i]; /* counter-clockwise: inside is left of a -> b */
-        rl_halfplane *h = &e->edge[i];
-        h->a = -(b.y - a.y);
-        h->b = b.x - a.x;
-        h->c = -(h->a * a.x + h->b * a.y);
-    }
+    for (uint32_t i = 0, j = e->nverts - 1; i < e->nverts; j = i++)
+        e->edge[i] = edge_halfplane(e->poly2[j], e->poly2[i]);
     e->area = polygon_area2(e->poly2, e->nverts);
 }
 
@@ -603,22 +598,13 @@ static int cell_domain(const rl_map *m, uint32_t cell, const v2 *clip, size_t nc
         return 1;
     /* cell intersect region: clip the cell by the clipped region's edges */
     v2 buf[2][RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8];
-    size_t n = d->n;
-    memcpy(buf[0], d->poly, n * sizeof *d->poly);
-    int cur = 0;
-    for (size_t e = 0; e < nclip && n > 0; e++) {
-        v2 a = clip[e], b = clip[(e + 1) % nclip];
-        rl_halfplane h = {-(b.y - a.y), b.x - a.x, 0};
-        h.c = -(h.a * a.x + h.b * a.y);
-        n = clip_poly2(buf[cur], n, h, buf[1 - cur]);
-        cur = 1 - cur;
-    }
-    double part = n >= 3 ? polygon_area2(buf[cur], (uint32_t)n) : 0.0;
+    size_t n = clip_to_polygon(d->poly, d->n, clip, nclip, buf[0], buf[1]);
+    double part = n >= 3 ? polygon_area2(buf[0], (uint32_t)n) : 0.0;
     if (!(part > 0))
         return 0;
     d->weight = part / m->cells[cell].area;
     d->n = (uint32_t)(n < RL_MAX_POLY_VERTS + 8 ? n : RL_MAX_POLY_VERTS + 8);
-    memcpy(d->poly, buf[cur], d->n * sizeof *d->poly);
+    memcpy(d->poly, buf[0], d->n * sizeof *d->poly);
     return 1;
 }
 
