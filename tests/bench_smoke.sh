@@ -21,20 +21,8 @@ TMP=${2:-$(mktemp -d "${TMPDIR:-/tmp}/bench_smoke.XXXXXX")}
 rm -rf "$TMP"
 mkdir -p "$TMP"
 
-passed=0
-failed=0
-
-# check DESCRIPTION COMMAND...: one check that passes when COMMAND succeeds.
-check() {
-    local what=$1
-    shift
-    if "$@"; then
-        passed=$((passed + 1))
-    else
-        failed=$((failed + 1))
-        echo "FAIL: $what"
-    fi
-}
+# check DESCRIPTION COMMAND... and the counts $passed, $failed
+. "$(dirname "$0")/checks.sh"
 
 # csv_ok FILE MIN_ROWS: the header names the columns and at least MIN_ROWS rows follow,
 # each with a method name and then only finite numbers.

@@ -27,21 +27,9 @@ mkdir -p "$TMP"
 OUT=$TMP/stdout
 ERR=$TMP/stderr
 
-passed=0
-failed=0
+# check DESCRIPTION COMMAND... and the counts $passed, $failed
+. "$(dirname "$0")/checks.sh"
 status=0
-
-# check DESCRIPTION COMMAND...: one check that passes when COMMAND succeeds.
-check() {
-    local what=$1
-    shift
-    if "$@"; then
-        passed=$((passed + 1))
-    else
-        failed=$((failed + 1))
-        echo "FAIL: $what"
-    fi
-}
 
 # run COMMAND...: runs it, keeping stdout in $OUT, stderr in $ERR, exit code in $status.
 run() {

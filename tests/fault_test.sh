@@ -38,20 +38,8 @@ LOG=$TMP/log
 # Leaks inside HDF5 on damaged files are HDF5's (tests/lsan.supp), not ours.
 export LSAN_OPTIONS="suppressions=$(cd "$(dirname "$0")" && pwd)/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 
-passed=0
-failed=0
-
-# check DESCRIPTION COMMAND...: counts one check, passing when COMMAND succeeds.
-check() {
-    local what=$1
-    shift
-    if "$@"; then
-        passed=$((passed + 1))
-    else
-        failed=$((failed + 1))
-        echo "FAIL: $what"
-    fi
-}
+# check DESCRIPTION COMMAND... and the counts $passed, $failed
+. "$(dirname "$0")/checks.sh"
 
 # expect CODE TEXT DESCRIPTION COMMAND...: runs COMMAND (output in $LOG) and checks that it ends
 # within $LIMIT s with exit code CODE and, unless TEXT is empty, says TEXT (any letter case).
