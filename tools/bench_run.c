@@ -35,8 +35,6 @@
 #include "cli.h"
 #include "jsonout.h"
 
-/* The progress bar of a child advances in steps of 1/PROGRESS_STEPS of its run. */
-#define PROGRESS_STEPS 1000u
 
 const char *bench_setting_label(const bench_setting *s, char *buf, size_t size)
 {
@@ -154,22 +152,6 @@ int bench_fork(bench_job_fn job, void *arg, bench_result *out)
 
 /* ------------------------------------------------------------ in the child */
 
-/* Progress of a child's run: its bar and how many steps are drawn. */
-typedef struct child_progress {
-    cli_progress bar;
-    uint64_t shown;
-} child_progress;
-
-/* rl_progress_fn: moves the bar to done (in [0, 1]). */
-static void child_progress_to(void *user, double done)
-{
-    child_progress *p = user;
-    uint64_t step = done <= 0.0 ? 0 : done >= 1.0 ? PROGRESS_STEPS : (uint64_t)(done * PROGRESS_STEPS);
-    if (step > p->shown) {
-        cli_progress_add(&p->bar, step - p->shown);
-        p->shown = step;
-    }
-}
 
 /* Records a failure of the engine in r, from rl_errmsg(). */
 static void engine_failed(bench_result *r, const char *what)
@@ -202,16 +184,16 @@ static int apply_setting(rl_scene *scene, const bench_setting *s, bench_result *
 /* Relights scene, timing it and summing every pass's counters into r. @return the solution, or NULL (r says why). */
 static rl_solution *timed_relight(const rl_scene *scene, const char *label, bench_result *r)
 {
-    child_progress progress = {.shown = 0};
+    cli_progress bar;
     if (label != NULL)
-        cli_progress_start(&progress.bar, label, PROGRESS_STEPS);
+        cli_progress_start(&bar, label, CLI_PROGRESS_STEPS);
     rl_solution *sol = NULL;
     double wall0 = bench_clock(CLOCK_MONOTONIC), cpu0 = bench_clock(CLOCK_PROCESS_CPUTIME_ID);
-    rl_status st = rl_relight(scene, label != NULL ? child_progress_to : NULL, &progress, &sol);
+    rl_status st = rl_relight(scene, label != NULL ? cli_progress_fraction : NULL, &bar, &sol);
     r->wall_seconds = bench_clock(CLOCK_MONOTONIC) - wall0;
     r->cpu_seconds = bench_clock(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
     if (label != NULL)
-        cli_progress_finish(&progress.bar);
+        cli_progress_finish(&bar);
     if (st != RL_OK) {
         engine_failed(r, "relighting failed");
         return NULL;

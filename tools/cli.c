@@ -497,6 +497,20 @@ void cli_progress_add(cli_progress *p, uint64_t count)
     atomic_flag_clear(&p->drawing);
 }
 
+void cli_progress_reach(cli_progress *p, uint64_t done)
+{
+    uint64_t shown = atomic_load(&p->done);
+    if (done > shown)
+        cli_progress_add(p, done - shown);
+}
+
+void cli_progress_fraction(void *bar, double done)
+{
+    cli_progress_reach(bar, done <= 0.0   ? 0
+                            : done >= 1.0 ? CLI_PROGRESS_STEPS
+                                          : (uint64_t)(done * CLI_PROGRESS_STEPS));
+}
+
 void cli_progress_finish(cli_progress *p)
 {
     if (!p->enabled)

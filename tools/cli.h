@@ -217,8 +217,15 @@ typedef struct cli_progress {
     int enabled;               /* stderr is a terminal */
 } cli_progress;
 
+/** Steps of a bar that shows a fraction of a run (cli_progress_fraction()). */
+#define CLI_PROGRESS_STEPS 1000u
+
 void cli_progress_start(cli_progress *p, const char *label, uint64_t total);
 void cli_progress_add(cli_progress *p, uint64_t count);
+/** Advances p to done steps; a count at or below what is drawn changes nothing. One caller thread at a time. */
+void cli_progress_reach(cli_progress *p, uint64_t done);
+/** An rl_progress_fn: moves bar (a cli_progress started with CLI_PROGRESS_STEPS) to fraction done of [0, 1]. */
+void cli_progress_fraction(void *bar, double done);
 /** Draws the final state and ends the line (or does nothing when disabled). */
 void cli_progress_finish(cli_progress *p);
 

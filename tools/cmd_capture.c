@@ -67,11 +67,8 @@ int ilf_capture_failure(const char *sub, int status)
 
 void ilf_capture_progress(void *bar, uint64_t done, uint64_t total)
 {
-    cli_progress *p = bar;
     (void)total;
-    uint64_t shown = atomic_load(&p->done);
-    if (done > shown)
-        cli_progress_add(p, done - shown);
+    cli_progress_reach(bar, done);
 }
 
 /* ------------------------------------------------------------ options */

@@ -33,8 +33,6 @@
 #include "relight_cli.h"
 #include "tonemap.h"
 
-/* Progress is reported to cli_progress in steps of 1/PROGRESS_STEPS of the run. */
-#define PROGRESS_STEPS 1000u
 /* The PNG maps the 90th percentile of the lit pixels' luminance to this value: low enough that
  * visible emitters (a few per cent of a view) saturate instead of setting the exposure. */
 #define PNG_PERCENTILE 0.90
@@ -188,22 +186,6 @@ static void report_written(const relight_options *o, const char *path, const cha
 
 /* ------------------------------------------------------------ relighting */
 
-/* Progress bar state: the cli_progress and how many of its PROGRESS_STEPS are drawn. */
-typedef struct relight_progress {
-    cli_progress bar;
-    uint64_t shown;
-} relight_progress;
-
-/* rl_progress_fn: advances the bar to done (in [0, 1]). */
-static void on_progress(void *user, double done)
-{
-    relight_progress *p = user;
-    uint64_t target = done <= 0.0 ? 0 : done >= 1.0 ? PROGRESS_STEPS : (uint64_t)(done * PROGRESS_STEPS);
-    if (target > p->shown) {
-        cli_progress_add(&p->bar, target - p->shown);
-        p->shown = target;
-    }
-}
 
 /* @return the time of clock in seconds. */
 static double clock_seconds(clockid_t clock)
@@ -216,16 +198,16 @@ static double clock_seconds(clockid_t clock)
 /* Runs the engine on run->scene, timing it, with a progress bar unless quiet. @return an exit code. */
 static int relight(relight_run *run)
 {
-    relight_progress progress = {.shown = 0};
+    cli_progress bar;
     int show = !run->o->quiet;
     if (show)
-        cli_progress_start(&progress.bar, "relight", PROGRESS_STEPS);
+        cli_progress_start(&bar, "relight", CLI_PROGRESS_STEPS);
     double wall0 = clock_seconds(CLOCK_MONOTONIC), cpu0 = clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
-    rl_status st = rl_relight(run->scene, show ? on_progress : NULL, &progress, &run->solution);
+    rl_status st = rl_relight(run->scene, show ? cli_progress_fraction : NULL, &bar, &run->solution);
     run->wall_seconds = clock_seconds(CLOCK_MONOTONIC) - wall0;
     run->cpu_seconds = clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
     if (show)
-        cli_progress_finish(&progress.bar);
+        cli_progress_finish(&bar);
     if (st != RL_OK)
         return relight_failure("relight", st);
     run->maps = rl_solution_map_count(run->solution);

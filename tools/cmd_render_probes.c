@@ -276,19 +276,12 @@ static int trace(void *user, const double org[3], const double dir[3], float rgb
     return rl_solution_trace(user, org, dir, rgb) == RL_OK;
 }
 
-/* rl_progress_fn: the relighting's fraction done, on a bar of 1000 steps. */
-static void on_relight_progress(void *bar, double done)
-{
-    double steps = done <= 0.0 ? 0.0 : done >= 1.0 ? 1000.0 : 1000.0 * done;
-    ilf_capture_progress(bar, (uint64_t)steps, 1000);
-}
-
 static int relight(const probes_options *o, const rl_scene *scene, rl_solution **sol)
 {
     cli_progress bar;
     if (!o->quiet)
-        cli_progress_start(&bar, "relight", 1000);
-    rl_status st = rl_relight(scene, o->quiet ? NULL : on_relight_progress, &bar, sol);
+        cli_progress_start(&bar, "relight", CLI_PROGRESS_STEPS);
+    rl_status st = rl_relight(scene, o->quiet ? NULL : cli_progress_fraction, &bar, sol);
     if (!o->quiet)
         cli_progress_finish(&bar);
     return st == RL_OK ? ILF_EXIT_OK : relight_failure("render-probes", st);
