@@ -83,8 +83,6 @@ int bench_make_folder(const char *path);
 /** Writes t to path atomically; unless quiet prints "wrote PATH: what". @return 1, or 0 after reporting. */
 int bench_write_text(const char *path, const bench_text *t, const char *what, int quiet);
 
-/** @return seconds on clock (CLOCK_MONOTONIC or CLOCK_PROCESS_CPUTIME_ID). */
-double bench_clock(int clock_id);
 
 /** @return the luminance Y = 0.2126 R + 0.7152 G + 0.0722 B of a linear Rec.709 colour. */
 double bench_luminance(const float rgb[3]);

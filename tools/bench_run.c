@@ -188,10 +188,10 @@ static rl_solution *timed_relight(const rl_scene *scene, const char *label, benc
     if (label != NULL)
         cli_progress_start(&bar, label, CLI_PROGRESS_STEPS);
     rl_solution *sol = NULL;
-    double wall0 = bench_clock(CLOCK_MONOTONIC), cpu0 = bench_clock(CLOCK_PROCESS_CPUTIME_ID);
+    double wall0 = cli_clock_seconds(CLOCK_MONOTONIC), cpu0 = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
     rl_status st = rl_relight(scene, label != NULL ? cli_progress_fraction : NULL, &bar, &sol);
-    r->wall_seconds = bench_clock(CLOCK_MONOTONIC) - wall0;
-    r->cpu_seconds = bench_clock(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
+    r->wall_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - wall0;
+    r->cpu_seconds = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
     if (label != NULL)
         cli_progress_finish(&bar);
     if (st != RL_OK) {

@@ -129,13 +129,6 @@ int bench_write_text(const char *path, const bench_text *t, const char *what, in
     return 1;
 }
 
-double bench_clock(int clock_id)
-{
-    struct timespec ts;
-    clock_gettime((clockid_t)clock_id, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 double bench_luminance(const float rgb[3])
 {
     return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];

@@ -446,6 +446,13 @@ unsigned cli_default_threads(void)
 
 /* ------------------------------------------------------------- progress */
 
+double cli_clock_seconds(int clock_id)
+{
+    struct timespec ts;
+    clock_gettime((clockid_t)clock_id, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 static int64_t monotonic_ms(void)
 {
     struct timespec ts;

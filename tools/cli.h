@@ -217,6 +217,9 @@ typedef struct cli_progress {
     int enabled;               /* stderr is a terminal */
 } cli_progress;
 
+/** @return the time of clock clock_id (CLOCK_MONOTONIC, CLOCK_PROCESS_CPUTIME_ID, ...) in seconds. */
+double cli_clock_seconds(int clock_id);
+
 /** Steps of a bar that shows a fraction of a run (cli_progress_fraction()). */
 #define CLI_PROGRESS_STEPS 1000u
 

@@ -187,14 +187,6 @@ static void report_written(const relight_options *o, const char *path, const cha
 /* ------------------------------------------------------------ relighting */
 
 
-/* @return the time of clock in seconds. */
-static double clock_seconds(clockid_t clock)
-{
-    struct timespec ts;
-    clock_gettime(clock, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Runs the engine on run->scene, timing it, with a progress bar unless quiet. @return an exit code. */
 static int relight(relight_run *run)
 {
@@ -202,10 +194,10 @@ static int relight(relight_run *run)
     int show = !run->o->quiet;
     if (show)
         cli_progress_start(&bar, "relight", CLI_PROGRESS_STEPS);
-    double wall0 = clock_seconds(CLOCK_MONOTONIC), cpu0 = clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
+    double wall0 = cli_clock_seconds(CLOCK_MONOTONIC), cpu0 = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
     rl_status st = rl_relight(run->scene, show ? cli_progress_fraction : NULL, &bar, &run->solution);
-    run->wall_seconds = clock_seconds(CLOCK_MONOTONIC) - wall0;
-    run->cpu_seconds = clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
+    run->wall_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - wall0;
+    run->cpu_seconds = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
     if (show)
         cli_progress_finish(&bar);
     if (st != RL_OK)
