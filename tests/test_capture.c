@@ -169,24 +169,45 @@ static lfio_lightfield *capture_file(const char *manifest, unsigned threads, cap
     return lf;
 }
 
+/* Incoming radiance along propagation direction d (arriving from -d) for a reference, in v. */
+typedef void (*incoming_fn)(const void *ctx, const double d[3], double v[3]);
+
+/* Gives in ref the mean of incoming radiance f over solid angle id of slab s: k*k (k <= 6) weighted samples. */
+static void box_mean(const lfio_slab *s, uint64_t id, uint32_t k, incoming_fn f, const void *ctx, double ref[3])
+{
+    double dirs[6 * 6 * 3], weights[6 * 6];
+    cap_partition_samples(lfio_slab_get_desc(s)->n, id, k, dirs, weights);
+    ref[0] = ref[1] = ref[2] = 0.0;
+    for (uint32_t q = 0; q < k * k; q++) {
+        double w[3], d[3], v[3];
+        lfio_slab_to_world(s, &dirs[3 * q], w);
+        d[0] = -w[0], d[1] = -w[1], d[2] = -w[2];
+        f(ctx, d, v);
+        for (int c = 0; c < 3; c++)
+            ref[c] += weights[q] * v[c];
+    }
+}
+
+/* An environment as an incoming_fn. */
+typedef struct env_source {
+    env_fn env;
+} env_source;
+
+static void from_env(const void *ctx, const double d[3], double v[3])
+{
+    ((const env_source *)ctx)->env(d, v);
+}
+
 /* Relative L1 difference between the stored field at (i, j) and the box mean of env over each solid angle. */
 static double field_error(const lfio_slab *s, uint32_t i, uint32_t j, env_fn env)
 {
-    const uint32_t n = lfio_slab_get_desc(s)->n, k = 6;
-    double dirs[6 * 6 * 3], weights[6 * 6], diff = 0.0, total = 0.0;
+    const env_source src = {env};
+    double diff = 0.0, total = 0.0;
     float *rgb = malloc(lfio_slab_dir_count(s) * 3 * sizeof *rgb);
     lfio_slab_read_position(s, i, j, rgb);
     for (uint64_t id = 0; id < lfio_slab_dir_count(s); id++) {
-        double ref[3] = {0, 0, 0};
-        cap_partition_samples(n, id, k, dirs, weights);
-        for (uint32_t q = 0; q < k * k; q++) {
-            double w[3], d[3], v[3];
-            lfio_slab_to_world(s, &dirs[3 * q], w);
-            d[0] = -w[0], d[1] = -w[1], d[2] = -w[2];
-            env(d, v);
-            for (int c = 0; c < 3; c++)
-                ref[c] += weights[q] * v[c];
-        }
+        double ref[3];
+        box_mean(s, id, 6, from_env, &src, ref);
         for (int c = 0; c < 3; c++) {
             diff += fabs(rgb[3 * id + c] - ref[c]);
             total += ref[c];
@@ -694,30 +715,37 @@ static int trace_scene(void *user, const double org[3], const double dir[3], flo
     return rl_solution_trace(user, org, dir, rgb) == RL_OK;
 }
 
+/* A relit scene seen from point x, as an incoming_fn. */
+typedef struct scene_source {
+    const rl_solution *sol;
+    double x[3];
+} scene_source;
+
+static void from_scene(const void *ctx, const double d[3], double v[3])
+{
+    const scene_source *src = ctx;
+    float rgb[3];
+    rl_solution_trace(src->sol, src->x, d, rgb);
+    for (int c = 0; c < 3; c++)
+        v[c] = rgb[c];
+}
+
 /* The scene's box-mean radiance through position x of slab s, per solid angle, vs the stored field:
  * relative L1 error; irradiance of the reference and of the field in *e_ref, *e_field (green). */
 static double loop_error(const rl_solution *sol, const lfio_slab *s, uint32_t i, uint32_t j, double *e_ref,
                          double *e_field)
 {
-    const uint32_t n = lfio_slab_get_desc(s)->n, k = 4;
+    const uint32_t n = lfio_slab_get_desc(s)->n;
     const double pole[3] = {0, 0, 1};
-    double x[3], dirs[4 * 4 * 3], weights[16], diff = 0.0, total = 0.0;
+    scene_source src = {sol, {0, 0, 0}};
+    double diff = 0.0, total = 0.0;
     float *rgb = malloc(lfio_slab_dir_count(s) * 3 * sizeof *rgb);
     lfio_slab_read_position(s, i, j, rgb);
-    lfio_slab_position(s, i, j, x);
+    lfio_slab_position(s, i, j, src.x);
     *e_ref = *e_field = 0.0;
     for (uint64_t id = 0; id < lfio_slab_dir_count(s); id++) {
-        double ref[3] = {0, 0, 0}, proj = lfio_part_projected_solid_angle(n, id, pole);
-        cap_partition_samples(n, id, k, dirs, weights);
-        for (uint32_t q = 0; q < k * k; q++) {
-            double w[3], d[3];
-            float v[3];
-            lfio_slab_to_world(s, &dirs[3 * q], w);
-            d[0] = -w[0], d[1] = -w[1], d[2] = -w[2];
-            rl_solution_trace(sol, x, d, v);
-            for (int c = 0; c < 3; c++)
-                ref[c] += weights[q] * v[c];
-        }
+        double ref[3], proj = lfio_part_projected_solid_angle(n, id, pole);
+        box_mean(s, id, 4, from_scene, &src, ref);
         for (int c = 0; c < 3; c++) {
             diff += fabs(rgb[3 * id + c] - ref[c]);
             total += ref[c];
