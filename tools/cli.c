@@ -530,7 +530,7 @@ void cli_progress_finish(cli_progress *p)
 
 /*
  * The writers (lfio, jsonout.c, the image writer) build each output under a
- * temporary name beside it: "<name>.tmp-XXXXXX", or ".<name>.tmp-XXXXXX.<ext>"
+ * temporary name beside it: "<name>.tmp-<tag>", or ".<name>.tmp-<tag>.<ext>"
  * for images. A handler for SIGINT, SIGTERM and SIGHUP only writes the signal
  * number to a pipe, which is all a handler may safely do; a watcher thread
  * reading the pipe then removes the temporaries of every registered output
