@@ -231,6 +231,7 @@ static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, uint32_t pa
 {
     ctx->scene = scene;
     ctx->tracer = tracer;
+    ctx->occluders = tracer_occluders(tracer);
     ctx->sampling = sampling;
     ctx->pass = pass;
     ctx->emitters = e;

@@ -126,3 +126,26 @@ v3 sample_spherical_triangle(v3 a, v3 b, v3 c, double omega, double u1, double u
     sph_tri t = sph_tri_make(a, b, c, omega);
     return sph_tri_sample(&t, u1, u2);
 }
+
+double sph_fan(const v3 *p, size_t n, v3 x, v3 *dir, double *omega)
+{
+    double total = 0.0;
+    for (size_t i = 0; i < n; i++)
+        dir[i] = v3_norm(v3_sub(p[i], x));
+    for (size_t i = 1; i + 1 < n; i++) {
+        omega[i] = spherical_triangle_area(dir[0], dir[i], dir[i + 1]);
+        total += omega[i];
+    }
+    return total;
+}
+
+v3 sph_fan_sample(const v3 *dir, const double *omega, size_t n, double total, double u1, double u2)
+{
+    /* pick triangle i with probability omega[i] / total, reusing u1's rest within it */
+    double pick = u1 * total, acc = 0.0;
+    size_t i = 1;
+    for (; i + 2 < n && pick >= acc + omega[i]; i++)
+        acc += omega[i];
+    double r = omega[i] > 0 ? fmin(fmax((pick - acc) / omega[i], 0.0), 1.0) : 0.5;
+    return sample_spherical_triangle(dir[0], dir[i], dir[i + 1], omega[i], r, u2);
+}

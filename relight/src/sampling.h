@@ -6,6 +6,7 @@
 #ifndef RELIGHT_SAMPLING_H
 #define RELIGHT_SAMPLING_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "vec.h"
@@ -55,5 +56,13 @@ v3 sample_spherical_triangle(v3 a, v3 b, v3 c, double omega, double u1, double u
 
 /* @return the solid angle of the spherical triangle a, b, c (unit vectors). */
 double spherical_triangle_area(v3 a, v3 b, v3 c);
+
+/* The fan of convex polygon p (n vertices, 3 <= n) as seen from x: unit
+ * directions dir[0..n) and the solid angles omega[i] of triangles (0, i, i+1)
+ * for i in [1, n-1). @return their total, the polygon's solid angle. */
+double sph_fan(const v3 *p, size_t n, v3 x, v3 *dir, double *omega);
+
+/* A direction uniformly distributed in a fan of sph_fan() (total > 0), from u1, u2 in [0, 1). */
+v3 sph_fan_sample(const v3 *dir, const double *omega, size_t n, double total, double u1, double u2);
 
 #endif /* RELIGHT_SAMPLING_H */

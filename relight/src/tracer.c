@@ -23,6 +23,7 @@ struct rl_tracer {
     RTCDevice device;
     RTCScene scene;
     uint32_t *prim_polygon;
+    rl_occluders *occluders; /* exact pyramid queries beside the rays */
     v3 centre;
     double extent;
 };
@@ -112,6 +113,11 @@ rl_status tracer_new(const rl_scene *s, rl_tracer **out)
         tracer_destroy(t);
         return rl__fail(RL_ERR_INTERNAL, "Embree failed to build the scene");
     }
+    rl_status st = occluders_new(s, &t->occluders);
+    if (st != RL_OK) {
+        tracer_destroy(t);
+        return st;
+    }
     *out = t;
     return RL_OK;
 }
@@ -125,7 +131,13 @@ void tracer_destroy(rl_tracer *t)
     if (t->device)
         rtcReleaseDevice(t->device);
     free(t->prim_polygon);
+    occluders_destroy(t->occluders);
     free(t);
+}
+
+const rl_occluders *tracer_occluders(const rl_tracer *t)
+{
+    return t->occluders;
 }
 
 double tracer_extent(const rl_tracer *t)

@@ -13,6 +13,7 @@
 #include <stdint.h>
 
 #include "scene_internal.h"
+#include "shadow.h"
 #include "vec.h"
 
 typedef struct rl_tracer rl_tracer;
@@ -44,6 +45,9 @@ double tracer_extent(const rl_tracer *t);
 
 /* @return the point the tracer recentres the scene on. */
 v3 tracer_centre(const rl_tracer *t);
+
+/* @return the exact occluder index of the same polygons (shadow.h), owned by the tracer. */
+const rl_occluders *tracer_occluders(const rl_tracer *t);
 
 /* Sets flush-to-zero and denormals-are-zero for the calling thread, as Embree advises. */
 void tracer_thread_init(void);

@@ -282,9 +282,12 @@ static void emitter_radiance(const rl_emitter *e, v2 q, v3 d, const leaf *L, con
     }
 }
 
-/* @return 1 if solid angle id at level lv certainly carries no radiance of
- * slab emitter e: the mask is clear for it and for its edge neighbours. */
-static int slab_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id)
+void emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3])
+{
+    emitter_radiance(e, q, d, NULL, NULL, out);
+}
+
+int emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id)
 {
     const lfio_slab *s = e->lf->slab;
     uint32_t n = lfio_slab_get_desc(s)->n;
@@ -415,20 +418,6 @@ typedef struct tile {
     size_t npoly;
 } tile;
 
-/* The fan of convex polygon p (n vertices, n >= 3) as seen from x: unit
- * directions and the solid angles of triangles (0, i, i+1). @return the total. */
-static double spherical_fan(const v3 *p, size_t n, v3 x, v3 *dir, double *omega)
-{
-    double total = 0.0;
-    for (size_t i = 0; i < n; i++)
-        dir[i] = v3_norm(v3_sub(p[i], x));
-    for (size_t i = 1; i + 1 < n; i++) {
-        omega[i] = spherical_triangle_area(dir[0], dir[i], dir[i + 1]);
-        total += omega[i];
-    }
-    return total;
-}
-
 /* Chooses the pair's level: partition_n, or finer while the emitter
  * subtends less than one leaf (a leaf is about 2*pi / (4 m^2) sr, about
  * 1.26 / m rad across) from every corner of the tile, in solid angle or in
@@ -445,7 +434,7 @@ static uint32_t pair_level(const rl_transfer_ctx *ctx, const pair *p, const tile
     double om[RL_MAX_POLY_VERTS + 2];
     for (size_t j = 0; j < t->npoly; j++) {
         v3 r = frame_point(&t->m->frame, t->poly[j]);
-        double omega = spherical_fan(p->sclip, p->ns, r, dir, om), ext = 0.0;
+        double omega = sph_fan(p->sclip, p->ns, r, dir, om), ext = 0.0;
         for (size_t a = 0; a < p->ns; a++) {
             far2 = fmax(far2, v3_dot(v3_sub(r, p->sclip[a]), v3_sub(r, p->sclip[a])));
             for (size_t b = a + 1; b < p->ns; b++)
@@ -557,7 +546,7 @@ static int walk(const rl_transfer_ctx *ctx, const pair *p, const tile *t, rl_scr
     while (top > 0 && rc == 0) {
         uint32_t lv = stack[top - 1].lv;
         uint64_t id = stack[--top].id;
-        int dark = p->e->kind == EM_SLAB && ctx->sampling->zero_culling && slab_node_dark(p->e, lv, id);
+        int dark = p->e->kind == EM_SLAB && ctx->sampling->zero_culling && emitter_node_dark(p->e, lv, id);
         if (dark || node_region(ctx, p, p->sclip, p->ns, t, lv, id, reg, q) == 0)
             continue;
         if (lv >= p->level) {
@@ -969,15 +958,10 @@ static void baseline_sample(const rl_transfer_ctx *ctx, const pair *p, const rl_
     } else {
         v3 dir[RL_MAX_POLY_VERTS + 2];
         double om[RL_MAX_POLY_VERTS + 2];
-        double total = spherical_fan(p->sclip, p->ns, x, dir, om);
+        double total = sph_fan(p->sclip, p->ns, x, dir, om);
         if (!(total > 0))
             return;
-        double pick = u[2] * total, accw = 0.0;
-        size_t i = 1;
-        for (; i + 2 < p->ns && pick >= accw + om[i]; i++)
-            accw += om[i];
-        double r = om[i] > 0 ? fmin(fmax((pick - accw) / om[i], 0.0), 1.0) : 0.5;
-        to_s = sample_spherical_triangle(dir[0], dir[i], dir[i + 1], om[i], r, u[3]);
+        to_s = sph_fan_sample(dir, om, p->ns, total, u[2], u[3]);
         double dn = -v3_dot(to_s, e->frame.n);
         if (!(dn > 0))
             return;
@@ -1060,8 +1044,16 @@ int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uin
         t->npoly = clip_poly2(a, n, (rl_halfplane){0, -1, vb}, t->poly);
     }
     int rc = 0;
+    rl_method method = ctx->sampling->method;
+    if (m->polygon < 0 && (method == RL_METHOD_CULLED || method == RL_METHOD_ADAPTIVE)) {
+        /* a point receiver is culled from its own view of each emitter */
+        for (size_t e = 0; e < ctx->nemitters && rc == 0; e++)
+            rc = point_gather(ctx, (uint32_t)e, map_index, m->frame.origin, m->frame.n, m->e_pass[0], scratch, cnt);
+        free(t);
+        return rc;
+    }
     for (size_t e = 0; e < ctx->nemitters && rc == 0 && t->npoly > 0; e++) {
-        if (ctx->sampling->method != RL_METHOD_AREA && ctx->sampling->method != RL_METHOD_SOLIDANGLE)
+        if (method != RL_METHOD_AREA && method != RL_METHOD_SOLIDANGLE)
             rc = gather_solid_angles(ctx, t, (uint32_t)e, scratch, cnt);
         else
             gather_baseline(ctx, t, (uint32_t)e, cnt);
@@ -1072,6 +1064,7 @@ int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uin
 
 void scratch_free(rl_scratch *s)
 {
+    free(s->occ);
     free(s->pair_total);
     free(s->pair_leaves);
     free(s->leaves);

@@ -6,6 +6,7 @@
 #define RELIGHT_TRANSFER_H
 
 #include "maps.h"
+#include "shadow.h"
 #include "tracer.h"
 
 typedef enum em_kind {
@@ -48,6 +49,7 @@ typedef struct rl_counters {
 typedef struct rl_transfer_ctx {
     const rl_scene *scene;
     const rl_tracer *tracer;
+    const rl_occluders *occluders; /* which polygons can block a point's view of an emitter */
     const rl_sampling *sampling;
     uint32_t pass;
     const rl_emitter *emitters;
@@ -69,6 +71,7 @@ typedef struct rl_scratch {
     uint32_t *pair_leaves; /* adaptive: and the leaves carrying it */
     size_t pair_cap;
     uint32_t first_cell;  /* the tile's first cell index */
+    uint32_t *occ;        /* point receivers: one list of possible occluders per level of the walk */
 } rl_scratch;
 
 /* Frees what a scratch space holds (not the struct). */
@@ -79,6 +82,19 @@ void emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, 
 
 /* Sets up emitter e from light field lf. */
 void emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e);
+
+/* Radiance leaving emitter e at frame point q in propagation direction d (unit), W sr^-1 m^-2. */
+void emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3]);
+
+/* @return 1 if solid angle id at level lv of light field emitter e
+ * certainly carries no radiance (its mask and its neighbours' are clear). */
+int emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id);
+
+/* Adds to out the irradiance at point x (unit normal nx, receiver
+ * map_index) from emitter ei, by culled transfer from the point's own view
+ * (points.c). @return 0, or -1 if scratch memory ran out. */
+int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint32_t map_index, v3 x, v3 nx, double out[3],
+                 rl_scratch *s, rl_counters *cnt);
 
 /* Adds to m->e_pass, for the cells in grid rows [row0, row1) of map m, the
  * irradiance from every emitter of ctx, by ctx->sampling->method. map_index

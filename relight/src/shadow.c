@@ -1,0 +1,309 @@
+/*
+ * shadow.c - an index of the scene's polygons (a bounding-box tree) and
+ * exact tests of a polygon against a pyramid of segments (shadow.h).
+ *
+ * A polygon P meets a pyramid when P clipped by the pyramid's side planes
+ * and by its base plane keeps a positive area. P blocks the pyramid when
+ * the apex and every base vertex lie strictly on opposite sides of P's
+ * plane and the segment to every base vertex crosses P inside its edges:
+ * P and the pyramid are convex, so then every segment crosses P. Points
+ * within `tol` of a plane count as on it, and "inside P" needs a margin of
+ * tol, so FREE and BLOCKED err towards PARTIAL, which only costs rays.
+ *
+ * The tree is built once by median splits on the longest axis of the
+ * polygons' box centres, four polygons a leaf; it is read-only afterwards.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "shadow.h"
+
+#define LEAF_SIZE 4
+#define TREE_STACK 128
+
+typedef struct occ_poly {
+    uint32_t first, count; /* into rl_occluders.verts */
+    v3 n;                  /* unit normal, vertices counter-clockwise about it */
+    v3 lo, hi;
+} occ_poly;
+
+typedef struct occ_node {
+    v3 lo, hi;
+    uint32_t first, count; /* leaf: polygons order[first .. first+count); inner: count = 0, children first, first+1 */
+} occ_node;
+
+struct rl_occluders {
+    v3 *verts;
+    occ_poly *polys;
+    uint32_t *order;
+    size_t npolys;
+    occ_node *nodes;
+    size_t nnodes;
+};
+
+static v3 v3_min(v3 a, v3 b) { return (v3){dmin(a.x, b.x), dmin(a.y, b.y), dmin(a.z, b.z)}; }
+static v3 v3_max(v3 a, v3 b) { return (v3){dmax(a.x, b.x), dmax(a.y, b.y), dmax(a.z, b.z)}; }
+static double v3_axis(v3 a, int k) { return k == 0 ? a.x : k == 1 ? a.y : a.z; }
+
+static int boxes_overlap(v3 alo, v3 ahi, v3 blo, v3 bhi)
+{
+    return alo.x <= bhi.x && blo.x <= ahi.x && alo.y <= bhi.y && blo.y <= ahi.y && alo.z <= bhi.z &&
+           blo.z <= ahi.z;
+}
+
+/* Partially orders order[lo..hi) so that the polygon at mid has the median
+ * box centre on axis k (quickselect). */
+static void select_median(const occ_poly *p, uint32_t *order, size_t lo, size_t hi, size_t mid, int k)
+{
+    while (hi - lo > 1) {
+        double pivot = v3_axis(p[order[(lo + hi) / 2]].lo, k) + v3_axis(p[order[(lo + hi) / 2]].hi, k);
+        size_t i = lo, j = hi - 1;
+        while (i <= j) {
+            while (v3_axis(p[order[i]].lo, k) + v3_axis(p[order[i]].hi, k) < pivot)
+                i++;
+            while (v3_axis(p[order[j]].lo, k) + v3_axis(p[order[j]].hi, k) > pivot)
+                j--;
+            if (i <= j) {
+                uint32_t t = order[i];
+                order[i] = order[j];
+                order[j] = t;
+                i++;
+                if (j == 0)
+                    break;
+                j--;
+            }
+        }
+        if (mid <= j)
+            hi = j + 1;
+        else if (mid >= i)
+            lo = i;
+        else
+            return;
+    }
+}
+
+/* Builds the subtree of node over order[first, first+count). */
+static void build(rl_occluders *o, size_t node, uint32_t first, uint32_t count)
+{
+    occ_node *nd = &o->nodes[node];
+    v3 lo = o->polys[o->order[first]].lo, hi = o->polys[o->order[first]].hi;
+    v3 clo = v3_scale(v3_add(lo, hi), 0.5), chi = clo;
+    for (uint32_t i = first; i < first + count; i++) {
+        const occ_poly *p = &o->polys[o->order[i]];
+        lo = v3_min(lo, p->lo);
+        hi = v3_max(hi, p->hi);
+        v3 c = v3_scale(v3_add(p->lo, p->hi), 0.5);
+        clo = v3_min(clo, c);
+        chi = v3_max(chi, c);
+    }
+    nd->lo = lo;
+    nd->hi = hi;
+    if (count <= LEAF_SIZE) {
+        nd->first = first;
+        nd->count = count;
+        return;
+    }
+    v3 ext = v3_sub(chi, clo);
+    int k = ext.x >= ext.y && ext.x >= ext.z ? 0 : ext.y >= ext.z ? 1 : 2;
+    uint32_t half = count / 2;
+    select_median(o->polys, o->order, first, first + count, first + half, k);
+    size_t left = o->nnodes;
+    o->nnodes += 2;
+    nd->first = (uint32_t)left;
+    nd->count = 0;
+    build(o, left, first, half);
+    build(o, left + 1, first + half, count - half);
+}
+
+rl_status occluders_new(const rl_scene *scene, rl_occluders **out)
+{
+    *out = NULL;
+    rl_occluders *o = calloc(1, sizeof *o);
+    size_t n = scene->npolygons, nv = 0;
+    for (size_t k = 0; k < n; k++)
+        nv += scene->polygons[k].count;
+    if (o) {
+        o->verts = malloc((nv ? nv : 1) * sizeof *o->verts);
+        o->polys = malloc((n ? n : 1) * sizeof *o->polys);
+        o->order = malloc((n ? n : 1) * sizeof *o->order);
+        o->nodes = malloc((2 * n + 1) * sizeof *o->nodes);
+    }
+    if (!o || !o->verts || !o->polys || !o->order || !o->nodes) {
+        occluders_destroy(o);
+        return rl__fail(RL_ERR_NOMEM, "out of memory for the occluder index of %zu polygons", n);
+    }
+    size_t at = 0;
+    for (size_t k = 0; k < n; k++) {
+        const rl_polygon *pg = &scene->polygons[k];
+        occ_poly *p = &o->polys[k];
+        p->first = (uint32_t)at;
+        p->count = pg->count;
+        p->n = v3_load(pg->normal);
+        for (uint32_t i = 0; i < pg->count; i++) {
+            v3 v = v3_load(scene->vertices[pg->first + i]);
+            o->verts[at++] = v;
+            p->lo = i ? v3_min(p->lo, v) : v;
+            p->hi = i ? v3_max(p->hi, v) : v;
+        }
+        o->order[k] = (uint32_t)k;
+    }
+    o->npolys = n;
+    if (n > 0) {
+        o->nnodes = 1;
+        build(o, 0, 0, (uint32_t)n);
+    }
+    *out = o;
+    return RL_OK;
+}
+
+void occluders_destroy(rl_occluders *o)
+{
+    if (!o)
+        return;
+    free(o->verts);
+    free(o->polys);
+    free(o->order);
+    free(o->nodes);
+    free(o);
+}
+
+int pyramid_make(v3 apex, const v3 *base, size_t nbase, double tol, rl_pyramid *p)
+{
+    if (nbase < 3 || nbase > RL_PYRAMID_MAX_BASE)
+        return 0;
+    v3 newell = {0, 0, 0}, c = {0, 0, 0};
+    for (size_t i = 0; i < nbase; i++) {
+        newell = v3_add(newell, v3_cross(base[i], base[(i + 1) % nbase]));
+        c = v3_add(c, base[i]);
+    }
+    double len = v3_len(newell);
+    if (!(len > 0))
+        return 0;
+    c = v3_scale(c, 1.0 / (double)nbase);
+    p->base_n = v3_scale(newell, 1.0 / len);
+    double h = v3_dot(v3_sub(apex, base[0]), p->base_n);
+    if (!(fabs(h) > tol))
+        return 0;
+    if (h < 0)
+        p->base_n = v3_scale(p->base_n, -1.0);
+    p->apex = apex;
+    p->nbase = nbase;
+    p->tol = tol;
+    p->lo = p->hi = apex;
+    for (size_t i = 0; i < nbase; i++) {
+        p->base[i] = base[i];
+        p->lo = v3_min(p->lo, base[i]);
+        p->hi = v3_max(p->hi, base[i]);
+        v3 s = v3_cross(v3_sub(base[i], apex), v3_sub(base[(i + 1) % nbase], apex));
+        p->side[i] = v3_dot(s, v3_sub(c, apex)) < 0 ? v3_scale(s, -1.0) : s;
+    }
+    return 1;
+}
+
+/* @return 1 if shadow rays of p can never meet polygon q: its plane holds
+ * the apex, or it lies in the base's plane. */
+static int unreachable(const rl_occluders *o, const occ_poly *q, const rl_pyramid *p)
+{
+    const v3 *v = o->verts + q->first;
+    if (fabs(v3_dot(v3_sub(p->apex, v[0]), q->n)) <= p->tol)
+        return 1;
+    for (uint32_t i = 0; i < q->count; i++)
+        if (fabs(v3_dot(v3_sub(v[i], p->base[0]), p->base_n)) > p->tol)
+            return 0;
+    return 1;
+}
+
+/* @return 1 if polygon q meets pyramid p in a positive area. */
+static int meets(const rl_occluders *o, const occ_poly *q, const rl_pyramid *p)
+{
+    v3 buf[2][RL_SCENE_MAX_POLY_VERTS + RL_PYRAMID_MAX_BASE + 2];
+    v3 *cur = buf[0], *next = buf[1];
+    size_t n = q->count;
+    memcpy(cur, o->verts + q->first, n * sizeof *cur);
+    for (size_t i = 0; i < p->nbase && n >= 3; i++) {
+        n = clip_poly3(cur, n, p->apex, p->side[i], next);
+        v3 *t = cur;
+        cur = next;
+        next = t;
+    }
+    if (n >= 3)
+        n = clip_poly3(cur, n, p->base[0], p->base_n, next), cur = next;
+    if (n < 3)
+        return 0;
+    v3 newell = {0, 0, 0};
+    for (size_t i = 0; i < n; i++)
+        newell = v3_add(newell, v3_cross(v3_sub(cur[i], cur[0]), v3_sub(cur[(i + 1) % n], cur[0])));
+    return v3_len(newell) > 1e-6 * p->tol * p->tol;
+}
+
+/* @return 1 if polygon q crosses every segment of pyramid p. */
+static int blocks(const rl_occluders *o, const occ_poly *q, const rl_pyramid *p)
+{
+    const v3 *v = o->verts + q->first;
+    double sa = v3_dot(v3_sub(p->apex, v[0]), q->n);
+    if (!(fabs(sa) > p->tol))
+        return 0;
+    for (size_t b = 0; b < p->nbase; b++) {
+        double sb = v3_dot(v3_sub(p->base[b], v[0]), q->n);
+        if (!(sa > 0 ? sb < -p->tol : sb > p->tol))
+            return 0;
+        v3 h = v3_madd(p->apex, v3_sub(p->base[b], p->apex), sa / (sa - sb));
+        for (uint32_t i = 0; i < q->count; i++) {
+            v3 a = v[i], c = v[(i + 1) % q->count];
+            v3 m = v3_cross(q->n, v3_sub(c, a));
+            if (!(v3_dot(v3_sub(h, a), m) > p->tol * v3_len(m)))
+                return 0;
+        }
+    }
+    return 1;
+}
+
+size_t occluders_collect(const rl_occluders *o, const rl_pyramid *p, int32_t skip, uint32_t *list, size_t cap)
+{
+    if (o->npolys == 0)
+        return 0;
+    uint32_t stack[TREE_STACK];
+    size_t top = 0, n = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const occ_node *nd = &o->nodes[stack[--top]];
+        if (!boxes_overlap(nd->lo, nd->hi, p->lo, p->hi))
+            continue;
+        if (nd->count == 0) {
+            if (top + 2 > TREE_STACK)
+                return SIZE_MAX; /* deeper than any tree of 2^64 polygons: cannot happen */
+            stack[top++] = nd->first + 1;
+            stack[top++] = nd->first;
+            continue;
+        }
+        for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
+            uint32_t k = o->order[i];
+            const occ_poly *q = &o->polys[k];
+            if ((int64_t)k == skip || !boxes_overlap(q->lo, q->hi, p->lo, p->hi) || unreachable(o, q, p) ||
+                !meets(o, q, p))
+                continue;
+            if (n == cap)
+                return SIZE_MAX;
+            list[n++] = k;
+        }
+    }
+    return n;
+}
+
+rl_visibility occluders_classify(const rl_occluders *o, const rl_pyramid *p, const uint32_t *list, size_t n,
+                                 uint32_t *out, size_t *nout)
+{
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        const occ_poly *q = &o->polys[list[i]];
+        if (!boxes_overlap(q->lo, q->hi, p->lo, p->hi) || !meets(o, q, p))
+            continue;
+        if (blocks(o, q, p)) {
+            *nout = 0;
+            return VIS_BLOCKED;
+        }
+        out[m++] = list[i];
+    }
+    *nout = m;
+    return m ? VIS_PARTIAL : VIS_FREE;
+}
