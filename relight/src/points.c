@@ -41,7 +41,8 @@
 typedef struct point_walk {
     const rl_transfer_ctx *ctx;
     const rl_emitter *e;
-    uint32_t ei, map_index, level;
+    uint32_t ei, level, rays;
+    uint64_t receiver; /* keys the samples: the point's index, or (map, cell, origin) */
     v3 x, nx;
     v3 s[RL_MAX_POLY_VERTS + 2]; /* the emitter clipped to x's front */
     size_t ns;
@@ -101,9 +102,9 @@ static void sample_leaf(point_walk *w, uint32_t lv, uint64_t id, const v3 *q, si
     double total = sph_fan(q, nq, w->x, dir, om);
     if (!(total > 0))
         return;
-    uint32_t k = ctx->sampling->rays_per_solid_angle;
+    uint32_t k = w->rays;
     uint64_t key = hash_mix(
-        hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), w->ei), w->map_index), lv), id);
+        hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), w->ei), w->receiver), lv), id);
     lds_key lk = lds_make(key);
     double hx = v3_dot(v3_sub(w->x, e->frame.origin), e->frame.n);
     double sum[3] = {0, 0, 0}; /* light arriving (or, constant: light removed) */
@@ -220,8 +221,8 @@ static void visit(point_walk *w, uint32_t lv, uint64_t id, const v3 *src, size_t
         visit(w, 2 * lv, ch[k], q, nq, mine, nmine, vis, depth + 1);
 }
 
-int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint32_t map_index, v3 x, v3 nx, double out[3],
-                 rl_scratch *s, rl_counters *cnt)
+int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver, v3 x, v3 nx, uint32_t rays,
+                 double out[3], rl_scratch *s, rl_counters *cnt)
 {
     const rl_emitter *e = &ctx->emitters[ei];
     if (!(v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0))
@@ -237,7 +238,8 @@ int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint32_t map_index, v3
     w->ctx = ctx;
     w->e = e;
     w->ei = ei;
-    w->map_index = map_index;
+    w->receiver = receiver;
+    w->rays = rays;
     w->level = ctx->sampling->partition_n;
     w->x = x;
     w->nx = nx;
@@ -256,7 +258,6 @@ int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint32_t map_index, v3
     for (size_t i = 0; i < w->ns; i++)
         r = dmax(r, v3_maxabs(v3_sub(w->s[i], ctx->centre)));
     w->eps = dmax(1e-6 * r, ctx->eps);
-    cnt->pairs++;
     /* the whole view first: most points see most emitters unoccluded */
     rl_pyramid *root = malloc(sizeof *root);
     if (!root) {
@@ -288,4 +289,13 @@ int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint32_t map_index, v3
     free(root);
     free(w);
     return 0;
+}
+
+double point_lambert(const rl_emitter *e, v3 x, v3 nx)
+{
+    v3 c[RL_MAX_POLY_VERTS + 2];
+    if (!(v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0))
+        return 0.0;
+    size_t n = clip_poly3(e->verts, e->nverts, x, nx, c);
+    return n >= 3 ? lambert(x, nx, c, n) : 0.0;
 }

@@ -216,6 +216,26 @@ static int unreachable(const rl_occluders *o, const occ_poly *q, const rl_pyrami
 /* @return 1 if polygon q meets pyramid p in a positive area. */
 static int meets(const rl_occluders *o, const occ_poly *q, const rl_pyramid *p)
 {
+    /* cheap separations first: q wholly outside one face of p, or p wholly
+     * on one side of q's plane; only what survives both is clipped */
+    const v3 *v = o->verts + q->first;
+    for (size_t i = 0; i <= p->nbase; i++) {
+        v3 org = i < p->nbase ? p->apex : p->base[0], nrm = i < p->nbase ? p->side[i] : p->base_n;
+        uint32_t k = 0;
+        while (k < q->count && v3_dot(v3_sub(v[k], org), nrm) < 0)
+            k++;
+        if (k == q->count)
+            return 0;
+    }
+    double sa = v3_dot(v3_sub(p->apex, v[0]), q->n);
+    int side = sa > 0 ? 1 : sa < 0 ? -1 : 0;
+    for (size_t b = 0; side != 0 && b < p->nbase; b++) {
+        double sb = v3_dot(v3_sub(p->base[b], v[0]), q->n);
+        if ((sb > 0 ? 1 : sb < 0 ? -1 : 0) != side)
+            side = 0;
+    }
+    if (side != 0)
+        return 0;
     v3 buf[2][RL_SCENE_MAX_POLY_VERTS + RL_PYRAMID_MAX_BASE + 2];
     v3 *cur = buf[0], *next = buf[1];
     size_t n = q->count;

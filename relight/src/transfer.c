@@ -418,40 +418,27 @@ typedef struct tile {
     size_t npoly;
 } tile;
 
-/* Chooses the pair's level: partition_n, or finer while the emitter
- * subtends less than one leaf (a leaf is about 2*pi / (4 m^2) sr, about
- * 1.26 / m rad across) from every corner of the tile, in solid angle or in
- * angular width -- exact solid angles, so an emitter seen edge-on counts as
- * small. Descent stops where the leaves covering the emitter's
- * angular extent would pass 65536, and, for a tile of cells, where a leaf's
- * footprint shrinks below a quarter of a cell: beyond those, leaves
- * multiply without new information. */
-static uint32_t pair_level(const rl_transfer_ctx *ctx, const pair *p, const tile *t)
+/* @return 1 if the pair's emitter subtends less than one solid angle of
+ * partition_n (about 2*pi / (4 m^2) sr, about 1.26 / m rad across) from every
+ * corner of the tile, in solid angle or in angular width -- exact solid
+ * angles, so an emitter seen edge-on or a sliver counts as small. Leaves
+ * aimed at such an emitter would mostly miss it; such pairs are gathered
+ * from each cell origin's exact view instead (gather_views()). */
+static int pair_small(const rl_transfer_ctx *ctx, const pair *p, const tile *t)
 {
-    uint32_t m = ctx->sampling->partition_n;
-    double subtended = 0.0, width = 0.0, extent = 0.0, far2 = 0.0;
+    double m = ctx->sampling->partition_n, subtended = 0.0, width = 0.0;
     v3 dir[RL_MAX_POLY_VERTS + 2];
     double om[RL_MAX_POLY_VERTS + 2];
     for (size_t j = 0; j < t->npoly; j++) {
         v3 r = frame_point(&t->m->frame, t->poly[j]);
         double omega = sph_fan(p->sclip, p->ns, r, dir, om), ext = 0.0;
-        for (size_t a = 0; a < p->ns; a++) {
-            far2 = fmax(far2, v3_dot(v3_sub(r, p->sclip[a]), v3_sub(r, p->sclip[a])));
+        for (size_t a = 0; a < p->ns; a++)
             for (size_t b = a + 1; b < p->ns; b++)
                 ext = fmax(ext, acos(fmin(1.0, fmax(-1.0, v3_dot(dir[a], dir[b])))));
-        }
         subtended = fmax(subtended, omega);
         width = fmax(width, ext > 0 ? omega / ext : 0.0);
-        extent = fmax(extent, ext);
     }
-    double cap = extent > 0 ? 324.0 / extent : (double)(1u << 20);
-    if (t->m->polygon >= 0)
-        cap = fmin(cap, 2.5 * sqrt(far2) / t->m->cell);
-    /* an emitter seen edge-on is long and thin: its angular width, not only
-     * its solid angle, must span a leaf */
-    while (m < cap && m < (1u << 20) && (1.6 / ((double)m * m) > subtended || 1.26 / m > width))
-        m *= 2;
-    return m;
+    return 1.6 / (m * m) > subtended || 1.26 / m > width;
 }
 
 /* Sets up pair p for emitter e and tile t. @return 0 if they cannot exchange light. */
@@ -474,8 +461,8 @@ static int pair_setup(const rl_transfer_ctx *ctx, const rl_emitter *e, const til
         return 0; /* the emitter is behind, or in, the receiver's plane */
     /* naive never descends: it is the plain enumeration of partition_n */
     int plain = ctx->sampling->method == RL_METHOD_NAIVE || !ctx->sampling->descend;
-    p->level = plain ? ctx->sampling->partition_n : pair_level(ctx, p, t);
-    p->descended = p->level > ctx->sampling->partition_n;
+    p->level = ctx->sampling->partition_n;
+    p->descended = !plain && pair_small(ctx, p, t);
     p->eps = pair_eps(ctx, p, t->m, t->poly, t->npoly);
     return 1;
 }
@@ -895,6 +882,52 @@ static int adaptive_reserve(rl_scratch *s, const tile *t)
     return 0;
 }
 
+/* Origins per cell at which gather_views() evaluates Lambert's formula, per ray of the view walks. */
+#define VIEW_LAMBERT_ORIGINS 4
+
+/* Transfer from emitter ei to every cell of the tile by the views of k
+ * stratified origins per cell (point_gather(), one ray per solid angle a
+ * shadow boundary crosses, so k per cell and solid angle as elsewhere):
+ * for pairs whose emitter subtends less than a solid angle, where leaves
+ * aimed at it would mostly miss. A constant emitter's cell mean is then
+ * taken as the mean of Lambert's formula at 4k origins minus the mean
+ * light that occluders remove at the first k (each an unbiased estimate;
+ * the second is exactly zero wherever the views are unoccluded), so the
+ * cell's area is integrated with more origins than rays. @return 0 or -1. */
+static int gather_views(const rl_transfer_ctx *ctx, const tile *t, uint32_t ei, rl_scratch *s, rl_counters *cnt)
+{
+    rl_map *m = t->m;
+    const rl_emitter *e = &ctx->emitters[ei];
+    uint32_t k = ctx->sampling->rays_per_solid_angle;
+    uint32_t nl = e->kind == EM_CONST ? VIEW_LAMBERT_ORIGINS * k : 0;
+    for (uint32_t j = t->row0; j < t->row1; j++)
+        for (uint32_t i = 0; i < m->nu; i++) {
+            int32_t cell = m->grid[(size_t)j * m->nu + i];
+            origin_domain dom;
+            if (cell < 0 || !cell_domain(m, (uint32_t)cell, NULL, 0, &dom))
+                continue;
+            uint64_t rk = hash_mix(hash_mix(t->map_index, (uint64_t)cell), UINT64_C(0x76696577)); /* "view" */
+            lds_key key = lds_make(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), rk));
+            double seen[3] = {0, 0, 0}, unocc = 0.0, full = 0.0;
+            for (uint32_t o = 0; o < k || o < nl; o++) {
+                double u[4];
+                lds4(&key, o, u);
+                v3 x = domain_point(m, &dom, u[0], u[1]);
+                double f = nl ? point_lambert(e, x, m->frame.n) : 0.0;
+                full += f;
+                if (o >= k)
+                    continue;
+                unocc += f;
+                if (point_gather(ctx, ei, hash_mix(rk, o), x, m->frame.n, 1, seen, s, cnt) != 0)
+                    return -1;
+            }
+            for (int c = 0; c < 3; c++)
+                m->e_pass[cell][c] += nl ? e->emission[c] * full / nl - (e->emission[c] * unocc - seen[c]) / k
+                                         : seen[c] / k;
+        }
+    return 0;
+}
+
 /* Culled or naive transfer from emitter e to the tile. */
 static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32_t ei, rl_scratch *s,
                                rl_counters *cnt)
@@ -908,7 +941,10 @@ static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32
         cnt->pairs++;
         cnt->pairs_descended += p->descended;
         s->nleaves = 0;
-        if (culled) {
+        if (culled && p->descended) {
+            /* an emitter smaller than a solid angle: each cell's origins see it exactly */
+            rc = gather_views(ctx, t, ei, s, cnt);
+        } else if (culled) {
             rc = walk(ctx, p, t, s, cnt);
             qsort(s->leaves, s->nleaves, sizeof *s->leaves, cmp_u64);
         } else {
@@ -1047,8 +1083,11 @@ int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uin
     rl_method method = ctx->sampling->method;
     if (m->polygon < 0 && (method == RL_METHOD_CULLED || method == RL_METHOD_ADAPTIVE)) {
         /* a point receiver is culled from its own view of each emitter */
-        for (size_t e = 0; e < ctx->nemitters && rc == 0; e++)
-            rc = point_gather(ctx, (uint32_t)e, map_index, m->frame.origin, m->frame.n, m->e_pass[0], scratch, cnt);
+        for (size_t e = 0; e < ctx->nemitters && rc == 0; e++) {
+            cnt->pairs++;
+            rc = point_gather(ctx, (uint32_t)e, map_index, m->frame.origin, m->frame.n,
+                              ctx->sampling->rays_per_solid_angle, m->e_pass[0], scratch, cnt);
+        }
         free(t);
         return rc;
     }

@@ -90,11 +90,18 @@ void emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3]);
  * certainly carries no radiance (its mask and its neighbours' are clear). */
 int emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id);
 
-/* Adds to out the irradiance at point x (unit normal nx, receiver
- * map_index) from emitter ei, by culled transfer from the point's own view
- * (points.c). @return 0, or -1 if scratch memory ran out. */
-int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint32_t map_index, v3 x, v3 nx, double out[3],
-                 rl_scratch *s, rl_counters *cnt);
+/* Adds to out the irradiance at point x (unit normal nx) from emitter ei,
+ * by culled transfer from the point's own view (points.c): exact where a
+ * part of the emitter is wholly seen or wholly hidden, `rays` samples in
+ * each solid angle a shadow boundary crosses. receiver keys the samples.
+ * @return 0, or -1 if scratch memory ran out. */
+int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver, v3 x, v3 nx, uint32_t rays,
+                 double out[3], rl_scratch *s, rl_counters *cnt);
+
+/* @return the irradiance at x (unit normal nx) from emitter e of unit
+ * radiance with nothing in between (Lambert's formula), exactly as
+ * point_gather() computes an unoccluded constant emitter. */
+double point_lambert(const rl_emitter *e, v3 x, v3 nx);
 
 /* Adds to m->e_pass, for the cells in grid rows [row0, row1) of map m, the
  * irradiance from every emitter of ctx, by ctx->sampling->method. map_index
