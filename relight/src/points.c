@@ -75,20 +75,10 @@ static size_t node_part(const point_walk *w, uint32_t lv, uint64_t id, const v3 
 {
     double v[3][3];
     lfio_part_vertices(lv, id, v);
-    v3 g[3], buf[RL_MAX_POLY_VERTS + 8];
+    v3 g[3];
     for (int k = 0; k < 3; k++)
         g[k] = frame_vector(&w->e->frame, v[k]);
-    const v3 *cur = src;
-    v3 *dst[3] = {out, buf, out};
-    for (int k = 0; k < 3 && n >= 3; k++) {
-        /* a point y of S is seen along the node when x - y lies in the cone of g */
-        v3 m = v3_cross(g[k], g[(k + 1) % 3]);
-        if (v3_dot(m, g[(k + 2) % 3]) < 0)
-            m = v3_scale(m, -1.0);
-        n = clip_poly3(cur, n, w->x, v3_scale(m, -1.0), dst[k]);
-        cur = dst[k];
-    }
-    return n >= 3 ? n : 0;
+    return clip_to_view(w->x, g, src, n, out);
 }
 
 /* Samples leaf part q (nq vertices) with k directions uniform in its solid

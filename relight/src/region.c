@@ -34,6 +34,22 @@ size_t clip_poly3(const v3 *p, size_t count, v3 o, v3 n, v3 *out)
     return m;
 }
 
+size_t clip_to_view(v3 x, const v3 g[3], const v3 *src, size_t n, v3 *out)
+{
+    v3 buf[RL_MAX_POLY_VERTS + 8];
+    const v3 *cur = src;
+    v3 *dst[3] = {out, buf, out};
+    for (int k = 0; k < 3 && n >= 3; k++) {
+        /* y is seen along the cone when x - y lies on g[k+2]'s side of the plane of g[k], g[k+1] */
+        v3 m = v3_cross(g[k], g[(k + 1) % 3]);
+        if (v3_dot(m, g[(k + 2) % 3]) < 0)
+            m = v3_scale(m, -1.0);
+        n = clip_poly3(cur, n, x, v3_scale(m, -1.0), dst[k]);
+        cur = dst[k];
+    }
+    return n >= 3 ? n : 0;
+}
+
 size_t clip_poly2(const v2 *p, size_t count, rl_halfplane h, v2 *out)
 {
     size_t m = 0;

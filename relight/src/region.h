@@ -100,6 +100,12 @@ int region_contains(const rl_region *r, v2 q);
 void region_compute(const rl_frame *f, const v3 *s, size_t ns, const v3 *k, size_t nk, double margin,
                     rl_region *out);
 
+/* Clips the convex 3D polygon src (n vertices, at most RL_MAX_POLY_VERTS + 2)
+ * to the points y seen from x along the cone of propagation directions g[0..3)
+ * (x - y a nonnegative combination of g), into out (room for n + 3).
+ * @return the vertex count (0 when fewer than 3 remain). */
+size_t clip_to_view(v3 x, const v3 g[3], const v3 *src, size_t n, v3 *out);
+
 /* Clips the cone spanned by generators g (count, a convex spherical polygon,
  * at most 6) to dot(d, n) <= 0. @return the generator count of the result. */
 size_t clip_cone(const v3 *g, size_t count, v3 n, v3 *out);

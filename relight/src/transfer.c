@@ -592,6 +592,44 @@ static v3 domain_point(const rl_map *m, const origin_domain *d, double a, double
     return frame_point(&m->frame, q);
 }
 
+/* Draws the direction of one sample of leaf L from origin x, informed by
+ * the emitter: when the leaf's three corner directions all reach the
+ * emitter from x, every direction of the leaf does (the view of a cone is
+ * the convex hull of its corners' views), and d is drawn over the leaf as
+ * leaf_sample() does (*lp = L, lam its barycentrics); otherwise d is
+ * uniform in the solid angle of the part of the emitter the leaf sees from
+ * x (*lp = NULL, weight that solid angle), so that no sample misses. Either
+ * way the mean of w * (radiance cos V) is the leaf's light at x.
+ * @return 0 when the leaf sees nothing of the emitter from x. */
+static int leaf_draw(const pair *p, const leaf *L, v3 x, double u1, double u2, v3 *d, double *w, double lam[3],
+                     const leaf **lp)
+{
+    const rl_emitter *e = p->e;
+    double hx = v3_dot(v3_sub(x, e->frame.origin), e->frame.n);
+    if (!(hx > 0))
+        return 0;
+    int inside = 1;
+    for (int k = 0; k < 3 && inside; k++) {
+        double dn = v3_dot(L->p[k], e->frame.n);
+        inside = dn > 0 && emitter_contains(e, frame_project(&e->frame, v3_madd(x, L->p[k], -hx / dn)));
+    }
+    if (inside) {
+        *d = leaf_sample(L, u1, u2, w, lam);
+        *lp = L;
+        return 1;
+    }
+    v3 q[RL_MAX_POLY_VERTS + 8], dir[RL_MAX_POLY_VERTS + 8];
+    double om[RL_MAX_POLY_VERTS + 8];
+    size_t nq = clip_to_view(x, L->p, p->sclip, p->ns, q);
+    double total = nq >= 3 ? sph_fan(q, nq, x, dir, om) : 0.0;
+    if (!(total > 0))
+        return 0;
+    *d = v3_scale(sph_fan_sample(dir, om, nq, total, u1, u2), -1.0);
+    *w = total;
+    *lp = NULL;
+    return 1;
+}
+
 /* Queues the k rays of (cell, leaf L) into acc.
  * @return the factor that turns acc into the cell's irradiance (0: no rays). */
 static double gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t cell, const leaf *L,
@@ -611,14 +649,20 @@ static double gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile 
         uint32_t g = k - i0 < GROUP ? k - i0 : GROUP;
         double w[GROUP], lam[GROUP][3];
         v3 x[GROUP], d[GROUP];
+        const leaf *lp[GROUP];
+        int drawn[GROUP];
         for (uint32_t i = 0; i < g; i++) {
             double u[4];
             lds4(&key, i0 + i, u);
-            d[i] = leaf_sample(L, u[2], u[3], &w[i], lam[i]);
             x[i] = domain_point(m, &dom, u[0], u[1]);
+            drawn[i] = leaf_draw(p, L, x[i], u[2], u[3], &d[i], &w[i], lam[i], &lp[i]);
         }
-        for (uint32_t i = 0; i < g; i++)
-            shoot_back(ctx, p, x[i], m->frame.n, d[i], w[i], L, lam[i], acc, batch, cnt);
+        for (uint32_t i = 0; i < g; i++) {
+            if (drawn[i])
+                shoot_back(ctx, p, x[i], m->frame.n, d[i], w[i], lp[i], lam[i], acc, batch, cnt);
+            else
+                cnt->samples++;
+        }
     }
     return dom.weight / k;
 }
@@ -669,8 +713,12 @@ static estimate node_estimate(const rl_transfer_ctx *ctx, const pair *p, const t
         double u[4], w, lam[3];
         lds4(&key, i, u);
         acc[i][0] = acc[i][1] = acc[i][2] = 0.0;
-        v3 d = leaf_sample(L, u[2], u[3], &w, lam);
-        shoot_back(ctx, p, domain_point(m, dom, u[0], u[1]), m->frame.n, d, w, L, lam, acc[i], &batch, cnt);
+        v3 d, x = domain_point(m, dom, u[0], u[1]);
+        const leaf *lp;
+        if (leaf_draw(p, L, x, u[2], u[3], &d, &w, lam, &lp))
+            shoot_back(ctx, p, x, m->frame.n, d, w, lp, lam, acc[i], &batch, cnt);
+        else
+            cnt->samples++;
     }
     batch_flush(ctx, &batch, cnt);
     estimate est = {{0, 0, 0}, 0, k};
