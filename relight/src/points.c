@@ -13,12 +13,12 @@
  *   - FREE, constant emitter: Lambert's formula over Q is the node's exact
  *     contribution, and the walk stops there;
  *   - otherwise the walk goes down to partition_n, where each leaf draws k
- *     directions uniformly in Q's solid angle (so none misses S). For a
- *     constant emitter the leaf's estimate is Lambert over Q minus the
- *     sampled light that occluders remove (a control variate: exact when
- *     nothing is hit, unbiased otherwise); for a light field or a bounce
- *     map it is the sampled radiance, with rays traced only in PARTIAL
- *     leaves (FREE ones are known to arrive).
+ *     directions uniformly in Q's solid angle (so none misses S) and
+ *     averages the radiance that arrives, with rays traced only in PARTIAL
+ *     leaves (FREE ones are known to arrive). Lambert's formula minus the
+ *     sampled loss would be unbiased too, but it dips below zero next to
+ *     an umbra; the plain average never does, at the same variance where
+ *     visibility, not the cosine, is what varies.
  * So light is estimated only where a shadow boundary crosses the emitter,
  * and small, far, sliver and edge-on emitters are no harder than large
  * ones: Q is exact whatever its size. Samples are keyed by (seed, pass,
@@ -97,7 +97,7 @@ static void sample_leaf(point_walk *w, uint32_t lv, uint64_t id, const v3 *q, si
         hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), w->ei), w->receiver), lv), id);
     lds_key lk = lds_make(key);
     double hx = v3_dot(v3_sub(w->x, e->frame.origin), e->frame.n);
-    double sum[3] = {0, 0, 0}; /* light arriving (or, constant: light removed) */
+    double sum[3] = {0, 0, 0}; /* light arriving */
     v3 org[RL_RAY_PACKET], rd[RL_RAY_PACKET];
     double tn[RL_RAY_PACKET], tf[RL_RAY_PACKET], lc[RL_RAY_PACKET][3];
     int occluded[RL_RAY_PACKET];
@@ -107,10 +107,8 @@ static void sample_leaf(point_walk *w, uint32_t lv, uint64_t id, const v3 *q, si
             w->cnt->rays_cast += nb;
             tracer_occluded_n(ctx->tracer, nb, org, rd, tn, tf, occluded);
             for (size_t r = 0; r < nb; r++) {
-                /* constant: what occluders remove; otherwise: what arrives */
-                int add = w->constant ? occluded[r] : !occluded[r];
                 w->cnt->rays_kept += !occluded[r];
-                for (int c = 0; add && c < 3; c++)
+                for (int c = 0; !occluded[r] && c < 3; c++)
                     sum[c] += lc[r][c];
             }
             nb = 0;
@@ -136,10 +134,9 @@ static void sample_leaf(point_walk *w, uint32_t lv, uint64_t id, const v3 *q, si
             continue;
         for (int c = 0; c < 3; c++)
             l[c] *= cos_r;
-        if (vis == VIS_FREE) {
-            if (!w->constant) /* (a constant emitter's FREE nodes never get here) */
-                for (int c = 0; c < 3; c++)
-                    sum[c] += l[c];
+        if (vis == VIS_FREE) { /* (a constant emitter's FREE nodes never get here) */
+            for (int c = 0; c < 3; c++)
+                sum[c] += l[c];
             continue;
         }
         org[nb] = w->x;
@@ -149,9 +146,8 @@ static void sample_leaf(point_walk *w, uint32_t lv, uint64_t id, const v3 *q, si
         memcpy(lc[nb], l, sizeof l);
         nb++;
     }
-    double f = w->constant ? lambert(w->x, w->nx, q, nq) : 0.0;
     for (int c = 0; c < 3; c++)
-        w->out[c] += w->constant ? e->emission[c] * f - total * sum[c] / k : total * sum[c] / k;
+        w->out[c] += total * sum[c] / k;
 }
 
 /* Visits node (lv, id) whose parent's part of S is src (n vertices) and
