@@ -511,6 +511,73 @@ static void check_extremes(void)
     extreme_case("point_just_below", &unit, edge_on, 0.05, 0);
 }
 
+/*
+ * The extremes as radiance maps: one emitter of radiance 2 and one
+ * receiving polygon of 0.25 m cells, every method at the default settings
+ * (n = 32, k = 4, 128 samples, descent on), RMSE of the peak against
+ * Lambert's mean over each cell. tol[m]: the bound asserted for method m
+ * (culled, naive, adaptive, area, solidangle); a negative bound asserts
+ * only finite, non-negative values (a baseline that cannot see the case,
+ * printed so that its failure is on record).
+ */
+static void extreme_map(const char *name, const tpoly *em, const tpoly *rcv, const double tol[5])
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/extreme_map_%s.json", tmpdir, name);
+    tpoly p[2] = {*em, *rcv};
+    ts_write_scene(path, MATS, p, 2, "\"radiance_maps\": {\"cell_size\": 0.25}");
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    ts_emitter ref = {em, 2.0};
+    const rl_method methods[5] = {RL_METHOD_CULLED, RL_METHOD_NAIVE, RL_METHOD_ADAPTIVE, RL_METHOD_AREA,
+                                  RL_METHOD_SOLIDANGLE};
+    for (int m = 0; m < 5; m++) {
+        set_sampling(s, methods[m], 32, 4, 128, 0);
+        rl_solution *sol = NULL;
+        CHECK(rl_relight(s, NULL, NULL, &sol) == RL_OK, "%s: %s", name, rl_errmsg());
+        if (!sol)
+            continue;
+        long total;
+        CHECK(ts_bad_values(sol, &total) == 0, "%s %s: values not finite or negative", name,
+              rl_method_name(methods[m]));
+        ts_errors e = ts_errors_vs_reference(sol, (size_t)ts_map_of(sol, 1), &ref, 1, 24);
+        double rel = e.peak > 0 ? e.rmse / e.peak : e.rmse;
+        printf("extreme map %-20s %-10s: RMSE %.3g%%, max %.3g%% of peak %.4g (%u cells)%s\n", name,
+               rl_method_name(methods[m]), 100 * rel, 100 * (e.peak > 0 ? e.max / e.peak : e.max), e.peak, e.cells,
+               tol[m] < 0 ? " (not bounded)" : "");
+        CHECK(tol[m] < 0 || rel <= tol[m], "%s %s: RMSE %.3g of peak above %.3g", name, rl_method_name(methods[m]),
+              rel, tol[m]);
+        rl_solution_destroy(sol);
+    }
+    rl_scene_destroy(s);
+}
+
+static void check_map_extremes(void)
+{
+    tpoly floor = ts_rect_z("grey", -0.5, -0.5, 0.5, 0.5, 0.0, 1);
+    /* culled, naive, adaptive, area, solidangle */
+    const double ordinary[5] = {0.01, 0.01, 0.01, 0.03, 0.01}, small[5] = {0.02, -1, 0.04, 0.02, 0.02};
+    tpoly unit = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
+    extreme_map("unit_over_floor", &unit, &floor, ordinary);
+    tpoly tiny = ts_rect_z("light", -5e-6, -5e-6, 5e-6, 5e-6, 1.0, 0);
+    extreme_map("tiny_emitter_1e-5m", &tiny, &floor, small);
+    tpoly huge = ts_rect_z("light", -5e3, -5e3, 5e3, 5e3, 1.0, 0);
+    const double huge_tol[5] = {0.02, 0.02, 0.02, -1, 0.03};
+    extreme_map("huge_emitter_1e4m", &huge, &floor, huge_tol);
+    tpoly far = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1000.0, 0);
+    extreme_map("emitter_1km_away", &far, &floor, small);
+    /* a vertical receiver at x = 3 facing the emitter, its top 1 mm under the
+     * emitter's plane: the emitter is seen from 1 mm to 0.5 m off edge-on */
+    tpoly edge_on = {"grey", 4, {{3, 0.5, 0.499}, {3, -0.5, 0.499}, {3, -0.5, 0.999}, {3, 0.5, 0.999}}};
+    extreme_map("edge_on_from_3m", &unit, &edge_on, small);
+    /* a floor touching a vertical emitter's lower edge: cells from 0 to 1 m away */
+    tpoly wall = {"light", 4, {{0, -0.5, 0}, {0, 0.5, 0}, {0, 0.5, 1}, {0, -0.5, 1}}};
+    tpoly beside = ts_rect_z("grey", 0, -0.5, 1, 0.5, 0.0, 1);
+    const double touch_tol[5] = {0.02, 0.02, 0.02, -1, 0.02};
+    extreme_map("touching_edge", &wall, &beside, touch_tol);
+}
+
 /* A fixed generator for the random scenes. */
 static uint64_t rnd_state = 77;
 static double rnd(void)
@@ -611,6 +678,7 @@ int main(int argc, char **argv)
     snprintf(tmpdir, sizeof tmpdir, "%s", t ? t : "/tmp");
     if (argc > 1 && strcmp(argv[1], "--extremes") == 0) {
         check_extremes();
+        check_map_extremes();
         check_slab_edge_on();
         check_random_scenes(24);
     } else {
