@@ -316,7 +316,6 @@ typedef struct pair {
     size_t ns;
     uint32_t level;
     int descended;
-    int ratio;  /* Lambert's formula times the sampled fraction that arrives (gather_ratio()) */
     double eps; /* ray offset at both ends, m (pair_eps()) */
 } pair;
 
@@ -402,15 +401,8 @@ static void shoot_back(const rl_transfer_ctx *ctx, const pair *p, v3 x, v3 nr, v
     emitter_radiance(e, q, d, L, lam, l);
     if (!(l[0] > 0 || l[1] > 0 || l[2] > 0))
         return;
-    if (p->ratio) {
-        /* channel 1 weighs every sample, channel 0 those that arrive */
-        acc[1] += cos_r * w;
-        l[0] = cos_r * w;
-        l[1] = l[2] = 0.0;
-    } else {
-        for (int c = 0; c < 3; c++)
-            l[c] *= cos_r * w;
-    }
+    for (int c = 0; c < 3; c++)
+        l[c] *= cos_r * w;
     double eps = p->eps;
     batch_push(ctx, b, x, v3_scale(d, -1.0), eps / dmax(cos_r, 1e-3), t - eps / dmax(dn, 1e-3), l, acc, cnt);
 }
@@ -454,7 +446,6 @@ static int pair_setup(const rl_transfer_ctx *ctx, const rl_emitter *e, const til
 {
     const rl_frame *rf = &t->m->frame;
     p->e = e;
-    p->ratio = 0;
     if (e->polygon >= 0 && e->polygon == t->m->polygon)
         return 0;
     /* the tile must be in front of the emitter somewhere */
@@ -911,11 +902,6 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t,
         batch_flush(ctx, &batch, cnt);
         for (uint32_t i = i0; i <= i1; i++) {
             int32_t cell = m->grid[(size_t)j * m->nu + i];
-            if (cell >= 0 && p->ratio) {
-                s->pair_total[cell - s->first_cell] += s->row_acc[i - i0][1] * s->row_scale[i - i0];
-                s->pair_vis[cell - s->first_cell] += s->row_acc[i - i0][0] * s->row_scale[i - i0];
-                continue;
-            }
             for (int c = 0; cell >= 0 && c < 3; c++)
                 m->e_pass[cell][c] += s->row_acc[i - i0][c] * s->row_scale[i - i0];
         }
@@ -923,9 +909,8 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t,
     return 0;
 }
 
-/* Zeroes the per-cell measures of the tile's cells (adaptive's budget,
- * the ratio's weights), growing them as needed. @return 0 or -1. */
-static int tile_reserve(rl_scratch *s, const tile *t)
+/* Zeroes the adaptive per-cell measures for the tile's cells, growing them as needed. @return 0 or -1. */
+static int adaptive_reserve(rl_scratch *s, const tile *t)
 {
     const rl_map *m = t->m;
     uint32_t c0 = UINT32_MAX, c1 = 0; /* a tile's cells are numbered consecutively, row by row */
@@ -945,14 +930,10 @@ static int tile_reserve(rl_scratch *s, const tile *t)
         uint32_t *lv = tot ? realloc(s->pair_leaves, n * sizeof *lv) : NULL;
         if (lv)
             s->pair_leaves = lv;
-        double *vis = lv ? realloc(s->pair_vis, n * sizeof *vis) : NULL;
-        if (vis)
-            s->pair_vis = vis;
-        if (!tot || !lv || !vis)
+        if (!tot || !lv)
             return -1;
         s->pair_cap = n;
     }
-    memset(s->pair_vis, 0, n * sizeof *s->pair_vis);
     memset(s->pair_total, 0, n * sizeof *s->pair_total);
     memset(s->pair_leaves, 0, n * sizeof *s->pair_leaves);
     s->first_cell = c0 == UINT32_MAX ? 0 : c0;
@@ -960,7 +941,7 @@ static int tile_reserve(rl_scratch *s, const tile *t)
 }
 
 /* @return how many origins the mean of Lambert's formula over a cell takes
- * (gather_ratio(), gather_views()). The formula is smooth except near the
+ * (gather_lambert(), gather_views()). The formula is smooth except near the
  * emitter's plane, where it falls to 0 with the distance to that plane;
  * its quasi-random mean's error was measured to fall as (cell size /
  * distance to the emitter's plane) / origins: 0.45% of the peak at 16
@@ -1027,37 +1008,81 @@ static int gather_views(const rl_transfer_ctx *ctx, const pair *p, const tile *t
     return 0;
 }
 
-/* Finishes a ratio pair: each cell of the tile gets emission * the mean of
- * Lambert's formula at lambert_origins() origins * the fraction of the sampled
- * light that arrived (s->pair_vis over s->pair_total, both weighted as the
- * plain estimate would be). Unoccluded cells are Lambert's exact field and
- * shadowed ones exactly 0; a ratio of two estimates is consistent but not
- * unbiased, by O(1 / samples) in a penumbra (the furnace test bounds it). */
-static void gather_ratio(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t ei, rl_scratch *s)
+/* Transfer from a constant emitter to every cell of the tile: the emitter's
+ * radiance times Lambert's formula averaged over lambert_origins() origins
+ * of the cell, times the fraction of light that arrives, estimated from
+ * shadow rays to uniform points of the emitter (clipped to the receiver's
+ * front) weighted by cos cos / r^2, k of them per solid angle of
+ * partition_n the emitter subtends from the cell's centre (at least k, at
+ * most 64 k). Unoccluded cells get Lambert's field, cells in full shadow
+ * exactly 0: rays are spent on visibility alone, which is all a constant
+ * emitter leaves unknown. A ratio of two estimates is consistent rather
+ * than unbiased (by O(1 / rays) in a penumbra; the white-furnace test
+ * bounds it); Lambert minus the sampled loss would be unbiased, but it
+ * dips below zero in shadows. The solid angles play no part: no sample is
+ * wasted on directions that miss the emitter. */
+static void gather_lambert(const rl_transfer_ctx *ctx, const pair *p, const tile *t, uint32_t ei, rl_counters *cnt)
 {
     rl_map *m = t->m;
-    uint32_t rays = ctx->sampling->rays_per_solid_angle;
+    const rl_emitter *e = p->e;
+    uint32_t k = ctx->sampling->rays_per_solid_angle, n = ctx->sampling->partition_n;
+    double leaf_sr = 2.0 * PI / (4.0 * n * n);
+    v2 sp[RL_MAX_POLY_VERTS + 2];
+    for (size_t i = 0; i < p->ns; i++)
+        sp[i] = frame_project(&e->frame, p->sclip[i]);
     for (uint32_t j = t->row0; j < t->row1; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
             int32_t cell = m->grid[(size_t)j * m->nu + i];
             origin_domain dom;
-            if (cell < 0)
-                continue;
-            double all = s->pair_total[cell - s->first_cell], seen = s->pair_vis[cell - s->first_cell];
-            if (!(all > 0) || !(seen > 0) || !cell_domain(m, (uint32_t)cell, NULL, 0, &dom))
+            if (cell < 0 || !cell_domain(m, (uint32_t)cell, NULL, 0, &dom))
                 continue;
             lds_key key = lds_make(hash_mix(
                 hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), t->map_index), (uint64_t)cell));
-            uint32_t k = lambert_origins(p, m, &dom, rays);
+            uint32_t no = lambert_origins(p, m, &dom, k);
             double f = 0.0;
-            for (uint32_t o = 0; o < k; o++) {
+            for (uint32_t o = 0; o < no; o++) {
                 double u[4];
                 lds4(&key, o, u);
-                f += point_lambert(p->e, domain_point(m, &dom, u[0], u[1]), m->frame.n);
+                f += point_lambert(e, domain_point(m, &dom, u[0], u[1]), m->frame.n);
             }
-            double scale = f / k * fmin(seen / all, 1.0);
-            for (int c = 0; c < 3; c++)
-                m->e_pass[cell][c] += p->e->emission[c] * scale;
+            if (!(f > 0))
+                continue;
+            /* rays in proportion to the solid angle the emitter subtends from the cell */
+            v2 c = {0, 0};
+            for (uint32_t v = 0; v < dom.n; v++)
+                c = (v2){c.x + dom.poly[v].x / dom.n, c.y + dom.poly[v].y / dom.n};
+            v3 dir[RL_MAX_POLY_VERTS + 2];
+            double om[RL_MAX_POLY_VERTS + 2];
+            double leaves = ceil(sph_fan(p->sclip, p->ns, frame_point(&m->frame, c), dir, om) / leaf_sr);
+            uint32_t nr = leaves >= 64.0 ? 64 * k : leaves <= 1.0 ? k : k * (uint32_t)leaves;
+            double all = 0.0, seen[3] = {0, 0, 0};
+            ray_batch batch;
+            batch.n = 0;
+            for (uint32_t r = 0; r < nr; r++) {
+                double u[4];
+                lds4(&key, r, u);
+                v3 x = domain_point(m, &dom, u[0], u[1]);
+                v3 y = frame_point(&e->frame, sample_polygon(sp, (uint32_t)p->ns, u[2], u[3]));
+                v3 to = v3_sub(y, x);
+                double dist = v3_len(to);
+                cnt->samples++;
+                if (!(dist > 0))
+                    continue;
+                to = v3_scale(to, 1.0 / dist);
+                double cos_r = v3_dot(to, m->frame.n), cos_s = -v3_dot(to, e->frame.n);
+                if (!(cos_r > 0) || !(cos_s > 0))
+                    continue;
+                double w = cos_r * cos_s / (dist * dist), l[3] = {w, 0, 0};
+                all += w;
+                batch_push(ctx, &batch, x, to, p->eps / fmax(cos_r, 1e-3), dist - p->eps / fmax(cos_s, 1e-3), l,
+                           seen, cnt);
+            }
+            batch_flush(ctx, &batch, cnt);
+            if (!(all > 0))
+                continue;
+            double scale = f / no * fmin(seen[0] / all, 1.0);
+            for (int ch = 0; ch < 3; ch++)
+                m->e_pass[cell][ch] += e->emission[ch] * scale;
         }
 }
 
@@ -1074,7 +1099,12 @@ static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32
         cnt->pairs++;
         cnt->pairs_descended += p->descended;
         s->nleaves = 0;
-        if (culled && p->descended) {
+        int method = ctx->sampling->method;
+        if (ctx->sampling->descend && p->e->kind == EM_CONST &&
+            (method == RL_METHOD_CULLED || method == RL_METHOD_NAIVE)) {
+            /* a constant emitter: Lambert's formula, and rays for visibility alone */
+            gather_lambert(ctx, p, t, ei, cnt);
+        } else if (culled && p->descended) {
             /* an emitter smaller than a solid angle: each cell's origins see it exactly */
             rc = gather_views(ctx, p, t, ei, s, cnt);
         } else if (culled) {
@@ -1088,15 +1118,11 @@ static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32
         }
         /* adaptive first measures every cell's total (stage 0), then estimates (stage 1) */
         int adaptive = ctx->sampling->method == RL_METHOD_ADAPTIVE;
-        /* descend 0 keeps the paper's plain estimator everywhere */
-        p->ratio = !adaptive && !p->descended && p->e->kind == EM_CONST && ctx->sampling->descend;
-        if (rc == 0 && (adaptive || p->ratio))
-            rc = tile_reserve(s, t);
+        if (rc == 0 && adaptive)
+            rc = adaptive_reserve(s, t);
         for (int stage = adaptive ? 0 : 1; stage <= 1 && rc == 0; stage++)
             for (size_t k = 0; k < s->nleaves && rc == 0; k++)
                 rc = gather_leaf(ctx, p, t, s->leaves[k], ei, culled, reg, q, s, stage, cnt);
-        if (rc == 0 && p->ratio)
-            gather_ratio(ctx, p, t, ei, s);
     }
     free(p);
     free(reg);
@@ -1240,7 +1266,6 @@ int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uin
 
 void scratch_free(rl_scratch *s)
 {
-    free(s->pair_vis);
     free(s->occ);
     free(s->pair_total);
     free(s->pair_leaves);

@@ -69,7 +69,6 @@ typedef struct rl_scratch {
     size_t row_cap;
     double *pair_total;   /* adaptive: each tile cell's total from the current emitter */
     uint32_t *pair_leaves; /* adaptive: and the leaves carrying it */
-    double *pair_vis;     /* ratio pairs: each tile cell's weight of samples that arrived (pair_total: of all) */
     size_t pair_cap;
     uint32_t first_cell;  /* the tile's first cell index */
     uint32_t *occ;        /* point receivers: one list of possible occluders per level of the walk */

@@ -50,8 +50,8 @@ typedef enum rl_method {
     RL_METHOD_NAIVE = 1,     /**< every solid angle of the emitter's hemisphere, every cell */
     RL_METHOD_AREA = 2,      /**< uniform points on the emitter with shadow rays */
     RL_METHOD_SOLIDANGLE = 3, /**< uniform directions in the emitter's spherical polygon */
-    RL_METHOD_ADAPTIVE = 4    /**< culled, then each (cell, solid angle) refined into its four children
-                                   where its estimate is uncertain, down to 4 x partition_n */
+    RL_METHOD_ADAPTIVE = 4    /**< culled's leaves, each (cell, solid angle) refined into its four children
+                                   where pilot samples find it uncertain, down to 4 x partition_n */
 } rl_method;
 
 /** @return the method's name ("culled", "naive", "area", "solidangle", "adaptive"). */
@@ -74,8 +74,10 @@ typedef struct rl_sampling {
     uint32_t bounce_partition_n;   /**< partition level of those passes (which never descend); 0 (default): partition_n / 4, at least 1.
                                         Indirect light is smooth, and a bounce pass gathers from every surface */
     uint64_t seed;                 /**< default 1 */
-    uint32_t descend;              /**< 1 (default): pairs whose emitter subtends less than a solid angle
-                                        use finer levels; 0: always partition_n, the paper's plain method */
+    uint32_t descend;              /**< 1 (default, direct pass): pairs whose emitter subtends less than a
+                                        solid angle are gathered from exact views, and constant emitters use
+                                        Lambert's formula times the sampled arriving fraction; 0: the plain
+                                        estimator at partition_n everywhere, the paper's method */
     uint32_t zero_culling;         /**< 1 (default): culled and adaptive skip light field solid angles that the
                                         zero-radiance mask rules out, and cells that only the slab's dark
                                         positions could light; 0: no culling by radiance, only by geometry */
