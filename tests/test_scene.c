@@ -474,6 +474,8 @@ static void test_set_sampling(void)
         {"bounces", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .bounces = 65, .target_error = 0.05}},
         {"threads", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .threads = 1025, .target_error = 0.05}},
         {"descend", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .descend = 2, .target_error = 0.05}},
+        {"bounce_cell_factor", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .bounce_cell_factor = 65,
+                                .target_error = 0.05}},
         {"target_error", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 0}},
         {"target_error", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 2}},
         {"time_budget", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 0.05,

@@ -111,9 +111,10 @@ static int reference_key(const bench_config *cfg, const rl_scene *scene, uint64_
     char settings[512];
     snprintf(settings, sizeof settings,
              "cell_size=%.17g method=solidangle samples=%" PRIu32 " seeds=%" PRIu64 ",%" PRIu64
-             " bounces=%" PRIu32 " bounce_partition_n=%" PRIu32 " partition_n=%" PRIu32 " descend=%" PRIu32,
+             " bounces=%" PRIu32 " bounce_partition_n=%" PRIu32 " bounce_cell_factor=%" PRIu32 " partition_n=%" PRIu32
+             " descend=%" PRIu32,
              rl_scene_cell_size(scene), cfg->reference_samples, REFERENCE_SEEDS[0], REFERENCE_SEEDS[1], s->bounces,
-             s->bounce_partition_n, s->partition_n, s->descend);
+             s->bounce_partition_n, s->bounce_cell_factor, s->partition_n, s->descend);
     *key = fnv1a(h, settings, strlen(settings));
     cJSON_Delete(root);
     free(text);

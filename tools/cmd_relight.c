@@ -405,6 +405,7 @@ static cJSON *settings_json(const rl_sampling *s)
     add_count(j, "bounces", s->bounces);
     add_count(j, "seed", s->seed);
     add_count(j, "descend", s->descend);
+    add_count(j, "bounce_cell_factor", s->bounce_cell_factor);
     add_count(j, "zero_culling", s->zero_culling);
     return j;
 }

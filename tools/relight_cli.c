@@ -60,6 +60,7 @@ int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, c
     case SAMPLING_OPT_SEED: ok = parse_seed(p, value, &v->seed); break;
     case SAMPLING_OPT_PARTITION_N: ok = parse_partition_n(p, value, 1, &v->partition_n); break;
     case SAMPLING_OPT_BOUNCE_PARTITION_N: ok = parse_partition_n(p, value, 0, &v->bounce_partition_n); break;
+    case SAMPLING_OPT_BOUNCE_CELL_FACTOR: ok = cli_value_u32(p, value, 0, 64, &v->bounce_cell_factor); break;
     case SAMPLING_OPT_DESCEND: ok = cli_value_u32(p, value, 0, 1, &v->descend); break;
     case SAMPLING_OPT_ZERO_CULLING: ok = cli_value_u32(p, value, 0, 1, &v->zero_culling); break;
     case SAMPLING_OPT_TARGET_ERROR:
@@ -103,6 +104,8 @@ static rl_sampling merged_sampling(const rl_sampling *scene, const sampling_over
         s.bounces = v->bounces;
     if (o->given & (1u << SAMPLING_OPT_BOUNCE_PARTITION_N))
         s.bounce_partition_n = v->bounce_partition_n;
+    if (o->given & (1u << SAMPLING_OPT_BOUNCE_CELL_FACTOR))
+        s.bounce_cell_factor = v->bounce_cell_factor;
     if (o->given & (1u << SAMPLING_OPT_DESCEND))
         s.descend = v->descend;
     if (o->given & (1u << SAMPLING_OPT_ZERO_CULLING))

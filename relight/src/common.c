@@ -50,6 +50,7 @@ void rl_sampling_default(rl_sampling *s)
     s->samples_per_cell = 128;
     s->bounces = 0;
     s->bounce_partition_n = 0;
+    s->bounce_cell_factor = 0;
     s->seed = 1;
     s->descend = 1;
     s->zero_culling = 1;

@@ -321,14 +321,24 @@ static rl_status solve(const rl_scene *scene, uint32_t passes, rl_progress_fn pr
         rl_solution_destroy(s);
         return rl__fail(RL_ERR_NOMEM, "out of memory for emitters");
     }
+    /* bounce passes gather on coarser cells when asked: indirect light is smooth */
+    rl_map *coarse = NULL;
+    size_t ncoarse = 0;
+    uint32_t factor = scene->sampling.bounce_cell_factor ? scene->sampling.bounce_cell_factor : 4;
+    if (passes > 1 && factor > 1)
+        st = maps_build_sized(scene, scene->cell_size * factor, &coarse, &ncoarse);
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
+        int gather_coarse = p > 0 && coarse;
         if (p > 0)
             ne = append_bounce_emitters(scene, s->maps, s->nmaps, e, 0);
-        st = run_pass(scene, s->tracer, p, p, s->maps, s->nmaps, e, ne, progress, user, (double)p / passes,
-                      1.0 / passes, &s->passes[p]);
+        st = run_pass(scene, s->tracer, p, p, gather_coarse ? coarse : s->maps, gather_coarse ? ncoarse : s->nmaps, e,
+                      ne, progress, user, (double)p / passes, 1.0 / passes, &s->passes[p]);
+        for (size_t m = 0; gather_coarse && m < s->nmaps; m++)
+            map_interpolate(&coarse[m], &s->maps[m]);
         close_pass(s->maps, s->nmaps);
         s->npasses = p + 1;
     }
+    maps_free(coarse, ncoarse);
     free(e);
     if (st != RL_OK) {
         rl_solution_destroy(s);
@@ -399,19 +409,6 @@ rl_status rl_solution_map_info(const rl_solution *s, size_t k, rl_map_info *out)
     out->vertices = &s->scene->vertices[pg->first][0];
     out->nvertices = pg->count;
     return RL_OK;
-}
-
-/* @return the centroid of the convex polygon p (count vertices). */
-static v2 polygon_centroid(const v2 *p, uint32_t count)
-{
-    double a = 0, cx = 0, cy = 0;
-    for (uint32_t i = 1; i + 1 < count; i++) {
-        double w = v2_cross(v2_sub(p[i], p[0]), v2_sub(p[i + 1], p[0]));
-        a += w;
-        cx += w * (p[0].x + p[i].x + p[i + 1].x) / 3;
-        cy += w * (p[0].y + p[i].y + p[i + 1].y) / 3;
-    }
-    return a > 0 ? (v2){cx / a, cy / a} : p[0];
 }
 
 /* @return x as a float, FLT_MAX where it is beyond float's range: a light

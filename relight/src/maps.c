@@ -143,6 +143,11 @@ static rl_status map_accumulators(rl_map *m)
 
 rl_status maps_build(const rl_scene *scene, rl_map **maps, size_t *count)
 {
+    return maps_build_sized(scene, scene->cell_size, maps, count);
+}
+
+rl_status maps_build_sized(const rl_scene *scene, double cell, rl_map **maps, size_t *count)
+{
     size_t n = 0;
     uint64_t total = 0;
     *maps = NULL;
@@ -161,7 +166,7 @@ rl_status maps_build(const rl_scene *scene, rl_map **maps, size_t *count)
             continue;
         rl_map *mp = &out[m++];
         map_frame(scene, (uint32_t)k, mp);
-        mp->cell = scene->cell_size;
+        mp->cell = cell;
         memcpy(mp->albedo, mat->albedo, sizeof mp->albedo);
         memcpy(mp->emission, mat->emission, sizeof mp->emission);
         rl_status st = map_cells(mp);
@@ -243,4 +248,36 @@ int64_t map_cell_at(const rl_map *m, v2 q)
     if (!(fi >= 0 && fj >= 0 && fi < m->nu && fj < m->nv))
         return -1;
     return m->grid[(size_t)fj * m->nu + (size_t)fi];
+}
+
+void map_interpolate(const rl_map *coarse, rl_map *fine)
+{
+    const double C = coarse->cell;
+    for (uint32_t k = 0; k < fine->ncells; k++) {
+        v2 poly[RL_MAX_POLY_VERTS + 4];
+        v2 c = polygon_centroid(poly, map_cell_polygon(fine, &fine->cells[k], poly));
+        double a = (c.x - coarse->u0) / C - 0.5, b = (c.y - coarse->v0) / C - 0.5;
+        double fa = floor(a), fb = floor(b), t = a - fa, s = b - fb;
+        double acc[3] = {0, 0, 0}, wsum = 0.0;
+        for (int dj = 0; dj <= 1; dj++)
+            for (int di = 0; di <= 1; di++) {
+                double ci = fa + di, cj = fb + dj, w = (di ? t : 1 - t) * (dj ? s : 1 - s);
+                if (ci < 0 || cj < 0 || ci >= coarse->nu || cj >= coarse->nv || !(w > 0))
+                    continue;
+                int32_t q = coarse->grid[(size_t)cj * coarse->nu + (size_t)ci];
+                if (q < 0)
+                    continue; /* outside the polygon: the others carry the value to the edge */
+                for (int ch = 0; ch < 3; ch++)
+                    acc[ch] += w * coarse->e_pass[q][ch];
+                wsum += w;
+            }
+        if (!(wsum > 0)) { /* no centre around: the coarse cell that holds the centroid */
+            int64_t q = map_cell_at(coarse, c);
+            for (int ch = 0; ch < 3; ch++)
+                fine->e_pass[k][ch] = q < 0 ? 0.0 : coarse->e_pass[q][ch];
+            continue;
+        }
+        for (int ch = 0; ch < 3; ch++)
+            fine->e_pass[k][ch] = acc[ch] / wsum;
+    }
 }

@@ -42,6 +42,15 @@ typedef struct rl_map {
  * @return RL_OK and *maps (count in *count); RL_ERR_NOMEM or RL_ERR_INPUT (too many cells). */
 rl_status maps_build(const rl_scene *scene, rl_map **maps, size_t *count);
 
+/* As maps_build(), with cells of side cell (m) instead of the scene's. */
+rl_status maps_build_sized(const rl_scene *scene, double cell, rl_map **maps, size_t *count);
+
+/* Sets fine->e_pass from coarse->e_pass, the same polygon's map on a grid
+ * of larger cells with the same origin: bilinear between the coarse cells'
+ * centres at each fine cell's centroid, over the coarse cells that exist
+ * (so values are carried to the polygon's edges, never across them). */
+void map_interpolate(const rl_map *coarse, rl_map *fine);
+
 /* Builds one point receiver at p facing n (unit). @return RL_OK or RL_ERR_NOMEM. */
 rl_status map_point(v3 p, v3 n, rl_map *out);
 

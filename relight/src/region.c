@@ -50,6 +50,19 @@ size_t clip_to_view(v3 x, const v3 g[3], const v3 *src, size_t n, v3 *out)
     return n >= 3 ? n : 0;
 }
 
+/* @return the centroid of the convex polygon p (count vertices). */
+v2 polygon_centroid(const v2 *p, uint32_t count)
+{
+    double a = 0, cx = 0, cy = 0;
+    for (uint32_t i = 1; i + 1 < count; i++) {
+        double w = v2_cross(v2_sub(p[i], p[0]), v2_sub(p[i + 1], p[0]));
+        a += w;
+        cx += w * (p[0].x + p[i].x + p[i + 1].x) / 3;
+        cy += w * (p[0].y + p[i].y + p[i + 1].y) / 3;
+    }
+    return a > 0 ? (v2){cx / a, cy / a} : p[0];
+}
+
 size_t clip_poly2(const v2 *p, size_t count, rl_halfplane h, v2 *out)
 {
     size_t m = 0;

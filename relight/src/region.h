@@ -7,6 +7,8 @@
 
 #include <stddef.h>
 
+#include <stdint.h>
+
 #include "vec.h"
 
 /* Largest vertex count of the polygons handled here: scene polygons have at
@@ -67,6 +69,9 @@ typedef struct rl_region {
  * dot(x - o, n) >= 0, writing at most count+1 vertices to out.
  * @return the vertex count of the result (0 if nothing remains). */
 size_t clip_poly3(const v3 *p, size_t count, v3 o, v3 n, v3 *out);
+
+/* @return the centroid of the convex 2D polygon p (count >= 1 vertices; its first vertex if degenerate). */
+v2 polygon_centroid(const v2 *p, uint32_t count);
 
 /* Clips the convex 2D polygon p to half-plane h, writing at most count+1 vertices.
  * @return the vertex count of the result. */

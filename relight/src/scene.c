@@ -60,6 +60,7 @@ static const int_limit lim_seed = {0, (uint64_t)1 << 53, 0}; /* integers a JSON 
 static const int_limit lim_pixels = {1, 16384, 0};
 static const int_limit lim_index = {0, UINT32_MAX, 0};
 static const int_limit lim_flag = {0, 1, 0};
+static const int_limit lim_cell_factor = {0, 64, 0}; /* 0: the default, 4 */
 
 /* @return 1 if v is allowed by l. */
 static int limit_ok(const int_limit *l, uint64_t v)
@@ -708,15 +709,16 @@ static rl_status read_radiance_maps(rl_build *b, const cJSON *j)
 static rl_status read_sampling(rl_build *b, const cJSON *j)
 {
     static const char *const keys[] = {"method", "partition_n", "rays_per_solid_angle", "samples_per_cell",
-                                       "bounces", "bounce_partition_n", "descend", "zero_culling", "seed", NULL};
+                                       "bounces", "bounce_partition_n", "bounce_cell_factor", "descend",
+                                       "zero_culling", "seed", NULL};
     static const char *const all_keys[] = {"method", "partition_n", "rays_per_solid_angle", "samples_per_cell",
-                                           "bounces", "bounce_partition_n", "descend", "zero_culling", "seed",
-                                           "target_error", "time_budget", NULL};
+                                           "bounces", "bounce_partition_n", "bounce_cell_factor", "descend",
+                                           "zero_culling", "seed", "target_error", "time_budget", NULL};
     static const int_limit *const limits[] = {NULL, &lim_partition, &lim_rays, &lim_samples, &lim_bounces,
-                                              &lim_bounce_partition, &lim_flag, &lim_flag, &lim_seed};
+                                              &lim_bounce_partition, &lim_cell_factor, &lim_flag, &lim_flag, &lim_seed};
     rl_sampling *s = &b->scene->sampling;
     uint32_t *const fields[] = {NULL, &s->partition_n, &s->rays_per_solid_angle, &s->samples_per_cell, &s->bounces,
-                                &s->bounce_partition_n, &s->descend, &s->zero_culling, NULL};
+                                &s->bounce_partition_n, &s->bounce_cell_factor, &s->descend, &s->zero_culling, NULL};
     rl_status st = json_keys(b, j, "sampling", all_keys);
     const cJSON *m = member(j, "method");
     const char *name = NULL;
@@ -1047,6 +1049,7 @@ rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
                   {"samples_per_cell", x->samples_per_cell, &lim_samples},
                   {"bounces", x->bounces, &lim_bounces},
                   {"bounce_partition_n", x->bounce_partition_n, &lim_bounce_partition},
+                  {"bounce_cell_factor", x->bounce_cell_factor, &lim_cell_factor},
                   {"descend", x->descend, &lim_flag},
                   {"zero_culling", x->zero_culling, &lim_flag},
                   {"threads", x->threads, &lim_threads}};

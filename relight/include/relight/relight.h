@@ -73,6 +73,9 @@ typedef struct rl_sampling {
     uint32_t bounces;              /**< further diffuse passes after the direct one, default 0 */
     uint32_t bounce_partition_n;   /**< partition level of those passes (which never descend); 0 (default): partition_n / 4, at least 1.
                                         Indirect light is smooth, and a bounce pass gathers from every surface */
+    uint32_t bounce_cell_factor;   /**< bounce passes gather on cells this many times larger (1 .. 64) and
+                                        interpolate onto the cells bilinearly, as indirect light is smooth;
+                                        1: on every cell; 0 (default): 4 */
     uint64_t seed;                 /**< default 1 */
     uint32_t descend;              /**< 1 (default, direct pass): pairs whose emitter subtends less than a
                                         solid angle are gathered from exact views, and constant emitters use
