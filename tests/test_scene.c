@@ -20,6 +20,7 @@
 
 #include "check.h"
 #include "relight/scene.h"
+#include "maps.h"
 #include "scene_internal.h"
 
 static const char *corpus; /* tests/scenes */
@@ -570,6 +571,67 @@ static void test_data(void)
     }
 }
 
+/* ------------------------------------------------------ coarse bounces */
+
+/*
+ * map_interpolate(), which carries bounce light from the coarse cells it is
+ * gathered on to the radiance cells: a field linear in the map's frame,
+ * given at the coarse cells' centres, comes back exactly at every fine cell
+ * whose four surrounding centres exist, and nowhere outside the range of
+ * the coarse values (no overshoot at the edges of a triangle).
+ */
+static void test_interpolation(void)
+{
+    write_text("interp.json", "{\"materials\": {\"g\": {}}, \"polygons\": ["
+                              "{\"material\": \"g\", \"vertices\": [[0,0,0],[2,0,0],[2,1.5,0],[0,1.5,0]]},"
+                              "{\"material\": \"g\", \"vertices\": [[0,0,1],[1.3,0,1],[0,1.1,1]]}],"
+                              "\"radiance_maps\": {\"cell_size\": 0.05}}");
+    rl_scene *s = load(tmpdir, "interp.json");
+    rl_map *fine = NULL, *coarse = NULL;
+    size_t nf = 0, nc = 0;
+    if (!s || maps_build(s, &fine, &nf) != RL_OK || maps_build_sized(s, 0.2, &coarse, &nc) != RL_OK) {
+        CHECK(0, "maps: %s", rl_errmsg());
+        maps_free(fine, nf);
+        rl_scene_destroy(s);
+        return;
+    }
+    CHECK(nf == 2 && nc == 2, "%zu fine and %zu coarse maps", nf, nc);
+    for (size_t m = 0; m < nf && m < nc; m++) {
+        rl_map *c = &coarse[m], *f = &fine[m];
+        double lo = INFINITY, hi = -INFINITY;
+        for (uint32_t k = 0; k < c->ncells; k++) {
+            double u = c->u0 + (c->cells[k].i + 0.5) * c->cell, v = c->v0 + (c->cells[k].j + 0.5) * c->cell;
+            for (int ch = 0; ch < 3; ch++)
+                c->e_pass[k][ch] = 1.0 + 2.0 * u - 3.0 * v + ch;
+            lo = fmin(lo, c->e_pass[k][0]);
+            hi = fmax(hi, c->e_pass[k][0]);
+        }
+        map_interpolate(c, f);
+        long exact = 0, interior = 0, outside = 0;
+        for (uint32_t k = 0; k < f->ncells; k++) {
+            v2 poly[RL_MAX_POLY_VERTS + 4];
+            v2 q = polygon_centroid(poly, map_cell_polygon(f, &f->cells[k], poly));
+            double a = (q.x - c->u0) / c->cell - 0.5, b = (q.y - c->v0) / c->cell - 0.5;
+            int i0 = (int)floor(a), j0 = (int)floor(b), all = i0 >= 0 && j0 >= 0 && i0 + 1 < (int)c->nu &&
+                                                         j0 + 1 < (int)c->nv;
+            for (int dj = 0; all && dj <= 1; dj++)
+                for (int di = 0; all && di <= 1; di++)
+                    all = c->grid[(size_t)(j0 + dj) * c->nu + (size_t)(i0 + di)] >= 0;
+            outside += !(f->e_pass[k][0] >= lo - 1e-12 && f->e_pass[k][0] <= hi + 1e-12);
+            if (!all)
+                continue;
+            interior++;
+            exact += fabs(f->e_pass[k][0] - (1.0 + 2.0 * q.x - 3.0 * q.y)) < 1e-9 &&
+                     fabs(f->e_pass[k][2] - (3.0 + 2.0 * q.x - 3.0 * q.y)) < 1e-9;
+        }
+        CHECK(interior > 0 && exact == interior, "map %zu: %ld of %ld interior cells linear", m, exact, interior);
+        CHECK(outside == 0, "map %zu: %ld cells outside the coarse range", m, outside);
+    }
+    maps_free(fine, nf);
+    maps_free(coarse, nc);
+    rl_scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 3) {
@@ -591,5 +653,6 @@ int main(int argc, char **argv)
     test_lightfields();
     test_set_sampling();
     test_data();
+    test_interpolation();
     return check_report();
 }
