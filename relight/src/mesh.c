@@ -508,18 +508,51 @@ static int gltf_check(const char *path, char *why, size_t size)
     FILE *f = fopen(path, "rb");
     if (!f)
         return 1;
-    size_t len = 0;
-    if (glb) { /* header: magic, version, length; then a chunk: length, type "JSON" */
-        unsigned char h[20];
-        if (fread(h, 1, sizeof h, f) != sizeof h || memcmp(h, "glTF", 4) != 0 || memcmp(h + 16, "JSON", 4) != 0) {
-            fclose(f);
-            return 1;
-        }
-        len = (size_t)h[12] | (size_t)h[13] << 8 | (size_t)h[14] << 16 | (size_t)h[15] << 24;
-    } else if (fseek(f, 0, SEEK_END) == 0) {
+    size_t len = 0, fsize = 0;
+    if (fseek(f, 0, SEEK_END) == 0) {
         long end = ftell(f);
-        len = end > 0 ? (size_t)end : 0;
+        fsize = end > 0 ? (size_t)end : 0;
         rewind(f);
+    }
+    if (glb) {
+        /* header: magic, version 2, total length; then a chunk: length, type
+         * "JSON". assimp reserves what these lengths claim before it reads,
+         * so they are held to the file's size first (glTF 2.0, 4.4). */
+        unsigned char h[20];
+        if (fread(h, 1, sizeof h, f) != sizeof h || memcmp(h, "glTF", 4) != 0) {
+            fclose(f);
+            snprintf(why, size, "not a binary glTF file: no 20-byte header starting with 'glTF'");
+            return 0;
+        }
+        size_t version = (size_t)h[4] | (size_t)h[5] << 8 | (size_t)h[6] << 16 | (size_t)h[7] << 24;
+        size_t total = (size_t)h[8] | (size_t)h[9] << 8 | (size_t)h[10] << 16 | (size_t)h[11] << 24;
+        len = (size_t)h[12] | (size_t)h[13] << 8 | (size_t)h[14] << 16 | (size_t)h[15] << 24;
+        const char *bad = version != 2                  ? "version is not 2"
+                          : total != fsize              ? "header length differs from the file's size"
+                          : memcmp(h + 16, "JSON", 4)   ? "first chunk is not JSON"
+                          : len == 0 || len % 4 != 0    ? "JSON chunk length is 0 or not a multiple of 4"
+                          : len > fsize - sizeof h      ? "JSON chunk is longer than the rest of the file"
+                          : len > GLTF_JSON_MAX         ? "JSON chunk is larger than the checker reads"
+                                                        : NULL;
+        if (bad) {
+            fclose(f);
+            snprintf(why, size, "binary glTF: %s (header length %zu, JSON chunk %zu bytes, file %zu bytes)", bad,
+                     total, len, fsize);
+            return 0;
+        }
+        /* the binary chunk, when present, must fit too */
+        size_t next = sizeof h + len;
+        unsigned char c[8];
+        if (next < fsize &&
+            (fseek(f, (long)next, SEEK_SET) != 0 || fread(c, 1, sizeof c, f) != sizeof c ||
+             ((size_t)c[0] | (size_t)c[1] << 8 | (size_t)c[2] << 16 | (size_t)c[3] << 24) > fsize - next - 8)) {
+            fclose(f);
+            snprintf(why, size, "binary glTF: the chunk after the JSON is longer than the rest of the file");
+            return 0;
+        }
+        fseek(f, (long)sizeof h, SEEK_SET);
+    } else {
+        len = fsize;
     }
     char *text = len > 0 && len <= GLTF_JSON_MAX ? malloc(len) : NULL;
     size_t got = text ? fread(text, 1, len, f) : 0;
