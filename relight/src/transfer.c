@@ -122,6 +122,8 @@ typedef struct leaf {
     sph_tri tri;          /* !planar: Arvo's warp; every sample weighs omega */
     v3 p[3];              /* planar: the lattice triangle's corners (|x|+|y|+|z| = 1 in e's frame), world */
     double jac;           /* planar: |det(p0, p1, p2)| / 2; a sample through point P weighs jac / |P|^3 */
+    int reach;            /* every corner direction leaves the emitter's front (p[k] . n > 0) */
+    v2 land[3];           /* then: corner k from origin x lands at project(x) - h(x) * land[k] on the emitter */
     int mix;              /* planar, light field, at or below the slab's level: lfio_slab_radiance_mix() */
     double to_slab[3][3]; /* mix: the slab-level triangle's barycentrics from the leaf's */
     uint64_t ids[4];      /* mix: the slab-level solid angle holding the leaf, then its neighbours */
@@ -161,6 +163,10 @@ static void leaf_make(const rl_transfer_ctx *ctx, const rl_emitter *e, uint32_t 
     L->key = hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), map_index), lv), id);
     for (int k = 0; k < 3; k++)
         L->p[k] = frame_vector(&e->frame, v[k]);
+    /* in e's frame a corner is v[k] itself: it reaches the front when v[k].z > 0 */
+    L->reach = v[0][2] > 0 && v[1][2] > 0 && v[2][2] > 0;
+    for (int k = 0; k < 3 && L->reach; k++)
+        L->land[k] = (v2){v[k][0] / v[k][2], v[k][1] / v[k][2]};
     L->planar = lv >= PLANAR_MIN_LEVEL;
     L->mix = 0;
     if (!L->planar) {
@@ -605,14 +611,17 @@ static int leaf_draw(const pair *p, const leaf *L, v3 x, double u1, double u2, v
                      const leaf **lp)
 {
     const rl_emitter *e = p->e;
-    double hx = v3_dot(v3_sub(x, e->frame.origin), e->frame.n);
+    v3 rel = v3_sub(x, e->frame.origin);
+    double hx = v3_dot(rel, e->frame.n);
     if (!(hx > 0))
         return 0;
-    int inside = 1;
-    for (int k = 0; k < 3 && inside; k++) {
-        double dn = v3_dot(L->p[k], e->frame.n);
-        inside = dn > 0 && emitter_contains(e, frame_project(&e->frame, v3_madd(x, L->p[k], -hx / dn)));
-    }
+    /* A light field's leaves stay blind: its radiance varies inside a leaf
+     * anyway, and on data/beams.json the clipping cost 1.8x the time for 20%
+     * less error, a loss at equal time. */
+    int inside = L->reach || e->kind == EM_SLAB;
+    v2 px = {v3_dot(rel, e->frame.e1), v3_dot(rel, e->frame.e2)};
+    for (int k = 0; k < 3 && inside && e->kind != EM_SLAB; k++)
+        inside = emitter_contains(e, (v2){px.x - hx * L->land[k].x, px.y - hx * L->land[k].y});
     if (inside) {
         *d = leaf_sample(L, u1, u2, w, lam);
         *lp = L;
