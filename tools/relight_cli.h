@@ -28,7 +28,7 @@
     {"samples", 0, "N", "shadow rays per (cell, emitter), area and solidangle (default: scene's)"}, \
     {"bounces", 0, "B", "diffuse passes after the direct one, 0 .. 64 (default: the scene's)"},    \
     {"bounce-partition-n", 0, "N", "partition level of bounce passes, 0 = partition-n / 4 (default: scene's)"}, \
-    {"bounce-cell-factor", 0, "F", "bounces gather on cells F times larger, interpolated; 1 = every cell, 0 = 4 (default: scene's)"}, \
+    {"bounce-cell-factor", 0, "F", "bounces gather on cells F times larger, interpolated; 1 = every cell, 0 = 2 (default: scene's)"}, \
     {"descend", 0, "0|1", "1: exact views of small emitters, Lambert ratio for diffuse ones (default: scene's)"}, \
     {"zero-culling", 0, "0|1", "1: cull light field directions and cells by zero radiance (default: scene's)"}, \
     {"target-error", 0, "E", "adaptive: refine while a cell's error exceeds E of it, (0, 1] (default: scene's)"}, \

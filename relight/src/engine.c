@@ -324,7 +324,7 @@ static rl_status solve(const rl_scene *scene, uint32_t passes, rl_progress_fn pr
     /* bounce passes gather on coarser cells when asked: indirect light is smooth */
     rl_map *coarse = NULL;
     size_t ncoarse = 0;
-    uint32_t factor = scene->sampling.bounce_cell_factor ? scene->sampling.bounce_cell_factor : 4;
+    uint32_t factor = scene->sampling.bounce_cell_factor ? scene->sampling.bounce_cell_factor : 2;
     if (passes > 1 && factor > 1)
         st = maps_build_sized(scene, scene->cell_size * factor, &coarse, &ncoarse);
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {

@@ -60,7 +60,7 @@ static const int_limit lim_seed = {0, (uint64_t)1 << 53, 0}; /* integers a JSON 
 static const int_limit lim_pixels = {1, 16384, 0};
 static const int_limit lim_index = {0, UINT32_MAX, 0};
 static const int_limit lim_flag = {0, 1, 0};
-static const int_limit lim_cell_factor = {0, 64, 0}; /* 0: the default, 4 */
+static const int_limit lim_cell_factor = {0, 64, 0}; /* 0: the default, 2 */
 
 /* @return 1 if v is allowed by l. */
 static int limit_ok(const int_limit *l, uint64_t v)

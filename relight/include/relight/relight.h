@@ -75,7 +75,7 @@ typedef struct rl_sampling {
                                         Indirect light is smooth, and a bounce pass gathers from every surface */
     uint32_t bounce_cell_factor;   /**< bounce passes gather on cells this many times larger (1 .. 64) and
                                         interpolate onto the cells bilinearly, as indirect light is smooth;
-                                        1: on every cell; 0 (default): 4 */
+                                        1: on every cell; 0 (default): 2 */
     uint64_t seed;                 /**< default 1 */
     uint32_t descend;              /**< 1 (default, direct pass): pairs whose emitter subtends less than a
                                         solid angle are gathered from exact views, and constant emitters use
