@@ -23,7 +23,7 @@
 #             1e-4 .. 1 m (log-uniform) from its lower edge, facing up
 #   edge-on   points 1e-6 m under the square's plane, 1 .. 3 m from it, facing it
 #   occluded  the floor case with a closed 0.4 m box halfway under the square
-#             (reference: `ilf irradiance --method solidangle --samples 262144`)
+#             (reference: `ilf irradiance --method solidangle --samples 32768`)
 # Errors are RMSE and largest error over the points, relative to the largest
 # reference value.
 set -eu
@@ -169,7 +169,7 @@ echo "| case | method | us/point | RMSE | max |"
 echo "|---|---|---:|---:|---:|"
 for case in floor grazing edge edge-on occluded; do
     if [ $case = occluded ]; then
-        "$ILF" irradiance "$OUT/$case.json" --points "$OUT/$case-$N2.txt" --method solidangle --samples 262144 \
+        "$ILF" irradiance "$OUT/$case.json" --points "$OUT/$case-$N2.txt" --method solidangle --samples 32768 \
             > "$OUT/$case-ref.txt"
     else
         lambert $case "$N2" > "$OUT/$case-ref.txt"

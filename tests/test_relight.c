@@ -592,6 +592,65 @@ static void check_map_extremes(void)
     extreme_map("touching_edge", &wall, &beside, touch_tol);
 }
 
+/*
+ * Shading of solved maps (rl_solution_trace, which renders use): flat gives
+ * each cell's own irradiance; smooth (the default) interpolates between cell
+ * centres, so at a cell's centre it is that cell's value, halfway between
+ * two neighbours it is their mean, and it never leaves the range of the
+ * cells around the point.
+ */
+static void check_shading(void)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/shading.json", tmpdir);
+    tpoly p[2] = {ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0), ts_rect_z("grey", -1, -1, 1, 1, 0.0, 1)};
+    ts_write_scene(path, MATS, p, 2, "\"radiance_maps\": {\"cell_size\": 0.25}");
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 0);
+    rl_solution *sol = NULL;
+    CHECK(rl_relight(s, NULL, NULL, &sol) == RL_OK, "shading: %s", rl_errmsg());
+    if (sol) {
+        ts_cells c = ts_cells_get(sol, (size_t)ts_map_of(sol, 1));
+        double *centre = malloc(3 * sizeof(double) * (c.n + 1));
+        rl_solution_map_cells(sol, (size_t)ts_map_of(sol, 1), NULL, NULL, centre, NULL, NULL);
+        const double down[3] = {0, 0, -1};
+        double albedo = 0.5 / 3.14159265358979323846; /* grey: radiance = 0.5 E / pi */
+        long centres = 0, halves = 0, flat = 0, bounded = 0;
+        for (uint32_t k = 0; k < c.n; k++) {
+            double org[3] = {centre[3 * k], centre[3 * k + 1], 0.5};
+            float rgb[3];
+            rl_solution_set_smooth(sol, 0);
+            rl_solution_trace(sol, org, down, rgb);
+            flat += fabs(rgb[1] - albedo * c.e[3 * k + 1]) <= 1e-6 * (1 + rgb[1]);
+            rl_solution_set_smooth(sol, 1);
+            rl_solution_trace(sol, org, down, rgb);
+            centres += fabs(rgb[1] - albedo * c.e[3 * k + 1]) <= 1e-5 * (1 + rgb[1]);
+            /* halfway to the neighbour in +x, when it exists */
+            for (uint32_t m = 0; m < c.n; m++) {
+                if (c.ij[2 * m] != c.ij[2 * k] + 1 || c.ij[2 * m + 1] != c.ij[2 * k + 1])
+                    continue;
+                double mid[3] = {0.5 * (centre[3 * k] + centre[3 * m]), centre[3 * k + 1], 0.5};
+                rl_solution_trace(sol, mid, down, rgb);
+                double want = albedo * 0.5 * (c.e[3 * k + 1] + c.e[3 * m + 1]);
+                halves += fabs(rgb[1] - want) <= 1e-5 * (1 + want);
+                bounded += rgb[1] >= albedo * fmin(c.e[3 * k + 1], c.e[3 * m + 1]) * (1 - 1e-6) &&
+                           rgb[1] <= albedo * fmax(c.e[3 * k + 1], c.e[3 * m + 1]) * (1 + 1e-6);
+            }
+        }
+        CHECK(c.n == 64 && flat == c.n && centres == c.n, "shading: %ld flat and %ld smooth of %u cell centres exact",
+              flat, centres, c.n);
+        CHECK(halves == 56 && bounded == 56, "shading: %ld of 56 midpoints the neighbours' mean, %ld in range", halves,
+              bounded);
+        CHECK(rl_solution_set_smooth(NULL, 1) == RL_ERR_ARG, "set_smooth(NULL)");
+        free(centre);
+        ts_cells_free(&c);
+    }
+    rl_solution_destroy(sol);
+    rl_scene_destroy(s);
+}
+
 /* A fixed generator for the random scenes. */
 static uint64_t rnd_state = 77;
 static double rnd(void)
@@ -697,6 +756,7 @@ int main(int argc, char **argv)
         check_random_scenes(24);
     } else {
         check_unoccluded();
+        check_shading();
         check_identities();
         check_lightfield();
     }

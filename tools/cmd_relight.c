@@ -47,22 +47,24 @@ typedef struct relight_options {
     sampling_overrides sampling;
     int quiet;
     int no_view; /* skip view.exr/png: no image is written, so OpenImageIO is never loaded */
+    int flat_view; /* each cell's own value in the view, no interpolation */
 } relight_options;
 
 /* Options after the shared sampling ones, whose ids come first (relight_cli.h). */
-enum relight_option_id { OPT_OUTPUT = SAMPLING_OPT_COUNT, OPT_QUIET, OPT_NO_VIEW };
+enum relight_option_id { OPT_OUTPUT = SAMPLING_OPT_COUNT, OPT_QUIET, OPT_NO_VIEW, OPT_FLAT_VIEW };
 
 static const cli_option relight_options_table[] = {
     RELIGHT_SAMPLING_OPTIONS,
     {"output", 'o', "DIR", "folder for radiance.h5, stats.json and view.exr/png (required; created)"},
     {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
     {"no-view", 0, NULL, "write no view.exr/png even when the scene has a camera"},
+    {"flat-view", 0, NULL, "show each cell's own value in the view (default: interpolated between cells)"},
 };
 
 static const cli_usage relight_usage = {
     "relight",
     "SCENE -o DIR [--method M] [--threads N] [--seed S] [--partition-n N] [--rays K]\n"
-    "                   [--samples N] [--bounces B] [--no-view] [--quiet]",
+    "                   [--samples N] [--bounces B] [--no-view] [--flat-view] [--quiet]",
     "Relights the scene (docs/scene.md) and writes to DIR: radiance.h5, the irradiance\n"
     "and radiosity of every receiving polygon's cells (docs/format.md); stats.json, the\n"
     "settings, times and per-pass counters (docs/cli.md); and, when the scene has a\n"
@@ -96,6 +98,8 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
         o->quiet = 1;
     else if (opt == OPT_NO_VIEW)
         o->no_view = 1;
+    else if (opt == OPT_FLAT_VIEW)
+        o->flat_view = 1;
     else
         return sampling_option_apply(p, &o->sampling, opt, value);
     return 1;
@@ -344,7 +348,9 @@ static int write_view(const relight_run *run)
         cli_error("relight", "out of memory for a %dx%d view", width, height);
         return ILF_EXIT_FAILED;
     }
-    rl_status rs = rl_solution_render(run->solution, pixels);
+    rl_status rs = rl_solution_set_smooth(run->solution, !run->o->flat_view);
+    if (rs == RL_OK)
+        rs = rl_solution_render(run->solution, pixels);
     int code = rs == RL_OK ? ILF_EXIT_OK : relight_failure("relight", rs);
     char what[160];
     snprintf(what, sizeof what, "%dx%d, radiance in W sr^-1 m^-2", width, height);

@@ -33,6 +33,7 @@ struct rl_solution {
     rl_tracer *tracer;
     rl_pass_stats *passes;
     uint32_t npasses;
+    int flat; /* shade each cell's own value instead of interpolating between cells */
 };
 
 /* ------------------------------------------------------------ parallel work */
@@ -462,7 +463,7 @@ typedef struct render_job {
 /* Finds the front face first hit along a ray: its polygon, map and cell
  * (map or cell -1 when the polygon does not receive). @return 1, or 0 for
  * no hit or a back face. */
-static int pick(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, int32_t *map, int64_t *cell)
+static int pick(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, int32_t *map, int64_t *cell, v2 *at)
 {
     double t;
     *map = -1;
@@ -472,8 +473,10 @@ static int pick(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, int32_t *m
     if (v3_dot(dir, v3_load(s->scene->polygons[*poly].normal)) >= 0)
         return 0; /* the back of a one-sided surface */
     *map = s->polygon_map[*poly];
-    if (*map >= 0)
-        *cell = map_cell_at(&s->maps[*map], frame_project(&s->maps[*map].frame, v3_madd(org, dir, t)));
+    if (*map >= 0) {
+        *at = frame_project(&s->maps[*map].frame, v3_madd(org, dir, t));
+        *cell = map_cell_at(&s->maps[*map], *at);
+    }
     return 1;
 }
 
@@ -483,16 +486,26 @@ static void shade(const rl_solution *s, v3 org, v3 dir, float out[3])
     uint32_t poly;
     int32_t map;
     int64_t cell;
+    v2 at;
     out[0] = out[1] = out[2] = 0.0f;
-    if (!pick(s, org, dir, &poly, &map, &cell))
+    if (!pick(s, org, dir, &poly, &map, &cell, &at))
         return;
     const rl_material *mat = &s->scene->materials[s->scene->polygons[poly].material];
-    for (int c = 0; c < 3; c++) {
-        double l = mat->emission[c];
-        if (cell >= 0)
-            l += s->maps[map].albedo[c] * s->maps[map].e_total[cell][c] / PI;
-        out[c] = (float)l;
-    }
+    double e[3] = {0, 0, 0};
+    if (cell >= 0 && s->flat)
+        memcpy(e, s->maps[map].e_total[cell], sizeof e);
+    else if (cell >= 0)
+        map_sample(&s->maps[map], at, (const double(*)[3])s->maps[map].e_total, e);
+    for (int c = 0; c < 3; c++)
+        out[c] = (float)(mat->emission[c] + (cell >= 0 ? s->maps[map].albedo[c] * e[c] / PI : 0.0));
+}
+
+rl_status rl_solution_set_smooth(rl_solution *s, int smooth)
+{
+    if (!s)
+        return rl__fail(RL_ERR_ARG, "rl_solution_set_smooth: NULL solution");
+    s->flat = !smooth;
+    return RL_OK;
 }
 
 rl_status rl_solution_trace(const rl_solution *s, const double org[3], const double dir[3], float rgb[3])
@@ -526,7 +539,8 @@ static void *render_worker(void *p)
                 uint32_t poly;
                 int32_t map;
                 int64_t cell;
-                pick(job->s, v3_load(cam->position), d, &poly, &map, &cell);
+                v2 at;
+                pick(job->s, v3_load(cam->position), d, &poly, &map, &cell, &at);
                 job->map_ids[px] = cell >= 0 ? map : -1;
                 job->cell_ids[px] = cell >= 0 ? (int32_t)cell : -1;
             }

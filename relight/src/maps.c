@@ -250,34 +250,38 @@ int64_t map_cell_at(const rl_map *m, v2 q)
     return m->grid[(size_t)fj * m->nu + (size_t)fi];
 }
 
+void map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3])
+{
+    double a = (q.x - m->u0) / m->cell - 0.5, b = (q.y - m->v0) / m->cell - 0.5;
+    double fa = floor(a), fb = floor(b), t = a - fa, s = b - fb;
+    double acc[3] = {0, 0, 0}, wsum = 0.0;
+    for (int dj = 0; dj <= 1; dj++)
+        for (int di = 0; di <= 1; di++) {
+            double ci = fa + di, cj = fb + dj, w = (di ? t : 1 - t) * (dj ? s : 1 - s);
+            if (ci < 0 || cj < 0 || ci >= m->nu || cj >= m->nv || !(w > 0))
+                continue;
+            int32_t c = m->grid[(size_t)cj * m->nu + (size_t)ci];
+            if (c < 0)
+                continue; /* outside the polygon: the others carry the value to the edge */
+            for (int ch = 0; ch < 3; ch++)
+                acc[ch] += w * values[c][ch];
+            wsum += w;
+        }
+    if (!(wsum > 0)) { /* no centre around: the cell that holds q */
+        int64_t c = map_cell_at(m, q);
+        for (int ch = 0; ch < 3; ch++)
+            out[ch] = c < 0 ? 0.0 : values[c][ch];
+        return;
+    }
+    for (int ch = 0; ch < 3; ch++)
+        out[ch] = acc[ch] / wsum;
+}
+
 void map_interpolate(const rl_map *coarse, rl_map *fine)
 {
-    const double C = coarse->cell;
     for (uint32_t k = 0; k < fine->ncells; k++) {
         v2 poly[RL_MAX_POLY_VERTS + 4];
-        v2 c = polygon_centroid(poly, map_cell_polygon(fine, &fine->cells[k], poly));
-        double a = (c.x - coarse->u0) / C - 0.5, b = (c.y - coarse->v0) / C - 0.5;
-        double fa = floor(a), fb = floor(b), t = a - fa, s = b - fb;
-        double acc[3] = {0, 0, 0}, wsum = 0.0;
-        for (int dj = 0; dj <= 1; dj++)
-            for (int di = 0; di <= 1; di++) {
-                double ci = fa + di, cj = fb + dj, w = (di ? t : 1 - t) * (dj ? s : 1 - s);
-                if (ci < 0 || cj < 0 || ci >= coarse->nu || cj >= coarse->nv || !(w > 0))
-                    continue;
-                int32_t q = coarse->grid[(size_t)cj * coarse->nu + (size_t)ci];
-                if (q < 0)
-                    continue; /* outside the polygon: the others carry the value to the edge */
-                for (int ch = 0; ch < 3; ch++)
-                    acc[ch] += w * coarse->e_pass[q][ch];
-                wsum += w;
-            }
-        if (!(wsum > 0)) { /* no centre around: the coarse cell that holds the centroid */
-            int64_t q = map_cell_at(coarse, c);
-            for (int ch = 0; ch < 3; ch++)
-                fine->e_pass[k][ch] = q < 0 ? 0.0 : coarse->e_pass[q][ch];
-            continue;
-        }
-        for (int ch = 0; ch < 3; ch++)
-            fine->e_pass[k][ch] = acc[ch] / wsum;
+        map_sample(coarse, polygon_centroid(poly, map_cell_polygon(fine, &fine->cells[k], poly)),
+                   (const double(*)[3])coarse->e_pass, fine->e_pass[k]);
     }
 }

@@ -45,6 +45,13 @@ rl_status maps_build(const rl_scene *scene, rl_map **maps, size_t *count);
 /* As maps_build(), with cells of side cell (m) instead of the scene's. */
 rl_status maps_build_sized(const rl_scene *scene, double cell, rl_map **maps, size_t *count);
 
+/* Gives in out the value of a field known per cell of m (values[cell]) at
+ * frame point q: bilinear between the centres of the grid squares around q,
+ * over those whose cells exist, so values are carried to the polygon's
+ * edges and never across them; the value of q's own cell when no centre
+ * around it has one. */
+void map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3]);
+
 /* Sets fine->e_pass from coarse->e_pass, the same polygon's map on a grid
  * of larger cells with the same origin: bilinear between the coarse cells'
  * centres at each fine cell's centroid, over the coarse cells that exist

@@ -85,9 +85,20 @@ rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, do
                                 float *irradiance, float *radiosity);
 
 /**
+ * Chooses how rl_solution_trace() and rl_solution_render() read a map:
+ * smooth (nonzero, the default) interpolates irradiance bilinearly between
+ * the centres of the cells around the point hit, over the cells of the same
+ * polygon only (carried to its edges, never across them); 0 gives each
+ * cell's own value, flat, for inspecting the cells. Not thread-safe with
+ * renders of the same solution. @return RL_OK; RL_ERR_ARG if s is NULL.
+ */
+rl_status rl_solution_set_smooth(rl_solution *s, int smooth);
+
+/**
  * Gives the radiance (W sr^-1 m^-2) arriving at org from the first surface
  * along the ray org + t*dir, t > 0 (dir need not be unit): emission plus
- * albedo * irradiance / pi of the cell hit; 0 for a back face or no hit.
+ * albedo * irradiance / pi at the point hit (rl_solution_set_smooth()); 0 for
+ * a back face or no hit.
  * Light field slabs are not surfaces and are not seen. Thread-safe.
  * @return RL_OK; RL_ERR_ARG if org or dir is not finite or dir is zero.
  */
@@ -96,7 +107,8 @@ rl_status rl_solution_trace(const rl_solution *s, const double org[3], const dou
 /**
  * Renders the scene camera's view: width*height*3 floats, rows top to bottom,
  * radiance (W sr^-1 m^-2) of the first surface seen: emission plus
- * albedo * irradiance / pi of its cell; back faces and the background are 0.
+ * albedo * irradiance / pi at the point seen (rl_solution_set_smooth());
+ * back faces and the background are 0.
  * @return RL_OK; RL_ERR_ARG if the scene has no camera.
  */
 rl_status rl_solution_render(const rl_solution *s, float *rgb);
