@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # hostile_test.sh - runs the hostile-input corpus (tests/hostile/) through `ilf`.
 #
-# Usage: bash hostile_test.sh ILF_BINARY CORPUS_DIR TMPDIR
+# Usage: bash hostile_test.sh ILF_BINARY CORPUS_DIR TMPDIR [--no-budget]
 #
 # CORPUS_DIR is tests/hostile: cases.txt lists every case (kind, exit code,
 # file, problem), the small text cases sit beside it, and gen_hostile.py
@@ -10,9 +10,16 @@
 # Each case runs the commands that read its kind of file (cases.txt says
 # which) and checks each run: it ends within 20 s, is neither killed by a
 # signal nor reports a sanitizer error, exits with the listed code, names
-# the file (its basename) and the problem in its output, and leaves no
-# output behind. Cases run as many at a time as there are processors. The
-# last line is "N passed, M failed"; the exit status is nonzero if anything
+# the file (its basename) and the problem in its output, leaves no output
+# behind, and stays within the budget of a bad file: 0.5 s of CPU time (user
+# + system: unlike wall time, it does not grow when other work shares the
+# machine) and 64 MiB of peak memory, both above the program's own baseline,
+# the largest of the same commands on small valid inputs (measured first, in
+# the same run: loading OpenImageIO alone costs about 0.55 s and 139 MiB). --no-budget
+# (sanitizer builds, whose shadow memory and checks inflate both) keeps the
+# measurements but not the budget. Every run's CPU time and memory are
+# printed. Cases run as many at a time as there are processors. The last
+# line is "N passed, M failed"; the exit status is nonzero if anything
 # failed. Leaks inside third-party libraries are suppressed (tests/lsan.supp).
 #
 # Readers without a command of their own are reported as skipped: radiance-map
@@ -20,14 +27,21 @@
 # reader) and, with an `ilf` that has no capture command, manifests and images.
 set -u
 
-if [ $# -ne 3 ]; then
-    echo "usage: bash hostile_test.sh ILF_BINARY CORPUS_DIR TMPDIR" >&2
+if [ $# -lt 3 ] || [ $# -gt 4 ] || { [ $# -eq 4 ] && [ "$4" != --no-budget ]; }; then
+    echo "usage: bash hostile_test.sh ILF_BINARY CORPUS_DIR TMPDIR [--no-budget]" >&2
     exit 2
 fi
 ILF=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
 CORPUS=$2
 TMP=$3
+BUDGET=1
+[ $# -eq 4 ] && BUDGET=0
 LIMIT=20
+CPU_BUDGET=0.5   # seconds of CPU time a bad file may cost above the baseline
+MEM_BUDGET=65536 # KiB of peak memory above the commands' own baseline
+MEASURE=$(cd "$(dirname "$0")" && pwd)/hostile/measure.py
+MPY=/usr/bin/python3
+[ -x "$MPY" ] || MPY=$(command -v python3)
 PARALLEL=$(nproc 2>/dev/null || echo 2)
 
 rm -rf "$TMP"
@@ -47,9 +61,10 @@ printf '0 0 0 0 0 1\n' >"$POINTS"
 expect_failure() {
     local result=$1 want=$2 file=$3 problem=$4 output=$5
     shift 5
-    local log=$TMP/logs/$(basename "$result") status why="" shown="$*"
-    timeout -k 5 "$LIMIT" "$@" >"$log" 2>&1
+    local log=$TMP/logs/$(basename "$result") status why="" shown="$*" cpu rss
+    "$MPY" "$MEASURE" "$LIMIT" "$log.usage" "$@" >"$log" 2>&1
     status=$?
+    read -r cpu rss <"$log.usage" 2>/dev/null || { cpu=0 rss=0; }
     if [ "$status" -eq 124 ] || [ "$status" -eq 137 ]; then
         why="no answer within $LIMIT s"
     elif [ "$status" -ge 128 ]; then
@@ -64,7 +79,13 @@ expect_failure() {
         why="the output does not say '$problem'"
     elif [ "$output" != - ] && [ -e "$output" ]; then
         why="it left $output behind"
+    elif [ "$BUDGET" -eq 1 ] && awk -v c="$cpu" -v b="$CPU_BUDGET" -v z="$BASE_CPU" 'BEGIN { exit !(c > z + b) }'; then
+        why="it took $cpu s of CPU time, over the baseline $BASE_CPU s + $CPU_BUDGET s"
+    elif [ "$BUDGET" -eq 1 ] && [ $((rss - BASELINE)) -gt "$MEM_BUDGET" ]; then
+        why="it peaked at $((rss / 1024)) MiB, over the baseline $((BASELINE / 1024)) MiB + $((MEM_BUDGET / 1024)) MiB"
     fi
+    printf '%6.3f s CPU %5d MiB (baseline %+4d MiB)  %s\n' "$cpu" $((rss / 1024)) $(((rss - BASELINE) / 1024)) \
+        "${shown#"$ILF "}" >>"$TMP/costs"
     if [ -z "$why" ]; then
         echo "pass" >>"$result"
     else
@@ -136,6 +157,33 @@ elif ! "$PY" "$WORK/gen_hostile.py" "$WORK/gen" "$WORK/gen/base.h5"; then
     echo "FAIL: gen_hostile.py failed" >"$TMP/results/gen"
 fi
 
+# ------------------------------------------------------------------ the baseline
+
+# The commands' own peak memory on small valid inputs: the largest is what a bad file's run
+# is measured against (relight and capture load Embree, HDF5 and, for images, OpenImageIO).
+printf '{"materials": {"lamp": {"emission": [1, 1, 1]}, "grey": {}}, "polygons": [
+  {"material": "lamp", "vertices": [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]]},
+  {"material": "grey", "vertices": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]}],
+  "radiance_maps": {"cell_size": 0.25}}\n' >"$TMP/valid.json"
+BASELINE=0
+BASE_CPU=0
+baseline() {
+    "$MPY" "$MEASURE" "$LIMIT" "$TMP/baseline.usage" "$@" >/dev/null 2>&1
+    local cpu rss
+    read -r cpu rss <"$TMP/baseline.usage" 2>/dev/null || { cpu=0 rss=0; }
+    [ "$rss" -gt "$BASELINE" ] && BASELINE=$rss
+    BASE_CPU=$(awk -v a="$BASE_CPU" -v b="$cpu" 'BEGIN { print (b > a ? b : a) }')
+    echo "baseline: ${*#"$ILF "}: $cpu s CPU, $((rss / 1024)) MiB"
+}
+baseline "$ILF" relight "$TMP/valid.json" -o "$TMP/valid-out" --quiet
+baseline "$ILF" irradiance "$TMP/valid.json" --points "$POINTS"
+if [ -e "$WORK/gen/base.h5" ]; then
+    baseline "$ILF" info "$WORK/gen/base.h5"
+    baseline "$ILF" verify "$WORK/gen/base.h5"
+    baseline "$ILF" slice "$WORK/gen/base.h5" --position 0,0 -o "$TMP/valid-slice.png"
+fi
+rm -rf "$TMP/valid-out" "$TMP/valid-slice.png"
+
 # ------------------------------------------------------------------ the corpus
 
 skipped=0
@@ -165,6 +213,8 @@ wait
 echo "skip: radiance-map files: no ilf command reads them (tests/fuzz/fuzz_radmap.c covers lfio_radmap_read)"
 [ "$CAPTURE" -eq 1 ] || echo "skip: capture manifests and images: this ilf has no capture command"
 
+echo "what each run cost (CPU time, peak memory), most expensive first:"
+sort -g -r "$TMP/costs" 2>/dev/null
 passed=$(cat "$TMP"/results/* 2>/dev/null | grep -c '^pass$')
 failed=$(cat "$TMP"/results/* 2>/dev/null | grep -c '^FAIL')
 grep -h -v '^pass$' "$TMP"/results/* 2>/dev/null
