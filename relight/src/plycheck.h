@@ -17,7 +17,10 @@
 
 /*
  * Checks the file at path if it is a PLY file (it starts with "ply" and a
- * line end); any other file passes untouched, for assimp to judge.
+ * line end); a file that assimp would read as PLY without being one (its
+ * name ends in .ply, or it starts with "ply" in any letter case, but its
+ * first line is not "ply") is refused; any other file passes untouched,
+ * for assimp to judge.
  * @return 1 if the file is not PLY, or its header parses and its body holds
  * every element and list the header and the list counts promise; 0 with the
  * problem in why (why_size bytes), e.g. "PLY header declares 1000000000
