@@ -210,7 +210,7 @@ interrupt() {
     check "$what: ended by the signal or finished (exit $STATUS)" test "$STATUS" -eq "$code" -o "$STATUS" -eq 0
     check "$what: every output under its final name is complete" every_output_complete "$dir"
     if [ "$sig" = KILL ]; then
-        temporaries "$dir" | xargs -r rm -f -- # allowed leftovers; the next run must not see them
+        temporaries "$dir" | xargs -r rm -rf -- # allowed leftovers (files, a staging folder); the next run must not see them
     else
         check "$what: no temporaries left ($(temporaries "$dir" | tr '\n' ' '))" no_temporaries "$dir"
     fi

@@ -538,10 +538,14 @@ void cli_progress_finish(cli_progress *p)
  */
 
 #define MAX_WATCHED 16
+#define MAX_WATCHED_PATH 4096
 
 static const int watched_signals[] = {SIGINT, SIGTERM, SIGHUP};
 static pthread_mutex_t watched_lock = PTHREAD_MUTEX_INITIALIZER;
-static char *watched[MAX_WATCHED];
+/* Fixed storage: registering an output cannot run out of memory. A folder
+ * (is_folder) is a staging folder, removed whole. */
+static char watched[MAX_WATCHED][MAX_WATCHED_PATH];
+static int watched_is_folder[MAX_WATCHED];
 static size_t watched_count;
 static int signal_pipe[2] = {-1, -1};
 
@@ -589,6 +593,22 @@ static void remove_temporaries(const char *path)
     closedir(dir);
 }
 
+/* Removes staging folder path and every file in it (it holds no folders). */
+static void remove_folder(const char *path)
+{
+    DIR *dir = opendir(path);
+    if (dir != NULL) {
+        for (struct dirent *e; (e = readdir(dir)) != NULL;) {
+            char victim[8192];
+            if (strcmp(e->d_name, ".") != 0 && strcmp(e->d_name, "..") != 0
+                && snprintf(victim, sizeof victim, "%s/%s", path, e->d_name) < (int)sizeof victim)
+                unlink(victim);
+        }
+        closedir(dir);
+    }
+    rmdir(path);
+}
+
 /* Watcher thread: waits for a signal, removes every registered output's temporaries, ends the process. */
 static void *watch_interrupts(void *unused)
 {
@@ -599,8 +619,12 @@ static void *watch_interrupts(void *unused)
             return NULL;
     }
     pthread_mutex_lock(&watched_lock);
-    for (size_t k = 0; k < watched_count; k++)
-        remove_temporaries(watched[k]);
+    for (size_t k = 0; k < watched_count; k++) {
+        if (watched_is_folder[k])
+            remove_folder(watched[k]);
+        else
+            remove_temporaries(watched[k]);
+    }
     signal(sig, SIG_DFL);
     kill(getpid(), sig);
     pause(); /* the signal ends the process; the lock stays held so no output is registered meanwhile */
@@ -635,13 +659,33 @@ static int start_watcher(void)
     return 1;
 }
 
-void cli_output_watch(const char *path)
+/* Registers path, a folder when is_folder. */
+static void watch(const char *path, int is_folder)
 {
     pthread_mutex_lock(&watched_lock);
-    char *copy = watched_count < MAX_WATCHED && start_watcher() ? malloc(strlen(path) + 1) : NULL;
-    if (copy != NULL) {
-        strcpy(copy, path);
-        watched[watched_count++] = copy;
+    size_t length = strlen(path);
+    if (watched_count < MAX_WATCHED && length < MAX_WATCHED_PATH && start_watcher()) {
+        watched_is_folder[watched_count] = is_folder;
+        memcpy(watched[watched_count++], path, length + 1);
     }
+    pthread_mutex_unlock(&watched_lock);
+}
+
+void cli_output_watch(const char *path)
+{
+    watch(path, 0);
+}
+
+void cli_staging_watch(const char *path)
+{
+    watch(path, 1);
+}
+
+void cli_staging_forget(const char *path)
+{
+    pthread_mutex_lock(&watched_lock);
+    for (size_t k = 0; k < watched_count; k++)
+        if (watched_is_folder[k] && strcmp(watched[k], path) == 0)
+            watched[k][0] = '\0'; /* opendir("") and rmdir("") fail harmlessly */
     pthread_mutex_unlock(&watched_lock);
 }

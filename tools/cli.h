@@ -198,9 +198,20 @@ unsigned cli_default_threads(void);
  * ("<name>.tmp-XXXXXX", ".<name>.tmp-XXXXXX.<ext>") are removed, then the
  * process ends by that signal. Outputs under their final names are always
  * complete, so an interrupted command leaves either the old file, the new
- * one, or nothing. At most 16 outputs; later ones are not watched.
+ * one, or nothing. At most 16 outputs, with paths under 4096 bytes; others
+ * are not watched. It allocates nothing.
  */
 void cli_output_watch(const char *path);
+
+/*
+ * Registers path as a staging folder this command created (outputs are
+ * written into it, then renamed into place together): on SIGINT, SIGTERM or
+ * SIGHUP it is removed with every file in it. Same limits as cli_output_watch().
+ */
+void cli_staging_watch(const char *path);
+
+/* Unregisters staging folder path, once it is gone or emptied into place. */
+void cli_staging_forget(const char *path);
 
 /* ------------------------------------------------------------ progress */
 

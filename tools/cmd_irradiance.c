@@ -18,6 +18,7 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "points_file.h"
 #include "relight/engine.h"
 #include "relight_cli.h"
 
@@ -48,12 +49,6 @@ static const cli_usage irradiance_usage = {
     "printf '2.5 2.5 0 0 0 1\\n' | ilf irradiance data/beams_diffuse.json --points - --bounces 1",
 };
 
-/* Points read from a file: 6 doubles each. */
-typedef struct point_list {
-    double *values;
-    size_t count, capacity;
-} point_list;
-
 /* ------------------------------------------------------------ options */
 
 /* Applies one option to the irradiance_options ctx. @return 1, or 0 after reporting. */
@@ -82,100 +77,6 @@ static int parse_arguments(irradiance_options *o, int argc, char **argv)
         return ILF_EXIT_USAGE;
     }
     return -1;
-}
-
-/* ------------------------------------------------------------ points */
-
-/* @return 1 if line holds only blanks, or a comment starting with '#' after them. */
-static int skippable(const char *line)
-{
-    line += strspn(line, " \t\r\n\v\f");
-    return *line == '\0' || *line == '#';
-}
-
-/*
- * Parses one point line into out[6]: exactly six finite numbers separated
- * by blanks, with a nonzero normal. @return 1, or 0 with a reason in why.
- */
-static int parse_point(char *line, double out[6], char *why, size_t why_size)
-{
-    static const char blanks[] = " \t\r\n\v\f";
-    char *save = NULL;
-    int found = 0;
-    for (char *field = strtok_r(line, blanks, &save); field != NULL; field = strtok_r(NULL, blanks, &save)) {
-        if (found == 6) {
-            snprintf(why, why_size, "more than 6 numbers (expected x y z nx ny nz)");
-            return 0;
-        }
-        char inner[160];
-        if (!cli_parse_double(field, &out[found], inner, sizeof inner)) {
-            snprintf(why, why_size, "value %d: %s", found + 1, inner);
-            return 0;
-        }
-        found++;
-    }
-    if (found < 6) {
-        snprintf(why, why_size, "%d number%s, expected 6 (x y z nx ny nz)", found, found == 1 ? "" : "s");
-        return 0;
-    }
-    if (out[3] == 0.0 && out[4] == 0.0 && out[5] == 0.0) {
-        snprintf(why, why_size, "the normal (nx ny nz) is zero");
-        return 0;
-    }
-    return 1;
-}
-
-/* Appends one point to list. @return 1, or 0 when memory runs out. */
-static int append_point(point_list *list, const double p[6])
-{
-    if (list->count == list->capacity) {
-        size_t grown = list->capacity ? 2 * list->capacity : 256;
-        double *more = realloc(list->values, grown * 6 * sizeof *more);
-        if (more == NULL)
-            return 0;
-        list->values = more;
-        list->capacity = grown;
-    }
-    memcpy(list->values + 6 * list->count++, p, 6 * sizeof *p);
-    return 1;
-}
-
-/* Reads every point of path ("-": stdin) into list. @return an exit code, after reporting any problem. */
-static int read_points(const char *path, point_list *list)
-{
-    int from_stdin = strcmp(path, "-") == 0;
-    const char *shown = from_stdin ? "<stdin>" : path;
-    FILE *f = from_stdin ? stdin : fopen(path, "r");
-    if (f == NULL) {
-        cli_error("irradiance", "%s: cannot open: %s", path, strerror(errno));
-        return ILF_EXIT_USAGE;
-    }
-    char *line = NULL;
-    size_t cap = 0;
-    unsigned long number = 0;
-    int code = ILF_EXIT_OK;
-    while (code == ILF_EXIT_OK && getline(&line, &cap, f) >= 0) {
-        number++;
-        double p[6];
-        char why[256];
-        if (skippable(line))
-            continue;
-        if (!parse_point(line, p, why, sizeof why)) {
-            cli_error("irradiance", "%s:%lu: %s", shown, number, why);
-            code = ILF_EXIT_USAGE;
-        } else if (!append_point(list, p)) {
-            cli_error("irradiance", "out of memory after %zu points", list->count);
-            code = ILF_EXIT_FAILED;
-        }
-    }
-    if (code == ILF_EXIT_OK && ferror(f)) {
-        cli_error("irradiance", "%s: cannot read: %s", shown, strerror(errno));
-        code = ILF_EXIT_USAGE;
-    }
-    free(line);
-    if (!from_stdin)
-        fclose(f);
-    return code;
 }
 
 /* ------------------------------------------------------------ main */
@@ -212,10 +113,10 @@ int ilf_cmd_irradiance(int argc, char **argv)
     rl_scene *scene = NULL;
     code = relight_scene_open("irradiance", o.scene, &o.sampling, &scene);
     if (code == ILF_EXIT_OK)
-        code = read_points(o.points, &points);
+        code = points_read(o.points, &points);
     if (code == ILF_EXIT_OK)
         code = print_irradiance(scene, &points);
-    free(points.values);
+    points_free(&points);
     rl_scene_destroy(scene);
     return code;
 }

@@ -8,13 +8,19 @@
  *   view.png     the same, tone mapped and sRGB-encoded  } scene has a camera
  *
  * Invariants: DIR exists (it is created) before the engine runs, so a long
- * run never ends in an output that cannot be placed; every output is written
- * atomically (lfio, capture/image.h, jsonout.h), so DIR never holds a partial file;
+ * run never ends in an output that cannot be placed. Outputs are written into
+ * a staging folder inside DIR (".relight.tmp-XXXXXX", each file atomically:
+ * lfio, capture/image.h, jsonout.h) and renamed into place together only once
+ * every one is written: a run that fails (out of memory, a full disk, an
+ * interruption) leaves DIR as it found it, removing the staging folder and any
+ * folder it created, and DIR never holds a partial file or a mix of two runs'
+ * outputs unless the final renames themselves fail;
  * stdout carries the summary (nothing with --quiet), stderr errors and the
  * progress bar (only on a terminal, never with --quiet).
  */
 #include <cjson/cJSON.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
@@ -76,6 +82,10 @@ static const cli_usage relight_usage = {
     "ilf relight scene.json -o out/naive --method naive --threads 4 --quiet",
 };
 
+/* The outputs, in the order they are written and renamed into place. */
+enum relight_output { OUT_RADIANCE, OUT_STATS, OUT_VIEW_EXR, OUT_VIEW_PNG, OUT_COUNT };
+static const char *const output_names[OUT_COUNT] = {"radiance.h5", "stats.json", "view.exr", "view.png"};
+
 /* Everything one run produced, for the outputs and the summary. */
 typedef struct relight_run {
     const relight_options *o;
@@ -84,6 +94,12 @@ typedef struct relight_run {
     double wall_seconds, cpu_seconds;
     size_t maps;
     uint64_t cells;
+    size_t created_from;         /* length of the first folder of DIR this run created; 0: none */
+    char *stage;                 /* the staging folder, or NULL */
+    char *staged[OUT_COUNT];     /* each output's path in the staging folder */
+    char *placed[OUT_COUNT];     /* and in DIR */
+    int written[OUT_COUNT];      /* staged and complete */
+    char report[OUT_COUNT][192]; /* what each holds, printed once they are in place */
 } relight_run;
 
 /* ------------------------------------------------------------ options */
@@ -137,9 +153,11 @@ static char *join_path(const char *dir, const char *name)
     return path;
 }
 
-/* Creates folder path and any missing parents, like mkdir -p. @return 1, or 0 after reporting. */
-static int make_folder(const char *path)
+/* Creates folder path and any missing parents, like mkdir -p; *created_from receives the length of
+ * the first prefix of path it created (0: none). @return 1, or 0 after reporting. */
+static int make_folder(const char *path, size_t *created_from)
 {
+    *created_from = 0;
     char *copy = malloc(strlen(path) + 1);
     if (copy == NULL) {
         cli_error("relight", "out of memory");
@@ -154,7 +172,10 @@ static int make_folder(const char *path)
             continue;
         *at = '\0';
         struct stat st;
-        if (mkdir(copy, 0777) != 0 && errno != EEXIST) {
+        int made = mkdir(copy, 0777) == 0;
+        if (made && *created_from == 0)
+            *created_from = (size_t)(at - copy);
+        if (!made && errno != EEXIST) {
             cli_error("relight", "cannot create folder '%s': %s", copy, strerror(errno));
             ok = 0;
         } else if (stat(copy, &st) != 0 || !S_ISDIR(st.st_mode)) {
@@ -169,23 +190,102 @@ static int make_folder(const char *path)
     return ok;
 }
 
-/* Registers the outputs DIR may receive, so that an interruption removes their temporaries (cli.h). */
-static void watch_outputs(const char *dir)
+/* Creates the staging folder in DIR, registered so that an interruption removes it (cli.h), and
+ * every output's two paths: nothing is allocated once outputs are placed. @return an exit code. */
+static int stage_open(relight_run *run)
 {
-    static const char *const names[] = {"radiance.h5", "stats.json", "view.exr", "view.png"};
-    for (size_t k = 0; k < sizeof names / sizeof names[0]; k++) {
-        char *path = join_path(dir, names[k]);
-        if (path != NULL)
-            cli_output_watch(path);
-        free(path);
+    run->stage = join_path(run->o->output, ".relight.tmp-XXXXXX");
+    int ok = run->stage != NULL;
+    for (int k = 0; ok && k < OUT_COUNT; k++)
+        ok = (run->staged[k] = join_path(run->stage, output_names[k])) != NULL
+             && (run->placed[k] = join_path(run->o->output, output_names[k])) != NULL;
+    if (!ok) {
+        cli_error("relight", "out of memory");
+        return ILF_EXIT_FAILED;
     }
+    if (mkdtemp(run->stage) == NULL) {
+        cli_error("relight", "cannot create a staging folder in '%s': %s", run->o->output, strerror(errno));
+        free(run->stage);
+        run->stage = NULL;
+        return ILF_EXIT_FAILED;
+    }
+    /* mkdtemp replaced the X's in the folder's name; the staged paths must follow. */
+    size_t len = strlen(run->stage);
+    for (int k = 0; k < OUT_COUNT; k++)
+        memcpy(run->staged[k], run->stage, len);
+    cli_staging_watch(run->stage);
+    return ILF_EXIT_OK;
 }
 
-/* Reports "wrote PATH: what" unless quiet. */
-static void report_written(const relight_options *o, const char *path, const char *what)
+/* Records that output k is staged and complete, holding what. */
+static void stage_done(relight_run *run, int k, const char *what)
 {
-    if (!o->quiet)
-        printf("wrote %s: %s\n", path, what);
+    run->written[k] = 1;
+    snprintf(run->report[k], sizeof run->report[k], "%s", what);
+}
+
+/* Renames every staged output into DIR, flushes DIR and removes the staging folder, then prints
+ * "wrote PATH: what" for each unless quiet. @return an exit code. */
+static int stage_commit(relight_run *run)
+{
+    int code = ILF_EXIT_OK;
+    for (int k = 0; k < OUT_COUNT && code == ILF_EXIT_OK; k++) {
+        if (run->written[k] && rename(run->staged[k], run->placed[k]) != 0) {
+            cli_error("relight", "%s: cannot move it into place from %s: %s", run->placed[k], run->stage,
+                      strerror(errno));
+            code = ILF_EXIT_FAILED;
+        }
+        run->written[k] &= code == ILF_EXIT_OK;
+    }
+    /* The renames are durable once DIR's entries are on disk. */
+    int fd = open(run->o->output, O_RDONLY | O_DIRECTORY);
+    if (fd >= 0) {
+        if (fsync(fd) != 0 && code == ILF_EXIT_OK) {
+            cli_error("relight", "%s: written, but cannot flush the folder: %s", run->o->output, strerror(errno));
+            code = ILF_EXIT_FAILED;
+        }
+        close(fd);
+    }
+    for (int k = 0; k < OUT_COUNT && !run->o->quiet; k++)
+        if (run->written[k])
+            printf("wrote %s: %s\n", run->placed[k], run->report[k]);
+    return code;
+}
+
+/* Removes the staging folder and what is left in it, then the folders of DIR this run created if
+ * they are empty, and frees the paths. */
+static void stage_close(relight_run *run)
+{
+    if (run->stage != NULL) {
+        for (int k = 0; k < OUT_COUNT; k++)
+            if (run->staged[k] != NULL)
+                unlink(run->staged[k]);
+        rmdir(run->stage);
+        cli_staging_forget(run->stage);
+    }
+    char folder[4096];
+    size_t len = strlen(run->o->output);
+    if (run->created_from > 0 && len < sizeof folder) {
+        /* Deepest first, up to the first folder this run created; rmdir leaves any that is not
+         * empty (a successful run's DIR). */
+        memcpy(folder, run->o->output, len + 1);
+        while (len > 1 && folder[len - 1] == '/')
+            folder[--len] = '\0';
+        while (len >= run->created_from && rmdir(folder) == 0) {
+            char *slash = strrchr(folder, '/');
+            if (slash == NULL || len == run->created_from)
+                break;
+            while (slash > folder && slash[-1] == '/')
+                slash--;
+            *slash = '\0';
+            len = (size_t)(slash - folder);
+        }
+    }
+    free(run->stage);
+    for (int k = 0; k < OUT_COUNT; k++) {
+        free(run->staged[k]);
+        free(run->placed[k]);
+    }
 }
 
 /* ------------------------------------------------------------ relighting */
@@ -287,9 +387,9 @@ static int write_radiance(relight_run *run)
     const size_t n = run->maps;
     lfio_radmap_patch *patches = calloc(n ? n : 1, sizeof *patches);
     patch_arrays *arrays = calloc(n ? n : 1, sizeof *arrays);
-    char *path = join_path(run->o->output, "radiance.h5");
+    const char *path = run->staged[OUT_RADIANCE];
     int code = ILF_EXIT_OK;
-    if (!patches || !arrays || !path) {
+    if (!patches || !arrays) {
         cli_error("relight", "out of memory");
         code = ILF_EXIT_FAILED;
     }
@@ -305,39 +405,31 @@ static int write_radiance(relight_run *run)
         char what[128], size[32];
         snprintf(what, sizeof what, "%zu map%s, %" PRIu64 " cells, %s", n, n == 1 ? "" : "s", run->cells,
                  cli_format_bytes(cli_file_size(path), size, sizeof size));
-        report_written(run->o, path, what);
+        stage_done(run, OUT_RADIANCE, what);
     }
     for (size_t k = 0; arrays && k < n; k++)
         patch_free(&arrays[k]);
     free(arrays);
     free(patches);
-    free(path);
     return code;
 }
 
 /* ------------------------------------------------------------ view.exr, view.png */
 
-/* Writes pixels ([y][x][rgb]) to DIR/name. @return an exit code. */
-static int write_view_image(const relight_run *run, const char *name, int width, int height, const float *pixels,
-                            const char *what)
+/* Writes pixels ([y][x][rgb]) to output k. @return an exit code. */
+static int write_view_image(relight_run *run, int k, int width, int height, const float *pixels, const char *what)
 {
     char err[512];
-    char *path = join_path(run->o->output, name);
-    if (path == NULL) {
-        cli_error("relight", "out of memory");
-        return ILF_EXIT_FAILED;
-    }
-    cap_status st = cap_image_write(path, width, height, 3, pixels, err, sizeof err);
+    cap_status st = cap_image_write(run->staged[k], width, height, 3, pixels, err, sizeof err);
     if (st != CAP_OK)
         cli_error("relight", "%s", err);
     else
-        report_written(run->o, path, what);
-    free(path);
+        stage_done(run, k, what);
     return st == CAP_OK ? ILF_EXIT_OK : ILF_EXIT_FAILED;
 }
 
 /* Renders the camera's view and writes view.exr (radiance) and view.png (tone mapped). @return an exit code. */
-static int write_view(const relight_run *run)
+static int write_view(relight_run *run)
 {
     uint32_t w = 0, h = 0;
     rl_scene_camera_size(run->scene, &w, &h);
@@ -355,13 +447,18 @@ static int write_view(const relight_run *run)
     char what[160];
     snprintf(what, sizeof what, "%dx%d, radiance in W sr^-1 m^-2", width, height);
     if (code == ILF_EXIT_OK)
-        code = write_view_image(run, "view.exr", width, height, pixels, what);
+        code = write_view_image(run, OUT_VIEW_EXR, width, height, pixels, what);
     if (code == ILF_EXIT_OK) {
-        double scale = tone_percentile_scale(pixels, count, 3, TONE_LUMINANCE, PNG_PERCENTILE, PNG_TARGET);
+        double scale = 1.0;
+        if (!tone_percentile_scale(pixels, count, 3, TONE_LUMINANCE, PNG_PERCENTILE, PNG_TARGET, &scale)) {
+            cli_error("relight", "out of memory for the exposure of a %dx%d view", width, height);
+            code = ILF_EXIT_FAILED;
+        }
         tone_apply(pixels, count, 3, scale);
         snprintf(what, sizeof what, "%dx%d, sRGB, scale %.6g (90th percentile of luminance -> %.1f)", width, height,
                  scale, PNG_TARGET);
-        code = write_view_image(run, "view.png", width, height, pixels, what);
+        if (code == ILF_EXIT_OK)
+            code = write_view_image(run, OUT_VIEW_PNG, width, height, pixels, what);
     }
     free(pixels);
     return code;
@@ -458,23 +555,22 @@ static cJSON *stats_json(const relight_run *run)
 }
 
 /* Writes DIR/stats.json. @return an exit code. */
-static int write_stats(const relight_run *run)
+static int write_stats(relight_run *run)
 {
     char err[1024];
     cJSON *root = stats_json(run);
-    char *path = join_path(run->o->output, "stats.json");
+    const char *path = run->staged[OUT_STATS];
     int code = ILF_EXIT_OK;
-    if (root == NULL || path == NULL) {
+    if (root == NULL) {
         cli_error("relight", "out of memory while building stats.json");
         code = ILF_EXIT_FAILED;
     } else if (!json_write_file(path, root, err, sizeof err)) {
         cli_error("relight", "%s", err);
         code = ILF_EXIT_FAILED;
     } else {
-        report_written(run->o, path, "settings, times and pass statistics");
+        stage_done(run, OUT_STATS, "settings, times and pass statistics");
     }
     cJSON_Delete(root);
-    free(path);
     return code;
 }
 
@@ -506,10 +602,10 @@ int ilf_cmd_relight(int argc, char **argv)
         return code;
     relight_run run = {.o = &o};
     code = relight_scene_open("relight", o.scene, &o.sampling, &run.scene);
-    if (code == ILF_EXIT_OK && !make_folder(o.output))
+    if (code == ILF_EXIT_OK && !make_folder(o.output, &run.created_from))
         code = ILF_EXIT_FAILED;
     if (code == ILF_EXIT_OK)
-        watch_outputs(o.output);
+        code = stage_open(&run);
     if (code == ILF_EXIT_OK)
         code = relight(&run);
     if (code == ILF_EXIT_OK)
@@ -520,6 +616,9 @@ int ilf_cmd_relight(int argc, char **argv)
         code = write_view(&run);
     if (code == ILF_EXIT_OK)
         code = write_stats(&run);
+    if (code == ILF_EXIT_OK)
+        code = stage_commit(&run);
+    stage_close(&run);
     rl_solution_destroy(run.solution);
     rl_scene_destroy(run.scene);
     return code;

@@ -375,9 +375,14 @@ static int slice_file(lfio_reader *r, const slice_options *o)
     double scale = 1.0;
     if (code == ILF_EXIT_OK && cap_image_guess_format(o->output) == CAP_IMAGE_FORMAT_PNG) {
         const size_t count = (size_t)img.width * img.height;
-        scale = o->exposure_given ? exp2(o->exposure)
-                                  : tone_percentile_scale(img.pixels, count, img.channels, TONE_PEAK, 0.99, 1.0);
-        tone_apply(img.pixels, count, img.channels, scale);
+        if (o->exposure_given)
+            scale = exp2(o->exposure);
+        else if (!tone_percentile_scale(img.pixels, count, img.channels, TONE_PEAK, 0.99, 1.0, &scale)) {
+            cli_error("slice", "out of memory for the exposure of a %dx%d image", img.width, img.height);
+            code = ILF_EXIT_FAILED;
+        }
+        if (code == ILF_EXIT_OK)
+            tone_apply(img.pixels, count, img.channels, scale);
     }
     if (code == ILF_EXIT_OK)
         code = write_image(&img, o);

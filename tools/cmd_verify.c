@@ -25,19 +25,20 @@ static const cli_usage verify_usage = {
     "Checks each light field file completely: format, attributes and shapes, every\n"
     "checksum (by reading all data), the stored directions, solid angles and mask.\n"
     "Prints \"FILE: ok\" or \"FILE: <first problem> (N problems)\" for each file and\n"
-    "exits 0 when all are valid, 2 otherwise.",
+    "exits 0 when all are valid, 2 when one is not, 1 when one could not be checked\n"
+    "for want of memory.",
     "ilf verify scene.h5 backup/*.h5",
 };
 
-/* Verifies one file and prints its line. @return 1 if the file is valid. */
-static int verify_one(const char *path, int quiet)
+/* Verifies one file and prints its line. @return LFIO_OK if the file is valid, else lfio's status. */
+static lfio_status verify_one(const char *path, int quiet)
 {
     lfio_verify_report report = {0};
     lfio_status status = lfio_verify(path, &report);
     if (status == LFIO_OK) {
         if (!quiet)
             printf("%s: ok\n", path);
-        return 1;
+        return LFIO_OK;
     }
     char line[1024];
     /* A file that cannot be opened at all may leave the report empty. HDF5's
@@ -51,7 +52,7 @@ static int verify_one(const char *path, int quiet)
         problem += len + 2;
     unsigned problems = report.problems > 0 ? (unsigned)report.problems : 1u;
     printf("%s: %s (%u problem%s)\n", path, problem, problems, problems == 1 ? "" : "s");
-    return 0;
+    return status;
 }
 
 int ilf_cmd_verify(int argc, char **argv)
@@ -83,10 +84,14 @@ int ilf_cmd_verify(int argc, char **argv)
         code = ILF_EXIT_USAGE;
     }
     if (code < 0) {
-        int all_valid = 1;
-        for (size_t k = 0; k < file_count; k++)
-            all_valid &= verify_one(files[k], quiet);
-        code = all_valid ? ILF_EXIT_OK : ILF_EXIT_USAGE;
+        /* Running out of memory says nothing about the file: that run failed (exit 1). */
+        int all_valid = 1, unchecked = 0;
+        for (size_t k = 0; k < file_count; k++) {
+            lfio_status st = verify_one(files[k], quiet);
+            all_valid &= st == LFIO_OK;
+            unchecked |= st == LFIO_ERR_NOMEM;
+        }
+        code = unchecked ? ILF_EXIT_FAILED : all_valid ? ILF_EXIT_OK : ILF_EXIT_USAGE;
     }
     free(files);
     return code;

@@ -27,13 +27,13 @@ static float pixel_measure(const float *px, tone_measure measure)
     return m > px[2] ? m : px[2];
 }
 
-double tone_percentile_scale(const float *pixels, size_t count, int channels, tone_measure measure,
-                             double percentile, double target)
+int tone_percentile_scale(const float *pixels, size_t count, int channels, tone_measure measure,
+                          double percentile, double target, double *scale_out)
 {
     float *values = malloc((count ? count : 1) * sizeof(float));
     size_t lit = 0;
     if (values == NULL)
-        return 1.0; /* only the automatic exposure suffers; the image is still written */
+        return 0;
     for (size_t k = 0; k < count; k++) {
         float m = pixel_measure(pixels + k * (size_t)channels, measure);
         if (m > 0.0f)
@@ -46,7 +46,8 @@ double tone_percentile_scale(const float *pixels, size_t count, int channels, to
         scale = target / values[rank > 0 ? (rank <= lit ? rank : lit) - 1 : 0];
     }
     free(values);
-    return scale;
+    *scale_out = scale;
+    return 1;
 }
 
 float tone_srgb_encode(double linear)

@@ -5,8 +5,7 @@
  *
  * Invariants: pixels are float, interleaved [y][x][channel] with at least 3
  * channels, the first three linear RGB; a fourth (alpha) is never scaled or
- * encoded. Nothing here allocates except tone_percentile_scale(), which
- * degrades to a scale of 1 when memory runs out.
+ * encoded. Nothing here allocates except tone_percentile_scale().
  */
 #ifndef ILF_TONEMAP_H
 #define ILF_TONEMAP_H
@@ -20,11 +19,12 @@ typedef enum tone_measure {
 } tone_measure;
 
 /**
- * @return target / the given percentile (nearest rank, in (0, 1]) of measure
- * over the count pixels where it is > 0; 1 if there are none or memory runs out.
+ * Sets *scale to target / the given percentile (nearest rank, in (0, 1]) of
+ * measure over the count pixels where it is > 0, or to 1 if there are none.
+ * @return 1, or 0 when memory runs out (*scale untouched).
  */
-double tone_percentile_scale(const float *pixels, size_t count, int channels, tone_measure measure,
-                             double percentile, double target);
+int tone_percentile_scale(const float *pixels, size_t count, int channels, tone_measure measure,
+                          double percentile, double target, double *scale);
 
 /** @return the sRGB encoding of a linear value, clamped to [0, 1]. */
 float tone_srgb_encode(double linear);

@@ -231,8 +231,9 @@ cap_status cap_capture_run(const cap_manifest *m, const cap_capture_options *o, 
     if (report == NULL)
         cap_report_free(&local);
     job_free(&job);
-    if (st == CAP_OK && lfio_lightfield_take_slab(lf, slab) != LFIO_OK)
-        st = cap__fail(CAP_ERR_INPUT, "%s: %s", m->path, lfio_errmsg());
+    lfio_status taken = st == CAP_OK ? lfio_lightfield_take_slab(lf, slab) : LFIO_OK;
+    if (taken != LFIO_OK)
+        st = cap__fail(taken == LFIO_ERR_NOMEM ? CAP_ERR_NOMEM : CAP_ERR_INPUT, "%s: %s", m->path, lfio_errmsg());
     else if (st != CAP_OK)
         lfio_slab_destroy(slab);
     if (st != CAP_OK) {

@@ -719,6 +719,10 @@ lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const
     size_t size = 0;
     int fd = -1, err = 0;
     lfio_status st = make_temp(path, &tmp, &fd);
+    /* The folder's name is taken now: once the file is renamed into place, running out of
+     * memory must not turn a complete write into a reported failure. */
+    if (st == LFIO_OK && (dir = folder_of(path)) == NULL)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
     if (st == LFIO_OK)
         st = build_image(path, tmp, fill, content, &image, &size);
     if (st == LFIO_OK && ((err = write_all(fd, image, size)) != 0 || (err = fsync(fd) ? errno : 0) != 0))
@@ -732,9 +736,8 @@ lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const
     if (st != LFIO_OK && tmp != NULL)
         remove(tmp);
     /* The rename is only durable once the folder's entry is on disk. */
-    if (st == LFIO_OK && ((dir = folder_of(path)) == NULL || (err = sync_folder(dir)) != 0))
-        st = lfio__fail(LFIO_ERR_IO, "%s: written, but cannot flush its folder: %s", path,
-                        dir ? strerror(err) : "out of memory");
+    if (st == LFIO_OK && (err = sync_folder(dir)) != 0)
+        st = lfio__fail(LFIO_ERR_IO, "%s: written, but cannot flush its folder: %s", path, strerror(err));
     free(dir);
     free(tmp);
     lfio__h5_quiet_end(&q);

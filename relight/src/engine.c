@@ -568,7 +568,9 @@ static rl_status render(const rl_solution *s, float *rgb, int32_t *map_ids, int3
     atomic_init(&job.next_row, 0);
     unsigned n = thread_count(s->scene->sampling.threads), started = 0;
     pthread_t *threads = malloc(n * sizeof *threads);
-    for (; threads && started < n; started++)
+    if (threads == NULL)
+        return rl__fail(RL_ERR_NOMEM, "%s: out of memory for %u render threads", s->scene->path, n);
+    for (; started < n; started++)
         if (pthread_create(&threads[started], NULL, render_worker, &job) != 0)
             break;
     if (started == 0)

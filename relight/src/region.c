@@ -13,6 +13,7 @@
  * degenerate to trust, the region is "all", which is conservative: it can
  * only cost work, never drop light.
  */
+#include <assert.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -99,10 +100,12 @@ size_t clip_to_region(const v2 *p, size_t count, const rl_region *r, v2 *out, si
 {
     if (r->empty)
         return 0;
-    v2 *buf = malloc(2 * out_cap * sizeof *buf);
-    if (!buf)
-        return count ? (memcpy(out, p, count * sizeof *p), count) : 0; /* conservative */
-    v2 *cur = buf, *next = buf + out_cap;
+    /* On the stack: this runs for every node of every walk, and cannot fail. */
+    enum { CAP = RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES };
+    v2 buf[2][CAP];
+    assert(out_cap <= CAP && count <= out_cap);
+    (void)out_cap;
+    v2 *cur = buf[0], *next = buf[1];
     memcpy(cur, p, count * sizeof *p);
     size_t m = count;
     for (size_t k = 0; !r->all && k < r->count && m > 0; k++) {
@@ -112,7 +115,6 @@ size_t clip_to_region(const v2 *p, size_t count, const rl_region *r, v2 *out, si
         next = t;
     }
     memcpy(out, cur, m * sizeof *cur);
-    free(buf);
     return m;
 }
 

@@ -1120,7 +1120,8 @@ static int gather_solid_angles(const rl_transfer_ctx *ctx, const tile *t, uint32
             rc = gather_views(ctx, p, t, ei, s, cnt);
         } else if (culled) {
             rc = walk(ctx, p, t, s, cnt);
-            qsort(s->leaves, s->nleaves, sizeof *s->leaves, cmp_u64);
+            if (rc == 0 && s->nleaves > 1)
+                qsort(s->leaves, s->nleaves, sizeof *s->leaves, cmp_u64);
         } else {
             uint64_t total = lfio_part_hemi_count(p->level);
             cnt->leaves_considered += total;

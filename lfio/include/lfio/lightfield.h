@@ -207,7 +207,7 @@ void lfio_lightfield_destroy(lfio_lightfield *lf);
 
 /**
  * Appends slab s and takes ownership of it, also on failure (it is then destroyed).
- * @return LFIO_OK; LFIO_ERR_ARG if its name is empty, invalid or already used.
+ * @return LFIO_OK; LFIO_ERR_ARG if its name is empty, invalid or already used; LFIO_ERR_NOMEM.
  */
 lfio_status lfio_lightfield_take_slab(lfio_lightfield *lf, lfio_slab *s);
 

@@ -109,7 +109,7 @@ rl_status rl_solution_trace(const rl_solution *s, const double org[3], const dou
  * radiance (W sr^-1 m^-2) of the first surface seen: emission plus
  * albedo * irradiance / pi at the point seen (rl_solution_set_smooth());
  * back faces and the background are 0.
- * @return RL_OK; RL_ERR_ARG if the scene has no camera.
+ * @return RL_OK; RL_ERR_ARG if the scene has no camera; RL_ERR_NOMEM.
  */
 rl_status rl_solution_render(const rl_solution *s, float *rgb);
 
@@ -117,7 +117,7 @@ rl_status rl_solution_render(const rl_solution *s, float *rgb);
  * Renders which cell each camera pixel sees: map_ids and cell_ids get
  * width*height entries, rows top to bottom; -1 where the pixel sees no
  * map (background, back face, a surface that does not receive).
- * @return RL_OK; RL_ERR_ARG if the scene has no camera.
+ * @return RL_OK; RL_ERR_ARG if the scene has no camera; RL_ERR_NOMEM.
  */
 rl_status rl_solution_render_cells(const rl_solution *s, int32_t *map_ids, int32_t *cell_ids);
 
