@@ -701,6 +701,9 @@ rl_status rl__build_mesh(rl_build *b, const char *path, const char *elem, const 
         return rl__build_fail(b, elem, "cannot open '%s': %s", path, strerror(errno));
     if (!S_ISREG(sb.st_mode))
         return rl__build_fail(b, elem, "'%s' is not a regular file", path);
+    /* assimp reads uninitialised memory on an empty glTF (valgrind, a fuzz_mesh input) */
+    if (sb.st_size == 0)
+        return rl__build_fail(b, elem, "cannot read '%s': the file is empty", path);
     if (!mesh_format_supported(path))
         return rl__build_fail(b, elem, "cannot read '%s': mesh format not supported (OBJ, PLY, glTF, GLB, STL, FBX "
                               "and 3DS are: their readers check their counts)", path);

@@ -745,30 +745,50 @@ static estimate node_estimate(const rl_transfer_ctx *ctx, const pair *p, const t
     return est;
 }
 
+/* @return the equal-weight mean of two independent estimates of one quantity. */
+static estimate estimate_mean(const estimate *a, const estimate *b)
+{
+    estimate m;
+    for (int c = 0; c < 3; c++)
+        m.e[c] = 0.5 * (a->e[c] + b->e[c]);
+    m.var = 0.25 * (a->var + b->var);
+    m.samples = a->samples + b->samples;
+    return m;
+}
+
 /* Estimates solid angle id at level lv for one cell. k pilot samples
  * decide: while their standard error exceeds tol (W m^-2) the node is
  * replaced by its four children (recursively, each held to tol / 2);
- * otherwise k fresh samples estimate it. The pilot never enters the
- * result, so the estimate is unbiased whatever the decision (reusing the
- * samples that decided, as this method once did, kept nodes whose few
- * samples all missed at zero: 0.4% low in a white furnace, 2.4% with two
- * bounces). */
+ * otherwise k fresh samples estimate it. The result is the mean of the
+ * pilot's estimate and the other one, with weights 1/2 whatever the
+ * decision: the pilot is unbiased by itself and the fresh or refined
+ * estimate is unbiased given the decision (its samples are independent of
+ * the pilot's), so their fixed-weight mean is unbiased, and an unrefined
+ * node gets the variance of 2k samples for the 2k it drew. (Using the
+ * pilot alone when it decides against refining, as this method once did,
+ * kept nodes whose few samples all missed at zero: 0.4% low in a white
+ * furnace, 2.4% with two bounces.) */
 static estimate adaptive_node(const rl_transfer_ctx *ctx, const pair *p, const tile *t, const origin_domain *dom,
                               uint32_t cell, uint32_t ei, const leaf *L, uint32_t max_level, double tol,
                               rl_counters *cnt)
 {
     uint32_t k = ctx->sampling->rays_per_solid_angle;
-    int refine = 2 * L->lv <= max_level && k > 1;
-    if (refine) {
-        estimate pilot = node_estimate(ctx, p, t, dom, cell, L, k, SALT_PILOT, cnt);
+    int pilot_drawn = 2 * L->lv <= max_level && k > 1, refine = pilot_drawn;
+    estimate pilot = {{0, 0, 0}, 0, 0};
+    if (pilot_drawn) {
+        pilot = node_estimate(ctx, p, t, dom, cell, L, k, SALT_PILOT, cnt);
         refine = sqrt(pilot.var) > tol;
     }
     if (refine && budget_spent(ctx)) {
         cnt->budget_reached = 1;
         refine = 0;
     }
-    if (!refine)
-        return node_estimate(ctx, p, t, dom, cell, L, k, 0, cnt);
+    if (!refine) {
+        estimate fresh = node_estimate(ctx, p, t, dom, cell, L, k, 0, cnt);
+        if (pilot_drawn)
+            return estimate_mean(&pilot, &fresh);
+        return fresh;
+    }
     cnt->refinements++;
     uint64_t ch[4];
     lfio_part_children(L->lv, L->id, ch);
@@ -782,7 +802,7 @@ static estimate adaptive_node(const rl_transfer_ctx *ctx, const pair *p, const t
         fine.var += r.var;
         fine.samples += r.samples;
     }
-    return fine;
+    return estimate_mean(&pilot, &fine);
 }
 
 /* Gives the u range [*ulo, *uhi] of convex polygon q within the band v in [va, vb]. @return 0 if none. */

@@ -14,6 +14,8 @@
 # that crashes, leaks, overflows or hangs (10 s) is saved in
 # BUILD_DIR/fuzz/TARGET/ as crash-*, leak-* or timeout-*, named in the log.
 # Exit status: 0 when the time ran out without a finding, nonzero otherwise.
+# FUZZ_SEED=S fixes libFuzzer's random seed (CI uses 1, so that a short run
+# tries the same inputs on every commit and a finding there is one of them).
 set -eu
 
 if [ $# -lt 2 ] || [ $# -gt 3 ]; then
@@ -43,8 +45,10 @@ export LSAN_OPTIONS="suppressions=$HERE/../lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIO
 # fast unwinder, which the suppression of libassimp cannot match (fuzz_mesh found one in its ASCII
 # STL reader; corpus/fuzz_mesh/stl_assimp_leak.bin keeps it).
 export ASAN_OPTIONS="fast_unwind_on_malloc=0${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
+SEED=()
+[ -n "${FUZZ_SEED:-}" ] && SEED=(-seed="$FUZZ_SEED")
 DICT=()
 [ -f "$HERE/$TARGET.dict" ] && DICT=(-dict="$HERE/$TARGET.dict")
 # One worker: the machine is shared. rss_limit keeps a runaway allocation a finding, not an OOM kill.
 exec "$BINARY" "$WORK/corpus" "$SEEDS" -max_total_time="$SECONDS_TO_RUN" -timeout=10 -rss_limit_mb=2048 \
-    -max_len=65536 -artifact_prefix="$WORK/" -print_final_stats=1 "${DICT[@]}"
+    -max_len=65536 -artifact_prefix="$WORK/" -print_final_stats=1 "${SEED[@]}" "${DICT[@]}"
