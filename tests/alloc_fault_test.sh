@@ -10,9 +10,10 @@
 # bounce and a view, a capture of a 2x2 probe grid, a depth correction, and
 # point queries. Each is first run untouched to count its allocations M (by
 # ilfkit's own code: libraries' are not counted). Then for N in 1..M, every N
-# when ILFKIT_FAULT_WALK=full, else every N up to 40 and 40 more spread
-# evenly over the rest (ILFKIT_FAULT_ONLY=TEXT walks only the runs whose name
-# holds TEXT), the run with the N-th allocation failing must:
+# when ILFKIT_FAULT_WALK=full, else every N up to W and W more spread evenly
+# over the rest (W = ILFKIT_FAULT_WALK, default 40; the sanitizer build uses
+# 20; ILFKIT_FAULT_ONLY=TEXT walks only the runs whose name holds TEXT), the
+# run with the N-th allocation failing must:
 #   - exit 1 (a failed run, not bad input: cli.h), saying "memory" or
 #     "allocat", with no crash, no sanitizer report and no leak (when built
 #     with ILFKIT_SANITIZE, LeakSanitizer turns a leak into a failing exit);
@@ -33,7 +34,7 @@ mkdir -p "$TMP"
 TMP=$(cd "$TMP" && pwd)
 LOG=$TMP/log
 COUNT=$TMP/count
-WALK=${ILFKIT_FAULT_WALK:-sample}
+WALK=${ILFKIT_FAULT_WALK:-40}
 JOBS=$(nproc 2>/dev/null || echo 2)
 # Under the sanitizers the shim is preloaded ahead of libasan, which must be told that is fine;
 # leaks inside HDF5 and assimp are theirs (lsan.supp).
@@ -112,10 +113,11 @@ walk() {
     fi
     [ "$out" = - ] || rm -rf "$out"
     local ns
-    if [ "$WALK" = full ] || [ "$count" -le 80 ]; then
+    if [ "$WALK" = full ] || [ "$count" -le $((2 * WALK)) ]; then
         ns=$(seq 1 "$count")
     else
-        ns=$( (seq 1 40; seq 1 40 | awk -v m="$count" '{ print 40 + int(($1 * (m - 40)) / 40) }') | sort -n -u)
+        ns=$( (seq 1 "$WALK"; seq 1 "$WALK" | awk -v m="$count" -v w="$WALK" '{ print w + int(($1 * (m - w)) / w) }') |
+            sort -n -u)
     fi
     rm -f "$TMP"/result.*
     for n in $ns; do
