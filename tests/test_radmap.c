@@ -254,6 +254,60 @@ static void test_round_trip(const lfio_radmap_patch *patches, size_t count, cons
     CHECK(lfio_radmap_count(NULL) == 0 && strcmp(lfio_radmap_creator(NULL), "") == 0, "NULL accessors");
 }
 
+/* A describe function over an array that fails at patch fail_at (SIZE_MAX: never). */
+struct describer {
+    const lfio_radmap_patch *patches;
+    size_t fail_at, asked;
+};
+
+static lfio_status describe_some(void *user, size_t k, lfio_radmap_patch *out)
+{
+    struct describer *d = user;
+    CHECK(k == d->asked, "describe asked for patch %zu after %zu", k, d->asked);
+    d->asked++;
+    if (k == d->fail_at)
+        return LFIO_ERR_NOMEM;
+    *out = d->patches[k];
+    return LFIO_OK;
+}
+
+/* lfio_radmap_write_each(): the same content as lfio_radmap_write() (the bytes differ only in HDF5's
+ * object times), patches asked in order, once; a describe that fails abandons the write with its
+ * status and leaves an existing file as it was. */
+static void test_write_each(const lfio_radmap_patch *patches, size_t count)
+{
+    char path[512];
+    struct describer d = {patches, SIZE_MAX, 0};
+    quiet_start();
+    lfio_status st = lfio_radmap_write_each(tmp_path(path, sizeof path, "each.h5"), "test_radmap", "scenes/test.json",
+                                            count, describe_some, &d);
+    quiet_stop();
+    CHECK(st == LFIO_OK && d.asked == count, "write_each: %s, %zu asked", lfio_errmsg(), d.asked);
+    lfio_radmap *map = NULL;
+    CHECK(lfio_radmap_read(path, &map) == LFIO_OK && lfio_radmap_count(map) == count, "read back: %s",
+          lfio_errmsg());
+    for (size_t k = 0; map != NULL && k < count && k < lfio_radmap_count(map); k++) {
+        lfio_radmap_patch back;
+        CHECK(lfio_radmap_get(map, k, &back) == LFIO_OK, "get %zu", k);
+        check_patch_equal(&patches[k], &back, patches[k].label);
+    }
+    lfio_radmap_destroy(map);
+    size_t a_size = 0;
+    unsigned char *a = read_whole(path, &a_size);
+    struct describer fail = {patches, 1, 0};
+    quiet_start();
+    st = lfio_radmap_write_each(path, NULL, NULL, count, describe_some, &fail);
+    quiet_stop();
+    CHECK(st == LFIO_ERR_NOMEM && fail.asked == 2, "a failing describe: status %d, %zu asked", (int)st, fail.asked);
+    size_t c_size = 0;
+    unsigned char *c = read_whole(path, &c_size);
+    CHECK(c && c_size == a_size && memcmp(a, c, a_size) == 0, "a failed write_each changed the file");
+    CHECK(sweep_tmpdir(1) == 0, "temporaries left after a failed write_each");
+    CHECK(lfio_radmap_write_each(path, NULL, NULL, 1, NULL, NULL) == LFIO_ERR_ARG, "NULL describe");
+    free(a);
+    free(c);
+}
+
 /* Expects writing p (one patch) to be refused with LFIO_ERR_ARG, a message containing needle, and no file. */
 static void expect_refused(const lfio_radmap_patch *p, const char *needle, const char *what)
 {
@@ -550,6 +604,7 @@ int main(void)
     test_round_trip(patches, 3, good); /* replaces an existing file */
     test_round_trip(NULL, 0, tmp_path(empty, sizeof empty, "no_patches.h5"));
     test_round_trip(&patches[1], 1, tmp_path(lonely, sizeof lonely, "empty_patch.h5"));
+    test_write_each(patches, 3);
     test_writer_refusals(&t[0], good);
     test_bad_files(good);
     CHECK(sweep_tmpdir(1) == 0, "temporaries left at the end");

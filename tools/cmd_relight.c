@@ -319,34 +319,62 @@ static unsigned threads_used(const rl_sampling *s)
 
 /* ------------------------------------------------------------ radiance.h5 */
 
-/* One patch for lfio_radmap_write() and the arrays it borrows. */
+/* The arrays of the one patch lfio_radmap_write_each() is writing, grown to the largest map so far. */
 typedef struct patch_arrays {
+    const rl_solution *solution;
+    size_t capacity; /* cells */
     uint32_t *ij;
     double *area, *centre;
     float *irradiance, *radiosity;
+    uint64_t cells;  /* over the patches described so far */
+    int reported;    /* describe_map reported a failure */
 } patch_arrays;
 
-/* Describes map k of the solution in *p, with arrays in *a (freed by patch_free). @return an exit code. */
-static int fill_patch(const rl_solution *sol, size_t k, lfio_radmap_patch *p, patch_arrays *a)
+/* Grows a's arrays to hold n cells. @return 1, or 0 when memory runs out (a keeps what it had). */
+static int patch_reserve(patch_arrays *a, size_t n)
 {
+    if (n <= a->capacity)
+        return 1;
+    void *p;
+    if ((p = realloc(a->ij, 2 * n * sizeof *a->ij)) == NULL)
+        return 0;
+    a->ij = p;
+    if ((p = realloc(a->area, n * sizeof *a->area)) == NULL)
+        return 0;
+    a->area = p;
+    if ((p = realloc(a->centre, 3 * n * sizeof *a->centre)) == NULL)
+        return 0;
+    a->centre = p;
+    if ((p = realloc(a->irradiance, 3 * n * sizeof *a->irradiance)) == NULL)
+        return 0;
+    a->irradiance = p;
+    if ((p = realloc(a->radiosity, 3 * n * sizeof *a->radiosity)) == NULL)
+        return 0;
+    a->radiosity = p;
+    a->capacity = n;
+    return 1;
+}
+
+/* lfio_radmap_write_each()'s describe: map k of the solution, in the arrays of user (a patch_arrays).
+ * Reports its own failures (cli.h). @return LFIO_OK, or LFIO_ERR_NOMEM / LFIO_ERR_ARG after reporting. */
+static lfio_status describe_map(void *user, size_t k, lfio_radmap_patch *p)
+{
+    patch_arrays *a = user;
     rl_map_info m;
-    rl_status st = rl_solution_map_info(sol, k, &m);
-    if (st != RL_OK)
-        return relight_failure("relight", st);
-    const size_t n = m.ncells ? m.ncells : 1;
-    a->ij = malloc(2 * n * sizeof *a->ij);
-    a->area = malloc(n * sizeof *a->area);
-    a->centre = malloc(3 * n * sizeof *a->centre);
-    a->irradiance = malloc(3 * n * sizeof *a->irradiance);
-    a->radiosity = malloc(3 * n * sizeof *a->radiosity);
-    if (!a->ij || !a->area || !a->centre || !a->irradiance || !a->radiosity) {
+    rl_status st = rl_solution_map_info(a->solution, k, &m);
+    if (st == RL_OK && !patch_reserve(a, m.ncells ? m.ncells : 1)) {
         cli_error("relight", "out of memory for the %u cells of map %zu", m.ncells, k);
-        return ILF_EXIT_FAILED;
+        a->reported = 1;
+        return LFIO_ERR_NOMEM;
     }
-    st = rl_solution_map_cells(sol, k, a->ij, a->area, a->centre, a->irradiance, a->radiosity);
-    if (st != RL_OK)
-        return relight_failure("relight", st);
-    memset(p, 0, sizeof *p);
+    if (st == RL_OK)
+        st = rl_solution_map_cells(a->solution, k, a->ij, a->area, a->centre, a->irradiance, a->radiosity);
+    if (st != RL_OK) {
+        relight_failure("relight", st);
+        a->reported = 1;
+        return st == RL_ERR_NOMEM ? LFIO_ERR_NOMEM : LFIO_ERR_ARG;
+    }
+    a->cells += m.ncells;
     p->label = m.label;
     p->polygon = m.polygon;
     p->nverts = m.nvertices;
@@ -368,49 +396,33 @@ static int fill_patch(const rl_solution *sol, size_t k, lfio_radmap_patch *p, pa
     p->radiosity = a->radiosity;
     memcpy(p->albedo, m.albedo, sizeof p->albedo);
     memcpy(p->emission, m.emission, sizeof p->emission);
-    return ILF_EXIT_OK;
+    return LFIO_OK;
 }
 
-/* Releases the arrays of a. */
-static void patch_free(patch_arrays *a)
-{
-    free(a->ij);
-    free(a->area);
-    free(a->centre);
-    free(a->irradiance);
-    free(a->radiosity);
-}
-
-/* Writes every map of the solution to DIR/radiance.h5. @return an exit code. */
+/* Writes every map of the solution to the staged radiance.h5, one map's cells in memory at a time.
+ * @return an exit code. */
 static int write_radiance(relight_run *run)
 {
     const size_t n = run->maps;
-    lfio_radmap_patch *patches = calloc(n ? n : 1, sizeof *patches);
-    patch_arrays *arrays = calloc(n ? n : 1, sizeof *arrays);
     const char *path = run->staged[OUT_RADIANCE];
+    patch_arrays arrays = {run->solution, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
+    lfio_status st = lfio_radmap_write_each(path, RELIGHT_CREATOR, run->o->scene, n, describe_map, &arrays);
     int code = ILF_EXIT_OK;
-    if (!patches || !arrays) {
-        cli_error("relight", "out of memory");
-        code = ILF_EXIT_FAILED;
-    }
-    for (size_t k = 0; code == ILF_EXIT_OK && k < n; k++) {
-        code = fill_patch(run->solution, k, &patches[k], &arrays[k]);
-        run->cells += patches[k].ncells;
-    }
-    if (code == ILF_EXIT_OK) {
-        lfio_status st = lfio_radmap_write(path, RELIGHT_CREATOR, run->o->scene, patches, n);
-        code = st == LFIO_OK ? ILF_EXIT_OK : cli_lfio_failure("relight", st, CLI_OUTPUT, path);
-    }
+    /* describe_map reported its own failures; lfio's are reported here */
+    if (st != LFIO_OK)
+        code = arrays.reported ? ILF_EXIT_FAILED : cli_lfio_failure("relight", st, CLI_OUTPUT, path);
+    run->cells = arrays.cells;
     if (code == ILF_EXIT_OK) {
         char what[128], size[32];
         snprintf(what, sizeof what, "%zu map%s, %" PRIu64 " cells, %s", n, n == 1 ? "" : "s", run->cells,
                  cli_format_bytes(cli_file_size(path), size, sizeof size));
         stage_done(run, OUT_RADIANCE, what);
     }
-    for (size_t k = 0; arrays && k < n; k++)
-        patch_free(&arrays[k]);
-    free(arrays);
-    free(patches);
+    free(arrays.ij);
+    free(arrays.area);
+    free(arrays.centre);
+    free(arrays.irradiance);
+    free(arrays.radiosity);
     return code;
 }
 

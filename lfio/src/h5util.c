@@ -11,7 +11,7 @@
  *     dataset is checked against its expected layout before it is read.
  *   - A write either renames a complete, fsynced file over its target or
  *     leaves the target untouched and removes its temporary. HDF5 builds the
- *     file in memory and never writes to disk itself (see build_image()).
+ *     file in memory and never writes to disk itself (see build_and_write()).
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -550,11 +550,11 @@ static uint32_t metadata_checksum(const unsigned char *k, size_t len)
 }
 
 /*
- * Repairs the superblock of an image from H5Fget_file_image(): HDF5 1.10.8
- * clears the "open for writing" status flags in the copy but leaves the old
- * checksum, so the image would not open. Recomputing it gives the bytes a
- * normal H5Fclose would have written (checked by comparing whole files).
- * Superblocks before version 2 have no checksum and need nothing.
+ * Makes the superblock of an open file's image say what a closed file's
+ * says: the "open for writing" status flags cleared and the checksum
+ * recomputed, the bytes a normal H5Fclose would have written (checked by
+ * comparing whole files; H5Fget_file_image's copy clears the flags but
+ * leaves the old checksum). Superblocks before version 2 have neither.
  * @return LFIO_OK; LFIO_ERR_IO if the image does not start with a superblock.
  */
 static lfio_status finish_superblock(const char *path, unsigned char *image, size_t size)
@@ -570,6 +570,7 @@ static lfio_status finish_superblock(const char *path, unsigned char *image, siz
         return LFIO_OK;
     if (version > 3 || (offset_size != 4 && offset_size != 8) || size < covered + 4)
         return lfio__fail(LFIO_ERR_IO, "%s: /: unexpected superblock version %u", path, version);
+    image[11] = 0; /* file consistency flags */
     uint32_t sum = metadata_checksum(image, covered);
     for (int k = 0; k < 4; k++)
         image[covered + k] = (unsigned char)(sum >> (8 * k));
@@ -590,59 +591,6 @@ static int small_metadata_cache(hid_t fapl)
     return H5Pset_mdc_config(fapl, &cfg) < 0 ? -1 : 0;
 }
 
-/*
- * Builds the whole file in memory with HDF5's core driver (no backing store)
- * and returns its bytes. HDF5 1.10 cannot recover from a failed write to a
- * real file: a flush failing inside H5Dclose/H5Fclose leaves a freed file
- * registered, and the process crashes at exit (HDFFV-11052, fixed in 1.14.1).
- * In memory nothing can fail that way; the bytes then go to disk through
- * write_all(), whose errors are ordinary. The cost: memory about the size of
- * the file, twice over while the image is copied out.
- * @return LFIO_OK and *image (malloc'd), *size; an error with *image = NULL.
- */
-static lfio_status build_image(const char *path, const char *name, lfio__h5_fill_fn fill,
-                               const void *content, unsigned char **image, size_t *size)
-{
-    *image = NULL;
-    *size = 0;
-    lfio_status st = LFIO_OK;
-    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-    /* Version 1.8+ structures carry metadata checksums; strong close releases every
-     * object with the file, so no forgotten id outlives it. */
-    if (fapl < 0 || H5Pset_fapl_core(fapl, CORE_INCREMENT, 0) < 0
-        || H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST) < 0
-        || H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0 || small_metadata_cache(fapl) < 0)
-        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot set file access properties");
-    /* name only identifies the in-memory file: the core driver creates nothing on disk. */
-    hid_t file = st == LFIO_OK ? H5Fcreate(name, H5F_ACC_TRUNC, H5P_DEFAULT, fapl) : -1;
-    if (st == LFIO_OK && file < 0)
-        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the file in memory");
-    lfio__h5_close(fapl);
-    if (st == LFIO_OK)
-        st = fill(path, file, content);
-    ssize_t bytes = -1;
-    /* H5Fget_file_image copies what has reached the driver: flush the metadata cache first. */
-    if (st == LFIO_OK && H5Fflush(file, H5F_SCOPE_GLOBAL) < 0)
-        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot flush the file in memory");
-    if (st == LFIO_OK && (bytes = H5Fget_file_image(file, NULL, 0)) <= 0)
-        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot finish the file image");
-    if (st == LFIO_OK && (*image = malloc((size_t)bytes)) == NULL)
-        st = lfio__fail(LFIO_ERR_NOMEM, "%s: no memory for a file image of %zd bytes", path, bytes);
-    if (st == LFIO_OK && H5Fget_file_image(file, *image, (size_t)bytes) != bytes)
-        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot copy the file image");
-    if (st == LFIO_OK)
-        st = finish_superblock(path, *image, (size_t)bytes);
-    if (file >= 0 && H5Fclose(file) < 0 && st == LFIO_OK)
-        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot close the file in memory");
-    if (st != LFIO_OK) {
-        free(*image);
-        *image = NULL;
-    } else {
-        *size = (size_t)bytes;
-    }
-    return st;
-}
-
 /* Writes size bytes of data to fd, resuming after partial writes and signals. @return 0 or an errno value. */
 static int write_all(int fd, const unsigned char *data, size_t size)
 {
@@ -656,6 +604,111 @@ static int write_all(int fd, const unsigned char *data, size_t size)
         size -= (size_t)n;
     }
     return 0;
+}
+
+/* The core driver's file buffer, allocated through these callbacks so that its bytes can be written
+ * out without a copy. The driver holds one buffer per file; udata is shared, not copied. */
+typedef struct core_image {
+    unsigned char *buf;
+} core_image;
+
+static void *image_malloc(size_t size, H5FD_file_image_op_t op, void *udata)
+{
+    (void)op;
+    core_image *ci = udata;
+    void *p = malloc(size ? size : 1);
+    if (p != NULL)
+        ci->buf = p;
+    return p;
+}
+
+static void *image_memcpy(void *dest, const void *src, size_t size, H5FD_file_image_op_t op, void *udata)
+{
+    (void)op;
+    (void)udata;
+    return memcpy(dest, src, size);
+}
+
+static void *image_realloc(void *ptr, size_t size, H5FD_file_image_op_t op, void *udata)
+{
+    (void)op;
+    core_image *ci = udata;
+    void *p = realloc(ptr, size ? size : 1);
+    if (p != NULL)
+        ci->buf = p;
+    return p;
+}
+
+static herr_t image_free(void *ptr, H5FD_file_image_op_t op, void *udata)
+{
+    (void)op;
+    core_image *ci = udata;
+    if (ptr == ci->buf)
+        ci->buf = NULL;
+    free(ptr);
+    return 0;
+}
+
+static void *image_udata_copy(void *udata)
+{
+    return udata;
+}
+
+static herr_t image_udata_free(void *udata)
+{
+    (void)udata;
+    return 0;
+}
+
+/*
+ * Builds the whole file in memory with HDF5's core driver (no backing store)
+ * and writes its bytes to fd. HDF5 1.10 cannot recover from a failed write to
+ * a real file: a flush failing inside H5Dclose/H5Fclose leaves a freed file
+ * registered, and the process crashes at exit (HDFFV-11052, fixed in 1.14.1).
+ * In memory nothing can fail that way; the bytes then go to disk through
+ * write_all(), whose errors are ordinary. The driver's buffer is allocated
+ * through core_image, so the bytes are written from it directly: memory about
+ * the size of the file, once.
+ * @return LFIO_OK; an error (LFIO_ERR_IO naming the temporary's failure).
+ */
+static lfio_status build_and_write(const char *path, const char *name, lfio__h5_fill_fn fill, const void *content,
+                                   int fd)
+{
+    lfio_status st = LFIO_OK;
+    core_image ci = {NULL};
+    H5FD_file_image_callbacks_t callbacks = {image_malloc, image_memcpy, image_realloc, image_free,
+                                             image_udata_copy, image_udata_free, &ci};
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    /* Version 1.8+ structures carry metadata checksums; strong close releases every
+     * object with the file, so no forgotten id outlives it. */
+    if (fapl < 0 || H5Pset_fapl_core(fapl, CORE_INCREMENT, 0) < 0
+        || H5Pset_file_image_callbacks(fapl, &callbacks) < 0
+        || H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST) < 0
+        || H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0 || small_metadata_cache(fapl) < 0)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot set file access properties");
+    /* name only identifies the in-memory file: the core driver creates nothing on disk. */
+    hid_t file = st == LFIO_OK ? H5Fcreate(name, H5F_ACC_TRUNC, H5P_DEFAULT, fapl) : -1;
+    if (st == LFIO_OK && file < 0)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the file in memory");
+    lfio__h5_close(fapl);
+    if (st == LFIO_OK)
+        st = fill(path, file, content);
+    ssize_t bytes = -1;
+    /* Everything must have reached the driver's buffer: flush the metadata cache first. */
+    if (st == LFIO_OK && H5Fflush(file, H5F_SCOPE_GLOBAL) < 0)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot flush the file in memory");
+    if (st == LFIO_OK && ((bytes = H5Fget_file_image(file, NULL, 0)) <= 0 || ci.buf == NULL))
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot finish the file image");
+    /* The open file's superblock says it is open for writing: the bytes on disk must say what
+     * a closed file's say (finish_superblock). */
+    if (st == LFIO_OK)
+        st = finish_superblock(path, ci.buf, (size_t)bytes);
+    int err = 0;
+    if (st == LFIO_OK && (err = write_all(fd, ci.buf, (size_t)bytes)) != 0)
+        st = lfio__fail(LFIO_ERR_IO, "%s: cannot write the temporary file: %s", path, strerror(err));
+    if (file >= 0 && H5Fclose(file) < 0 && st == LFIO_OK)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot close the file in memory");
+    return st;
 }
 
 /* fsyncs folder dir so that a rename inside it is durable. @return 0 or an errno value. */
@@ -715,8 +768,6 @@ lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const
     lfio__h5_quiet q;
     lfio__h5_quiet_begin(&q);
     char *tmp = NULL, *dir = NULL;
-    unsigned char *image = NULL;
-    size_t size = 0;
     int fd = -1, err = 0;
     lfio_status st = make_temp(path, &tmp, &fd);
     /* The folder's name is taken now: once the file is renamed into place, running out of
@@ -724,10 +775,9 @@ lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const
     if (st == LFIO_OK && (dir = folder_of(path)) == NULL)
         st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
     if (st == LFIO_OK)
-        st = build_image(path, tmp, fill, content, &image, &size);
-    if (st == LFIO_OK && ((err = write_all(fd, image, size)) != 0 || (err = fsync(fd) ? errno : 0) != 0))
-        st = lfio__fail(LFIO_ERR_IO, "%s: cannot write the temporary file: %s", path, strerror(err));
-    free(image);
+        st = build_and_write(path, tmp, fill, content, fd);
+    if (st == LFIO_OK && fsync(fd) != 0)
+        st = lfio__fail(LFIO_ERR_IO, "%s: cannot write the temporary file: %s", path, strerror(errno));
     if (fd >= 0 && close(fd) != 0 && st == LFIO_OK)
         st = lfio__fail(LFIO_ERR_IO, "%s: cannot close the temporary file: %s", path, strerror(errno));
     if (st == LFIO_OK && rename(tmp, path) != 0)

@@ -239,8 +239,9 @@ static int check_patch(const lfio_radmap_patch *p, char *why, size_t why_size)
 struct map_content {
     const char *creator;
     const char *scene;
-    const lfio_radmap_patch *patches;
     size_t count;
+    lfio_radmap_describe_fn describe;
+    void *user;
 };
 
 /* Writes the attributes of patch group g (obj) describing p. */
@@ -325,47 +326,64 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
     hid_t patches = H5Gcreate2(file, "patches", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
     if (patches < 0)
         return lfio__h5_fail(LFIO_ERR_IO, path, "/patches", "cannot create group");
-    for (size_t k = 0; st == LFIO_OK && k < c->count; k++)
-        st = write_patch(path, patches, k, &c->patches[k]);
+    uint64_t cells = 0;
+    for (size_t k = 0; st == LFIO_OK && k < c->count; k++) {
+        lfio_radmap_patch p;
+        memset(&p, 0, sizeof p);
+        char why[256];
+        st = c->describe(c->user, k, &p);
+        if (st != LFIO_OK)
+            break;
+        if (!check_patch(&p, why, sizeof why)) {
+            st = lfio__fail(LFIO_ERR_ARG, "%s: patch %zu (%s): %s", path, k, p.label ? p.label : "no label", why);
+        } else if ((cells += p.ncells) > LFIO_RADMAP_MAX_CELLS) {
+            st = lfio__fail(LFIO_ERR_ARG, "%s: more than %llu cells", path,
+                            (unsigned long long)LFIO_RADMAP_MAX_CELLS);
+        } else {
+            st = write_patch(path, patches, k, &p);
+        }
+    }
     lfio__h5_close(patches);
     return st;
 }
 
-/* Checks every argument of lfio_radmap_write() as the reader would check the file. */
+/* Checks the arguments every write shares: the count and the two texts. */
 static lfio_status check_write_args(const char *path, const struct map_content *c)
 {
-    if (c->count > 0 && c->patches == NULL)
-        return lfio__fail(LFIO_ERR_ARG, "%s: NULL patches", path);
     if (c->count > LFIO_RADMAP_MAX_PATCHES)
         return lfio__fail(LFIO_ERR_ARG, "%s: %zu patches, at most %u allowed", path, c->count,
                           LFIO_RADMAP_MAX_PATCHES);
     if (strlen(c->creator) > LFIO_RADMAP_TEXT_MAX || strlen(c->scene) > LFIO_RADMAP_TEXT_MAX)
         return lfio__fail(LFIO_ERR_ARG, "%s: creator or scene longer than %u bytes", path, LFIO_RADMAP_TEXT_MAX);
-    uint64_t cells = 0;
-    for (size_t k = 0; k < c->count; k++) {
-        const lfio_radmap_patch *p = &c->patches[k];
-        char why[256];
-        if (!check_patch(p, why, sizeof why))
-            return lfio__fail(LFIO_ERR_ARG, "%s: patch %zu (%s): %s", path, k, p->label ? p->label : "no label",
-                              why);
-        cells += p->ncells;
-    }
-    if (cells > LFIO_RADMAP_MAX_CELLS)
-        return lfio__fail(LFIO_ERR_ARG, "%s: %llu cells, at most %llu allowed", path, (unsigned long long)cells,
-                          (unsigned long long)LFIO_RADMAP_MAX_CELLS);
     return LFIO_OK;
 }
 
-/* Checks the arguments, then writes the file with lfio__h5_write_atomic(). */
-lfio_status lfio_radmap_write(const char *path, const char *creator, const char *scene,
-                              const lfio_radmap_patch *patches, size_t count)
+lfio_status lfio_radmap_write_each(const char *path, const char *creator, const char *scene, size_t count,
+                                   lfio_radmap_describe_fn describe, void *user)
 {
     if (path == NULL || path[0] == '\0')
         return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_write: NULL or empty path");
-    const struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", patches,
-                                  count};
+    if (describe == NULL && count > 0)
+        return lfio__fail(LFIO_ERR_ARG, "%s: NULL describe function", path);
+    const struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", count,
+                                  describe, user};
     lfio_status st = check_write_args(path, &c);
     return st == LFIO_OK ? lfio__h5_write_atomic(path, write_contents, &c) : st;
+}
+
+/* lfio_radmap_write()'s describe: patch k of the caller's array. */
+static lfio_status describe_array(void *user, size_t k, lfio_radmap_patch *out)
+{
+    *out = ((const lfio_radmap_patch *)user)[k];
+    return LFIO_OK;
+}
+
+lfio_status lfio_radmap_write(const char *path, const char *creator, const char *scene,
+                              const lfio_radmap_patch *patches, size_t count)
+{
+    if (path != NULL && path[0] != '\0' && count > 0 && patches == NULL)
+        return lfio__fail(LFIO_ERR_ARG, "%s: NULL patches", path);
+    return lfio_radmap_write_each(path, creator, scene, count, describe_array, (void *)patches);
 }
 
 /* ----------------------------------------------------------------- reading */

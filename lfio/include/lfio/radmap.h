@@ -91,6 +91,25 @@ lfio_status lfio_radmap_write(const char *path, const char *creator, const char 
                               const lfio_radmap_patch *patches, size_t count);
 
 /**
+ * Describes patch k (0 .. count - 1, asked in order, once each) of a file
+ * being written by lfio_radmap_write_each(): fills *out, whose arrays must
+ * stay valid until the next call or the write's end.
+ * @return LFIO_OK, or another status to abandon the write (with a message
+ * set by lfio or by the caller's own reporting).
+ */
+typedef lfio_status (*lfio_radmap_describe_fn)(void *user, size_t k, lfio_radmap_patch *out);
+
+/**
+ * Writes a file as lfio_radmap_write() does, asking describe for one patch
+ * at a time, so that a caller need only hold one patch's arrays. Each patch
+ * is checked as it arrives; a bad one, or a failing describe, abandons the
+ * write and leaves path as it was.
+ * @return as lfio_radmap_write(), or describe's status.
+ */
+lfio_status lfio_radmap_write_each(const char *path, const char *creator, const char *scene, size_t count,
+                                   lfio_radmap_describe_fn describe, void *user);
+
+/**
  * Reads a whole file, checking format, attributes, shapes and limits before
  * allocating, then every checksum and value.
  * @return LFIO_OK and *out, owned by the caller; LFIO_ERR_NOTFOUND, LFIO_ERR_IO,
