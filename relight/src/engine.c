@@ -288,7 +288,8 @@ static void close_pass(rl_map *maps, size_t nmaps)
         for (uint32_t c = 0; c < maps[m].ncells; c++)
             for (int k = 0; k < 3; k++) {
                 maps[m].e_total[c][k] += maps[m].e_pass[c][k];
-                maps[m].e_prev[c][k] = maps[m].e_pass[c][k];
+                if (maps[m].e_prev != NULL)
+                    maps[m].e_prev[c][k] = maps[m].e_pass[c][k];
             }
 }
 

@@ -131,22 +131,31 @@ static rl_status map_cells(rl_map *m)
     return RL_OK;
 }
 
-/* Allocates the three accumulators of m. @return RL_OK or RL_ERR_NOMEM. */
-static rl_status map_accumulators(rl_map *m)
+/* Allocates the accumulators of m: e_prev only when it re-emits (bounces follow), so a direct-only
+ * run keeps 48 bytes a cell instead of 72. @return RL_OK or RL_ERR_NOMEM. */
+static rl_status map_accumulators(rl_map *m, int re_emits)
 {
     size_t n = m->ncells ? m->ncells : 1;
     m->e_total = calloc(n, sizeof *m->e_total);
     m->e_pass = calloc(n, sizeof *m->e_pass);
-    m->e_prev = calloc(n, sizeof *m->e_prev);
-    return m->e_total && m->e_pass && m->e_prev ? RL_OK : RL_ERR_NOMEM;
+    m->e_prev = re_emits ? calloc(n, sizeof *m->e_prev) : NULL;
+    return m->e_total && m->e_pass && (m->e_prev || !re_emits) ? RL_OK : RL_ERR_NOMEM;
 }
+
+static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map **maps, size_t *count);
 
 rl_status maps_build(const rl_scene *scene, rl_map **maps, size_t *count)
 {
-    return maps_build_sized(scene, scene->cell_size, maps, count);
+    return build(scene, scene->cell_size, scene->sampling.bounces > 0, maps, count);
 }
 
 rl_status maps_build_sized(const rl_scene *scene, double cell, rl_map **maps, size_t *count)
+{
+    return build(scene, cell, 0, maps, count);
+}
+
+/* Builds the maps with cells of side cell; re_emit: they will light bounce passes (e_prev). */
+static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map **maps, size_t *count)
 {
     size_t n = 0;
     uint64_t total = 0;
@@ -171,7 +180,7 @@ rl_status maps_build_sized(const rl_scene *scene, double cell, rl_map **maps, si
         memcpy(mp->emission, mat->emission, sizeof mp->emission);
         rl_status st = map_cells(mp);
         if (st == RL_OK)
-            st = map_accumulators(mp);
+            st = map_accumulators(mp, re_emit);
         total += mp->ncells;
         if (st == RL_ERR_INPUT || (st == RL_OK && total > MAX_TOTAL_CELLS))
             st = rl__fail(RL_ERR_INPUT, "%s: %s: more than %llu radiance cells in the scene; raise "
@@ -212,7 +221,7 @@ rl_status map_point(v3 p, v3 n, rl_map *out)
     out->ncells = 1;
     out->pool[0] = (v2){0, 0};
     out->cells[0].poly_count = 1;
-    return map_accumulators(out);
+    return map_accumulators(out, 0);
 }
 
 void maps_free(rl_map *maps, size_t count)

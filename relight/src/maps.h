@@ -33,7 +33,7 @@ typedef struct rl_map {
     v2 *pool;              /* clipped cell polygons */
     double (*e_total)[3];  /* irradiance summed over passes */
     double (*e_pass)[3];   /* irradiance of the current pass */
-    double (*e_prev)[3];   /* irradiance of the previous pass: what bounces re-emit */
+    double (*e_prev)[3];   /* irradiance of the previous pass: what bounces re-emit; NULL without bounces */
     float albedo[3];
     float emission[3];
 } rl_map;
@@ -42,7 +42,8 @@ typedef struct rl_map {
  * @return RL_OK and *maps (count in *count); RL_ERR_NOMEM or RL_ERR_INPUT (too many cells). */
 rl_status maps_build(const rl_scene *scene, rl_map **maps, size_t *count);
 
-/* As maps_build(), with cells of side cell (m) instead of the scene's. */
+/* As maps_build(), with cells of side cell (m) instead of the scene's, for receivers that never
+ * re-emit (no e_prev): the coarse grids of bounce passes. */
 rl_status maps_build_sized(const rl_scene *scene, double cell, rl_map **maps, size_t *count);
 
 /* Gives in out the value of a field known per cell of m (values[cell]) at
