@@ -26,10 +26,20 @@
 
 /* --------------------------------------------------------------- errors */
 
+/* Who the messages come from: "ilf", or "ilf-mpi" and a rank (cli_set_identity()). */
+static const char *message_program = "ilf";
+static char message_suffix[64];
+
+void cli_set_identity(const char *program, const char *suffix)
+{
+    message_program = program;
+    snprintf(message_suffix, sizeof message_suffix, "%s", suffix ? suffix : "");
+}
+
 void cli_error(const char *sub, const char *fmt, ...)
 {
     va_list ap;
-    fprintf(stderr, "ilf %s: ", sub);
+    fprintf(stderr, "%s %s%s: ", message_program, sub, message_suffix);
     va_start(ap, fmt);
     vfprintf(stderr, fmt, ap);
     va_end(ap);

@@ -35,7 +35,11 @@ enum ilf_exit {
     ILF_EXIT_USAGE = 2   /**< bad usage or bad input: unknown option, invalid value, unreadable file */
 };
 
-/** Prints "ilf SUB: <message>" and a newline to stderr. */
+/** Names the messages' sender from now on: "PROGRAM SUB SUFFIX: ..." (default "ilf", no suffix;
+ * ilf-mpi gives its rank). program must outlive every message; suffix is copied (up to 63 bytes). */
+void cli_set_identity(const char *program, const char *suffix);
+
+/** Prints "ilf SUB: <message>" (cli_set_identity()) and a newline to stderr. */
 void cli_error(const char *sub, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))

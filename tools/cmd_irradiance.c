@@ -18,6 +18,7 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "job.h"
 #include "points_file.h"
 #include "relight/engine.h"
 #include "relight_cli.h"
@@ -81,6 +82,25 @@ static int parse_arguments(irradiance_options *o, int argc, char **argv)
 
 /* ------------------------------------------------------------ main */
 
+/* Collective: gives every rank rank 0's points. @return an exit code. */
+static int share_points(point_list *points)
+{
+    unsigned long long count = points->count;
+    if (!job_share("irradiance", &count, sizeof count))
+        return job_fail(ILF_EXIT_FAILED);
+    if (job_rank() != 0) {
+        points->values = malloc((count ? count : 1) * 6 * sizeof *points->values);
+        if (points->values == NULL) {
+            cli_error("irradiance", "out of memory for %llu points", count);
+            return job_fail(ILF_EXIT_FAILED);
+        }
+        points->count = points->capacity = (size_t)count;
+    }
+    if (count > 0 && !job_share("irradiance", points->values, (size_t)count * 6 * sizeof *points->values))
+        return job_fail(ILF_EXIT_FAILED);
+    return ILF_EXIT_OK;
+}
+
 /* Computes and prints the irradiance of every point. @return an exit code. */
 static int print_irradiance(const rl_scene *scene, const point_list *points)
 {
@@ -91,9 +111,10 @@ static int print_irradiance(const rl_scene *scene, const point_list *points)
         cli_error("irradiance", "out of memory for %zu points", points->count);
         return ILF_EXIT_FAILED;
     }
-    rl_status st = rl_irradiance(scene, points->values, points->count, rgb, NULL);
-    int code = st == RL_OK ? ILF_EXIT_OK : relight_failure("irradiance", st);
-    for (size_t k = 0; code == ILF_EXIT_OK && k < points->count; k++)
+    rl_status st = rl_irradiance_cluster(scene, job_cluster(), points->values, points->count, rgb, NULL);
+    /* the other ranks may be waiting in an exchange this rank will not reach: end the job */
+    int code = st == RL_OK ? ILF_EXIT_OK : job_fail(relight_failure("irradiance", st));
+    for (size_t k = 0; code == ILF_EXIT_OK && job_rank() == 0 && k < points->count; k++)
         printf("%.6g %.6g %.6g\n", rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2]);
     free(rgb);
     if (code == ILF_EXIT_OK && fflush(stdout) != 0) {
@@ -111,9 +132,13 @@ int ilf_cmd_irradiance(int argc, char **argv)
         return code;
     point_list points = {NULL, 0, 0};
     rl_scene *scene = NULL;
-    code = relight_scene_open("irradiance", o.scene, &o.sampling, &scene);
-    if (code == ILF_EXIT_OK)
+    code = job_agree(relight_scene_open("irradiance", o.scene, &o.sampling, &scene));
+    /* rank 0 alone reads the points (standard input reaches it only) and shares them */
+    if (code == ILF_EXIT_OK && job_rank() == 0)
         code = points_read(o.points, &points);
+    code = job_agree(code);
+    if (code == ILF_EXIT_OK && job_ranks() > 1)
+        code = job_agree(share_points(&points));
     if (code == ILF_EXIT_OK)
         code = print_irradiance(scene, &points);
     points_free(&points);

@@ -17,6 +17,12 @@
  * outputs unless the final renames themselves fail;
  * stdout carries the summary (nothing with --quiet), stderr errors and the
  * progress bar (only on a terminal, never with --quiet).
+ *
+ * As a rank of `ilf-mpi` (job.h), every rank loads the scene and runs the
+ * engine on its share of the work; rank 0 alone creates DIR and the staging
+ * folder (whose name it shares), writes stats.json and the view, and places
+ * the outputs; radiance.h5 is written by every rank together. A failure on
+ * any rank fails the job, and DIR is left as it was.
  */
 #include <cjson/cJSON.h>
 #include <errno.h>
@@ -33,6 +39,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "capture/image.h"
+#include "job.h"
 #include "jsonout.h"
 #include "lfio/radmap.h"
 #include "relight/engine.h"
@@ -91,7 +98,8 @@ typedef struct relight_run {
     const relight_options *o;
     rl_scene *scene;
     rl_solution *solution;
-    double wall_seconds, cpu_seconds;
+    double wall_seconds, cpu_seconds; /* of the engine, on this rank */
+    double write_seconds;              /* of radiance.h5 */
     size_t maps;
     uint64_t cells;
     size_t created_from;         /* length of the first folder of DIR this run created; 0: none */
@@ -190,11 +198,14 @@ static int make_folder(const char *path, size_t *created_from)
     return ok;
 }
 
-/* Creates the staging folder in DIR, registered so that an interruption removes it (cli.h), and
- * every output's two paths: nothing is allocated once outputs are placed. @return an exit code. */
-static int stage_open(relight_run *run)
+/* The staging folder's name template; mkdtemp replaces the X's. */
+#define STAGE_TEMPLATE ".relight.tmp-XXXXXX"
+
+/* Makes every output's two paths for the staging folder named `stage` (the template's length): nothing is
+ * allocated once outputs are placed. @return an exit code. */
+static int stage_paths(relight_run *run, const char *stage)
 {
-    run->stage = join_path(run->o->output, ".relight.tmp-XXXXXX");
+    run->stage = join_path(run->o->output, stage);
     int ok = run->stage != NULL;
     for (int k = 0; ok && k < OUT_COUNT; k++)
         ok = (run->staged[k] = join_path(run->stage, output_names[k])) != NULL
@@ -203,6 +214,15 @@ static int stage_open(relight_run *run)
         cli_error("relight", "out of memory");
         return ILF_EXIT_FAILED;
     }
+    return ILF_EXIT_OK;
+}
+
+/* Creates the staging folder in DIR, registered so that an interruption removes it (cli.h), and
+ * every output's two paths. @return an exit code. */
+static int stage_open(relight_run *run)
+{
+    if (stage_paths(run, STAGE_TEMPLATE) != ILF_EXIT_OK)
+        return ILF_EXIT_FAILED;
     if (mkdtemp(run->stage) == NULL) {
         cli_error("relight", "cannot create a staging folder in '%s': %s", run->o->output, strerror(errno));
         free(run->stage);
@@ -215,6 +235,28 @@ static int stage_open(relight_run *run)
         memcpy(run->staged[k], run->stage, len);
     cli_staging_watch(run->stage);
     return ILF_EXIT_OK;
+}
+
+/* Collective: rank 0 creates DIR and the staging folder, and every other rank learns the staging
+ * folder's name (they write radiance.h5 into it together). @return the job's exit code. */
+static int stage_open_job(relight_run *run)
+{
+    int code = ILF_EXIT_OK;
+    if (job_rank() == 0) {
+        if (!make_folder(run->o->output, &run->created_from))
+            code = ILF_EXIT_FAILED;
+        if (code == ILF_EXIT_OK)
+            code = stage_open(run);
+    }
+    code = job_agree(code);
+    if (code != ILF_EXIT_OK || job_ranks() == 1)
+        return code;
+    char name[sizeof STAGE_TEMPLATE] = STAGE_TEMPLATE;
+    if (job_rank() == 0)
+        memcpy(name, run->stage + strlen(run->stage) - (sizeof name - 1), sizeof name);
+    if (!job_share("relight", name, sizeof name))
+        return job_fail(ILF_EXIT_FAILED);
+    return job_agree(job_rank() == 0 ? ILF_EXIT_OK : stage_paths(run, name));
 }
 
 /* Records that output k is staged and complete, holding what. */
@@ -252,6 +294,16 @@ static int stage_commit(relight_run *run)
     return code;
 }
 
+/* Frees the staging folder's and the outputs' paths. */
+static void free_paths(relight_run *run)
+{
+    free(run->stage);
+    for (int k = 0; k < OUT_COUNT; k++) {
+        free(run->staged[k]);
+        free(run->placed[k]);
+    }
+}
+
 /* Removes the staging folder and what is left in it, then the folders of DIR this run created if
  * they are empty, and frees the paths. */
 static void stage_close(relight_run *run)
@@ -281,11 +333,7 @@ static void stage_close(relight_run *run)
             len = (size_t)(slash - folder);
         }
     }
-    free(run->stage);
-    for (int k = 0; k < OUT_COUNT; k++) {
-        free(run->staged[k]);
-        free(run->placed[k]);
-    }
+    free_paths(run);
 }
 
 /* ------------------------------------------------------------ relighting */
@@ -299,13 +347,15 @@ static int relight(relight_run *run)
     if (show)
         cli_progress_start(&bar, "relight", CLI_PROGRESS_STEPS);
     double wall0 = cli_clock_seconds(CLOCK_MONOTONIC), cpu0 = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
-    rl_status st = rl_relight(run->scene, show ? cli_progress_fraction : NULL, &bar, &run->solution);
+    rl_status st = rl_relight_cluster(run->scene, job_cluster(), show ? cli_progress_fraction : NULL, &bar,
+                                      &run->solution);
     run->wall_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - wall0;
     run->cpu_seconds = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
     if (show)
         cli_progress_finish(&bar);
+    /* the other ranks may be waiting in an exchange this rank will not reach: end the job */
     if (st != RL_OK)
-        return relight_failure("relight", st);
+        return job_fail(relight_failure("relight", st));
     run->maps = rl_solution_map_count(run->solution);
     return ILF_EXIT_OK;
 }
@@ -406,12 +456,14 @@ static int write_radiance(relight_run *run)
     const size_t n = run->maps;
     const char *path = run->staged[OUT_RADIANCE];
     patch_arrays arrays = {run->solution, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
-    lfio_status st = lfio_radmap_write_each(path, RELIGHT_CREATOR, run->o->scene, n, describe_map, &arrays);
+    double t0 = cli_clock_seconds(CLOCK_MONOTONIC);
+    lfio_status st = job_radmap_write(path, RELIGHT_CREATOR, run->o->scene, n, describe_map, &arrays);
     int code = ILF_EXIT_OK;
     /* describe_map reported its own failures; lfio's are reported here */
     if (st != LFIO_OK)
         code = arrays.reported ? ILF_EXIT_FAILED : cli_lfio_failure("relight", st, CLI_OUTPUT, path);
     run->cells = arrays.cells;
+    run->write_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - t0;
     if (code == ILF_EXIT_OK) {
         char what[128], size[32];
         snprintf(what, sizeof what, "%zu map%s, %" PRIu64 " cells, %s", n, n == 1 ? "" : "s", run->cells,
@@ -558,6 +610,21 @@ static cJSON *stats_json(const relight_run *run)
     cJSON_AddNumberToObject(root, "cpu_seconds", run->cpu_seconds);
     add_count(root, "maps", run->maps);
     add_count(root, "cells", run->cells);
+    add_count(root, "ranks", (uint64_t)job_ranks());
+    cJSON_AddNumberToObject(root, "radiance_write_seconds", run->write_seconds);
+    const job_exchange *log = NULL;
+    size_t nlog = job_exchange_log(&log);
+    cJSON *exchanges = nlog > 0 ? cJSON_AddArrayToObject(root, "exchanges") : NULL;
+    for (size_t k = 0; exchanges != NULL && k < nlog; k++) {
+        cJSON *x = cJSON_CreateObject();
+        if (x == NULL || !cJSON_AddItemToArray(exchanges, x)) {
+            cJSON_Delete(x);
+            break;
+        }
+        add_count(x, "bytes", log[k].bytes);
+        cJSON_AddNumberToObject(x, "wait_seconds", log[k].wait_seconds);
+        cJSON_AddNumberToObject(x, "move_seconds", log[k].move_seconds);
+    }
     cJSON *passes = ok ? cJSON_AddArrayToObject(root, "passes") : NULL;
     if (passes == NULL || !add_passes(passes, run->solution)) {
         cJSON_Delete(root);
@@ -599,6 +666,9 @@ static void print_run(const relight_run *run)
            run->o->scene, rl_method_name(s->method), s->partition_n, s->rays_per_solid_angle,
            s->rays_per_solid_angle == 1 ? "" : "s", s->bounces, s->bounces == 1 ? "" : "s", threads_used(s),
            threads_used(s) == 1 ? "" : "s", run->wall_seconds, run->cpu_seconds);
+    if (job_ranks() > 1)
+        printf("job of %d ranks, each with the threads above; times are rank 0's, pass counts and cpu summed\n",
+               job_ranks());
     for (uint32_t k = 0; k < rl_solution_pass_count(run->solution); k++) {
         rl_pass_stats ps;
         if (rl_solution_pass_stats(run->solution, k, &ps) == RL_OK)
@@ -613,24 +683,29 @@ int ilf_cmd_relight(int argc, char **argv)
     if (code >= 0)
         return code;
     relight_run run = {.o = &o};
-    code = relight_scene_open("relight", o.scene, &o.sampling, &run.scene);
-    if (code == ILF_EXIT_OK && !make_folder(o.output, &run.created_from))
-        code = ILF_EXIT_FAILED;
+    /* ranks other than 0 only compute and write their part of radiance.h5 */
+    o.quiet |= job_rank() != 0;
+    code = job_agree(relight_scene_open("relight", o.scene, &o.sampling, &run.scene));
     if (code == ILF_EXIT_OK)
-        code = stage_open(&run);
+        code = stage_open_job(&run);
     if (code == ILF_EXIT_OK)
         code = relight(&run);
     if (code == ILF_EXIT_OK)
         print_run(&run);
     if (code == ILF_EXIT_OK)
         code = write_radiance(&run);
-    if (code == ILF_EXIT_OK && rl_scene_has_camera(run.scene) && !o.no_view)
+    int rank0 = job_rank() == 0;
+    if (code == ILF_EXIT_OK && rank0 && rl_scene_has_camera(run.scene) && !o.no_view)
         code = write_view(&run);
-    if (code == ILF_EXIT_OK)
+    if (code == ILF_EXIT_OK && rank0)
         code = write_stats(&run);
-    if (code == ILF_EXIT_OK)
+    if (code == ILF_EXIT_OK && rank0)
         code = stage_commit(&run);
-    stage_close(&run);
+    code = job_agree(code);
+    if (rank0)
+        stage_close(&run);
+    else
+        free_paths(&run);
     rl_solution_destroy(run.solution);
     rl_scene_destroy(run.scene);
     return code;

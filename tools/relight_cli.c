@@ -9,6 +9,7 @@
  * stay for every field not given.
  */
 #include "relight_cli.h"
+#include "job.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -141,6 +142,9 @@ int relight_scene_open(const char *sub, const char *path, const sampling_overrid
         return st == RL_ERR_NOMEM ? ILF_EXIT_FAILED : ILF_EXIT_USAGE;
     }
     rl_sampling s = merged_sampling(rl_scene_sampling(scene), o);
+    /* Several ranks on one machine share its cores instead of each taking them all. */
+    if (s.threads == 0 && job_ranks() > 1)
+        s.threads = job_threads_per_rank();
     st = rl_scene_set_sampling(scene, &s);
     if (st != RL_OK) {
         int code = relight_failure(sub, st);

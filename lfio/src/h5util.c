@@ -142,9 +142,10 @@ void lfio__h5_format_dims(char *buf, size_t size, int rank, const hsize_t *dims)
         snprintf(buf + used, size - used, "]");
 }
 
-/* Transfers a hyperslab of dset to or from buf; an empty one transfers nothing (see h5util.h). */
-lfio_status lfio__h5_xfer(const char *path, const char *obj, hid_t dset, int write, hid_t mtype,
-                          int rank, const hsize_t *start, const hsize_t *count, void *buf)
+/* Transfers a hyperslab of dset to or from buf through transfer list dxpl; with !mine this process
+ * selects nothing (its part of a collective write). An empty hyperslab transfers nothing. */
+static lfio_status xfer(const char *path, const char *obj, hid_t dset, int write, hid_t mtype, int rank,
+                        const hsize_t *start, const hsize_t *count, void *buf, hid_t dxpl, int mine)
 {
     hsize_t nelem = 1;
     for (int k = 0; k < rank; k++)
@@ -155,15 +156,57 @@ lfio_status lfio__h5_xfer(const char *path, const char *obj, hid_t dset, int wri
     hid_t fspace = H5Dget_space(dset);
     hid_t mspace = H5Screate_simple(1, &nelem, NULL);
     herr_t rc = -1;
-    if (fspace >= 0 && mspace >= 0
-        && H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, NULL, count, NULL) >= 0)
-        rc = write ? H5Dwrite(dset, mtype, mspace, fspace, H5P_DEFAULT, buf)
-                   : H5Dread(dset, mtype, mspace, fspace, H5P_DEFAULT, buf);
+    int selected = fspace >= 0 && mspace >= 0
+                   && (mine ? H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, NULL, count, NULL)
+                            : (H5Sselect_none(fspace) < 0 ? -1 : H5Sselect_none(mspace))) >= 0;
+    if (selected)
+        rc = write ? H5Dwrite(dset, mtype, mspace, fspace, dxpl, buf)
+                   : H5Dread(dset, mtype, mspace, fspace, dxpl, buf);
     if (rc < 0) /* before closing: any HDF5 call clears the error stack */
         st = lfio__h5_fail(LFIO_ERR_IO, path, obj, write ? "cannot write" : "cannot read");
     lfio__h5_close(mspace);
     lfio__h5_close(fspace);
     return st;
+}
+
+lfio_status lfio__h5_xfer(const char *path, const char *obj, hid_t dset, int write, hid_t mtype,
+                          int rank, const hsize_t *start, const hsize_t *count, void *buf)
+{
+    return xfer(path, obj, dset, write, mtype, rank, start, count, buf, H5P_DEFAULT, 1);
+}
+
+#ifdef LFIO_MPI
+/* @return 1 if dset's file was opened with the MPI-IO driver (lfio__h5_write_collective), else 0. */
+static int written_collectively(hid_t dset)
+{
+    hid_t file = H5Iget_file_id(dset);
+    hid_t fapl = file >= 0 ? H5Fget_access_plist(file) : -1;
+    int mpio = fapl >= 0 && H5Pget_driver(fapl) == H5FD_MPIO;
+    lfio__h5_close(fapl);
+    lfio__h5_close(file);
+    return mpio;
+}
+#endif
+
+lfio_status lfio__h5_write_part(const char *path, const char *obj, hid_t dset, hid_t mtype, int rank,
+                                const hsize_t *start, const hsize_t *count, const void *buf, int mine)
+{
+#ifdef LFIO_MPI
+    if (written_collectively(dset)) {
+        /* Filtered (deflated, checksummed) datasets take parallel writes only collectively. */
+        static const char nothing = 0;
+        hid_t dxpl = H5Pcreate(H5P_DATASET_XFER);
+        if (dxpl < 0 || H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE) < 0) {
+            lfio__h5_close(dxpl);
+            return lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot set up a collective write");
+        }
+        lfio_status st = xfer(path, obj, dset, 1, mtype, rank, start, count, (void *)(mine ? buf : &nothing),
+                              dxpl, mine);
+        lfio__h5_close(dxpl);
+        return st;
+    }
+#endif
+    return mine ? xfer(path, obj, dset, 1, mtype, rank, start, count, (void *)buf, H5P_DEFAULT, 1) : LFIO_OK;
 }
 
 /* ----------------------------------------------------------------- attributes */
@@ -791,6 +834,115 @@ lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const
     free(dir);
     free(tmp);
     lfio__h5_quiet_end(&q);
+    return st;
+}
+
+#ifdef LFIO_MPI
+/* Collective: @return st if this rank failed; else LFIO_OK if every rank succeeded, or an error whose
+ * message says that another rank failed writing path. */
+static lfio_status agree(const char *path, lfio_status st, MPI_Comm comm)
+{
+    int mine = (int)st, worst = 0;
+    if (MPI_Allreduce(&mine, &worst, 1, MPI_INT, MPI_MAX, comm) != MPI_SUCCESS)
+        worst = LFIO_ERR_IO;
+    if (st != LFIO_OK || worst == 0)
+        return st;
+    return lfio__fail((lfio_status)worst, "%s: another rank failed while writing it", path);
+}
+
+/* Rank 0 fsyncs the written temporary, renames it over path and fsyncs the folder. @return its status. */
+static lfio_status place_file(const char *path, const char *tmp)
+{
+    int err = 0;
+    char *dir = folder_of(path);
+    int fd = open(tmp, O_RDONLY);
+    if (dir == NULL)
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
+    lfio_status st = LFIO_OK;
+    if (fd < 0 || fsync(fd) != 0)
+        st = lfio__fail(LFIO_ERR_IO, "%s: cannot flush the temporary file: %s", path, strerror(errno));
+    if (fd >= 0)
+        close(fd);
+    if (st == LFIO_OK && rename(tmp, path) != 0)
+        st = lfio__fail(LFIO_ERR_IO, "%s: cannot rename the temporary file over it: %s", path, strerror(errno));
+    if (st == LFIO_OK && (err = sync_folder(dir)) != 0)
+        st = lfio__fail(LFIO_ERR_IO, "%s: written, but cannot flush its folder: %s", path, strerror(err));
+    free(dir);
+    return st;
+}
+
+/* The communicator of the collective write under way in this process, or MPI_COMM_NULL. */
+static MPI_Comm writing_comm = MPI_COMM_NULL;
+
+/* Opens the temporary tmp for a collective write over comm. @return the file, or -1 (message set). */
+static hid_t create_shared(const char *path, const char *tmp, MPI_Comm comm)
+{
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = -1;
+    if (fapl >= 0 && H5Pset_fapl_mpio(fapl, comm, MPI_INFO_NULL) >= 0
+        && H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST) >= 0 && small_metadata_cache(fapl) >= 0
+        && H5Pset_all_coll_metadata_ops(fapl, 1) >= 0 && H5Pset_coll_metadata_write(fapl, 1) >= 0)
+        file = H5Fcreate(tmp, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+    if (file < 0)
+        lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the temporary file for a collective write");
+    lfio__h5_close(fapl);
+    return file;
+}
+
+/* The collective writer (h5util.h): rank 0 names the temporary, every rank writes its part through
+ * MPI-IO, the ranks agree on the outcome, rank 0 places the file, and every rank learns its status. */
+lfio_status lfio__h5_write_collective(const char *path, lfio__h5_fill_fn fill, const void *content, MPI_Comm comm)
+{
+    lfio__h5_quiet q;
+    lfio__h5_quiet_begin(&q);
+    int rank = 0;
+    MPI_Comm_rank(comm, &rank);
+    char *tmp = NULL;
+    int fd = -1;
+    unsigned long len = 0;
+    lfio_status st = rank == 0 ? make_temp(path, &tmp, &fd) : LFIO_OK;
+    if (fd >= 0)
+        close(fd); /* HDF5 opens it by name; it stays empty until then */
+    if (rank == 0 && tmp != NULL)
+        len = (unsigned long)strlen(tmp) + 1;
+    if (MPI_Bcast(&len, 1, MPI_UNSIGNED_LONG, 0, comm) != MPI_SUCCESS)
+        st = lfio__fail(LFIO_ERR_IO, "%s: cannot share the temporary file's name between ranks", path);
+    if (rank != 0 && len > 0 && (tmp = malloc(len)) == NULL)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
+    st = agree(path, st, comm);
+    if (st == LFIO_OK && MPI_Bcast(tmp, (int)len, MPI_CHAR, 0, comm) != MPI_SUCCESS)
+        st = lfio__fail(LFIO_ERR_IO, "%s: cannot share the temporary file's name between ranks", path);
+    hid_t file = st == LFIO_OK ? create_shared(path, tmp, comm) : -1;
+    st = agree(path, st == LFIO_OK && file < 0 ? LFIO_ERR_IO : st, comm);
+    writing_comm = comm;
+    if (st == LFIO_OK)
+        st = fill(path, file, content);
+    writing_comm = MPI_COMM_NULL;
+    if (file >= 0 && H5Fclose(file) < 0 && st == LFIO_OK)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot close the temporary file");
+    st = agree(path, st, comm);
+    if (rank == 0 && st == LFIO_OK)
+        st = place_file(path, tmp);
+    if (rank == 0 && st != LFIO_OK && tmp != NULL)
+        remove(tmp);
+    /* Every rank learns whether rank 0 placed the file. */
+    int placed = st == LFIO_OK;
+    if (MPI_Bcast(&placed, 1, MPI_INT, 0, comm) != MPI_SUCCESS)
+        placed = 0;
+    if (!placed && st == LFIO_OK)
+        st = lfio__fail(LFIO_ERR_IO, "%s: rank 0 could not put it in place", path);
+    free(tmp);
+    lfio__h5_quiet_end(&q);
+    return st;
+}
+#endif
+
+lfio_status lfio__h5_agree(const char *path, lfio_status st)
+{
+#ifdef LFIO_MPI
+    if (writing_comm != MPI_COMM_NULL)
+        return agree(path, st, writing_comm);
+#endif
+    (void)path;
     return st;
 }
 

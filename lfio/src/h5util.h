@@ -153,6 +153,17 @@ lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, 
 lfio_status lfio__h5_xfer(const char *path, const char *obj, hid_t dset, int write, hid_t mtype,
                           int rank, const hsize_t *start, const hsize_t *count, void *buf);
 
+/*
+ * Writes the hyperslab [start, start+count) of dset from buf, as lfio__h5_xfer()
+ * does, when mine; when !mine writes nothing. In a file being written by
+ * lfio__h5_write_collective() every rank must call it for every dataset, in
+ * the same order: the transfer is collective, and a rank that is not `mine`
+ * takes part with nothing selected.
+ * @return LFIO_OK; LFIO_ERR_IO with the message set.
+ */
+lfio_status lfio__h5_write_part(const char *path, const char *obj, hid_t dset, hid_t mtype, int rank,
+                                const hsize_t *start, const hsize_t *count, const void *buf, int mine);
+
 /* ----------------------------------------------------------------- files */
 
 /* Fills the open, empty file with its content. @return LFIO_OK or an error with the message set. */
@@ -166,6 +177,30 @@ typedef lfio_status (*lfio__h5_fill_fn)(const char *path, hid_t file, const void
  * @return LFIO_OK; the status of fill(); LFIO_ERR_IO; LFIO_ERR_NOMEM.
  */
 lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const void *content);
+
+/*
+ * Inside the fill() of lfio__h5_write_collective(), where one rank can fail
+ * alone (a step that is not an HDF5 call), every rank calls this so that all
+ * of them stop together. Elsewhere it returns st.
+ * @return st if this process failed; else LFIO_OK, or an error saying another rank failed.
+ */
+lfio_status lfio__h5_agree(const char *path, lfio_status st);
+
+#ifdef LFIO_MPI
+/*
+ * Writes a file atomically over the ranks of comm (collective: every rank
+ * calls it with the same path and fill): rank 0 creates the temporary beside
+ * path, every rank opens it with HDF5's MPI-IO driver (1.10 object formats,
+ * collective metadata) and runs fill(), which must make the same HDF5 calls
+ * on every rank; once every rank has closed it without error, rank 0 fsyncs
+ * it and renames it over path, then fsyncs the folder. On failure path is
+ * untouched and the temporary removed. Silences HDF5.
+ * @return on every rank: LFIO_OK once the file is in place; this rank's
+ * error, or another rank's (with a message saying so).
+ */
+lfio_status lfio__h5_write_collective(const char *path, lfio__h5_fill_fn fill, const void *content,
+                                      MPI_Comm comm);
+#endif
 
 /*
  * Checks that path is a readable regular HDF5 file, then opens it read-only

@@ -26,6 +26,9 @@
 #include "h5util.h"
 #include "internal.h"
 #include "lfio/radmap.h"
+#ifdef LFIO_MPI
+#include "lfio/radmap_mpi.h"
+#endif
 
 #define FORMAT_NAME "ilfkit-radiance-maps"
 #define FORMAT_VERSION 1
@@ -242,6 +245,7 @@ struct map_content {
     size_t count;
     lfio_radmap_describe_fn describe;
     void *user;
+    int rank, ranks; /* this writer among those of a collective write: patch k's arrays are rank k mod ranks's */
 };
 
 /* Writes the attributes of patch group g (obj) describing p. */
@@ -273,8 +277,9 @@ static lfio_status write_patch_attrs(const char *path, const char *obj, hid_t g,
     return st;
 }
 
-/* Writes patch p as group /patches/k of the file whose "patches" group is patches. */
-static lfio_status write_patch(const char *path, hid_t patches, size_t k, const lfio_radmap_patch *p)
+/* Writes patch p as group /patches/k of the file whose "patches" group is patches; its arrays only when
+ * mine (a collective write's other ranks take part with nothing). */
+static lfio_status write_patch(const char *path, hid_t patches, size_t k, const lfio_radmap_patch *p, int mine)
 {
     char obj[64], name[24];
     snprintf(name, sizeof name, "%zu", k);
@@ -294,8 +299,8 @@ static lfio_status write_patch(const char *path, hid_t patches, size_t k, const 
         if (st != LFIO_OK)
             break;
         const hsize_t zero[2] = {0, 0};
-        st = lfio__h5_xfer(path, dobj, d, 1, memory_type((enum map_ds)t), lay.rank, zero, lay.dims,
-                           (void *)patch_array(p, (enum map_ds)t));
+        st = lfio__h5_write_part(path, dobj, d, memory_type((enum map_ds)t), lay.rank, zero, lay.dims,
+                                 patch_array(p, (enum map_ds)t), mine);
         /* Closing flushes the chunk cache: the last chunks reach the file only here. */
         if (H5Dclose(d) < 0 && st == LFIO_OK)
             st = lfio__h5_fail(LFIO_ERR_IO, path, dobj, "cannot flush dataset");
@@ -332,7 +337,8 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
         memset(&p, 0, sizeof p);
         char why[256];
         st = c->describe(c->user, k, &p);
-        if (st != LFIO_OK)
+        /* describing can fail on one rank of a collective write alone (out of memory) */
+        if ((st = lfio__h5_agree(path, st)) != LFIO_OK)
             break;
         if (!check_patch(&p, why, sizeof why)) {
             st = lfio__fail(LFIO_ERR_ARG, "%s: patch %zu (%s): %s", path, k, p.label ? p.label : "no label", why);
@@ -340,7 +346,7 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
             st = lfio__fail(LFIO_ERR_ARG, "%s: more than %llu cells", path,
                             (unsigned long long)LFIO_RADMAP_MAX_CELLS);
         } else {
-            st = write_patch(path, patches, k, &p);
+            st = write_patch(path, patches, k, &p, (int)(k % (size_t)c->ranks) == c->rank);
         }
     }
     lfio__h5_close(patches);
@@ -366,10 +372,29 @@ lfio_status lfio_radmap_write_each(const char *path, const char *creator, const 
     if (describe == NULL && count > 0)
         return lfio__fail(LFIO_ERR_ARG, "%s: NULL describe function", path);
     const struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", count,
-                                  describe, user};
+                                  describe, user, 0, 1};
     lfio_status st = check_write_args(path, &c);
     return st == LFIO_OK ? lfio__h5_write_atomic(path, write_contents, &c) : st;
 }
+
+#ifdef LFIO_MPI
+lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, const char *scene, size_t count,
+                                       lfio_radmap_describe_fn describe, void *user, MPI_Comm comm)
+{
+    int rank = 0, ranks = 1;
+    if (MPI_Comm_rank(comm, &rank) != MPI_SUCCESS || MPI_Comm_size(comm, &ranks) != MPI_SUCCESS)
+        return lfio__fail(LFIO_ERR_ARG, "%s: not a valid MPI communicator", path ? path : "lfio_radmap_write");
+    /* Arguments are the same on every rank, so every rank refuses the same ones before any collective call. */
+    if (path == NULL || path[0] == '\0')
+        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_write: NULL or empty path");
+    if (describe == NULL && count > 0)
+        return lfio__fail(LFIO_ERR_ARG, "%s: NULL describe function", path);
+    const struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", count,
+                                  describe, user, rank, ranks};
+    lfio_status st = check_write_args(path, &c);
+    return st == LFIO_OK ? lfio__h5_write_collective(path, write_contents, &c, comm) : st;
+}
+#endif
 
 /* lfio_radmap_write()'s describe: patch k of the caller's array. */
 static lfio_status describe_array(void *user, size_t k, lfio_radmap_patch *out)

@@ -8,7 +8,10 @@
  * tiles (rows of one map's grid); worker threads take tiles from an atomic
  * counter, and each tile's cells are written only by the thread that owns
  * the tile, in an order fixed by the tile alone. So the output does not
- * depend on the number of threads or on scheduling.
+ * depend on the number of threads or on scheduling. In a job of several
+ * processes (rl_cluster), tile k belongs to rank k mod ranks, and after each
+ * pass the ranks exchange their tiles' values: since a tile's values do not
+ * depend on who computed them, every rank then holds what one process would.
  */
 #include <float.h>
 #include <pthread.h>
@@ -170,6 +173,115 @@ static work_item *make_tiles(const rl_map *maps, size_t nmaps, size_t *n)
     return items;
 }
 
+/* ------------------------------------------------------------ several ranks */
+
+/* @return the rank that owns tile k of a pass. */
+static uint32_t tile_owner(const rl_cluster *cl, size_t k)
+{
+    return (uint32_t)(k % cl->ranks);
+}
+
+/* @return the first cell of map m in grid row j or after: cells are numbered row by row. */
+static uint32_t first_cell_of_row(const rl_map *m, uint32_t j)
+{
+    uint32_t lo = 0, hi = m->ncells;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (m->cells[mid].j < j)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* Copies the pass irradiance of every tile of owners other than `rank` (skip_own) or of `rank` alone
+ * (!skip_own) between the maps and buf, packed by owner then tile: to buf when pack, else from it.
+ * cursor (one per rank) starts at each owner's offset. */
+static void copy_tiles(const rl_cluster *cl, rl_map *maps, const work_item *items, size_t nitems, double *buf,
+                       uint64_t *cursor, int pack)
+{
+    for (size_t k = 0; k < nitems; k++) {
+        uint32_t owner = tile_owner(cl, k);
+        rl_map *m = &maps[items[k].map];
+        uint32_t c0 = first_cell_of_row(m, items[k].row0), c1 = first_cell_of_row(m, items[k].row1);
+        size_t values = 3 * (size_t)(c1 - c0);
+        /* a rank packs its own tiles and unpacks everyone else's */
+        if ((owner == cl->rank) == pack && values > 0) {
+            double *at = buf + cursor[owner], *cells = &m->e_pass[c0][0];
+            memcpy(pack ? at : cells, pack ? cells : at, values * sizeof *buf);
+        }
+        cursor[owner] += values;
+    }
+}
+
+/* Makes every rank's pass irradiance whole: each rank computed only its own tiles. @return 0 or -1 (failed,
+ * with *why naming what). */
+static int exchange_tiles(const rl_cluster *cl, rl_map *maps, const work_item *items, size_t nitems,
+                          const char **why)
+{
+    uint64_t *counts = calloc(cl->ranks, sizeof *counts), *offsets = calloc(cl->ranks, sizeof *offsets),
+             *cursor = calloc(cl->ranks, sizeof *cursor);
+    double *buf = NULL;
+    int rc = -1;
+    *why = "out of memory for the exchange";
+    if (counts && offsets && cursor) {
+        for (size_t k = 0; k < nitems; k++) {
+            const rl_map *m = &maps[items[k].map];
+            counts[tile_owner(cl, k)] +=
+                3 * (uint64_t)(first_cell_of_row(m, items[k].row1) - first_cell_of_row(m, items[k].row0));
+        }
+        uint64_t total = 0;
+        for (uint32_t r = 0; r < cl->ranks; r++)
+            offsets[r] = total, total += counts[r];
+        buf = malloc((total ? total : 1) * sizeof *buf);
+    }
+    if (buf) {
+        memcpy(cursor, offsets, cl->ranks * sizeof *cursor);
+        copy_tiles(cl, maps, items, nitems, buf, cursor, 1);
+        *why = "the exchange between ranks failed";
+        if (cl->allgather(cl->user, buf, counts, offsets) == 0) {
+            memcpy(cursor, offsets, cl->ranks * sizeof *cursor);
+            copy_tiles(cl, maps, items, nitems, buf, cursor, 0);
+            rc = 0;
+        }
+    }
+    free(buf);
+    free(cursor);
+    free(offsets);
+    free(counts);
+    return rc;
+}
+
+/* Keeps in place the items this rank owns, in order. @return their count. */
+static size_t own_tiles(const rl_cluster *cl, work_item *items, size_t nitems)
+{
+    size_t n = 0;
+    for (size_t k = 0; k < nitems; k++)
+        if (tile_owner(cl, k) == cl->rank)
+            items[n++] = items[k];
+    return n;
+}
+
+/* Sums the pass statistics over ranks (wall time stays this rank's). @return 0 or -1. */
+static int sum_stats(const rl_cluster *cl, rl_pass_stats *st)
+{
+    double v[] = {(double)st->samples, (double)st->rays_cast, (double)st->rays_kept,
+                  (double)st->solid_angles_considered, (double)st->solid_angles_culled, (double)st->pairs,
+                  (double)st->pairs_descended, (double)st->refinements, st->estimated_rmse,
+                  (double)st->budget_reached, st->cpu_seconds};
+    if (cl->sum(cl->user, v, sizeof v / sizeof v[0]) != 0)
+        return -1;
+    uint64_t *counts[] = {&st->samples, &st->rays_cast, &st->rays_kept, &st->solid_angles_considered,
+                          &st->solid_angles_culled, &st->pairs, &st->pairs_descended, &st->refinements};
+    for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++)
+        *counts[k] = (uint64_t)v[k];
+    st->estimated_rmse = v[8];
+    st->budget_reached = v[9] > 0;
+    st->cpu_seconds = v[10];
+    return 0;
+}
+
 /* ---------------------------------------------------------------- emitters */
 
 /* @return 1 if any channel of v is > 0. */
@@ -246,10 +358,9 @@ static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, uint32_t pa
 
 /* Runs one pass over maps with emitters e; gather_level_pass chooses the
  * partition level (0: partition_n, else the bounce level). @return RL_OK or an error. */
-static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, uint32_t pass, uint32_t gather_level_pass,
-                          rl_map *maps,
-                          size_t nmaps, const rl_emitter *e, size_t ne, rl_progress_fn progress, void *user,
-                          double base, double span, rl_pass_stats *st)
+static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_cluster *cl, uint32_t pass,
+                          uint32_t gather_level_pass, rl_map *maps, size_t nmaps, const rl_emitter *e, size_t ne,
+                          rl_progress_fn progress, void *user, double base, double span, rl_pass_stats *st)
 {
     double w0 = now(CLOCK_MONOTONIC), c0 = now(CLOCK_PROCESS_CPUTIME_ID);
     memset(st, 0, sizeof *st);
@@ -261,23 +372,43 @@ static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, uint32
     rl_sampling sampling = pass_sampling(&scene->sampling, gather_level_pass);
     make_ctx(scene, tracer, pass, &sampling, e, ne, &job.ctx);
     job.maps = maps;
-    job.items = make_tiles(maps, nmaps, &job.nitems);
-    if (!job.items)
+    size_t nall = 0;
+    work_item *all = make_tiles(maps, nmaps, &nall);
+    work_item *mine = cl && all ? malloc((nall ? nall : 1) * sizeof *mine) : NULL;
+    if (!all || (cl && !mine)) {
+        free(all);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
+    }
+    job.items = all;
+    job.nitems = nall;
+    if (cl) {
+        memcpy(mine, all, nall * sizeof *mine);
+        job.items = mine;
+        job.nitems = own_tiles(cl, mine, nall);
+    }
     unsigned threads = thread_count(scene->sampling.threads);
     int rc = ne > 0 ? run_job(&job, threads, progress, user, base, span) : 0;
     if (job.counters)
         sum_counters(job.counters, threads, st);
+    free(job.counters);
+    free(mine);
+    if (rc != 0) {
+        free(all);
+        return rl__fail(RL_ERR_NOMEM, "out of memory during pass %u", pass);
+    }
+    const char *why = NULL;
+    st->cpu_seconds = now(CLOCK_PROCESS_CPUTIME_ID) - c0;
+    rc = cl && ne > 0 ? exchange_tiles(cl, maps, all, nall, &why) : 0;
+    free(all);
+    if (rc == 0 && cl && sum_stats(cl, st) != 0)
+        rc = -1, why = "the exchange of statistics between ranks failed";
+    if (rc != 0)
+        return rl__fail(RL_ERR_IO, "pass %u: %s", pass, why);
     size_t cells = 0;
     for (size_t m = 0; m < nmaps; m++)
         cells += maps[m].ncells;
     st->estimated_rmse = cells ? sqrt(st->estimated_rmse / (double)cells) : 0.0;
-    free(job.counters);
-    free((void *)job.items);
-    if (rc != 0)
-        return rl__fail(RL_ERR_NOMEM, "out of memory during pass %u", pass);
     st->wall_seconds = now(CLOCK_MONOTONIC) - w0;
-    st->cpu_seconds = now(CLOCK_PROCESS_CPUTIME_ID) - c0;
     return RL_OK;
 }
 
@@ -294,8 +425,8 @@ static void close_pass(rl_map *maps, size_t nmaps)
 }
 
 /* Solves the maps with `passes` passes (may be 0). */
-static rl_status solve(const rl_scene *scene, uint32_t passes, rl_progress_fn progress, void *user,
-                       rl_solution **out)
+static rl_status solve(const rl_scene *scene, const rl_cluster *cl, uint32_t passes, rl_progress_fn progress,
+                       void *user, rl_solution **out)
 {
     *out = NULL;
     rl_solution *s = calloc(1, sizeof *s);
@@ -333,7 +464,7 @@ static rl_status solve(const rl_scene *scene, uint32_t passes, rl_progress_fn pr
         int gather_coarse = p > 0 && coarse;
         if (p > 0)
             ne = append_bounce_emitters(scene, s->maps, s->nmaps, e, 0);
-        st = run_pass(scene, s->tracer, p, p, gather_coarse ? coarse : s->maps, gather_coarse ? ncoarse : s->nmaps, e,
+        st = run_pass(scene, s->tracer, cl, p, p, gather_coarse ? coarse : s->maps, gather_coarse ? ncoarse : s->nmaps, e,
                       ne, progress, user, (double)p / passes, 1.0 / passes, &s->passes[p]);
         for (size_t m = 0; gather_coarse && m < s->nmaps; m++)
             map_interpolate(&coarse[m], &s->maps[m]);
@@ -352,11 +483,28 @@ static rl_status solve(const rl_scene *scene, uint32_t passes, rl_progress_fn pr
     return RL_OK;
 }
 
-rl_status rl_relight(const rl_scene *scene, rl_progress_fn progress, void *user, rl_solution **out)
+/* @return the cluster to run with: NULL for one process. Checks it (RL_ERR_ARG in *st). */
+static const rl_cluster *check_cluster(const rl_cluster *cl, rl_status *st)
+{
+    *st = RL_OK;
+    if (cl && (cl->ranks == 0 || cl->rank >= cl->ranks || !cl->allgather || !cl->sum))
+        *st = rl__fail(RL_ERR_ARG, "cluster: rank %u of %u, or a NULL callback", cl->rank, cl->ranks);
+    return cl && cl->ranks > 1 ? cl : NULL;
+}
+
+rl_status rl_relight_cluster(const rl_scene *scene, const rl_cluster *cluster, rl_progress_fn progress,
+                             void *user, rl_solution **out)
 {
     if (!scene || !out)
         return rl__fail(RL_ERR_ARG, "rl_relight: NULL argument");
-    return solve(scene, scene->sampling.bounces + 1, progress, user, out);
+    rl_status st;
+    const rl_cluster *cl = check_cluster(cluster, &st);
+    return st != RL_OK ? st : solve(scene, cl, scene->sampling.bounces + 1, progress, user, out);
+}
+
+rl_status rl_relight(const rl_scene *scene, rl_progress_fn progress, void *user, rl_solution **out)
+{
+    return rl_relight_cluster(scene, NULL, progress, user, out);
 }
 
 void rl_solution_destroy(rl_solution *s)
@@ -749,14 +897,24 @@ static rl_status point_maps(const double *points, size_t count, rl_map **out)
 rl_status rl_irradiance(const rl_scene *scene, const double *points, size_t count, double *out,
                         rl_pass_stats *stats)
 {
+    return rl_irradiance_cluster(scene, NULL, points, count, out, stats);
+}
+
+rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster, const double *points,
+                                size_t count, double *out, rl_pass_stats *stats)
+{
     rl_map *pts = NULL;
     rl_solution *sol = NULL;
-    rl_status st = point_maps(points, count, &pts);
+    rl_status st;
+    const rl_cluster *cl = check_cluster(cluster, &st);
+    if (st != RL_OK)
+        return st;
+    st = point_maps(points, count, &pts);
     if (st != RL_OK)
         return st;
     /* Light reflected by the scene: solve `bounces` passes and let every lit
      * map re-emit the irradiance summed over them. */
-    st = solve(scene, scene->sampling.bounces, NULL, NULL, &sol);
+    st = solve(scene, cl, scene->sampling.bounces, NULL, NULL, &sol);
     size_t ne = 0;
     rl_emitter *e = st == RL_OK ? primary_emitters(scene, sol->nmaps, &ne) : NULL;
     if (st == RL_OK && !e)
@@ -768,7 +926,7 @@ rl_status rl_irradiance(const rl_scene *scene, const double *points, size_t coun
     }
     rl_pass_stats local;
     if (st == RL_OK)
-        st = run_pass(scene, sol->tracer, scene->sampling.bounces, 0, pts, count, e, ne, NULL, NULL, 0, 1,
+        st = run_pass(scene, sol->tracer, cl, scene->sampling.bounces, 0, pts, count, e, ne, NULL, NULL, 0, 1,
                       stats ? stats : &local);
     for (size_t k = 0; st == RL_OK && k < count; k++)
         for (int c = 0; c < 3; c++)

@@ -34,6 +34,30 @@ typedef struct rl_pass_stats {
 /** Progress callback: done in [0, 1] over the whole run. Called from the calling thread only. */
 typedef void (*rl_progress_fn)(void *user, double done);
 
+/**
+ * The processes of one job (the ranks of an MPI job, docs/cluster.md), as the
+ * engine sees them: it never calls MPI itself. Every rank loads the same
+ * scene and makes the same calls; the work of each pass (tiles of cells, or
+ * points) is divided over the ranks, tile k to rank k mod ranks, and after
+ * the pass the callbacks make every rank's maps whole. The results are bit
+ * for bit those of one process, whatever ranks and threads. The callbacks are
+ * called from the calling thread, by every rank in the same order; when one
+ * fails (returns nonzero) the run fails with RL_ERR_IO. A rank whose run
+ * fails otherwise (out of memory) returns without entering the next
+ * exchange: the caller must then end the whole job (MPI_Abort), since the
+ * other ranks wait in it.
+ */
+typedef struct rl_cluster {
+    uint32_t rank;  /**< this process, 0 .. ranks - 1 */
+    uint32_t ranks; /**< processes in the job, >= 1 */
+    /** On entry rank r has filled only block r of values (counts[r] doubles from offsets[r]);
+     * on return every block holds its owner's values. @return 0, or nonzero on failure. */
+    int (*allgather)(void *user, double *values, const uint64_t *counts, const uint64_t *offsets);
+    /** Replaces each of the n values by its sum over the ranks. @return 0, or nonzero on failure. */
+    int (*sum)(void *user, double *values, size_t n);
+    void *user;     /**< passed to both */
+} rl_cluster;
+
 /** A solved scene: radiance maps of every receiving polygon. Opaque. */
 typedef struct rl_solution rl_solution;
 
@@ -43,6 +67,15 @@ typedef struct rl_solution rl_solution;
  * @return RL_OK and *out, owned by the caller; RL_ERR_NOMEM, RL_ERR_INPUT, RL_ERR_INTERNAL.
  */
 rl_status rl_relight(const rl_scene *scene, rl_progress_fn progress, void *user, rl_solution **out);
+
+/**
+ * rl_relight() as rank cluster->rank of a job (NULL: one process, as
+ * rl_relight()). Every rank ends with the whole solution; pass statistics
+ * are summed over ranks, except wall_seconds (this rank's).
+ * @return as rl_relight(); RL_ERR_ARG for a cluster with rank >= ranks; RL_ERR_IO when an exchange fails.
+ */
+rl_status rl_relight_cluster(const rl_scene *scene, const rl_cluster *cluster, rl_progress_fn progress,
+                             void *user, rl_solution **out);
 
 /** Releases a solution. NULL is a no-op. */
 void rl_solution_destroy(rl_solution *s);
@@ -150,6 +183,14 @@ rl_status rl_bench_rays(const rl_scene *scene, uint64_t rays, rl_ray_bench *out)
  */
 rl_status rl_irradiance(const rl_scene *scene, const double *points, size_t count, double *out,
                         rl_pass_stats *stats);
+
+/**
+ * rl_irradiance() as rank cluster->rank of a job (NULL: one process). Every
+ * rank passes the same points and ends with every point's answer.
+ * @return as rl_irradiance(); RL_ERR_ARG for a cluster with rank >= ranks; RL_ERR_IO when an exchange fails.
+ */
+rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster, const double *points,
+                                size_t count, double *out, rl_pass_stats *stats);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,40 @@
+/*
+ * radmap_mpi.h - writing a radiance-map file collectively from the ranks of
+ * an MPI job, with HDF5's MPI-IO driver. Present only in an lfio built with
+ * MPI (CMake option ILFKIT_MPI, linked with a parallel HDF5); the file
+ * written is the one lfio_radmap_write_each() writes, read by the same
+ * lfio_radmap_read(). Conventions as in lfio/radmap.h.
+ *
+ * Thread safety: collective over comm; one call at a time per process.
+ *
+ * This header is valid C99 and C++.
+ */
+#ifndef LFIO_RADMAP_MPI_H
+#define LFIO_RADMAP_MPI_H
+
+#include <mpi.h>
+
+#include "lfio/radmap.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/**
+ * Writes count patches to path as lfio_radmap_write_each() does, collectively
+ * over comm: every rank calls it with the same arguments, and describe must
+ * give every rank the same patch k (each rank checks every patch); the arrays
+ * of patch k are written by rank k mod size. Rank 0 creates the temporary
+ * beside path (so every rank must see path's folder) and renames it over path
+ * once every rank has written its part; on failure path is untouched.
+ * @return on every rank: LFIO_OK once the file is in place; this rank's error,
+ * or LFIO_ERR_IO (or another rank's status) with a message that another rank failed.
+ */
+lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, const char *scene, size_t count,
+                                       lfio_radmap_describe_fn describe, void *user, MPI_Comm comm);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* LFIO_RADMAP_MPI_H */

@@ -1,0 +1,154 @@
+#!/usr/bin/env bash
+# mpi_test.sh - `ilf-mpi` (the MPI build, docs/cluster.md) against `ilf`.
+#
+# Usage: bash mpi_test.sh BUILD_DIR DATA_DIR TMPDIR [FAILALLOC_SO]
+#
+# (a) Identity. 'beams' (its light field and a diffuse lamp added, 0.15 m
+#     cells, 2 bounces) relit by `ilf --threads 1` and by `mpirun -n K
+#     ilf-mpi --threads T` for (K, T) = (1, 2), (2, 1), (2, 2), (3, 1): every
+#     radiance.h5 must hold the same values (h5diff, exact) and every
+#     view.exr the same bytes; the same for adaptive at K = 3. Point queries
+#     with a bounce, from a file and from standard input, K = 1, 2, 3: the
+#     same lines as `ilf irradiance`.
+# (b) Faults. The job must exit non-zero with the failing rank's message and
+#     leave no output (nor a staging folder) when: one rank is given a scene
+#     that does not exist (exit 2); one rank runs out of memory in the middle
+#     of its run (FAILALLOC_SO preloaded on it alone; exit 1); one rank is
+#     killed with SIGKILL during the run.
+# The last line is "N passed, M failed"; the exit status is nonzero if anything failed.
+set -u
+
+if [ $# -lt 3 ]; then
+    echo "usage: bash mpi_test.sh BUILD_DIR DATA_DIR TMPDIR [FAILALLOC_SO]" >&2
+    exit 2
+fi
+build=$(cd "$1" && pwd)
+data=$(cd "$2" && pwd)
+tmp=$3
+failalloc=${4:-}
+ilf=$build/tools/ilf
+ilf_mpi=$build/tools/ilf-mpi
+. "$(dirname "$0")/checks.sh"
+
+rm -rf "$tmp"
+mkdir -p "$tmp"
+cd "$tmp" || exit 2
+
+# Open MPI refuses root unless told; a test machine's container often runs as root.
+mpirun=(mpirun --oversubscribe)
+[ "$(id -u)" -eq 0 ] && mpirun+=(--allow-run-as-root)
+export OMPI_MCA_rmaps_base_oversubscribe=1
+
+python3 - "$data" scene.json <<'EOF'
+import json, sys
+data, out = sys.argv[1], sys.argv[2]
+s = json.load(open(data + "/beams.json"))
+for lf in s["lightfields"]:
+    lf["file"] = data + "/" + lf["file"]
+s["radiance_maps"]["cell_size"] = 0.15
+s["camera"]["width"], s["camera"]["height"] = 160, 120
+s["materials"]["lamp"] = {"albedo": [0, 0, 0], "emission": [4, 4, 3]}
+s["polygons"].append({"material": "lamp", "vertices": [[0.5, 4.2, 2.99], [0.5, 4.6, 2.99], [0.9, 4.6, 2.99], [0.9, 4.2, 2.99]]})
+s["sampling"]["bounces"] = 2
+json.dump(s, open(out, "w"), indent=1)
+EOF
+
+# ------------------------------------------------------------------ (a) identity
+
+"$ilf" relight scene.json -o ref --threads 1 --quiet
+check "ilf relight makes the reference" test -s ref/radiance.h5 -a -s ref/view.exr
+
+same_image() { # A B: two EXR files with the same bytes but for the capDate stamp that OpenEXR writes
+    python3 -c "
+import re, sys
+a, b = (re.sub(rb'capDate\0string\0.{4}[0-9: ]{19}', b'', open(f, 'rb').read(), count=1) for f in sys.argv[1:])
+sys.exit(a != b)" "$1" "$2"
+}
+same_maps() { # DIR: its radiance.h5 and view.exr equal the reference's
+    h5diff -q ref/radiance.h5 "$1/radiance.h5" >/dev/null && same_image ref/view.exr "$1/view.exr"
+}
+for kt in "1 2" "2 1" "2 2" "3 1"; do
+    set -- $kt
+    "${mpirun[@]}" -n "$1" "$ilf_mpi" relight scene.json -o "k$1t$2" --threads "$2" --quiet
+    check "relight: $1 rank(s) x $2 thread(s) exits 0" test $? -eq 0
+    check "relight: $1 rank(s) x $2 thread(s) gives the maps and view of one process" same_maps "k$1t$2"
+done
+check "h5diff sees a different seed (the comparison can fail)" \
+    bash -c "'$ilf' relight scene.json -o seed --threads 1 --quiet --seed 9 --no-view && ! h5diff -q ref/radiance.h5 seed/radiance.h5 >/dev/null"
+check "stats.json of a 2-rank run names 2 ranks and an exchange per pass" \
+    python3 -c "import json; d = json.load(open('k2t1/stats.json')); assert d['ranks'] == 2 and len(d['exchanges']) == 3 and all(x['bytes'] > 0 for x in d['exchanges']), d"
+"$ilf" relight scene.json -o ref_adaptive --threads 1 --quiet --method adaptive --no-view --bounces 1
+"${mpirun[@]}" -n 3 "$ilf_mpi" relight scene.json -o adaptive3 --threads 1 --quiet --method adaptive --no-view --bounces 1
+check "adaptive: 3 ranks give the maps of one process" h5diff -q ref_adaptive/radiance.h5 adaptive3/radiance.h5
+
+python3 - > points.txt <<'EOF'
+import random
+random.seed(5)
+for k in range(300):
+    print("%.4f %.4f %.4f 0 0 1" % (random.uniform(0.1, 4.9), random.uniform(0.1, 4.9), random.uniform(0, 1.5)))
+EOF
+"$ilf" irradiance scene.json --points points.txt --bounces 1 --threads 1 > points_ref.txt
+check "ilf irradiance answers every point" test "$(wc -l < points_ref.txt)" -eq 300
+for k in 1 2 3; do
+    "${mpirun[@]}" -n "$k" "$ilf_mpi" irradiance scene.json --points points.txt --bounces 1 --threads 1 > "points_$k.txt"
+    check "irradiance: $k rank(s), points from a file, the same answers" cmp -s points_ref.txt "points_$k.txt"
+done
+"${mpirun[@]}" -n 2 "$ilf_mpi" irradiance scene.json --points - --bounces 1 --threads 1 < points.txt > points_stdin.txt
+check "irradiance: 2 ranks, points from standard input, the same answers" cmp -s points_ref.txt points_stdin.txt
+
+# ------------------------------------------------------------------ (b) faults
+
+no_output() { # DIR: no radiance.h5, no staging folder left
+    [ ! -e "$1/radiance.h5" ] && ! ls -a "$1" 2>/dev/null | grep -q '^\.relight\.tmp-'
+}
+
+"${mpirun[@]}" -n 1 "$ilf_mpi" relight scene.json -o bad --threads 1 --quiet : \
+    -n 1 "$ilf_mpi" relight missing.json -o bad --threads 1 --quiet 2> bad.err
+code=$?
+check "a scene missing on one rank: the job exits 2 (got $code)" test "$code" -eq 2
+check "a scene missing on one rank: its message names the file and the rank" grep -q 'rank 1 of 2.*missing.json' bad.err
+check "a scene missing on one rank: no output" no_output bad
+
+if [ -n "$failalloc" ]; then
+    # Count rank 1's allocations in a whole run, then fail the one at 60% of them: in a pass.
+    "${mpirun[@]}" -n 1 "$ilf_mpi" relight scene.json -o count --threads 1 --quiet --no-view : \
+        -n 1 -x LD_PRELOAD="$failalloc" -x ILFKIT_FAIL_ALLOC_LOG="$tmp/count.log" \
+        "$ilf_mpi" relight scene.json -o count --threads 1 --quiet --no-view
+    total=$(cut -d' ' -f1 count.log 2>/dev/null)
+    check "the allocation counter counted rank 1's run" test "${total:-0}" -gt 100
+    n=$(( ${total:-0} * 6 / 10 ))
+    timeout 300 "${mpirun[@]}" -n 1 "$ilf_mpi" relight scene.json -o oom --threads 1 --quiet --no-view : \
+        -n 1 -x LD_PRELOAD="$failalloc" -x ILFKIT_FAIL_ALLOC="$n" \
+        "$ilf_mpi" relight scene.json -o oom --threads 1 --quiet --no-view 2> oom.err
+    code=$?
+    check "rank 1 out of memory (allocation $n of $total): the job exits 1 (got $code)" test "$code" -eq 1
+    check "rank 1 out of memory: its message says so" grep -q 'rank 1 of 2.*out of memory' oom.err
+    check "rank 1 out of memory: no output" no_output oom
+fi
+
+# SIGKILL to rank 1 once rank 0 has made its staging folder (the engine is running).
+big=$tmp/big.json
+python3 -c "import json; s = json.load(open('scene.json')); s['radiance_maps']['cell_size'] = 0.04; json.dump(s, open('$big', 'w'))"
+"${mpirun[@]}" -n 2 "$ilf_mpi" relight "$big" -o killed --threads 1 --quiet --no-view 2> killed.err &
+job=$!
+victim=""
+for _ in $(seq 600); do
+    if ls -a killed 2>/dev/null | grep -q '^\.relight\.tmp-'; then
+        for pid in $(pgrep -f "ilf-mpi relight $big"); do
+            if tr '\0' '\n' < "/proc/$pid/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=1'; then
+                victim=$pid
+            fi
+        done
+        [ -n "$victim" ] && break
+    fi
+    sleep 0.05
+done
+check "found rank 1 of the run to kill" test -n "$victim"
+[ -n "$victim" ] && kill -KILL "$victim"
+wait "$job"
+code=$?
+check "rank 1 killed: the job exits non-zero (got $code)" test "$code" -ne 0
+check "rank 1 killed: no radiance.h5 and no staging folder left" no_output killed
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]

@@ -1,0 +1,205 @@
+/*
+ * job_mpi.c - one rank of an MPI job (job.h), for `ilf-mpi`: the engine's
+ * exchanges as MPI collectives over MPI_COMM_WORLD, the radiance-map file
+ * through lfio's parallel HDF5 writer, and failures that end the whole job.
+ * The only file of tools/ that includes mpi.h.
+ *
+ * Invariants: ranks other than 0 hold what they write to stderr until a
+ * collective step says whether rank 0 failed too (then rank 0's message
+ * stands for all, since every rank read the same input) or not (then theirs
+ * is printed); whatever they still hold is printed before the job is
+ * aborted or the rank ends. Each exchange records its bytes and its time,
+ * split into waiting for the slowest rank and moving the data.
+ */
+#define _GNU_SOURCE /* open_memstream is POSIX 2008, but glibc lets stderr be assigned */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <mpi.h>
+
+#include "cli.h"
+#include "job.h"
+#include "job_mpi.h"
+#include "lfio/radmap_mpi.h"
+
+#define MAX_EXCHANGES 64
+
+static MPI_Comm job_comm = MPI_COMM_NULL;
+static int this_rank = 0, rank_count = 1, ranks_on_node = 1;
+static FILE *real_stderr = NULL; /* ranks > 0: stderr while held */
+static char *held = NULL;        /* what a rank > 0 wrote to stderr and has not printed yet */
+static size_t held_size = 0;
+static rl_cluster cluster;
+static job_exchange exchanges[MAX_EXCHANGES];
+static size_t exchange_count = 0;
+
+/* @return monotonic time in seconds. */
+static double seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* ------------------------------------------------------------- stderr */
+
+/* Starts holding stderr (ranks > 0). */
+static void hold_stderr(void)
+{
+    FILE *f = open_memstream(&held, &held_size);
+    if (f != NULL) {
+        real_stderr = stderr;
+        stderr = f;
+    }
+}
+
+/* Ends holding: prints what was held (print) or drops it, then holds again. */
+static void release_stderr(int print)
+{
+    if (real_stderr == NULL)
+        return;
+    fclose(stderr);
+    stderr = real_stderr;
+    real_stderr = NULL;
+    if (print && held_size > 0)
+        fwrite(held, 1, held_size, stderr), fflush(stderr);
+    free(held);
+    held = NULL;
+    held_size = 0;
+}
+
+/* --------------------------------------------------------- the engine's calls */
+
+/* rl_cluster.allgather over the job: MPI_Allgatherv in place, timed. */
+static int allgather(void *user, double *values, const uint64_t *counts, const uint64_t *offsets)
+{
+    (void)user;
+    int *n = malloc(rank_count * sizeof *n), *at = malloc(rank_count * sizeof *at);
+    int ok = n && at;
+    uint64_t bytes = 0;
+    for (int r = 0; ok && r < rank_count; r++) {
+        /* MPI counts are ints: 2^31 doubles (16 GiB) per rank and in all */
+        ok = counts[r] <= INT32_MAX && offsets[r] <= INT32_MAX - counts[r];
+        if (ok)
+            n[r] = (int)counts[r], at[r] = (int)offsets[r], bytes += counts[r] * sizeof *values;
+    }
+    double t0 = seconds();
+    ok = ok && MPI_Barrier(job_comm) == MPI_SUCCESS;
+    double t1 = seconds();
+    ok = ok && MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, values, n, at, MPI_DOUBLE, job_comm) == MPI_SUCCESS;
+    if (ok && exchange_count < MAX_EXCHANGES)
+        exchanges[exchange_count++] = (job_exchange){t1 - t0, seconds() - t1, (unsigned long long)bytes};
+    free(n);
+    free(at);
+    return ok ? 0 : -1;
+}
+
+/* rl_cluster.sum over the job. */
+static int sum(void *user, double *values, size_t n)
+{
+    (void)user;
+    return n <= INT32_MAX && MPI_Allreduce(MPI_IN_PLACE, values, (int)n, MPI_DOUBLE, MPI_SUM, job_comm) == MPI_SUCCESS
+               ? 0
+               : -1;
+}
+
+/* ------------------------------------------------------------------ job.h */
+
+int job_rank(void)
+{
+    return this_rank;
+}
+
+int job_ranks(void)
+{
+    return rank_count;
+}
+
+const rl_cluster *job_cluster(void)
+{
+    return rank_count > 1 ? &cluster : NULL;
+}
+
+int job_agree(int code)
+{
+    int codes[2] = {code, this_rank == 0 ? code : 0}, all[2] = {code, code};
+    if (MPI_Allreduce(codes, all, 2, MPI_INT, MPI_MAX, job_comm) != MPI_SUCCESS)
+        return job_fail(ILF_EXIT_FAILED);
+    /* all[1] is rank 0's code: when it failed, its message stands for the same failure here */
+    release_stderr(all[1] == 0);
+    if (this_rank > 0)
+        hold_stderr();
+    return all[0];
+}
+
+int job_share(const char *sub, void *buf, size_t size)
+{
+    if (size > INT32_MAX || MPI_Bcast(buf, (int)size, MPI_BYTE, 0, job_comm) != MPI_SUCCESS) {
+        cli_error(sub, "cannot share %zu bytes between the ranks", size);
+        return 0;
+    }
+    return 1;
+}
+
+int job_fail(int code)
+{
+    release_stderr(1);
+    fflush(stdout);
+    MPI_Abort(job_comm, code);
+    return code; /* not reached */
+}
+
+lfio_status job_radmap_write(const char *path, const char *creator, const char *scene, size_t count,
+                             lfio_radmap_describe_fn describe, void *user)
+{
+    return lfio_radmap_write_each_mpi(path, creator, scene, count, describe, user, job_comm);
+}
+
+/* --------------------------------------------------------------- job_mpi.h */
+
+int job_mpi_start(int *argc, char ***argv)
+{
+    int provided = 0;
+    /* Only the calling thread makes MPI calls; the engine's workers never do. */
+    if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
+        return 0;
+    job_comm = MPI_COMM_WORLD;
+    MPI_Comm_rank(job_comm, &this_rank);
+    MPI_Comm_size(job_comm, &rank_count);
+    MPI_Comm node;
+    if (MPI_Comm_split_type(job_comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node) == MPI_SUCCESS) {
+        MPI_Comm_size(node, &ranks_on_node);
+        MPI_Comm_free(&node);
+    }
+    cluster = (rl_cluster){(uint32_t)this_rank, (uint32_t)rank_count, allgather, sum, NULL};
+    static char suffix[64];
+    snprintf(suffix, sizeof suffix, " (rank %d of %d)", this_rank, rank_count);
+    cli_set_identity("ilf-mpi", rank_count > 1 ? suffix : "");
+    if (this_rank > 0)
+        hold_stderr();
+    return 1;
+}
+
+int job_mpi_finish(int code)
+{
+    release_stderr(1);
+    MPI_Finalize();
+    return code;
+}
+
+unsigned job_threads_per_rank(void)
+{
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    long each = (cores > 0 ? cores : 1) / (ranks_on_node > 0 ? ranks_on_node : 1);
+    return each > 0 ? (unsigned)each : 1u;
+}
+
+size_t job_exchange_log(const job_exchange **log)
+{
+    *log = exchanges;
+    return exchange_count;
+}

@@ -1,0 +1,14 @@
+/*
+ * job_mpi.h - starting and ending the MPI rank that `ilf-mpi` is (job_mpi.c);
+ * between the two, job.h describes the job.
+ */
+#ifndef ILF_JOB_MPI_H
+#define ILF_JOB_MPI_H
+
+/** Initialises MPI (funnelled threads) over MPI_COMM_WORLD. @return 1, or 0 if MPI could not start. */
+int job_mpi_start(int *argc, char ***argv);
+
+/** Prints what this rank still holds, finalises MPI. @return code. */
+int job_mpi_finish(int code);
+
+#endif /* ILF_JOB_MPI_H */
