@@ -40,7 +40,12 @@ that its four entries reference with four transforms; `--ilf` writes it too:
       --origin -0.4,-0.4,0 --u 0.8,0,0 --v 0,0.8,0 --radiance 100,100,100 \
       --cone 35 --seed 1 -o data/classroom_lightfield.h5
 
-Usage: python3 data/gen_scenes.py [--out DIR] [--ilf PATH]
+  building_NXxNY.json (only with --building NX NY)
+                      a building floor of NX x NY classrooms side by side,
+                      each closed and lit by its own lamps (10 x 10: 303,500
+                      polygons, 100 times the classroom), for docs/cluster.md.
+
+Usage: python3 data/gen_scenes.py [--out DIR] [--ilf PATH] [--building NX NY]
 """
 
 import argparse
@@ -433,6 +438,24 @@ def classroom_scene(lightfield=False):
     return out
 
 
+def building_scene(nx, ny):
+    """A building floor: nx x ny classrooms (each closed, its own lamps) 0.2 m apart, for the
+    cluster measurements of docs/cluster.md (10 x 10 is 100 times the classroom)."""
+    room = classroom_scene()
+    X, Y, _ = CLASS
+    polygons = []
+    for i in range(nx):
+        for j in range(ny):
+            dx, dy = i * (X + 0.2), j * (Y + 0.2)
+            for p in room["polygons"]:
+                moved = rounded([[v[0] + dx, v[1] + dy, v[2]] for v in p["vertices"]])
+                polygons.append({"material": p["material"], "vertices": moved})
+    out = dict(room)
+    out["polygons"] = polygons
+    out["camera"] = dict(room["camera"])
+    return out
+
+
 # ------------------------------------------------------------------ main
 
 
@@ -442,11 +465,20 @@ def main():
                         help="folder to write into (default: this script's folder)")
     parser.add_argument("--ilf", help="path of the ilf command: also write the light field files with it "
                         "(beams_lightfield.h5, classroom_lightfield.h5)")
+    parser.add_argument("--building", nargs=2, type=int, metavar=("NX", "NY"),
+                        help="write only building_NXxNY.json: a floor of NX x NY classrooms")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
-    beams, beams_diffuse = beams_scenes()
-    scenes = {"beams.json": beams, "beams_diffuse.json": beams_diffuse, "classroom.json": classroom_scene(),
-              "classroom_lightfield.json": classroom_scene(lightfield=True)}
+    if args.building:
+        nx, ny = args.building
+        if nx < 1 or ny < 1:
+            parser.error("--building: NX and NY must be at least 1")
+        scenes = {"building_%dx%d.json" % (nx, ny): building_scene(nx, ny)}
+        args.ilf = None
+    else:
+        beams, beams_diffuse = beams_scenes()
+        scenes = {"beams.json": beams, "beams_diffuse.json": beams_diffuse, "classroom.json": classroom_scene(),
+                  "classroom_lightfield.json": classroom_scene(lightfield=True)}
     for name, sections in scenes.items():
         path = os.path.join(args.out, name)
         write_scene(path, sections)

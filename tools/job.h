@@ -54,10 +54,10 @@ lfio_status job_radmap_write(const char *path, const char *creator, const char *
  * shared evenly by the ranks on this machine. */
 unsigned job_threads_per_rank(void);
 
-/** One exchange of pass results between the ranks (seconds waiting for the slowest rank, then moving). */
+/** One exchange of pass results between the ranks. */
 typedef struct job_exchange {
-    double wait_seconds;
-    double move_seconds;
+    double wait_seconds; /**< the longest any rank waited for the slowest to finish the pass */
+    double move_seconds; /**< moving the data, on this rank */
     unsigned long long bytes; /**< gathered onto each rank */
 } job_exchange;
 

@@ -87,12 +87,16 @@ static int allgather(void *user, double *values, const uint64_t *counts, const u
         if (ok)
             n[r] = (int)counts[r], at[r] = (int)offsets[r], bytes += counts[r] * sizeof *values;
     }
+    /* The barrier separates waiting for the slowest rank (load imbalance) from moving the data;
+     * the longest wait of any rank is what the imbalance cost. */
     double t0 = seconds();
     ok = ok && MPI_Barrier(job_comm) == MPI_SUCCESS;
-    double t1 = seconds();
+    double t1 = seconds(), waited = t1 - t0, longest = waited;
     ok = ok && MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, values, n, at, MPI_DOUBLE, job_comm) == MPI_SUCCESS;
+    double moved = seconds() - t1;
+    ok = ok && MPI_Allreduce(&waited, &longest, 1, MPI_DOUBLE, MPI_MAX, job_comm) == MPI_SUCCESS;
     if (ok && exchange_count < MAX_EXCHANGES)
-        exchanges[exchange_count++] = (job_exchange){t1 - t0, seconds() - t1, (unsigned long long)bytes};
+        exchanges[exchange_count++] = (job_exchange){longest, moved, (unsigned long long)bytes};
     free(n);
     free(at);
     return ok ? 0 : -1;
@@ -179,6 +183,9 @@ int job_mpi_start(int *argc, char ***argv)
     static char suffix[64];
     snprintf(suffix, sizeof suffix, " (rank %d of %d)", this_rank, rank_count);
     cli_set_identity("ilf-mpi", rank_count > 1 ? suffix : "");
+    /* Rank 0 prints what the job prints (help, results, the summary). */
+    if (this_rank > 0 && freopen("/dev/null", "w", stdout) == NULL)
+        fclose(stdout);
     if (this_rank > 0)
         hold_stderr();
     return 1;
@@ -186,6 +193,8 @@ int job_mpi_start(int *argc, char ***argv)
 
 int job_mpi_finish(int code)
 {
+    /* A usage error every rank met is reported once, by rank 0. */
+    code = job_agree(code);
     release_stderr(1);
     MPI_Finalize();
     return code;

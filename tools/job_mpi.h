@@ -8,7 +8,8 @@
 /** Initialises MPI (funnelled threads) over MPI_COMM_WORLD. @return 1, or 0 if MPI could not start. */
 int job_mpi_start(int *argc, char ***argv);
 
-/** Prints what this rank still holds, finalises MPI. @return code. */
+/** Collective: agrees on the job's exit code (the largest), prints what this rank still holds and
+ * finalises MPI. @return the job's exit code. */
 int job_mpi_finish(int code);
 
 #endif /* ILF_JOB_MPI_H */

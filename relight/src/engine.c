@@ -9,7 +9,8 @@
  * counter, and each tile's cells are written only by the thread that owns
  * the tile, in an order fixed by the tile alone. So the output does not
  * depend on the number of threads or on scheduling. In a job of several
- * processes (rl_cluster), tile k belongs to rank k mod ranks, and after each
+ * processes (rl_cluster), the tiles are shuffled and dealt to the ranks
+ * (deal_tiles), and after each
  * pass the ranks exchange their tiles' values: since a tile's values do not
  * depend on who computed them, every rank then holds what one process would.
  */
@@ -175,10 +176,39 @@ static work_item *make_tiles(const rl_map *maps, size_t nmaps, size_t *n)
 
 /* ------------------------------------------------------------ several ranks */
 
-/* @return the rank that owns tile k of a pass. */
-static uint32_t tile_owner(const rl_cluster *cl, size_t k)
+/* A tile and its place in the deal. */
+typedef struct dealt {
+    uint64_t key;
+    size_t tile;
+} dealt;
+
+/* qsort order of dealt: by key, then tile (keys are distinct in practice). */
+static int by_key(const void *a, const void *b)
 {
-    return (uint32_t)(k % cl->ranks);
+    const dealt *x = a, *y = b;
+    return x->key != y->key ? (x->key < y->key ? -1 : 1) : (x->tile > y->tile) - (x->tile < y->tile);
+}
+
+/* Deals the n tiles of a pass to the ranks: shuffled by a fixed hash of their index, then dealt in
+ * turn, so every rank gets the same number and a like mix. Dealing in list order would not do:
+ * lists repeat (the six faces of every box), and a rank would get every box's top, lit, face.
+ * @return owner[n] (malloc'd), or NULL when out of memory. */
+static uint32_t *deal_tiles(const rl_cluster *cl, size_t n)
+{
+    uint32_t *owner = malloc((n ? n : 1) * sizeof *owner);
+    dealt *order = malloc((n ? n : 1) * sizeof *order);
+    if (owner && order) {
+        for (size_t k = 0; k < n; k++)
+            order[k] = (dealt){hash_mix(0x9e3779b97f4a7c15u, k), k};
+        qsort(order, n, sizeof *order, by_key);
+        for (size_t k = 0; k < n; k++)
+            owner[order[k].tile] = (uint32_t)(k % cl->ranks);
+    } else {
+        free(owner);
+        owner = NULL;
+    }
+    free(order);
+    return owner;
 }
 
 /* @return the first cell of map m in grid row j or after: cells are numbered row by row. */
@@ -198,11 +228,11 @@ static uint32_t first_cell_of_row(const rl_map *m, uint32_t j)
 /* Copies the pass irradiance of every tile of owners other than `rank` (skip_own) or of `rank` alone
  * (!skip_own) between the maps and buf, packed by owner then tile: to buf when pack, else from it.
  * cursor (one per rank) starts at each owner's offset. */
-static void copy_tiles(const rl_cluster *cl, rl_map *maps, const work_item *items, size_t nitems, double *buf,
-                       uint64_t *cursor, int pack)
+static void copy_tiles(const rl_cluster *cl, const uint32_t *owners, rl_map *maps, const work_item *items,
+                       size_t nitems, double *buf, uint64_t *cursor, int pack)
 {
     for (size_t k = 0; k < nitems; k++) {
-        uint32_t owner = tile_owner(cl, k);
+        uint32_t owner = owners[k];
         rl_map *m = &maps[items[k].map];
         uint32_t c0 = first_cell_of_row(m, items[k].row0), c1 = first_cell_of_row(m, items[k].row1);
         size_t values = 3 * (size_t)(c1 - c0);
@@ -217,8 +247,8 @@ static void copy_tiles(const rl_cluster *cl, rl_map *maps, const work_item *item
 
 /* Makes every rank's pass irradiance whole: each rank computed only its own tiles. @return 0 or -1 (failed,
  * with *why naming what). */
-static int exchange_tiles(const rl_cluster *cl, rl_map *maps, const work_item *items, size_t nitems,
-                          const char **why)
+static int exchange_tiles(const rl_cluster *cl, const uint32_t *owners, rl_map *maps, const work_item *items,
+                          size_t nitems, const char **why)
 {
     uint64_t *counts = calloc(cl->ranks, sizeof *counts), *offsets = calloc(cl->ranks, sizeof *offsets),
              *cursor = calloc(cl->ranks, sizeof *cursor);
@@ -228,7 +258,7 @@ static int exchange_tiles(const rl_cluster *cl, rl_map *maps, const work_item *i
     if (counts && offsets && cursor) {
         for (size_t k = 0; k < nitems; k++) {
             const rl_map *m = &maps[items[k].map];
-            counts[tile_owner(cl, k)] +=
+            counts[owners[k]] +=
                 3 * (uint64_t)(first_cell_of_row(m, items[k].row1) - first_cell_of_row(m, items[k].row0));
         }
         uint64_t total = 0;
@@ -238,11 +268,11 @@ static int exchange_tiles(const rl_cluster *cl, rl_map *maps, const work_item *i
     }
     if (buf) {
         memcpy(cursor, offsets, cl->ranks * sizeof *cursor);
-        copy_tiles(cl, maps, items, nitems, buf, cursor, 1);
+        copy_tiles(cl, owners, maps, items, nitems, buf, cursor, 1);
         *why = "the exchange between ranks failed";
         if (cl->allgather(cl->user, buf, counts, offsets) == 0) {
             memcpy(cursor, offsets, cl->ranks * sizeof *cursor);
-            copy_tiles(cl, maps, items, nitems, buf, cursor, 0);
+            copy_tiles(cl, owners, maps, items, nitems, buf, cursor, 0);
             rc = 0;
         }
     }
@@ -254,11 +284,11 @@ static int exchange_tiles(const rl_cluster *cl, rl_map *maps, const work_item *i
 }
 
 /* Keeps in place the items this rank owns, in order. @return their count. */
-static size_t own_tiles(const rl_cluster *cl, work_item *items, size_t nitems)
+static size_t own_tiles(const rl_cluster *cl, const uint32_t *owners, work_item *items, size_t nitems)
 {
     size_t n = 0;
     for (size_t k = 0; k < nitems; k++)
-        if (tile_owner(cl, k) == cl->rank)
+        if (owners[k] == cl->rank)
             items[n++] = items[k];
     return n;
 }
@@ -375,8 +405,11 @@ static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, const 
     size_t nall = 0;
     work_item *all = make_tiles(maps, nmaps, &nall);
     work_item *mine = cl && all ? malloc((nall ? nall : 1) * sizeof *mine) : NULL;
-    if (!all || (cl && !mine)) {
+    uint32_t *owners = cl && all ? deal_tiles(cl, nall) : NULL;
+    if (!all || (cl && (!mine || !owners))) {
         free(all);
+        free(mine);
+        free(owners);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
     }
     job.items = all;
@@ -384,7 +417,7 @@ static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, const 
     if (cl) {
         memcpy(mine, all, nall * sizeof *mine);
         job.items = mine;
-        job.nitems = own_tiles(cl, mine, nall);
+        job.nitems = own_tiles(cl, owners, mine, nall);
     }
     unsigned threads = thread_count(scene->sampling.threads);
     int rc = ne > 0 ? run_job(&job, threads, progress, user, base, span) : 0;
@@ -394,12 +427,14 @@ static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, const 
     free(mine);
     if (rc != 0) {
         free(all);
+        free(owners);
         return rl__fail(RL_ERR_NOMEM, "out of memory during pass %u", pass);
     }
     const char *why = NULL;
     st->cpu_seconds = now(CLOCK_PROCESS_CPUTIME_ID) - c0;
-    rc = cl && ne > 0 ? exchange_tiles(cl, maps, all, nall, &why) : 0;
+    rc = cl && ne > 0 ? exchange_tiles(cl, owners, maps, all, nall, &why) : 0;
     free(all);
+    free(owners);
     if (rc == 0 && cl && sum_stats(cl, st) != 0)
         rc = -1, why = "the exchange of statistics between ranks failed";
     if (rc != 0)
