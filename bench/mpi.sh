@@ -72,7 +72,7 @@ for case in "classroom $root/data/classroom.json --bounces 2" \
 done
 
 echo "" >> "$report"
-echo "label | runs | whole run (median, s) | engine (median, s) | passes (last run, s) | exchanges (bytes:wait:move) | radiance.h5 write (s) | cells"
+echo "label | runs | whole run (median, s) | engine (median, s) | passes (last run, s) | exchanges (bytes:wait:move) | radiance.h5 write (s) | cells" >> "$report"
 python3 - "$out/runs.txt" >> "$report" <<'EOF'
 import sys, statistics, collections
 rows = collections.OrderedDict()

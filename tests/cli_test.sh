@@ -361,6 +361,7 @@ assert s["settings"]["partition_n"] == 8 and s["settings"]["rays_per_solid_angle
 assert s["settings"]["bounces"] == 1 and s["threads"] == 2, s
 assert s["maps"] == 1 and s["cells"] == 64, s
 assert s["wall_seconds"] >= 0 and s["cpu_seconds"] >= 0, s
+assert s["ranks"] == 1 and s["radiance_write_seconds"] > 0 and "exchanges" not in s, s
 assert len(s["passes"]) == 2 and [p["pass"] for p in s["passes"]] == [0, 1], s["passes"]
 keys = {"wall_seconds", "cpu_seconds", "samples", "rays_cast", "rays_kept", "solid_angles_considered",
         "solid_angles_culled", "pairs", "pairs_descended", "emitters"}

@@ -38,6 +38,8 @@ cd "$tmp" || exit 2
 mpirun=(mpirun --oversubscribe)
 [ "$(id -u)" -eq 0 ] && mpirun+=(--allow-run-as-root)
 export OMPI_MCA_rmaps_base_oversubscribe=1
+# Containers often forbid the cross-process copies of the shared-memory transport.
+export OMPI_MCA_btl_vader_single_copy_mechanism=none
 
 python3 - "$data" scene.json <<'EOF'
 import json, sys

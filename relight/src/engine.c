@@ -55,12 +55,21 @@ typedef struct pass_job {
     atomic_size_t next, done;
     atomic_int failed;
     rl_counters *counters; /* one per thread */
+    double *seconds;       /* [nitems]: each tile's CPU time, or NULL */
 } pass_job;
 
 typedef struct worker_arg {
     pass_job *job;
     unsigned index;
 } worker_arg;
+
+/* @return the time of clock (monotonic wall, process or thread CPU), in seconds. */
+static double now(clockid_t clock)
+{
+    struct timespec ts;
+    clock_gettime(clock, &ts);
+    return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
 
 /* Takes tiles until none are left. */
 static void *worker(void *p)
@@ -74,9 +83,12 @@ static void *worker(void *p)
         if (k >= job->nitems || atomic_load(&job->failed))
             break;
         const work_item *w = &job->items[k];
+        double t0 = job->seconds ? now(CLOCK_THREAD_CPUTIME_ID) : 0.0;
         if (transfer_tile(&job->ctx, w->map, &job->maps[w->map], w->row0, w->row1, &scratch,
                           &job->counters[a->index]) != 0)
             atomic_store(&job->failed, 1);
+        if (job->seconds)
+            job->seconds[k] = now(CLOCK_THREAD_CPUTIME_ID) - t0;
         atomic_fetch_add(&job->done, 1);
     }
     scratch_free(&scratch);
@@ -92,13 +104,6 @@ static unsigned thread_count(uint32_t t)
     return n > 0 ? (unsigned)n : 1;
 }
 
-/* @return monotonic wall time or process CPU time, in seconds. */
-static double now(clockid_t clock)
-{
-    struct timespec ts;
-    clock_gettime(clock, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
 
 /* Runs job on n threads, reporting progress from the calling thread.
  * base and span place this pass within the run's [0, 1] progress. @return 0 or -1. */
@@ -176,41 +181,6 @@ static work_item *make_tiles(const rl_map *maps, size_t nmaps, size_t *n)
 
 /* ------------------------------------------------------------ several ranks */
 
-/* A tile and its place in the deal. */
-typedef struct dealt {
-    uint64_t key;
-    size_t tile;
-} dealt;
-
-/* qsort order of dealt: by key, then tile (keys are distinct in practice). */
-static int by_key(const void *a, const void *b)
-{
-    const dealt *x = a, *y = b;
-    return x->key != y->key ? (x->key < y->key ? -1 : 1) : (x->tile > y->tile) - (x->tile < y->tile);
-}
-
-/* Deals the n tiles of a pass to the ranks: shuffled by a fixed hash of their index, then dealt in
- * turn, so every rank gets the same number and a like mix. Dealing in list order would not do:
- * lists repeat (the six faces of every box), and a rank would get every box's top, lit, face.
- * @return owner[n] (malloc'd), or NULL when out of memory. */
-static uint32_t *deal_tiles(const rl_cluster *cl, size_t n)
-{
-    uint32_t *owner = malloc((n ? n : 1) * sizeof *owner);
-    dealt *order = malloc((n ? n : 1) * sizeof *order);
-    if (owner && order) {
-        for (size_t k = 0; k < n; k++)
-            order[k] = (dealt){hash_mix(0x9e3779b97f4a7c15u, k), k};
-        qsort(order, n, sizeof *order, by_key);
-        for (size_t k = 0; k < n; k++)
-            owner[order[k].tile] = (uint32_t)(k % cl->ranks);
-    } else {
-        free(owner);
-        owner = NULL;
-    }
-    free(order);
-    return owner;
-}
-
 /* @return the first cell of map m in grid row j or after: cells are numbered row by row. */
 static uint32_t first_cell_of_row(const rl_map *m, uint32_t j)
 {
@@ -223,6 +193,70 @@ static uint32_t first_cell_of_row(const rl_map *m, uint32_t j)
             hi = mid;
     }
     return lo;
+}
+
+/* @return the number of cells of tile w. */
+static uint32_t tile_cells(const rl_map *maps, const work_item *w)
+{
+    const rl_map *m = &maps[w->map];
+    return first_cell_of_row(m, w->row1) - first_cell_of_row(m, w->row0);
+}
+
+/* The expected cost of a tile with no measurement: its cells, plus what setting up any tile costs
+ * (its emitter pairs, its clipping), in cells. Fitted to the classroom's tiles (cost = a cells + b):
+ * b is about 0 cells in the direct pass, 9 in a bounce pass (3,035 emitters, every tile paired with each). */
+#define TILE_SETUP_CELLS 8.0
+
+/* A tile in the deal: its expected cost and a fixed hash that orders equal costs. */
+typedef struct dealt {
+    double cost;
+    uint64_t key;
+    size_t tile;
+} dealt;
+
+/* qsort order of dealt: dearest first, then by key, then tile. */
+static int dearest_first(const void *a, const void *b)
+{
+    const dealt *x = a, *y = b;
+    if (x->cost != y->cost)
+        return x->cost > y->cost ? -1 : 1;
+    if (x->key != y->key)
+        return x->key < y->key ? -1 : 1;
+    return (x->tile > y->tile) - (x->tile < y->tile);
+}
+
+
+/* Deals the n tiles of a pass to the ranks by expected cost, dearest first, each to the rank with
+ * the least so far (longest processing time first): the measured CPU seconds of the same tiles in
+ * the previous pass when given (bounce passes repeat their tiles), else their cells. Equal costs are
+ * ordered by a fixed hash of the tile's index, so that the many tiles of the same size are mixed:
+ * taken in list order, a rank would get every box's top, lit, face. Every rank computes the same
+ * deal. @return owner[n] (malloc'd), or NULL when out of memory. */
+static uint32_t *deal_tiles(const rl_cluster *cl, const rl_map *maps, const work_item *items, size_t n,
+                            const double *measured)
+{
+    uint32_t *owner = malloc((n ? n : 1) * sizeof *owner);
+    dealt *order = malloc((n ? n : 1) * sizeof *order);
+    double *load = calloc(cl->ranks, sizeof *load);
+    if (owner && order && load) {
+        for (size_t k = 0; k < n; k++)
+            order[k] = (dealt){measured ? measured[k] : tile_cells(maps, &items[k]) + TILE_SETUP_CELLS,
+                               hash_mix(0x9e3779b97f4a7c15u, k), k};
+        qsort(order, n, sizeof *order, dearest_first);
+        for (size_t k = 0; k < n; k++) {
+            uint32_t least = 0;
+            for (uint32_t r = 1; r < cl->ranks; r++)
+                least = load[r] < load[least] ? r : least;
+            owner[order[k].tile] = least;
+            load[least] += order[k].cost;
+        }
+    } else {
+        free(owner);
+        owner = NULL;
+    }
+    free(load);
+    free(order);
+    return owner;
 }
 
 /* Copies the pass irradiance of every tile of owners other than `rank` (skip_own) or of `rank` alone
@@ -256,11 +290,8 @@ static int exchange_tiles(const rl_cluster *cl, const uint32_t *owners, rl_map *
     int rc = -1;
     *why = "out of memory for the exchange";
     if (counts && offsets && cursor) {
-        for (size_t k = 0; k < nitems; k++) {
-            const rl_map *m = &maps[items[k].map];
-            counts[owners[k]] +=
-                3 * (uint64_t)(first_cell_of_row(m, items[k].row1) - first_cell_of_row(m, items[k].row0));
-        }
+        for (size_t k = 0; k < nitems; k++)
+            counts[owners[k]] += 3 * (uint64_t)tile_cells(maps, &items[k]);
         uint64_t total = 0;
         for (uint32_t r = 0; r < cl->ranks; r++)
             offsets[r] = total, total += counts[r];
@@ -283,14 +314,61 @@ static int exchange_tiles(const rl_cluster *cl, const uint32_t *owners, rl_map *
     return rc;
 }
 
-/* Keeps in place the items this rank owns, in order. @return their count. */
-static size_t own_tiles(const rl_cluster *cl, const uint32_t *owners, work_item *items, size_t nitems)
+/* This rank's share of a pass's tiles. */
+typedef struct share {
+    uint32_t *owner;  /* [n]: each tile's rank */
+    work_item *mine;  /* this rank's tiles, in list order */
+    size_t *index;    /* [nmine]: their places in the list */
+    double *seconds;  /* [nmine]: the CPU time each took */
+    size_t nmine;
+} share;
+
+/* Frees a share's arrays. */
+static void share_free(share *sh)
 {
-    size_t n = 0;
-    for (size_t k = 0; k < nitems; k++)
-        if (owners[k] == cl->rank)
-            items[n++] = items[k];
-    return n;
+    free(sh->owner);
+    free(sh->mine);
+    free(sh->index);
+    free(sh->seconds);
+}
+
+/* Deals the n tiles of items (by measured costs when given) and keeps this rank's. @return 0 or -1 (out of
+ * memory). */
+static int share_deal(const rl_cluster *cl, const rl_map *maps, const work_item *items, size_t n,
+                      const double *measured, share *sh)
+{
+    memset(sh, 0, sizeof *sh);
+    sh->owner = deal_tiles(cl, maps, items, n, measured);
+    sh->mine = malloc((n ? n : 1) * sizeof *sh->mine);
+    sh->index = malloc((n ? n : 1) * sizeof *sh->index);
+    sh->seconds = calloc(n ? n : 1, sizeof *sh->seconds);
+    if (!sh->owner || !sh->mine || !sh->index || !sh->seconds) {
+        share_free(sh);
+        return -1;
+    }
+    for (size_t k = 0; k < n; k++)
+        if (sh->owner[k] == cl->rank) {
+            sh->index[sh->nmine] = k;
+            sh->mine[sh->nmine++] = items[k];
+        }
+    return 0;
+}
+
+/* Gathers every tile's measured CPU time onto every rank, into *measured (replaced; n values), for the
+ * deal of a next pass over the same tiles. @return 0, or -1 when the exchange fails. */
+static int share_measure(const rl_cluster *cl, const share *sh, size_t n, double **measured)
+{
+    free(*measured);
+    *measured = calloc(n ? n : 1, sizeof **measured);
+    if (!*measured)
+        return 0; /* no measurement: the next deal goes by cells */
+    for (size_t k = 0; k < sh->nmine; k++)
+        (*measured)[sh->index[k]] = sh->seconds[k];
+    if (cl->sum(cl->user, *measured, n) == 0)
+        return 0;
+    free(*measured);
+    *measured = NULL;
+    return -1;
 }
 
 /* Sums the pass statistics over ranks (wall time stays this rank's). @return 0 or -1. */
@@ -387,10 +465,13 @@ static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, uint32_t pa
 }
 
 /* Runs one pass over maps with emitters e; gather_level_pass chooses the
- * partition level (0: partition_n, else the bounce level). @return RL_OK or an error. */
+ * partition level (0: partition_n, else the bounce level). With several ranks,
+ * *measured holds the previous pass's per-tile CPU times (NULL: none) when
+ * this pass repeats its tiles, and receives this pass's. @return RL_OK or an error. */
 static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_cluster *cl, uint32_t pass,
                           uint32_t gather_level_pass, rl_map *maps, size_t nmaps, const rl_emitter *e, size_t ne,
-                          rl_progress_fn progress, void *user, double base, double span, rl_pass_stats *st)
+                          rl_progress_fn progress, void *user, double base, double span, double **measured,
+                          rl_pass_stats *st)
 {
     double w0 = now(CLOCK_MONOTONIC), c0 = now(CLOCK_PROCESS_CPUTIME_ID);
     memset(st, 0, sizeof *st);
@@ -404,41 +485,32 @@ static rl_status run_pass(const rl_scene *scene, const rl_tracer *tracer, const 
     job.maps = maps;
     size_t nall = 0;
     work_item *all = make_tiles(maps, nmaps, &nall);
-    work_item *mine = cl && all ? malloc((nall ? nall : 1) * sizeof *mine) : NULL;
-    uint32_t *owners = cl && all ? deal_tiles(cl, nall) : NULL;
-    if (!all || (cl && (!mine || !owners))) {
+    share sh = {0};
+    if (!all || (cl && share_deal(cl, maps, all, nall, *measured, &sh) != 0)) {
         free(all);
-        free(mine);
-        free(owners);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
     }
-    job.items = all;
-    job.nitems = nall;
-    if (cl) {
-        memcpy(mine, all, nall * sizeof *mine);
-        job.items = mine;
-        job.nitems = own_tiles(cl, owners, mine, nall);
-    }
+    job.items = cl ? sh.mine : all;
+    job.nitems = cl ? sh.nmine : nall;
+    job.seconds = cl ? sh.seconds : NULL;
     unsigned threads = thread_count(scene->sampling.threads);
     int rc = ne > 0 ? run_job(&job, threads, progress, user, base, span) : 0;
     if (job.counters)
         sum_counters(job.counters, threads, st);
     free(job.counters);
-    free(mine);
-    if (rc != 0) {
-        free(all);
-        free(owners);
-        return rl__fail(RL_ERR_NOMEM, "out of memory during pass %u", pass);
-    }
-    const char *why = NULL;
     st->cpu_seconds = now(CLOCK_PROCESS_CPUTIME_ID) - c0;
-    rc = cl && ne > 0 ? exchange_tiles(cl, owners, maps, all, nall, &why) : 0;
-    free(all);
-    free(owners);
+    const char *why = "out of memory";
+    /* A failed rank leaves now: the others wait in the exchange until the job is ended (engine.h). */
+    if (rc == 0 && cl && ne > 0 && exchange_tiles(cl, sh.owner, maps, all, nall, &why) != 0)
+        rc = -2;
+    if (rc == 0 && cl && ne > 0 && share_measure(cl, &sh, nall, measured) != 0)
+        rc = -2, why = "the exchange of tile costs between ranks failed";
     if (rc == 0 && cl && sum_stats(cl, st) != 0)
-        rc = -1, why = "the exchange of statistics between ranks failed";
+        rc = -2, why = "the exchange of statistics between ranks failed";
+    free(all);
+    share_free(&sh);
     if (rc != 0)
-        return rl__fail(RL_ERR_IO, "pass %u: %s", pass, why);
+        return rl__fail(rc == -2 ? RL_ERR_IO : RL_ERR_NOMEM, "pass %u: %s", pass, why);
     size_t cells = 0;
     for (size_t m = 0; m < nmaps; m++)
         cells += maps[m].ncells;
@@ -495,18 +567,25 @@ static rl_status solve(const rl_scene *scene, const rl_cluster *cl, uint32_t pas
     uint32_t factor = scene->sampling.bounce_cell_factor ? scene->sampling.bounce_cell_factor : 2;
     if (passes > 1 && factor > 1)
         st = maps_build_sized(scene, scene->cell_size * factor, &coarse, &ncoarse);
+    /* per-tile CPU times of the last pass: bounce passes after the first repeat its tiles and emitters */
+    double *measured = NULL;
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
         int gather_coarse = p > 0 && coarse;
         if (p > 0)
             ne = append_bounce_emitters(scene, s->maps, s->nmaps, e, 0);
+        if (p < 2) {
+            free(measured);
+            measured = NULL;
+        }
         st = run_pass(scene, s->tracer, cl, p, p, gather_coarse ? coarse : s->maps, gather_coarse ? ncoarse : s->nmaps, e,
-                      ne, progress, user, (double)p / passes, 1.0 / passes, &s->passes[p]);
+                      ne, progress, user, (double)p / passes, 1.0 / passes, &measured, &s->passes[p]);
         for (size_t m = 0; gather_coarse && m < s->nmaps; m++)
             map_interpolate(&coarse[m], &s->maps[m]);
         close_pass(s->maps, s->nmaps);
         s->npasses = p + 1;
     }
     maps_free(coarse, ncoarse);
+    free(measured);
     free(e);
     if (st != RL_OK) {
         rl_solution_destroy(s);
@@ -960,9 +1039,11 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
         ne = append_bounce_emitters(scene, sol->maps, sol->nmaps, e, ne);
     }
     rl_pass_stats local;
+    double *measured = NULL;
     if (st == RL_OK)
         st = run_pass(scene, sol->tracer, cl, scene->sampling.bounces, 0, pts, count, e, ne, NULL, NULL, 0, 1,
-                      stats ? stats : &local);
+                      &measured, stats ? stats : &local);
+    free(measured);
     for (size_t k = 0; st == RL_OK && k < count; k++)
         for (int c = 0; c < 3; c++)
             out[3 * k + c] = pts[k].e_pass[0][c];
