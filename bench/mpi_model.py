@@ -39,12 +39,12 @@ def load(path):
 
 
 def whole_runs(out):
-    """Median whole-run wall time per label of runs.txt."""
+    """The whole-run wall time of the last run of each label of runs.txt (its stats.json is the one kept)."""
     runs = {}
     for line in open(os.path.join(out, "runs.txt")):
         f = line.split()
-        runs.setdefault(f[0], []).append(float(f[1]))
-    return {k: sorted(v)[len(v) // 2] for k, v in runs.items()}
+        runs[f[0]] = float(f[1])
+    return runs
 
 
 def main():
@@ -57,8 +57,8 @@ def main():
     whole = whole_runs(a.out)
     t, bw, lat = a.cores_per_rank, a.bandwidth * 1e9, a.latency * 1e-6
     print("Predicted speed-up over one rank of %d threads; %.0f GB/s, %.0f us per message.\n" % (t, a.bandwidth, a.latency))
-    print("| case | S (s) | C (cpu s) | exchanged per run | W1, W2 (s) | K = 1 | 8 | 64 | 512 | exchange > compute from K = |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("| case | S (s) | C (cpu s) | exchanged per run | W1, W2 (s) | K = 1 | 8 | 64 | 512 | at 512: write, exchange, compute (s) | exchange > compute from K = | 512, write as W1 |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for case in sorted({k.split(":")[0] for k in whole}):
         one = load(os.path.join(a.out, case + "-1x2", "stats.json"))
         two = load(os.path.join(a.out, case + "-2x1", "stats.json"))
@@ -66,19 +66,21 @@ def main():
         c = sum(x["cpu_seconds"] for x in one["passes"])
         e = min(1.0, c / (2 * passes_wall))
         w1, w2 = one["radiance_write_seconds"], two["radiance_write_seconds"]
-        s = whole[case + ":1x2"] - passes_wall - w1
+        s = max(0.0, whole[case + ":1x2"] - passes_wall - w1)
         bytes_ = [x["bytes"] for x in two.get("exchanges", [])]
         for scale, name in ((1, case), (100, case + " x 100")):
-            def time(k):
+            def time(k, flat_write=False):
                 compute = scale * c / (k * t * e)
                 exchange = sum((k - 1) * lat + scale * b * (k - 1) / k / bw for b in bytes_) if k > 1 else 0.0
-                write = scale * (w1 if k == 1 else w2 * (1 + 0.5 * math.log2(k / 2)))
-                return scale * s + compute + exchange + write, compute, exchange
+                write = scale * (w1 if k == 1 or flat_write else w2 * (1 + 0.5 * math.log2(k / 2)))
+                return scale * s + compute + exchange + write, compute, exchange, write
             t1 = time(1)[0]
             cross = next((k for k in (2 ** i for i in range(1, 21)) if time(k)[2] > time(k)[1]), None)
-            print("| %s | %.1f | %.1f | %.1f MB | %.1f, %.1f | %.1f s | %.1fx | %.1fx | %.1fx | %s |" % (
+            at = time(512)
+            print("| %s | %.1f | %.1f | %.1f MB | %.1f, %.1f | %.1f s | %.2fx | %.2fx | %.2fx | %.1f, %.2f, %.2f | %s | %.2fx |" % (
                 name, scale * s, scale * c, scale * sum(bytes_) / 1e6, scale * w1, scale * w2, t1,
-                t1 / time(8)[0], t1 / time(64)[0], t1 / time(512)[0], cross if cross else "beyond 10^6"))
+                t1 / time(8)[0], t1 / time(64)[0], t1 / at[0], at[3], at[2], at[1],
+                cross if cross else "beyond 10^6", t1 / time(512, True)[0]))
     return 0
 
 

@@ -9,8 +9,8 @@
  * counter, and each tile's cells are written only by the thread that owns
  * the tile, in an order fixed by the tile alone. So the output does not
  * depend on the number of threads or on scheduling. In a job of several
- * processes (rl_cluster), the tiles are shuffled and dealt to the ranks
- * (deal_tiles), and after each
+ * processes (rl_cluster), the tiles are dealt to the ranks by expected
+ * cost (deal_tiles), and after each
  * pass the ranks exchange their tiles' values: since a tile's values do not
  * depend on who computed them, every rank then holds what one process would.
  */

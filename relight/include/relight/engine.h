@@ -38,7 +38,7 @@ typedef void (*rl_progress_fn)(void *user, double done);
  * The processes of one job (the ranks of an MPI job, docs/cluster.md), as the
  * engine sees them: it never calls MPI itself. Every rank loads the same
  * scene and makes the same calls; the work of each pass (tiles of cells, or
- * points) is shuffled and dealt out to the ranks (the same deal on every rank), and after
+ * points) is dealt out to the ranks by expected cost (the same deal on every rank), and after
  * the pass the callbacks make every rank's maps whole. The results are bit
  * for bit those of one process, whatever ranks and threads. The callbacks are
  * called from the calling thread, by every rank in the same order; when one
