@@ -57,7 +57,7 @@
 
 #include "mesh.h"
 #include "plycheck.h"
-#include "vec.h"
+#include "ilf/vec.h"
 
 static const double plane_tol = 1e-6; /* distances, relative to the diameter */
 static const double area_tol = 1e-12; /* areas, relative to the diameter squared */

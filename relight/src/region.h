@@ -9,7 +9,7 @@
 
 #include <stdint.h>
 
-#include "vec.h"
+#include "ilf/vec.h"
 
 /* Largest vertex count of the polygons handled here: scene polygons have at
  * most RL_SCENE_MAX_POLY_VERTS (64), and clipping adds a few. */

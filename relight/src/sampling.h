@@ -9,7 +9,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "vec.h"
+#include "ilf/vec.h"
 
 /* @return a well-mixed 64-bit hash of h and x (order matters). */
 static inline uint64_t hash_mix(uint64_t h, uint64_t x)

@@ -34,7 +34,7 @@
 #include <sys/stat.h>
 
 #include "mesh.h"
-#include "vec.h"
+#include "ilf/vec.h"
 
 /* Largest scene file read, in bytes. */
 #define SCENE_MAX_BYTES ((size_t)256 << 20)

@@ -14,7 +14,7 @@
 
 #include "scene_internal.h"
 #include "shadow.h"
-#include "vec.h"
+#include "ilf/vec.h"
 
 typedef struct rl_tracer rl_tracer;
 

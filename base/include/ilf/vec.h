@@ -1,10 +1,12 @@
 /*
- * vec.h - small 3-vector and 2-vector helpers used across the engine.
- * Values by copy, doubles throughout: the engine computes geometry in double
- * and hands only ray tracing to Embree's single precision.
+ * ilf/vec.h - small 3-vector and 2-vector helpers for every floor.
+ * Values by copy, doubles throughout: geometry is computed in double and only
+ * ray tracing is handed to Embree's single precision. Header-only static
+ * inline functions, so they never become symbols; they keep short names
+ * (v3_add, not ilf_v3_add) because they are the vocabulary of every formula.
  */
-#ifndef RELIGHT_VEC_H
-#define RELIGHT_VEC_H
+#ifndef ILF_VEC_H
+#define ILF_VEC_H
 
 #include <math.h>
 
@@ -37,4 +39,4 @@ static inline v2 v2_sub(v2 a, v2 b) { return (v2){a.x - b.x, a.y - b.y}; }
 /* @return the z component of the cross product (twice the signed area of 0, a, b). */
 static inline double v2_cross(v2 a, v2 b) { return a.x * b.y - a.y * b.x; }
 
-#endif /* RELIGHT_VEC_H */
+#endif /* ILF_VEC_H */

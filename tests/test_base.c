@@ -1,0 +1,183 @@
+/*
+ * test_base.c - the ground floor (base/): the thread pool runs every index
+ * exactly once whatever the count, and the atomic writer's temporaries follow
+ * the one naming rule, vanish on release and replace the destination whole.
+ */
+#include <dirent.h>
+#include <errno.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "ilf/atomic_file.h"
+#include "ilf/hash.h"
+#include "ilf/limits.h"
+#include "ilf/pool.h"
+
+static int failures;
+#define CHECK(cond)                                                                                                    \
+    do {                                                                                                               \
+        if (!(cond)) {                                                                                                 \
+            fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond);                                   \
+            failures++;                                                                                                \
+        }                                                                                                              \
+    } while (0)
+
+/* ------------------------------------------------------------------ pool */
+
+enum { ITEMS = 10000 };
+typedef struct counted {
+    atomic_uint runs[ILF_MAX_THREADS];
+    atomic_size_t next;
+    atomic_uint done[ITEMS];
+} counted;
+
+static void count_run(void *arg, unsigned k)
+{
+    counted *c = arg;
+    atomic_fetch_add(&c->runs[k], 1);
+    for (size_t i; (i = atomic_fetch_add(&c->next, 1)) < ITEMS;)
+        atomic_fetch_add(&c->done[i], 1);
+}
+
+static void check_once(counted *c, unsigned n, const char *what)
+{
+    for (unsigned k = 0; k < ILF_MAX_THREADS; k++)
+        if (atomic_load(&c->runs[k]) != (k < n ? 1u : 0u)) {
+            fprintf(stderr, "%s, n = %u: index %u ran %u times\n", what, n, k, atomic_load(&c->runs[k]));
+            failures++;
+            return;
+        }
+    for (size_t i = 0; i < ITEMS; i++)
+        if (atomic_load(&c->done[i]) != 1) {
+            fprintf(stderr, "%s, n = %u: item %zu done %u times\n", what, n, i, atomic_load(&c->done[i]));
+            failures++;
+            return;
+        }
+}
+
+static void test_pool(void)
+{
+    static counted c;
+    const unsigned counts[] = {1, 2, 3, 7, 64};
+    for (size_t t = 0; t < sizeof counts / sizeof counts[0]; t++) {
+        memset(&c, 0, sizeof c);
+        ilf_team *team = ilf_team_start(counts[t], count_run, &c);
+        CHECK(ilf_team_threads(team) <= counts[t]);
+        ilf_team_join(team);
+        check_once(&c, counts[t], "team");
+        memset(&c, 0, sizeof c);
+        ilf_parallel(counts[t], count_run, &c);
+        check_once(&c, counts[t], "parallel");
+    }
+    /* Past the cap, a team is capped, and 0 = every core is at least one. */
+    memset(&c, 0, sizeof c);
+    ilf_team_join(ilf_team_start(ILF_MAX_THREADS + 5, count_run, &c));
+    check_once(&c, ILF_MAX_THREADS, "capped team");
+    CHECK(ilf_thread_count(0) >= 1 && ilf_thread_count(0) <= ILF_MAX_THREADS);
+    CHECK(ilf_thread_count(3) == 3);
+    CHECK(ilf_thread_count(ILF_MAX_THREADS * 2) == ILF_MAX_THREADS);
+    ilf_team_join(NULL);
+    CHECK(ilf_team_threads(NULL) == 0);
+}
+
+/* ----------------------------------------------------------- atomic file */
+
+/* @return the number of entries of dir that are temporaries under the rule. */
+static int temporaries_in(const char *dir)
+{
+    DIR *d = opendir(dir);
+    int n = 0;
+    for (struct dirent *e; d && (e = readdir(d)) != NULL;)
+        n += ilf_atomic_is_temporary(e->d_name);
+    if (d)
+        closedir(d);
+    return n;
+}
+
+static char *read_all(const char *path)
+{
+    static char buf[256];
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    size_t n = fread(buf, 1, sizeof buf - 1, f);
+    buf[n] = '\0';
+    fclose(f);
+    return buf;
+}
+
+static void test_atomic(const char *tmp)
+{
+    char dir[4096], path[4200];
+    snprintf(dir, sizeof dir, "%s/test_base.%ld", tmp, (long)getpid());
+    CHECK(mkdir(dir, 0755) == 0);
+    snprintf(path, sizeof path, "%s/out.v2.png", dir);
+    const char *step = NULL;
+
+    /* Released without commit: nothing remains. */
+    ilf_atomic *a = NULL;
+    CHECK(ilf_atomic_new(path, &a, &step) == 0 && a != NULL);
+    const char *t = strrchr(ilf_atomic_temp_path(a), '/') + 1;
+    CHECK(ilf_atomic_is_temporary_of(t, "out.v2.png"));
+    CHECK(!ilf_atomic_is_temporary_of(t, "out.v2"));
+    CHECK(ilf_atomic_is_temporary(t));
+    CHECK(strcmp(t + strlen(t) - 4, ".png") == 0); /* the extension is kept */
+    CHECK(temporaries_in(dir) == 1);
+    ilf_atomic_release(a);
+    CHECK(temporaries_in(dir) == 0);
+    CHECK(access(path, F_OK) != 0);
+
+    /* Written and committed: the destination holds it whole, and no temporary is left. */
+    CHECK(ilf_atomic_write(path, "first", 5, &step) == 0);
+    CHECK(read_all(path) && strcmp(read_all(path), "first") == 0);
+    chmod(path, 0640);
+    CHECK(ilf_atomic_write(path, "second", 6, &step) == 0);
+    CHECK(read_all(path) && strcmp(read_all(path), "second") == 0);
+    struct stat st;
+    CHECK(stat(path, &st) == 0 && (st.st_mode & 0777) == 0640); /* a replaced file keeps its mode */
+    CHECK(temporaries_in(dir) == 0);
+
+    /* Two writers at once get two temporaries. */
+    ilf_atomic *b = NULL, *c = NULL;
+    CHECK(ilf_atomic_new(path, &b, &step) == 0 && ilf_atomic_new(path, &c, &step) == 0);
+    CHECK(b && c && strcmp(ilf_atomic_temp_path(b), ilf_atomic_temp_path(c)) != 0);
+    CHECK(temporaries_in(dir) == 2);
+    ilf_atomic_release(b);
+    ilf_atomic_release(c);
+    ilf_atomic_release(NULL);
+
+    /* A missing folder fails with errno and a step, creating nothing. */
+    char missing[4300];
+    snprintf(missing, sizeof missing, "%s/no/such/file.h5", dir);
+    a = NULL;
+    CHECK(ilf_atomic_new(missing, &a, &step) == ENOENT && a == NULL && step != NULL);
+
+    /* The naming rule, both ways. */
+    CHECK(ilf_atomic_is_temporary_of(".radiance.h5.tmp-0123456789ab.h5", "radiance.h5"));
+    CHECK(ilf_atomic_is_temporary_of(".stage.tmp-0123456789ab", "stage"));
+    CHECK(!ilf_atomic_is_temporary_of(".radiance.h5.tmp-0123456789ab.png", "radiance.h5"));
+    CHECK(!ilf_atomic_is_temporary_of(".radiance.h5.tmp-0123456789a.h5", "radiance.h5"));
+    CHECK(!ilf_atomic_is_temporary_of("radiance.h5.tmp-0123456789ab.h5", "radiance.h5"));
+    CHECK(!ilf_atomic_is_temporary("radiance.h5"));
+    CHECK(!ilf_atomic_is_temporary(".tmp-0123456789ab"));
+    unlink(path);
+    CHECK(rmdir(dir) == 0);
+}
+
+int main(void)
+{
+    const char *tmp = getenv("ILF_TEST_TMP");
+    test_pool();
+    test_atomic(tmp && *tmp ? tmp : "/tmp");
+    /* splitmix64 of 0 is the published first output of the generator seeded with 0. */
+    CHECK(ilf_splitmix64(0) == 0xe220a8397b1dcdafull);
+    if (failures)
+        fprintf(stderr, "test_base: %d failures\n", failures);
+    else
+        printf("test_base: ok\n");
+    return failures ? 1 : 0;
+}
