@@ -82,6 +82,9 @@ static inline rl_scene *ts_load(const char *path)
 }
 
 /* Sets method, level, rays per solid angle, samples per cell, descent and threads (0: every core). */
+/* The run options of ts_relight(): the threads of the last ts_set_sampling(). */
+static rl_run_options ts_run;
+
 static inline void ts_set_sampling(rl_scene *s, rl_method m, uint32_t n, uint32_t k, uint32_t samples,
                                    uint32_t descend, uint32_t threads)
 {
@@ -91,7 +94,8 @@ static inline void ts_set_sampling(rl_scene *s, rl_method m, uint32_t n, uint32_
     smp.rays_per_solid_angle = k;
     smp.samples_per_cell = samples;
     smp.descend = descend;
-    smp.threads = threads;
+    rl_run_options_default(&ts_run);
+    ts_run.threads = threads;
     CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
 }
 
@@ -99,7 +103,7 @@ static inline void ts_set_sampling(rl_scene *s, rl_method m, uint32_t n, uint32_
 static inline rl_solution *ts_relight(const rl_scene *s, const char *what)
 {
     rl_solution *sol = NULL;
-    rl_status st = rl_relight(s, NULL, NULL, &sol);
+    rl_status st = rl_relight(s, &ts_run, &sol);
     CHECK(st == RL_OK, "%s: relight: %s", what, rl_errmsg());
     return st == RL_OK ? sol : NULL;
 }

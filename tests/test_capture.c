@@ -785,7 +785,7 @@ static void test_closed_loop(void)
     rl_scene *scene = NULL;
     rl_solution *sol = NULL;
     CHECK(rl_scene_load(scene_path, &scene) == RL_OK, "%s", rl_errmsg());
-    CHECK(scene == NULL || rl_relight(scene, NULL, NULL, &sol) == RL_OK, "%s", rl_errmsg());
+    CHECK(scene == NULL || rl_relight(scene, NULL, &sol) == RL_OK, "%s", rl_errmsg());
     if (sol == NULL) {
         rl_scene_destroy(scene);
         return;
@@ -952,7 +952,7 @@ static uint32_t floor_irradiance(const char *scene_name, const char *text, doubl
     rl_solution *sol = NULL;
     uint32_t count = 0;
     CHECK(rl_scene_load(tmp_path(scene_name), &scene) == RL_OK, "%s", rl_errmsg());
-    CHECK(scene == NULL || rl_relight(scene, NULL, NULL, &sol) == RL_OK, "%s", rl_errmsg());
+    CHECK(scene == NULL || rl_relight(scene, NULL, &sol) == RL_OK, "%s", rl_errmsg());
     for (size_t k = 0; sol != NULL && k < rl_solution_map_count(sol); k++) {
         rl_map_info m;
         rl_solution_map_info(sol, k, &m);

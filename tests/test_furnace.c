@@ -147,11 +147,10 @@ static void run(const char *name, rl_scene *s, rl_method m, uint32_t bounces, do
         smp.rays_per_solid_angle = 4;
         smp.samples_per_cell = 64;
         smp.bounces = bounces;
-        smp.threads = 0;
         smp.seed = seed + (uint64_t)k;
         CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, NULL, NULL, &sol) == RL_OK, "%s relight: %s", name, rl_errmsg());
+        CHECK(rl_relight(s, NULL, &sol) == RL_OK, "%s relight: %s", name, rl_errmsg());
         if (!sol)
             return;
         furnace_result r = judge(sol, exact);

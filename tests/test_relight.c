@@ -27,7 +27,10 @@ static char tmpdir[512];
 
 static int no_descent; /* set by the random-scene test */
 
-/* Sets method, level, rays and threads on a scene. */
+/* The run options of every call: the threads of the last set_sampling(). */
+static rl_run_options run_opts;
+
+/* Sets method, level, rays on a scene, and the threads of the calls that follow. */
 static void set_sampling(rl_scene *s, rl_method m, uint32_t n, uint32_t k, uint32_t samples, uint32_t threads)
 {
     rl_sampling smp = *rl_scene_sampling(s);
@@ -36,7 +39,8 @@ static void set_sampling(rl_scene *s, rl_method m, uint32_t n, uint32_t k, uint3
     smp.partition_n = n;
     smp.rays_per_solid_angle = k;
     smp.samples_per_cell = samples;
-    smp.threads = threads;
+    rl_run_options_default(&run_opts);
+    run_opts.threads = threads;
     CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
 }
 
@@ -115,7 +119,7 @@ static void check_unoccluded(void)
     for (int m = 0; m < 5; m++) {
         set_sampling(s, methods[m], 32, 4, 128, 0);
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, NULL, NULL, &sol) == RL_OK, "%s: %s", rl_method_name(methods[m]), rl_errmsg());
+        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "%s: %s", rl_method_name(methods[m]), rl_errmsg());
         if (!sol)
             continue;
         long k = ts_map_of(sol, 1);
@@ -137,7 +141,7 @@ static void check_unoccluded(void)
     set_sampling(s, RL_METHOD_CULLED, 32, 4, 128, 0);
     no_descent = 0;
     rl_solution *plain = NULL;
-    CHECK(rl_relight(s, NULL, NULL, &plain) == RL_OK, "plain: %s", rl_errmsg());
+    CHECK(rl_relight(s, &run_opts, &plain) == RL_OK, "plain: %s", rl_errmsg());
     if (plain) {
         rl_pass_stats st;
         rl_solution_pass_stats(plain, 0, &st);
@@ -151,7 +155,7 @@ static void check_unoccluded(void)
     for (int q = 0; q < 3; q++) {
         set_sampling(s, RL_METHOD_CULLED, 16, ks[q], 64, 0);
         rl_solution *sol = NULL;
-        rl_relight(s, NULL, NULL, &sol);
+        rl_relight(s, &run_opts, &sol);
         double rmse, mx;
         errors_vs_reference(sol, (size_t)ts_map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
         printf("culled n=16 k=%-2u: RMSE %.4f%%\n", ks[q], 100 * rmse);
@@ -165,7 +169,7 @@ static void check_unoccluded(void)
     for (int q = 0; q < 3; q++) {
         set_sampling(s, RL_METHOD_AREA, 16, 1, ns[q], 0);
         rl_solution *sol = NULL;
-        rl_relight(s, NULL, NULL, &sol);
+        rl_relight(s, &run_opts, &sol);
         double rmse, mx;
         errors_vs_reference(sol, (size_t)ts_map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
         printf("area samples=%-4u: RMSE %.4f%%\n", ns[q], 100 * rmse);
@@ -178,7 +182,7 @@ static void check_unoccluded(void)
     for (int m = 0; m < 4; m++) {
         set_sampling(s, methods[m], 32, 16, 4096, 0);
         double out[12];
-        CHECK(rl_irradiance(s, &pts[0][0], 4, out, NULL) == RL_OK, "irradiance: %s", rl_errmsg());
+        CHECK(rl_irradiance(s, &run_opts, &pts[0][0], 4, out, NULL) == RL_OK, "irradiance: %s", rl_errmsg());
         for (int q = 0; q < 4; q++) {
             double nrm[3] = {pts[q][3], pts[q][4], pts[q][5]}, l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
             for (int c = 0; c < 3; c++)
@@ -210,13 +214,13 @@ static void check_identities(void)
         return;
     rl_solution *sol[4] = {NULL};
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 1);
-    rl_relight(s, NULL, NULL, &sol[0]);
+    rl_relight(s, &run_opts, &sol[0]);
     set_sampling(s, RL_METHOD_NAIVE, 16, 2, 16, 2);
-    rl_relight(s, NULL, NULL, &sol[1]);
+    rl_relight(s, &run_opts, &sol[1]);
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 3);
-    rl_relight(s, NULL, NULL, &sol[2]);
+    rl_relight(s, &run_opts, &sol[2]);
     set_sampling(s, RL_METHOD_AREA, 16, 2, 16, 1);
-    rl_relight(s, NULL, NULL, &sol[3]);
+    rl_relight(s, &run_opts, &sol[3]);
     if (sol[0] && sol[1] && sol[2] && sol[3]) {
         /* the bounce pass gathers by solid angles (the direct one from this
          * constant emitter by Lambert's formula, the same code for both) */
@@ -277,7 +281,7 @@ static void check_identities(void)
         smp.target_error = 0.02;
         smp.bounces = 0;
         rl_scene_set_sampling(s, &smp);
-        rl_relight(s, NULL, NULL, &ad[k]);
+        rl_relight(s, &run_opts, &ad[k]);
     }
     if (ad[0] && ad[1]) {
         rl_pass_stats st;
@@ -349,14 +353,14 @@ static uint64_t check_culled_naive(rl_scene *s, const char *what)
     rl_solution *a = NULL, *b = NULL, *c = NULL;
     uint64_t samples = 0;
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 0);
-    rl_relight(s, NULL, NULL, &a);
+    rl_relight(s, &run_opts, &a);
     set_sampling(s, RL_METHOD_NAIVE, 16, 2, 16, 0);
-    rl_relight(s, NULL, NULL, &b);
+    rl_relight(s, &run_opts, &b);
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 0);
     rl_sampling smp = *rl_scene_sampling(s);
     smp.zero_culling = 0;
     CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "zero_culling 0: %s", rl_errmsg());
-    rl_relight(s, NULL, NULL, &c);
+    rl_relight(s, &run_opts, &c);
     smp.zero_culling = 1;
     rl_scene_set_sampling(s, &smp);
     long total;
@@ -410,7 +414,7 @@ static void check_lightfield(void)
     for (int m = 0; m < 2; m++) {
         set_sampling(s, methods[m], 32, 4, 256, 0);
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, NULL, NULL, &sol) == RL_OK, "light field relight: %s", rl_errmsg());
+        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "light field relight: %s", rl_errmsg());
         if (!sol)
             continue;
         double rmse, mx;
@@ -465,7 +469,7 @@ static void check_slab_edge_on(void)
             double l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
             for (int c = 0; c < 3; c++)
                 nrm[c] /= l;
-            CHECK(rl_irradiance(s, pts[q], 1, out, NULL) == RL_OK, "edge-on: %s", rl_errmsg());
+            CHECK(rl_irradiance(s, &run_opts, pts[q], 1, out, NULL) == RL_OK, "edge-on: %s", rl_errmsg());
             double ref = rl_reference_polygon_irradiance(&em.v[0][0], 4, pts[q], nrm, 2.0);
             printf("extreme slab_edge_on[%d]          %-10s: %.6g vs %.6g (rel %.2g)\n", q, rl_method_name(methods[m]),
                    out[0], ref, fabs(out[0] - ref) / ref);
@@ -496,7 +500,7 @@ static void extreme_case(const char *name, const tpoly *em, const double pt[6], 
     for (int m = 0; m < 3; m++) {
         set_sampling(s, methods[m], 32, 16, 4096, 0);
         double out[3] = {NAN, NAN, NAN};
-        CHECK(rl_irradiance(s, pt, 1, out, NULL) == RL_OK, "%s: %s", name, rl_errmsg());
+        CHECK(rl_irradiance(s, &run_opts, pt, 1, out, NULL) == RL_OK, "%s: %s", name, rl_errmsg());
         int finite = isfinite(out[0]) && isfinite(out[1]) && isfinite(out[2]) && out[0] >= 0;
         double err = fabs(out[0] - ref);
         printf("extreme %-22s %-10s: %.6g vs %.6g (rel %.2g)\n", name, rl_method_name(methods[m]), out[0], ref,
@@ -549,7 +553,7 @@ static void extreme_map(const char *name, const tpoly *em, const tpoly *rcv, con
     for (int m = 0; m < 5; m++) {
         set_sampling(s, methods[m], 32, 4, 128, 0);
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, NULL, NULL, &sol) == RL_OK, "%s: %s", name, rl_errmsg());
+        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "%s: %s", name, rl_errmsg());
         if (!sol)
             continue;
         long total;
@@ -610,7 +614,7 @@ static void check_shading(void)
         return;
     set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 0);
     rl_solution *sol = NULL;
-    CHECK(rl_relight(s, NULL, NULL, &sol) == RL_OK, "shading: %s", rl_errmsg());
+    CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "shading: %s", rl_errmsg());
     if (sol) {
         ts_cells c = ts_cells_get(sol, (size_t)ts_map_of(sol, 1));
         double *centre = malloc(3 * sizeof(double) * (c.n + 1));
@@ -710,9 +714,9 @@ static void check_random_scenes(int count)
         rl_solution *a = NULL, *b = NULL;
         no_descent = sc % 2; /* half the scenes with the paper's plain method: every pair comparable */
         set_sampling(s, RL_METHOD_CULLED, 8, 1, 16, 0);
-        rl_relight(s, NULL, NULL, &a);
+        rl_relight(s, &run_opts, &a);
         set_sampling(s, RL_METHOD_NAIVE, 8, 1, 16, 0);
-        rl_relight(s, NULL, NULL, &b);
+        rl_relight(s, &run_opts, &b);
         uint64_t descended = 0;
         for (uint32_t q = 0; a && q < rl_solution_pass_count(a); q++) {
             rl_pass_stats st;

@@ -19,6 +19,7 @@
 #include <sys/stat.h>
 
 #include "check.h"
+#include "relight/engine.h"
 #include "relight/scene.h"
 #include "maps.h"
 #include "scene_internal.h"
@@ -115,7 +116,7 @@ static void test_minimal(void)
     CHECK(rl_scene_cell_size(s) == 0.05, "default cell size %g", rl_scene_cell_size(s));
     CHECK(!rl_scene_has_camera(s), "no camera");
     CHECK(got->method == RL_METHOD_CULLED && got->partition_n == 32 && got->rays_per_solid_angle == 4 &&
-              got->samples_per_cell == def.samples_per_cell && got->bounces == 0 && got->seed == 1 && got->threads == 0,
+              got->samples_per_cell == def.samples_per_cell && got->bounces == 0 && got->seed == 1,
           "default sampling");
     CHECK(memcmp(got, &def, sizeof def) == 0, "sampling equals rl_sampling_default");
     CHECK(s->nmaterials == 1 && s->materials[0].albedo[1] == 0.8f && s->materials[0].emission[2] == 0.0f,
@@ -331,6 +332,56 @@ static void test_bad(void)
     CHECK(count >= 25, "corpus of %zu bad scenes", count);
 }
 
+/* ----------------------------------------------------------- run options */
+
+static void write_text(const char *name, const char *text);
+
+/* Threads and the time budget are run options, checked by each call that runs the engine (they were
+ * sampling settings, checked by rl_scene_set_sampling); a scene file's time budget is only a suggestion. */
+static void test_run_options(void)
+{
+    rl_run_options def;
+    memset(&def, 0xff, sizeof def);
+    rl_run_options_default(&def);
+    CHECK(def.threads == 0 && def.progress == NULL && def.progress_user == NULL && def.time_budget == 0,
+          "rl_run_options_default");
+    rl_run_options_default(NULL);
+    write_text("budget.json", "{\"materials\": {\"m\": {}}, \"polygons\": [{\"material\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [1, 1, 0]]}],\n"
+                              " \"sampling\": {\"method\": \"adaptive\", \"time_budget\": 2.5}}\n");
+    rl_scene *s = load(tmpdir, "budget.json");
+    if (!s)
+        return;
+    CHECK(rl_scene_time_budget(s) == 2.5 && rl_scene_time_budget(NULL) == 0, "scene time budget %g",
+          rl_scene_time_budget(s));
+    const struct {
+        const char *field;
+        rl_run_options value;
+    } bad[] = {
+        {"threads", {.threads = RL_MAX_THREADS + 1}},
+        {"time_budget", {.time_budget = -1}},
+        {"time_budget", {.time_budget = INFINITY}},
+        {"time_budget", {.time_budget = NAN}},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        rl_solution *sol = (rl_solution *)&def;
+        rl_ray_bench rb;
+        double pt[6] = {0.5, 0.2, 1, 0, 0, -1}, e[3];
+        CHECK(rl_relight(s, &bad[k].value, &sol) == RL_ERR_ARG && sol == NULL, "bad %s accepted", bad[k].field);
+        CHECK(strstr(rl_errmsg(), bad[k].field) != NULL, "message '%s' names %s", rl_errmsg(), bad[k].field);
+        CHECK(rl_irradiance(s, &bad[k].value, pt, 1, e, NULL) == RL_ERR_ARG, "irradiance: bad %s accepted",
+              bad[k].field);
+        CHECK(rl_bench_rays(s, &bad[k].value, 10, &rb) == RL_ERR_ARG, "bench: bad %s accepted", bad[k].field);
+    }
+    rl_run_options one = {.threads = 1};
+    rl_solution *sol = NULL;
+    CHECK(rl_relight(s, &one, &sol) == RL_OK && sol != NULL, "one thread: %s", rl_errmsg());
+    CHECK(sol == NULL || rl_solution_render(sol, NULL, (float[3]){0}) == RL_ERR_ARG, "render without a camera");
+    rl_solution_destroy(sol);
+    CHECK(rl_relight(s, NULL, &sol) == RL_OK && sol != NULL, "NULL options: %s", rl_errmsg());
+    rl_solution_destroy(sol);
+    rl_scene_destroy(s);
+}
+
 /* ----------------------------------------------------------- light fields */
 
 /* Writes text to tmpdir/name. */
@@ -460,7 +511,7 @@ static void test_set_sampling(void)
         return;
     rl_sampling x;
     rl_sampling_default(&x);
-    x.method = RL_METHOD_AREA, x.partition_n = 4096, x.rays_per_solid_angle = 65536, x.threads = 1024;
+    x.method = RL_METHOD_AREA, x.partition_n = 4096, x.rays_per_solid_angle = 65536;
     x.seed = UINT64_MAX;
     CHECK(rl_scene_set_sampling(s, &x) == RL_OK, "valid settings: %s", rl_errmsg());
     CHECK(memcmp(rl_scene_sampling(s), &x, sizeof x) == 0, "settings replaced");
@@ -473,14 +524,11 @@ static void test_set_sampling(void)
         {"rays_per_solid_angle", {.partition_n = 1, .rays_per_solid_angle = 0, .samples_per_cell = 1, .target_error = 0.05}},
         {"samples_per_cell", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 0, .target_error = 0.05}},
         {"bounces", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .bounces = 65, .target_error = 0.05}},
-        {"threads", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .threads = 1025, .target_error = 0.05}},
         {"descend", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .descend = 2, .target_error = 0.05}},
         {"bounce_cell_factor", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .bounce_cell_factor = 65,
                                 .target_error = 0.05}},
         {"target_error", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 0}},
         {"target_error", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 2}},
-        {"time_budget", {.partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 0.05,
-                         .time_budget = -1}},
         {"method", {.method = (rl_method)7, .partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 0.05}},
     };
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
@@ -652,6 +700,7 @@ int main(int argc, char **argv)
     test_bad();
     test_lightfields();
     test_set_sampling();
+    test_run_options();
     test_data();
     test_interpolation();
     return check_report();

@@ -148,7 +148,8 @@ int bench_fork(bench_job_fn job, void *arg, bench_result *out);
 typedef struct bench_relight_job {
     rl_scene *scene;                 /**< the inherited scene, or NULL to load scene_path in the child */
     const char *scene_path;
-    const sampling_overrides *overrides; /**< applied when the child loads the scene */
+    const sampling_overrides *overrides; /**< applied when the child loads the scene, and its run options
+                                          (relight_run_options()); NULL: none given */
     bench_setting setting;
     const bench_reference *ref;      /**< NULL: no error metrics */
     const char *image_path;          /**< camera view of |error| / peak, float32 [height][width]; NULL: none */
@@ -156,11 +157,12 @@ typedef struct bench_relight_job {
 } bench_relight_job;
 
 /**
- * In a child: applies setting s to the scene's sampling and relights it with
- * a progress bar labelled label (NULL: none), timing it and summing every
- * pass's counters into r. @return the solution, or NULL with r->message.
+ * In a child: applies setting s to the scene's sampling and relights it as ro
+ * says (its progress replaced by a bar labelled label; NULL: none), timing
+ * it and summing every pass's counters into r. @return the solution, or NULL with r->message.
  */
-rl_solution *bench_relight_timed(rl_scene *scene, const bench_setting *s, const char *label, bench_result *r);
+rl_solution *bench_relight_timed(rl_scene *scene, const rl_run_options *ro, const bench_setting *s, const char *label,
+                                 bench_result *r);
 
 /** bench_job_fn of a bench_relight_job. */
 void bench_relight_child(void *arg, bench_result *out);
@@ -169,6 +171,7 @@ void bench_relight_child(void *arg, bench_result *out);
 typedef struct bench_rays_job {
     const rl_scene *scene;
     uint64_t rays;
+    rl_run_options run; /**< threads of the measurement */
 } bench_rays_job;
 
 /** bench_job_fn of a bench_rays_job: rays_cast = rays traced, rays_kept = those not blocked. */

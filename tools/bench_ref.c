@@ -280,8 +280,10 @@ static rl_solution *reference_run(const reference_job *job, uint64_t seed, const
     memset(&run, 0, sizeof run);
     bench_setting setting = {.method = RL_METHOD_SOLIDANGLE, .samples = job->cfg->reference_samples};
     rl_solution *sol = NULL;
+    rl_run_options ro;
+    relight_run_options(&job->cfg->sampling, job->scene, &ro);
     if (rl_scene_set_sampling(job->scene, &s) == RL_OK)
-        sol = bench_relight_timed(job->scene, &setting, job->cfg->quiet ? NULL : label, &run);
+        sol = bench_relight_timed(job->scene, &ro, &setting, job->cfg->quiet ? NULL : label, &run);
     else
         snprintf(run.message, sizeof run.message, "cannot set the reference seed");
     r->wall_seconds += run.wall_seconds;

@@ -182,14 +182,17 @@ static int apply_setting(rl_scene *scene, const bench_setting *s, bench_result *
 }
 
 /* Relights scene, timing it and summing every pass's counters into r. @return the solution, or NULL (r says why). */
-static rl_solution *timed_relight(const rl_scene *scene, const char *label, bench_result *r)
+static rl_solution *timed_relight(const rl_scene *scene, const rl_run_options *ro, const char *label, bench_result *r)
 {
     cli_progress bar;
     if (label != NULL)
         cli_progress_start(&bar, label, CLI_PROGRESS_STEPS);
     rl_solution *sol = NULL;
     double wall0 = cli_clock_seconds(CLOCK_MONOTONIC), cpu0 = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
-    rl_status st = rl_relight(scene, label != NULL ? cli_progress_fraction : NULL, &bar, &sol);
+    rl_run_options run = *ro;
+    run.progress = label != NULL ? cli_progress_fraction : NULL;
+    run.progress_user = &bar;
+    rl_status st = rl_relight(scene, &run, &sol);
     r->wall_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - wall0;
     r->cpu_seconds = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
     if (label != NULL)
@@ -262,8 +265,8 @@ static void error_metrics(const double *y, const bench_reference *ref, bench_res
 
 /* Writes the camera's view of |y - yref| / peak as float32 [height][width] (NaN where no cell is
  * seen) to path. @return 1, or 0 with the reason in r. */
-static int write_error_image(const rl_solution *sol, const rl_scene *scene, const bench_reference *ref,
-                             const double *y, const char *path, bench_result *r)
+static int write_error_image(const rl_solution *sol, const rl_scene *scene, const rl_run_options *ro,
+                             const bench_reference *ref, const double *y, const char *path, bench_result *r)
 {
     uint32_t w = 0, h = 0;
     if (!rl_scene_camera_size(scene, &w, &h))
@@ -271,7 +274,7 @@ static int write_error_image(const rl_solution *sol, const rl_scene *scene, cons
     size_t count = (size_t)w * h;
     int32_t *map_ids = malloc(count * sizeof *map_ids), *cell_ids = malloc(count * sizeof *cell_ids);
     float *pixels = malloc(count * sizeof *pixels);
-    int ok = map_ids && cell_ids && pixels && rl_solution_render_cells(sol, map_ids, cell_ids) == RL_OK;
+    int ok = map_ids && cell_ids && pixels && rl_solution_render_cells(sol, ro, map_ids, cell_ids) == RL_OK;
     double scale = ref->peak > 0.0 ? 1.0 / ref->peak : 0.0;
     for (size_t p = 0; ok && p < count; p++) {
         int seen = map_ids[p] >= 0 && (size_t)map_ids[p] < ref->maps && cell_ids[p] >= 0;
@@ -291,7 +294,8 @@ static int write_error_image(const rl_solution *sol, const rl_scene *scene, cons
 }
 
 /* Compares the solution with the reference: metrics, and the error image when asked. @return 1, or 0 (r says why). */
-static int compare(const rl_solution *sol, const bench_relight_job *job, rl_scene *scene, bench_result *r)
+static int compare(const rl_solution *sol, const bench_relight_job *job, rl_scene *scene, const rl_run_options *ro,
+                   bench_result *r)
 {
     const bench_reference *ref = job->ref;
     double *y = malloc((ref->cells ? ref->cells : 1) * sizeof *y);
@@ -302,7 +306,7 @@ static int compare(const rl_solution *sol, const bench_relight_job *job, rl_scen
     if (ok)
         error_metrics(y, ref, r);
     if (ok && job->image_path != NULL)
-        ok = write_error_image(sol, scene, ref, y, job->image_path, r);
+        ok = write_error_image(sol, scene, ro, ref, y, job->image_path, r);
     free(y);
     return ok;
 }
@@ -319,9 +323,10 @@ static uint64_t solution_cells(const rl_solution *sol)
     return cells;
 }
 
-rl_solution *bench_relight_timed(rl_scene *scene, const bench_setting *s, const char *label, bench_result *r)
+rl_solution *bench_relight_timed(rl_scene *scene, const rl_run_options *ro, const bench_setting *s, const char *label,
+                                 bench_result *r)
 {
-    return apply_setting(scene, s, r) ? timed_relight(scene, label, r) : NULL;
+    return apply_setting(scene, s, r) ? timed_relight(scene, ro, label, r) : NULL;
 }
 
 void bench_relight_child(void *arg, bench_result *out)
@@ -332,10 +337,12 @@ void bench_relight_child(void *arg, bench_result *out)
         snprintf(out->message, sizeof out->message, "cannot load %s", job->scene_path);
         return;
     }
-    rl_solution *sol = bench_relight_timed(scene, &job->setting, job->label, out);
+    rl_run_options ro;
+    relight_run_options(job->overrides, scene, &ro);
+    rl_solution *sol = bench_relight_timed(scene, &ro, &job->setting, job->label, out);
     if (sol != NULL) {
         out->cells = solution_cells(sol);
-        out->ok = job->ref == NULL || compare(sol, job, scene, out);
+        out->ok = job->ref == NULL || compare(sol, job, scene, &ro, out);
     }
     rl_solution_destroy(sol);
     if (job->scene == NULL)
@@ -346,7 +353,7 @@ void bench_rays_child(void *arg, bench_result *out)
 {
     const bench_rays_job *job = arg;
     rl_ray_bench rb;
-    rl_status st = rl_bench_rays(job->scene, job->rays, &rb);
+    rl_status st = rl_bench_rays(job->scene, &job->run, job->rays, &rb);
     out->cpu_seconds = rb.cpu_seconds; /* the tracing alone, not drawing the rays */
     if (st != RL_OK) {
         engine_failed(out, "ray benchmark failed");

@@ -22,7 +22,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "bench.h"
 #include "cli.h"
@@ -281,12 +280,12 @@ static size_t build_settings(const bench_config *cfg, bench_setting *out)
 
 /* ------------------------------------------------------------ the sweep */
 
-/* @return the worker threads a run uses: the setting, or every processor for 0 (relight.h's rule). */
-static unsigned threads_used(const rl_scene *scene)
+/* @return the worker threads a run uses: --threads, or every processor for 0 (the engine's rule). */
+static unsigned threads_used(const bench_config *cfg, const rl_scene *scene)
 {
-    long online = sysconf(_SC_NPROCESSORS_ONLN);
-    unsigned t = rl_scene_sampling(scene)->threads;
-    return t > 0 ? t : online > 0 ? (unsigned)online : 1u;
+    rl_run_options ro;
+    relight_run_options(&cfg->sampling, scene, &ro);
+    return relight_threads_used(&ro);
 }
 
 /* @return the slot of method m in --methods. */
@@ -363,6 +362,7 @@ static int run_entry(bench_sweep *s, rl_scene *scene, size_t i)
     char label[64], image[BENCH_PATH_MAX];
     int camera = s->camera_width > 0 && bench_path(image, s->cfg->output, ".error-run.bin");
     bench_relight_job job = {.scene = scene,
+                             .overrides = &s->cfg->sampling,
                              .setting = e->setting,
                              .ref = s->ref,
                              .image_path = camera ? image : NULL,
@@ -382,7 +382,8 @@ static int run_entry(bench_sweep *s, rl_scene *scene, size_t i)
 /* Measures the ray ceiling in a child into s->ceiling (a failure is noted, not fatal). */
 static void measure_ceiling(bench_sweep *s, const rl_scene *scene)
 {
-    bench_rays_job job = {scene, s->cfg->quick ? SWEEP_CEILING_RAYS_QUICK : SWEEP_CEILING_RAYS};
+    bench_rays_job job = {scene, s->cfg->quick ? SWEEP_CEILING_RAYS_QUICK : SWEEP_CEILING_RAYS, {0}};
+    relight_run_options(&s->cfg->sampling, scene, &job.run);
     bench_fork(bench_rays_child, &job, &s->ceiling);
     if (!s->cfg->quiet && s->ceiling.ok)
         printf("ray ceiling: %" PRIu64 " rays, %.3g rays/s, %.3g rays per cpu second\n", s->ceiling.rays_cast,
@@ -402,7 +403,7 @@ static int sweep(const bench_config *cfg, rl_scene *scene)
     int code = bench_reference_obtain(cfg, scene, &ref);
     if (code != ILF_EXIT_OK)
         return code;
-    bench_sweep s = {.cfg = cfg, .ref = &ref, .entries = entries, .count = count, .threads = threads_used(scene),
+    bench_sweep s = {.cfg = cfg, .ref = &ref, .entries = entries, .count = count, .threads = threads_used(cfg, scene),
                      .bounces = rl_scene_sampling(scene)->bounces};
     rl_scene_camera_size(scene, &s.camera_width, &s.camera_height);
     for (size_t m = 0; m < BENCH_MAX_METHODS; m++)
@@ -458,13 +459,14 @@ static int rays_mode(const bench_config *cfg, rl_scene *scene)
 {
     if (cfg->output != NULL && !bench_make_folder(cfg->output))
         return ILF_EXIT_FAILED;
-    bench_rays_job job = {scene, cfg->rays_count};
+    bench_rays_job job = {scene, cfg->rays_count, {0}};
+    relight_run_options(&cfg->sampling, scene, &job.run);
     bench_result r;
     if (!bench_fork(bench_rays_child, &job, &r) || !r.ok) {
         cli_error(BENCH_SUB, "%s", r.message);
         return ILF_EXIT_FAILED;
     }
-    unsigned threads = threads_used(scene);
+    unsigned threads = threads_used(cfg, scene);
     if (!cfg->quiet)
         printf("rays: %" PRIu64 " in %.3f s wall, %.3f s cpu, %u thread%s: %.4g rays/s, %.4g rays per cpu second, "
                "%.1f%% blocked\n",

@@ -102,7 +102,7 @@ static int share_points(point_list *points)
 }
 
 /* Computes and prints the irradiance of every point. @return an exit code. */
-static int print_irradiance(const rl_scene *scene, const point_list *points)
+static int print_irradiance(const rl_scene *scene, const sampling_overrides *o, const point_list *points)
 {
     if (points->count == 0)
         return ILF_EXIT_OK;
@@ -111,7 +111,9 @@ static int print_irradiance(const rl_scene *scene, const point_list *points)
         cli_error("irradiance", "out of memory for %zu points", points->count);
         return ILF_EXIT_FAILED;
     }
-    rl_status st = rl_irradiance_cluster(scene, job_cluster(), points->values, points->count, rgb, NULL);
+    rl_run_options ro;
+    relight_run_options(o, scene, &ro);
+    rl_status st = rl_irradiance_cluster(scene, job_cluster(), &ro, points->values, points->count, rgb, NULL);
     /* the other ranks may be waiting in an exchange this rank will not reach: end the job */
     int code = st == RL_OK ? ILF_EXIT_OK : job_fail(relight_failure("irradiance", st));
     for (size_t k = 0; code == ILF_EXIT_OK && job_rank() == 0 && k < points->count; k++)
@@ -140,7 +142,7 @@ int ilf_cmd_irradiance(int argc, char **argv)
     if (code == ILF_EXIT_OK && job_ranks() > 1)
         code = job_agree(share_points(&points));
     if (code == ILF_EXIT_OK)
-        code = print_irradiance(scene, &points);
+        code = print_irradiance(scene, &o.sampling, &points);
     points_free(&points);
     rl_scene_destroy(scene);
     return code;

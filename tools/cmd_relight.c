@@ -98,6 +98,7 @@ typedef struct relight_run {
     const relight_options *o;
     rl_scene *scene;
     rl_solution *solution;
+    rl_run_options run_options;       /* threads and time budget of the engine's calls (no progress) */
     double wall_seconds, cpu_seconds; /* of the engine, on this rank */
     double write_seconds;              /* of radiance.h5 */
     size_t maps;
@@ -347,8 +348,10 @@ static int relight(relight_run *run)
     if (show)
         cli_progress_start(&bar, "relight", CLI_PROGRESS_STEPS);
     double wall0 = cli_clock_seconds(CLOCK_MONOTONIC), cpu0 = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
-    rl_status st = rl_relight_cluster(run->scene, job_cluster(), show ? cli_progress_fraction : NULL, &bar,
-                                      &run->solution);
+    rl_run_options ro = run->run_options;
+    ro.progress = show ? cli_progress_fraction : NULL;
+    ro.progress_user = &bar;
+    rl_status st = rl_relight_cluster(run->scene, job_cluster(), &ro, &run->solution);
     run->wall_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - wall0;
     run->cpu_seconds = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
     if (show)
@@ -360,12 +363,6 @@ static int relight(relight_run *run)
     return ILF_EXIT_OK;
 }
 
-/* @return the worker threads a run used: the setting, or every processor for 0 (relight.h's rule). */
-static unsigned threads_used(const rl_sampling *s)
-{
-    long online = sysconf(_SC_NPROCESSORS_ONLN);
-    return s->threads > 0 ? s->threads : online > 0 ? (unsigned)online : 1u;
-}
 
 /* ------------------------------------------------------------ radiance.h5 */
 
@@ -506,7 +503,7 @@ static int write_view(relight_run *run)
     }
     rl_status rs = rl_solution_set_smooth(run->solution, !run->o->flat_view);
     if (rs == RL_OK)
-        rs = rl_solution_render(run->solution, pixels);
+        rs = rl_solution_render(run->solution, &run->run_options, pixels);
     int code = rs == RL_OK ? ILF_EXIT_OK : relight_failure("relight", rs);
     char what[160];
     snprintf(what, sizeof what, "%dx%d, radiance in W sr^-1 m^-2", width, height);
@@ -605,7 +602,7 @@ static cJSON *stats_json(const relight_run *run)
     int ok = settings != NULL && cJSON_AddItemToObject(root, "settings", settings);
     if (settings != NULL && !ok)
         cJSON_Delete(settings);
-    add_count(root, "threads", threads_used(s));
+    add_count(root, "threads", relight_threads_used(&run->run_options));
     cJSON_AddNumberToObject(root, "wall_seconds", run->wall_seconds);
     cJSON_AddNumberToObject(root, "cpu_seconds", run->cpu_seconds);
     add_count(root, "maps", run->maps);
@@ -661,11 +658,12 @@ static void print_run(const relight_run *run)
     if (run->o->quiet)
         return;
     const rl_sampling *s = rl_scene_sampling(run->scene);
+    unsigned threads = relight_threads_used(&run->run_options);
     printf("relit %s: method %s, partition n %" PRIu32 ", %" PRIu32 " ray%s per solid angle, %" PRIu32
            " bounce%s, %u thread%s: %.3f s wall, %.3f s cpu\n",
            run->o->scene, rl_method_name(s->method), s->partition_n, s->rays_per_solid_angle,
-           s->rays_per_solid_angle == 1 ? "" : "s", s->bounces, s->bounces == 1 ? "" : "s", threads_used(s),
-           threads_used(s) == 1 ? "" : "s", run->wall_seconds, run->cpu_seconds);
+           s->rays_per_solid_angle == 1 ? "" : "s", s->bounces, s->bounces == 1 ? "" : "s", threads,
+           threads == 1 ? "" : "s", run->wall_seconds, run->cpu_seconds);
     if (job_ranks() > 1)
         printf("job of %d ranks, each with the threads above; times are rank 0's, pass counts and cpu summed\n",
                job_ranks());
@@ -686,6 +684,8 @@ int ilf_cmd_relight(int argc, char **argv)
     /* ranks other than 0 only compute and write their part of radiance.h5 */
     o.quiet |= job_rank() != 0;
     code = job_agree(relight_scene_open("relight", o.scene, &o.sampling, &run.scene));
+    if (code == ILF_EXIT_OK)
+        relight_run_options(&o.sampling, run.scene, &run.run_options);
     if (code == ILF_EXIT_OK)
         code = stage_open_job(&run);
     if (code == ILF_EXIT_OK)

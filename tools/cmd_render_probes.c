@@ -281,7 +281,11 @@ static int relight(const probes_options *o, const rl_scene *scene, rl_solution *
     cli_progress bar;
     if (!o->quiet)
         cli_progress_start(&bar, "relight", CLI_PROGRESS_STEPS);
-    rl_status st = rl_relight(scene, o->quiet ? NULL : cli_progress_fraction, &bar, sol);
+    rl_run_options ro;
+    relight_run_options(&o->sampling, scene, &ro);
+    ro.progress = o->quiet ? NULL : cli_progress_fraction;
+    ro.progress_user = &bar;
+    rl_status st = rl_relight(scene, &ro, sol);
     if (!o->quiet)
         cli_progress_finish(&bar);
     return st == RL_OK ? ILF_EXIT_OK : relight_failure("render-probes", st);
@@ -313,7 +317,9 @@ static int render_probe(const probes_options *o, const rl_solution *sol, const c
 static int render_all(const probes_options *o, const rl_scene *scene, const rl_solution *sol)
 {
     const rl_sampling *rs = rl_scene_sampling(scene);
-    cap_probe_settings s = {(int)o->size[0], (int)o->size[1], o->strata, rs->seed, rs->threads, NULL, NULL};
+    rl_run_options ro;
+    relight_run_options(&o->sampling, scene, &ro);
+    cap_probe_settings s = {(int)o->size[0], (int)o->size[1], o->strata, rs->seed, ro.threads, NULL, NULL};
     float *pixels = malloc((size_t)s.width * s.height * 3 * sizeof *pixels);
     if (pixels == NULL) {
         cli_error("render-probes", "out of memory for a %dx%d probe", s.width, s.height);

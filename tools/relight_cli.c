@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ilf/pool.h"
 #include "relight/scene.h"
 
 /* Largest seed: the integers a JSON number (and so a scene file or stats.json) holds exactly. */
@@ -57,7 +58,7 @@ int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, c
         if (!ok)
             cli_bad_value(p, value, "expected culled, naive, area, solidangle or adaptive");
         break;
-    case SAMPLING_OPT_THREADS: ok = cli_value_u32(p, value, 0, 1024, &v->threads); break;
+    case SAMPLING_OPT_THREADS: ok = cli_value_u32(p, value, 0, RL_MAX_THREADS, &o->threads); break;
     case SAMPLING_OPT_SEED: ok = parse_seed(p, value, &v->seed); break;
     case SAMPLING_OPT_PARTITION_N: ok = parse_partition_n(p, value, 1, &v->partition_n); break;
     case SAMPLING_OPT_BOUNCE_PARTITION_N: ok = parse_partition_n(p, value, 0, &v->bounce_partition_n); break;
@@ -70,8 +71,8 @@ int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, c
             ok = 0, cli_bad_value(p, value, "must be in (0, 1]");
         break;
     case SAMPLING_OPT_TIME_BUDGET:
-        ok = cli_value_double(p, value, &v->time_budget);
-        if (ok && !(v->time_budget >= 0))
+        ok = cli_value_double(p, value, &o->time_budget);
+        if (ok && !(o->time_budget >= 0))
             ok = 0, cli_bad_value(p, value, "must be >= 0 seconds");
         break;
     case SAMPLING_OPT_RAYS: ok = cli_value_u32(p, value, 1, 65536, &v->rays_per_solid_angle); break;
@@ -91,8 +92,6 @@ static rl_sampling merged_sampling(const rl_sampling *scene, const sampling_over
     const rl_sampling *v = &o->values;
     if (o->given & (1u << SAMPLING_OPT_METHOD))
         s.method = v->method;
-    if (o->given & (1u << SAMPLING_OPT_THREADS))
-        s.threads = v->threads;
     if (o->given & (1u << SAMPLING_OPT_SEED))
         s.seed = v->seed;
     if (o->given & (1u << SAMPLING_OPT_PARTITION_N))
@@ -113,8 +112,6 @@ static rl_sampling merged_sampling(const rl_sampling *scene, const sampling_over
         s.zero_culling = v->zero_culling;
     if (o->given & (1u << SAMPLING_OPT_TARGET_ERROR))
         s.target_error = v->target_error;
-    if (o->given & (1u << SAMPLING_OPT_TIME_BUDGET))
-        s.time_budget = v->time_budget;
     return s;
 }
 
@@ -142,9 +139,6 @@ int relight_scene_open(const char *sub, const char *path, const sampling_overrid
         return st == RL_ERR_NOMEM ? ILF_EXIT_FAILED : ILF_EXIT_USAGE;
     }
     rl_sampling s = merged_sampling(rl_scene_sampling(scene), o);
-    /* Several ranks on one machine share its cores instead of each taking them all. */
-    if (s.threads == 0 && job_ranks() > 1)
-        s.threads = job_threads_per_rank();
     st = rl_scene_set_sampling(scene, &s);
     if (st != RL_OK) {
         int code = relight_failure(sub, st);
@@ -153,6 +147,23 @@ int relight_scene_open(const char *sub, const char *path, const sampling_overrid
     }
     *out = scene;
     return ILF_EXIT_OK;
+}
+
+void relight_run_options(const sampling_overrides *o, const rl_scene *scene, rl_run_options *out)
+{
+    rl_run_options_default(out);
+    unsigned given = o != NULL ? o->given : 0u;
+    if (given & (1u << SAMPLING_OPT_THREADS))
+        out->threads = o->threads;
+    /* Several ranks on one machine share its cores instead of each taking them all. */
+    if (out->threads == 0 && job_ranks() > 1)
+        out->threads = job_threads_per_rank();
+    out->time_budget = (given & (1u << SAMPLING_OPT_TIME_BUDGET)) ? o->time_budget : rl_scene_time_budget(scene);
+}
+
+unsigned relight_threads_used(const rl_run_options *ro)
+{
+    return ilf_thread_count(ro->threads);
 }
 
 void relight_print_pass(FILE *out, uint32_t k, const rl_pass_stats *s)

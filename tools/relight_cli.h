@@ -51,10 +51,12 @@ enum sampling_option_id {
     SAMPLING_OPT_COUNT
 };
 
-/** Sampling settings given on the command line. */
+/** Sampling settings and run options given on the command line. */
 typedef struct sampling_overrides {
     unsigned given;      /**< bit k set when option k (enum sampling_option_id) was given */
     rl_sampling values;  /**< the given values; other fields unused */
+    uint32_t threads;    /**< --threads, when given */
+    double time_budget;  /**< --time-budget, when given */
 } sampling_overrides;
 
 /**
@@ -69,6 +71,17 @@ int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, c
  * reporting, with *out = NULL.
  */
 int relight_scene_open(const char *sub, const char *path, const sampling_overrides *o, rl_scene **out);
+
+/**
+ * Fills *out with the run options of a call on scene: --threads when given,
+ * else 0 (every core), or this rank's share of the cores in a job of several
+ * ranks; --time-budget when given, else the scene's suggestion
+ * (rl_scene_time_budget()); no progress callback. o may be NULL (nothing given).
+ */
+void relight_run_options(const sampling_overrides *o, const rl_scene *scene, rl_run_options *out);
+
+/** @return the worker threads a call with options ro uses: 0 means every core, as in the engine. */
+unsigned relight_threads_used(const rl_run_options *ro);
 
 /**
  * Reports a failed relight call with rl_errmsg() and maps st to an exit

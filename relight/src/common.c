@@ -54,7 +54,5 @@ void rl_sampling_default(rl_sampling *s)
     s->seed = 1;
     s->descend = 1;
     s->zero_culling = 1;
-    s->threads = 0;
     s->target_error = 0.05;
-    s->time_budget = 0.0;
 }

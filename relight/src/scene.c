@@ -55,7 +55,6 @@ static const int_limit lim_bounce_partition = {0, 4096, 1}; /* 0: derived from p
 static const int_limit lim_rays = {1, 65536, 0};
 static const int_limit lim_samples = {1, 1048576, 0};
 static const int_limit lim_bounces = {0, 64, 0};
-static const int_limit lim_threads = {0, 1024, 0};
 static const int_limit lim_seed = {0, (uint64_t)1 << 53, 0}; /* integers a JSON number holds exactly */
 static const int_limit lim_pixels = {1, 16384, 0};
 static const int_limit lim_index = {0, UINT32_MAX, 0};
@@ -742,9 +741,10 @@ static rl_status read_sampling(rl_build *b, const cJSON *j)
     if (st == RL_OK && te && (st = json_number(b, te, "sampling.target_error", &s->target_error)) == RL_OK &&
         !(s->target_error > 0 && s->target_error <= 1))
         st = rl__build_fail(b, "sampling.target_error", "must be in (0, 1], got %.17g", s->target_error);
-    if (st == RL_OK && tb && (st = json_number(b, tb, "sampling.time_budget", &s->time_budget)) == RL_OK &&
-        !(s->time_budget >= 0))
-        st = rl__build_fail(b, "sampling.time_budget", "must be >= 0 seconds, got %.17g", s->time_budget);
+    /* the time budget is how to run, not what to compute: kept apart as the scene's suggestion */
+    double *budget = &b->scene->time_budget;
+    if (st == RL_OK && tb && (st = json_number(b, tb, "sampling.time_budget", budget)) == RL_OK && !(*budget >= 0))
+        st = rl__build_fail(b, "sampling.time_budget", "must be >= 0 seconds, got %.17g", *budget);
     return st;
 }
 
@@ -1034,6 +1034,11 @@ const rl_sampling *rl_scene_sampling(const rl_scene *s)
     return s ? &s->sampling : NULL;
 }
 
+double rl_scene_time_budget(const rl_scene *s)
+{
+    return s ? s->time_budget : 0.0;
+}
+
 rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
 {
     if (!s || !x)
@@ -1051,8 +1056,7 @@ rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
                   {"bounce_partition_n", x->bounce_partition_n, &lim_bounce_partition},
                   {"bounce_cell_factor", x->bounce_cell_factor, &lim_cell_factor},
                   {"descend", x->descend, &lim_flag},
-                  {"zero_culling", x->zero_culling, &lim_flag},
-                  {"threads", x->threads, &lim_threads}};
+                  {"zero_culling", x->zero_culling, &lim_flag}};
     for (size_t k = 0; k < sizeof fields / sizeof fields[0]; k++)
         if (!limit_ok(fields[k].limit, fields[k].value)) {
             char rule[64];
@@ -1061,9 +1065,6 @@ rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
         }
     if (!(x->target_error > 0) || !(x->target_error <= 1))
         return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: target_error must be in (0, 1], got %g", x->target_error);
-    if (!(x->time_budget >= 0) || !isfinite(x->time_budget))
-        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: time_budget must be finite and >= 0, got %g",
-                        x->time_budget);
     s->sampling = *x;
     return RL_OK;
 }

@@ -70,6 +70,7 @@ struct rl_scene {
     size_t nlightfields;
     double cell_size;
     rl_sampling sampling;
+    double time_budget; /* the file's sampling.time_budget: a suggested run option, seconds, >= 0 */
     int has_camera;
     rl_camera camera;
 };

@@ -8,6 +8,7 @@
  * Single rays and packets of 4, 8 and 16 are used (rtcIntersect1M with the
  * default context aborts in Debian's Embree 3.13.5).
  */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #if defined(__SSE__) || defined(__x86_64__)
@@ -63,14 +64,17 @@ static size_t triangle_count(const rl_scene *s)
     return n;
 }
 
-rl_status tracer_new(const rl_scene *s, rl_tracer **out)
+rl_status tracer_new(const rl_scene *s, unsigned threads, rl_tracer **out)
 {
+    /* Embree counts the calling thread among its threads; without a count it takes every hardware thread */
+    char config[32];
+    snprintf(config, sizeof config, "threads=%u", threads > 0 ? threads : 1u);
     *out = NULL;
     rl_tracer *t = calloc(1, sizeof *t);
     if (!t)
         return rl__fail(RL_ERR_NOMEM, "out of memory for the ray tracer");
     scene_bounds(s, &t->centre, &t->extent);
-    t->device = rtcNewDevice(NULL);
+    t->device = rtcNewDevice(config);
     if (!t->device) {
         free(t);
         return rl__fail(RL_ERR_INTERNAL, "Embree could not start (rtcNewDevice failed)");

@@ -18,9 +18,10 @@
 
 typedef struct rl_tracer rl_tracer;
 
-/* Builds the acceleration structure of every polygon (robust mode).
+/* Builds the acceleration structure of every polygon (robust mode) on at most `threads` threads (>= 1;
+ * Embree's own workers, which it would otherwise start on every hardware thread, follow the run's count).
  * @return RL_OK and *out; RL_ERR_NOMEM or RL_ERR_INTERNAL. */
-rl_status tracer_new(const rl_scene *scene, rl_tracer **out);
+rl_status tracer_new(const rl_scene *scene, unsigned threads, rl_tracer **out);
 
 /* Releases the tracer. NULL is a no-op. */
 void tracer_destroy(rl_tracer *t);

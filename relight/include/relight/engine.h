@@ -31,8 +31,32 @@ typedef struct rl_pass_stats {
     int budget_reached;           /**< adaptive: 1 if the time budget stopped refinement */
 } rl_pass_stats;
 
-/** Progress callback: done in [0, 1] over the whole run. Called from the calling thread only. */
+/** Progress callback: done in [0, 1] over the whole run, never decreasing. Called from the calling thread only. */
 typedef void (*rl_progress_fn)(void *user, double done);
+
+/** Most worker threads a run may ask for (the cap of ilfkit's one thread pool). */
+#define RL_MAX_THREADS 1024u
+
+/**
+ * How to run one call, apart from what to compute: the scene's sampling
+ * settings decide the result; these decide only how it is reached. Passed
+ * by pointer to every call that runs the engine; NULL means
+ * rl_run_options_default(). The call copies what it needs and keeps no
+ * pointer to the options.
+ */
+typedef struct rl_run_options {
+    uint32_t threads;        /**< worker threads, 0 (default) = every core; at most RL_MAX_THREADS.
+                                  The ray tracer's own threads (building its hierarchy) follow the same
+                                  count. Results do not depend on it. */
+    rl_progress_fn progress; /**< called with the fraction done; NULL (default): none */
+    void *progress_user;     /**< passed to progress */
+    double time_budget;      /**< adaptive method: seconds after which no solid angle is refined further
+                                  (the result then depends on timing); 0 (default) = none; finite, >= 0.
+                                  A scene file may suggest one: rl_scene_time_budget() */
+} rl_run_options;
+
+/** Fills *o with the defaults: every core, no progress, no time budget. NULL is a no-op. */
+void rl_run_options_default(rl_run_options *o);
 
 /**
  * The processes of one job (the ranks of an MPI job, docs/cluster.md), as the
@@ -62,11 +86,12 @@ typedef struct rl_cluster {
 typedef struct rl_solution rl_solution;
 
 /**
- * Relights a scene with its sampling settings, on sampling.threads threads
- * (0: every core). The scene must outlive the solution.
- * @return RL_OK and *out, owned by the caller; RL_ERR_NOMEM, RL_ERR_INPUT, RL_ERR_INTERNAL.
+ * Relights a scene with its sampling settings, run as options say (NULL:
+ * defaults). The scene must outlive the solution. Several calls may run at once on the same scene (it is only read).
+ * @return RL_OK and *out, owned by the caller; RL_ERR_ARG (NULL scene or out, options out of range,
+ * naming the field); RL_ERR_NOMEM, RL_ERR_INPUT, RL_ERR_INTERNAL.
  */
-rl_status rl_relight(const rl_scene *scene, rl_progress_fn progress, void *user, rl_solution **out);
+rl_status rl_relight(const rl_scene *scene, const rl_run_options *options, rl_solution **out);
 
 /**
  * rl_relight() as rank cluster->rank of a job (NULL: one process, as
@@ -74,8 +99,8 @@ rl_status rl_relight(const rl_scene *scene, rl_progress_fn progress, void *user,
  * are summed over ranks, except wall_seconds (this rank's).
  * @return as rl_relight(); RL_ERR_ARG for a cluster with rank >= ranks; RL_ERR_IO when an exchange fails.
  */
-rl_status rl_relight_cluster(const rl_scene *scene, const rl_cluster *cluster, rl_progress_fn progress,
-                             void *user, rl_solution **out);
+rl_status rl_relight_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_run_options *options,
+                             rl_solution **out);
 
 /** Releases a solution. NULL is a no-op. */
 void rl_solution_destroy(rl_solution *s);
@@ -138,21 +163,25 @@ rl_status rl_solution_set_smooth(rl_solution *s, int smooth);
 rl_status rl_solution_trace(const rl_solution *s, const double org[3], const double dir[3], float rgb[3]);
 
 /**
- * Renders the scene camera's view: width*height*3 floats, rows top to bottom,
- * radiance (W sr^-1 m^-2) of the first surface seen: emission plus
- * albedo * irradiance / pi at the point seen (rl_solution_set_smooth());
- * back faces and the background are 0.
- * @return RL_OK; RL_ERR_ARG if the scene has no camera; RL_ERR_NOMEM.
+ * Renders the scene camera's view: width*height*3 floats (rl_scene_camera_size()),
+ * rows top to bottom, radiance (W sr^-1 m^-2) of the first surface seen:
+ * emission plus albedo * irradiance / pi at the point seen
+ * (rl_solution_set_smooth()); back faces and the background are 0. Runs on
+ * options->threads threads (NULL: defaults); progress and time_budget are
+ * not used. The result does not depend on the thread count.
+ * @return RL_OK; RL_ERR_ARG if s or rgb is NULL, the scene has no camera, or options are out of range.
  */
-rl_status rl_solution_render(const rl_solution *s, float *rgb);
+rl_status rl_solution_render(const rl_solution *s, const rl_run_options *options, float *rgb);
 
 /**
  * Renders which cell each camera pixel sees: map_ids and cell_ids get
  * width*height entries, rows top to bottom; -1 where the pixel sees no
- * map (background, back face, a surface that does not receive).
- * @return RL_OK; RL_ERR_ARG if the scene has no camera; RL_ERR_NOMEM.
+ * map (background, back face, a surface that does not receive). Options as
+ * in rl_solution_render().
+ * @return RL_OK; RL_ERR_ARG if an output is NULL, the scene has no camera, or options are out of range.
  */
-rl_status rl_solution_render_cells(const rl_solution *s, int32_t *map_ids, int32_t *cell_ids);
+rl_status rl_solution_render_cells(const rl_solution *s, const rl_run_options *options, int32_t *map_ids,
+                                   int32_t *cell_ids);
 
 /** Result of rl_bench_rays(). */
 typedef struct rl_ray_bench {
@@ -164,33 +193,38 @@ typedef struct rl_ray_bench {
 
 /**
  * Measures the ray tracer alone: the same packet occlusion queries the
- * engine makes (up to 16 rays, coherent flag), on `rays` random shadow rays
- * from uniform points on the scene's polygons in cosine-distributed
- * directions, on sampling.threads threads. Rays are drawn in chunks before
- * they are traced and only the tracing is timed, so no sampling work is
- * counted. The ceiling the engine's ray rate is measured against.
- * @return RL_OK and *out; RL_ERR_NOMEM or RL_ERR_INTERNAL.
+ * engine makes (up to 16 rays, coherent flag), on about `rays` random shadow
+ * rays (rounded up to a whole share per thread) from uniform points on the
+ * scene's polygons in cosine-distributed directions, on options->threads
+ * threads (NULL: defaults; progress and time_budget are not used). Each
+ * thread draws its own fixed sequence of rays, in chunks before they are
+ * traced, and only the tracing is timed, so no sampling work is counted. The
+ * ceiling the engine's ray rate is measured against.
+ * @return RL_OK and *out; RL_ERR_ARG (NULL scene or out, no polygons, options out of range);
+ * RL_ERR_NOMEM or RL_ERR_INTERNAL.
  */
-rl_status rl_bench_rays(const rl_scene *scene, uint64_t rays, rl_ray_bench *out);
+rl_status rl_bench_rays(const rl_scene *scene, const rl_run_options *options, uint64_t rays, rl_ray_bench *out);
 
 /**
  * Irradiance at points, as Radiance's rtrace -I: points[6*i..] = x y z nx ny nz
  * (normal need not be unit, must be nonzero); out[3*i..] = r g b in W m^-2.
  * Each point is a receiver of zero area facing its normal; with bounces > 0
- * the light reflected by the solved radiance maps is included.
- * @return RL_OK; RL_ERR_ARG (a point or normal not finite or zero, with its index);
- * RL_ERR_NOMEM; RL_ERR_INTERNAL. stats may be NULL.
+ * the light reflected by the solved radiance maps is included. Run as
+ * options say (NULL: defaults); progress covers the bounce passes and the
+ * points. stats (may be NULL) receives the points' pass.
+ * @return RL_OK; RL_ERR_ARG (a point or normal not finite or zero, with its index; options out of range);
+ * RL_ERR_NOMEM; RL_ERR_INTERNAL.
  */
-rl_status rl_irradiance(const rl_scene *scene, const double *points, size_t count, double *out,
-                        rl_pass_stats *stats);
+rl_status rl_irradiance(const rl_scene *scene, const rl_run_options *options, const double *points, size_t count,
+                        double *out, rl_pass_stats *stats);
 
 /**
  * rl_irradiance() as rank cluster->rank of a job (NULL: one process). Every
  * rank passes the same points and ends with every point's answer.
  * @return as rl_irradiance(); RL_ERR_ARG for a cluster with rank >= ranks; RL_ERR_IO when an exchange fails.
  */
-rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster, const double *points,
-                                size_t count, double *out, rl_pass_stats *stats);
+rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_run_options *options,
+                                const double *points, size_t count, double *out, rl_pass_stats *stats);
 
 #ifdef __cplusplus
 }

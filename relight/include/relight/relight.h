@@ -64,7 +64,8 @@ int rl_method_parse(const char *name, rl_method *m);
  * such emitters stay far inside float32, the type of the radiance maps. */
 #define RL_MAX_EMISSION 1e30
 
-/** Sampling settings (scene key "sampling"). */
+/** Sampling settings (scene key "sampling"): what to compute. How a call runs (threads, progress,
+ * time budget) is not among them: see rl_run_options in relight/engine.h. */
 typedef struct rl_sampling {
     rl_method method;              /**< default culled */
     uint32_t partition_n;          /**< partition level, a power of two, default 32 (4096 solid angles per hemisphere) */
@@ -84,11 +85,8 @@ typedef struct rl_sampling {
     uint32_t zero_culling;         /**< 1 (default): culled and adaptive skip light field solid angles that the
                                         zero-radiance mask rules out, and cells that only the slab's dark
                                         positions could light; 0: no culling by radiance, only by geometry */
-    uint32_t threads;              /**< worker threads; 0 = every core (not part of the scene file) */
     double target_error;           /**< adaptive: refine a (cell, solid angle) while its estimated standard
                                         error exceeds this fraction of its estimate; default 0.05 */
-    double time_budget;            /**< adaptive: seconds after which no solid angle is refined further
-                                        (the result then depends on timing); 0 (default) = none */
 } rl_sampling;
 
 /** Fills *s with the defaults above. */

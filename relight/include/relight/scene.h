@@ -36,6 +36,10 @@ void rl_scene_destroy(rl_scene *s);
 /** @return the scene's sampling settings (borrowed). */
 const rl_sampling *rl_scene_sampling(const rl_scene *s);
 
+/** @return the time budget the scene file suggests (its "sampling.time_budget", seconds; 0 = none, also
+ * for NULL): a default for rl_run_options.time_budget, which the engine itself never reads from the scene. */
+double rl_scene_time_budget(const rl_scene *s);
+
 /** Replaces the sampling settings. @return RL_OK or RL_ERR_ARG (partition_n not a power of two in 1..4096, k = 0, ...). */
 rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *sampling);
 

@@ -1,0 +1,64 @@
+/*
+ * engine_internal.h - what the engine's files share: the solution object,
+ * the run options once checked, and the pass runner that solutions (engine.c)
+ * and point queries (query.c) are both made by.
+ *
+ * Invariants: a solution's maps, tracer and polygon_map are built together
+ * and never change after rl__solve() returns, except the `flat` shading
+ * switch; everything here is internal to librelight (rl__ prefix).
+ */
+#ifndef RELIGHT_ENGINE_INTERNAL_H
+#define RELIGHT_ENGINE_INTERNAL_H
+
+#include "relight/engine.h"
+#include "transfer.h"
+
+#define RL__PI 3.14159265358979323846
+
+struct rl_solution {
+    const rl_scene *scene;
+    rl_map *maps;
+    size_t nmaps;
+    int32_t *polygon_map; /* scene polygon -> map index, or -1 */
+    rl_tracer *tracer;
+    rl_pass_stats *passes;
+    uint32_t npasses;
+    int flat; /* shade each cell's own value instead of interpolating between cells */
+};
+
+/* A call's run options, checked, with the thread count resolved. */
+typedef struct rl__run {
+    unsigned threads;        /* >= 1: ilf_thread_count(options->threads) */
+    rl_progress_fn progress; /* or NULL */
+    void *user;
+    double time_budget;      /* seconds, 0 = none */
+} rl__run;
+
+/* Checks options (NULL: the defaults) and resolves them into *run; `call` names the caller in messages.
+ * @return RL_OK, or RL_ERR_ARG naming the field out of range. */
+rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__run *run);
+
+/* @return the cluster to run with, NULL for one process; checks it, RL_ERR_ARG in *st. */
+const rl_cluster *rl__check_cluster(const rl_cluster *cl, rl_status *st);
+
+/* Solves the scene's maps with `passes` passes (may be 0), reporting progress over [0, span) of the run.
+ * @return RL_OK and *out (rl_solution_destroy), or an error. */
+rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *run, uint32_t passes, double span,
+                    rl_solution **out);
+
+/* Builds the emitters of the scene itself (pass 0), with room for `extra` more.
+ * @return the array (count in *n) or NULL when out of memory. */
+rl_emitter *rl__primary_emitters(const rl_scene *scene, size_t extra, size_t *n);
+
+/* Appends to e (room assumed) one emitter per map that re-emits light (e_prev nonzero). @return the new count. */
+size_t rl__append_bounce_emitters(const rl_scene *scene, const rl_map *maps, size_t nmaps, rl_emitter *e, size_t n);
+
+/* Runs one pass over maps with emitters e; gather_level_pass chooses the partition level (0: partition_n,
+ * else the bounce level). base and span place it within the run's progress. With several ranks,
+ * *measured holds the previous pass's per-tile CPU times (NULL: none) and receives this pass's.
+ * @return RL_OK or an error. */
+rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_cluster *cl, const rl__run *run,
+                       uint32_t pass, uint32_t gather_level_pass, rl_map *maps, size_t nmaps, const rl_emitter *e,
+                       size_t ne, double base, double span, double **measured, rl_pass_stats *st);
+
+#endif /* RELIGHT_ENGINE_INTERNAL_H */

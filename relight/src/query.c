@@ -1,0 +1,93 @@
+/*
+ * query.c - point queries (rl_irradiance, rl_irradiance_cluster): the
+ * irradiance at given points, as Radiance's rtrace -I.
+ *
+ * Each point becomes a receiver of zero area facing its normal (map_point),
+ * and one more pass of the engine's pass runner (engine.c) gathers onto the
+ * points from the scene's emitters and, with bounces, from the radiance maps
+ * solved first, each re-emitting the irradiance summed over its passes.
+ * Invariants: a point's answer depends only on the scene and the point (its
+ * index keys its samples), never on threads, ranks or the other points.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine_internal.h"
+
+/* Share of the progress given to the bounce passes solved before the points' pass. */
+#define SOLVE_SHARE(bounces) ((double)(bounces) / ((bounces) + 1.0))
+
+/* Checks the points and builds one zero-area receiver per point. @return RL_OK or an error. */
+static rl_status point_maps(const double *points, size_t count, rl_map **out)
+{
+    rl_map *maps = calloc(count ? count : 1, sizeof *maps);
+    if (!maps)
+        return rl__fail(RL_ERR_NOMEM, "out of memory for %zu points", count);
+    for (size_t k = 0; k < count; k++) {
+        v3 p = v3_load(points + 6 * k), n = v3_load(points + 6 * k + 3);
+        double len = v3_len(n);
+        if (!isfinite(v3_maxabs(p)) || !isfinite(len) || !(len > 0)) {
+            maps_free(maps, k);
+            return rl__fail(RL_ERR_ARG, "point %zu: position and normal must be finite, normal nonzero", k + 1);
+        }
+        if (map_point(p, v3_scale(n, 1.0 / len), &maps[k]) != RL_OK) {
+            maps_free(maps, k + 1);
+            return rl__fail(RL_ERR_NOMEM, "out of memory for %zu points", count);
+        }
+    }
+    *out = maps;
+    return RL_OK;
+}
+
+rl_status rl_irradiance(const rl_scene *scene, const rl_run_options *options, const double *points, size_t count,
+                        double *out, rl_pass_stats *stats)
+{
+    return rl_irradiance_cluster(scene, NULL, options, points, count, out, stats);
+}
+
+rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_run_options *options,
+                                const double *points, size_t count, double *out, rl_pass_stats *stats)
+{
+    if (!scene || (count > 0 && (!points || !out)))
+        return rl__fail(RL_ERR_ARG, "rl_irradiance: NULL argument");
+    rl_map *pts = NULL;
+    rl_solution *sol = NULL;
+    rl__run run;
+    rl_status st = rl__run_resolve("rl_irradiance", options, &run);
+    const rl_cluster *cl = st == RL_OK ? rl__check_cluster(cluster, &st) : NULL;
+    if (st != RL_OK)
+        return st;
+    st = point_maps(points, count, &pts);
+    if (st != RL_OK)
+        return st;
+    /* Light reflected by the scene: solve `bounces` passes and let every lit
+     * map re-emit the irradiance summed over them. */
+    uint32_t bounces = scene->sampling.bounces;
+    double share = SOLVE_SHARE(bounces);
+    st = rl__solve(scene, cl, &run, bounces, share, &sol);
+    size_t ne = 0;
+    rl_emitter *e = st == RL_OK ? rl__primary_emitters(scene, sol->nmaps, &ne) : NULL;
+    if (st == RL_OK && !e)
+        st = rl__fail(RL_ERR_NOMEM, "out of memory for emitters");
+    if (st == RL_OK && bounces > 0) {
+        for (size_t m = 0; m < sol->nmaps; m++)
+            memcpy(sol->maps[m].e_prev, sol->maps[m].e_total, sol->maps[m].ncells * sizeof *sol->maps[m].e_prev);
+        ne = rl__append_bounce_emitters(scene, sol->maps, sol->nmaps, e, ne);
+    }
+    rl_pass_stats local;
+    double *measured = NULL;
+    if (st == RL_OK)
+        st = rl__run_pass(scene, sol->tracer, cl, &run, bounces, 0, pts, count, e, ne, share, 1.0 - share,
+                          &measured, stats ? stats : &local);
+    free(measured);
+    for (size_t k = 0; st == RL_OK && k < count; k++)
+        for (int c = 0; c < 3; c++)
+            out[3 * k + c] = pts[k].e_pass[0][c];
+    if (st == RL_OK && run.progress)
+        run.progress(run.user, 1.0);
+    free(e);
+    rl_solution_destroy(sol);
+    maps_free(pts, count);
+    return st;
+}
