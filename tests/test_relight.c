@@ -10,6 +10,7 @@
  * stability cases instead: grazing and touching geometry, tiny, huge and
  * distant emitters, and a light field slab seen edge-on.
  */
+#include <dirent.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -749,6 +750,58 @@ static void check_random_scenes(int count)
     CHECK(compared >= count / 2, "at least the plain-method half is comparable: %ld of %d", compared, count);
 }
 
+/* Threads of this process now, from /proc/self/task (0 where there is no /proc). */
+static unsigned task_count(void)
+{
+    DIR *d = opendir("/proc/self/task");
+    unsigned n = 0;
+    for (struct dirent *e; d && (e = readdir(d)) != NULL;)
+        n += e->d_name[0] != '.';
+    if (d)
+        closedir(d);
+    return n;
+}
+
+/* rl_progress_fn: the most threads the process had while the engine ran. */
+static void count_tasks(void *user, double done)
+{
+    (void)done;
+    unsigned *most = user, n = task_count();
+    *most = n > *most ? n : *most;
+}
+
+/* `--threads 1` means one thread everywhere, Embree's hierarchy builder included: while a relight on
+ * one worker runs (its progress callback comes from the calling thread), the process has at most the
+ * caller and that worker; Embree, left to itself, starts one thread per hardware thread and keeps them. */
+static void check_one_thread(void)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/one_thread.json", tmpdir);
+    tpoly p[] = {
+        ts_rect_z("light", -0.4, -0.4, 0.4, 0.4, 2.0, 0),
+        ts_rect_z("grey", -2, -2, 2, 2, 0.0, 1),
+        ts_rect_z("grey", -0.5, -0.3, 0.3, 0.5, 1.0, 0),
+    };
+    ts_write_scene(path, MATS, p, 3, "\"radiance_maps\": {\"cell_size\": 0.02}, \"sampling\": {\"bounces\": 1}");
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    unsigned before = task_count(), most = 0;
+    rl_run_options one = {.threads = 1, .progress = count_tasks, .progress_user = &most};
+    rl_solution *sol = NULL;
+    CHECK(rl_relight(s, &one, &sol) == RL_OK, "one thread: %s", rl_errmsg());
+    if (before > 0) {
+        printf("one thread: at most %u threads while relighting (%u before)\n", most, before);
+        CHECK(most >= 1 && most <= before + 1, "--threads 1 ran %u threads besides the caller's %u", most - before,
+              before);
+    }
+    rl_ray_bench rb;
+    CHECK(rl_bench_rays(s, &one, 1000, &rb) == RL_OK && rb.rays >= 1000, "bench on one thread: %s", rl_errmsg());
+    CHECK(task_count() == 0 || task_count() <= before + 1, "threads left after a one-thread bench: %u", task_count());
+    rl_solution_destroy(sol);
+    rl_scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     const char *t = getenv("ILF_TEST_TMP");
@@ -759,6 +812,7 @@ int main(int argc, char **argv)
         check_slab_edge_on();
         check_random_scenes(24);
     } else {
+        check_one_thread(); /* first, before any other run has started threads */
         check_unoccluded();
         check_shading();
         check_identities();
