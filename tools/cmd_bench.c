@@ -154,7 +154,7 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
     case OPT_QUICK: cfg->quick = 1; return 1;
     case OPT_METHODS: return parse_methods(p, value, cfg);
     case OPT_THREADS: return sampling_option_apply(p, &cfg->sampling, SAMPLING_OPT_THREADS, value);
-    case OPT_BOUNCES: return sampling_option_apply(p, &cfg->sampling, SAMPLING_OPT_BOUNCES, value);
+    case OPT_BOUNCES: return sampling_option_apply(p, &cfg->sampling, (int)rl_sampling_setting_find("bounces"), value);
     case OPT_CACHE:
         if (snprintf(cfg->cache, sizeof cfg->cache, "%s", value) >= (int)sizeof cfg->cache)
             return cli_bad_value(p, value, "path too long"), 0;
@@ -492,7 +492,7 @@ int ilf_cmd_bench(int argc, char **argv)
     cfg.methods[3] = RL_METHOD_SOLIDANGLE;
     cfg.methods[4] = RL_METHOD_ADAPTIVE;
     cfg.nmethods = 5;
-    cfg.sampling.given = 1u << SAMPLING_OPT_BOUNCES; /* bounces 0 unless --bounces */
+    cfg.sampling.given = 1u << rl_sampling_setting_find("bounces"); /* bounces 0 unless --bounces */
     enum bench_mode mode = MODE_SWEEP;
     int code = parse_arguments(&cfg, &mode, argc, argv);
     if (code >= 0)

@@ -32,9 +32,9 @@ typedef struct irradiance_options {
 /* Options after the shared sampling ones, whose ids come first (relight_cli.h). */
 enum irradiance_option_id { OPT_POINTS = SAMPLING_OPT_COUNT };
 
-static const cli_option irradiance_options_table[] = {
-    RELIGHT_SAMPLING_OPTIONS,
-    {"points", 'p', "FILE", "points, one 'x y z nx ny nz' per line; '-' reads standard input (required)"},
+/* The sampling options' entries are filled by relight_options_fill() before parsing. */
+static cli_option irradiance_options_table[] = {
+    [OPT_POINTS] = {"points", 'p', "FILE", "points, one 'x y z nx ny nz' per line; '-' reads standard input (required)"},
 };
 
 static const cli_usage irradiance_usage = {
@@ -65,6 +65,8 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
 /* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(irradiance_options *o, int argc, char **argv)
 {
+    if (!relight_options_fill("irradiance", irradiance_options_table))
+        return ILF_EXIT_FAILED;
     int code = cli_parse(&irradiance_usage, irradiance_options_table,
                          sizeof irradiance_options_table / sizeof irradiance_options_table[0], argc, argv,
                          &o->scene, apply_option, o);

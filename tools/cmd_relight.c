@@ -66,12 +66,12 @@ typedef struct relight_options {
 /* Options after the shared sampling ones, whose ids come first (relight_cli.h). */
 enum relight_option_id { OPT_OUTPUT = SAMPLING_OPT_COUNT, OPT_QUIET, OPT_NO_VIEW, OPT_FLAT_VIEW };
 
-static const cli_option relight_options_table[] = {
-    RELIGHT_SAMPLING_OPTIONS,
-    {"output", 'o', "DIR", "folder for radiance.h5, stats.json and view.exr/png (required; created)"},
-    {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
-    {"no-view", 0, NULL, "write no view.exr/png even when the scene has a camera"},
-    {"flat-view", 0, NULL, "show each cell's own value in the view (default: interpolated between cells)"},
+/* The sampling options' entries are filled by relight_options_fill() before parsing. */
+static cli_option relight_options_table[] = {
+    [OPT_OUTPUT] = {"output", 'o', "DIR", "folder for radiance.h5, stats.json and view.exr/png (required; created)"},
+    [OPT_QUIET] = {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
+    [OPT_NO_VIEW] = {"no-view", 0, NULL, "write no view.exr/png even when the scene has a camera"},
+    [OPT_FLAT_VIEW] = {"flat-view", 0, NULL, "show each cell's own value in the view (default: interpolated between cells)"},
 };
 
 static const cli_usage relight_usage = {
@@ -133,6 +133,8 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
 /* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(relight_options *o, int argc, char **argv)
 {
+    if (!relight_options_fill("relight", relight_options_table))
+        return ILF_EXIT_FAILED;
     int code = cli_parse(&relight_usage, relight_options_table,
                          sizeof relight_options_table / sizeof relight_options_table[0], argc, argv, &o->scene,
                          apply_option, o);

@@ -49,16 +49,16 @@ typedef struct probes_options {
 enum probes_option_id { OPT_PLANE = SAMPLING_OPT_COUNT, OPT_GRID, OPT_SIZE, OPT_STRATA, OPT_N, OPT_NAME,
                         OPT_OUTPUT, OPT_QUIET };
 
-static const cli_option probes_options_table[] = {
-    RELIGHT_SAMPLING_OPTIONS,
-    {"plane", 0, "O:U:V", "capture plane origin:u:v, each X,Y,Z in metres, u and v orthogonal (required)"},
-    {"grid", 0, "NUxNV", "probe positions along u and v, at cell centres (default 1x1, up to 1024 each)"},
-    {"size", 0, "WxH", "equirectangular probe image size (default 256x128)"},
-    {"strata", 0, "S", "S*S jittered directions per pixel, 1 .. 64 (default 2)"},
-    {"n", 0, "N", "partition level written in the manifest for `ilf capture` (default 16)"},
-    {"name", 0, "NAME", "slab name written in the manifest (default probes)"},
-    {"output", 'o', "DIR", "folder for probe_I_J.exr and manifest.json (required; created)"},
-    {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
+/* The sampling options' entries are filled by relight_options_fill() before parsing. */
+static cli_option probes_options_table[] = {
+    [OPT_PLANE] = {"plane", 0, "O:U:V", "capture plane origin:u:v, each X,Y,Z in metres, u and v orthogonal (required)"},
+    [OPT_GRID] = {"grid", 0, "NUxNV", "probe positions along u and v, at cell centres (default 1x1, up to 1024 each)"},
+    [OPT_SIZE] = {"size", 0, "WxH", "equirectangular probe image size (default 256x128)"},
+    [OPT_STRATA] = {"strata", 0, "S", "S*S jittered directions per pixel, 1 .. 64 (default 2)"},
+    [OPT_N] = {"n", 0, "N", "partition level written in the manifest for `ilf capture` (default 16)"},
+    [OPT_NAME] = {"name", 0, "NAME", "slab name written in the manifest (default probes)"},
+    [OPT_OUTPUT] = {"output", 'o', "DIR", "folder for probe_I_J.exr and manifest.json (required; created)"},
+    [OPT_QUIET] = {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
 };
 
 static const cli_usage probes_usage = {
@@ -177,6 +177,8 @@ static void set_defaults(probes_options *o)
 /* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(probes_options *o, int argc, char **argv)
 {
+    if (!relight_options_fill("render-probes", probes_options_table))
+        return ILF_EXIT_FAILED;
     int code = cli_parse(&probes_usage, probes_options_table,
                          sizeof probes_options_table / sizeof probes_options_table[0], argc, argv, &o->scene,
                          apply_option, o);

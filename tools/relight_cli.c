@@ -4,7 +4,8 @@
  * relight_cli.h).
  *
  * Invariants: option values are parsed strictly (cli.c's parsers), with the
- * ranges of docs/scene.md; overrides are applied in one
+ * bounds of relight's one table of sampling settings (rl_sampling_setting),
+ * which also names the options and gives their help; overrides are applied in one
  * rl_scene_set_sampling() call after loading, so the scene's own values
  * stay for every field not given.
  */
@@ -20,11 +21,8 @@
 #include "ilf/pool.h"
 #include "relight/scene.h"
 
-/* Largest seed: the integers a JSON number (and so a scene file or stats.json) holds exactly. */
-#define SEED_MAX ((uint64_t)1 << 53)
-
-/* Parses a seed: digits only, 0 .. SEED_MAX. @return 1, or 0 after reporting. */
-static int parse_seed(const cli_parser *p, const char *text, uint64_t *seed)
+/* Parses a seed: digits only, 0 .. max (2^53, what a JSON number holds exactly). @return 1, or 0 after reporting. */
+static int parse_seed(const cli_parser *p, const char *text, double max, uint64_t *seed)
 {
     size_t len = strlen(text);
     int digits = len > 0 && len <= 20;
@@ -32,53 +30,82 @@ static int parse_seed(const cli_parser *p, const char *text, uint64_t *seed)
         digits = isdigit((unsigned char)text[k]);
     errno = 0;
     unsigned long long value = digits ? strtoull(text, NULL, 10) : 0;
-    if (!digits || errno == ERANGE || value > SEED_MAX)
+    if (!digits || errno == ERANGE || value > (unsigned long long)max)
         return cli_bad_value(p, text, "expected a whole number from 0 to 2^53 (9007199254740992)"), 0;
     *seed = value;
     return 1;
 }
 
-/* Parses a partition level: a power of two from lo (0 or 1) to 4096. @return 1, or 0 after reporting. */
-static int parse_partition_n(const cli_parser *p, const char *text, uint32_t lo, uint32_t *n)
+int relight_options_fill(const char *sub, cli_option *table)
 {
-    if (!cli_value_u32(p, text, lo, 4096, n))
+    static char help[SAMPLING_OPT_SETTINGS][320];
+    if (rl_sampling_setting_count() != SAMPLING_OPT_SETTINGS) {
+        cli_error(sub, "internal error: %zu sampling settings, the command line knows %d", rl_sampling_setting_count(),
+                  SAMPLING_OPT_SETTINGS);
         return 0;
-    if ((*n & (*n - 1)) != 0)
-        return cli_bad_value(p, text, "must be a power of two"), 0;
+    }
+    for (size_t k = 0; k < SAMPLING_OPT_SETTINGS; k++) {
+        const rl_setting_info *set = rl_sampling_setting(k);
+        char rule[128];
+        snprintf(help[k], sizeof help[k], "%s (%s; default: the scene's)", set->help,
+                 rl_sampling_setting_rule(k, rule, sizeof rule));
+        table[k] = (cli_option){set->option, 0, set->meta, help[k]};
+    }
+    table[SAMPLING_OPT_THREADS] = (cli_option){"threads", 0, "N", "worker threads, 0 = every processor (default 0)"};
+    table[SAMPLING_OPT_TIME_BUDGET] =
+        (cli_option){"time-budget", 0, "S", "adaptive: stop refining after S seconds, 0 = never (default: the scene's)"};
     return 1;
+}
+
+/* Parses the value of setting k into v. @return 1, or 0 after reporting. */
+static int parse_setting(const cli_parser *p, size_t k, const char *text, rl_sampling *v)
+{
+    const rl_setting_info *set = rl_sampling_setting(k);
+    char rule[128], why[160];
+    rl_sampling_setting_rule(k, rule, sizeof rule);
+    switch (set->type) {
+    case RL_SETTING_METHOD:
+        if (rl_method_parse(text, &v->method))
+            return 1;
+        snprintf(why, sizeof why, "expected %s", rule);
+        return cli_bad_value(p, text, why), 0;
+    case RL_SETTING_UINT64: {
+        uint64_t value = 0;
+        return parse_seed(p, text, set->hi, &value) && rl_sampling_set(v, k, (double)value);
+    }
+    case RL_SETTING_UINT32: {
+        uint32_t value = 0;
+        if (!cli_value_u32(p, text, (uint32_t)set->lo, (uint32_t)set->hi, &value))
+            return 0;
+        if (!rl_sampling_setting_allows(k, value, 1))
+            return cli_bad_value(p, text, "must be a power of two"), 0; /* the only rule besides the range */
+        return rl_sampling_set(v, k, value);
+    }
+    case RL_SETTING_REAL: {
+        double value = 0;
+        if (!cli_value_double(p, text, &value))
+            return 0;
+        if (!rl_sampling_setting_allows(k, value, 1)) {
+            snprintf(why, sizeof why, "must be %s", rule);
+            return cli_bad_value(p, text, why), 0;
+        }
+        return rl_sampling_set(v, k, value);
+    }
+    }
+    return 0;
 }
 
 int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, const char *value)
 {
-    rl_sampling *v = &o->values;
     int ok = 0;
-    switch (opt) {
-    case SAMPLING_OPT_METHOD:
-        ok = rl_method_parse(value, &v->method);
-        if (!ok)
-            cli_bad_value(p, value, "expected culled, naive, area, solidangle or adaptive");
-        break;
-    case SAMPLING_OPT_THREADS: ok = cli_value_u32(p, value, 0, RL_MAX_THREADS, &o->threads); break;
-    case SAMPLING_OPT_SEED: ok = parse_seed(p, value, &v->seed); break;
-    case SAMPLING_OPT_PARTITION_N: ok = parse_partition_n(p, value, 1, &v->partition_n); break;
-    case SAMPLING_OPT_BOUNCE_PARTITION_N: ok = parse_partition_n(p, value, 0, &v->bounce_partition_n); break;
-    case SAMPLING_OPT_BOUNCE_CELL_FACTOR: ok = cli_value_u32(p, value, 0, 64, &v->bounce_cell_factor); break;
-    case SAMPLING_OPT_DESCEND: ok = cli_value_u32(p, value, 0, 1, &v->descend); break;
-    case SAMPLING_OPT_ZERO_CULLING: ok = cli_value_u32(p, value, 0, 1, &v->zero_culling); break;
-    case SAMPLING_OPT_TARGET_ERROR:
-        ok = cli_value_double(p, value, &v->target_error);
-        if (ok && !(v->target_error > 0 && v->target_error <= 1))
-            ok = 0, cli_bad_value(p, value, "must be in (0, 1]");
-        break;
-    case SAMPLING_OPT_TIME_BUDGET:
+    if (opt >= 0 && opt < SAMPLING_OPT_SETTINGS)
+        ok = parse_setting(p, (size_t)opt, value, &o->values);
+    else if (opt == SAMPLING_OPT_THREADS)
+        ok = cli_value_u32(p, value, 0, RL_MAX_THREADS, &o->threads);
+    else if (opt == SAMPLING_OPT_TIME_BUDGET) {
         ok = cli_value_double(p, value, &o->time_budget);
         if (ok && !(o->time_budget >= 0))
             ok = 0, cli_bad_value(p, value, "must be >= 0 seconds");
-        break;
-    case SAMPLING_OPT_RAYS: ok = cli_value_u32(p, value, 1, 65536, &v->rays_per_solid_angle); break;
-    case SAMPLING_OPT_SAMPLES: ok = cli_value_u32(p, value, 1, 1048576, &v->samples_per_cell); break;
-    case SAMPLING_OPT_BOUNCES: ok = cli_value_u32(p, value, 0, 64, &v->bounces); break;
-    default: break;
     }
     if (ok)
         o->given |= 1u << opt;
@@ -89,29 +116,11 @@ int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, c
 static rl_sampling merged_sampling(const rl_sampling *scene, const sampling_overrides *o)
 {
     rl_sampling s = *scene;
-    const rl_sampling *v = &o->values;
-    if (o->given & (1u << SAMPLING_OPT_METHOD))
-        s.method = v->method;
-    if (o->given & (1u << SAMPLING_OPT_SEED))
-        s.seed = v->seed;
-    if (o->given & (1u << SAMPLING_OPT_PARTITION_N))
-        s.partition_n = v->partition_n;
-    if (o->given & (1u << SAMPLING_OPT_RAYS))
-        s.rays_per_solid_angle = v->rays_per_solid_angle;
-    if (o->given & (1u << SAMPLING_OPT_SAMPLES))
-        s.samples_per_cell = v->samples_per_cell;
-    if (o->given & (1u << SAMPLING_OPT_BOUNCES))
-        s.bounces = v->bounces;
-    if (o->given & (1u << SAMPLING_OPT_BOUNCE_PARTITION_N))
-        s.bounce_partition_n = v->bounce_partition_n;
-    if (o->given & (1u << SAMPLING_OPT_BOUNCE_CELL_FACTOR))
-        s.bounce_cell_factor = v->bounce_cell_factor;
-    if (o->given & (1u << SAMPLING_OPT_DESCEND))
-        s.descend = v->descend;
-    if (o->given & (1u << SAMPLING_OPT_ZERO_CULLING))
-        s.zero_culling = v->zero_culling;
-    if (o->given & (1u << SAMPLING_OPT_TARGET_ERROR))
-        s.target_error = v->target_error;
+    for (size_t k = 0; k < SAMPLING_OPT_SETTINGS; k++) {
+        double value = 0;
+        if ((o->given & (1u << k)) && rl_sampling_get(&o->values, k, &value))
+            rl_sampling_set(&s, k, value);
+    }
     return s;
 }
 

@@ -5,9 +5,10 @@
  * describing a pass's statistics.
  *
  * Invariants: an option given on the command line replaces exactly that
- * field of the scene's sampling settings and nothing else; every value is
- * range-checked when parsed, and rl_scene_set_sampling() checks the whole
- * again, so a bad value is always bad usage (exit 2), never a crash.
+ * field of the scene's sampling settings (or that run option) and nothing
+ * else; every value is range-checked when parsed, against the same table of
+ * settings the scene loader reads, and rl_scene_set_sampling() checks the
+ * whole again, so a bad value is always bad usage (exit 2), never a crash.
  */
 #ifndef ILF_RELIGHT_CLI_H
 #define ILF_RELIGHT_CLI_H
@@ -17,39 +18,25 @@
 #include "cli.h"
 #include "relight/engine.h"
 
-/* The sampling options, in the order of enum sampling_option_id. Commands
- * put them first in their option tables, so an option's index is its id. */
-#define RELIGHT_SAMPLING_OPTIONS                                                                  \
-    {"method", 0, "M", "culled, naive, area, solidangle or adaptive (default: the scene's)"},       \
-    {"threads", 0, "N", "worker threads, 0 = every processor (default 0)"},                        \
-    {"seed", 0, "S", "random seed, 0 .. 2^53 (default: the scene's)"},                             \
-    {"partition-n", 0, "N", "partition level, a power of two up to 4096 (default: the scene's)"},  \
-    {"rays", 0, "K", "rays per (cell, solid angle), 1 .. 65536 (default: the scene's)"},           \
-    {"samples", 0, "N", "shadow rays per (cell, emitter), area and solidangle (default: scene's)"}, \
-    {"bounces", 0, "B", "diffuse passes after the direct one, 0 .. 64 (default: the scene's)"},    \
-    {"bounce-partition-n", 0, "N", "partition level of bounce passes, 0 = partition-n / 4 (default: scene's)"}, \
-    {"bounce-cell-factor", 0, "F", "bounces gather on cells F times larger, interpolated; 1 = every cell, 0 = 2 (default: scene's)"}, \
-    {"descend", 0, "0|1", "1: exact views of small emitters, Lambert ratio for diffuse ones (default: scene's)"}, \
-    {"zero-culling", 0, "0|1", "1: cull light field directions and cells by zero radiance (default: scene's)"}, \
-    {"target-error", 0, "E", "adaptive: refine while a cell's error exceeds E of it, (0, 1] (default: scene's)"}, \
-    {"time-budget", 0, "S", "adaptive: stop refining after S seconds, 0 = never (default: the scene's)"}
-
+/* The sampling options: first one per row of relight's table of sampling
+ * settings (rl_sampling_setting(k) is option k: its name, placeholder,
+ * bounds and help all come from there), then the run options --threads and
+ * --time-budget. Commands reserve the first SAMPLING_OPT_COUNT entries of
+ * their option tables and fill them with relight_options_fill(), so an
+ * option's index is its id. */
 enum sampling_option_id {
-    SAMPLING_OPT_METHOD,
-    SAMPLING_OPT_THREADS,
-    SAMPLING_OPT_SEED,
-    SAMPLING_OPT_PARTITION_N,
-    SAMPLING_OPT_RAYS,
-    SAMPLING_OPT_SAMPLES,
-    SAMPLING_OPT_BOUNCES,
-    SAMPLING_OPT_BOUNCE_PARTITION_N,
-    SAMPLING_OPT_BOUNCE_CELL_FACTOR,
-    SAMPLING_OPT_DESCEND,
-    SAMPLING_OPT_ZERO_CULLING,
-    SAMPLING_OPT_TARGET_ERROR,
+    SAMPLING_OPT_SETTINGS = 11, /* rows of the settings table: relight_options_fill() checks the count */
+    SAMPLING_OPT_THREADS = SAMPLING_OPT_SETTINGS,
     SAMPLING_OPT_TIME_BUDGET,
     SAMPLING_OPT_COUNT
 };
+
+/**
+ * Fills table[0 .. SAMPLING_OPT_COUNT) with the sampling options (strings
+ * static, built once; call from the main thread).
+ * @return 1, or 0 after reporting when relight's table no longer has SAMPLING_OPT_SETTINGS rows.
+ */
+int relight_options_fill(const char *sub, cli_option *table);
 
 /** Sampling settings and run options given on the command line. */
 typedef struct sampling_overrides {
@@ -60,7 +47,8 @@ typedef struct sampling_overrides {
 } sampling_overrides;
 
 /**
- * Parses the value of sampling option opt (< SAMPLING_OPT_COUNT) into o.
+ * Parses the value of sampling option opt (< SAMPLING_OPT_COUNT) into o, checked against the
+ * setting's bounds in relight's table.
  * @return 1, or 0 after reporting the bad value.
  */
 int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, const char *value);

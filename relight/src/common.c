@@ -1,6 +1,6 @@
 /*
- * common.c - the engine's per-thread error message, method names and the
- * default sampling settings.
+ * common.c - the engine's per-thread error message and method names
+ * (the sampling settings' table and defaults are in settings.c).
  */
 #include <stdarg.h>
 #include <stdio.h>
@@ -39,20 +39,4 @@ int rl_method_parse(const char *name, rl_method *m)
             return 1;
         }
     return 0;
-}
-
-void rl_sampling_default(rl_sampling *s)
-{
-    memset(s, 0, sizeof *s);
-    s->method = RL_METHOD_CULLED;
-    s->partition_n = 32;
-    s->rays_per_solid_angle = 4;
-    s->samples_per_cell = 128;
-    s->bounces = 0;
-    s->bounce_partition_n = 0;
-    s->bounce_cell_factor = 0;
-    s->seed = 1;
-    s->descend = 1;
-    s->zero_culling = 1;
-    s->target_error = 0.05;
 }

@@ -50,16 +50,8 @@ typedef struct int_limit {
     int pow2; /* also a power of two */
 } int_limit;
 
-static const int_limit lim_partition = {1, 4096, 1};
-static const int_limit lim_bounce_partition = {0, 4096, 1}; /* 0: derived from partition_n */
-static const int_limit lim_rays = {1, 65536, 0};
-static const int_limit lim_samples = {1, 1048576, 0};
-static const int_limit lim_bounces = {0, 64, 0};
-static const int_limit lim_seed = {0, (uint64_t)1 << 53, 0}; /* integers a JSON number holds exactly */
 static const int_limit lim_pixels = {1, 16384, 0};
 static const int_limit lim_index = {0, UINT32_MAX, 0};
-static const int_limit lim_flag = {0, 1, 0};
-static const int_limit lim_cell_factor = {0, 64, 0}; /* 0: the default, 2 */
 
 /* @return 1 if v is allowed by l. */
 static int limit_ok(const int_limit *l, uint64_t v)
@@ -704,44 +696,47 @@ static rl_status read_radiance_maps(rl_build *b, const cJSON *j)
     return RL_OK;
 }
 
-/* Reads "sampling": method and the integer settings. */
+/* Reads "sampling": every setting of the table (settings.c), in its order, and the time budget, which
+ * the file may still hold as a suggested run option (rl_scene_time_budget()). */
 static rl_status read_sampling(rl_build *b, const cJSON *j)
 {
-    static const char *const keys[] = {"method", "partition_n", "rays_per_solid_angle", "samples_per_cell",
-                                       "bounces", "bounce_partition_n", "bounce_cell_factor", "descend",
-                                       "zero_culling", "seed", NULL};
-    static const char *const all_keys[] = {"method", "partition_n", "rays_per_solid_angle", "samples_per_cell",
-                                           "bounces", "bounce_partition_n", "bounce_cell_factor", "descend",
-                                           "zero_culling", "seed", "target_error", "time_budget", NULL};
-    static const int_limit *const limits[] = {NULL, &lim_partition, &lim_rays, &lim_samples, &lim_bounces,
-                                              &lim_bounce_partition, &lim_cell_factor, &lim_flag, &lim_flag, &lim_seed};
+    enum { MAX_KEYS = 32 };
+    const char *keys[MAX_KEYS + 2];
+    size_t n = rl_sampling_setting_count();
+    for (size_t k = 0; k < n && k < MAX_KEYS; k++)
+        keys[k] = rl_sampling_setting(k)->key;
+    keys[n < MAX_KEYS ? n : MAX_KEYS] = "time_budget";
+    keys[(n < MAX_KEYS ? n : MAX_KEYS) + 1] = NULL;
     rl_sampling *s = &b->scene->sampling;
-    uint32_t *const fields[] = {NULL, &s->partition_n, &s->rays_per_solid_angle, &s->samples_per_cell, &s->bounces,
-                                &s->bounce_partition_n, &s->bounce_cell_factor, &s->descend, &s->zero_culling, NULL};
-    rl_status st = json_keys(b, j, "sampling", all_keys);
-    const cJSON *m = member(j, "method");
-    const char *name = NULL;
-    if (st == RL_OK && m && (st = json_string(b, m, "sampling.method", &name)) == RL_OK &&
-        !rl_method_parse(name, &s->method))
-        st = rl__build_fail(b, "sampling.method", "unknown method '%.64s' (expected culled, naive, area, solidangle or adaptive)", name);
-    for (size_t k = 1; keys[k] && st == RL_OK; k++) {
-        const cJSON *v = member(j, keys[k]);
-        char elem[ELEM_MAX];
-        uint64_t value = 0;
-        member_elem(elem, "sampling", keys[k]);
-        if (v && (st = json_integer(b, v, elem, limits[k], &value)) == RL_OK) {
-            if (fields[k])
-                *fields[k] = (uint32_t)value;
-            else
-                s->seed = value;
+    rl_status st = json_keys(b, j, "sampling", keys);
+    for (size_t k = 0; k < n && st == RL_OK; k++) {
+        const rl_setting_info *set = rl_sampling_setting(k);
+        const cJSON *v = member(j, set->key);
+        char elem[ELEM_MAX], rule[128];
+        member_elem(elem, "sampling", set->key);
+        if (!v)
+            continue;
+        if (set->type == RL_SETTING_METHOD) {
+            const char *name = NULL;
+            if ((st = json_string(b, v, elem, &name)) == RL_OK && !rl_method_parse(name, &s->method))
+                st = rl__build_fail(b, elem, "unknown method '%.64s' (expected %s)", name,
+                                    rl_sampling_setting_rule(k, rule, sizeof rule));
+        } else if (set->type == RL_SETTING_REAL) {
+            double value = 0;
+            if ((st = json_number(b, v, elem, &value)) == RL_OK && !rl_sampling_setting_allows(k, value, 1))
+                st = rl__build_fail(b, elem, "must be %s, got %.17g", rl_sampling_setting_rule(k, rule, sizeof rule),
+                                    value);
+            if (st == RL_OK)
+                rl_sampling_set(s, k, value);
+        } else {
+            int_limit lim = {(uint64_t)set->lo, (uint64_t)set->hi, (set->flags & RL_SETTING_POW2) != 0};
+            uint64_t value = 0;
+            if ((st = json_integer(b, v, elem, &lim, &value)) == RL_OK)
+                rl_sampling_set(s, k, (double)value);
         }
     }
-    /* the adaptive method's two real-valued settings */
-    const cJSON *te = member(j, "target_error"), *tb = member(j, "time_budget");
-    if (st == RL_OK && te && (st = json_number(b, te, "sampling.target_error", &s->target_error)) == RL_OK &&
-        !(s->target_error > 0 && s->target_error <= 1))
-        st = rl__build_fail(b, "sampling.target_error", "must be in (0, 1], got %.17g", s->target_error);
     /* the time budget is how to run, not what to compute: kept apart as the scene's suggestion */
+    const cJSON *tb = member(j, "time_budget");
     double *budget = &b->scene->time_budget;
     if (st == RL_OK && tb && (st = json_number(b, tb, "sampling.time_budget", budget)) == RL_OK && !(*budget >= 0))
         st = rl__build_fail(b, "sampling.time_budget", "must be >= 0 seconds, got %.17g", *budget);
@@ -1043,28 +1038,21 @@ rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
 {
     if (!s || !x)
         return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: scene and sampling must not be NULL");
-    if ((unsigned)x->method > RL_METHOD_ADAPTIVE)
-        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: method %d is not a method", (int)x->method);
-    const struct {
-        const char *name;
-        uint64_t value;
-        const int_limit *limit;
-    } fields[] = {{"partition_n", x->partition_n, &lim_partition},
-                  {"rays_per_solid_angle", x->rays_per_solid_angle, &lim_rays},
-                  {"samples_per_cell", x->samples_per_cell, &lim_samples},
-                  {"bounces", x->bounces, &lim_bounces},
-                  {"bounce_partition_n", x->bounce_partition_n, &lim_bounce_partition},
-                  {"bounce_cell_factor", x->bounce_cell_factor, &lim_cell_factor},
-                  {"descend", x->descend, &lim_flag},
-                  {"zero_culling", x->zero_culling, &lim_flag}};
-    for (size_t k = 0; k < sizeof fields / sizeof fields[0]; k++)
-        if (!limit_ok(fields[k].limit, fields[k].value)) {
-            char rule[64];
-            return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: %s must be %s, got %llu", fields[k].name,
-                            limit_rule(fields[k].limit, rule), (unsigned long long)fields[k].value);
-        }
-    if (!(x->target_error > 0) || !(x->target_error <= 1))
-        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: target_error must be in (0, 1], got %g", x->target_error);
+    for (size_t k = 0; k < rl_sampling_setting_count(); k++) {
+        const rl_setting_info *set = rl_sampling_setting(k);
+        double value = 0;
+        char rule[128];
+        rl_sampling_get(x, k, &value);
+        if (rl_sampling_setting_allows(k, value, 0))
+            continue;
+        if (set->type == RL_SETTING_METHOD)
+            return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: method %d is not a method", (int)x->method);
+        if (set->type == RL_SETTING_REAL)
+            return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: %s must be %s, got %g", set->key,
+                            rl_sampling_setting_rule(k, rule, sizeof rule), value);
+        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: %s must be %s, got %.0f", set->key,
+                        rl_sampling_setting_rule(k, rule, sizeof rule), value);
+    }
     s->sampling = *x;
     return RL_OK;
 }

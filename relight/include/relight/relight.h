@@ -92,6 +92,63 @@ typedef struct rl_sampling {
 /** Fills *s with the defaults above. */
 void rl_sampling_default(rl_sampling *s);
 
+/** The type of a sampling setting's value. */
+typedef enum rl_setting_type {
+    RL_SETTING_METHOD = 0, /**< an rl_method, written as its name (rl_method_name()) */
+    RL_SETTING_UINT32 = 1, /**< a uint32_t integer */
+    RL_SETTING_UINT64 = 2, /**< a uint64_t integer */
+    RL_SETTING_REAL = 3    /**< a double */
+} rl_setting_type;
+
+/** Flags of a sampling setting's allowed values. */
+enum {
+    RL_SETTING_POW2 = 1,       /**< an integer that is also a power of two (or 0, where lo is 0) */
+    RL_SETTING_LO_OPEN = 2,    /**< lo itself is not allowed (a real in (lo, hi]) */
+    RL_SETTING_TEXT_BOUNDS = 4 /**< the bounds hold for values written as text (scene files, command
+                                    lines), not for rl_scene_set_sampling(): the integers a JSON
+                                    number holds exactly */
+};
+
+/**
+ * One sampling setting, as every reader of settings sees it: the scene
+ * loader's "sampling" object, rl_scene_set_sampling()'s checks, the
+ * command line's options and their --help all come from this one table.
+ */
+typedef struct rl_setting_info {
+    const char *key;       /**< key in the scene's "sampling" object and field name of rl_sampling */
+    const char *option;    /**< command-line option without "--" */
+    const char *meta;      /**< placeholder of the value in help ("N") */
+    rl_setting_type type;
+    size_t offset;         /**< offsetof(rl_sampling, the field) */
+    double lo, hi;         /**< allowed values, inclusive unless RL_SETTING_LO_OPEN (METHOD: rl_method range) */
+    unsigned flags;        /**< RL_SETTING_* */
+    double default_value;  /**< as rl_sampling_default() sets it (METHOD: the rl_method) */
+    const char *help;      /**< one line on what it does, without its bounds or default */
+} rl_setting_info;
+
+/** @return the number of sampling settings (the rows of the table, in the scene file's key order). */
+size_t rl_sampling_setting_count(void);
+
+/** @return setting k (static, read-only, never freed), or NULL if k >= rl_sampling_setting_count(). */
+const rl_setting_info *rl_sampling_setting(size_t k);
+
+/** @return the index of the setting with scene key `key`, or rl_sampling_setting_count() if there is none. */
+size_t rl_sampling_setting_find(const char *key);
+
+/** Writes setting k's allowed values in words ("a power of two in 1..4096", "in (0, 1]") into buf.
+ * @return buf ("" for an unknown k); NULL buf or size 0 writes nothing and returns "". */
+const char *rl_sampling_setting_rule(size_t k, char *buf, size_t size);
+
+/** @return 1 if value is allowed for setting k (text bounds included when `text`), else 0. */
+int rl_sampling_setting_allows(size_t k, double value, int text);
+
+/** Reads setting k of s into *value (integers beyond 2^53 round). @return 1, or 0 for an unknown k or NULL. */
+int rl_sampling_get(const rl_sampling *s, size_t k, double *value);
+
+/** Sets setting k of s to value, converted to the field's type (no range check: rl_sampling_setting_allows()).
+ * @return 1, or 0 for an unknown k, NULL s, or a value the type cannot hold. */
+int rl_sampling_set(rl_sampling *s, size_t k, double value);
+
 #ifdef __cplusplus
 }
 #endif
