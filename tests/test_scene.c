@@ -332,6 +332,44 @@ static void test_bad(void)
     CHECK(count >= 25, "corpus of %zu bad scenes", count);
 }
 
+/* ----------------------------------------------------------- settings table */
+
+/* The one table of sampling settings agrees with rl_sampling_default() and with the loader's messages. */
+static void test_settings_table(void)
+{
+    rl_sampling def, x;
+    rl_sampling_default(&def);
+    memset(&x, 0, sizeof x);
+    size_t n = rl_sampling_setting_count();
+    CHECK(n == 11 && rl_sampling_setting(n) == NULL, "%zu settings", n);
+    for (size_t k = 0; k < n; k++) {
+        const rl_setting_info *s = rl_sampling_setting(k);
+        double v = -1;
+        CHECK(rl_sampling_get(&def, k, &v) && v == s->default_value, "%s: default %g, table %g", s->key, v,
+              s->default_value);
+        CHECK(rl_sampling_setting_allows(k, s->default_value, 1) && rl_sampling_setting_find(s->key) == k,
+              "%s: default allowed, found", s->key);
+        CHECK(rl_sampling_set(&x, k, s->default_value), "%s: set", s->key);
+        CHECK(!rl_sampling_setting_allows(k, 2 * s->hi + 1, 1), "%s: above its bound", s->key);
+    }
+    CHECK(memcmp(&x, &def, sizeof x) == 0, "the table's defaults are rl_sampling_default()'s");
+    char rule[128];
+    size_t pn = rl_sampling_setting_find("partition_n"), te = rl_sampling_setting_find("target_error");
+    CHECK(strcmp(rl_sampling_setting_rule(pn, rule, sizeof rule), "a power of two in 1..4096") == 0, "rule %s", rule);
+    CHECK(strcmp(rl_sampling_setting_rule(te, rule, sizeof rule), "in (0, 1]") == 0, "rule %s", rule);
+    CHECK(strcmp(rl_sampling_setting_rule(0, rule, sizeof rule), "culled, naive, area, solidangle or adaptive") == 0,
+          "rule %s", rule);
+    CHECK(!rl_sampling_setting_allows(pn, 3, 1) && rl_sampling_setting_allows(pn, 4096, 1), "power of two");
+    CHECK(!rl_sampling_setting_allows(te, 0, 1) && rl_sampling_setting_allows(te, 1, 1), "(0, 1]");
+    size_t seed = rl_sampling_setting_find("seed");
+    CHECK(!rl_sampling_setting_allows(seed, 18446744073709549568.0, 1) &&
+              rl_sampling_setting_allows(seed, 18446744073709549568.0, 0),
+          "the seed's bound holds for text only");
+    CHECK(rl_sampling_setting_find("threads") == n && rl_sampling_setting_find("time_budget") == n &&
+              rl_sampling_setting_find(NULL) == n,
+          "run options are not settings");
+}
+
 /* ----------------------------------------------------------- run options */
 
 static void write_text(const char *name, const char *text);
@@ -700,6 +738,7 @@ int main(int argc, char **argv)
     test_bad();
     test_lightfields();
     test_set_sampling();
+    test_settings_table();
     test_run_options();
     test_data();
     test_interpolation();
