@@ -1,7 +1,11 @@
 /*
  * engine.h - running the relighting engine on a loaded scene: radiance maps
  * by passes (direct, then `bounces` diffuse passes), irradiance at points,
- * and the camera's view. Conventions as in relight/relight.h.
+ * the camera's view and the ray tracer's benchmark. Conventions as in
+ * relight/relight.h. What to compute comes from the scene (its sampling
+ * settings); how to run it (threads, progress, time budget) comes with each
+ * call, as rl_run_options. A solution and its scene are only read by the
+ * calls here, except rl_solution_set_smooth().
  *
  * This header is valid C99 and C++.
  */
