@@ -18,7 +18,6 @@
  * solution.c, the camera view in view.c, point queries in query.c and the
  * ray benchmark in bench_rays.c.
  */
-#include <float.h>
 #include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
