@@ -33,7 +33,9 @@
  *   - Writes are atomic (base's ilf/atomic_file.h): the image is written to
  *     FOLDER/.NAME.tmp-<12 hex>.EXT beside the path, flushed and renamed over
  *     it; on failure the temporary is removed and an existing file at the
- *     path is left as it was.
+ *     path is left as it was (except when only the final flush of the
+ *     folder fails: the new image is then in place, and the failure is
+ *     still reported).
  *   - On failure a one-line message naming the file goes to err (errlen
  *     bytes, always terminated, when err is not NULL and errlen > 0). The
  *     library keeps no message of its own: err is the only report.
@@ -59,7 +61,7 @@ extern "C" {
 /** Largest accepted width * height * channels of an image read (reason in ilf/limits.h). */
 #define IMG_MAX_SAMPLES ILF_IMAGE_MAX_SAMPLES
 
-/** Result of a fallible call; the values equal capture's cap_status for the same meaning. */
+/** Result of a fallible call; IMG_OK (0) is success. */
 typedef enum img_status {
     IMG_OK = 0,
     IMG_ERR_ARG = 1,    /**< an argument is NULL or out of range, or the extension is not writable */
