@@ -10,7 +10,7 @@
  * Invariants: DIR exists (it is created) before the engine runs, so a long
  * run never ends in an output that cannot be placed. Outputs are written into
  * a staging folder inside DIR (".relight.tmp-XXXXXX", each file atomically:
- * lfio, capture/image.h, jsonout.h) and renamed into place together only once
+ * lfio, image/image.h, jsonout.h) and renamed into place together only once
  * every one is written: a run that fails (out of memory, a full disk, an
  * interruption) leaves DIR as it found it, removing the staging folder and any
  * folder it created, and DIR never holds a partial file or a mix of two runs'
@@ -38,7 +38,7 @@
 
 #include "cli.h"
 #include "commands.h"
-#include "capture/image.h"
+#include "image/image.h"
 #include "job.h"
 #include "jsonout.h"
 #include "lfio/radmap.h"
@@ -483,12 +483,12 @@ static int write_radiance(relight_run *run)
 static int write_view_image(relight_run *run, int k, int width, int height, const float *pixels, const char *what)
 {
     char err[512];
-    cap_status st = cap_image_write(run->staged[k], width, height, 3, pixels, err, sizeof err);
-    if (st != CAP_OK)
+    img_status st = img_write(run->staged[k], width, height, 3, pixels, err, sizeof err);
+    if (st != IMG_OK)
         cli_error("relight", "%s", err);
     else
         stage_done(run, k, what);
-    return st == CAP_OK ? ILF_EXIT_OK : ILF_EXIT_FAILED;
+    return st == IMG_OK ? ILF_EXIT_OK : ILF_EXIT_FAILED;
 }
 
 /* Renders the camera's view and writes view.exr (radiance) and view.png (tone mapped). @return an exit code. */

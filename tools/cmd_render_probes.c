@@ -22,10 +22,10 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "capture/image.h"
 #include "capture/projection.h"
 #include "cli.h"
 #include "commands.h"
+#include "image/image.h"
 #include "jsonout.h"
 #include "relight/engine.h"
 #include "relight_cli.h"
@@ -309,7 +309,7 @@ static int render_probe(const probes_options *o, const rl_solution *sol, const c
     if (!output_path(o->output, name, path))
         return ILF_EXIT_FAILED;
     cli_output_watch(path);
-    if (cap_image_write(path, s->width, s->height, 3, pixels, err, sizeof err) != CAP_OK) {
+    if (img_write(path, s->width, s->height, 3, pixels, err, sizeof err) != IMG_OK) {
         cli_error("render-probes", "%s", err);
         return ILF_EXIT_FAILED;
     }

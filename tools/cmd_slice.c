@@ -26,7 +26,7 @@
 
 #include "cli.h"
 #include "commands.h"
-#include "capture/image.h"
+#include "image/image.h"
 #include "tonemap.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
@@ -160,7 +160,7 @@ static int check_combination(const slice_options *o)
         problem = "give exactly one of --position, --direction and --toward";
     else if (o->output == NULL)
         problem = "-o OUT.exr|OUT.png is required";
-    else if (cap_image_guess_format(o->output) == CAP_IMAGE_FORMAT_UNKNOWN)
+    else if (img_guess_format(o->output) == IMG_FORMAT_UNKNOWN)
         problem = "the output must end in .exr or .png";
     else if (o->mode != SLICE_POSITION && (o->layout_given || o->size_given))
         problem = "--layout and --size apply to --position only";
@@ -343,11 +343,11 @@ static int slice_direction(lfio_reader *r, size_t k, const slice_options *o, sli
 static int write_image(const slice_image *img, const slice_options *o)
 {
     char err[512];
-    cap_status st = cap_image_write(o->output, img->width, img->height, img->channels, img->pixels, err, sizeof err);
-    if (st == CAP_OK)
+    img_status st = img_write(o->output, img->width, img->height, img->channels, img->pixels, err, sizeof err);
+    if (st == IMG_OK)
         return ILF_EXIT_OK;
     cli_error("slice", "%s", err);
-    return st == CAP_ERR_ARG ? ILF_EXIT_USAGE : ILF_EXIT_FAILED;
+    return st == IMG_ERR_ARG ? ILF_EXIT_USAGE : ILF_EXIT_FAILED;
 }
 
 static void describe_result(const slice_image *img, const slice_options *o, const char *slab, double scale)
@@ -359,7 +359,7 @@ static void describe_result(const slice_image *img, const slice_options *o, cons
     else
         printf("positions for one direction");
     printf(" of slab '%s'; ", slab);
-    if (cap_image_guess_format(o->output) == CAP_IMAGE_FORMAT_EXR)
+    if (img_guess_format(o->output) == IMG_FORMAT_EXR)
         printf("raw radiance (scale 1)%s\n", o->exposure_given ? ", --exposure applies to PNG only" : "");
     else
         printf("scale %.6g (%s)\n", scale, o->exposure_given ? "from --exposure" : "auto: 1/99th percentile");
@@ -373,7 +373,7 @@ static int slice_file(lfio_reader *r, const slice_options *o)
     slice_image img = {0, 0, 0, NULL};
     int code = o->mode == SLICE_POSITION ? slice_position(r, k, o, &img) : slice_direction(r, k, o, &img);
     double scale = 1.0;
-    if (code == ILF_EXIT_OK && cap_image_guess_format(o->output) == CAP_IMAGE_FORMAT_PNG) {
+    if (code == ILF_EXIT_OK && img_guess_format(o->output) == IMG_FORMAT_PNG) {
         const size_t count = (size_t)img.width * img.height;
         if (o->exposure_given)
             scale = exp2(o->exposure);

@@ -1,6 +1,7 @@
 /*
- * tonemap.c - exposure from a percentile of the lit pixels and the sRGB
- * transfer function (see tonemap.h), shared by `ilf slice` and `ilf relight`.
+ * tonemap.c - exposure from a percentile of the lit pixels, then the sRGB
+ * transfer function of the image library (see tonemap.h), shared by
+ * `ilf slice` and `ilf relight`.
  *
  * Invariants: the percentile is the nearest rank over pixels whose measure
  * is > 0, so a dark background never drags the exposure up; encoded values
@@ -10,6 +11,8 @@
 
 #include <math.h>
 #include <stdlib.h>
+
+#include "image/image.h"
 
 /* qsort order of floats, ascending. */
 static int compare_floats(const void *a, const void *b)
@@ -50,17 +53,11 @@ int tone_percentile_scale(const float *pixels, size_t count, int channels, tone_
     return 1;
 }
 
-float tone_srgb_encode(double linear)
-{
-    double v = linear <= 0.0031308 ? 12.92 * linear : 1.055 * pow(linear, 1.0 / 2.4) - 0.055;
-    return (float)(v < 0.0 ? 0.0 : v > 1.0 ? 1.0 : v);
-}
-
 void tone_apply(float *pixels, size_t count, int channels, double scale)
 {
     for (size_t k = 0; k < count; k++) {
         float *px = pixels + k * (size_t)channels;
         for (int c = 0; c < 3; c++)
-            px[c] = tone_srgb_encode(scale * px[c]);
+            px[c] = img_srgb_encode(scale * px[c]);
     }
 }

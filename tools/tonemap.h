@@ -1,7 +1,7 @@
 /*
  * tonemap.h - turning linear radiance images into 8-bit display images for
  * `ilf` (slice, relight): one exposure factor chosen from a percentile of
- * the lit pixels, then the sRGB transfer function.
+ * the lit pixels, then the sRGB transfer function (img_srgb_encode).
  *
  * Invariants: pixels are float, interleaved [y][x][channel] with at least 3
  * channels, the first three linear RGB; a fourth (alpha) is never scaled or
@@ -25,9 +25,6 @@ typedef enum tone_measure {
  */
 int tone_percentile_scale(const float *pixels, size_t count, int channels, tone_measure measure,
                           double percentile, double target, double *scale);
-
-/** @return the sRGB encoding of a linear value, clamped to [0, 1]. */
-float tone_srgb_encode(double linear);
 
 /** Multiplies the colour channels (not alpha) of count pixels by scale and sRGB-encodes them, in place. */
 void tone_apply(float *pixels, size_t count, int channels, double scale);

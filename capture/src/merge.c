@@ -15,7 +15,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "capture/image.h"
+#include "ilf/limits.h"
+#include "image/image.h"
 #include "internal.h"
 #include "probe.h"
 
@@ -33,7 +34,7 @@ typedef struct bracket_acc {
 
 /* One image as the merge sees it: colour channels in use and the conversion to radiance. */
 typedef struct source {
-    const cap_image *img;
+    const img_image *img;
     int colours;    /* 1 (grey) or 3 */
     int srgb;       /* decode the sRGB curve */
     float factor;   /* scale / exposure */
@@ -42,7 +43,7 @@ typedef struct source {
 /* ------------------------------------------------------------ repair */
 
 /* Mean of the finite values, negatives counted as 0, among the 8 neighbours of (x, y) in channel c. */
-static float neighbour_mean(const cap_image *img, int x, int y, int c)
+static float neighbour_mean(const img_image *img, int x, int y, int c)
 {
     double sum = 0.0;
     int count = 0;
@@ -61,7 +62,7 @@ static float neighbour_mean(const cap_image *img, int x, int y, int c)
 }
 
 /* Counts NaN and infinite values in the colour channels, noting their indices in where (if not NULL). */
-static uint64_t scan_bad(const cap_image *img, int colours, size_t *where, uint64_t *nan, uint64_t *inf)
+static uint64_t scan_bad(const img_image *img, int colours, size_t *where, uint64_t *nan, uint64_t *inf)
 {
     const size_t pixels = (size_t)img->width * img->height;
     uint64_t bad = 0;
@@ -79,7 +80,7 @@ static uint64_t scan_bad(const cap_image *img, int colours, size_t *where, uint6
 }
 
 /* Sets negative values to 0, counting them and the lowest. */
-static void clamp_negative(cap_image *img, int colours, cap_repair *rep)
+static void clamp_negative(img_image *img, int colours, cap_repair *rep)
 {
     const size_t pixels = (size_t)img->width * img->height;
     for (size_t p = 0; p < pixels; p++)
@@ -94,7 +95,7 @@ static void clamp_negative(cap_image *img, int colours, cap_repair *rep)
 }
 
 /* Replaces non-finite values by their neighbours' mean (computed before any is written), then negatives by 0. */
-static cap_status repair(cap_image *img, int colours, cap_repair *rep)
+static cap_status repair(img_image *img, int colours, cap_repair *rep)
 {
     uint64_t nan = 0, inf = 0;
     uint64_t bad = scan_bad(img, colours, NULL, &nan, &inf);
@@ -123,12 +124,6 @@ static cap_status repair(cap_image *img, int colours, cap_repair *rep)
 
 /* ------------------------------------------------------------ values */
 
-/* The sRGB transfer function undone (IEC 61966-2-1). */
-static float srgb_decode(float v)
-{
-    return v <= 0.04045f ? v / 12.92f : powf((v + 0.055f) / 1.055f, 2.4f);
-}
-
 /* Pixel p's radiance into rgb and its largest stored (encoded) colour value into *z. */
 static void pixel_value(const source *s, size_t p, float rgb[3], float *z)
 {
@@ -137,7 +132,7 @@ static void pixel_value(const source *s, size_t p, float rgb[3], float *z)
     for (int c = 0; c < 3; c++) {
         float e = v[s->colours == 3 ? c : 0];
         top = fmaxf(top, e);
-        rgb[c] = (s->srgb ? srgb_decode(e) : e) * s->factor;
+        rgb[c] = (s->srgb ? img_srgb_decode(e) : e) * s->factor;
     }
     *z = top;
 }
@@ -218,13 +213,34 @@ static cap_status acc_alloc(bracket_acc *acc, size_t pixels)
 
 /* ------------------------------------------------------------ reading */
 
+/* @return the capture status of the same meaning as the image library's s. */
+static cap_status from_image(img_status s)
+{
+    switch (s) {
+    case IMG_OK:
+        return CAP_OK;
+    case IMG_ERR_ARG:
+        return CAP_ERR_ARG;
+    case IMG_ERR_INPUT:
+        return CAP_ERR_INPUT;
+    case IMG_ERR_OUTPUT:
+        return CAP_ERR_OUTPUT;
+    case IMG_ERR_NOMEM:
+        return CAP_ERR_NOMEM;
+    }
+    return CAP_ERR_INPUT;
+}
+
 /* Reads image k of entry e and checks its size. */
 static cap_status read_image(const cap_manifest *m, const cap__entry *e, uint32_t k, const cap__hdr *first,
-                             cap_image *img)
+                             img_image *img)
 {
-    cap_status st = cap_image_read(e->files[k], img, NULL, 0);
-    if (st != CAP_OK)
+    char msg[ILF_MESSAGE_BYTES];
+    cap_status st = from_image(img_read(e->files[k], img, msg, sizeof msg));
+    if (st != CAP_OK) {
+        cap__fail_text(st, msg);
         return cap__fail_prefix(st, "%s: %s", m->path, e->element);
+    }
     const char *why = cap_projection_check_size(e->projection, img->width, img->height);
     if (why != NULL)
         st = cap__fail(CAP_ERR_INPUT, "%s: %s: %s: %dx%d: %s", m->path, e->element, e->files[k], img->width,
@@ -234,12 +250,12 @@ static cap_status read_image(const cap_manifest *m, const cap__entry *e, uint32_
                        m->path, e->element, e->files[k], img->width, img->height, e->files[0], first->width,
                        first->height);
     if (st != CAP_OK)
-        cap_image_free(img);
+        img_free(img);
     return st;
 }
 
 /* Describes how image k of e turns into radiance. */
-static source make_source(const cap__entry *e, uint32_t k, const cap_image *img)
+static source make_source(const cap__entry *e, uint32_t k, const img_image *img)
 {
     source s;
     s.img = img;
@@ -253,7 +269,7 @@ static source make_source(const cap__entry *e, uint32_t k, const cap_image *img)
 static cap_status load_one(const cap_manifest *m, const cap__entry *e, uint32_t k, cap__hdr *out, bracket_acc *acc,
                            cap_repair *rep)
 {
-    cap_image img;
+    img_image img;
     cap_status st = read_image(m, e, k, out, &img);
     if (st != CAP_OK)
         return st;
@@ -272,7 +288,7 @@ static cap_status load_one(const cap_manifest *m, const cap__entry *e, uint32_t 
         accumulate(&s, acc);
     else if (st == CAP_OK)
         store_single(&s, out->rgb);
-    cap_image_free(&img);
+    img_free(&img);
     return st;
 }
 

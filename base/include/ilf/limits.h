@@ -22,4 +22,12 @@
  * a longer one is cut at this length, never overrun. */
 #define ILF_MESSAGE_BYTES 1024u
 
+/* Pixels along either side of an image read or written (image/image.h). Far beyond any light probe or
+ * view ilf makes, small enough that width * height * 4 channels of float stays addressable. */
+#define ILF_IMAGE_MAX_SIDE 65536
+
+/* Samples (width * height * channels) of one image read: 8 GiB of float. A corrupt or hostile header
+ * cannot make the reader allocate more than this, whatever sides it claims. */
+#define ILF_IMAGE_MAX_SAMPLES (1LL << 31)
+
 #endif /* ILF_LIMITS_H */

@@ -1,21 +1,21 @@
 /*
- * image_oiio.cpp - the image module libilfkit_oiio.so: encoding and decoding
- * pixels with OpenImageIO behind the entry table of image_module.h, which
- * capture/src/image.c loads on the first image read or write. This is the
+ * oiio_module.cpp - the image module libilfkit_oiio.so: encoding and decoding
+ * pixels with OpenImageIO behind the entry table of module.h, which
+ * image/src/image.c loads on the first image read or write. This is the
  * only file in ilfkit that includes OpenImageIO headers, and the only C++
- * source of the capture library.
+ * source of the image library.
  *
  * Invariants:
  *   - The only exported symbol is the entry function; everything else has
  *     hidden visibility (the module is built with -fvisibility=hidden).
  *   - No exception leaves a table function: each body runs inside a try
  *     block and turns exceptions into a status and message.
- *   - Nothing here calls the capture library: messages go to the caller's
+ *   - Nothing here calls ilfkit's libraries: messages go to the caller's
  *     buffer, one line, naming the image's final path.
  *   - EXR is written as 32-bit float, PNG as 8-bit, as the caller's format
  *     says (image.c chose it from the extension); content is never guessed.
  */
-#include "image_module.h"
+#include "module.h"
 
 #include <OpenImageIO/imageio.h>
 
@@ -28,13 +28,12 @@
 
 namespace {
 
-/* Largest accepted sample count: far beyond what ilf reads, small enough that
- * a corrupt header cannot make us allocate without bound. */
-constexpr long long max_side = CAP_IMAGE_MAX_SIDE;
-constexpr long long max_samples = 1LL << 31;
+/* The reader's bounds (image/image.h; their reasons in ilf/limits.h). */
+constexpr long long max_side = IMG_MAX_SIDE;
+constexpr long long max_samples = IMG_MAX_SAMPLES;
 
 /* Formats a message into msg. @return status. */
-cap_status fail(cap_status status, char *msg, size_t msglen, const char *fmt, ...)
+img_status fail(img_status status, char *msg, size_t msglen, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -53,9 +52,9 @@ std::string first_line(std::string text)
 }
 
 /* @return the spec for the format: 32-bit float linear EXR or 8-bit sRGB PNG. */
-OIIO::ImageSpec make_spec(cap_image_format format, int width, int height, int channels)
+OIIO::ImageSpec make_spec(img_format format, int width, int height, int channels)
 {
-    bool exr = format == CAP_IMAGE_FORMAT_EXR;
+    bool exr = format == IMG_FORMAT_EXR;
     OIIO::ImageSpec spec(width, height, channels, exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
     if (exr) {
         spec.attribute("compression", "zip");
@@ -69,20 +68,20 @@ OIIO::ImageSpec make_spec(cap_image_format format, int width, int height, int ch
     return spec;
 }
 
-cap_status write_pixels(const char *file, const char *path, cap_image_format format, int width, int height,
+img_status write_pixels(const char *file, const char *path, img_format format, int width, int height,
                         int channels, const float *pixels, char *msg, size_t msglen)
 {
-    auto out = OIIO::ImageOutput::create(format == CAP_IMAGE_FORMAT_EXR ? "openexr" : "png");
+    auto out = OIIO::ImageOutput::create(format == IMG_FORMAT_EXR ? "openexr" : "png");
     if (!out)
-        return fail(CAP_ERR_OUTPUT, msg, msglen, "%s: no OpenImageIO writer: %s", path,
+        return fail(IMG_ERR_OUTPUT, msg, msglen, "%s: no OpenImageIO writer: %s", path,
                     first_line(OIIO::geterror()).c_str());
     OIIO::ImageSpec spec = make_spec(format, width, height, channels);
     bool ok = out->open(file, spec) && out->write_image(OIIO::TypeDesc::FLOAT, pixels);
     ok = out->close() && ok;
     if (!ok)
-        return fail(CAP_ERR_OUTPUT, msg, msglen, "%s: cannot write image: %s", path,
+        return fail(IMG_ERR_OUTPUT, msg, msglen, "%s: cannot write image: %s", path,
                     first_line(out->geterror()).c_str());
-    return CAP_OK;
+    return IMG_OK;
 }
 
 /* @return whether t is an integer sample type, which OpenImageIO normalises to [0, 1] when converting to float. */
@@ -92,24 +91,24 @@ bool is_integer_type(OIIO::TypeDesc t)
            t.basetype != OIIO::TypeDesc::DOUBLE;
 }
 
-cap_status read_pixels(const char *path, cap_image *img, char *msg, size_t msglen)
+img_status read_pixels(const char *path, img_image *img, char *msg, size_t msglen)
 {
     auto in = OIIO::ImageInput::open(path);
     if (!in)
-        return fail(CAP_ERR_INPUT, msg, msglen, "%s: not a readable image: %s", path,
+        return fail(IMG_ERR_INPUT, msg, msglen, "%s: not a readable image: %s", path,
                     first_line(OIIO::geterror()).c_str());
     const OIIO::ImageSpec &spec = in->spec();
     long long samples = static_cast<long long>(spec.width) * spec.height * spec.nchannels;
     if (spec.width < 1 || spec.height < 1 || spec.nchannels < 1 || spec.width > max_side ||
         spec.height > max_side || spec.depth > 1 || samples > max_samples)
-        return fail(CAP_ERR_INPUT, msg, msglen, "%s: unsupported image size %dx%dx%d with %d channels", path,
+        return fail(IMG_ERR_INPUT, msg, msglen, "%s: unsupported image size %dx%dx%d with %d channels", path,
                     spec.width, spec.height, spec.depth, spec.nchannels);
     float *buf = static_cast<float *>(std::malloc(static_cast<size_t>(samples) * sizeof(float)));
     if (buf == nullptr)
-        return fail(CAP_ERR_NOMEM, msg, msglen, "%s: out of memory for %lld samples", path, samples);
+        return fail(IMG_ERR_NOMEM, msg, msglen, "%s: out of memory for %lld samples", path, samples);
     if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, buf)) {
         std::free(buf);
-        return fail(CAP_ERR_INPUT, msg, msglen, "%s: cannot read image data: %s", path,
+        return fail(IMG_ERR_INPUT, msg, msglen, "%s: cannot read image data: %s", path,
                     first_line(in->geterror()).c_str());
     }
     img->width = spec.width;
@@ -118,44 +117,44 @@ cap_status read_pixels(const char *path, cap_image *img, char *msg, size_t msgle
     img->pixels = buf;
     img->integer = is_integer_type(spec.format) ? 1 : 0;
     img->bits = static_cast<int>(spec.format.size() * 8);
-    return CAP_OK;
+    return IMG_OK;
 }
 
 /* Table entry: write_pixels with every exception turned into a status. */
-cap_status module_write(const char *file, const char *path, cap_image_format format, int width, int height,
+img_status module_write(const char *file, const char *path, img_format format, int width, int height,
                         int channels, const float *pixels, char *msg, size_t msglen)
 {
     try {
         return write_pixels(file, path, format, width, height, channels, pixels, msg, msglen);
     } catch (const std::bad_alloc &) {
-        return fail(CAP_ERR_NOMEM, msg, msglen, "%s: out of memory while writing", path);
+        return fail(IMG_ERR_NOMEM, msg, msglen, "%s: out of memory while writing", path);
     } catch (const std::exception &e) {
-        return fail(CAP_ERR_OUTPUT, msg, msglen, "%s: %s", path, e.what());
+        return fail(IMG_ERR_OUTPUT, msg, msglen, "%s: %s", path, e.what());
     } catch (...) {
-        return fail(CAP_ERR_OUTPUT, msg, msglen, "%s: unexpected error while writing", path);
+        return fail(IMG_ERR_OUTPUT, msg, msglen, "%s: unexpected error while writing", path);
     }
 }
 
 /* Table entry: read_pixels with every exception turned into a status. */
-cap_status module_read(const char *path, cap_image *img, char *msg, size_t msglen)
+img_status module_read(const char *path, img_image *img, char *msg, size_t msglen)
 {
     try {
         return read_pixels(path, img, msg, msglen);
     } catch (const std::bad_alloc &) {
-        return fail(CAP_ERR_NOMEM, msg, msglen, "%s: out of memory while reading", path);
+        return fail(IMG_ERR_NOMEM, msg, msglen, "%s: out of memory while reading", path);
     } catch (const std::exception &e) {
-        return fail(CAP_ERR_INPUT, msg, msglen, "%s: %s", path, e.what());
+        return fail(IMG_ERR_INPUT, msg, msglen, "%s: %s", path, e.what());
     } catch (...) {
-        return fail(CAP_ERR_INPUT, msg, msglen, "%s: unexpected error while reading", path);
+        return fail(IMG_ERR_INPUT, msg, msglen, "%s: unexpected error while reading", path);
     }
 }
 
-const cap__image_module table = {CAP__IMAGE_MODULE_VERSION, module_write, module_read};
+const img__module table = {IMG__MODULE_VERSION, module_write, module_read};
 
 } // namespace
 
-/* The module's one exported symbol, named by CAP__IMAGE_MODULE_ENTRY. */
-extern "C" __attribute__((visibility("default"))) const cap__image_module *ilfkit_image_module(void)
+/* The module's one exported symbol, named by IMG__MODULE_ENTRY. */
+extern "C" __attribute__((visibility("default"))) const img__module *ilfkit_image_module(void)
 {
     return &table;
 }

@@ -1,0 +1,67 @@
+/*
+ * module.h - the entry table between image/src/image.c, which implements
+ * image/image.h, and the image module libilfkit_oiio.so
+ * (image/src/oiio_module.cpp), which image.c loads with dlopen() on the
+ * first image read or write so that programs that never touch an image do
+ * not map OpenImageIO and its few hundred dependencies.
+ *
+ * The module exports one C function, IMG__MODULE_ENTRY, returning a static
+ * table whose first field is IMG__MODULE_VERSION. Any change to this header
+ * that changes the table or the functions' meaning must raise the version,
+ * so that a module from another build is refused, not called.
+ *
+ * Division of work: image.c checks arguments, chooses the format by
+ * extension, stats inputs and makes writes atomic (base's atomic writer);
+ * the module only encodes and decodes pixels. The module is self-contained:
+ * it calls nothing of ilfkit (its messages go to the caller's buffer) and
+ * never lets an exception out.
+ *
+ * This header is valid C and C++.
+ */
+#ifndef IMAGE_MODULE_H
+#define IMAGE_MODULE_H
+
+#include <stddef.h>
+
+#include "image/image.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** The table layout and meaning this build expects; raise on any change. (Moving the module from
+ * capture/ to image/ changed names only: the layout and the status values are those of version 1.) */
+#define IMG__MODULE_VERSION 1u
+
+/** Name of the exported entry function (an img__module_entry_fn). */
+#define IMG__MODULE_ENTRY "ilfkit_image_module"
+
+/** What the module offers. msg (msglen > 0 bytes, never NULL) receives one line on failure. */
+typedef struct img__module {
+    unsigned version; /**< IMG__MODULE_VERSION of the module's build; first, in every version */
+
+    /**
+     * Writes width x height x channels float pixels ([y][x][channel], sizes
+     * already checked) to the existing file file, replacing its content, in
+     * format (EXR or PNG); path is the final name, for messages only.
+     * @return IMG_OK; IMG_ERR_OUTPUT or IMG_ERR_NOMEM with a message naming path.
+     */
+    img_status (*write)(const char *file, const char *path, img_format format, int width, int height, int channels,
+                        const float *pixels, char *msg, size_t msglen);
+
+    /**
+     * Reads the first subimage of path (an existing file, not a folder) as
+     * image/image.h describes, pixels allocated with malloc().
+     * @return IMG_OK with *img filled; IMG_ERR_INPUT or IMG_ERR_NOMEM with *img untouched and a message naming path.
+     */
+    img_status (*read)(const char *path, img_image *img, char *msg, size_t msglen);
+} img__module;
+
+/** @return the module's static table (never NULL). */
+typedef const img__module *(*img__module_entry_fn)(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* IMAGE_MODULE_H */

@@ -1,0 +1,193 @@
+/*
+ * test_image.c - the image library (image/image.h) on its own, linked
+ * without capture: what test_capture does not already cover of it.
+ *
+ * What is checked:
+ *   - nothing of the module is mapped before the first read or write, and
+ *     the calls that never load it (status names, formats, sRGB) do not;
+ *   - the sRGB curve: fixed points, both segments, clamping, and decode
+ *     undoing encode;
+ *   - writes: a PNG read back as 8-bit integers quantised as given (opaque:
+ *     OpenImageIO's PNG reader multiplies colours by alpha), an EXR
+ *     replacing an existing file atomically, keeping its mode and leaving no
+ *     temporary (base's naming rule) behind; a missing folder, bad sizes and
+ *     channel counts refused with their status and a message naming the file;
+ *   - reads: missing files, folders and non-images refused as bad input with
+ *     the image zeroed; NULL err and a short err buffer are safe.
+ * Scratch files go to $ILF_TEST_TMP/image. The last line is "N passed, M failed".
+ */
+#include <dirent.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "check.h"
+#include "ilf/atomic_file.h"
+#include "image/image.h"
+
+#define PATH_BYTES 1024
+
+static char tmp_dir[PATH_BYTES - 64];
+
+/* @return tmp_dir/name in a static rotating buffer (4 live at a time). */
+static const char *tmp_path(const char *name)
+{
+    static char bufs[4][PATH_BYTES];
+    static int next;
+    char *b = bufs[next++ % 4];
+    snprintf(b, PATH_BYTES, "%s/%s", tmp_dir, name);
+    return b;
+}
+
+/* @return 1 if a line of /proc/self/maps contains name, 0 if none does, -1 if the maps cannot be read. */
+static int mapped(const char *name)
+{
+    FILE *f = fopen("/proc/self/maps", "r");
+    if (f == NULL)
+        return -1;
+    char line[PATH_BYTES + 128];
+    int found = 0;
+    while (!found && fgets(line, sizeof line, f) != NULL)
+        found = strstr(line, name) != NULL;
+    fclose(f);
+    return found;
+}
+
+/* @return how many entries of tmp_dir are temporaries under base's atomic-writer rule. */
+static int temporaries_left(void)
+{
+    DIR *d = opendir(tmp_dir);
+    int count = 0;
+    for (struct dirent *e; d != NULL && (e = readdir(d)) != NULL;)
+        count += ilf_atomic_is_temporary(e->d_name);
+    if (d != NULL)
+        closedir(d);
+    return count;
+}
+
+/* Must run before this process's first read or write. */
+static void test_nothing_loaded(void)
+{
+    CHECK(strcmp(img_status_name(IMG_OK), "ok") == 0 && strcmp(img_status_name(IMG_ERR_OUTPUT), "cannot write") == 0 &&
+              strcmp(img_status_name((img_status)99), "unknown status") == 0,
+          "status names");
+    CHECK(img_guess_format(NULL) == IMG_FORMAT_UNKNOWN && img_guess_format("x.png.tif") == IMG_FORMAT_UNKNOWN &&
+              img_guess_format("dir.exr/x") == IMG_FORMAT_UNKNOWN && img_guess_format(".EXR") == IMG_FORMAT_EXR,
+          "formats by the last component's extension");
+    img_free(NULL);
+    char err[256] = "";
+    const float px[3] = {0, 0, 0};
+    CHECK(img_write(tmp_path("a.tif"), 1, 1, 3, px, err, sizeof err) == IMG_ERR_ARG && strstr(err, "a.tif") != NULL,
+          "unknown extension: %s", err);
+    CHECK(img_write(tmp_path("a.png"), 0, 1, 3, px, err, sizeof err) == IMG_ERR_ARG &&
+              img_write(tmp_path("a.png"), IMG_MAX_SIDE + 1, 1, 3, px, err, sizeof err) == IMG_ERR_ARG &&
+              img_write(tmp_path("a.png"), 1, 1, 5, px, err, sizeof err) == IMG_ERR_ARG &&
+              img_write(NULL, 1, 1, 3, px, NULL, 0) == IMG_ERR_ARG && img_write(tmp_path("a.png"), 1, 1, 3, NULL, err, 0) == IMG_ERR_ARG,
+          "bad sizes, channel counts and NULLs are bad arguments");
+    img_image img;
+    CHECK(img_read(NULL, &img, err, sizeof err) == IMG_ERR_ARG && img.pixels == NULL &&
+              img_read(tmp_path("x.exr"), NULL, err, sizeof err) == IMG_ERR_ARG,
+          "NULL path or image");
+    CHECK(img_srgb_encode(0.5) > 0.0f, "sRGB needs no module");
+    CHECK(mapped("libilfkit_oiio") == 0 && mapped("libOpenImageIO") == 0,
+          "argument errors, names, formats and sRGB load nothing");
+}
+
+static void test_srgb(void)
+{
+    CHECK(img_srgb_encode(0.0) == 0.0f && img_srgb_encode(1.0) == 1.0f && img_srgb_decode(0.0f) == 0.0f &&
+              fabsf(img_srgb_decode(1.0f) - 1.0f) < 1e-6f,
+          "0 and 1 are fixed points");
+    CHECK(img_srgb_encode(-3.0) == 0.0f && img_srgb_encode(7.0) == 1.0f && isnan(img_srgb_encode(NAN)),
+          "encoding clamps to [0, 1] (NaN stays NaN)");
+    CHECK(fabs(img_srgb_encode(0.001) - 0.01292) < 1e-7 && fabs(img_srgb_encode(0.18) - 0.46135) < 1e-4,
+          "linear segment and the power segment (mid grey 0.18 -> %g)", (double)img_srgb_encode(0.18));
+    double worst = 0.0;
+    for (int k = 0; k <= 1000; k++) {
+        double v = k / 1000.0;
+        worst = fmax(worst, fabs(img_srgb_decode(img_srgb_encode(v)) - v));
+    }
+    CHECK(worst < 1e-6, "decode undoes encode within 1e-6 (worst %g)", worst);
+}
+
+static void test_writes(void)
+{
+    char err[512] = "";
+    const float rgba[2 * 1 * 4] = {0.0f, 0.6f, 1.0f, 1.0f, 0.25f, 2.0f, -1.0f, 1.0f};
+    const char *png = tmp_path("two.png");
+    remove(png);
+    CHECK(img_write(png, 2, 1, 4, rgba, err, sizeof err) == IMG_OK, "%s", err);
+    CHECK(mapped("libilfkit_oiio") == 1, "the module is mapped after the first write");
+    img_image img;
+    CHECK(img_read(png, &img, err, sizeof err) == IMG_OK, "%s", err);
+    if (img.pixels != NULL) {
+        CHECK(img.width == 2 && img.height == 1 && img.channels == 4 && img.integer == 1 && img.bits == 8,
+              "PNG: 2x1x4, 8-bit integers (%dx%dx%d, %d bits)", img.width, img.height, img.channels, img.bits);
+        const float want[8] = {0.0f, 153.0f / 255, 1.0f, 1.0f, 64.0f / 255, 1.0f, 0.0f, 1.0f};
+        float worst = 0.0f;
+        for (int k = 0; k < 8; k++)
+            worst = fmaxf(worst, fabsf(img.pixels[k] - want[k]));
+        CHECK(worst < 1e-6f, "PNG values quantised as given and clamped (worst %g)", (double)worst);
+    }
+    img_free(&img);
+    CHECK(img.pixels == NULL && img.width == 0, "img_free zeroes");
+
+    const char *exr = tmp_path("over.exr");
+    const float a[3] = {1, 2, 3}, b[3] = {4, 5, 6};
+    CHECK(img_write(exr, 1, 1, 3, a, err, sizeof err) == IMG_OK, "%s", err);
+    CHECK(chmod(exr, 0640) == 0, "chmod");
+    CHECK(img_write(exr, 1, 1, 3, b, err, sizeof err) == IMG_OK, "%s", err);
+    struct stat st;
+    CHECK(stat(exr, &st) == 0 && (st.st_mode & 0777) == 0640, "a replaced image keeps its mode (%o)",
+          (unsigned)(st.st_mode & 0777));
+    CHECK(img_read(exr, &img, err, sizeof err) == IMG_OK && img.pixels != NULL && memcmp(img.pixels, b, sizeof b) == 0,
+          "the EXR holds the second write: %s", err);
+    img_free(&img);
+    CHECK(temporaries_left() == 0, "no temporary left behind");
+
+    const char *nowhere = tmp_path("no-such-folder/x.exr");
+    CHECK(img_write(nowhere, 1, 1, 3, a, err, sizeof err) == IMG_ERR_OUTPUT && strstr(err, nowhere) != NULL &&
+              strstr(err, "cannot create a file there") != NULL,
+          "a missing folder: %s", err);
+    char tiny[8];
+    CHECK(img_write(nowhere, 1, 1, 3, a, tiny, sizeof tiny) == IMG_ERR_OUTPUT && strlen(tiny) == sizeof tiny - 1,
+          "a short err buffer gets a terminated prefix");
+    CHECK(img_write(nowhere, 1, 1, 3, a, NULL, 0) == IMG_ERR_OUTPUT, "NULL err is safe");
+}
+
+static void test_reads(void)
+{
+    char err[512] = "";
+    img_image img;
+    const char *missing = tmp_path("missing.exr");
+    CHECK(img_read(missing, &img, err, sizeof err) == IMG_ERR_INPUT && strstr(err, missing) != NULL &&
+              img.pixels == NULL && img.width == 0,
+          "a missing file: %s", err);
+    CHECK(img_read(tmp_dir, &img, err, sizeof err) == IMG_ERR_INPUT && strstr(err, "is a folder") != NULL,
+          "a folder: %s", err);
+    const char *text = tmp_path("text.exr");
+    FILE *f = fopen(text, "w");
+    if (f != NULL) {
+        fputs("not an image\n", f);
+        fclose(f);
+    }
+    CHECK(img_read(text, &img, NULL, 0) == IMG_ERR_INPUT && img.pixels == NULL, "not an image, NULL err");
+    CHECK(img_read(text, &img, err, sizeof err) == IMG_ERR_INPUT && strstr(err, "not a readable image") != NULL &&
+              strchr(err, '\n') == NULL,
+          "one line naming the problem: %s", err);
+}
+
+int main(void)
+{
+    const char *base = getenv("ILF_TEST_TMP");
+    snprintf(tmp_dir, sizeof tmp_dir, "%s/image", base != NULL ? base : "/tmp");
+    mkdir(base != NULL ? base : "/tmp", 0777);
+    mkdir(tmp_dir, 0777);
+    test_nothing_loaded();
+    test_srgb();
+    test_writes();
+    test_reads();
+    return check_report();
+}
