@@ -669,26 +669,41 @@ static int start_watcher(void)
     return 1;
 }
 
-/* Registers path, a folder when is_folder. */
-static void watch(const char *path, int is_folder)
+/* Registers path, a folder when is_folder; called with watched_lock held. */
+static void watch_locked(const char *path, int is_folder)
 {
-    pthread_mutex_lock(&watched_lock);
     size_t length = strlen(path);
     if (watched_count < MAX_WATCHED && length < MAX_WATCHED_PATH && start_watcher()) {
         watched_is_folder[watched_count] = is_folder;
         memcpy(watched[watched_count++], path, length + 1);
     }
+}
+
+/* Registers path, a folder when is_folder. */
+static void watch(const char *path, int is_folder)
+{
+    pthread_mutex_lock(&watched_lock);
+    watch_locked(path, is_folder);
     pthread_mutex_unlock(&watched_lock);
+}
+
+char *cli_staging_make(char *template)
+{
+    /* Created and registered under the lock the watcher takes before it cleans up: a signal that
+     * arrives in between waits for the registration, so it never leaves the folder behind. */
+    pthread_mutex_lock(&watched_lock);
+    char *made = mkdtemp(template);
+    int saved = errno;
+    if (made != NULL)
+        watch_locked(made, 1);
+    pthread_mutex_unlock(&watched_lock);
+    errno = saved;
+    return made;
 }
 
 void cli_output_watch(const char *path)
 {
     watch(path, 0);
-}
-
-void cli_staging_watch(const char *path)
-{
-    watch(path, 1);
 }
 
 void cli_staging_forget(const char *path)

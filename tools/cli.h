@@ -208,11 +208,13 @@ unsigned cli_default_threads(void);
 void cli_output_watch(const char *path);
 
 /*
- * Registers path as a staging folder this command created (outputs are
- * written into it, then renamed into place together): on SIGINT, SIGTERM or
- * SIGHUP it is removed with every file in it. Same limits as cli_output_watch().
+ * Creates a staging folder from template (mkdtemp's XXXXXX, replaced in place;
+ * outputs are written into it, then renamed into place together) and registers
+ * it in the same step, so that SIGINT, SIGTERM or SIGHUP at any moment removes
+ * it with every file in it. Same limits as cli_output_watch().
+ * @return template, or NULL with errno set.
  */
-void cli_staging_watch(const char *path);
+char *cli_staging_make(char *template);
 
 /* Unregisters staging folder path, once it is gone or emptied into place. */
 void cli_staging_forget(const char *path);

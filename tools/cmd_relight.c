@@ -226,7 +226,7 @@ static int stage_open(relight_run *run)
 {
     if (stage_paths(run, STAGE_TEMPLATE) != ILF_EXIT_OK)
         return ILF_EXIT_FAILED;
-    if (mkdtemp(run->stage) == NULL) {
+    if (cli_staging_make(run->stage) == NULL) {
         cli_error("relight", "cannot create a staging folder in '%s': %s", run->o->output, strerror(errno));
         free(run->stage);
         run->stage = NULL;
@@ -236,7 +236,6 @@ static int stage_open(relight_run *run)
     size_t len = strlen(run->stage);
     for (int k = 0; k < OUT_COUNT; k++)
         memcpy(run->staged[k], run->stage, len);
-    cli_staging_watch(run->stage);
     return ILF_EXIT_OK;
 }
 
