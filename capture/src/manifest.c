@@ -21,6 +21,7 @@
 #include "manifest.h"
 
 #define PATH_MAX_BYTES 4095
+_Static_assert(CAP_MANIFEST_MAX_BYTES == ILF_MANIFEST_MAX_BYTES, "capture.h and ilf/limits.h disagree");
 #define DEFAULT_N 16u
 #define DEFAULT_SLAB "capture"
 
@@ -101,9 +102,9 @@ static cap_status get_forward_up(const parser *p, const ilf_json *j, const char 
 /* An orientation: 3 rows of 3 numbers forming a rotation, or {"forward", "up"}. */
 static cap_status get_orientation(const parser *p, const ilf_json *j, const char *elem, double R[9])
 {
-    if ((ilf_json_type_of(j) == ILF_JSON_OBJECT))
+    if (ilf_json_type_of(j) == ILF_JSON_OBJECT)
         return get_forward_up(p, j, elem, R);
-    if (!(ilf_json_type_of(j) == ILF_JSON_ARRAY) || (int)ilf_json_count(j) != 3)
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY || (int)ilf_json_count(j) != 3)
         return cap__json_bad(p->path, elem, "expected 3 rows of 3 numbers or {\"forward\": ..., \"up\": ...}, got %s",
                    ilf_json_kind(j));
     char e[ILF_JSON_ELEM_MAX];
@@ -223,7 +224,7 @@ static cap_status read_bracket_item(const parser *p, const ilf_json *j, const ch
 
 static cap_status read_bracket(const parser *p, const ilf_json *j, const char *elem, cap__entry *e)
 {
-    if (!(ilf_json_type_of(j) == ILF_JSON_ARRAY))
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
         return cap__json_bad(p->path, elem, "expected an array of {\"file\", \"exposure\"}, got %s", ilf_json_kind(j));
     int count = (int)ilf_json_count(j);
     if (count < 1 || count > (int)CAP_BRACKET_MAX)
@@ -314,7 +315,7 @@ static cap_status read_position(const parser *p, const ilf_json *j, const char *
 
 static cap_status read_positions(const parser *p, const ilf_json *j)
 {
-    if (!(ilf_json_type_of(j) == ILF_JSON_ARRAY))
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
         return cap__json_bad(p->path, "positions", "expected an array, got %s", ilf_json_kind(j));
     char elem[ILF_JSON_ELEM_MAX];
     size_t k = 0;

@@ -37,17 +37,10 @@
  * of which passes the same steps before it is kept. Whatever is appended
  * therefore satisfies the polygon invariants of scene_internal.h.
  */
-#ifndef _POSIX_C_SOURCE
-#define _POSIX_C_SOURCE 200809L /* stat(); the build defines it too */
-#endif
-
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
-#include <sys/stat.h>
 
 #include "mesh.h"
 #include "ilf/mesh.h"

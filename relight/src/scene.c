@@ -20,18 +20,12 @@
  * allocation is sized by a count read from a file before that count has
  * been checked against its limit; arrays grow as elements pass their checks.
  */
-#ifndef _POSIX_C_SOURCE
-#define _POSIX_C_SOURCE 200809L /* fileno(), fstat(); the build defines it too */
-#endif
-
-#include <errno.h>
 #include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "mesh.h"
 #include "ilf/json.h"
@@ -312,7 +306,7 @@ static rl_status resolve_path(const rl_build *b, const char *elem, const char *f
 static rl_status read_materials(rl_build *b, const ilf_json *j)
 {
     static const char *const keys[] = {"albedo", "emission", NULL};
-    if (!(ilf_json_type_of(j) == ILF_JSON_OBJECT))
+    if (ilf_json_type_of(j) != ILF_JSON_OBJECT)
         return rl__build_fail(b, "materials", "expected an object, got %s", json_kind(j));
     for (const ilf_json *m = ilf_json_first(j); m; m = ilf_json_next(m)) {
         char elem[ELEM_MAX], sub[ELEM_MAX];
@@ -365,9 +359,9 @@ static rl_status read_polygon(rl_build *b, const ilf_json *p, const char *elem)
     if (st != RL_OK)
         return st;
     member_elem(sub, elem, "vertices");
-    if (!(ilf_json_type_of(vj) == ILF_JSON_ARRAY))
+    if (ilf_json_type_of(vj) != ILF_JSON_ARRAY)
         return rl__build_fail(b, sub, "expected an array of [x, y, z] vertices, got %s", json_kind(vj));
-    size_t n = (size_t)(int)ilf_json_count(vj);
+    size_t n = ilf_json_count(vj);
     if (n > RL_MAX_POLYGON_VERTICES) /* before anything is read into b->face */
         return rl__build_fail(b, elem, "has %zu vertices, more than the limit of %u", n, RL_MAX_POLYGON_VERTICES);
     size_t i = 0;
@@ -383,7 +377,7 @@ static rl_status read_polygon(rl_build *b, const ilf_json *p, const char *elem)
 /* Reads "polygons": an array of polygons. */
 static rl_status read_polygons(rl_build *b, const ilf_json *j)
 {
-    if (!(ilf_json_type_of(j) == ILF_JSON_ARRAY))
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
         return rl__build_fail(b, "polygons", "expected an array, got %s", json_kind(j));
     size_t i = 0;
     for (const ilf_json *p = ilf_json_first(j); p; p = ilf_json_next(p), i++) {
@@ -400,7 +394,7 @@ static rl_status read_polygons(rl_build *b, const ilf_json *j)
 static rl_status read_meshes(rl_build *b, const ilf_json *j)
 {
     static const char *const keys[] = {"file", "material", NULL};
-    if (!(ilf_json_type_of(j) == ILF_JSON_ARRAY))
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
         return rl__build_fail(b, "meshes", "expected an array, got %s", json_kind(j));
     size_t i = 0;
     for (const ilf_json *m = ilf_json_first(j); m; m = ilf_json_next(m), i++) {
@@ -432,7 +426,7 @@ static rl_status read_meshes(rl_build *b, const ilf_json *j)
 /* Reads a 4x4 matrix: 16 numbers in row-major order, or 4 rows of 4. @return RL_OK and t, or RL_ERR_INPUT. */
 static rl_status read_matrix(const rl_build *b, const ilf_json *j, const char *elem, double t[16])
 {
-    if (!(ilf_json_type_of(j) == ILF_JSON_ARRAY) || !(ilf_json_type_of(ilf_json_first(j)) == ILF_JSON_ARRAY))
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY || ilf_json_type_of(ilf_json_first(j)) != ILF_JSON_ARRAY)
         return json_vector(b, j, elem, 16, t);
     if ((int)ilf_json_count(j) != 4)
         return rl__build_fail(b, elem, "expected 4 rows of 4 numbers, got %d rows", (int)ilf_json_count(j));
@@ -532,7 +526,7 @@ static rl_status pick_slab(const rl_build *b, const ilf_json *sj, const char *el
 {
     size_t count = lfio_lightfield_slab_count(lf->lf);
     uint64_t index = 0;
-    if ((ilf_json_type_of(sj) == ILF_JSON_STRING)) {
+    if (ilf_json_type_of(sj) == ILF_JSON_STRING) {
         lf->slab = lfio_lightfield_find(lf->lf, ilf_json_text(sj));
         if (lf->slab)
             return RL_OK;
@@ -578,7 +572,7 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
         st = resolve_path(b, sub, file, lf->file, sizeof lf->file);
     sj = member(j, "slab");
     member_elem(sub, elem, "slab");
-    if (st == RL_OK && sj && !(ilf_json_type_of(sj) == ILF_JSON_STRING) && !(ilf_json_type_of(sj) == ILF_JSON_NUMBER))
+    if (st == RL_OK && sj && ilf_json_type_of(sj) != ILF_JSON_STRING && ilf_json_type_of(sj) != ILF_JSON_NUMBER)
         st = rl__build_fail(b, sub, "expected a slab name or index, got %s", json_kind(sj));
     tj = member(j, "transform");
     member_elem(sub, elem, "transform");
@@ -624,7 +618,7 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
 /* Reads "lightfields": an array of light field emitters. */
 static rl_status read_lightfields(rl_build *b, const ilf_json *j)
 {
-    if (!(ilf_json_type_of(j) == ILF_JSON_ARRAY))
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
         return rl__build_fail(b, "lightfields", "expected an array, got %s", json_kind(j));
     rl_scene *s = b->scene;
     size_t i = 0;
@@ -766,7 +760,7 @@ static rl_status read_scene(rl_build *b, const ilf_json *root)
                     {"sampling", read_sampling},   {"camera", read_camera},
                     {"polygons", read_polygons},   {"meshes", read_meshes},
                     {"lightfields", read_lightfields}};
-    if (!(ilf_json_type_of(root) == ILF_JSON_OBJECT))
+    if (ilf_json_type_of(root) != ILF_JSON_OBJECT)
         return rl__build_fail(b, "", "expected a JSON object at the top level, got %s", json_kind(root));
     rl_status st = json_keys(b, root, "", keys);
     for (size_t k = 0; k < sizeof sections / sizeof sections[0] && st == RL_OK; k++) {

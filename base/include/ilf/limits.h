@@ -35,7 +35,8 @@
 #define ILF_SCENE_MAX_BYTES ((size_t)256 << 20)
 
 /* Bytes of a capture manifest: a grid and a few settings per position, at most
- * CAP__MAX_POSITIONS of them, fits in well under this. */
+ * CAP__MAX_POSITIONS of them, fits in well under this. capture.h promises it to library users as
+ * CAP_MANIFEST_MAX_BYTES; manifest.c checks that the two agree. */
 #define ILF_MANIFEST_MAX_BYTES ((size_t)64 << 20)
 
 /* Bytes of a proxy's JSON list of rectangles (at most CAP_PROXY_MAX of them). */
@@ -52,7 +53,8 @@
 #define ILF_MESH_MAX_FACE_VERTICES 4096u
 
 /* Bytes of a glTF file's JSON read by the accessor pre-check (.gltf: the whole file; .glb: its JSON
- * chunk). Parsing costs several times this in memory; larger JSON is refused. */
+ * chunk). Parsing costs several times this in memory; a GLB whose JSON chunk is larger is refused,
+ * a larger .gltf is left to assimp unchecked. */
 #define ILF_GLTF_JSON_MAX_BYTES ((size_t)1 << 28)
 
 /* Elements declared in a PLY header (vertex, face, ...): real files have two or three. */
