@@ -582,6 +582,29 @@ expect 0 "reproject onto the triangulated quad" "$ILF" reproject "$CAP/probes.h5
     -o "$CAP/mesh_tri.h5" --grid 4x4 --n 4 --plain --quiet
 check "two triangles make the quad's slab, radiance and coverage alike" \
     diff <("$ILF" info "$CAP/mesh.h5" | grep -v '^file') <("$ILF" info "$CAP/mesh_tri.h5" | grep -v '^file')
+# Proxies take what scenes take, through the same importer: the same quad as PLY, and the triangulated
+# quad as STL and as binary glTF, give the OBJ's reprojection.
+printf 'ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n' >"$CAP/lamp.ply"
+printf 'element face 1\nproperty list uchar int vertex_indices\nend_header\n' >>"$CAP/lamp.ply"
+printf -- '-0.3 0.3 2\n0.3 0.3 2\n0.3 -0.3 2\n-0.3 -0.3 2\n4 0 3 2 1\n' >>"$CAP/lamp.ply"
+{
+    echo "solid lamp"
+    for tri in "-0.3 0.3 2|-0.3 -0.3 2|0.3 -0.3 2" "-0.3 0.3 2|0.3 -0.3 2|0.3 0.3 2"; do
+        echo " facet normal 0 0 1"
+        echo "  outer loop"
+        IFS='|' read -r a b c <<<"$tri"
+        printf '   vertex %s\n   vertex %s\n   vertex %s\n' "$a" "$b" "$c"
+        echo "  endloop"
+        echo " endfacet"
+    done
+    echo "endsolid lamp"
+} >"$CAP/lamp.stl"
+for ext in ply stl; do
+    expect 0 "reproject onto the quad as ${ext^^}" "$ILF" reproject "$CAP/probes.h5" --proxy "$CAP/lamp.$ext" \
+        -o "$CAP/mesh_$ext.h5" --grid 4x4 --n 4 --plain --quiet
+    check "the ${ext^^} proxy gives the OBJ's slab, radiance and coverage" \
+        diff <("$ILF" info "$CAP/mesh.h5" | grep -v '^file') <("$ILF" info "$CAP/mesh_$ext.h5" | grep -v '^file')
+done
 
 # capture and reproject: bad inputs are named and leave no output.
 printf '{"plane": {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0]}, "grid": {"nu": 1, "nv": 1},\n' >"$CAP/m_key.json"
@@ -619,9 +642,14 @@ printf 'v 0 0 2\nv 1 0 2\nv 0 1 2\nf 1 2 3\n' >"$CAP/tri.obj"
 expect 2 "a proxy mesh with a lone triangle" "$ILF" reproject "$CAP/probes.h5" --proxy "$CAP/tri.obj" -o "$CAP/never.h5"
 check "the lone triangle is refused by name" stderr_has "face 0 (mesh 0 face 0): 3 vertices: is a triangle without"
 printf 'ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nend_header\n' >"$CAP/huge.ply"
-expect 2 "a PLY proxy (its header's counts would be trusted)" "$ILF" reproject "$CAP/probes.h5" \
+expect 2 "a hostile PLY proxy (its header's counts would be trusted)" "$ILF" reproject "$CAP/probes.h5" \
     --proxy "$CAP/huge.ply" -o "$CAP/never.h5"
-check "the proxy format is refused by name" stderr_has "huge.ply: proxy format not supported"
+check "the PLY check refuses it by name, as for scenes" \
+    stderr_has "huge.ply: cannot read '$CAP/huge.ply': PLY header declares 4000000000 'vertex' elements"
+cp "$SRC/tests/hostile/mesh/count_absurd.dae" "$CAP/absurd.dae"
+expect 2 "a Collada proxy (its reader trusts a header's counts)" "$ILF" reproject "$CAP/probes.h5" \
+    --proxy "$CAP/absurd.dae" -o "$CAP/never.h5"
+check "the proxy format is refused by name" stderr_has "absurd.dae': mesh format not supported"
 expect 2 "render-probes without --plane" "$ILF" render-probes "$SRC/data/capture/scene.json" -o "$CAP/never"
 expect 2 "render-probes with a skew plane" "$ILF" render-probes "$SRC/data/capture/scene.json" \
     --plane 0,0,1:1,0,0:1,1,0 -o "$CAP/never"

@@ -1,6 +1,6 @@
 /*
  * manifest.c - reading and validating capture manifests (capture/capture.h,
- * docs/capture.md): JSON with cJSON, every key checked, every value
+ * docs/capture.md): JSON through base's strict reader (ilf/json.h), every key checked, every value
  * range-checked, every image file checked to exist.
  *
  * Invariants: loading either returns a manifest meeting manifest.h's
@@ -11,16 +11,17 @@
  */
 #include <errno.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
 #include "internal.h"
-#include "json.h"
 #include "manifest.h"
 
 #define PATH_MAX_BYTES 4095
+_Static_assert(CAP_MANIFEST_MAX_BYTES == ILF_MANIFEST_MAX_BYTES, "capture.h and ilf/limits.h disagree");
 #define DEFAULT_N 16u
 #define DEFAULT_SLAB "capture"
 
@@ -37,7 +38,7 @@ static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
 
 /* ------------------------------------------------------------ settings */
 
-static cap_status get_projection(const parser *p, const cJSON *j, const char *elem, cap_projection *out)
+static cap_status get_projection(const parser *p, const ilf_json *j, const char *elem, cap_projection *out)
 {
     const char *name = "";
     cap_status st = cap__json_string(p->path, j, elem, &name);
@@ -47,7 +48,7 @@ static cap_status get_projection(const parser *p, const cJSON *j, const char *el
     return st;
 }
 
-static cap_status get_colour_space(const parser *p, const cJSON *j, const char *elem, cap_colour_space *out)
+static cap_status get_colour_space(const parser *p, const ilf_json *j, const char *elem, cap_colour_space *out)
 {
     static const cap_colour_space all[] = {CAP_COLOUR_AUTO, CAP_COLOUR_LINEAR, CAP_COLOUR_SRGB};
     const char *name = "";
@@ -63,14 +64,14 @@ static cap_status get_colour_space(const parser *p, const cJSON *j, const char *
 }
 
 /* R from {"forward": f, "up": u}: columns forward, up x forward, up (orthogonalised). */
-static cap_status get_forward_up(const parser *p, const cJSON *j, const char *elem, double R[9])
+static cap_status get_forward_up(const parser *p, const ilf_json *j, const char *elem, double R[9])
 {
     static const char *const keys[] = {"forward", "up", NULL};
-    const cJSON *fj, *uj;
+    const ilf_json *fj, *uj;
     double f[3], u[3], l[3];
-    char fe[CAP__ELEM_MAX], ue[CAP__ELEM_MAX];
-    cap__json_member_name(fe, elem, "forward");
-    cap__json_member_name(ue, elem, "up");
+    char fe[ILF_JSON_ELEM_MAX], ue[ILF_JSON_ELEM_MAX];
+    ilf_json_member_name(fe, elem, "forward");
+    ilf_json_member_name(ue, elem, "up");
     cap_status st = cap__json_keys(p->path, j, elem, keys);
     if (st == CAP_OK)
         st = cap__json_member(p->path, j, elem, "forward", 1, &fj);
@@ -99,17 +100,17 @@ static cap_status get_forward_up(const parser *p, const cJSON *j, const char *el
 }
 
 /* An orientation: 3 rows of 3 numbers forming a rotation, or {"forward", "up"}. */
-static cap_status get_orientation(const parser *p, const cJSON *j, const char *elem, double R[9])
+static cap_status get_orientation(const parser *p, const ilf_json *j, const char *elem, double R[9])
 {
-    if (cJSON_IsObject(j))
+    if (ilf_json_type_of(j) == ILF_JSON_OBJECT)
         return get_forward_up(p, j, elem, R);
-    if (!cJSON_IsArray(j) || cJSON_GetArraySize(j) != 3)
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY || (int)ilf_json_count(j) != 3)
         return cap__json_bad(p->path, elem, "expected 3 rows of 3 numbers or {\"forward\": ..., \"up\": ...}, got %s",
-                   cap__json_kind(j));
-    char e[CAP__ELEM_MAX];
+                   ilf_json_kind(j));
+    char e[ILF_JSON_ELEM_MAX];
     for (int r = 0; r < 3; r++) {
-        cap__json_item_name(e, elem, (size_t)r);
-        cap_status st = cap__json_vector3(p->path, cJSON_GetArrayItem(j, r), e, &R[3 * r]);
+        ilf_json_item_name(e, elem, (size_t)r);
+        cap_status st = cap__json_vector3(p->path, ilf_json_at(j, (size_t)(r)), e, &R[3 * r]);
         if (st != CAP_OK)
             return st;
     }
@@ -119,14 +120,14 @@ static cap_status get_orientation(const parser *p, const cJSON *j, const char *e
 }
 
 /* Reads the optional settings keys of obj into e (projection, orientation, colour_space, scale). */
-static cap_status get_settings(const parser *p, const cJSON *obj, const char *elem, cap__entry *e)
+static cap_status get_settings(const parser *p, const ilf_json *obj, const char *elem, cap__entry *e)
 {
-    char sub[4][CAP__ELEM_MAX];
-    const cJSON *j[4];
+    char sub[4][ILF_JSON_ELEM_MAX];
+    const ilf_json *j[4];
     static const char *const keys[4] = {"projection", "orientation", "colour_space", "scale"};
     for (int k = 0; k < 4; k++) {
-        cap__json_member_name(sub[k], elem, keys[k]);
-        j[k] = cJSON_GetObjectItemCaseSensitive(obj, keys[k]);
+        ilf_json_member_name(sub[k], elem, keys[k]);
+        j[k] = ilf_json_get(obj, keys[k]);
     }
     cap_status st = CAP_OK;
     if (j[0] != NULL)
@@ -198,15 +199,15 @@ static void entry_free(cap__entry *e)
 /* ------------------------------------------------------------ positions */
 
 /* One bracket image {"file", "exposure"}. */
-static cap_status read_bracket_item(const parser *p, const cJSON *j, const char *elem, cap__entry *e, uint32_t k)
+static cap_status read_bracket_item(const parser *p, const ilf_json *j, const char *elem, cap__entry *e, uint32_t k)
 {
     static const char *const keys[] = {"file", "exposure", NULL};
-    const cJSON *fj, *xj;
+    const ilf_json *fj, *xj;
     const char *file;
     double exposure;
-    char fe[CAP__ELEM_MAX], xe[CAP__ELEM_MAX];
-    cap__json_member_name(fe, elem, "file");
-    cap__json_member_name(xe, elem, "exposure");
+    char fe[ILF_JSON_ELEM_MAX], xe[ILF_JSON_ELEM_MAX];
+    ilf_json_member_name(fe, elem, "file");
+    ilf_json_member_name(xe, elem, "exposure");
     cap_status st = cap__json_keys(p->path, j, elem, keys);
     if (st == CAP_OK)
         st = cap__json_member(p->path, j, elem, "file", 1, &fj);
@@ -221,33 +222,33 @@ static cap_status read_bracket_item(const parser *p, const cJSON *j, const char 
     return st;
 }
 
-static cap_status read_bracket(const parser *p, const cJSON *j, const char *elem, cap__entry *e)
+static cap_status read_bracket(const parser *p, const ilf_json *j, const char *elem, cap__entry *e)
 {
-    if (!cJSON_IsArray(j))
-        return cap__json_bad(p->path, elem, "expected an array of {\"file\", \"exposure\"}, got %s", cap__json_kind(j));
-    int count = cJSON_GetArraySize(j);
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
+        return cap__json_bad(p->path, elem, "expected an array of {\"file\", \"exposure\"}, got %s", ilf_json_kind(j));
+    int count = (int)ilf_json_count(j);
     if (count < 1 || count > (int)CAP_BRACKET_MAX)
         return cap__json_bad(p->path, elem, "%d images; a bracket holds 1 to %u", count, CAP_BRACKET_MAX);
     cap_status st = entry_reserve(e, (uint32_t)count);
     e->bracket = 1;
-    char sub[CAP__ELEM_MAX];
+    char sub[ILF_JSON_ELEM_MAX];
     for (int k = 0; st == CAP_OK && k < count; k++) {
-        cap__json_item_name(sub, elem, (size_t)k);
-        st = read_bracket_item(p, cJSON_GetArrayItem(j, k), sub, e, (uint32_t)k);
+        ilf_json_item_name(sub, elem, (size_t)k);
+        st = read_bracket_item(p, ilf_json_at(j, (size_t)(k)), sub, e, (uint32_t)k);
     }
     return st;
 }
 
 /* "image" with an optional "exposure", or "bracket": exactly one of the two. */
-static cap_status read_images(const parser *p, const cJSON *j, const char *elem, cap__entry *e)
+static cap_status read_images(const parser *p, const ilf_json *j, const char *elem, cap__entry *e)
 {
-    const cJSON *ij = cJSON_GetObjectItemCaseSensitive(j, "image");
-    const cJSON *bj = cJSON_GetObjectItemCaseSensitive(j, "bracket");
-    const cJSON *xj = cJSON_GetObjectItemCaseSensitive(j, "exposure");
-    char ie[CAP__ELEM_MAX], be[CAP__ELEM_MAX], xe[CAP__ELEM_MAX];
-    cap__json_member_name(ie, elem, "image");
-    cap__json_member_name(be, elem, "bracket");
-    cap__json_member_name(xe, elem, "exposure");
+    const ilf_json *ij = ilf_json_get(j, "image");
+    const ilf_json *bj = ilf_json_get(j, "bracket");
+    const ilf_json *xj = ilf_json_get(j, "exposure");
+    char ie[ILF_JSON_ELEM_MAX], be[ILF_JSON_ELEM_MAX], xe[ILF_JSON_ELEM_MAX];
+    ilf_json_member_name(ie, elem, "image");
+    ilf_json_member_name(be, elem, "bracket");
+    ilf_json_member_name(xe, elem, "exposure");
     if ((ij == NULL) == (bj == NULL))
         return cap__json_bad(p->path, elem, "give exactly one of 'image' and 'bracket'");
     if (bj != NULL && xj != NULL)
@@ -283,16 +284,16 @@ static cap_status claim_entry(const parser *p, const char *elem, uint32_t i, uin
     return CAP_OK;
 }
 
-static cap_status read_position(const parser *p, const cJSON *j, const char *elem)
+static cap_status read_position(const parser *p, const ilf_json *j, const char *elem)
 {
     static const char *const keys[] = {"i", "j", "image", "exposure", "bracket", "projection",
                                        "orientation", "colour_space", "scale", NULL};
     const lfio_slab_desc *d = &p->m->desc;
-    const cJSON *ij, *jj;
+    const ilf_json *ij, *jj;
     uint32_t i = 0, jv = 0;
-    char ie[CAP__ELEM_MAX], je[CAP__ELEM_MAX];
-    cap__json_member_name(ie, elem, "i");
-    cap__json_member_name(je, elem, "j");
+    char ie[ILF_JSON_ELEM_MAX], je[ILF_JSON_ELEM_MAX];
+    ilf_json_member_name(ie, elem, "i");
+    ilf_json_member_name(je, elem, "j");
     cap__entry *e = NULL;
     cap_status st = cap__json_keys(p->path, j, elem, keys);
     if (st == CAP_OK)
@@ -312,14 +313,14 @@ static cap_status read_position(const parser *p, const cJSON *j, const char *ele
     return st;
 }
 
-static cap_status read_positions(const parser *p, const cJSON *j)
+static cap_status read_positions(const parser *p, const ilf_json *j)
 {
-    if (!cJSON_IsArray(j))
-        return cap__json_bad(p->path, "positions", "expected an array, got %s", cap__json_kind(j));
-    char elem[CAP__ELEM_MAX];
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
+        return cap__json_bad(p->path, "positions", "expected an array, got %s", ilf_json_kind(j));
+    char elem[ILF_JSON_ELEM_MAX];
     size_t k = 0;
-    for (const cJSON *c = j->child; c != NULL; c = c->next, k++) {
-        cap__json_item_name(elem, "positions", k);
+    for (const ilf_json *c = ilf_json_first(j); c != NULL; c = ilf_json_next(c), k++) {
+        ilf_json_item_name(elem, "positions", k);
         cap_status st = read_position(p, c, elem);
         if (st != CAP_OK)
             return st;
@@ -357,17 +358,17 @@ static cap_status expand_pattern(const parser *p, const char *pattern, uint32_t 
 }
 
 /* "exposures": 1 .. CAP_BRACKET_MAX numbers > 0 into ex. @return CAP_OK and *count. */
-static cap_status read_exposures(const parser *p, const cJSON *j, double ex[CAP_BRACKET_MAX], uint32_t *count)
+static cap_status read_exposures(const parser *p, const ilf_json *j, double ex[CAP_BRACKET_MAX], uint32_t *count)
 {
-    int n = cJSON_IsArray(j) ? cJSON_GetArraySize(j) : -1;
+    int n = (ilf_json_type_of(j) == ILF_JSON_ARRAY) ? (int)ilf_json_count(j) : -1;
     if (n < 1 || n > (int)CAP_BRACKET_MAX)
-        return n < 0 ? cap__json_bad(p->path, "exposures", "expected an array of numbers, got %s", cap__json_kind(j))
+        return n < 0 ? cap__json_bad(p->path, "exposures", "expected an array of numbers, got %s", ilf_json_kind(j))
                      : cap__json_bad(p->path, "exposures", "%d exposures; a bracket holds 1 to %u", n, CAP_BRACKET_MAX);
-    char elem[CAP__ELEM_MAX];
+    char elem[ILF_JSON_ELEM_MAX];
     cap_status st = CAP_OK;
     for (int k = 0; st == CAP_OK && k < n; k++) {
-        cap__json_item_name(elem, "exposures", (size_t)k);
-        st = cap__json_positive(p->path, cJSON_GetArrayItem(j, k), elem, &ex[k]);
+        ilf_json_item_name(elem, "exposures", (size_t)k);
+        st = cap__json_positive(p->path, ilf_json_at(j, (size_t)(k)), elem, &ex[k]);
     }
     *count = (uint32_t)n;
     return st;
@@ -375,7 +376,7 @@ static cap_status read_exposures(const parser *p, const cJSON *j, double ex[CAP_
 
 /* "pattern", one image per position, or with "exposures" (jx, else NULL) a bracket per position: image k of the
  * bracket is the pattern with {k} replaced by k, at exposure k. */
-static cap_status read_pattern(const parser *p, const cJSON *j, const cJSON *jx)
+static cap_status read_pattern(const parser *p, const ilf_json *j, const ilf_json *jx)
 {
     const lfio_slab_desc *d = &p->m->desc;
     const char *pattern;
@@ -412,7 +413,7 @@ static cap_status read_pattern(const parser *p, const cJSON *j, const cJSON *jx)
 
 /* ------------------------------------------------------------ the slab */
 
-static cap_status read_units(const parser *p, const cJSON *j, lfio_slab_desc *d)
+static cap_status read_units(const parser *p, const ilf_json *j, lfio_slab_desc *d)
 {
     const char *name;
     cap_status st = cap__json_string(p->path, j, "units", &name);
@@ -428,10 +429,10 @@ static cap_status read_units(const parser *p, const cJSON *j, lfio_slab_desc *d)
 }
 
 /* The slab: plane, grid, n, name, units, within lfio's size limit. */
-static cap_status read_slab(const parser *p, const cJSON *root, lfio_slab_desc *d)
+static cap_status read_slab(const parser *p, const ilf_json *root, lfio_slab_desc *d)
 {
     static const char *const plane_keys[] = {"origin", "u", "v", NULL};
-    const cJSON *j;
+    const ilf_json *j;
     lfio_slab_desc_init(d);
     snprintf(d->name, sizeof d->name, "%s", DEFAULT_SLAB);
     d->n = DEFAULT_N;
@@ -447,11 +448,11 @@ static cap_status read_slab(const parser *p, const cJSON *root, lfio_slab_desc *
     if (st == CAP_OK && (uint64_t)d->nu * d->nv > CAP__MAX_POSITIONS)
         return cap__json_bad(p->path, "grid", "%u x %u positions; at most %llu are supported", d->nu, d->nv,
                    (unsigned long long)CAP__MAX_POSITIONS);
-    if (st == CAP_OK && (j = cJSON_GetObjectItemCaseSensitive(root, "n")) != NULL)
+    if (st == CAP_OK && (j = ilf_json_get(root, "n")) != NULL)
         st = cap__json_uint(p->path, j, "n", 1, LFIO_SLAB_MAX_N, &d->n);
-    if (st == CAP_OK && (j = cJSON_GetObjectItemCaseSensitive(root, "slab")) != NULL)
+    if (st == CAP_OK && (j = ilf_json_get(root, "slab")) != NULL)
         st = cap__json_slab_name(p->path, j, "slab", d->name);
-    if (st == CAP_OK && (j = cJSON_GetObjectItemCaseSensitive(root, "units")) != NULL)
+    if (st == CAP_OK && (j = ilf_json_get(root, "units")) != NULL)
         st = read_units(p, j, d);
     if (st != CAP_OK)
         return st;
@@ -464,7 +465,7 @@ static cap_status read_slab(const parser *p, const cJSON *root, lfio_slab_desc *
 
 /* ------------------------------------------------------------ the file */
 
-static cap_status read_root(parser *p, const cJSON *root)
+static cap_status read_root(parser *p, const ilf_json *root)
 {
     static const char *const keys[] = {"plane", "grid", "n", "slab", "units", "projection", "orientation",
                                        "colour_space", "scale", "pattern", "exposures", "positions", NULL};
@@ -481,9 +482,9 @@ static cap_status read_root(parser *p, const cJSON *root)
         st = get_settings(p, root, "", &p->shared);
     if (st != CAP_OK)
         return st;
-    const cJSON *pattern = cJSON_GetObjectItemCaseSensitive(root, "pattern");
-    const cJSON *positions = cJSON_GetObjectItemCaseSensitive(root, "positions");
-    const cJSON *exposures = cJSON_GetObjectItemCaseSensitive(root, "exposures");
+    const ilf_json *pattern = ilf_json_get(root, "pattern");
+    const ilf_json *positions = ilf_json_get(root, "positions");
+    const ilf_json *exposures = ilf_json_get(root, "exposures");
     if ((pattern == NULL) == (positions == NULL))
         return cap__json_bad(p->path, "", "give exactly one of 'pattern' and 'positions'");
     if (exposures != NULL && pattern == NULL)
@@ -523,7 +524,7 @@ cap_status cap_manifest_load(const char *path, cap_manifest **out)
     parser p;
     memset(&p, 0, sizeof p);
     p.path = path;
-    cJSON *root = NULL;
+    ilf_json *root = NULL;
     cap_status st = set_folder(&p, path);
     if (st == CAP_OK)
         st = cap__json_load(path, CAP_MANIFEST_MAX_BYTES, &root);
@@ -535,7 +536,7 @@ cap_status cap_manifest_load(const char *path, cap_manifest **out)
         strcpy(p.m->path, path);
         st = read_root(&p, root);
     }
-    cJSON_Delete(root);
+    ilf_json_free(root);
     if (st != CAP_OK) {
         cap_manifest_destroy(p.m);
         return st;
@@ -596,4 +597,139 @@ const char *cap_colour_space_name(cap_colour_space c)
         return "srgb";
     }
     return "";
+}
+
+/* ------------------------------------------------------------ JSON values (manifest.h) */
+
+/* Moves the reader's message into capture's error state. @return CAP_OK, CAP_ERR_INPUT or CAP_ERR_NOMEM. */
+static cap_status json_result(const ilf_json_ctx *c, ilf_json_status st)
+{
+    if (st == ILF_JSON_OK)
+        return CAP_OK;
+    return cap__fail_text(st == ILF_JSON_ERR_NOMEM ? CAP_ERR_NOMEM : CAP_ERR_INPUT, c->message);
+}
+
+cap_status cap__json_bad(const char *path, const char *elem, const char *fmt, ...)
+{
+    char text[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    ilf_json_ctx c = {.file = path};
+    return json_result(&c, ilf_json_fail(&c, elem, "%s", text));
+}
+
+cap_status cap__json_load(const char *path, size_t max_bytes, ilf_json **root)
+{
+    ilf_json_ctx c = {.file = path};
+    return json_result(&c, ilf_json_load(&c, max_bytes, root));
+}
+
+cap_status cap__json_keys(const char *path, const ilf_json *j, const char *elem, const char *const *allowed)
+{
+    ilf_json_ctx c = {.file = path};
+    return json_result(&c, ilf_json_keys(&c, j, elem, allowed));
+}
+
+cap_status cap__json_member(const char *path, const ilf_json *obj, const char *elem, const char *key, int required,
+                            const ilf_json **out)
+{
+    ilf_json_ctx c = {.file = path};
+    return json_result(&c, ilf_json_member(&c, obj, elem, key, required, out));
+}
+
+cap_status cap__json_positive(const char *path, const ilf_json *j, const char *elem, double *out)
+{
+    ilf_json_ctx c = {.file = path};
+    double v = 0.0;
+    ilf_json_status st = ilf_json_number(&c, j, elem, &v);
+    if (st == ILF_JSON_OK && !(v > 0.0))
+        st = ilf_json_fail(&c, elem, "must be > 0, got %g", v);
+    if (st == ILF_JSON_OK)
+        *out = v;
+    return json_result(&c, st);
+}
+
+cap_status cap__json_vector3(const char *path, const ilf_json *j, const char *elem, double out[3])
+{
+    ilf_json_ctx c = {.file = path};
+    return json_result(&c, ilf_json_vector(&c, j, elem, 3, out));
+}
+
+cap_status cap__json_uint(const char *path, const ilf_json *j, const char *elem, uint32_t lo, uint32_t hi,
+                          uint32_t *out)
+{
+    ilf_json_ctx c = {.file = path};
+    uint64_t v = 0;
+    ilf_json_status st = ilf_json_integer(&c, j, elem, lo, hi, 0, &v);
+    if (st == ILF_JSON_OK)
+        *out = (uint32_t)v;
+    return json_result(&c, st);
+}
+
+cap_status cap__json_string(const char *path, const ilf_json *j, const char *elem, const char **out)
+{
+    ilf_json_ctx c = {.file = path};
+    return json_result(&c, ilf_json_string(&c, j, elem, out));
+}
+
+/* ------------------------------------------------------------ slabs */
+
+cap_status cap__json_slab_name(const char *path, const ilf_json *j, const char *elem, char name[LFIO_NAME_MAX + 1])
+{
+    const char *text;
+    cap_status st = cap__json_string(path, j, elem, &text);
+    if (st != CAP_OK)
+        return st;
+    size_t len = strlen(text);
+    int ok = len >= 1 && len <= LFIO_NAME_MAX;
+    for (const char *c = text; ok && *c != '\0'; c++)
+        ok = (*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9') || *c == '_' ||
+             *c == '-' || *c == '.';
+    if (!ok)
+        return cap__json_bad(path, elem, "'%s': use 1 to %d of A-Z a-z 0-9 _ - .", text, LFIO_NAME_MAX);
+    memcpy(name, text, len + 1);
+    return CAP_OK;
+}
+
+cap_status cap__json_rectangle(const char *path, const ilf_json *obj, const char *elem, lfio_slab_desc *d)
+{
+    static const char *const keys[3] = {"origin", "u", "v"};
+    double *dest[3] = {d->origin, d->u, d->v};
+    for (int k = 0; k < 3; k++) {
+        const ilf_json *j;
+        char e[ILF_JSON_ELEM_MAX];
+        ilf_json_member_name(e, elem, keys[k]);
+        cap_status st = cap__json_member(path, obj, elem, keys[k], 1, &j);
+        if (st == CAP_OK)
+            st = cap__json_vector3(path, j, e, dest[k]);
+        if (st != CAP_OK)
+            return st;
+    }
+    double lu = cap__norm(d->u), lv = cap__norm(d->v);
+    if (!(lu > 0.0) || !(lv > 0.0) || !isfinite(lu * lv))
+        return cap__json_bad(path, elem, "u and v must be nonzero (and their lengths finite)");
+    if (fabs(cap__dot(d->u, d->v)) > 1e-9 * lu * lv)
+        return cap__json_bad(path, elem, "u and v must be orthogonal (u.v = %g)", cap__dot(d->u, d->v));
+    return CAP_OK;
+}
+
+cap_status cap__json_grid(const char *path, const ilf_json *j, const char *elem, lfio_slab_desc *d)
+{
+    static const char *const keys[] = {"nu", "nv", NULL};
+    const ilf_json *a, *b;
+    char ae[ILF_JSON_ELEM_MAX], be[ILF_JSON_ELEM_MAX];
+    ilf_json_member_name(ae, elem, "nu");
+    ilf_json_member_name(be, elem, "nv");
+    cap_status st = cap__json_keys(path, j, elem, keys);
+    if (st == CAP_OK)
+        st = cap__json_member(path, j, elem, "nu", 1, &a);
+    if (st == CAP_OK)
+        st = cap__json_member(path, j, elem, "nv", 1, &b);
+    if (st == CAP_OK)
+        st = cap__json_uint(path, a, ae, 1, 65536, &d->nu);
+    if (st == CAP_OK)
+        st = cap__json_uint(path, b, be, 1, 65536, &d->nv);
+    return st;
 }

@@ -11,6 +11,7 @@
 #define CAPTURE_MANIFEST_H
 
 #include "capture/capture.h"
+#include "ilf/json.h"
 
 /** Most positions a manifest may describe. */
 #define CAP__MAX_POSITIONS ((uint64_t)1 << 20)
@@ -34,5 +35,52 @@ struct cap_manifest {
     uint64_t images;
     cap__entry *entries; /* [nv][nu]: entry k = j*nu + i */
 };
+
+/* ------------------------------------------------------------ JSON values
+ * Capture's typed reading of its JSON inputs (manifests here, proxies in proxy.c), through base's one
+ * strict reader (ilf/json.h): each function reads one value and, on failure, moves the reader's
+ * message "PATH: ELEM: problem" into capture's error state with CAP_ERR_INPUT (CAP_ERR_NOMEM when
+ * memory runs out). Nothing is stored on failure except where stated. */
+
+/* Fails with "PATH: ELEM: <fmt>" (ELEM and its colon left out when empty). @return CAP_ERR_INPUT. */
+cap_status cap__json_bad(const char *path, const char *elem, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* Reads and parses the JSON file path of at most max_bytes (a file that cannot be opened or read is
+ * CAP_ERR_INPUT, as every problem with a capture input is). @return CAP_OK and *root (ilf_json_free it). */
+cap_status cap__json_load(const char *path, size_t max_bytes, ilf_json **root);
+
+/* j must be an object whose keys are all in allowed (NULL-terminated) and none repeated. @return CAP_OK or CAP_ERR_INPUT. */
+cap_status cap__json_keys(const char *path, const ilf_json *j, const char *elem, const char *const *allowed);
+
+/* *out = member key of obj, or NULL; a missing required member is an error. @return CAP_OK or CAP_ERR_INPUT. */
+cap_status cap__json_member(const char *path, const ilf_json *obj, const char *elem, const char *key, int required,
+                            const ilf_json **out);
+
+/* A finite number > 0. @return CAP_OK and *out, or CAP_ERR_INPUT. */
+cap_status cap__json_positive(const char *path, const ilf_json *j, const char *elem, double *out);
+
+/* An array of 3 finite numbers. @return CAP_OK and out, or CAP_ERR_INPUT. */
+cap_status cap__json_vector3(const char *path, const ilf_json *j, const char *elem, double out[3]);
+
+/* A whole number in lo..hi. @return CAP_OK and *out, or CAP_ERR_INPUT. */
+cap_status cap__json_uint(const char *path, const ilf_json *j, const char *elem, uint32_t lo, uint32_t hi,
+                          uint32_t *out);
+
+/* A non-empty string; *out is set to "" first, so it is never left undefined. @return CAP_OK or CAP_ERR_INPUT. */
+cap_status cap__json_string(const char *path, const ilf_json *j, const char *elem, const char **out);
+
+/* A slab name: 1 to LFIO_NAME_MAX of A-Z a-z 0-9 _ - . copied into name. @return CAP_OK or CAP_ERR_INPUT. */
+cap_status cap__json_slab_name(const char *path, const ilf_json *j, const char *elem, char name[LFIO_NAME_MAX + 1]);
+
+/* The required "origin", "u", "v" members of obj (which may hold other keys, checked by the caller)
+ * into d, with u and v nonzero and orthogonal as lfio requires. @return CAP_OK or CAP_ERR_INPUT. */
+cap_status cap__json_rectangle(const char *path, const ilf_json *obj, const char *elem, lfio_slab_desc *d);
+
+/* A grid object {"nu", "nv"}, each 1 .. 65536, into d->nu and d->nv. @return CAP_OK or CAP_ERR_INPUT. */
+cap_status cap__json_grid(const char *path, const ilf_json *j, const char *elem, lfio_slab_desc *d);
 
 #endif /* CAPTURE_MANIFEST_H */

@@ -1,7 +1,8 @@
 /*
  * proxy.c - loading proxy geometry for reprojection (cap_proxy_load in
- * capture/reproject.h): a JSON list of rectangles, or a mesh file read with
- * assimp whose faces are rectangles: quads, or triangles that pair up into
+ * capture/reproject.h): a JSON list of rectangles, or a mesh file imported
+ * by base's one mesh importer (ilf/mesh.h: the formats and checks scenes
+ * get) whose faces are rectangles: quads, or triangles that pair up into
  * rectangles (a triangulated quad, as exporters and assimp write them).
  *
  * Triangles are merged, not given slabs of their own: a slab is a
@@ -15,9 +16,6 @@
  * error naming the face, never silently dropped or split; one function,
  * corners_rectangle(), turns both quads and merged pairs into rectangles.
  */
-#include <assimp/cimport.h>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
 #include <ctype.h>
 #include <math.h>
 #include <stdio.h>
@@ -26,10 +24,11 @@
 
 #include "capture/reproject.h"
 #include "internal.h"
-#include "json.h"
+#include "ilf/mesh.h"
+#include "manifest.h"
 
-/* Largest proxy JSON file accepted. */
-#define PROXY_MAX_BYTES ((size_t)16 << 20)
+/* Largest proxy JSON file accepted (ilf/limits.h). */
+#define PROXY_MAX_BYTES ILF_PROXY_JSON_MAX_BYTES
 /* Relative tolerance of the rectangle test for mesh faces (edges of single-precision vertices). */
 #define RECT_TOL 1e-5
 
@@ -68,24 +67,24 @@ static cap_status check_size(const char *path, const char *elem, const lfio_slab
 
 /* ------------------------------------------------------------ JSON */
 
-static cap_status read_rect(const char *path, const cJSON *j, const char *elem, lfio_slab_desc *d)
+static cap_status read_rect(const char *path, const ilf_json *j, const char *elem, lfio_slab_desc *d)
 {
     static const char *const keys[] = {"name", "origin", "u", "v", "grid", "n", NULL};
-    const cJSON *x;
-    char e[CAP__ELEM_MAX];
+    const ilf_json *x;
+    char e[ILF_JSON_ELEM_MAX];
     cap_status st = cap__json_keys(path, j, elem, keys);
     if (st == CAP_OK)
         st = cap__json_rectangle(path, j, elem, d);
-    if (st == CAP_OK && (x = cJSON_GetObjectItemCaseSensitive(j, "name")) != NULL) {
-        cap__json_member_name(e, elem, "name");
+    if (st == CAP_OK && (x = ilf_json_get(j, "name")) != NULL) {
+        ilf_json_member_name(e, elem, "name");
         st = cap__json_slab_name(path, x, e, d->name);
     }
-    if (st == CAP_OK && (x = cJSON_GetObjectItemCaseSensitive(j, "grid")) != NULL) {
-        cap__json_member_name(e, elem, "grid");
+    if (st == CAP_OK && (x = ilf_json_get(j, "grid")) != NULL) {
+        ilf_json_member_name(e, elem, "grid");
         st = cap__json_grid(path, x, e, d);
     }
-    if (st == CAP_OK && (x = cJSON_GetObjectItemCaseSensitive(j, "n")) != NULL) {
-        cap__json_member_name(e, elem, "n");
+    if (st == CAP_OK && (x = ilf_json_get(j, "n")) != NULL) {
+        ilf_json_member_name(e, elem, "n");
         st = cap__json_uint(path, x, e, 1, LFIO_SLAB_MAX_N, &d->n);
     }
     if (st == CAP_OK)
@@ -95,36 +94,35 @@ static cap_status read_rect(const char *path, const cJSON *j, const char *elem, 
 
 static cap_status load_json(const char *path, const cap_proxy_defaults *def, cap_proxy *p)
 {
-    cJSON *root;
+    ilf_json *root;
     cap_status st = cap__json_load(path, PROXY_MAX_BYTES, &root);
     if (st != CAP_OK)
         return st;
-    int count = cJSON_IsArray(root) ? cJSON_GetArraySize(root) : -1;
+    int count = (ilf_json_type_of(root) == ILF_JSON_ARRAY) ? (int)ilf_json_count(root) : -1;
     if (count < 1 || count > (int)CAP_PROXY_MAX)
-        st = count < 0 ? cap__json_bad(path, "", "expected an array of rectangles, got %s", cap__json_kind(root))
+        st = count < 0 ? cap__json_bad(path, "", "expected an array of rectangles, got %s", ilf_json_kind(root))
                        : cap__json_bad(path, "", "%d rectangles; a proxy holds 1 to %u", count, CAP_PROXY_MAX);
     if (st == CAP_OK && (p->rects = calloc((size_t)count, sizeof *p->rects)) == NULL)
         st = cap__fail(CAP_ERR_NOMEM, "%s: out of memory", path);
     for (int k = 0; st == CAP_OK && k < count; k++) {
-        char elem[CAP__ELEM_MAX];
-        cap__json_item_name(elem, "", (size_t)k);
+        char elem[ILF_JSON_ELEM_MAX];
+        ilf_json_item_name(elem, "", (size_t)k);
         rect_init(&p->rects[k], def, "proxy", (size_t)k);
-        st = read_rect(path, cJSON_GetArrayItem(root, k), elem, &p->rects[k]);
+        st = read_rect(path, ilf_json_at(root, (size_t)(k)), elem, &p->rects[k]);
         p->count = (size_t)k + 1;
         if (st == CAP_OK && name_taken(p, (size_t)k))
             st = cap__json_bad(path, elem, "name '%s' is used twice", p->rects[k].name);
     }
-    cJSON_Delete(root);
+    ilf_json_free(root);
     return st;
 }
 
 /* ------------------------------------------------------------ meshes */
 
-static void vertex(const struct aiMesh *mesh, unsigned index, double out[3])
+/* Copies vertex k of face f of the mesh into out. */
+static void vertex(const ilf_mesh *m, const ilf_mesh_face *f, unsigned k, double out[3])
 {
-    out[0] = mesh->mVertices[index].x;
-    out[1] = mesh->mVertices[index].y;
-    out[2] = mesh->mVertices[index].z;
+    memcpy(out, m->vertices[m->indices[f->first + k]], 3 * sizeof *out);
 }
 
 /* Makes d's rectangle from corners c[0..3], in order around it: origin c0, u = c1 - c0, v = c3 - c0.
@@ -152,18 +150,6 @@ static const char *corners_rectangle(const double c[4][3], lfio_slab_desc *d)
     return NULL;
 }
 
-/* One face of the mesh file: where it is, for messages and names. */
-typedef struct face_ref {
-    unsigned mesh, face;
-    size_t index; /* over the file's meshes */
-    int used;     /* a triangle already merged into an earlier one's rectangle */
-} face_ref;
-
-/* @return the face's aiFace. */
-static const struct aiFace *face_of(const struct aiScene *sc, const face_ref *f)
-{
-    return &sc->mMeshes[f->mesh]->mFaces[f->face];
-}
 
 /* @return 1 if points a and b are within tol of each other in every coordinate. */
 static int same_point(const double a[3], const double b[3], double tol)
@@ -177,13 +163,12 @@ static int same_point(const double a[3], const double b[3], double tol)
  * edge c[0] -> c[2] (t's longest edge, run the other way, as in a consistently wound mesh) and its third
  * vertex becomes c[3]. @return the partner's index in faces, or 0 if there is none (c[3] undefined).
  */
-static size_t find_partner(const struct aiScene *sc, face_ref *faces, size_t count, size_t t, double c[4][3])
+static size_t find_partner(const ilf_mesh *m, const char *used, size_t t, double c[4][3])
 {
-    const struct aiMesh *mesh = sc->mMeshes[faces[t].mesh];
     double v[3][3], longest = -1.0;
     int opposite = 0;
     for (int k = 0; k < 3; k++)
-        vertex(mesh, face_of(sc, &faces[t])->mIndices[k], v[k]);
+        vertex(m, &m->faces[t], (unsigned)k, v[k]);
     for (int k = 0; k < 3; k++) {
         double e[3] = {v[(k + 2) % 3][0] - v[(k + 1) % 3][0], v[(k + 2) % 3][1] - v[(k + 1) % 3][1],
                        v[(k + 2) % 3][2] - v[(k + 1) % 3][2]};
@@ -195,13 +180,13 @@ static size_t find_partner(const struct aiScene *sc, face_ref *faces, size_t cou
     for (int k = 0; k < 3; k++)
         memcpy(c[k], v[(opposite + 2 + k) % 3], sizeof c[k]);
     const double tol = RECT_TOL * longest;
-    for (size_t b = t + 1; b < count; b++) {
-        const struct aiFace *f = face_of(sc, &faces[b]);
-        if (faces[b].used || f->mNumIndices != 3)
+    for (size_t b = t + 1; b < m->nfaces; b++) {
+        const ilf_mesh_face *f = &m->faces[b];
+        if (used[b] || f->count != 3)
             continue;
         double w[3][3];
         for (int k = 0; k < 3; k++)
-            vertex(sc->mMeshes[faces[b].mesh], f->mIndices[k], w[k]);
+            vertex(m, f, (unsigned)k, w[k]);
         for (int k = 0; k < 3; k++)
             if (same_point(w[k], c[0], tol) && same_point(w[(k + 1) % 3], c[2], tol)) {
                 memcpy(c[3], w[(k + 2) % 3], sizeof c[3]);
@@ -215,86 +200,77 @@ static size_t find_partner(const struct aiScene *sc, face_ref *faces, size_t cou
  * Makes rectangle d from face t (a quad, or a triangle merged with its partner, which is marked used) and
  * names the face(s) in elem. @return NULL, or why no rectangle can be made.
  */
-static const char *face_rectangle(const struct aiScene *sc, face_ref *faces, size_t count, size_t t,
-                                  lfio_slab_desc *d, char elem[CAP__ELEM_MAX])
+static const char *face_rectangle(const ilf_mesh *m, char *used, size_t t, lfio_slab_desc *d,
+                                  char elem[ILF_JSON_ELEM_MAX])
 {
-    const struct aiFace *f = face_of(sc, &faces[t]);
-    snprintf(elem, CAP__ELEM_MAX, "face %zu (mesh %u face %u)", faces[t].index, faces[t].mesh, faces[t].face);
+    const ilf_mesh_face *f = &m->faces[t];
+    snprintf(elem, ILF_JSON_ELEM_MAX, "face %zu (mesh %u face %u)", t, f->mesh, f->face);
     double c[4][3];
-    if (f->mNumIndices == 4) {
+    if (f->count == 4) {
         for (int k = 0; k < 4; k++)
-            vertex(sc->mMeshes[faces[t].mesh], f->mIndices[k], c[k]);
+            vertex(m, f, (unsigned)k, c[k]);
         return corners_rectangle(c, d);
     }
-    if (f->mNumIndices != 3)
+    if (f->count != 3)
         return "is neither a quad nor a triangle (proxy faces must be rectangles)";
-    size_t b = find_partner(sc, faces, count, t, c);
+    size_t b = find_partner(m, used, t, c);
     if (b == 0)
         return "is a triangle without a later triangle sharing its longest edge (triangles are accepted in "
                "pairs that form a rectangle)";
     const char *why = corners_rectangle(c, d);
     if (why != NULL)
         return "is a triangle that does not form a rectangle with the triangle sharing its longest edge";
-    faces[b].used = 1;
-    snprintf(elem, CAP__ELEM_MAX, "faces %zu and %zu (mesh %u faces %u and %u)", faces[t].index, faces[b].index,
-             faces[t].mesh, faces[t].face, faces[b].face);
+    used[b] = 1;
+    snprintf(elem, ILF_JSON_ELEM_MAX, "faces %zu and %zu (mesh %u faces %u and %u)", t, b, f->mesh, f->face,
+             m->faces[b].face);
     return NULL;
-}
-
-/* @return the number of faces over the scene's meshes. */
-static size_t face_total(const struct aiScene *sc)
-{
-    size_t total = 0;
-    for (unsigned m = 0; m < sc->mNumMeshes; m++)
-        total += sc->mMeshes[m]->mNumFaces;
-    return total;
 }
 
 /* Makes one rectangle per quad or merged triangle pair, in the order of their first faces, each named
  * "face<k>" after it (k counting faces over the file's meshes). */
-static cap_status mesh_rects(const char *path, const struct aiScene *sc, const cap_proxy_defaults *def,
-                             cap_proxy *p)
+static cap_status mesh_rects(const char *path, const ilf_mesh *m, const cap_proxy_defaults *def, cap_proxy *p)
 {
-    size_t total = face_total(sc);
+    size_t total = m->nfaces;
     if (total < 1 || total > 2 * (size_t)CAP_PROXY_MAX)
         return cap__json_bad(path, "", "%zu faces; a proxy holds 1 to %u rectangles", total, CAP_PROXY_MAX);
-    face_ref *faces = calloc(total, sizeof *faces);
+    char *used = calloc(total, 1);
     p->rects = calloc(total, sizeof *p->rects);
-    if (faces == NULL || p->rects == NULL) {
-        free(faces);
+    if (used == NULL || p->rects == NULL) {
+        free(used);
         return cap__fail(CAP_ERR_NOMEM, "%s: out of memory", path);
     }
-    size_t count = 0;
-    for (unsigned m = 0; m < sc->mNumMeshes; m++)
-        for (unsigned f = 0; f < sc->mMeshes[m]->mNumFaces; f++, count++)
-            faces[count] = (face_ref){m, f, count, 0};
     cap_status st = CAP_OK;
-    for (size_t t = 0; st == CAP_OK && t < count; t++) {
-        if (faces[t].used)
+    for (size_t t = 0; st == CAP_OK && t < total; t++) {
+        if (used[t])
             continue;
         lfio_slab_desc *d = &p->rects[p->count];
-        char elem[CAP__ELEM_MAX];
-        rect_init(d, def, "face", faces[t].index);
-        const char *why = face_rectangle(sc, faces, count, t, d, elem);
+        char elem[ILF_JSON_ELEM_MAX];
+        rect_init(d, def, "face", t);
+        const char *why = face_rectangle(m, used, t, d, elem);
         if (why != NULL)
-            st = cap__json_bad(path, elem, "%u vertices: %s", face_of(sc, &faces[t])->mNumIndices, why);
+            st = cap__json_bad(path, elem, "%u vertices: %s", m->faces[t].count, why);
         else if (++p->count > CAP_PROXY_MAX)
             st = cap__json_bad(path, elem, "more than %u rectangles; a proxy holds 1 to %u", CAP_PROXY_MAX,
                                CAP_PROXY_MAX);
         else
             st = check_size(path, elem, d);
     }
-    free(faces);
+    free(used);
     return st;
 }
 
+/* Imports the mesh file through the one importer, with every check scenes get (ilf/mesh.h). */
 static cap_status load_mesh(const char *path, const cap_proxy_defaults *def, cap_proxy *p)
 {
-    const struct aiScene *sc = aiImportFile(path, aiProcess_PreTransformVertices | aiProcess_ValidateDataStructure);
-    if (sc == NULL)
-        return cap__fail(CAP_ERR_INPUT, "%s: cannot read the mesh: %s", path, aiGetErrorString());
-    cap_status st = mesh_rects(path, sc, def, p);
-    aiReleaseImport(sc);
+    ilf_mesh *m = NULL;
+    char why[ILF_MESSAGE_BYTES];
+    ilf_mesh_status ms = ilf_mesh_import(path, &m, why, sizeof why);
+    if (ms == ILF_MESH_ERR_NOMEM)
+        return cap__fail(CAP_ERR_NOMEM, "%s: out of memory", path);
+    if (ms != ILF_MESH_OK)
+        return cap__fail(CAP_ERR_INPUT, "%s: %s", path, why);
+    cap_status st = mesh_rects(path, m, def, p);
+    ilf_mesh_destroy(m);
     return st;
 }
 
@@ -325,14 +301,9 @@ cap_status cap_proxy_load(const char *path, const cap_proxy_defaults *defaults, 
     cap_proxy *p = calloc(1, sizeof *p);
     if (p == NULL)
         return cap__fail(CAP_ERR_NOMEM, "%s: out of memory", path);
-    /* Meshes only as OBJ: a line-based format whose reader allocates as it
-     * reads. assimp's readers of formats with counts in their headers (PLY,
-     * OFF, Collada and more) allocate whatever a header claims. */
-    cap_status st = has_extension(path, ".json") ? load_json(path, defaults, p)
-                    : has_extension(path, ".obj")
-                        ? load_mesh(path, defaults, p)
-                        : cap__fail(CAP_ERR_INPUT, "%s: proxy format not supported: give planar quads in JSON or a "
-                                                   "mesh in OBJ", path);
+    /* Meshes in every format scenes take, through the same importer and pre-checks (ilf/mesh.h);
+     * it refuses the formats whose readers trust a header's counts. */
+    cap_status st = has_extension(path, ".json") ? load_json(path, defaults, p) : load_mesh(path, defaults, p);
     if (st != CAP_OK) {
         cap_proxy_destroy(p);
         return st;

@@ -1,7 +1,8 @@
 /*
  * mesh.c - polygons for the scene loader: the checks that turn a vertex
  * list into a scene polygon, ear clipping for mesh faces that fail them, and
- * mesh files read with assimp's C API.
+ * mesh files, imported by base's one mesh importer (ilf/mesh.h), turned into
+ * scene polygons and materials.
  *
  * A vertex list becomes a polygon in these steps (check_polygon()), with d
  * its diameter (the largest distance between two of its vertices) and
@@ -23,11 +24,9 @@
  * The normal stored is the unit Newell vector of what is kept: the
  * right-hand rule normal, so counter-clockwise vertices face the viewer.
  *
- * Mesh files are read with assimp, PLY files after plycheck.c has checked
- * their declared counts against their size (assimp allocates from them),
- * glTF 2.0 files after their accessors' types are checked here (assimp
- * copies positions of any type as raw bytes into its vertices: a position
- * accessor of another type would load silently as garbage or nothing). A
+ * Mesh files are imported by ilf_mesh_import(), which makes every check
+ * before assimp reads them (PLY counts, glTF headers and accessor types,
+ * the accepted formats) and returns a polygon soup. A
  * mesh file that yields no polygon at all is an error rather than an empty
  * contribution: it is almost certainly the wrong file or a broken one.
  *
@@ -38,25 +37,13 @@
  * of which passes the same steps before it is kept. Whatever is appended
  * therefore satisfies the polygon invariants of scene_internal.h.
  */
-#ifndef _POSIX_C_SOURCE
-#define _POSIX_C_SOURCE 200809L /* stat(); the build defines it too */
-#endif
-
-#include <assimp/cimport.h>
-#include <cjson/cJSON.h>
-#include <assimp/material.h>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
-#include <sys/stat.h>
 
 #include "mesh.h"
-#include "plycheck.h"
+#include "ilf/mesh.h"
 #include "ilf/vec.h"
 
 static const double plane_tol = 1e-6; /* distances, relative to the diameter */
@@ -443,176 +430,19 @@ rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_
 
 /* ----------------------------------------------------------- mesh files */
 
-/* glTF 2.0 accessor component types. */
-enum { GLTF_UBYTE = 5121, GLTF_USHORT = 5123, GLTF_UINT = 5125, GLTF_FLOAT = 5126 };
-
-/* Largest glTF JSON read for the check; larger ones are left to assimp. */
-#define GLTF_JSON_MAX ((size_t)1 << 28)
-
-/* @return the name of glTF component type t. */
-static const char *gltf_type_name(int t)
-{
-    switch (t) {
-    case 5120: return "byte";
-    case GLTF_UBYTE: return "unsigned byte";
-    case 5122: return "short";
-    case GLTF_USHORT: return "unsigned short";
-    case GLTF_UINT: return "unsigned int";
-    case GLTF_FLOAT: return "float";
-    default: return "unknown";
-    }
-}
-
-/*
- * Checks accessor number `at` of the glTF accessors array, used by `use` of
- * meshes[mi].primitives[prim]: positions must be FLOAT VEC3 (glTF 2.0, 3.7.2.1),
- * indices SCALAR of an unsigned integer type. @return 1, or 0 with why.
- */
-static int gltf_accessor_ok(const cJSON *accessors, const cJSON *at, int indices, int mi, int prim, char *why,
-                            size_t size)
-{
-    const char *use = indices ? "indices" : "POSITION";
-    int n = cJSON_GetArraySize(accessors);
-    if (!cJSON_IsNumber(at) || at->valuedouble < 0 || at->valuedouble >= n || at->valuedouble != (int)at->valuedouble) {
-        snprintf(why, size, "meshes[%d].primitives[%d]: %s refers to accessor %g of %d", mi, prim, use,
-                 cJSON_IsNumber(at) ? at->valuedouble : -1.0, n);
-        return 0;
-    }
-    const cJSON *acc = cJSON_GetArrayItem(accessors, (int)at->valuedouble);
-    const cJSON *ct = cJSON_GetObjectItemCaseSensitive(acc, "componentType");
-    const cJSON *type = cJSON_GetObjectItemCaseSensitive(acc, "type");
-    int t = cJSON_IsNumber(ct) ? (int)ct->valuedouble : 0;
-    const char *ty = cJSON_IsString(type) ? type->valuestring : "(none)";
-    int ok = indices ? (t == GLTF_UBYTE || t == GLTF_USHORT || t == GLTF_UINT) && strcmp(ty, "SCALAR") == 0
-                     : t == GLTF_FLOAT && strcmp(ty, "VEC3") == 0;
-    if (!ok)
-        snprintf(why, size,
-                 "meshes[%d].primitives[%d]: %s accessor %d has componentType %d (%s) and type %s; glTF 2.0 %s",
-                 mi, prim, use, (int)at->valuedouble, t, gltf_type_name(t), ty,
-                 indices ? "indices are SCALAR unsigned byte, short or int" : "positions are VEC3 float (5126)");
-    return ok;
-}
-
-/*
- * Reads the JSON of a glTF 2.0 file (.gltf: the file; .glb: its first
- * chunk) and checks every mesh primitive's POSITION and indices accessors.
- * Anything it cannot make sense of is left to assimp, which reports it.
- * @return 1 (fine, or not a glTF 2.0 file), or 0 with why.
- */
-static int gltf_check(const char *path, char *why, size_t size)
-{
-    const char *dot = strrchr(path, '.');
-    int glb = dot && strcasecmp(dot, ".glb") == 0;
-    if (!dot || (!glb && strcasecmp(dot, ".gltf") != 0))
-        return 1;
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return 1;
-    size_t len = 0, fsize = 0;
-    if (fseek(f, 0, SEEK_END) == 0) {
-        long end = ftell(f);
-        fsize = end > 0 ? (size_t)end : 0;
-        rewind(f);
-    }
-    if (glb) {
-        /* header: magic, version 2, total length; then a chunk: length, type
-         * "JSON". assimp reserves what these lengths claim before it reads,
-         * so they are held to the file's size first (glTF 2.0, 4.4). */
-        unsigned char h[20];
-        if (fread(h, 1, sizeof h, f) != sizeof h || memcmp(h, "glTF", 4) != 0) {
-            fclose(f);
-            snprintf(why, size, "not a binary glTF file: no 20-byte header starting with 'glTF'");
-            return 0;
-        }
-        size_t version = (size_t)h[4] | (size_t)h[5] << 8 | (size_t)h[6] << 16 | (size_t)h[7] << 24;
-        size_t total = (size_t)h[8] | (size_t)h[9] << 8 | (size_t)h[10] << 16 | (size_t)h[11] << 24;
-        len = (size_t)h[12] | (size_t)h[13] << 8 | (size_t)h[14] << 16 | (size_t)h[15] << 24;
-        const char *bad = version != 2                  ? "version is not 2"
-                          : total != fsize              ? "header length differs from the file's size"
-                          : memcmp(h + 16, "JSON", 4)   ? "first chunk is not JSON"
-                          : len == 0 || len % 4 != 0    ? "JSON chunk length is 0 or not a multiple of 4"
-                          : len > fsize - sizeof h      ? "JSON chunk is longer than the rest of the file"
-                          : len > GLTF_JSON_MAX         ? "JSON chunk is larger than the checker reads"
-                                                        : NULL;
-        if (bad) {
-            fclose(f);
-            snprintf(why, size, "binary glTF: %s (header length %zu, JSON chunk %zu bytes, file %zu bytes)", bad,
-                     total, len, fsize);
-            return 0;
-        }
-        /* the binary chunk, when present, must fit too */
-        size_t next = sizeof h + len;
-        unsigned char c[8];
-        if (next < fsize &&
-            (fseek(f, (long)next, SEEK_SET) != 0 || fread(c, 1, sizeof c, f) != sizeof c ||
-             ((size_t)c[0] | (size_t)c[1] << 8 | (size_t)c[2] << 16 | (size_t)c[3] << 24) > fsize - next - 8)) {
-            fclose(f);
-            snprintf(why, size, "binary glTF: the chunk after the JSON is longer than the rest of the file");
-            return 0;
-        }
-        fseek(f, (long)sizeof h, SEEK_SET);
-    } else {
-        len = fsize;
-    }
-    char *text = len > 0 && len <= GLTF_JSON_MAX ? malloc(len) : NULL;
-    size_t got = text ? fread(text, 1, len, f) : 0;
-    fclose(f);
-    cJSON *root = got == len && text ? cJSON_ParseWithLength(text, len) : NULL;
-    free(text);
-    const cJSON *version = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(root, "asset"), "version");
-    const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
-    const cJSON *accessors = cJSON_GetObjectItemCaseSensitive(root, "accessors");
-    int ok = 1;
-    if (cJSON_IsString(version) && version->valuestring[0] == '2' && cJSON_IsArray(meshes)) {
-        int mi = 0;
-        for (const cJSON *m = meshes->child; m && ok; m = m->next, mi++) {
-            const cJSON *prims = cJSON_GetObjectItemCaseSensitive(m, "primitives");
-            int prim = 0;
-            for (const cJSON *p = cJSON_IsArray(prims) ? prims->child : NULL; p && ok; p = p->next, prim++) {
-                const cJSON *attrs = cJSON_GetObjectItemCaseSensitive(p, "attributes");
-                const cJSON *pos = cJSON_GetObjectItemCaseSensitive(attrs, "POSITION");
-                const cJSON *idx = cJSON_GetObjectItemCaseSensitive(p, "indices");
-                if (pos)
-                    ok = gltf_accessor_ok(accessors, pos, 0, mi, prim, why, size);
-                if (ok && idx)
-                    ok = gltf_accessor_ok(accessors, idx, 1, mi, prim, why, size);
-            }
-        }
-    }
-    cJSON_Delete(root);
-    return ok;
-}
-
 /* Marks a file material not yet turned into a scene material. */
 #define MATERIAL_UNSET UINT32_MAX
-
-/* @return 1 and its name if m is a material of the file's own, 0 for assimp's stand-in or no name. */
-static int own_material(const struct aiMaterial *m, struct aiString *name)
-{
-    if (aiGetMaterialString(m, AI_MATKEY_NAME, name) != aiReturn_SUCCESS)
-        return 0;
-    return name->length > 0 && strcmp(name->data, AI_DEFAULT_MATERIAL_NAME) != 0;
-}
-
-/* Copies the colour under key (type, index) of m into rgb, which keeps its value when m has no such key. */
-static void material_colour(const struct aiMaterial *m, const char *key, unsigned type, unsigned index,
-                            double rgb[3])
-{
-    struct aiColor4D c;
-    if (aiGetMaterialColor(m, key, type, index, &c) == aiReturn_SUCCESS)
-        rgb[0] = c.r, rgb[1] = c.g, rgb[2] = c.b;
-}
 
 /*
  * Finds the scene material for file material k: "<shown>:<name>" with the
  * diffuse colour as albedo and the emissive colour as emission, or *fallback
  * when the file has none. @return RL_OK and *out; RL_ERR_INPUT; RL_ERR_NOMEM.
  */
-static rl_status file_material(rl_build *b, const struct aiScene *sc, unsigned k, const char *elem,
+static rl_status file_material(rl_build *b, const ilf_mesh *mesh, uint32_t k, const char *elem,
                                const char *shown, const uint32_t *fallback, uint32_t *out)
 {
-    struct aiString name;
-    if (k >= sc->mNumMaterials || !own_material(sc->mMaterials[k], &name)) {
+    const ilf_mesh_material *fm = k < mesh->nmaterials ? &mesh->materials[k] : NULL;
+    if (!fm || fm->name[0] == '\0') {
         if (!fallback)
             return rl__build_fail(b, elem, "%s has faces without a material; give the entry a \"material\"",
                                   shown);
@@ -620,120 +450,74 @@ static rl_status file_material(rl_build *b, const struct aiScene *sc, unsigned k
         return RL_OK;
     }
     double albedo[3] = {0.8, 0.8, 0.8}, emission[3] = {0, 0, 0};
-    material_colour(sc->mMaterials[k], AI_MATKEY_COLOR_DIFFUSE, albedo);
-    material_colour(sc->mMaterials[k], AI_MATKEY_COLOR_EMISSIVE, emission);
+    if (fm->has_diffuse)
+        memcpy(albedo, fm->diffuse, sizeof albedo);
+    if (fm->has_emissive)
+        memcpy(emission, fm->emissive, sizeof emission);
     char full[256], where[320];
-    rl__format(full, sizeof full, "%s:%s", shown, name.data);
-    rl__format(where, sizeof where, "%s (%s) material '%s'", elem, shown, name.data);
+    rl__format(full, sizeof full, "%s:%s", shown, fm->name);
+    rl__format(where, sizeof where, "%s (%s) material '%s'", elem, shown, fm->name);
     return rl__build_material(b, where, full, albedo, emission, out);
 }
 
-/* Copies face f of mesh m into b->face. @return RL_OK, or RL_ERR_INPUT for a bad index or coordinate. */
-static rl_status gather_face(rl_build *b, const struct aiMesh *m, const struct aiFace *f, const char *label)
+/* Copies face f of the imported mesh into b->face. @return RL_OK, or RL_ERR_INPUT for too many vertices. */
+static rl_status gather_face(rl_build *b, const ilf_mesh *mesh, const ilf_mesh_face *f, const char *label)
 {
-    if (f->mNumIndices > RL_MAX_POLYGON_VERTICES)
-        return rl__build_fail(b, label, "has %u vertices, more than the limit of %u", f->mNumIndices,
+    if (f->count > RL_MAX_POLYGON_VERTICES)
+        return rl__build_fail(b, label, "has %u vertices, more than the limit of %u", f->count,
                               RL_MAX_POLYGON_VERTICES);
-    for (unsigned k = 0; k < f->mNumIndices; k++) {
-        unsigned i = f->mIndices[k];
-        if (i >= m->mNumVertices)
-            return rl__build_fail(b, label, "refers to vertex %u of %u", i, m->mNumVertices);
-        const struct aiVector3D *p = &m->mVertices[i];
-        b->face[k][0] = p->x, b->face[k][1] = p->y, b->face[k][2] = p->z;
-    }
+    for (uint32_t k = 0; k < f->count; k++)
+        memcpy(b->face[k], mesh->vertices[mesh->indices[f->first + k]], sizeof b->face[k]);
     return RL_OK;
 }
 
-/* Adds every face of the imported scene sc. @return as rl__build_mesh(). */
-static rl_status add_faces(rl_build *b, const struct aiScene *sc, uint32_t *materials, const char *elem,
+/* Adds every face of the imported mesh. @return as rl__build_mesh(). */
+static rl_status add_faces(rl_build *b, const ilf_mesh *mesh, uint32_t *materials, const char *elem,
                            const char *shown, const uint32_t *fallback)
 {
-    size_t face_no = 0;
-    for (unsigned mi = 0; mi < sc->mNumMeshes; mi++) {
-        const struct aiMesh *m = sc->mMeshes[mi];
-        for (unsigned fi = 0; fi < m->mNumFaces; fi++, face_no++) {
-            const struct aiFace *f = &m->mFaces[fi];
-            if (f->mNumIndices < 3)
-                continue; /* points and lines carry no light */
-            char label[sizeof ((rl_polygon *)0)->label];
-            /* A long name keeps its end, where the file's own name is. */
-            size_t len = strlen(shown);
-            rl__format(label, sizeof label, "%s (%s%s) face %zu", elem, len > 40 ? "..." : "",
-                       len > 40 ? shown + len - 37 : shown, face_no);
-            rl_status st = gather_face(b, m, f, label);
-            unsigned k = m->mMaterialIndex < sc->mNumMaterials ? m->mMaterialIndex : sc->mNumMaterials;
-            if (st == RL_OK && materials[k] == MATERIAL_UNSET)
-                st = file_material(b, sc, k, elem, shown, fallback, &materials[k]);
-            if (st == RL_OK)
-                st = rl__build_polygon(b, (const double (*)[3])b->face, f->mNumIndices, materials[k], label,
-                                       RL_POLY_SPLIT);
-            if (st != RL_OK)
-                return st;
-        }
+    for (size_t face_no = 0; face_no < mesh->nfaces; face_no++) {
+        const ilf_mesh_face *f = &mesh->faces[face_no];
+        if (f->count < 3)
+            continue; /* points and lines carry no light */
+        char label[sizeof ((rl_polygon *)0)->label];
+        /* A long name keeps its end, where the file's own name is. */
+        size_t len = strlen(shown);
+        rl__format(label, sizeof label, "%s (%s%s) face %zu", elem, len > 40 ? "..." : "",
+                   len > 40 ? shown + len - 37 : shown, face_no);
+        rl_status st = gather_face(b, mesh, f, label);
+        size_t k = f->material < mesh->nmaterials ? f->material : mesh->nmaterials;
+        if (st == RL_OK && materials[k] == MATERIAL_UNSET)
+            st = file_material(b, mesh, (uint32_t)k, elem, shown, fallback, &materials[k]);
+        if (st == RL_OK)
+            st = rl__build_polygon(b, (const double (*)[3])b->face, f->count, materials[k], label, RL_POLY_SPLIT);
+        if (st != RL_OK)
+            return st;
     }
     return RL_OK;
-}
-
-/* The mesh formats read: each is in the hostile-input corpus, and each
- * reader either checks its counts against the file or is checked first
- * (PLY, glTF). Others of assimp's readers (OFF, Collada, DirectX among
- * them) allocate whatever a header's count claims, gigabytes for a few
- * bytes, so they are refused rather than trusted. */
-static const char *const MESH_FORMATS[] = {"obj", "ply", "gltf", "glb", "stl", "fbx", "3ds", NULL};
-
-/* @return 1 if path's extension names a format of MESH_FORMATS (any case). */
-static int mesh_format_supported(const char *path)
-{
-    const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
-    if (!dot || (slash && dot < slash))
-        return 0;
-    for (size_t k = 0; MESH_FORMATS[k]; k++)
-        if (strcasecmp(dot + 1, MESH_FORMATS[k]) == 0)
-            return 1;
-    return 0;
 }
 
 rl_status rl__build_mesh(rl_build *b, const char *path, const char *elem, const char *shown,
                          const uint32_t *fallback)
 {
-    struct stat sb;
-    if (stat(path, &sb) != 0)
-        return rl__build_fail(b, elem, "cannot open '%s': %s", path, strerror(errno));
-    if (!S_ISREG(sb.st_mode))
-        return rl__build_fail(b, elem, "'%s' is not a regular file", path);
-    /* assimp reads uninitialised memory on an empty glTF (valgrind, a fuzz_mesh input) */
-    if (sb.st_size == 0)
-        return rl__build_fail(b, elem, "cannot read '%s': the file is empty", path);
-    if (!mesh_format_supported(path))
-        return rl__build_fail(b, elem, "cannot read '%s': mesh format not supported (OBJ, PLY, glTF, GLB, STL, FBX "
-                              "and 3DS are: their readers check their counts)", path);
-    char why[256];
-    if (!rl__ply_check(path, why, sizeof why)) /* assimp would trust its counts (plycheck.h) */
-        return rl__build_fail(b, elem, "cannot read '%s': %s", path, why);
-    if (!gltf_check(path, why, sizeof why)) /* assimp would copy any type as positions */
-        return rl__build_fail(b, elem, "cannot read '%s': %s", path, why);
-    const struct aiScene *sc =
-        aiImportFile(path, aiProcess_PreTransformVertices | aiProcess_ValidateDataStructure);
-    if (!sc)
-        return rl__build_fail(b, elem, "cannot read '%s': %s", path, aiGetErrorString());
-    if (sc->mFlags & AI_SCENE_FLAGS_INCOMPLETE) {
-        aiReleaseImport(sc);
-        return rl__build_fail(b, elem, "'%s' holds no complete mesh", path);
-    }
+    ilf_mesh *mesh = NULL;
+    char why[ILF_MESSAGE_BYTES];
+    ilf_mesh_status ms = ilf_mesh_import(path, &mesh, why, sizeof why);
+    if (ms == ILF_MESH_ERR_NOMEM)
+        return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
+    if (ms != ILF_MESH_OK)
+        return rl__build_fail(b, elem, "%s", why);
     /* one slot per file material, plus one for meshes whose material index is out of range */
-    uint32_t *materials = malloc(((size_t)sc->mNumMaterials + 1) * sizeof *materials);
+    uint32_t *materials = malloc((mesh->nmaterials + 1) * sizeof *materials);
     if (!materials) {
-        aiReleaseImport(sc);
+        ilf_mesh_destroy(mesh);
         return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
     }
-    for (size_t k = 0; k <= sc->mNumMaterials; k++)
+    for (size_t k = 0; k <= mesh->nmaterials; k++)
         materials[k] = MATERIAL_UNSET;
-    size_t before = b->scene->npolygons, faces = 0;
-    for (unsigned mi = 0; mi < sc->mNumMeshes; mi++)
-        faces += sc->mMeshes[mi]->mNumFaces;
-    rl_status st = add_faces(b, sc, materials, elem, shown, fallback);
+    size_t before = b->scene->npolygons, faces = mesh->nfaces;
+    rl_status st = add_faces(b, mesh, materials, elem, shown, fallback);
     free(materials);
-    aiReleaseImport(sc);
+    ilf_mesh_destroy(mesh);
     /* Every face dropped (points, lines, no area): nothing to light or be lit, almost surely a broken file. */
     if (st == RL_OK && b->scene->npolygons == before)
         return rl__build_fail(b, elem, "'%s' has no face with area (%zu faces, all points, lines or degenerate)",

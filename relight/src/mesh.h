@@ -5,7 +5,7 @@
  * scene.c owns the builder, reads the JSON, keeps the material table and
  * formats messages; mesh.c turns vertex lists into polygons that satisfy
  * scene_internal.h's invariants (planar, strictly convex, area > 0, finite,
- * right-hand normals) and reads mesh files with assimp.
+ * right-hand normals) and turns imported mesh files (ilf/mesh.h) into them.
  *
  * Invariants of a builder between calls: the scene's vertices, polygons,
  * materials and light fields arrays hold their counts of valid entries
@@ -17,13 +17,14 @@
 #ifndef RELIGHT_MESH_H
 #define RELIGHT_MESH_H
 
+#include "ilf/limits.h"
 #include "scene_internal.h"
 
-/* Most polygons, and most vertices, one scene may hold (2^26). */
-#define RL_MAX_ELEMENTS ((size_t)1 << 26)
+/* Most polygons, and most vertices, one scene may hold (ilf/limits.h says why). */
+#define RL_MAX_ELEMENTS ILF_MESH_MAX_ELEMENTS
 
-/* Most vertices one polygon or mesh face may have. */
-#define RL_MAX_POLYGON_VERTICES 4096u
+/* Most vertices one polygon or mesh face may have (ilf/limits.h says why). */
+#define RL_MAX_POLYGON_VERTICES ILF_MESH_MAX_FACE_VERTICES
 
 /* What to do with a polygon that is not planar and convex. */
 typedef enum rl_poly_policy {

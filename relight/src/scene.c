@@ -1,8 +1,9 @@
 /*
- * scene.c - reads scene files (docs/scene.md) with cJSON into an rl_scene,
+ * scene.c - reads scene files (docs/scene.md) with ilf_json into an rl_scene,
  * and the accessors of relight/scene.h.
  *
- * Loading reads the whole file (at most 256 MiB), parses it, then walks the
+ * Loading reads and parses the whole file (at most ILF_SCENE_MAX_BYTES) with
+ * base's one strict JSON reader (ilf/json.h), then walks the
  * tree section by section: materials, radiance_maps, sampling, camera,
  * polygons, meshes, lightfields. Every value is checked where it is read,
  * and the first problem ends the load with a message
@@ -19,28 +20,20 @@
  * allocation is sized by a count read from a file before that count has
  * been checked against its limit; arrays grow as elements pass their checks.
  */
-#ifndef _POSIX_C_SOURCE
-#define _POSIX_C_SOURCE 200809L /* fileno(), fstat(); the build defines it too */
-#endif
-
-#include <cjson/cJSON.h>
-#include <errno.h>
 #include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "mesh.h"
+#include "ilf/json.h"
+#include "ilf/limits.h"
 #include "ilf/vec.h"
 
-/* Largest scene file read, in bytes. */
-#define SCENE_MAX_BYTES ((size_t)256 << 20)
-
 /* Longest element path in messages. */
-#define ELEM_MAX 256
+#define ELEM_MAX ILF_JSON_ELEM_MAX
 
 /* ------------------------------------------------------------- limits */
 
@@ -52,20 +45,6 @@ typedef struct int_limit {
 
 static const int_limit lim_pixels = {1, 16384, 0};
 static const int_limit lim_index = {0, UINT32_MAX, 0};
-
-/* @return 1 if v is allowed by l. */
-static int limit_ok(const int_limit *l, uint64_t v)
-{
-    return v >= l->lo && v <= l->hi && (!l->pow2 || (v & (v - 1)) == 0);
-}
-
-/* Writes l's rule ("a power of two in 1..4096") to buf. @return buf. */
-static const char *limit_rule(const int_limit *l, char buf[64])
-{
-    snprintf(buf, 64, "%s in %llu..%llu", l->pow2 ? "a power of two" : "an integer",
-             (unsigned long long)l->lo, (unsigned long long)l->hi);
-    return buf;
-}
 
 /* ----------------------------------------------------------- messages */
 
@@ -94,128 +73,85 @@ void rl__format(char *out, size_t cap, const char *fmt, ...)
 /* Writes the path of member key of element elem ("sampling" + "seed" = "sampling.seed") to out. */
 static void member_elem(char out[ELEM_MAX], const char *elem, const char *key)
 {
-    rl__format(out, ELEM_MAX, "%s%s%s", elem, elem[0] ? "." : "", key);
+    ilf_json_member_name(out, elem, key);
 }
 
 /* Writes the path of entry i of array element elem ("polygons" + 3 = "polygons[3]") to out. */
 static void entry_elem(char out[ELEM_MAX], const char *elem, size_t i)
 {
-    rl__format(out, ELEM_MAX, "%s[%zu]", elem, i);
+    ilf_json_item_name(out, elem, i);
 }
 
 /* ------------------------------------------------------- JSON helpers */
+/* The scene's typed reading, through base's one strict reader (ilf/json.h): each helper moves the
+ * reader's message "<scene file>: <element>: <problem>" into relight's error state. */
+
+/* Records ctx's message with the status st maps to. @return RL_OK, RL_ERR_INPUT, RL_ERR_IO or RL_ERR_NOMEM. */
+static rl_status json_result(const ilf_json_ctx *ctx, ilf_json_status st)
+{
+    switch (st) {
+    case ILF_JSON_OK: return RL_OK;
+    case ILF_JSON_ERR_IO: return rl__fail(RL_ERR_IO, "%s", ctx->message);
+    case ILF_JSON_ERR_NOMEM: return rl__fail(RL_ERR_NOMEM, "%s", ctx->message);
+    default: return rl__fail(RL_ERR_INPUT, "%s", ctx->message);
+    }
+}
 
 /* @return what j is, for messages ("a string"); "nothing" for NULL. */
-static const char *json_kind(const cJSON *j)
+static const char *json_kind(const ilf_json *j)
 {
-    if (!j)
-        return "nothing";
-    if (cJSON_IsBool(j))
-        return "a boolean";
-    if (cJSON_IsNull(j))
-        return "null";
-    if (cJSON_IsNumber(j))
-        return "a number";
-    if (cJSON_IsString(j))
-        return "a string";
-    if (cJSON_IsArray(j))
-        return "an array";
-    return "an object";
+    return ilf_json_kind(j);
 }
 
 /* @return member key of object obj (case-sensitive), or NULL. */
-static const cJSON *member(const cJSON *obj, const char *key)
+static const ilf_json *member(const ilf_json *obj, const char *key)
 {
-    return cJSON_GetObjectItemCaseSensitive(obj, key);
+    return ilf_json_get(obj, key);
 }
 
-/*
- * Checks that j is an object whose keys all appear in allowed (NULL-terminated,
- * at most 32 names), each at most once. @return RL_OK or RL_ERR_INPUT naming the key.
- */
-static rl_status json_keys(const rl_build *b, const cJSON *j, const char *elem, const char *const *allowed)
+/* Checks that j is an object whose keys all appear in allowed (NULL-terminated), each at most once.
+ * @return RL_OK or RL_ERR_INPUT naming the key. */
+static rl_status json_keys(const rl_build *b, const ilf_json *j, const char *elem, const char *const *allowed)
 {
-    if (!cJSON_IsObject(j))
-        return rl__build_fail(b, elem, "expected an object, got %s", json_kind(j));
-    uint32_t seen = 0;
-    for (const cJSON *k = j->child; k; k = k->next) {
-        size_t a = 0;
-        while (allowed[a] && strcmp(allowed[a], k->string) != 0)
-            a++;
-        if (!allowed[a]) {
-            char list[256] = "";
-            for (size_t i = 0; allowed[i]; i++)
-                snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", allowed[i]);
-            return rl__build_fail(b, elem, "unknown key '%.100s' (expected %s)", k->string, list);
-        }
-        if (seen & (UINT32_C(1) << a))
-            return rl__build_fail(b, elem, "duplicate key '%s'", allowed[a]);
-        seen |= UINT32_C(1) << a;
-    }
-    return RL_OK;
+    ilf_json_ctx c = {.file = b->file};
+    return json_result(&c, ilf_json_keys(&c, j, elem, allowed));
 }
 
 /* Reads the finite number j. @return RL_OK and *out, or RL_ERR_INPUT naming elem. */
-static rl_status json_number(const rl_build *b, const cJSON *j, const char *elem, double *out)
+static rl_status json_number(const rl_build *b, const ilf_json *j, const char *elem, double *out)
 {
-    if (!cJSON_IsNumber(j))
-        return rl__build_fail(b, elem, "expected a number, got %s", json_kind(j));
-    if (!isfinite(j->valuedouble))
-        return rl__build_fail(b, elem, "not a finite number (too large for a double)");
-    *out = j->valuedouble;
-    return RL_OK;
+    ilf_json_ctx c = {.file = b->file};
+    return json_result(&c, ilf_json_number(&c, j, elem, out));
 }
 
 /* Reads a vector: the array j of exactly n finite numbers. @return RL_OK and out[0..n), or RL_ERR_INPUT. */
-static rl_status json_vector(const rl_build *b, const cJSON *j, const char *elem, size_t n, double *out)
+static rl_status json_vector(const rl_build *b, const ilf_json *j, const char *elem, size_t n, double *out)
 {
-    if (!cJSON_IsArray(j))
-        return rl__build_fail(b, elem, "expected an array of %zu numbers, got %s", n, json_kind(j));
-    size_t count = (size_t)cJSON_GetArraySize(j);
-    if (count != n)
-        return rl__build_fail(b, elem, "expected %zu numbers, got %zu", n, count);
-    size_t i = 0;
-    for (const cJSON *e = j->child; e; e = e->next, i++) {
-        char sub[ELEM_MAX];
-        entry_elem(sub, elem, i);
-        rl_status st = json_number(b, e, sub, &out[i]);
-        if (st != RL_OK)
-            return st;
-    }
-    return RL_OK;
+    ilf_json_ctx c = {.file = b->file};
+    return json_result(&c, ilf_json_vector(&c, j, elem, n, out));
 }
 
 /* Reads an integer allowed by l. @return RL_OK and *out, or RL_ERR_INPUT naming elem and the rule. */
-static rl_status json_integer(const rl_build *b, const cJSON *j, const char *elem, const int_limit *l,
+static rl_status json_integer(const rl_build *b, const ilf_json *j, const char *elem, const int_limit *l,
                               uint64_t *out)
 {
-    char rule[64];
-    if (!cJSON_IsNumber(j))
-        return rl__build_fail(b, elem, "expected %s, got %s", limit_rule(l, rule), json_kind(j));
-    double d = j->valuedouble;
-    if (!(d >= 0 && d <= 9007199254740992.0 && d == floor(d)) || !limit_ok(l, (uint64_t)d))
-        return rl__build_fail(b, elem, "must be %s, got %.17g", limit_rule(l, rule), d);
-    *out = (uint64_t)d;
-    return RL_OK;
+    ilf_json_ctx c = {.file = b->file};
+    return json_result(&c, ilf_json_integer(&c, j, elem, l->lo, l->hi, l->pow2, out));
 }
 
 /* Reads a non-empty string. @return RL_OK and *out (borrowed from j), or RL_ERR_INPUT. */
-static rl_status json_string(const rl_build *b, const cJSON *j, const char *elem, const char **out)
+static rl_status json_string(const rl_build *b, const ilf_json *j, const char *elem, const char **out)
 {
-    if (!cJSON_IsString(j))
-        return rl__build_fail(b, elem, "expected a string, got %s", json_kind(j));
-    if (j->valuestring[0] == '\0')
-        return rl__build_fail(b, elem, "must not be empty");
-    *out = j->valuestring;
-    return RL_OK;
+    ilf_json_ctx c = {.file = b->file};
+    return json_result(&c, ilf_json_string(&c, j, elem, out));
 }
 
 /* Finds the required member key of obj. @return RL_OK and *out, or RL_ERR_INPUT naming it. */
-static rl_status json_required(const rl_build *b, const cJSON *obj, const char *elem, const char *key,
-                               const cJSON **out)
+static rl_status json_required(const rl_build *b, const ilf_json *obj, const char *elem, const char *key,
+                               const ilf_json **out)
 {
-    *out = member(obj, key);
-    return *out ? RL_OK : rl__build_fail(b, elem, "missing key '%s'", key);
+    ilf_json_ctx c = {.file = b->file};
+    return json_result(&c, ilf_json_member(&c, obj, elem, key, 1, out));
 }
 
 /* -------------------------------------------------------- the builder */
@@ -344,27 +280,27 @@ static rl_status resolve_path(const rl_build *b, const char *elem, const char *f
 /* ----------------------------------------------------------- sections */
 
 /* Reads "materials": an object of name -> {"albedo", "emission"}. */
-static rl_status read_materials(rl_build *b, const cJSON *j)
+static rl_status read_materials(rl_build *b, const ilf_json *j)
 {
     static const char *const keys[] = {"albedo", "emission", NULL};
-    if (!cJSON_IsObject(j))
+    if (ilf_json_type_of(j) != ILF_JSON_OBJECT)
         return rl__build_fail(b, "materials", "expected an object, got %s", json_kind(j));
-    for (const cJSON *m = j->child; m; m = m->next) {
+    for (const ilf_json *m = ilf_json_first(j); m; m = ilf_json_next(m)) {
         char elem[ELEM_MAX], sub[ELEM_MAX];
-        member_elem(elem, "materials", m->string);
+        member_elem(elem, "materials", ilf_json_key(m));
         uint32_t index;
-        if (rl__build_find_material(b, m->string, &index))
+        if (rl__build_find_material(b, ilf_json_key(m), &index))
             return rl__build_fail(b, elem, "duplicate material");
         double colour[2][3] = {{0.8, 0.8, 0.8}, {0, 0, 0}};
         rl_status st = json_keys(b, m, elem, keys);
         for (int k = 0; k < 2 && st == RL_OK; k++) {
-            const cJSON *c = member(m, keys[k]);
+            const ilf_json *c = member(m, keys[k]);
             member_elem(sub, elem, keys[k]);
             if (c)
                 st = json_vector(b, c, sub, 3, colour[k]);
         }
         if (st == RL_OK)
-            st = rl__build_material(b, elem, m->string, colour[0], colour[1], &index);
+            st = rl__build_material(b, elem, ilf_json_key(m), colour[0], colour[1], &index);
         if (st != RL_OK)
             return st;
     }
@@ -372,7 +308,7 @@ static rl_status read_materials(rl_build *b, const cJSON *j)
 }
 
 /* Reads the member "material" of obj, which must name a known material. @return RL_OK and *index, or RL_ERR_INPUT. */
-static rl_status read_material_ref(const rl_build *b, const cJSON *j, const char *elem, uint32_t *index)
+static rl_status read_material_ref(const rl_build *b, const ilf_json *j, const char *elem, uint32_t *index)
 {
     const char *name = NULL;
     rl_status st = json_string(b, j, elem, &name);
@@ -382,11 +318,11 @@ static rl_status read_material_ref(const rl_build *b, const cJSON *j, const char
 }
 
 /* Reads one entry of "polygons": {"material", "vertices"}. */
-static rl_status read_polygon(rl_build *b, const cJSON *p, const char *elem)
+static rl_status read_polygon(rl_build *b, const ilf_json *p, const char *elem)
 {
     static const char *const keys[] = {"material", "vertices", NULL};
     char sub[ELEM_MAX];
-    const cJSON *mj = NULL, *vj = NULL;
+    const ilf_json *mj = NULL, *vj = NULL;
     uint32_t material = 0;
     rl_status st = json_keys(b, p, elem, keys);
     if (st == RL_OK)
@@ -400,13 +336,13 @@ static rl_status read_polygon(rl_build *b, const cJSON *p, const char *elem)
     if (st != RL_OK)
         return st;
     member_elem(sub, elem, "vertices");
-    if (!cJSON_IsArray(vj))
+    if (ilf_json_type_of(vj) != ILF_JSON_ARRAY)
         return rl__build_fail(b, sub, "expected an array of [x, y, z] vertices, got %s", json_kind(vj));
-    size_t n = (size_t)cJSON_GetArraySize(vj);
+    size_t n = ilf_json_count(vj);
     if (n > RL_MAX_POLYGON_VERTICES) /* before anything is read into b->face */
         return rl__build_fail(b, elem, "has %zu vertices, more than the limit of %u", n, RL_MAX_POLYGON_VERTICES);
     size_t i = 0;
-    for (const cJSON *v = vj->child; v; v = v->next, i++) {
+    for (const ilf_json *v = ilf_json_first(vj); v; v = ilf_json_next(v), i++) {
         char ve[ELEM_MAX];
         entry_elem(ve, sub, i);
         if ((st = json_vector(b, v, ve, 3, b->face[i])) != RL_OK)
@@ -416,12 +352,12 @@ static rl_status read_polygon(rl_build *b, const cJSON *p, const char *elem)
 }
 
 /* Reads "polygons": an array of polygons. */
-static rl_status read_polygons(rl_build *b, const cJSON *j)
+static rl_status read_polygons(rl_build *b, const ilf_json *j)
 {
-    if (!cJSON_IsArray(j))
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
         return rl__build_fail(b, "polygons", "expected an array, got %s", json_kind(j));
     size_t i = 0;
-    for (const cJSON *p = j->child; p; p = p->next, i++) {
+    for (const ilf_json *p = ilf_json_first(j); p; p = ilf_json_next(p), i++) {
         char elem[ELEM_MAX];
         entry_elem(elem, "polygons", i);
         rl_status st = read_polygon(b, p, elem);
@@ -432,16 +368,16 @@ static rl_status read_polygons(rl_build *b, const cJSON *j)
 }
 
 /* Reads "meshes": an array of {"file", "material"}. */
-static rl_status read_meshes(rl_build *b, const cJSON *j)
+static rl_status read_meshes(rl_build *b, const ilf_json *j)
 {
     static const char *const keys[] = {"file", "material", NULL};
-    if (!cJSON_IsArray(j))
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
         return rl__build_fail(b, "meshes", "expected an array, got %s", json_kind(j));
     size_t i = 0;
-    for (const cJSON *m = j->child; m; m = m->next, i++) {
+    for (const ilf_json *m = ilf_json_first(j); m; m = ilf_json_next(m), i++) {
         char elem[ELEM_MAX], sub[ELEM_MAX], path[1024];
         entry_elem(elem, "meshes", i);
-        const cJSON *fj = NULL, *mj;
+        const ilf_json *fj = NULL, *mj;
         const char *file = NULL;
         uint32_t material = 0;
         rl_status st = json_keys(b, m, elem, keys);
@@ -465,14 +401,14 @@ static rl_status read_meshes(rl_build *b, const cJSON *j)
 }
 
 /* Reads a 4x4 matrix: 16 numbers in row-major order, or 4 rows of 4. @return RL_OK and t, or RL_ERR_INPUT. */
-static rl_status read_matrix(const rl_build *b, const cJSON *j, const char *elem, double t[16])
+static rl_status read_matrix(const rl_build *b, const ilf_json *j, const char *elem, double t[16])
 {
-    if (!cJSON_IsArray(j) || !cJSON_IsArray(j->child))
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY || ilf_json_type_of(ilf_json_first(j)) != ILF_JSON_ARRAY)
         return json_vector(b, j, elem, 16, t);
-    if (cJSON_GetArraySize(j) != 4)
-        return rl__build_fail(b, elem, "expected 4 rows of 4 numbers, got %d rows", cJSON_GetArraySize(j));
+    if ((int)ilf_json_count(j) != 4)
+        return rl__build_fail(b, elem, "expected 4 rows of 4 numbers, got %d rows", (int)ilf_json_count(j));
     size_t r = 0;
-    for (const cJSON *row = j->child; row; row = row->next, r++) {
+    for (const ilf_json *row = ilf_json_first(j); row; row = ilf_json_next(row), r++) {
         char sub[ELEM_MAX];
         entry_elem(sub, elem, r);
         rl_status st = json_vector(b, row, sub, 4, t + 4 * r);
@@ -563,17 +499,17 @@ static uint32_t (*slab_support_new(const lfio_slab *slab))[4]
 }
 
 /* Picks lf's slab given by sj: a name, an index, or NULL for slab 0. @return RL_OK or RL_ERR_INPUT. */
-static rl_status pick_slab(const rl_build *b, const cJSON *sj, const char *elem, rl_lightfield *lf)
+static rl_status pick_slab(const rl_build *b, const ilf_json *sj, const char *elem, rl_lightfield *lf)
 {
     size_t count = lfio_lightfield_slab_count(lf->lf);
     uint64_t index = 0;
-    if (cJSON_IsString(sj)) {
-        lf->slab = lfio_lightfield_find(lf->lf, sj->valuestring);
+    if (ilf_json_type_of(sj) == ILF_JSON_STRING) {
+        lf->slab = lfio_lightfield_find(lf->lf, ilf_json_text(sj));
         if (lf->slab)
             return RL_OK;
         char names[256];
         slab_names(lf->lf, names, sizeof names);
-        return rl__build_fail(b, elem, "no slab named '%.64s' in '%s' (it has %s)", sj->valuestring, lf->file, names);
+        return rl__build_fail(b, elem, "no slab named '%.64s' in '%s' (it has %s)", ilf_json_text(sj), lf->file, names);
     }
     rl_status st = sj ? json_integer(b, sj, elem, &lim_index, &index) : RL_OK;
     if (st == RL_OK && index >= count)
@@ -596,11 +532,11 @@ static const rl_lightfield *earlier_lightfield(const rl_scene *s, const rl_light
 }
 
 /* Reads one entry of "lightfields" into lf; the scene's destroy releases what it owns. */
-static rl_status read_lightfield(rl_build *b, const cJSON *j, const char *elem, rl_lightfield *lf)
+static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *elem, rl_lightfield *lf)
 {
     static const char *const keys[] = {"file", "slab", "transform", NULL};
     char sub[ELEM_MAX];
-    const cJSON *fj = NULL, *sj, *tj;
+    const ilf_json *fj = NULL, *sj, *tj;
     const char *file = NULL;
     double t[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     rl_status st = json_keys(b, j, elem, keys);
@@ -613,7 +549,7 @@ static rl_status read_lightfield(rl_build *b, const cJSON *j, const char *elem, 
         st = resolve_path(b, sub, file, lf->file, sizeof lf->file);
     sj = member(j, "slab");
     member_elem(sub, elem, "slab");
-    if (st == RL_OK && sj && !cJSON_IsString(sj) && !cJSON_IsNumber(sj))
+    if (st == RL_OK && sj && ilf_json_type_of(sj) != ILF_JSON_STRING && ilf_json_type_of(sj) != ILF_JSON_NUMBER)
         st = rl__build_fail(b, sub, "expected a slab name or index, got %s", json_kind(sj));
     tj = member(j, "transform");
     member_elem(sub, elem, "transform");
@@ -657,13 +593,13 @@ static rl_status read_lightfield(rl_build *b, const cJSON *j, const char *elem, 
 }
 
 /* Reads "lightfields": an array of light field emitters. */
-static rl_status read_lightfields(rl_build *b, const cJSON *j)
+static rl_status read_lightfields(rl_build *b, const ilf_json *j)
 {
-    if (!cJSON_IsArray(j))
+    if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
         return rl__build_fail(b, "lightfields", "expected an array, got %s", json_kind(j));
     rl_scene *s = b->scene;
     size_t i = 0;
-    for (const cJSON *e = j->child; e; e = e->next, i++) {
+    for (const ilf_json *e = ilf_json_first(j); e; e = ilf_json_next(e), i++) {
         void *p = rl__grow(s->lightfields, &b->lightfield_cap, s->nlightfields + 1, sizeof *s->lightfields);
         if (!p)
             return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
@@ -680,11 +616,11 @@ static rl_status read_lightfields(rl_build *b, const cJSON *j)
 }
 
 /* Reads "radiance_maps": {"cell_size"}. */
-static rl_status read_radiance_maps(rl_build *b, const cJSON *j)
+static rl_status read_radiance_maps(rl_build *b, const ilf_json *j)
 {
     static const char *const keys[] = {"cell_size", NULL};
     rl_status st = json_keys(b, j, "radiance_maps", keys);
-    const cJSON *c = member(j, "cell_size");
+    const ilf_json *c = member(j, "cell_size");
     if (st != RL_OK || !c)
         return st;
     double size = 0;
@@ -698,7 +634,7 @@ static rl_status read_radiance_maps(rl_build *b, const cJSON *j)
 
 /* Reads "sampling": every setting of the table (settings.c), in its order, and the time budget, which
  * the file may still hold as a suggested run option (rl_scene_time_budget()). */
-static rl_status read_sampling(rl_build *b, const cJSON *j)
+static rl_status read_sampling(rl_build *b, const ilf_json *j)
 {
     enum { MAX_KEYS = 32 };
     const char *keys[MAX_KEYS + 2];
@@ -711,7 +647,7 @@ static rl_status read_sampling(rl_build *b, const cJSON *j)
     rl_status st = json_keys(b, j, "sampling", keys);
     for (size_t k = 0; k < n && st == RL_OK; k++) {
         const rl_setting_info *set = rl_sampling_setting(k);
-        const cJSON *v = member(j, set->key);
+        const ilf_json *v = member(j, set->key);
         char elem[ELEM_MAX], rule[128];
         member_elem(elem, "sampling", set->key);
         if (!v)
@@ -736,7 +672,7 @@ static rl_status read_sampling(rl_build *b, const cJSON *j)
         }
     }
     /* the time budget is how to run, not what to compute: kept apart as the scene's suggestion */
-    const cJSON *tb = member(j, "time_budget");
+    const ilf_json *tb = member(j, "time_budget");
     double *budget = &b->scene->time_budget;
     if (st == RL_OK && tb && (st = json_number(b, tb, "sampling.time_budget", budget)) == RL_OK && !(*budget >= 0))
         st = rl__build_fail(b, "sampling.time_budget", "must be >= 0 seconds, got %.17g", *budget);
@@ -756,7 +692,7 @@ static const char *camera_problem(const rl_camera *c)
 }
 
 /* Reads "camera": position, look_at, up, fov_deg, width, height. */
-static rl_status read_camera(rl_build *b, const cJSON *j)
+static rl_status read_camera(rl_build *b, const ilf_json *j)
 {
     static const char *const keys[] = {"position", "look_at", "up", "fov_deg", "width", "height", NULL};
     rl_camera *c = &b->scene->camera;
@@ -766,19 +702,19 @@ static rl_status read_camera(rl_build *b, const cJSON *j)
     *c = (rl_camera){.up = {0, 0, 1}, .fov_deg = 45, .width = 640, .height = 480};
     rl_status st = json_keys(b, j, "camera", keys);
     for (int k = 0; k < 3 && st == RL_OK; k++) {
-        const cJSON *v = member(j, keys[k]);
+        const ilf_json *v = member(j, keys[k]);
         member_elem(elem, "camera", keys[k]);
         if (v)
             st = json_vector(b, v, elem, 3, vectors[k]);
         else if (k < 2)
             st = rl__build_fail(b, "camera", "missing key '%s'", keys[k]);
     }
-    const cJSON *f = member(j, "fov_deg");
+    const ilf_json *f = member(j, "fov_deg");
     if (st == RL_OK && f && (st = json_number(b, f, "camera.fov_deg", &c->fov_deg)) == RL_OK &&
         !(c->fov_deg > 0 && c->fov_deg < 180))
         st = rl__build_fail(b, "camera.fov_deg", "must lie strictly between 0 and 180 degrees, got %.17g", c->fov_deg);
     for (int k = 0; k < 2 && st == RL_OK; k++) {
-        const cJSON *v = member(j, keys[4 + k]);
+        const ilf_json *v = member(j, keys[4 + k]);
         uint64_t value = 0;
         member_elem(elem, "camera", keys[4 + k]);
         if (v && (st = json_integer(b, v, elem, &lim_pixels, &value)) == RL_OK)
@@ -793,11 +729,11 @@ static rl_status read_camera(rl_build *b, const cJSON *j)
 }
 
 /* Reads the top-level object. */
-static rl_status read_scene(rl_build *b, const cJSON *root)
+static rl_status read_scene(rl_build *b, const ilf_json *root)
 {
     static const char *const keys[] = {"materials", "polygons", "meshes", "lightfields",
                                        "radiance_maps", "sampling", "camera", NULL};
-    typedef rl_status (*reader)(rl_build *, const cJSON *);
+    typedef rl_status (*reader)(rl_build *, const ilf_json *);
     static const struct {
         const char *key;
         reader read;
@@ -805,132 +741,15 @@ static rl_status read_scene(rl_build *b, const cJSON *root)
                     {"sampling", read_sampling},   {"camera", read_camera},
                     {"polygons", read_polygons},   {"meshes", read_meshes},
                     {"lightfields", read_lightfields}};
-    if (!cJSON_IsObject(root))
+    if (ilf_json_type_of(root) != ILF_JSON_OBJECT)
         return rl__build_fail(b, "", "expected a JSON object at the top level, got %s", json_kind(root));
     rl_status st = json_keys(b, root, "", keys);
     for (size_t k = 0; k < sizeof sections / sizeof sections[0] && st == RL_OK; k++) {
-        const cJSON *j = member(root, sections[k].key);
+        const ilf_json *j = member(root, sections[k].key);
         if (j)
             st = sections[k].read(b, j);
     }
     return st;
-}
-
-/* -------------------------------------------------------------- files */
-
-/* Reads the whole file into a NUL-terminated buffer. @return RL_OK; RL_ERR_IO; RL_ERR_INPUT (too large); RL_ERR_NOMEM. */
-static rl_status read_file(const char *path, char **text, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return rl__fail(RL_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-    struct stat sb;
-    rl_status st = RL_OK;
-    if (fstat(fileno(f), &sb) != 0)
-        st = rl__fail(RL_ERR_IO, "%s: cannot read: %s", path, strerror(errno));
-    else if (S_ISDIR(sb.st_mode))
-        st = rl__fail(RL_ERR_IO, "%s: is a directory, not a scene file", path);
-    else if (!S_ISREG(sb.st_mode))
-        st = rl__fail(RL_ERR_IO, "%s: not a regular file", path);
-    else if ((uint64_t)sb.st_size > SCENE_MAX_BYTES)
-        st = rl__fail(RL_ERR_INPUT, "%s: %lld bytes, more than the limit of 256 MiB", path, (long long)sb.st_size);
-    char *buf = st == RL_OK ? malloc((size_t)sb.st_size + 1) : NULL;
-    if (st == RL_OK && !buf)
-        st = rl__fail(RL_ERR_NOMEM, "%s: out of memory", path);
-    size_t n = st == RL_OK ? fread(buf, 1, (size_t)sb.st_size, f) : 0;
-    if (st == RL_OK && (n != (size_t)sb.st_size || ferror(f)))
-        st = rl__fail(RL_ERR_IO, "%s: cannot read: %s", path, ferror(f) ? strerror(errno) : "the file shrank");
-    fclose(f);
-    if (st != RL_OK) {
-        free(buf);
-        return st;
-    }
-    buf[n] = '\0';
-    *text = buf;
-    *len = n;
-    return RL_OK;
-}
-
-/* Sets *line and *col (from 1, col in bytes) of byte pos of text. */
-static void line_col(const char *text, size_t pos, unsigned long *line, unsigned long *col)
-{
-    *line = 1;
-    *col = 1;
-    for (size_t i = 0; i < pos; i++) {
-        if (text[i] == '\n')
-            ++*line, *col = 1;
-        else
-            ++*col;
-    }
-}
-
-/* Fails for the JSON error at byte pos of text (len bytes), quoting the text around it. @return RL_ERR_INPUT. */
-static rl_status json_error(const char *path, const char *text, size_t len, size_t pos, const char *what)
-{
-    unsigned long line, col;
-    line_col(text, pos, &line, &col);
-    size_t rest = pos;
-    while (rest < len && strchr(" \t\r\n", text[rest]))
-        rest++;
-    if (rest >= len)
-        return rl__fail(RL_ERR_INPUT, "%s:%lu:%lu: not valid JSON: %s", path, line, col,
-                        what ? what : "unexpected end of file");
-    size_t from = pos, to = pos; /* up to 12 bytes either side, within the line */
-    while (from > 0 && pos - from < 12 && text[from - 1] != '\n')
-        from--;
-    while (to < len && to - pos < 12 && text[to] != '\n')
-        to++;
-    char near[32];
-    size_t k = 0;
-    for (size_t i = from; i < to; i++)
-        near[k++] = text[i] >= 32 && text[i] < 127 ? text[i] : '?';
-    near[k] = '\0';
-    return rl__fail(RL_ERR_INPUT, "%s:%lu:%lu: not valid JSON: %s near '%s'", path, line, col,
-                    what ? what : "unexpected text", near);
-}
-
-/* @return how many arrays and objects are open at byte pos of text, strings skipped. */
-static size_t json_depth(const char *text, size_t pos)
-{
-    size_t depth = 0;
-    int in_string = 0;
-    for (size_t i = 0; i < pos; i++) {
-        if (in_string && text[i] == '\\')
-            i++;
-        else if (text[i] == '"')
-            in_string = !in_string;
-        else if (!in_string && (text[i] == '[' || text[i] == '{'))
-            depth++;
-        else if (!in_string && (text[i] == ']' || text[i] == '}') && depth > 0)
-            depth--;
-    }
-    return depth;
-}
-
-/* Parses text (len bytes, NUL-terminated) as JSON. @return RL_OK and *root, or RL_ERR_INPUT with line:column. */
-static rl_status parse_json(const char *path, const char *text, size_t len, cJSON **root)
-{
-    size_t start = len >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0 ? 3 : 0; /* a UTF-8 byte order mark */
-    const char *nul = memchr(text, '\0', len);
-    if (nul)
-        return json_error(path, text, len, (size_t)(nul - text), "a NUL byte");
-    size_t first = start;
-    while (first < len && strchr(" \t\r\n", text[first]))
-        first++;
-    if (first == len)
-        return rl__fail(RL_ERR_INPUT, "%s: the file is empty; expected a JSON object", path);
-    const char *end = NULL;
-    *root = cJSON_ParseWithLengthOpts(text + start, len - start + 1, &end, 1);
-    if (*root)
-        return RL_OK;
-    size_t pos = end && end >= text && end <= text + len ? (size_t)(end - text) : len;
-    /* cJSON stops at its nesting limit without saying so. */
-    if (json_depth(text, pos) >= CJSON_NESTING_LIMIT) {
-        char what[80];
-        snprintf(what, sizeof what, "arrays and objects nested more than %d deep", CJSON_NESTING_LIMIT);
-        return json_error(path, text, len, pos, what);
-    }
-    return json_error(path, text, len, pos, NULL);
 }
 
 /* ---------------------------------------------------------------- API */
@@ -977,14 +796,9 @@ rl_status rl_scene_load(const char *path, rl_scene **out)
         *out = NULL;
     if (!path || !out)
         return rl__fail(RL_ERR_ARG, "rl_scene_load: path and out must not be NULL");
-    char *text = NULL;
-    size_t len = 0;
-    rl_status st = read_file(path, &text, &len);
-    if (st != RL_OK)
-        return st;
-    cJSON *root = NULL;
-    st = parse_json(path, text, len, &root);
-    free(text);
+    ilf_json *root = NULL;
+    ilf_json_ctx jc = {.file = path};
+    rl_status st = json_result(&jc, ilf_json_load(&jc, ILF_SCENE_MAX_BYTES, &root));
     if (st != RL_OK)
         return st;
 
@@ -998,7 +812,7 @@ rl_status rl_scene_load(const char *path, rl_scene **out)
     if (st == RL_OK)
         st = read_scene(&b, root);
     build_release(&b);
-    cJSON_Delete(root);
+    ilf_json_free(root);
     if (st != RL_OK) {
         rl_scene_destroy(s);
         return st;

@@ -30,4 +30,48 @@
  * cannot make the reader allocate more than this, whatever sides it claims. */
 #define ILF_IMAGE_MAX_SAMPLES (1LL << 31)
 
+/* ------------------------------------------------------------ JSON (ilf/json.h) */
+
+/* Arrays and objects open at once in a JSON file. cJSON parses recursively, one stack frame per level:
+ * 1000 levels fit any thread's stack (cJSON's own CJSON_NESTING_LIMIT is the same) and no scene,
+ * manifest or glTF file nests more than about 10 deep. */
+#define ILF_JSON_MAX_DEPTH 1000
+
+/* Bytes of a scene file. The whole file is read and parsed in memory (the tree costs several times
+ * the text); the largest hand-written or generated scene is a few MiB, its meshes live in files of
+ * their own. */
+#define ILF_SCENE_MAX_BYTES ((size_t)256 << 20)
+
+/* Bytes of a capture manifest: a grid and a few settings per position, at most
+ * CAP__MAX_POSITIONS of them, fits in well under this. capture.h promises it to library users as
+ * CAP_MANIFEST_MAX_BYTES; manifest.c checks that the two agree. */
+#define ILF_MANIFEST_MAX_BYTES ((size_t)64 << 20)
+
+/* Bytes of a proxy's JSON list of rectangles (at most CAP_PROXY_MAX of them). */
+#define ILF_PROXY_JSON_MAX_BYTES ((size_t)16 << 20)
+
+/* ------------------------------------------------------------ meshes (ilf/mesh.h) */
+
+/* Polygons, and vertices, one scene may hold (2^26): 64 Mi polygons already take gigabytes in the
+ * engine's structures, and every index fits in 32 bits with room to spare. */
+#define ILF_MESH_MAX_ELEMENTS ((size_t)1 << 26)
+
+/* Vertices of one polygon or mesh face: the scene loader's scratch arrays are this long, and a
+ * convex face with more corners than this is a mistake or an attack, not a lamp. */
+#define ILF_MESH_MAX_FACE_VERTICES 4096u
+
+/* Bytes of a glTF file's JSON read by the accessor pre-check (.gltf: the whole file; .glb: its JSON
+ * chunk). Parsing costs several times this in memory; a GLB whose JSON chunk is larger is refused,
+ * a larger .gltf is left to assimp unchecked. */
+#define ILF_GLTF_JSON_MAX_BYTES ((size_t)1 << 28)
+
+/* Elements declared in a PLY header (vertex, face, ...): real files have two or three. */
+#define ILF_PLY_MAX_ELEMENTS 32
+
+/* Properties of one PLY element: positions, normals, colours and texture coordinates make about 12. */
+#define ILF_PLY_MAX_PROPERTIES 64
+
+/* Words on one PLY header line ("property list uchar int vertex_indices" has 5). */
+#define ILF_PLY_MAX_WORDS 6
+
 #endif /* ILF_LIMITS_H */

@@ -74,8 +74,11 @@ typedef struct cap_proxy_defaults {
  * rectangles {"name", "origin", "u", "v", "grid": {"nu", "nv"}, "n"}, of
  * which origin, u and v are required (u and v orthogonal) and grid and n
  * default to *defaults; names default to "proxy<k>". Any other file is a
- * mesh read with assimp (node transforms applied) whose faces are
- * rectangles: a quad v0..v3, counter-clockwise seen from its front,
+ * mesh in a format scenes accept (OBJ, PLY, glTF, GLB, STL, FBX or 3DS, by
+ * its extension), imported with the same pre-checks as scene meshes (PLY
+ * counts against the file's size, glTF headers and accessor types; other
+ * formats are refused because their readers trust a header's counts), node
+ * transforms applied, whose faces are rectangles: a quad v0..v3, counter-clockwise seen from its front,
  * becomes origin v0, u = v1 - v0, v = v3 - v0; a triangle is merged with
  * the later triangle that shares its longest edge (run the other way) into
  * the rectangle c0 c1 c2 c3, where c0 c1 c2 is the first triangle rotated

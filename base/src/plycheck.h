@@ -1,17 +1,17 @@
 /*
- * plycheck.h - internal to the scene loader: a structural check of PLY mesh
+ * plycheck.h - internal to base's mesh importer (mesh_import.c): a structural check of PLY mesh
  * files made before assimp reads them.
  *
  * assimp trusts the counts a PLY file declares (elements in the header, the
  * length of every list in the body) and reserves memory for them before it
  * finds out that the file is far too short to hold them: a header claiming
  * 10^9 vertices costs minutes and gigabytes, a face claiming 4*10^9 indices
- * aborts the process. rl__ply_check() walks the file's structure, as the
+ * aborts the process. ilf__ply_check() walks the file's structure, as the
  * header describes it, against the bytes actually there, so that every count
  * assimp will allocate from is bounded by the file's size.
  */
-#ifndef RELIGHT_PLYCHECK_H
-#define RELIGHT_PLYCHECK_H
+#ifndef ILF_PLYCHECK_H
+#define ILF_PLYCHECK_H
 
 #include <stddef.h>
 
@@ -26,6 +26,6 @@
  * problem in why (why_size bytes), e.g. "PLY header declares 1000000000
  * 'vertex' elements, but only 27 bytes follow it".
  */
-int rl__ply_check(const char *path, char *why, size_t why_size);
+int ilf__ply_check(const char *path, char *why, size_t why_size);
 
-#endif /* RELIGHT_PLYCHECK_H */
+#endif /* ILF_PLYCHECK_H */

@@ -23,6 +23,7 @@
 #endif
 
 #include "plycheck.h"
+#include "ilf/limits.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -36,11 +37,11 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-/* Capacities of the header tables; a header beyond them is refused. */
-#define PLY_MAX_ELEMENTS 32
-#define PLY_MAX_PROPERTIES 64
-/* Most blank-separated words one header line is split into. */
-#define PLY_MAX_WORDS 6
+/* Capacities of the header tables and of one header line's words (ilf/limits.h); a header beyond
+ * them is refused. */
+#define PLY_MAX_ELEMENTS ILF_PLY_MAX_ELEMENTS
+#define PLY_MAX_PROPERTIES ILF_PLY_MAX_PROPERTIES
+#define PLY_MAX_WORDS ILF_PLY_MAX_WORDS
 
 typedef enum ply_format { PLY_ASCII, PLY_LITTLE, PLY_BIG } ply_format;
 
@@ -375,7 +376,7 @@ static int is_ply(const unsigned char *d, size_t size)
 }
 
 /* Checks the mapped file of size bytes at d; ply_name: its name ends in
- * .ply, so assimp will read it as PLY whatever it holds. @return as rl__ply_check(). */
+ * .ply, so assimp will read it as PLY whatever it holds. @return as ilf__ply_check(). */
 static int check_bytes(const unsigned char *d, size_t size, int ply_name, char *why, size_t why_size)
 {
     /* assimp takes a file for PLY by its name, or by a leading "ply" in any
@@ -398,7 +399,7 @@ static int check_bytes(const unsigned char *d, size_t size, int ply_name, char *
     return ok;
 }
 
-int rl__ply_check(const char *path, char *why, size_t why_size)
+int ilf__ply_check(const char *path, char *why, size_t why_size)
 {
     int fd = open(path, O_RDONLY);
     if (fd < 0)

@@ -1,0 +1,82 @@
+/*
+ * ilf/mesh.h - the one mesh importer of ilfkit: scene meshes (relight) and
+ * capture's proxies read mesh files through it, with the same formats and the
+ * same pre-checks. It is the only code that includes assimp (a wall test
+ * checks it); what it returns is a plain polygon soup that each caller turns
+ * into its own objects (scene polygons, proxy rectangles).
+ *
+ * Formats: OBJ, PLY, glTF, GLB, STL, FBX and 3DS, chosen by the file's
+ * extension (any case). Each is in the hostile-input corpus, and each reader
+ * either checks its counts against the file or is checked first: PLY files
+ * by plycheck.c (declared counts against the bytes there), glTF and GLB files
+ * by their header, chunk lengths and accessor types. Others of assimp's
+ * readers (OFF, Collada, DirectX among them) allocate whatever a header's
+ * count claims, gigabytes for a few bytes, so they are refused.
+ *
+ * Invariants of an imported mesh: vertices are finite as assimp read them
+ * (the caller checks finiteness with its own message); every index is below
+ * nvertices; faces keep assimp's order and numbering, points and lines
+ * included (count 1 or 2), so messages can name a face as the file's own
+ * readers count it; a face's material is an index into materials or
+ * ILF_MESH_NO_MATERIAL.
+ */
+#ifndef ILF_MESH_H
+#define ILF_MESH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "ilf/limits.h"
+
+/* A face whose mesh names no material of the file. */
+#define ILF_MESH_NO_MATERIAL UINT32_MAX
+
+/* Bytes of a material name, its terminator included (assimp's own limit). */
+#define ILF_MESH_NAME_BYTES 1024
+
+typedef enum ilf_mesh_status {
+    ILF_MESH_OK = 0,
+    ILF_MESH_ERR_INPUT, /* the file is missing, unreadable, of a refused format, or broken */
+    ILF_MESH_ERR_NOMEM  /* memory ran out */
+} ilf_mesh_status;
+
+typedef struct ilf_mesh_material {
+    char name[ILF_MESH_NAME_BYTES]; /* "" when the file gives none (or only assimp's stand-in) */
+    int has_diffuse, has_emissive;  /* whether the file gives these colours */
+    double diffuse[3], emissive[3]; /* RGB, as the file gives them */
+} ilf_mesh_material;
+
+typedef struct ilf_mesh_face {
+    uint32_t mesh;     /* which of the file's meshes (assimp's numbering) */
+    uint32_t face;     /* its number within that mesh */
+    uint32_t material; /* index into materials, or ILF_MESH_NO_MATERIAL */
+    uint32_t count;    /* vertices: 1 a point, 2 a line, 3 or more a polygon */
+    size_t first;      /* its vertex indices are indices[first .. first + count) */
+} ilf_mesh_face;
+
+typedef struct ilf_mesh {
+    size_t nvertices, nfaces, nindices, nmaterials;
+    double (*vertices)[3];        /* [nvertices], all meshes' vertices placed in the file's frame */
+    ilf_mesh_face *faces;         /* [nfaces], over all meshes in order */
+    uint32_t *indices;            /* [nindices], each < nvertices */
+    ilf_mesh_material *materials; /* [nmaterials] */
+} ilf_mesh;
+
+/*
+ * Imports the mesh file at path after every pre-check. On failure why
+ * (why_size bytes) holds the problem, naming the file as given:
+ * "cannot open 'PATH': No such file or directory", "'PATH' is not a regular
+ * file", "cannot read 'PATH': the file is empty", "cannot read 'PATH': mesh
+ * format not supported (...)", "cannot read 'PATH': <pre-check or assimp's
+ * message>", "'PATH' holds no complete mesh".
+ * @return ILF_MESH_OK and *out (ilf_mesh_destroy it); else *out = NULL and why.
+ */
+ilf_mesh_status ilf_mesh_import(const char *path, ilf_mesh **out, char *why, size_t why_size);
+
+/* Frees an imported mesh; NULL is a no-op. @return nothing. */
+void ilf_mesh_destroy(ilf_mesh *m);
+
+/* @return 1 if path's extension names an accepted format (any case), else 0. */
+int ilf_mesh_format_supported(const char *path);
+
+#endif /* ILF_MESH_H */

@@ -1,0 +1,328 @@
+/*
+ * mesh_import.c - the one mesh importer (ilf/mesh.h): the checks made before
+ * assimp reads a file, assimp's C API, and the copy of what it read into a
+ * plain polygon soup. The only file of ilfkit that includes assimp
+ * (test_assimp_contained); PLY files are checked by plycheck.c first.
+ *
+ * Checks, in order, each refusing with a message naming the file: the file
+ * exists and is a regular, non-empty file (assimp reads uninitialised memory
+ * on an empty glTF); its extension names an accepted format (ilf/mesh.h);
+ * a PLY file's declared counts fit its size (plycheck.h: assimp trusts
+ * them); a GLB file's header and chunk lengths fit its size, and a glTF
+ * file's position and index accessors have the types glTF 2.0 requires
+ * (assimp copies positions of any type as raw bytes into its vertices: a
+ * position accessor of another type would load silently as garbage or
+ * nothing); assimp reads it with its data-structure validation; the result
+ * is complete.
+ *
+ * Invariants: an imported soup satisfies ilf/mesh.h's invariants, or
+ * nothing is returned and everything allocated on the way is freed; a
+ * pre-check never rejects a file because it cannot make sense of it, it
+ * leaves that to assimp, which reports it.
+ */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L /* stat(); the build defines it too */
+#endif
+
+#include <assimp/cimport.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+#include "ilf/json.h"
+#include "ilf/limits.h"
+#include "ilf/mesh.h"
+#include "plycheck.h"
+
+/* ------------------------------------------------------------ glTF */
+
+/* glTF 2.0 accessor component types. */
+enum { GLTF_UBYTE = 5121, GLTF_USHORT = 5123, GLTF_UINT = 5125, GLTF_FLOAT = 5126 };
+
+/* Largest glTF JSON read for the check (ilf/limits.h). */
+#define GLTF_JSON_MAX ILF_GLTF_JSON_MAX_BYTES
+
+/* @return the name of glTF component type t. */
+static const char *gltf_type_name(int t)
+{
+    switch (t) {
+    case 5120: return "byte";
+    case GLTF_UBYTE: return "unsigned byte";
+    case 5122: return "short";
+    case GLTF_USHORT: return "unsigned short";
+    case GLTF_UINT: return "unsigned int";
+    case GLTF_FLOAT: return "float";
+    default: return "unknown";
+    }
+}
+
+/*
+ * Checks accessor number `at` of the glTF accessors array, used by `use` of
+ * meshes[mi].primitives[prim]: positions must be FLOAT VEC3 (glTF 2.0, 3.7.2.1),
+ * indices SCALAR of an unsigned integer type. @return 1, or 0 with why.
+ */
+static int gltf_accessor_ok(const ilf_json *accessors, const ilf_json *at, int indices, int mi, int prim, char *why,
+                            size_t size)
+{
+    const char *use = indices ? "indices" : "POSITION";
+    int n = ilf_json_type_of(accessors) == ILF_JSON_ARRAY ? (int)ilf_json_count(accessors) : 0;
+    int number = ilf_json_type_of(at) == ILF_JSON_NUMBER;
+    double a = ilf_json_value(at);
+    if (!number || a < 0 || a >= n || a != (int)a) {
+        snprintf(why, size, "meshes[%d].primitives[%d]: %s refers to accessor %g of %d", mi, prim, use,
+                 number ? a : -1.0, n);
+        return 0;
+    }
+    const ilf_json *acc = ilf_json_at(accessors, (size_t)a);
+    const ilf_json *ct = ilf_json_get(acc, "componentType");
+    const ilf_json *type = ilf_json_get(acc, "type");
+    int t = ilf_json_type_of(ct) == ILF_JSON_NUMBER ? (int)ilf_json_value(ct) : 0;
+    const char *ty = ilf_json_type_of(type) == ILF_JSON_STRING ? ilf_json_text(type) : "(none)";
+    int ok = indices ? (t == GLTF_UBYTE || t == GLTF_USHORT || t == GLTF_UINT) && strcmp(ty, "SCALAR") == 0
+                     : t == GLTF_FLOAT && strcmp(ty, "VEC3") == 0;
+    if (!ok)
+        snprintf(why, size,
+                 "meshes[%d].primitives[%d]: %s accessor %d has componentType %d (%s) and type %s; glTF 2.0 %s",
+                 mi, prim, use, (int)a, t, gltf_type_name(t), ty,
+                 indices ? "indices are SCALAR unsigned byte, short or int" : "positions are VEC3 float (5126)");
+    return ok;
+}
+
+/*
+ * Reads the JSON of a glTF 2.0 file (.gltf: the file; .glb: its first
+ * chunk) and checks every mesh primitive's POSITION and indices accessors.
+ * Anything it cannot make sense of is left to assimp, which reports it.
+ * @return 1 (fine, or not a glTF 2.0 file), or 0 with why.
+ */
+static int gltf_check(const char *path, char *why, size_t size)
+{
+    const char *dot = strrchr(path, '.');
+    int glb = dot && strcasecmp(dot, ".glb") == 0;
+    if (!dot || (!glb && strcasecmp(dot, ".gltf") != 0))
+        return 1;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 1;
+    size_t len = 0, fsize = 0;
+    if (fseek(f, 0, SEEK_END) == 0) {
+        long end = ftell(f);
+        fsize = end > 0 ? (size_t)end : 0;
+        rewind(f);
+    }
+    if (glb) {
+        /* header: magic, version 2, total length; then a chunk: length, type
+         * "JSON". assimp reserves what these lengths claim before it reads,
+         * so they are held to the file's size first (glTF 2.0, 4.4). */
+        unsigned char h[20];
+        if (fread(h, 1, sizeof h, f) != sizeof h || memcmp(h, "glTF", 4) != 0) {
+            fclose(f);
+            snprintf(why, size, "not a binary glTF file: no 20-byte header starting with 'glTF'");
+            return 0;
+        }
+        size_t version = (size_t)h[4] | (size_t)h[5] << 8 | (size_t)h[6] << 16 | (size_t)h[7] << 24;
+        size_t total = (size_t)h[8] | (size_t)h[9] << 8 | (size_t)h[10] << 16 | (size_t)h[11] << 24;
+        len = (size_t)h[12] | (size_t)h[13] << 8 | (size_t)h[14] << 16 | (size_t)h[15] << 24;
+        const char *bad = version != 2                  ? "version is not 2"
+                          : total != fsize              ? "header length differs from the file's size"
+                          : memcmp(h + 16, "JSON", 4)   ? "first chunk is not JSON"
+                          : len == 0 || len % 4 != 0    ? "JSON chunk length is 0 or not a multiple of 4"
+                          : len > fsize - sizeof h      ? "JSON chunk is longer than the rest of the file"
+                          : len > GLTF_JSON_MAX         ? "JSON chunk is larger than the checker reads"
+                                                        : NULL;
+        if (bad) {
+            fclose(f);
+            snprintf(why, size, "binary glTF: %s (header length %zu, JSON chunk %zu bytes, file %zu bytes)", bad,
+                     total, len, fsize);
+            return 0;
+        }
+        /* the binary chunk, when present, must fit too */
+        size_t next = sizeof h + len;
+        unsigned char c[8];
+        if (next < fsize &&
+            (fseek(f, (long)next, SEEK_SET) != 0 || fread(c, 1, sizeof c, f) != sizeof c ||
+             ((size_t)c[0] | (size_t)c[1] << 8 | (size_t)c[2] << 16 | (size_t)c[3] << 24) > fsize - next - 8)) {
+            fclose(f);
+            snprintf(why, size, "binary glTF: the chunk after the JSON is longer than the rest of the file");
+            return 0;
+        }
+        fseek(f, (long)sizeof h, SEEK_SET);
+    } else {
+        len = fsize;
+    }
+    char *text = len > 0 && len <= GLTF_JSON_MAX ? malloc(len) : NULL;
+    size_t got = text ? fread(text, 1, len, f) : 0;
+    fclose(f);
+    ilf_json *root = got == len && text ? ilf_json_parse_quiet(text, len) : NULL;
+    free(text);
+    const ilf_json *version = ilf_json_get(ilf_json_get(root, "asset"), "version");
+    const ilf_json *meshes = ilf_json_get(root, "meshes");
+    const ilf_json *accessors = ilf_json_get(root, "accessors");
+    int ok = 1;
+    if (ilf_json_type_of(version) == ILF_JSON_STRING && ilf_json_text(version)[0] == '2' &&
+        ilf_json_type_of(meshes) == ILF_JSON_ARRAY) {
+        int mi = 0;
+        for (const ilf_json *m = ilf_json_first(meshes); m && ok; m = ilf_json_next(m), mi++) {
+            const ilf_json *prims = ilf_json_get(m, "primitives");
+            int prim = 0;
+            for (const ilf_json *p = ilf_json_first(prims); p && ok; p = ilf_json_next(p), prim++) {
+                const ilf_json *attrs = ilf_json_get(p, "attributes");
+                const ilf_json *pos = ilf_json_get(attrs, "POSITION");
+                const ilf_json *idx = ilf_json_get(p, "indices");
+                if (pos)
+                    ok = gltf_accessor_ok(accessors, pos, 0, mi, prim, why, size);
+                if (ok && idx)
+                    ok = gltf_accessor_ok(accessors, idx, 1, mi, prim, why, size);
+            }
+        }
+    }
+    ilf_json_free(root);
+    return ok;
+}
+
+/* ------------------------------------------------------------ formats */
+
+/* The accepted formats (ilf/mesh.h says why these and no others). */
+static const char *const MESH_FORMATS[] = {"obj", "ply", "gltf", "glb", "stl", "fbx", "3ds", NULL};
+
+int ilf_mesh_format_supported(const char *path)
+{
+    const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+    if (!dot || (slash && dot < slash))
+        return 0;
+    for (size_t k = 0; MESH_FORMATS[k]; k++)
+        if (strcasecmp(dot + 1, MESH_FORMATS[k]) == 0)
+            return 1;
+    return 0;
+}
+
+/* ------------------------------------------------------------ the soup */
+
+void ilf_mesh_destroy(ilf_mesh *m)
+{
+    if (!m)
+        return;
+    free(m->vertices);
+    free(m->faces);
+    free(m->indices);
+    free(m->materials);
+    free(m);
+}
+
+/* Copies material m's name (or "" for assimp's stand-in and unnamed ones) and colours into out. */
+static void copy_material(const struct aiMaterial *m, ilf_mesh_material *out)
+{
+    struct aiString name;
+    struct aiColor4D c;
+    if (aiGetMaterialString(m, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS && name.length > 0 &&
+        strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) != 0)
+        snprintf(out->name, sizeof out->name, "%s", name.data);
+    if ((out->has_diffuse = aiGetMaterialColor(m, AI_MATKEY_COLOR_DIFFUSE, &c) == aiReturn_SUCCESS))
+        out->diffuse[0] = c.r, out->diffuse[1] = c.g, out->diffuse[2] = c.b;
+    if ((out->has_emissive = aiGetMaterialColor(m, AI_MATKEY_COLOR_EMISSIVE, &c) == aiReturn_SUCCESS))
+        out->emissive[0] = c.r, out->emissive[1] = c.g, out->emissive[2] = c.b;
+}
+
+/* Copies what assimp read into a new soup. @return ILF_MESH_OK and *out, ILF_MESH_ERR_INPUT (an index out of
+ * range, or more than SIZE_MAX of something) with why, or ILF_MESH_ERR_NOMEM. */
+static ilf_mesh_status soup_new(const char *path, const struct aiScene *sc, ilf_mesh **out, char *why, size_t size)
+{
+    ilf_mesh *m = calloc(1, sizeof *m);
+    if (!m)
+        return ILF_MESH_ERR_NOMEM;
+    for (unsigned mi = 0; mi < sc->mNumMeshes; mi++) {
+        const struct aiMesh *a = sc->mMeshes[mi];
+        m->nvertices += a->mNumVertices;
+        m->nfaces += a->mNumFaces;
+        for (unsigned fi = 0; fi < a->mNumFaces; fi++)
+            m->nindices += a->mFaces[fi].mNumIndices;
+    }
+    m->nmaterials = sc->mNumMaterials;
+    m->vertices = malloc((m->nvertices ? m->nvertices : 1) * sizeof *m->vertices);
+    m->faces = malloc((m->nfaces ? m->nfaces : 1) * sizeof *m->faces);
+    m->indices = malloc((m->nindices ? m->nindices : 1) * sizeof *m->indices);
+    m->materials = calloc(m->nmaterials ? m->nmaterials : 1, sizeof *m->materials);
+    if (!m->vertices || !m->faces || !m->indices || !m->materials) {
+        ilf_mesh_destroy(m);
+        return ILF_MESH_ERR_NOMEM;
+    }
+    for (size_t k = 0; k < m->nmaterials; k++)
+        copy_material(sc->mMaterials[k], &m->materials[k]);
+    size_t v0 = 0, nf = 0, ni = 0;
+    for (unsigned mi = 0; mi < sc->mNumMeshes; mi++) {
+        const struct aiMesh *a = sc->mMeshes[mi];
+        for (unsigned k = 0; k < a->mNumVertices; k++) {
+            m->vertices[v0 + k][0] = a->mVertices[k].x;
+            m->vertices[v0 + k][1] = a->mVertices[k].y;
+            m->vertices[v0 + k][2] = a->mVertices[k].z;
+        }
+        uint32_t material = a->mMaterialIndex < sc->mNumMaterials ? a->mMaterialIndex : ILF_MESH_NO_MATERIAL;
+        for (unsigned fi = 0; fi < a->mNumFaces; fi++, nf++) {
+            const struct aiFace *f = &a->mFaces[fi];
+            m->faces[nf] = (ilf_mesh_face){mi, fi, material, f->mNumIndices, ni};
+            for (unsigned k = 0; k < f->mNumIndices; k++, ni++) {
+                if (f->mIndices[k] >= a->mNumVertices) { /* assimp's validation refuses these; kept as a guard */
+                    snprintf(why, size, "cannot read '%s': mesh %u face %u refers to vertex %u of %u", path, mi, fi,
+                             f->mIndices[k], a->mNumVertices);
+                    ilf_mesh_destroy(m);
+                    return ILF_MESH_ERR_INPUT;
+                }
+                m->indices[ni] = (uint32_t)(v0 + f->mIndices[k]);
+            }
+        }
+        v0 += a->mNumVertices;
+    }
+    *out = m;
+    return ILF_MESH_OK;
+}
+
+ilf_mesh_status ilf_mesh_import(const char *path, ilf_mesh **out, char *why, size_t why_size)
+{
+    *out = NULL;
+    struct stat sb;
+    if (stat(path, &sb) != 0) {
+        snprintf(why, why_size, "cannot open '%s': %s", path, strerror(errno));
+        return ILF_MESH_ERR_INPUT;
+    }
+    if (!S_ISREG(sb.st_mode)) {
+        snprintf(why, why_size, "'%s' is not a regular file", path);
+        return ILF_MESH_ERR_INPUT;
+    }
+    /* assimp reads uninitialised memory on an empty glTF (valgrind, a fuzz_mesh input) */
+    if (sb.st_size == 0) {
+        snprintf(why, why_size, "cannot read '%s': the file is empty", path);
+        return ILF_MESH_ERR_INPUT;
+    }
+    if (!ilf_mesh_format_supported(path)) {
+        snprintf(why, why_size, "cannot read '%s': mesh format not supported (OBJ, PLY, glTF, GLB, STL, FBX "
+                 "and 3DS are: their readers check their counts)", path);
+        return ILF_MESH_ERR_INPUT;
+    }
+    char problem[256];
+    /* assimp would trust a PLY header's counts (plycheck.h), and copy positions of any type (gltf_check) */
+    if (!ilf__ply_check(path, problem, sizeof problem) || !gltf_check(path, problem, sizeof problem)) {
+        snprintf(why, why_size, "cannot read '%s': %s", path, problem);
+        return ILF_MESH_ERR_INPUT;
+    }
+    const struct aiScene *sc = aiImportFile(path, aiProcess_PreTransformVertices | aiProcess_ValidateDataStructure);
+    if (!sc) {
+        snprintf(why, why_size, "cannot read '%s': %s", path, aiGetErrorString());
+        return ILF_MESH_ERR_INPUT;
+    }
+    ilf_mesh_status st = ILF_MESH_OK;
+    if (sc->mFlags & AI_SCENE_FLAGS_INCOMPLETE) {
+        snprintf(why, why_size, "'%s' holds no complete mesh", path);
+        st = ILF_MESH_ERR_INPUT;
+    } else {
+        st = soup_new(path, sc, out, why, why_size);
+        if (st == ILF_MESH_ERR_NOMEM)
+            snprintf(why, why_size, "'%s': out of memory", path);
+    }
+    aiReleaseImport(sc);
+    return st;
+}
