@@ -546,9 +546,8 @@ static int check_combination(const synth_options *o)
 /* Checks the radiance array stays within lfio's limit before asking for it. */
 static int check_size(const lfio_slab_desc *d)
 {
-    uint64_t ndir = lfio_part_hemi_count(d->n);
-    double bytes = (double)ndir * d->nu * d->nv * 3 * sizeof(float);
-    if (bytes > (double)LFIO_SLAB_MAX_BYTES) {
+    uint64_t bytes = lfio_slab_desc_bytes(d);
+    if (bytes > LFIO_SLAB_MAX_BYTES) {
         char size[32], limit[32];
         cli_error("synth", "%ux%u positions with n=%u need %s of radiance, more than the limit of %s",
                   (unsigned)d->nu, (unsigned)d->nv, (unsigned)d->n,

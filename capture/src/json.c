@@ -221,14 +221,9 @@ cap_status cap__json_slab_name(const char *path, const cJSON *j, const char *ele
     cap_status st = cap__json_string(path, j, elem, &text);
     if (st != CAP_OK)
         return st;
-    size_t len = strlen(text);
-    int ok = len >= 1 && len <= LFIO_NAME_MAX;
-    for (const char *c = text; ok && *c != '\0'; c++)
-        ok = (*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9') || *c == '_' ||
-             *c == '-' || *c == '.';
-    if (!ok)
+    if (!lfio_slab_name_valid(text))
         return cap__json_bad(path, elem, "'%s': use 1 to %d of A-Z a-z 0-9 _ - .", text, LFIO_NAME_MAX);
-    memcpy(name, text, len + 1);
+    memcpy(name, text, strlen(text) + 1);
     return CAP_OK;
 }
 
@@ -246,10 +241,10 @@ cap_status cap__json_rectangle(const char *path, const cJSON *obj, const char *e
         if (st != CAP_OK)
             return st;
     }
-    double lu = cap__norm(d->u), lv = cap__norm(d->v);
-    if (!(lu > 0.0) || !(lv > 0.0) || !isfinite(lu * lv))
+    int edges = lfio_slab_edges_check(d->u, d->v);
+    if (edges == LFIO_EDGES_LENGTH)
         return cap__json_bad(path, elem, "u and v must be nonzero (and their lengths finite)");
-    if (fabs(cap__dot(d->u, d->v)) > 1e-9 * lu * lv)
+    if (edges == LFIO_EDGES_ORTHOGONAL)
         return cap__json_bad(path, elem, "u and v must be orthogonal (u.v = %g)", cap__dot(d->u, d->v));
     return CAP_OK;
 }

@@ -455,10 +455,10 @@ static cap_status read_slab(const parser *p, const cJSON *root, lfio_slab_desc *
         st = read_units(p, j, d);
     if (st != CAP_OK)
         return st;
-    double bytes = (double)d->nu * d->nv * 4.0 * d->n * d->n * 12.0;
-    if (bytes > (double)LFIO_SLAB_MAX_BYTES)
+    uint64_t bytes = lfio_slab_desc_bytes(d);
+    if (bytes > LFIO_SLAB_MAX_BYTES)
         return cap__json_bad(p->path, "", "the slab would hold %.3g bytes of radiance, over lfio's limit of %.3g",
-                             bytes, (double)LFIO_SLAB_MAX_BYTES);
+                             (double)bytes, (double)LFIO_SLAB_MAX_BYTES);
     return CAP_OK;
 }
 
