@@ -15,6 +15,7 @@
 #include "ilf/atomic_file.h"
 #include "ilf/hash.h"
 #include "ilf/limits.h"
+#include "ilf/message.h"
 #include "ilf/pool.h"
 
 static int failures;
@@ -168,8 +169,30 @@ static void test_atomic(const char *tmp)
     CHECK(rmdir(dir) == 0);
 }
 
+/* The message rule: formatted, cut at a whole UTF-8 character, safe when an argument is the buffer. */
+static void test_message(void)
+{
+    static char buf[ILF_MESSAGE_BYTES];
+    CHECK(ilf_message_format(buf, "%s: %d", "a", 7) == 4 && strcmp(buf, "a: 7") == 0);
+    CHECK(ilf_message_format(buf, "ctx: %s", buf) == 9 && strcmp(buf, "ctx: a: 7") == 0);
+    char big[2 * ILF_MESSAGE_BYTES];
+    memset(big, 'x', sizeof big);
+    big[sizeof big - 1] = '\0';
+    CHECK(ilf_message_format(buf, "%s", big) == ILF_MESSAGE_BYTES - 1 && strlen(buf) == ILF_MESSAGE_BYTES - 1);
+    /* a 3-byte character straddling the cut is dropped whole; one that fits exactly is kept */
+    for (size_t at = ILF_MESSAGE_BYTES - 4; at <= ILF_MESSAGE_BYTES - 2; at++) {
+        memset(big, 'x', sizeof big);
+        big[sizeof big - 1] = '\0';
+        memcpy(big + at, "\xe2\x82\xac", 3);
+        size_t len = ilf_message_format(buf, "%s", big);
+        CHECK(len == (at + 3 <= ILF_MESSAGE_BYTES - 1 ? ILF_MESSAGE_BYTES - 1 : at));
+        CHECK(strlen(buf) == len);
+    }
+}
+
 int main(void)
 {
+    test_message();
     const char *tmp = getenv("ILF_TEST_TMP");
     test_pool();
     test_atomic(tmp && *tmp ? tmp : "/tmp");
