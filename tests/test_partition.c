@@ -443,6 +443,21 @@ static void check_strata(uint32_t n)
                       (unsigned long long)id, k, plane, sum, omega);
                 double l[3] = {1, 0, 0}, d[3], w;
                 CHECK(!lfio_part_strata_sample(&st, k * k, l, d, &w, NULL), "stratum k*k refused");
+                CHECK(!lfio_part_strata_centroid(&st, k * k, d, &w), "stratum k*k refused");
+                /* the centroid rule: the sample at l = 1/3 to rounding, and its weights sum to about omega */
+                double csum = 0.0;
+                for (uint32_t s = 0; s < k * k; s++) {
+                    const double third[3] = {1.0 / 3, 1.0 / 3, 1.0 / 3};
+                    double dc[3], wc, ds[3], ws;
+                    CHECK(lfio_part_strata_centroid(&st, s, dc, &wc) && lfio_part_strata_sample(&st, s, third, ds, &ws, NULL),
+                          "centroid");
+                    CHECK(fabs(dc[0] - ds[0]) + fabs(dc[1] - ds[1]) + fabs(dc[2] - ds[2]) < 1e-14 &&
+                              fabs(wc - ws) < 1e-13 * ws,
+                          "n=%u k=%u s=%u: centroid off the sample at l = 1/3", n, k, s);
+                    csum += wc;
+                }
+                /* a midpoint rule: close once the strata are small (it overshoots a whole octant by 65%) */
+                CHECK(n * k < 15 || fabs(csum - omega) < 0.05 * omega, "centroid weights %.9g vs %.9g", csum, omega);
             }
         }
     }

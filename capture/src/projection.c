@@ -239,11 +239,11 @@ int cap_partition_samples(uint32_t n, uint64_t id, uint32_t k, double *dirs, dou
     for (int c = 0; c < 3; c++)
         cap__normalise(v[c]);
     lfio_part_strata_init(&st, (const double(*)[3])v, k);
+    st.jac = 1.0; /* relative weights 1/|P|^3, normalised below: bit for bit the ones capture has always used */
     /* each stratum's centroid: a fixed, symmetric rule, the same on every run */
-    const double centroid[3] = {1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0};
     double total = 0.0;
     for (uint32_t s = 0; s < k * k; s++) {
-        lfio_part_strata_sample(&st, s, centroid, &dirs[3 * s], &weights[s], NULL);
+        lfio_part_strata_centroid(&st, s, &dirs[3 * s], &weights[s]);
         total += weights[s];
     }
     for (uint32_t s = 0; s < k * k; s++)

@@ -447,10 +447,9 @@ int lfio_part_strata_init(lfio_part_strata *st, const double p[3][3], uint32_t k
     return 1;
 }
 
-int lfio_part_strata_sample(const lfio_part_strata *st, uint32_t s, const double l[3], double dir[3], double *weight,
-                            double lam[3])
+/* Finds stratum s of k*k: lattice cell (c, r) and whether it is the upper triangle. @return 0 if s >= k*k. */
+static int stratum_cell(uint32_t k, uint32_t s, uint32_t *c, uint32_t *r, uint32_t *upper)
 {
-    uint32_t k = st->k;
     if ((uint64_t)s >= (uint64_t)k * k)
         return 0;
     /* row r holds 2(k - r) - 1 strata and starts at r(2k - r) = k*k - (k - r)^2 */
@@ -461,9 +460,51 @@ int lfio_part_strata_sample(const lfio_part_strata *st, uint32_t s, const double
     while ((uint64_t)(q + 1) * (q + 1) <= left)
         q++;
     uint32_t width = (uint64_t)q * q == left ? q : q + 1; /* ceil(sqrt(left)) = k - r */
-    uint32_t r = k - width;
-    uint32_t t = s - (uint32_t)((uint64_t)r * (2u * k - r));
-    uint32_t c = t / 2, upper = t % 2;
+    *r = k - width;
+    uint32_t t = s - (uint32_t)((uint64_t)*r * (2u * k - *r));
+    *c = t / 2;
+    *upper = t % 2;
+    return 1;
+}
+
+/* Lattice point p0 + (p1 - p0) i/k + (p2 - p0) j/k of st's triangle (capture's arithmetic, kept bit for bit). */
+static void lattice_point(const lfio_part_strata *st, uint32_t i, uint32_t j, double out[3])
+{
+    for (int a = 0; a < 3; a++)
+        out[a] = st->p[0][a] + (st->p[1][a] - st->p[0][a]) * i / st->k + (st->p[2][a] - st->p[0][a]) * j / st->k;
+}
+
+int lfio_part_strata_centroid(const lfio_part_strata *st, uint32_t s, double dir[3], double *weight)
+{
+    uint32_t c, r, upper;
+    if (!stratum_cell(st->k, s, &c, &r, &upper))
+        return 0;
+    double A[3], B[3], C[3];
+    /* the corners in the order their sum has always been taken */
+    lattice_point(st, c + 1, r, B);
+    lattice_point(st, c, r + 1, C);
+    if (!upper) {
+        lattice_point(st, c, r, A);
+        for (int a = 0; a < 3; a++)
+            A[a] = (A[a] + B[a] + C[a]) / 3.0;
+    } else {
+        lattice_point(st, c + 1, r + 1, A);
+        for (int a = 0; a < 3; a++)
+            A[a] = (B[a] + C[a] + A[a]) / 3.0;
+    }
+    double len = sqrt(A[0] * A[0] + A[1] * A[1] + A[2] * A[2]);
+    for (int a = 0; a < 3; a++)
+        dir[a] = A[a] / len;
+    *weight = st->jac / (len * len * len);
+    return 1;
+}
+
+int lfio_part_strata_sample(const lfio_part_strata *st, uint32_t s, const double l[3], double dir[3], double *weight,
+                            double lam[3])
+{
+    uint32_t k = st->k, c, r, upper;
+    if (!stratum_cell(k, s, &c, &r, &upper))
+        return 0;
     double g[3];
     /* for k = 1 every step below is exact, so g = l: a caller's own warp passes through */
     if (!upper) {

@@ -142,7 +142,8 @@ int lfio_part_face_vertices(uint32_t n, uint64_t id, double v[3][3]);
  */
 typedef struct lfio_part_strata {
     double p[3][3]; /**< the planar triangle's corners */
-    double jac;     /**< |det(p0, p1, p2)| / (2 k*k): a stratum's area times the plane's distance from 0 */
+    double jac;     /**< |det(p0, p1, p2)| / (2 k*k): a stratum's area times the plane's distance from 0
+                         (a caller that normalises the weights itself may set it to 1) */
     uint32_t k;     /**< strata per edge */
 } lfio_part_strata;
 
@@ -166,6 +167,15 @@ int lfio_part_strata_init(lfio_part_strata *st, const double p[3][3], uint32_t k
  */
 int lfio_part_strata_sample(const lfio_part_strata *st, uint32_t s, const double l[3], double dir[3], double *weight,
                             double lam[3]);
+
+/**
+ * Gives the direction through the centroid of stratum s (the mean of its three
+ * lattice corners, each p0 + (p1-p0) i/k + (p2-p0) j/k) and its weight
+ * jac / |P|^3: a fixed quadrature rule, one point per stratum, for callers
+ * that want the same directions on every run. dir = P / |P|.
+ * @return 1 on success; 0 if s >= k*k (outputs untouched).
+ */
+int lfio_part_strata_centroid(const lfio_part_strata *st, uint32_t s, double dir[3], double *weight);
 
 #ifdef __cplusplus
 }
