@@ -78,7 +78,8 @@ if command -v gnuplot >/dev/null 2>&1; then
 else
     echo "note: gnuplot not installed: PNG checks skipped"
 fi
-check "no temporaries left" bash -c "! compgen -G '$OUT/*tmp*' >/dev/null && ! compgen -G '$OUT/.error-run*' >/dev/null"
+# temporaries are hidden files (ilf/atomic_file.h: .NAME.tmp-TAG[.EXT]), which '*' does not match
+check "no temporaries left" bash -c "! compgen -G '$OUT/*tmp*' >/dev/null && ! compgen -G '$OUT/.*.tmp-*' >/dev/null && ! compgen -G '$OUT/.error-run*' >/dev/null"
 
 # Second run: the reference comes from the cache.
 bench >"$TMP/run2.out" 2>"$TMP/run2.err"

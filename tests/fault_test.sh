@@ -120,7 +120,8 @@ complete() {
     esac
 }
 
-# temporaries DIR: lists the writers' temporaries in DIR ("x.tmp-XXXXXX", ".x.tmp-XXXXXX.ext").
+# temporaries DIR: lists the writers' temporaries in DIR (the one rule of ilf/atomic_file.h:
+# ".x.tmp-<12 hex>" or ".x.tmp-<12 hex>.ext"; find's '*' also matches a leading dot).
 temporaries() {
     find "$1" -maxdepth 1 -name '*.tmp-*'
 }

@@ -15,6 +15,7 @@
 #include "ilf/atomic_file.h"
 #include "ilf/hash.h"
 #include "ilf/limits.h"
+#include "ilf/message.h"
 #include "ilf/pool.h"
 
 static int failures;
@@ -65,7 +66,8 @@ static void test_pool(void)
     const unsigned counts[] = {1, 2, 3, 7, 64};
     for (size_t t = 0; t < sizeof counts / sizeof counts[0]; t++) {
         memset(&c, 0, sizeof c);
-        ilf_team *team = ilf_team_start(counts[t], count_run, &c);
+        ilf_team *team = NULL;
+        CHECK(ilf_team_start(counts[t], count_run, &c, &team) == 0 && team != NULL);
         CHECK(ilf_team_threads(team) <= counts[t]);
         ilf_team_join(team);
         check_once(&c, counts[t], "team");
@@ -75,7 +77,9 @@ static void test_pool(void)
     }
     /* Past the cap, a team is capped, and 0 = every core is at least one. */
     memset(&c, 0, sizeof c);
-    ilf_team_join(ilf_team_start(ILF_MAX_THREADS + 5, count_run, &c));
+    ilf_team *capped = NULL;
+    CHECK(ilf_team_start(ILF_MAX_THREADS + 5, count_run, &c, &capped) == 0);
+    ilf_team_join(capped);
     check_once(&c, ILF_MAX_THREADS, "capped team");
     CHECK(ilf_thread_count(0) >= 1 && ilf_thread_count(0) <= ILF_MAX_THREADS);
     CHECK(ilf_thread_count(3) == 3);
@@ -168,8 +172,30 @@ static void test_atomic(const char *tmp)
     CHECK(rmdir(dir) == 0);
 }
 
+/* The message rule: formatted, cut at a whole UTF-8 character, safe when an argument is the buffer. */
+static void test_message(void)
+{
+    static char buf[ILF_MESSAGE_BYTES];
+    CHECK(ilf_message_format(buf, "%s: %d", "a", 7) == 4 && strcmp(buf, "a: 7") == 0);
+    CHECK(ilf_message_format(buf, "ctx: %s", buf) == 9 && strcmp(buf, "ctx: a: 7") == 0);
+    char big[2 * ILF_MESSAGE_BYTES];
+    memset(big, 'x', sizeof big);
+    big[sizeof big - 1] = '\0';
+    CHECK(ilf_message_format(buf, "%s", big) == ILF_MESSAGE_BYTES - 1 && strlen(buf) == ILF_MESSAGE_BYTES - 1);
+    /* a 3-byte character straddling the cut is dropped whole; one that fits exactly is kept */
+    for (size_t at = ILF_MESSAGE_BYTES - 4; at <= ILF_MESSAGE_BYTES - 2; at++) {
+        memset(big, 'x', sizeof big);
+        big[sizeof big - 1] = '\0';
+        memcpy(big + at, "\xe2\x82\xac", 3);
+        size_t len = ilf_message_format(buf, "%s", big);
+        CHECK(len == (at + 3 <= ILF_MESSAGE_BYTES - 1 ? ILF_MESSAGE_BYTES - 1 : at));
+        CHECK(strlen(buf) == len);
+    }
+}
+
 int main(void)
 {
+    test_message();
     const char *tmp = getenv("ILF_TEST_TMP");
     test_pool();
     test_atomic(tmp && *tmp ? tmp : "/tmp");

@@ -399,12 +399,96 @@ static void check_octant_sum(uint32_t n)
     CHECK(hi / lo > 4.0 && hi / lo < 5.3, "n=%u: largest/smallest solid angle %.3f", n, hi / lo);
 }
 
+/* Strata: indices cover the triangle once, k = 1 passes barycentrics through
+ * exactly, corners land where the scheme says, and the weights estimate the
+ * solid angle on both planes (the unit corners and the octahedron face). */
+static void check_strata(uint32_t n)
+{
+    lfio_part_strata st;
+    double v[3][3], f[3][3];
+    for (uint64_t id = 0; id < lfio_part_count(n); id += 1 + id / 3) {
+        CHECK(lfio_part_vertices(n, id, v) && lfio_part_face_vertices(n, id, f), "n=%u id=%llu", n,
+              (unsigned long long)id);
+        for (int c = 0; c < 3; c++) {
+            double l1 = fabs(f[c][0]) + fabs(f[c][1]) + fabs(f[c][2]);
+            double cosang = (f[c][0] * v[c][0] + f[c][1] * v[c][1] + f[c][2] * v[c][2]) /
+                            sqrt(f[c][0] * f[c][0] + f[c][1] * f[c][1] + f[c][2] * f[c][2]);
+            CHECK(fabs(l1 - 1.0) < 1e-15 && fabs(cosang - 1.0) < 1e-15, "face corner %d off its ray", c);
+        }
+        double omega = lfio_part_solid_angle(n, id);
+        for (int plane = 0; plane < 2; plane++) {
+            for (uint32_t k = 1; k <= 5; k++) {
+                CHECK(lfio_part_strata_init(&st, plane ? (const double(*)[3])f : (const double(*)[3])v, k), "init");
+                /* many uniform points per stratum: the mean weight sums to the solid angle */
+                double sum = 0.0;
+                int per = 400;
+                for (uint32_t s = 0; s < k * k; s++)
+                    for (int j = 0; j < per; j++) {
+                        double a = (j % 20 + 0.5) / 20, b = (j / 20 + 0.5) / 20, l[3], d[3], w, lam[3];
+                        if (a + b > 1.0) {
+                            a = 1.0 - a;
+                            b = 1.0 - b;
+                        }
+                        l[0] = 1.0 - a - b, l[1] = a, l[2] = b;
+                        CHECK(lfio_part_strata_sample(&st, s, l, d, &w, lam), "sample");
+                        uint64_t got;
+                        CHECK(lfio_part_id(n, d, &got) && (got == id || lam[0] < 1e-9 || lam[1] < 1e-9 ||
+                                                           lam[2] < 1e-9),
+                              "n=%u id=%llu k=%u s=%u: sample outside its solid angle", n, (unsigned long long)id, k, s);
+                        if (k == 1)
+                            CHECK(lam[0] == l[0] && lam[1] == l[1] && lam[2] == l[2], "k = 1 must pass l through");
+                        sum += w / per;
+                    }
+                CHECK(fabs(sum - omega) < 2e-3 * omega, "n=%u id=%llu k=%u plane %d: %.9g vs %.9g", n,
+                      (unsigned long long)id, k, plane, sum, omega);
+                double l[3] = {1, 0, 0}, d[3], w;
+                CHECK(!lfio_part_strata_sample(&st, k * k, l, d, &w, NULL), "stratum k*k refused");
+                CHECK(!lfio_part_strata_centroid(&st, k * k, d, &w), "stratum k*k refused");
+                /* the centroid rule: the sample at l = 1/3 to rounding, and its weights sum to about omega */
+                double csum = 0.0;
+                for (uint32_t s = 0; s < k * k; s++) {
+                    const double third[3] = {1.0 / 3, 1.0 / 3, 1.0 / 3};
+                    double dc[3], wc, ds[3], ws;
+                    CHECK(lfio_part_strata_centroid(&st, s, dc, &wc) && lfio_part_strata_sample(&st, s, third, ds, &ws, NULL),
+                          "centroid");
+                    CHECK(fabs(dc[0] - ds[0]) + fabs(dc[1] - ds[1]) + fabs(dc[2] - ds[2]) < 1e-14 &&
+                              fabs(wc - ws) < 1e-13 * ws,
+                          "n=%u k=%u s=%u: centroid off the sample at l = 1/3", n, k, s);
+                    csum += wc;
+                }
+                /* a midpoint rule: close once the strata are small (it overshoots a whole octant by 65%) */
+                CHECK(n * k < 15 || fabs(csum - omega) < 0.05 * omega, "centroid weights %.9g vs %.9g", csum, omega);
+            }
+        }
+    }
+    /* the numbering: s = r(2k - r) + 2c + upper; corner 0 of an upper stratum is (c+1, r+1) */
+    CHECK(lfio_part_vertices(n, 0, v), "vertices");
+    lfio_part_strata_init(&st, (const double(*)[3])v, 4);
+    for (uint32_t r = 0, s = 0; r < 4; r++)
+        for (uint32_t c = 0; c + r < 4; c++)
+            for (uint32_t up = 0; up < 2 && c + r + up < 4; up++, s++) {
+                double l[3] = {1, 0, 0}, d[3], w, lam[3];
+                lfio_part_strata_sample(&st, s, l, d, &w, lam);
+                double a = up ? c + 1.0 : c, b = up ? r + 1.0 : r;
+                CHECK(fabs(lam[1] - a / 4) < 1e-15 && fabs(lam[2] - b / 4) < 1e-15, "stratum %u at (%g, %g)", s,
+                      lam[1] * 4, lam[2] * 4);
+            }
+    double bad[3][3] = {{NAN, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    CHECK(!lfio_part_strata_init(&st, (const double(*)[3])bad, 2), "non-finite corner refused");
+    CHECK(!lfio_part_strata_init(&st, (const double(*)[3])v, 0), "k = 0 refused");
+    CHECK(!lfio_part_strata_init(&st, (const double(*)[3])v, LFIO_PART_MAX_STRATA_K + 1), "k too large refused");
+    CHECK(!lfio_part_face_vertices(n, lfio_part_count(n), f), "bad id refused");
+}
+
 int main(int argc, char **argv)
 {
     int extremes = argc > 1 && strcmp(argv[1], "--extremes") == 0;
     if (!extremes) {
         check_invalid();
         check_erratum_is_caught();
+        check_strata(1);
+        check_strata(3);
+        check_strata(8);
         for (uint32_t n = 1; n <= 64; n++) {
             check_level(n, 1);
             check_random(n, 2000);

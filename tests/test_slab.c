@@ -71,7 +71,35 @@ static void check_validation(void)
         s = (lfio_slab *)&d; /* any non-NULL value, to see it reset */
         lfio_status st = lfio_slab_new(&d, &s);
         CHECK(st == LFIO_ERR_ARG && s == NULL && strlen(lfio_errmsg()) > 0, "case %d: status %d", k, st);
+        /* the public check gives the same verdict and the same message */
+        char msg[256];
+        snprintf(msg, sizeof msg, "%s", lfio_errmsg());
+        CHECK(lfio_slab_desc_check(&d) == LFIO_ERR_ARG && strcmp(msg, lfio_errmsg()) == 0, "case %d: '%s' vs '%s'",
+              k, msg, lfio_errmsg());
     }
+    lfio_slab_desc_init(&d);
+    CHECK(lfio_slab_desc_check(&d) == LFIO_OK, "the default description is valid (an empty name included)");
+    CHECK(lfio_slab_desc_check(NULL) == LFIO_ERR_ARG, "NULL refused");
+    CHECK(lfio_slab_desc_bytes(&d) == 4 * 3 * sizeof(float), "1x1 positions at n = 1: 4 directions");
+    d.nu = d.nv = UINT32_MAX;
+    d.n = LFIO_SLAB_MAX_N;
+    CHECK(lfio_slab_desc_bytes(&d) == UINT64_MAX, "overflow saturates");
+    CHECK(lfio_slab_name_valid("a.b-c_9") && !lfio_slab_name_valid("") && !lfio_slab_name_valid("a b") &&
+              !lfio_slab_name_valid(NULL), "names");
+    char longest[LFIO_NAME_MAX + 2];
+    memset(longest, 'x', sizeof longest);
+    longest[LFIO_NAME_MAX] = '\0';
+    CHECK(lfio_slab_name_valid(longest), "63 characters");
+    longest[LFIO_NAME_MAX] = 'x';
+    longest[LFIO_NAME_MAX + 1] = '\0';
+    CHECK(!lfio_slab_name_valid(longest), "64 characters");
+    const double u[3] = {1, 0, 0}, v[3] = {0, 2, 0}, skew[3] = {1e-6, 1, 0}, zero[3] = {0, 0, 0},
+                 huge[3] = {0, 1e200, 0}, hugeu[3] = {1e200, 0, 0}, nan[3] = {NAN, 0, 0};
+    CHECK(lfio_slab_edges_check(u, v) == LFIO_EDGES_OK, "orthogonal edges");
+    CHECK(lfio_slab_edges_check(u, skew) == LFIO_EDGES_ORTHOGONAL, "skew edges");
+    CHECK(lfio_slab_edges_check(zero, v) == LFIO_EDGES_LENGTH, "zero edge");
+    CHECK(lfio_slab_edges_check(u, nan) == LFIO_EDGES_LENGTH, "NaN edge");
+    CHECK(lfio_slab_edges_check(hugeu, huge) == LFIO_EDGES_LENGTH, "|u||v| overflows");
     CHECK(lfio_slab_new(NULL, &s) == LFIO_ERR_ARG && s == NULL, "NULL desc refused");
     lfio_slab_destroy(NULL);
 }
@@ -370,8 +398,55 @@ static void check_thread_messages(void)
     lfio_slab_destroy(s);
 }
 
+/* The support boxes against a brute-force scan, with a threshold that hides some values from the mask. */
+static void check_support(float threshold)
+{
+    lfio_slab_desc d;
+    lfio_slab_desc_init(&d);
+    d.nu = 7, d.nv = 5, d.n = 3, d.mask_threshold = threshold;
+    lfio_slab *s = NULL;
+    CHECK(lfio_slab_new(&d, &s) == LFIO_OK, "slab: %s", lfio_errmsg());
+    uint64_t ndir = lfio_slab_dir_count(s);
+    float rgb[4 * 3 * 3 * 3];
+    CHECK(ndir * 3 <= sizeof rgb / sizeof rgb[0], "room");
+    for (uint32_t j = 0; j < d.nv; j++)
+        for (uint32_t i = 0; i < d.nu; i++) {
+            for (uint64_t k = 0; k < ndir * 3; k++) /* sparse, some below the threshold, one channel at a time */
+                rgb[k] = (k / 3 % 4 != 1 && (k * 7 + i * 3 + j * 5) % 11 == 0) ? (float)((i + j + k) % 3) * 0.25f : 0.0f;
+            CHECK(lfio_slab_write_position(s, i, j, rgb) == LFIO_OK, "write: %s", lfio_errmsg());
+        }
+    uint32_t(*box)[4] = malloc(ndir * sizeof *box);
+    CHECK(box && lfio_slab_support(s, box) == LFIO_OK, "support: %s", lfio_errmsg());
+    const float *rad = lfio_slab_radiance(s);
+    long bad = 0, empty = 0;
+    for (uint64_t k = 0; k < ndir && box; k++) {
+        uint32_t b[4] = {1, 0, 1, 0};
+        int any = 0;
+        for (uint32_t j = 0; j < d.nv; j++)
+            for (uint32_t i = 0; i < d.nu; i++) {
+                const float *p = rad + ((k * d.nv + j) * d.nu + i) * 3;
+                if (p[0] != 0 || p[1] != 0 || p[2] != 0) {
+                    if (!any)
+                        b[0] = b[1] = i, b[2] = b[3] = j, any = 1;
+                    b[0] = i < b[0] ? i : b[0], b[1] = i > b[1] ? i : b[1];
+                    b[2] = j < b[2] ? j : b[2], b[3] = j > b[3] ? j : b[3];
+                }
+            }
+        empty += !any;
+        if (any ? memcmp(b, box[k], sizeof b) != 0 : !(box[k][0] > box[k][1]))
+            bad++;
+    }
+    CHECK(bad == 0, "threshold %g: %ld of %llu boxes wrong", threshold, bad, (unsigned long long)ndir);
+    CHECK(empty > 0 && empty < (long)ndir, "the test has dark and lit directions (%ld dark)", empty);
+    CHECK(lfio_slab_support(NULL, box) == LFIO_ERR_ARG && lfio_slab_support(s, NULL) == LFIO_ERR_ARG, "NULL refused");
+    free(box);
+    lfio_slab_destroy(s);
+}
+
 int main(void)
 {
+    check_support(0.0f);
+    check_support(0.3f);
     check_validation();
     check_frames();
     check_writes_and_queries();

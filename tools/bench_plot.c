@@ -24,6 +24,7 @@
 
 #include "bench.h"
 #include "cli.h"
+#include "ilf/atomic_file.h"
 
 /* Colours of the methods, in --methods order (colour-blind safe, Okabe-Ito). */
 static const char *const METHOD_COLOURS[BENCH_MAX_METHODS] = {"#0072b2", "#d55e00", "#009e73", "#cc79a7",
@@ -78,12 +79,11 @@ static int run_gnuplot(const char *dir, const char *script, const char *out)
 int bench_plot(const char *dir, const char *name, const bench_text *script, int quiet)
 {
     static int warned;
-    char script_name[256], png_name[256], tmp_name[320];
-    char gp[BENCH_PATH_MAX], png[BENCH_PATH_MAX], tmp[BENCH_PATH_MAX];
+    char script_name[256], png_name[256];
+    char gp[BENCH_PATH_MAX], png[BENCH_PATH_MAX];
     snprintf(script_name, sizeof script_name, "%s.gp", name);
     snprintf(png_name, sizeof png_name, "%s.png", name);
-    snprintf(tmp_name, sizeof tmp_name, "%s.png.tmp-%ld", name, (long)getpid());
-    if (!bench_path(gp, dir, script_name) || !bench_path(png, dir, png_name) || !bench_path(tmp, dir, tmp_name) ||
+    if (!bench_path(gp, dir, script_name) || !bench_path(png, dir, png_name) ||
         !bench_write_text(gp, script, "gnuplot script", 1))
         return 0;
     if (!gnuplot_installed()) {
@@ -94,8 +94,16 @@ int bench_plot(const char *dir, const char *name, const bench_text *script, int 
         warned = 1;
         return 1;
     }
-    if (!run_gnuplot(dir, script_name, tmp_name) || rename(tmp, png) != 0) {
-        remove(tmp);
+    /* gnuplot draws into the one writer's temporary (ilf/atomic_file.h), named relative to dir */
+    ilf_atomic *a = NULL;
+    const char *step = NULL;
+    int drawn = ilf_atomic_new(png, &a, &step) == 0;
+    if (drawn) {
+        const char *temp = ilf_atomic_temp_path(a), *slash = strrchr(temp, '/');
+        drawn = run_gnuplot(dir, script_name, slash != NULL ? slash + 1 : temp) && ilf_atomic_commit(a, &step) == 0;
+    }
+    ilf_atomic_release(a);
+    if (!drawn) {
         cli_error(BENCH_SUB, "gnuplot could not draw %s (its script: %s)", png, gp);
         return 0;
     }

@@ -10,6 +10,7 @@
  * stdout carries only help text, stderr carries errors and the progress bar.
  */
 #include "cli.h"
+#include "ilf/atomic_file.h"
 
 #include <ctype.h>
 #include <dirent.h>
@@ -540,8 +541,8 @@ void cli_progress_finish(cli_progress *p)
 
 /*
  * The writers (lfio, jsonout.c, the image writer) build each output under a
- * temporary name beside it: "<name>.tmp-<tag>", or ".<name>.tmp-<tag>.<ext>"
- * for images. A handler for SIGINT, SIGTERM and SIGHUP only writes the signal
+ * temporary name beside it, by the one rule of ilf/atomic_file.h
+ * (".<name>.tmp-<tag>[.<ext>]"). A handler for SIGINT, SIGTERM and SIGHUP only writes the signal
  * number to a pipe, which is all a handler may safely do; a watcher thread
  * reading the pipe then removes the temporaries of every registered output
  * and ends the process by the same signal, its default action restored.
@@ -570,16 +571,6 @@ static void on_interrupt(int sig)
     errno = saved;
 }
 
-/* @return 1 if entry is a temporary of the output called name (see above). */
-static int is_temporary_of(const char *entry, const char *name)
-{
-    static const char mark[] = ".tmp-";
-    const char *rest = entry[0] == '.' && strncmp(entry + 1, name, strlen(name)) == 0 ? entry + 1 + strlen(name)
-                       : strncmp(entry, name, strlen(name)) == 0                   ? entry + strlen(name)
-                                                                                    : NULL;
-    return rest != NULL && strncmp(rest, mark, sizeof mark - 1) == 0;
-}
-
 /* Removes the temporaries of output path from its folder. */
 static void remove_temporaries(const char *path)
 {
@@ -596,7 +587,7 @@ static void remove_temporaries(const char *path)
         return;
     for (struct dirent *e; (e = readdir(dir)) != NULL;) {
         char victim[8192];
-        if (is_temporary_of(e->d_name, name)
+        if (ilf_atomic_is_temporary_of(e->d_name, name)
             && snprintf(victim, sizeof victim, "%s/%s", folder, e->d_name) < (int)sizeof victim)
             unlink(victim);
     }

@@ -96,10 +96,7 @@ static const char *plane_problem(const char *text, lfio_slab_desc *d, char why[1
             return why;
         part = colon + 1;
     }
-    double lu = sqrt(d->u[0] * d->u[0] + d->u[1] * d->u[1] + d->u[2] * d->u[2]);
-    double lv = sqrt(d->v[0] * d->v[0] + d->v[1] * d->v[1] + d->v[2] * d->v[2]);
-    double uv = d->u[0] * d->v[0] + d->u[1] * d->v[1] + d->u[2] * d->v[2];
-    if (!(lu > 0.0) || !(lv > 0.0) || fabs(uv) > 1e-9 * lu * lv)
+    if (lfio_slab_edges_check(d->u, d->v) != LFIO_EDGES_OK)
         return "u and v must be nonzero and orthogonal";
     return NULL;
 }
@@ -118,14 +115,11 @@ static int parse_plane(const cli_parser *p, const char *text, lfio_slab_desc *d)
 /* A slab name for the manifest: 1 to 63 of A-Z a-z 0-9 _ - . */
 static int parse_name(const cli_parser *p, const char *text, char name[LFIO_NAME_MAX + 1])
 {
-    size_t len = strlen(text);
-    int ok = len >= 1 && len <= LFIO_NAME_MAX && strspn(text, "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
-                                                             "0123456789_-.") == len;
-    if (!ok) {
+    if (!lfio_slab_name_valid(text)) {
         cli_bad_value(p, text, "use 1 to 63 of A-Z a-z 0-9 _ - .");
         return 0;
     }
-    memcpy(name, text, len + 1);
+    memcpy(name, text, strlen(text) + 1);
     return 1;
 }
 

@@ -15,13 +15,14 @@
  * every model returns a gain in [0, number of spots] and colours are >= 0.
  */
 #include <math.h>
-#include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
+#include "ilf/hash.h"
+#include "ilf/pool.h"
 #include "commands.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
@@ -182,84 +183,44 @@ static double model_gain(const synth_model *m, const double x[3], const double w
 
 /* ----------------------------------------------------------- sampling */
 
-static uint64_t mix64(uint64_t z)
+/* A uniform point (u1, u2) of the unit triangle u1, u2 >= 0, u1 + u2 <= 1, as barycentrics l. */
+static void jitter_in_triangle(uint64_t key, double l[3])
 {
-    /* splitmix64's finaliser: a cheap hash whose outputs look independent. */
-    z += 0x9E3779B97F4A7C15ull;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
-/* A uniform point (u1, u2) of the unit triangle u1, u2 >= 0, u1 + u2 <= 1. */
-static void jitter_in_triangle(uint64_t key, double *u1, double *u2)
-{
-    uint64_t h = mix64(key);
+    uint64_t h = ilf_splitmix64(key);
     double a = (double)(h >> 32) * 0x1p-32, b = (double)(h & 0xFFFFFFFFu) * 0x1p-32;
     if (a + b > 1.0) {
         a = 1.0 - a;
         b = 1.0 - b;
     }
-    *u1 = a;
-    *u2 = b;
+    l[0] = 1.0 - a - b;
+    l[1] = a;
+    l[2] = b;
 }
 
 /* Per-sample context of one (position, direction). */
 typedef struct direction_cell {
-    double corner[3][3]; /* the partition triangle's corners, world frame, unit length */
-    uint32_t strata;     /* K */
-    uint64_t key;        /* hash of seed, position and direction */
+    lfio_part_strata strata; /* the partition triangle's corners (world frame, unit length), K */
+    uint64_t key;            /* hash of seed, position and direction */
 } direction_cell;
-
-/* Running solid-angle-weighted sum of model values. */
-typedef struct weighted_sum {
-    double sum;
-    double weight;
-} weighted_sum;
-
-/*
- * Adds the sample of one stratum: lattice cell (c, r) of the triangle cut
- * into K*K, its lower triangle (c,r),(c+1,r),(c,r+1) or, when upper is set,
- * the same turned half a turn about the cell's centre. The weight 1/|p|^3
- * converts planar area to solid angle (dOmega = h dA / |p|^3 on a plane at
- * distance h from the origin), so the mean is over solid angle.
- */
-static void add_stratum(const synth_model *m, const double x[3], const direction_cell *cell, uint64_t stratum,
-                        uint32_t c, uint32_t r, int upper, weighted_sum *acc)
-{
-    double u1, u2;
-    jitter_in_triangle(cell->key ^ (stratum * 0xD1B54A32D192ED03ull), &u1, &u2);
-    double a = (upper ? c + 1.0 - u1 : c + u1) / cell->strata;
-    double b = (upper ? r + 1.0 - u2 : r + u2) / cell->strata;
-    double p[3];
-    for (int k = 0; k < 3; k++)
-        p[k] = cell->corner[0][k] + a * (cell->corner[1][k] - cell->corner[0][k]) +
-               b * (cell->corner[2][k] - cell->corner[0][k]);
-    double len = norm3(p);
-    double w[3] = {p[0] / len, p[1] / len, p[2] / len};
-    double weight = 1.0 / (len * len * len);
-    acc->sum += weight * model_gain(m, x, w);
-    acc->weight += weight;
-}
 
 /*
  * The model averaged over one solid angle: the planar triangle through its
- * three corners is cut into K*K lattice triangles (rows of 2(K-r)-1), each
- * sampled once at a jittered point, weighted by solid angle.
+ * three corners is cut into K*K strata (lfio_part_strata_sample()), each
+ * sampled once at a jittered point and weighted by its solid angle share,
+ * so the mean is over solid angle.
  */
 static double direction_mean(const synth_model *m, const double x[3], const direction_cell *cell)
 {
-    weighted_sum acc = {0.0, 0.0};
-    uint64_t stratum = 0;
-    uint32_t k = cell->strata;
-    for (uint32_t r = 0; r < k; r++) {
-        for (uint32_t c = 0; c + r < k; c++) {
-            add_stratum(m, x, cell, stratum++, c, r, 0, &acc);
-            if (c + r + 1 < k)
-                add_stratum(m, x, cell, stratum++, c, r, 1, &acc);
-        }
+    double sum = 0.0, weight = 0.0;
+    uint32_t count = cell->strata.k * cell->strata.k;
+    for (uint32_t s = 0; s < count; s++) {
+        double l[3], w[3], ws;
+        jitter_in_triangle(cell->key ^ (s * 0xD1B54A32D192ED03ull), l);
+        lfio_part_strata_sample(&cell->strata, s, l, w, &ws, NULL);
+        sum += ws * model_gain(m, x, w);
+        weight += ws;
     }
-    return acc.sum / acc.weight;
+    return sum / weight;
 }
 
 /* ---------------------------------------------------------- positions */
@@ -284,16 +245,17 @@ static void compute_position(const synth_batch *b, uint64_t pos, float *rgb)
     uint64_t ndir = lfio_slab_dir_count(b->slab);
     double x[3];
     lfio_slab_position(b->slab, (uint32_t)(pos % d->nu), (uint32_t)(pos / d->nu), x);
-    direction_cell cell = {.strata = b->strata};
+    direction_cell cell;
     for (uint64_t dir = 0; dir < ndir; dir++) {
         double gain = 1.0;
         /* The constant model is exactly c: skip sampling, which would only add rounding. */
         if (b->model->kind != SYNTH_CONSTANT) {
-            double local[3][3];
+            double local[3][3], world[3][3];
             lfio_part_vertices(d->n, dir, local);
             for (int k = 0; k < 3; k++)
-                lfio_slab_to_world(b->slab, local[k], cell.corner[k]);
-            cell.key = mix64(mix64(mix64(b->seed) ^ pos) ^ dir);
+                lfio_slab_to_world(b->slab, local[k], world[k]);
+            lfio_part_strata_init(&cell.strata, (const double(*)[3])world, b->strata);
+            cell.key = ilf_splitmix64(ilf_splitmix64(ilf_splitmix64(b->seed) ^ pos) ^ dir);
             gain = direction_mean(b->model, x, &cell);
         }
         for (int c = 0; c < 3; c++)
@@ -301,8 +263,9 @@ static void compute_position(const synth_batch *b, uint64_t pos, float *rgb)
     }
 }
 
-static void *synth_worker(void *arg)
+static void synth_worker(void *arg, unsigned index)
 {
+    (void)index;
     synth_batch *b = arg;
     uint64_t ndir = lfio_slab_dir_count(b->slab);
     for (;;) {
@@ -312,21 +275,13 @@ static void *synth_worker(void *arg)
         compute_position(b, b->first + k, b->out + k * ndir * 3);
         cli_progress_add(b->progress, 1);
     }
-    return NULL;
 }
 
 /* Runs the workers over one batch; the calling thread works too. */
 static void run_batch(synth_batch *b, unsigned threads)
 {
-    pthread_t ids[256];
-    unsigned started = 0;
     atomic_store(&b->next, 0);
-    for (unsigned t = 1; t < threads && t < 256; t++)
-        if (pthread_create(&ids[started], NULL, synth_worker, b) == 0)
-            started++;
-    synth_worker(b);
-    for (unsigned t = 0; t < started; t++)
-        pthread_join(ids[t], NULL);
+    ilf_parallel(ilf_thread_count(threads), synth_worker, b);
 }
 
 /* Computes every position batch by batch and stores it in the slab. */
@@ -591,9 +546,8 @@ static int check_combination(const synth_options *o)
 /* Checks the radiance array stays within lfio's limit before asking for it. */
 static int check_size(const lfio_slab_desc *d)
 {
-    uint64_t ndir = lfio_part_hemi_count(d->n);
-    double bytes = (double)ndir * d->nu * d->nv * 3 * sizeof(float);
-    if (bytes > (double)LFIO_SLAB_MAX_BYTES) {
+    uint64_t bytes = lfio_slab_desc_bytes(d);
+    if (bytes > LFIO_SLAB_MAX_BYTES) {
         char size[32], limit[32];
         cli_error("synth", "%ux%u positions with n=%u need %s of radiance, more than the limit of %s",
                   (unsigned)d->nu, (unsigned)d->nv, (unsigned)d->n,

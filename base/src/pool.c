@@ -4,11 +4,13 @@
  * Invariant: every index k < n runs exactly once, either on the thread made
  * for it or, if pthread_create failed, on the thread that joins the team, after
  * the other workers have finished (they share the caller's work queue, so the
- * late index usually finds nothing left). Nothing here allocates per item.
+ * late index usually finds nothing left). Nothing here allocates per item,
+ * and ilf_parallel allocates nothing at all (its team is on the caller's stack).
  */
 #include "ilf/pool.h"
 
 #include <pthread.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -44,10 +46,12 @@ static void *run_member(void *p)
     return NULL;
 }
 
-/* @return a team running fn(arg, first + k) for k = 0..n-1 on threads of their own, or NULL without memory. */
-static ilf_team *start_members(unsigned n, unsigned first, ilf_worker_fn fn, void *arg)
+/* @return the bytes of a team of n members. */
+static size_t team_bytes(unsigned n) { return sizeof(ilf_team) + (n ? n : 1) * sizeof(member); }
+
+/* Starts fn(arg, first + k) for k = 0..n-1 on threads of their own, in t (team_bytes(n) bytes). @return t. */
+static ilf_team *start_members(ilf_team *t, unsigned n, unsigned first, ilf_worker_fn fn, void *arg)
 {
-    ilf_team *t = malloc(sizeof *t + (n ? n : 1) * sizeof t->members[0]);
     if (t == NULL)
         return NULL;
     t->fn = fn;
@@ -63,40 +67,42 @@ static ilf_team *start_members(unsigned n, unsigned first, ilf_worker_fn fn, voi
     return t;
 }
 
-ilf_team *ilf_team_start(unsigned n, ilf_worker_fn fn, void *arg)
+int ilf_team_start(unsigned n, ilf_worker_fn fn, void *arg, ilf_team **out)
 {
     n = n < 1 ? 1 : n > ILF_MAX_THREADS ? ILF_MAX_THREADS : n;
-    ilf_team *t = start_members(n, 0, fn, arg);
-    if (t == NULL)
-        for (unsigned k = 0; k < n; k++)
-            fn(arg, k);
-    return t;
+    *out = start_members(malloc(team_bytes(n)), n, 0, fn, arg);
+    return *out != NULL ? 0 : -1;
 }
 
 unsigned ilf_team_threads(const ilf_team *team) { return team != NULL ? team->threads : 0u; }
 
-void ilf_team_join(ilf_team *team)
+/* Joins team's workers and runs the indices whose threads could not start. */
+static void join_members(ilf_team *team)
 {
-    if (team == NULL)
-        return;
     for (unsigned k = 0; k < team->n; k++)
         if (team->members[k].started)
             pthread_join(team->members[k].thread, NULL);
     for (unsigned k = 0; k < team->n; k++)
         if (!team->members[k].started)
             team->fn(team->arg, team->members[k].index);
+}
+
+void ilf_team_join(ilf_team *team)
+{
+    if (team == NULL)
+        return;
+    join_members(team);
     free(team);
 }
 
 void ilf_parallel(unsigned n, ilf_worker_fn fn, void *arg)
 {
     n = n < 1 ? 1 : n > ILF_MAX_THREADS ? ILF_MAX_THREADS : n;
-    /* Workers 1..n-1 on threads of their own, worker 0 here. */
-    ilf_team *t = n > 1 ? start_members(n - 1, 1, fn, arg) : NULL;
+    /* Workers 1..n-1 on threads of their own, worker 0 here. The team lives on this stack (at most
+     * ILF_MAX_THREADS members of a few words), so running in parallel never needs memory. */
+    max_align_t space[(team_bytes(n - 1) + sizeof(max_align_t) - 1) / sizeof(max_align_t)];
+    ilf_team *t = n > 1 ? start_members((ilf_team *)space, n - 1, 1, fn, arg) : NULL;
     fn(arg, 0);
     if (t != NULL)
-        ilf_team_join(t);
-    else
-        for (unsigned k = 1; k < n; k++)
-            fn(arg, k);
+        join_members(t);
 }

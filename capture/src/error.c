@@ -10,9 +10,10 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "ilf/message.h"
 #include "internal.h"
 
-static _Thread_local char message[1024];
+static _Thread_local char message[ILF_MESSAGE_BYTES];
 
 /* Replaces line breaks in message by spaces, so a message is one line. */
 static void flatten_message(void)
@@ -26,7 +27,7 @@ cap_status cap__fail(cap_status status, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(message, sizeof message, fmt, ap);
+    ilf_message_vformat(message, fmt, ap);
     va_end(ap);
     flatten_message();
     return status;
@@ -34,20 +35,19 @@ cap_status cap__fail(cap_status status, const char *fmt, ...)
 
 cap_status cap__fail_prefix(cap_status status, const char *fmt, ...)
 {
-    char old[sizeof message], prefix[512];
-    memcpy(old, message, sizeof old);
+    char prefix[512];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(prefix, sizeof prefix, fmt, ap);
     va_end(ap);
-    snprintf(message, sizeof message, "%s: %s", prefix, old);
+    ilf_message_format(message, "%s: %s", prefix, message);
     flatten_message();
     return status;
 }
 
 cap_status cap__fail_text(cap_status status, const char *text)
 {
-    snprintf(message, sizeof message, "%s", text != NULL ? text : "");
+    ilf_message_format(message, "%s", text != NULL ? text : "");
     flatten_message();
     return status;
 }

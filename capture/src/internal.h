@@ -118,12 +118,6 @@ typedef cap_status (*cap__position_fn)(void *ctx, uint32_t i, uint32_t j, float 
 cap_status cap__run_positions(lfio_slab *slab, unsigned threads, cap__position_fn fn, void *ctx,
                               cap_progress_fn progress, void *user);
 
-/* Runs fn(arg) on count threads (at most 256) and waits for them; on the calling thread alone
- * when count <= 1 or no thread can be started. fn must share out the work itself. */
-void cap__parallel(unsigned count, void *(*fn)(void *), void *arg);
-
-/* @return the worker count for a requested count (0: processors online, at least 1, at most 256). */
-unsigned cap__thread_count(unsigned requested);
 
 #endif /* __cplusplus */
 

@@ -456,10 +456,10 @@ static cap_status read_slab(const parser *p, const ilf_json *root, lfio_slab_des
         st = read_units(p, j, d);
     if (st != CAP_OK)
         return st;
-    double bytes = (double)d->nu * d->nv * 4.0 * d->n * d->n * 12.0;
-    if (bytes > (double)LFIO_SLAB_MAX_BYTES)
+    uint64_t bytes = lfio_slab_desc_bytes(d);
+    if (bytes > LFIO_SLAB_MAX_BYTES)
         return cap__json_bad(p->path, "", "the slab would hold %.3g bytes of radiance, over lfio's limit of %.3g",
-                             bytes, (double)LFIO_SLAB_MAX_BYTES);
+                             (double)bytes, (double)LFIO_SLAB_MAX_BYTES);
     return CAP_OK;
 }
 
@@ -682,14 +682,9 @@ cap_status cap__json_slab_name(const char *path, const ilf_json *j, const char *
     cap_status st = cap__json_string(path, j, elem, &text);
     if (st != CAP_OK)
         return st;
-    size_t len = strlen(text);
-    int ok = len >= 1 && len <= LFIO_NAME_MAX;
-    for (const char *c = text; ok && *c != '\0'; c++)
-        ok = (*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9') || *c == '_' ||
-             *c == '-' || *c == '.';
-    if (!ok)
+    if (!lfio_slab_name_valid(text))
         return cap__json_bad(path, elem, "'%s': use 1 to %d of A-Z a-z 0-9 _ - .", text, LFIO_NAME_MAX);
-    memcpy(name, text, len + 1);
+    memcpy(name, text, strlen(text) + 1);
     return CAP_OK;
 }
 
@@ -707,10 +702,10 @@ cap_status cap__json_rectangle(const char *path, const ilf_json *obj, const char
         if (st != CAP_OK)
             return st;
     }
-    double lu = cap__norm(d->u), lv = cap__norm(d->v);
-    if (!(lu > 0.0) || !(lv > 0.0) || !isfinite(lu * lv))
+    int edges = lfio_slab_edges_check(d->u, d->v);
+    if (edges == LFIO_EDGES_LENGTH)
         return cap__json_bad(path, elem, "u and v must be nonzero (and their lengths finite)");
-    if (fabs(cap__dot(d->u, d->v)) > 1e-9 * lu * lv)
+    if (edges == LFIO_EDGES_ORTHOGONAL)
         return cap__json_bad(path, elem, "u and v must be orthogonal (u.v = %g)", cap__dot(d->u, d->v));
     return CAP_OK;
 }

@@ -230,49 +230,23 @@ double cap_projection_solid_angle(cap_projection p, int width, int height, int x
 
 /* ---------------------------------------------------------------- samples */
 
-/* Adds the centroid of planar triangle (p, q, r) as a direction with weight 1/|c|^3. */
-static void add_centroid(const double p[3], const double q[3], const double r[3], double *dir, double *weight)
-{
-    double c[3] = {(p[0] + q[0] + r[0]) / 3.0, (p[1] + q[1] + r[1]) / 3.0, (p[2] + q[2] + r[2]) / 3.0};
-    double len = cap__norm(c);
-    for (int a = 0; a < 3; a++)
-        dir[a] = c[a] / len;
-    *weight = 1.0 / (len * len * len);
-}
-
-/* Lattice point A + (i/k)(B - A) + (j/k)(C - A) of the triangle with corners v. */
-static void lattice_point(const double v[3][3], uint32_t k, uint32_t i, uint32_t j, double out[3])
-{
-    for (int a = 0; a < 3; a++)
-        out[a] = v[0][a] + (v[1][a] - v[0][a]) * i / k + (v[2][a] - v[0][a]) * j / k;
-}
-
 int cap_partition_samples(uint32_t n, uint64_t id, uint32_t k, double *dirs, double *weights)
 {
     double v[3][3];
+    lfio_part_strata st;
     if (dirs == NULL || weights == NULL || k < 1 || k > 64 || !lfio_part_vertices(n, id, v))
         return 0;
     for (int c = 0; c < 3; c++)
         cap__normalise(v[c]);
-    uint32_t m = 0;
-    for (uint32_t j = 0; j < k; j++)
-        for (uint32_t i = 0; i + j < k; i++) {
-            double p00[3], p10[3], p01[3], p11[3];
-            lattice_point(v, k, i, j, p00);
-            lattice_point(v, k, i + 1, j, p10);
-            lattice_point(v, k, i, j + 1, p01);
-            add_centroid(p00, p10, p01, &dirs[3 * m], &weights[m]);
-            m++;
-            if (i + j + 2 <= k) {
-                lattice_point(v, k, i + 1, j + 1, p11);
-                add_centroid(p10, p01, p11, &dirs[3 * m], &weights[m]);
-                m++;
-            }
-        }
+    lfio_part_strata_init(&st, (const double(*)[3])v, k);
+    st.jac = 1.0; /* relative weights 1/|P|^3, normalised below: bit for bit the ones capture has always used */
+    /* each stratum's centroid: a fixed, symmetric rule, the same on every run */
     double total = 0.0;
-    for (uint32_t s = 0; s < m; s++)
+    for (uint32_t s = 0; s < k * k; s++) {
+        lfio_part_strata_centroid(&st, s, &dirs[3 * s], &weights[s]);
         total += weights[s];
-    for (uint32_t s = 0; s < m; s++)
+    }
+    for (uint32_t s = 0; s < k * k; s++)
         weights[s] /= total;
     return 1;
 }

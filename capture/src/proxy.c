@@ -59,9 +59,9 @@ static int name_taken(const cap_proxy *p, size_t k)
 /* Checks that a rectangle's slab fits lfio's size limit. */
 static cap_status check_size(const char *path, const char *elem, const lfio_slab_desc *d)
 {
-    double bytes = (double)d->nu * d->nv * 4.0 * d->n * d->n * 12.0;
-    if (bytes > (double)LFIO_SLAB_MAX_BYTES)
-        return cap__json_bad(path, elem, "the slab would hold %.3g bytes of radiance, over lfio's limit", bytes);
+    uint64_t bytes = lfio_slab_desc_bytes(d);
+    if (bytes > LFIO_SLAB_MAX_BYTES)
+        return cap__json_bad(path, elem, "the slab would hold %.3g bytes of radiance, over lfio's limit", (double)bytes);
     return CAP_OK;
 }
 

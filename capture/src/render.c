@@ -20,6 +20,8 @@
 #include <string.h>
 
 #include "capture/projection.h"
+#include "ilf/hash.h"
+#include "ilf/pool.h"
 #include "internal.h"
 
 #define MAX_SIDE 16384
@@ -38,20 +40,11 @@ typedef struct render_job {
     char message[128];
 } render_job;
 
-/* SplitMix64's finaliser: a well-mixed 64-bit hash. */
-static uint64_t mix64(uint64_t z)
-{
-    z += 0x9e3779b97f4a7c15ull;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
-
 /* Two uniform numbers in [0, 1) for stratum (a, b) of pixel (x, y). */
 static void jitter(uint64_t seed, int x, int y, uint32_t a, uint32_t b, double *u1, double *u2)
 {
-    uint64_t h = mix64(seed ^ mix64(((uint64_t)(uint32_t)y << 32) | (uint32_t)x));
-    h = mix64(h ^ (((uint64_t)a << 32) | b));
+    uint64_t h = ilf_splitmix64(seed ^ ilf_splitmix64(((uint64_t)(uint32_t)y << 32) | (uint32_t)x));
+    h = ilf_splitmix64(h ^ (((uint64_t)a << 32) | b));
     *u1 = (double)(h >> 40) / (double)(1u << 24);
     *u2 = (double)(h & 0xffffffu) / (double)(1u << 24);
 }
@@ -129,12 +122,12 @@ static void finish_row(render_job *job, int y, int x_failed)
     pthread_mutex_unlock(&job->lock);
 }
 
-static void *render_worker(void *arg)
+static void render_worker(void *arg, unsigned index)
 {
+    (void)index;
     render_job *job = arg;
     for (int y; (y = claim_row(job)) >= 0;)
         finish_row(job, y, render_row(job, y));
-    return NULL;
 }
 
 static cap_status check_settings(const cap_probe_settings *s, cap_radiance_fn fn, const double org[3],
@@ -171,10 +164,10 @@ cap_status cap_probe_render(const cap_probe_settings *s, cap_radiance_fn fn, voi
     job.failed_at = LONG_MAX;
     if (pthread_mutex_init(&job.lock, NULL) != 0)
         return cap__fail(CAP_ERR_NOMEM, "cannot create a mutex");
-    unsigned count = cap__thread_count(s->threads);
+    unsigned count = ilf_thread_count(s->threads);
     if (count > (unsigned)s->height)
         count = (unsigned)s->height;
-    cap__parallel(count, render_worker, &job);
+    ilf_parallel(count, render_worker, &job);
     pthread_mutex_destroy(&job.lock);
     if (job.failed_at != LONG_MAX)
         return cap__fail(CAP_ERR_INPUT, "%s", job.message);

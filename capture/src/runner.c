@@ -3,8 +3,8 @@
  * (cap__run_positions in internal.h). Used by the capture and by
  * reprojection, which differ only in how one position is computed.
  *
- * cap__parallel, which starts and joins the worker threads, serves the
- * probe renderer as well.
+ * The worker threads are the project's one pool (ilf/pool.h: ilf_parallel,
+ * one cap and one meaning of 0 = every core).
  *
  * Invariants: a worker owns one position buffer of 4n^2 RGB floats and
  * computes into it without locks; the slab is written only under the
@@ -18,12 +18,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
+#include "ilf/pool.h"
 #include "internal.h"
-
-/* Most worker threads started; beyond this the serial slab writes dominate anyway. */
-#define MAX_THREADS 256u
 
 typedef struct run_state {
     lfio_slab *slab;
@@ -40,15 +37,6 @@ typedef struct run_state {
     cap_status failure;
     char message[1024];
 } run_state;
-
-unsigned cap__thread_count(unsigned requested)
-{
-    if (requested == 0) {
-        long online = sysconf(_SC_NPROCESSORS_ONLN);
-        requested = online > 0 ? (unsigned)online : 1u;
-    }
-    return requested > MAX_THREADS ? MAX_THREADS : requested;
-}
 
 /* Records a failure at position k if it is the lowest so far; called with the lock held. */
 static void record_failure(run_state *r, uint64_t k, cap_status st, const char *message)
@@ -89,8 +77,9 @@ static void store(run_state *r, uint64_t k, const float *rgb)
     pthread_mutex_unlock(&r->lock);
 }
 
-static void *worker(void *arg)
+static void worker(void *arg, unsigned index)
 {
+    (void)index;
     run_state *r = arg;
     float *rgb = malloc(r->buffer_floats * sizeof *rgb);
     uint64_t k;
@@ -106,22 +95,6 @@ static void *worker(void *arg)
         pthread_mutex_unlock(&r->lock);
     }
     free(rgb);
-    return NULL;
-}
-
-void cap__parallel(unsigned count, void *(*fn)(void *), void *arg)
-{
-    pthread_t ids[MAX_THREADS];
-    unsigned started = 0;
-    if (count > MAX_THREADS)
-        count = MAX_THREADS;
-    for (unsigned t = 0; t < count && count > 1; t++)
-        if (pthread_create(&ids[started], NULL, fn, arg) == 0)
-            started++;
-    if (started == 0)
-        fn(arg);
-    for (unsigned t = 0; t < started; t++)
-        pthread_join(ids[t], NULL);
 }
 
 cap_status cap__run_positions(lfio_slab *slab, unsigned threads, cap__position_fn fn, void *ctx,
@@ -141,8 +114,8 @@ cap_status cap__run_positions(lfio_slab *slab, unsigned threads, cap__position_f
     r.buffer_floats = (size_t)lfio_slab_dir_count(slab) * 3;
     if (pthread_mutex_init(&r.lock, NULL) != 0)
         return cap__fail(CAP_ERR_NOMEM, "cannot create a mutex");
-    unsigned count = cap__thread_count(threads);
-    cap__parallel((uint64_t)count > r.total ? (unsigned)r.total : count, worker, &r);
+    unsigned count = ilf_thread_count(threads);
+    ilf_parallel((uint64_t)count > r.total ? (unsigned)r.total : count, worker, &r);
     pthread_mutex_destroy(&r.lock);
     if (r.failed_at < r.total)
         return cap__fail_text(r.failure, r.message);

@@ -10,8 +10,10 @@
  *   - Strings read from files are bounded before they are allocated; a
  *     dataset is checked against its expected layout before it is read.
  *   - A write either renames a complete, fsynced file over its target or
- *     leaves the target untouched and removes its temporary. HDF5 builds the
- *     file in memory and never writes to disk itself (see build_and_write()).
+ *     leaves the target untouched and removes its temporary (the project's
+ *     one writer, ilf/atomic_file.h, and its one rule for temporary names).
+ *     HDF5 builds the file in memory and never writes to disk itself (see
+ *     build_and_write()); a collective write lets MPI-IO write the temporary.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -25,6 +27,7 @@
 #include <unistd.h>
 
 #include "h5util.h"
+#include "ilf/atomic_file.h"
 #include "internal.h"
 
 /* Growth step of the in-memory file image while writing. */
@@ -754,85 +757,28 @@ static lfio_status build_and_write(const char *path, const char *name, lfio__h5_
     return st;
 }
 
-/* fsyncs folder dir so that a rename inside it is durable. @return 0 or an errno value. */
-static int sync_folder(const char *dir)
+/* Records the failure of step for path. @return LFIO_ERR_NOMEM for ENOMEM, else LFIO_ERR_IO. */
+static lfio_status atomic_fail(const char *path, int err, const char *step)
 {
-    int fd = open(dir, O_RDONLY | O_DIRECTORY);
-    if (fd < 0)
-        return errno;
-    int err = fsync(fd) == 0 ? 0 : errno;
-    close(fd);
-    return err;
-}
-
-/* @return the folder holding path (malloc'd; "." for a bare name), or NULL when out of memory. */
-static char *folder_of(const char *path)
-{
-    const char *slash = strrchr(path, '/');
-    size_t len = slash == NULL ? 0 : slash == path ? 1 : (size_t)(slash - path);
-    char *dir = malloc(len ? len + 1 : 2);
-    if (dir == NULL)
-        return NULL;
-    if (len)
-        memcpy(dir, path, len), dir[len] = '\0';
-    else
-        strcpy(dir, ".");
-    return dir;
-}
-
-/* Creates an empty temporary "path.tmp-XXXXXX" beside path. @return LFIO_OK, *tmp (malloc'd) and open *fd; LFIO_ERR_IO. */
-static lfio_status make_temp(const char *path, char **tmp, int *fd)
-{
-    static const char suffix[] = ".tmp-XXXXXX";
-    *fd = -1;
-    *tmp = malloc(strlen(path) + sizeof suffix);
-    if (*tmp == NULL)
+    if (err == ENOMEM)
         return lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
-    strcpy(*tmp, path);
-    strcat(*tmp, suffix);
-    *fd = mkstemp(*tmp);
-    if (*fd < 0) {
-        int err = errno;
-        free(*tmp);
-        *tmp = NULL;
-        return lfio__fail(LFIO_ERR_IO, "%s: cannot create a temporary file beside it: %s", path,
-                          strerror(err));
-    }
-    /* mkstemp makes the file private (0600); a replaced file keeps its mode, a new one is 0644. */
-    struct stat old;
-    fchmod(*fd, stat(path, &old) == 0 && S_ISREG(old.st_mode) ? (old.st_mode & 0777) : 0644);
-    return LFIO_OK;
+    return lfio__fail(LFIO_ERR_IO, "%s: %s: %s", path, step, strerror(err));
 }
 
-
-/* Builds the file in memory, writes it to a temporary beside path, fsyncs, renames it over path and fsyncs the folder. */
+/* Builds the file in memory, writes it to a temporary beside path and puts it in place (ilf/atomic_file.h). */
 lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const void *content)
 {
     lfio__h5_quiet q;
     lfio__h5_quiet_begin(&q);
-    char *tmp = NULL, *dir = NULL;
-    int fd = -1, err = 0;
-    lfio_status st = make_temp(path, &tmp, &fd);
-    /* The folder's name is taken now: once the file is renamed into place, running out of
-     * memory must not turn a complete write into a reported failure. */
-    if (st == LFIO_OK && (dir = folder_of(path)) == NULL)
-        st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
+    ilf_atomic *a = NULL;
+    const char *step = NULL;
+    int err = ilf_atomic_new(path, &a, &step);
+    lfio_status st = err != 0 ? atomic_fail(path, err, step) : LFIO_OK;
     if (st == LFIO_OK)
-        st = build_and_write(path, tmp, fill, content, fd);
-    if (st == LFIO_OK && fsync(fd) != 0)
-        st = lfio__fail(LFIO_ERR_IO, "%s: cannot write the temporary file: %s", path, strerror(errno));
-    if (fd >= 0 && close(fd) != 0 && st == LFIO_OK)
-        st = lfio__fail(LFIO_ERR_IO, "%s: cannot close the temporary file: %s", path, strerror(errno));
-    if (st == LFIO_OK && rename(tmp, path) != 0)
-        st = lfio__fail(LFIO_ERR_IO, "%s: cannot rename the temporary file over it: %s", path,
-                        strerror(errno));
-    if (st != LFIO_OK && tmp != NULL)
-        remove(tmp);
-    /* The rename is only durable once the folder's entry is on disk. */
-    if (st == LFIO_OK && (err = sync_folder(dir)) != 0)
-        st = lfio__fail(LFIO_ERR_IO, "%s: written, but cannot flush its folder: %s", path, strerror(err));
-    free(dir);
-    free(tmp);
+        st = build_and_write(path, ilf_atomic_temp_path(a), fill, content, ilf_atomic_fd(a));
+    if (st == LFIO_OK && (err = ilf_atomic_commit(a, &step)) != 0)
+        st = atomic_fail(path, err, step);
+    ilf_atomic_release(a); /* removes the temporary unless it was put in place */
     lfio__h5_quiet_end(&q);
     return st;
 }
@@ -848,27 +794,6 @@ static lfio_status agree(const char *path, lfio_status st, MPI_Comm comm)
     if (st != LFIO_OK || worst == 0)
         return st;
     return lfio__fail((lfio_status)worst, "%s: another rank failed while writing it", path);
-}
-
-/* Rank 0 fsyncs the written temporary, renames it over path and fsyncs the folder. @return its status. */
-static lfio_status place_file(const char *path, const char *tmp)
-{
-    int err = 0;
-    char *dir = folder_of(path);
-    int fd = open(tmp, O_RDONLY);
-    if (dir == NULL)
-        return lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
-    lfio_status st = LFIO_OK;
-    if (fd < 0 || fsync(fd) != 0)
-        st = lfio__fail(LFIO_ERR_IO, "%s: cannot flush the temporary file: %s", path, strerror(errno));
-    if (fd >= 0)
-        close(fd);
-    if (st == LFIO_OK && rename(tmp, path) != 0)
-        st = lfio__fail(LFIO_ERR_IO, "%s: cannot rename the temporary file over it: %s", path, strerror(errno));
-    if (st == LFIO_OK && (err = sync_folder(dir)) != 0)
-        st = lfio__fail(LFIO_ERR_IO, "%s: written, but cannot flush its folder: %s", path, strerror(err));
-    free(dir);
-    return st;
 }
 
 /* The communicator of the collective write under way in this process, or MPI_COMM_NULL. */
@@ -897,11 +822,14 @@ lfio_status lfio__h5_write_collective(const char *path, lfio__h5_fill_fn fill, c
     int rank = 0;
     MPI_Comm_rank(comm, &rank);
     char *tmp = NULL;
-    int fd = -1;
+    ilf_atomic *a = NULL;
+    const char *step = NULL;
     unsigned long len = 0;
-    lfio_status st = rank == 0 ? make_temp(path, &tmp, &fd) : LFIO_OK;
-    if (fd >= 0)
-        close(fd); /* HDF5 opens it by name; it stays empty until then */
+    int err = rank == 0 ? ilf_atomic_new(path, &a, &step) : 0;
+    lfio_status st = err != 0 ? atomic_fail(path, err, step) : LFIO_OK;
+    /* HDF5 opens the temporary by name; it stays empty until then */
+    if (a != NULL && (tmp = strdup(ilf_atomic_temp_path(a))) == NULL)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
     if (rank == 0 && tmp != NULL)
         len = (unsigned long)strlen(tmp) + 1;
     if (MPI_Bcast(&len, 1, MPI_UNSIGNED_LONG, 0, comm) != MPI_SUCCESS)
@@ -920,10 +848,9 @@ lfio_status lfio__h5_write_collective(const char *path, lfio__h5_fill_fn fill, c
     if (file >= 0 && H5Fclose(file) < 0 && st == LFIO_OK)
         st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot close the temporary file");
     st = agree(path, st, comm);
-    if (rank == 0 && st == LFIO_OK)
-        st = place_file(path, tmp);
-    if (rank == 0 && st != LFIO_OK && tmp != NULL)
-        remove(tmp);
+    if (rank == 0 && st == LFIO_OK && (err = ilf_atomic_commit(a, &step)) != 0)
+        st = atomic_fail(path, err, step);
+    ilf_atomic_release(a); /* rank 0: removes the temporary unless it was put in place */
     /* Every rank learns whether rank 0 placed the file. */
     int placed = st == LFIO_OK;
     if (MPI_Bcast(&placed, 1, MPI_INT, 0, comm) != MPI_SUCCESS)

@@ -15,9 +15,14 @@
  * the sphere, that order is clockwise in octants with an even number of
  * negative signs, so there C1 and C2 are swapped before anything is
  * returned; neighbours and weights are swapped with them.
+ *
+ * Strata (lfio_part_strata_*) cut a solid angle's planar triangle the same
+ * way the partition cuts an octant's face, so a stratum's index is found
+ * in constant time and every stratum has the same planar area.
  */
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "lfio/partition.h"
 
@@ -404,5 +409,121 @@ int lfio_part_interp(uint32_t n, const double d[3], uint64_t ids[4], double w[4]
         uint64_t ti = ids[2]; ids[2] = ids[3]; ids[3] = ti;
         double tw = w[2]; w[2] = w[3]; w[3] = tw;
     }
+    return 1;
+}
+
+/* ---------------------------------------------------------------- strata */
+
+int lfio_part_face_vertices(uint32_t n, uint64_t id, double v[3][3])
+{
+    if (!lfio_part_vertices(n, id, v))
+        return 0;
+    /* Scaled from the unit corners, not built from the lattice, so that the
+     * corners are the ones relight has always sampled (bit for bit). */
+    for (int k = 0; k < 3; k++) {
+        double l1 = fabs(v[k][0]) + fabs(v[k][1]) + fabs(v[k][2]);
+        for (int c = 0; c < 3; c++)
+            v[k][c] /= l1;
+    }
+    return 1;
+}
+
+int lfio_part_strata_init(lfio_part_strata *st, const double p[3][3], uint32_t k)
+{
+    if (st == NULL || p == NULL || k < 1 || k > LFIO_PART_MAX_STRATA_K)
+        return 0;
+    for (int a = 0; a < 3; a++)
+        for (int c = 0; c < 3; c++)
+            if (!isfinite(p[a][c]))
+                return 0;
+    memcpy(st->p, p, sizeof st->p);
+    /* det(p0, p1, p2) as p0 . (p1 x p2), the order relight has always used */
+    double x = p[1][1] * p[2][2] - p[1][2] * p[2][1];
+    double y = p[1][2] * p[2][0] - p[1][0] * p[2][2];
+    double z = p[1][0] * p[2][1] - p[1][1] * p[2][0];
+    double jac = 0.5 * fabs(p[0][0] * x + p[0][1] * y + p[0][2] * z);
+    st->jac = jac / ((double)k * k);
+    st->k = k;
+    return 1;
+}
+
+/* Finds stratum s of k*k: lattice cell (c, r) and whether it is the upper triangle. @return 0 if s >= k*k. */
+static int stratum_cell(uint32_t k, uint32_t s, uint32_t *c, uint32_t *r, uint32_t *upper)
+{
+    if ((uint64_t)s >= (uint64_t)k * k)
+        return 0;
+    /* row r holds 2(k - r) - 1 strata and starts at r(2k - r) = k*k - (k - r)^2 */
+    uint64_t left = (uint64_t)k * k - s; /* in [1, k*k] */
+    uint32_t q = (uint32_t)sqrt((double)left);
+    while ((uint64_t)q * q > left)
+        q--;
+    while ((uint64_t)(q + 1) * (q + 1) <= left)
+        q++;
+    uint32_t width = (uint64_t)q * q == left ? q : q + 1; /* ceil(sqrt(left)) = k - r */
+    *r = k - width;
+    uint32_t t = s - (uint32_t)((uint64_t)*r * (2u * k - *r));
+    *c = t / 2;
+    *upper = t % 2;
+    return 1;
+}
+
+/* Lattice point p0 + (p1 - p0) i/k + (p2 - p0) j/k of st's triangle (capture's arithmetic, kept bit for bit). */
+static void lattice_point(const lfio_part_strata *st, uint32_t i, uint32_t j, double out[3])
+{
+    for (int a = 0; a < 3; a++)
+        out[a] = st->p[0][a] + (st->p[1][a] - st->p[0][a]) * i / st->k + (st->p[2][a] - st->p[0][a]) * j / st->k;
+}
+
+int lfio_part_strata_centroid(const lfio_part_strata *st, uint32_t s, double dir[3], double *weight)
+{
+    uint32_t c, r, upper;
+    if (!stratum_cell(st->k, s, &c, &r, &upper))
+        return 0;
+    double A[3], B[3], C[3];
+    /* the corners in the order their sum has always been taken */
+    lattice_point(st, c + 1, r, B);
+    lattice_point(st, c, r + 1, C);
+    if (!upper) {
+        lattice_point(st, c, r, A);
+        for (int a = 0; a < 3; a++)
+            A[a] = (A[a] + B[a] + C[a]) / 3.0;
+    } else {
+        lattice_point(st, c + 1, r + 1, A);
+        for (int a = 0; a < 3; a++)
+            A[a] = (B[a] + C[a] + A[a]) / 3.0;
+    }
+    double len = sqrt(A[0] * A[0] + A[1] * A[1] + A[2] * A[2]);
+    for (int a = 0; a < 3; a++)
+        dir[a] = A[a] / len;
+    *weight = st->jac / (len * len * len);
+    return 1;
+}
+
+int lfio_part_strata_sample(const lfio_part_strata *st, uint32_t s, const double l[3], double dir[3], double *weight,
+                            double lam[3])
+{
+    uint32_t k = st->k, c, r, upper;
+    if (!stratum_cell(k, s, &c, &r, &upper))
+        return 0;
+    double g[3];
+    /* for k = 1 every step below is exact, so g = l: a caller's own warp passes through */
+    if (!upper) {
+        g[0] = ((double)(k - c - r - 1) + l[0]) / k;
+        g[1] = (c + l[1]) / k;
+        g[2] = (r + l[2]) / k;
+    } else {
+        g[0] = ((double)(k - c - r - 1) - l[0]) / k;
+        g[1] = (c + 1.0 - l[1]) / k;
+        g[2] = (r + 1.0 - l[2]) / k;
+    }
+    double P[3];
+    for (int a = 0; a < 3; a++)
+        P[a] = (st->p[0][a] * g[0] + st->p[1][a] * g[1]) + st->p[2][a] * g[2];
+    double inv = 1.0 / sqrt(P[0] * P[0] + P[1] * P[1] + P[2] * P[2]);
+    *weight = st->jac * inv * inv * inv;
+    for (int a = 0; a < 3; a++)
+        dir[a] = P[a] * inv;
+    if (lam != NULL)
+        memcpy(lam, g, sizeof g);
     return 1;
 }

@@ -39,6 +39,43 @@ void lfio_slab_desc_init(lfio_slab_desc *d)
     d->mask_threshold = 0.0f;
 }
 
+int lfio_slab_name_valid(const char *name)
+{
+    return name != NULL && lfio__valid_name(name);
+}
+
+int lfio_slab_edges_check(const double u[3], const double v[3])
+{
+    if (u == NULL || v == NULL || !finite3(u) || !finite3(v))
+        return LFIO_EDGES_LENGTH;
+    double lu = sqrt(dot3(u, u)), lv = sqrt(dot3(v, v));
+    /* the product too: where it overflows, the orthogonality test below would pass anything */
+    if (!(lu > 0.0) || !(lv > 0.0) || !isfinite(lu * lv))
+        return LFIO_EDGES_LENGTH;
+    if (fabs(dot3(u, v)) > 1e-9 * lu * lv)
+        return LFIO_EDGES_ORTHOGONAL;
+    return LFIO_EDGES_OK;
+}
+
+uint64_t lfio_slab_desc_bytes(const lfio_slab_desc *d)
+{
+    uint64_t ndir = 4u * (uint64_t)d->n * d->n, cells, floats, bytes;
+    if (!lfio__mul_u64(d->nu, d->nv, &cells) || !lfio__mul_u64(cells, ndir, &floats) ||
+        !lfio__mul_u64(floats, 3u * sizeof(float), &bytes))
+        return UINT64_MAX;
+    return bytes;
+}
+
+lfio_status lfio_slab_desc_check(const lfio_slab_desc *desc)
+{
+    char why[128];
+    if (desc == NULL)
+        return lfio__fail(LFIO_ERR_ARG, "lfio_slab_desc_check: desc is NULL");
+    if (lfio__check_desc(desc, why, sizeof why) != LFIO_OK)
+        return lfio__fail(LFIO_ERR_ARG, "slab '%s': %s", desc->name, why);
+    return LFIO_OK;
+}
+
 int lfio__valid_name(const char *name)
 {
     const char *end = memchr(name, '\0', LFIO_NAME_MAX + 1);
@@ -58,17 +95,16 @@ int lfio__valid_name(const char *name)
 lfio_status lfio__check_desc(const lfio_slab_desc *d, char *why, size_t why_size)
 {
     const char *problem = NULL;
-    double lu = sqrt(dot3(d->u, d->u)), lv = sqrt(dot3(d->v, d->v));
-    uint64_t ndir = 4u * (uint64_t)d->n * d->n, cells, floats, bytes;
+    int edges = lfio_slab_edges_check(d->u, d->v);
     if (memchr(d->name, '\0', sizeof d->name) == NULL)
         problem = "name is not NUL-terminated";
     else if (d->name[0] && !lfio__valid_name(d->name))
         problem = "name must be 1-63 characters of letters, digits, '_', '-', '.'";
     else if (!finite3(d->origin) || !finite3(d->u) || !finite3(d->v))
         problem = "origin, u and v must be finite";
-    else if (!(lu > 0.0) || !(lv > 0.0) || !isfinite(lu) || !isfinite(lv))
+    else if (edges == LFIO_EDGES_LENGTH)
         problem = "u and v must be nonzero and finite in length";
-    else if (fabs(dot3(d->u, d->v)) > 1e-9 * lu * lv)
+    else if (edges == LFIO_EDGES_ORTHOGONAL)
         problem = "u and v must be orthogonal";
     else if (d->nu < 1 || d->nv < 1)
         problem = "nu and nv must be at least 1";
@@ -78,8 +114,7 @@ lfio_status lfio__check_desc(const lfio_slab_desc *d, char *why, size_t why_size
         problem = "units must be radiance or relative";
     else if (!(d->mask_threshold >= 0.0f) || !isfinite(d->mask_threshold))
         problem = "mask threshold must be finite and >= 0";
-    else if (!lfio__mul_u64(d->nu, d->nv, &cells) || !lfio__mul_u64(cells, ndir, &floats) ||
-             !lfio__mul_u64(floats, 3u * sizeof(float), &bytes) || bytes > LFIO_SLAB_MAX_BYTES)
+    else if (lfio_slab_desc_bytes(d) > LFIO_SLAB_MAX_BYTES)
         problem = "radiance array would exceed 64 GiB";
     if (!problem)
         return LFIO_OK;
@@ -118,14 +153,13 @@ static void fill_tables(lfio_slab *s)
 
 lfio_status lfio_slab_new(const lfio_slab_desc *desc, lfio_slab **out)
 {
-    char why[128];
     if (!out)
         return lfio__fail(LFIO_ERR_ARG, "lfio_slab_new: out is NULL");
     *out = NULL;
     if (!desc)
         return lfio__fail(LFIO_ERR_ARG, "lfio_slab_new: desc is NULL");
-    if (lfio__check_desc(desc, why, sizeof why) != LFIO_OK)
-        return lfio__fail(LFIO_ERR_ARG, "slab '%s': %s", desc->name, why);
+    if (lfio_slab_desc_check(desc) != LFIO_OK)
+        return LFIO_ERR_ARG;
     lfio_slab *s = calloc(1, sizeof *s);
     if (!s)
         return lfio__fail(LFIO_ERR_NOMEM, "slab '%s': out of memory", desc->name);
@@ -167,6 +201,32 @@ const lfio_slab_desc *lfio_slab_get_desc(const lfio_slab *s)
 uint64_t lfio_slab_dir_count(const lfio_slab *s)
 {
     return s->ndir;
+}
+
+lfio_status lfio_slab_support(const lfio_slab *s, uint32_t (*box)[4])
+{
+    if (s == NULL || box == NULL)
+        return lfio__fail(LFIO_ERR_ARG, "lfio_slab_support: %s is NULL", s == NULL ? "slab" : "box");
+    uint32_t nu = s->desc.nu, nv = s->desc.nv;
+    for (uint64_t k = 0; k < s->ndir; k++) {
+        uint32_t b[4] = {UINT32_MAX, 0, UINT32_MAX, 0};
+        /* leaf_count counts values above the threshold; at threshold 0 a count of 0 means all zero */
+        int dark = s->leaf_count[k] == 0 && s->desc.mask_threshold == 0.0f;
+        for (uint32_t j = 0; j < nv && !dark; j++)
+            for (uint32_t i = 0; i < nu; i++) {
+                const float *p = s->radiance + ((k * nv + j) * (uint64_t)nu + i) * 3;
+                if (p[0] != 0.0f || p[1] != 0.0f || p[2] != 0.0f) {
+                    b[0] = i < b[0] ? i : b[0];
+                    b[1] = i > b[1] ? i : b[1];
+                    b[2] = j < b[2] ? j : b[2];
+                    b[3] = j > b[3] ? j : b[3];
+                }
+            }
+        if (b[0] == UINT32_MAX)
+            b[0] = 1, b[1] = 0; /* empty */
+        memcpy(box[k], b, sizeof b);
+    }
+    return LFIO_OK;
 }
 
 const float *lfio_slab_radiance(const lfio_slab *s)

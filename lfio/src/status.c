@@ -8,9 +8,10 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "ilf/message.h"
 #include "internal.h"
 
-static _Thread_local char errbuf[1024];
+static _Thread_local char errbuf[ILF_MESSAGE_BYTES];
 
 const char *lfio_status_name(lfio_status s)
 {
@@ -40,7 +41,7 @@ lfio_status lfio__fail(lfio_status status, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(errbuf, sizeof errbuf, fmt, ap);
+    ilf_message_vformat(errbuf, fmt, ap);
     va_end(ap);
     return status;
 }

@@ -6,9 +6,10 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "ilf/message.h"
 #include "scene_internal.h"
 
-static _Thread_local char errbuf[1024];
+static _Thread_local char errbuf[ILF_MESSAGE_BYTES];
 
 const char *rl_errmsg(void)
 {
@@ -19,7 +20,7 @@ rl_status rl__fail(rl_status status, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(errbuf, sizeof errbuf, fmt, ap);
+    ilf_message_vformat(errbuf, fmt, ap);
     va_end(ap);
     return status;
 }

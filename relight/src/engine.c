@@ -106,7 +106,12 @@ static int run_job(pass_job *job, unsigned n, const rl__run *run, double base, d
     atomic_init(&job->next, 0);
     atomic_init(&job->done, 0);
     atomic_init(&job->failed, 0);
-    ilf_team *team = ilf_team_start(n, worker, job);
+    ilf_team *team;
+    if (ilf_team_start(n, worker, job, &team) != 0) {
+        free(job->counters);
+        job->counters = NULL;
+        return -1;
+    }
     /* Without a started thread the work runs at join: nothing to wait for here. */
     while (run->progress && ilf_team_threads(team) > 0 && atomic_load(&job->done) < job->nitems &&
            !atomic_load(&job->failed)) {

@@ -5,8 +5,9 @@
  * as fn(arg, k) with its own index k in [0, n). Workers share work through
  * the caller's own counters (an atomic "next item"), so the result never
  * depends on how many of them actually started: where a thread cannot be
- * created, its index runs on the joining thread instead. Starting a team
- * therefore never fails. Thread counts follow one rule everywhere:
+ * created, its index runs on the joining thread instead. The only way to
+ * fail is a team record that cannot be allocated (ilf_team_start); ilf_parallel
+ * keeps its record on the stack and cannot fail. Thread counts follow one rule everywhere:
  * ilf_thread_count(0) is every online core, and no team is larger than
  * ILF_MAX_THREADS (ilf/limits.h).
  */
@@ -20,9 +21,9 @@ typedef void (*ilf_worker_fn)(void *arg, unsigned index);
 typedef struct ilf_team ilf_team;
 
 /* Starts fn(arg, k) for k = 0..n-1 (n >= 1, capped at ILF_MAX_THREADS) on threads of their own.
- * @return the team to join; NULL if even its record could not be allocated, in which case every
- * index has already run on the calling thread. */
-ilf_team *ilf_team_start(unsigned n, ilf_worker_fn fn, void *arg);
+ * @return 0 and *out, the team to join; -1 and *out = NULL if its record could not be allocated,
+ * in which case nothing has run (the caller reports it: out of memory is never absorbed). */
+int ilf_team_start(unsigned n, ilf_worker_fn fn, void *arg, ilf_team **out);
 
 /* Waits for every worker, runs any index whose thread could not be created, and frees team. NULL is a no-op. */
 void ilf_team_join(ilf_team *team);

@@ -77,6 +77,34 @@ typedef struct lfio_lightfield lfio_lightfield;
 /** Fills *d with a 1 m x 1 m slab at the origin facing +z, 1x1 positions, n = 1, no name. */
 void lfio_slab_desc_init(lfio_slab_desc *d);
 
+/**
+ * Checks desc against every rule lfio_slab_new() applies (the same code):
+ * a valid or empty name, finite origin, u and v nonzero, finite and
+ * orthogonal (lfio_slab_edges_check()), nu, nv >= 1, n in 1..LFIO_SLAB_MAX_N,
+ * known units, a finite mask threshold >= 0, a radiance array of at most
+ * LFIO_SLAB_MAX_BYTES. For readers of descriptions (manifests, command
+ * lines) that want lfio's verdict before asking for memory.
+ * @return LFIO_OK, or LFIO_ERR_ARG with lfio_errmsg() = "slab 'NAME': problem".
+ */
+lfio_status lfio_slab_desc_check(const lfio_slab_desc *desc);
+
+/**
+ * @return the bytes of desc's radiance array, nu*nv*4*n*n*3 floats (UINT64_MAX if that overflows);
+ * lfio_slab_new() refuses more than LFIO_SLAB_MAX_BYTES.
+ */
+uint64_t lfio_slab_desc_bytes(const lfio_slab_desc *desc);
+
+/** @return 1 if name is a valid slab name: 1..LFIO_NAME_MAX characters of A-Z a-z 0-9 _ - . (else 0). */
+int lfio_slab_name_valid(const char *name);
+
+/** Verdicts of lfio_slab_edges_check(). */
+#define LFIO_EDGES_OK 0         /**< usable slab edges */
+#define LFIO_EDGES_LENGTH 1     /**< a component is not finite, a length is 0, or |u|*|v| overflows */
+#define LFIO_EDGES_ORTHOGONAL 2 /**< |u.v| > 1e-9 |u| |v| */
+
+/** @return LFIO_EDGES_OK if u and v are a slab's edges as lfio_slab_new() requires, else the first rule broken. */
+int lfio_slab_edges_check(const double u[3], const double v[3]);
+
 /* ------------------------------------------------------------------ slabs */
 
 /**
@@ -97,6 +125,17 @@ uint64_t lfio_slab_dir_count(const lfio_slab *s);
 
 /** @return the radiance array, [dir][j][i][rgb] (borrowed, read-only). */
 const float *lfio_slab_radiance(const lfio_slab *s);
+
+/**
+ * The per-direction support of s's nonzero radiance: for every stored
+ * direction d, box[d] = {i_min, i_max, j_min, j_max}, the smallest box of
+ * positions outside which direction d's radiance is zero in every channel
+ * (whatever the mask threshold). A direction with no nonzero radiance gets
+ * i_min = 1 > i_max = 0. box holds lfio_slab_dir_count(s) entries. Lets a
+ * renderer skip the parts of an emitter that are dark along a direction.
+ * @return LFIO_OK, or LFIO_ERR_ARG if s or box is NULL.
+ */
+lfio_status lfio_slab_support(const lfio_slab *s, uint32_t (*box)[4]);
 
 /**
  * Sets the radiance of one sample and updates the mask.

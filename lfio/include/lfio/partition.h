@@ -116,6 +116,67 @@ int lfio_part_interp(uint32_t n, const double d[3], uint64_t ids[4], double w[4]
  */
 void lfio_part_interp_weights(const double lam[3], double w[4]);
 
+/**
+ * Gives the corners of solid angle id scaled onto the octahedron face
+ * |x|+|y|+|z| = 1: the planar triangle the partition cuts, whose lattice
+ * the ids are defined on (corner order as lfio_part_vertices()).
+ * @return 1 on success; 0 if n or id is invalid.
+ */
+int lfio_part_face_vertices(uint32_t n, uint64_t id, double v[3][3]);
+
+/** Largest k of lfio_part_strata_init(): k*k strata per solid angle. */
+#define LFIO_PART_MAX_STRATA_K 4096u
+
+/**
+ * A solid angle prepared for stratified sampling through a planar triangle:
+ * corners p[0..2] on the solid angle's corner rays, in any frame the caller
+ * rotates them into (lfio_part_vertices() gives them on the unit sphere,
+ * lfio_part_face_vertices() on the octahedron face). The triangle is cut into
+ * k*k strata of equal planar area: lattice cell (c, r) of the corners
+ * p[0] + a (p[1]-p[0]) + b (p[2]-p[0]), a = c/k.., b = r/k.., c + r < k,
+ * gives its lower triangle (c,r),(c+1,r),(c,r+1) and, when c + r + 1 < k,
+ * that triangle turned half a turn about the cell's centre. Strata are
+ * numbered row by row (r), then by c, lower before upper:
+ *     s = r*(2k - r) + 2c + upper
+ * the same scheme as the partition's own ids within an octant.
+ */
+typedef struct lfio_part_strata {
+    double p[3][3]; /**< the planar triangle's corners */
+    double jac;     /**< |det(p0, p1, p2)| / (2 k*k): a stratum's area times the plane's distance from 0
+                         (a caller that normalises the weights itself may set it to 1) */
+    uint32_t k;     /**< strata per edge */
+} lfio_part_strata;
+
+/**
+ * Prepares corners p (copied) for k*k strata.
+ * @return 1 on success; 0 if k is 0 or above LFIO_PART_MAX_STRATA_K, or a corner is not finite.
+ */
+int lfio_part_strata_init(lfio_part_strata *st, const double p[3][3], uint32_t k);
+
+/**
+ * Gives the direction through the point of stratum s with barycentric
+ * coordinates l inside the stratum (l >= 0, summing to 1; l[0] weighs the
+ * stratum corner on the side of p[0] .. as listed above), and its weight
+ * jac / |P|^3 for the point P: its share of solid angle, so that with l
+ * uniform on the stratum the weight's mean is the stratum's solid angle and
+ * one sample per stratum sums to an unbiased estimate of the whole. lam, if
+ * not NULL, receives P's barycentric coordinates in the whole triangle. For
+ * k = 1 lam equals l exactly, so a caller's own warp passes straight through.
+ * P = (p0 lam0 + p1 lam1) + p2 lam2; dir = P * (1/|P|); weight = jac*i*i*i, i = 1/|P|.
+ * @return 1 on success; 0 if s >= k*k (outputs untouched).
+ */
+int lfio_part_strata_sample(const lfio_part_strata *st, uint32_t s, const double l[3], double dir[3], double *weight,
+                            double lam[3]);
+
+/**
+ * Gives the direction through the centroid of stratum s (the mean of its three
+ * lattice corners, each p0 + (p1-p0) i/k + (p2-p0) j/k) and its weight
+ * jac / |P|^3: a fixed quadrature rule, one point per stratum, for callers
+ * that want the same directions on every run. dir = P / |P|.
+ * @return 1 on success; 0 if s >= k*k (outputs untouched).
+ */
+int lfio_part_strata_centroid(const lfio_part_strata *st, uint32_t s, double dir[3], double *weight);
+
 #ifdef __cplusplus
 }
 #endif
