@@ -473,28 +473,10 @@ static void slab_names(const lfio_lightfield *lf, char *buf, size_t cap)
  * memory runs out. */
 static uint32_t (*slab_support_new(const lfio_slab *slab))[4]
 {
-    const lfio_slab_desc *d = lfio_slab_get_desc(slab);
     uint64_t ndir = lfio_slab_dir_count(slab);
     uint32_t (*box)[4] = malloc((ndir ? ndir : 1) * sizeof *box);
-    if (!box)
-        return NULL;
-    const float *rad = lfio_slab_radiance(slab);
-    for (uint64_t k = 0; k < ndir; k++) {
-        uint32_t b[4] = {UINT32_MAX, 0, UINT32_MAX, 0};
-        for (uint32_t j = 0; j < d->nv; j++)
-            for (uint32_t i = 0; i < d->nu; i++) {
-                const float *p = rad + ((k * d->nv + j) * (uint64_t)d->nu + i) * 3;
-                if (p[0] != 0.0f || p[1] != 0.0f || p[2] != 0.0f) {
-                    b[0] = i < b[0] ? i : b[0];
-                    b[1] = i > b[1] ? i : b[1];
-                    b[2] = j < b[2] ? j : b[2];
-                    b[3] = j > b[3] ? j : b[3];
-                }
-            }
-        if (b[0] == UINT32_MAX)
-            b[0] = 1, b[1] = 0; /* empty */
-        memcpy(box[k], b, sizeof b);
-    }
+    if (box != NULL)
+        lfio_slab_support(slab, box);
     return box;
 }
 

@@ -121,7 +121,7 @@ typedef struct leaf {
     int planar;
     sph_tri tri;          /* !planar: Arvo's warp; every sample weighs omega */
     v3 p[3];              /* planar: the lattice triangle's corners (|x|+|y|+|z| = 1 in e's frame), world */
-    double jac;           /* planar: |det(p0, p1, p2)| / 2; a sample through point P weighs jac / |P|^3 */
+    lfio_part_strata st;  /* planar: the triangle's one stratum (lfio_part_strata_sample weighs each direction) */
     int reach;            /* every corner direction leaves the emitter's front (p[k] . n > 0) */
     v2 land[3];           /* then: corner k from origin x lands at project(x) - h(x) * land[k] on the emitter */
     int mix;              /* planar, light field, at or below the slab's level: lfio_slab_radiance_mix() */
@@ -143,12 +143,7 @@ static void barycentric(const double a[3][3], const double p[3], double lam[3])
 /* Gives the corners of solid angle id at level lv scaled onto |x|+|y|+|z| = 1. */
 static void lattice_triangle(uint32_t lv, uint64_t id, double v[3][3])
 {
-    lfio_part_vertices(lv, id, v);
-    for (int k = 0; k < 3; k++) {
-        double l1 = fabs(v[k][0]) + fabs(v[k][1]) + fabs(v[k][2]);
-        for (int c = 0; c < 3; c++)
-            v[k][c] /= l1;
-    }
+    lfio_part_face_vertices(lv, id, v);
 }
 
 /* Prepares solid angle id at level lv of emitter e for the receiver map map_index, emitter ei. */
@@ -173,7 +168,10 @@ static void leaf_make(const rl_transfer_ctx *ctx, const rl_emitter *e, uint32_t 
         L->tri = sph_tri_make(v3_norm(L->p[0]), v3_norm(L->p[1]), v3_norm(L->p[2]), L->omega);
         return;
     }
-    L->jac = 0.5 * fabs(v3_dot(L->p[0], v3_cross(L->p[1], L->p[2])));
+    double pw[3][3];
+    for (int k = 0; k < 3; k++)
+        v3_store(L->p[k], pw[k]);
+    lfio_part_strata_init(&L->st, (const double(*)[3])pw, 1);
     if (e->kind != EM_SLAB)
         return;
     /* the slab-level ancestor; levels that are not a power-of-two multiple of
@@ -205,14 +203,9 @@ static v3 leaf_sample(const leaf *L, double u1, double u2, double *w, double lam
         *w = L->omega;
         return sph_tri_sample(&L->tri, u1, u2);
     }
-    double su = sqrt(u1);
-    lam[0] = 1.0 - su;
-    lam[1] = su * (1.0 - u2);
-    lam[2] = su * u2;
-    v3 p = v3_add(v3_add(v3_scale(L->p[0], lam[0]), v3_scale(L->p[1], lam[1])), v3_scale(L->p[2], lam[2]));
-    double inv = 1.0 / sqrt(v3_dot(p, p));
-    *w = L->jac * inv * inv * inv;
-    return v3_scale(p, inv);
+    double su = sqrt(u1), l[3] = {1.0 - su, su * (1.0 - u2), su * u2}, d[3];
+    lfio_part_strata_sample(&L->st, 0, l, d, w, lam);
+    return v3_load(d);
 }
 
 /* For a mixing leaf of light field e: the rectangle of the slab outside which every
