@@ -660,7 +660,7 @@ static void test_data(void)
 /* ------------------------------------------------------ coarse bounces */
 
 /*
- * map_interpolate(), which carries bounce light from the coarse cells it is
+ * rl__map_interpolate(), which carries bounce light from the coarse cells it is
  * gathered on to the radiance cells: a field linear in the map's frame,
  * given at the coarse cells' centres, comes back exactly at every fine cell
  * whose four surrounding centres exist, and nowhere outside the range of
@@ -675,9 +675,9 @@ static void test_interpolation(void)
     rl_scene *s = load(tmpdir, "interp.json");
     rl_map *fine = NULL, *coarse = NULL;
     size_t nf = 0, nc = 0;
-    if (!s || maps_build(s, &fine, &nf) != RL_OK || maps_build_sized(s, 0.2, &coarse, &nc) != RL_OK) {
+    if (!s || rl__maps_build(s, &fine, &nf) != RL_OK || rl__maps_build_sized(s, 0.2, &coarse, &nc) != RL_OK) {
         CHECK(0, "maps: %s", rl_errmsg());
-        maps_free(fine, nf);
+        rl__maps_free(fine, nf);
         rl_scene_destroy(s);
         return;
     }
@@ -692,11 +692,11 @@ static void test_interpolation(void)
             lo = fmin(lo, c->e_pass[k][0]);
             hi = fmax(hi, c->e_pass[k][0]);
         }
-        map_interpolate(c, f);
+        rl__map_interpolate(c, f);
         long exact = 0, interior = 0, outside = 0;
         for (uint32_t k = 0; k < f->ncells; k++) {
             v2 poly[RL_MAX_POLY_VERTS + 4];
-            v2 q = polygon_centroid(poly, map_cell_polygon(f, &f->cells[k], poly));
+            v2 q = rl__polygon_centroid(poly, rl__map_cell_polygon(f, &f->cells[k], poly));
             double a = (q.x - c->u0) / c->cell - 0.5, b = (q.y - c->v0) / c->cell - 0.5;
             int i0 = (int)floor(a), j0 = (int)floor(b), all = i0 >= 0 && j0 >= 0 && i0 + 1 < (int)c->nu &&
                                                          j0 + 1 < (int)c->nv;
@@ -713,8 +713,8 @@ static void test_interpolation(void)
         CHECK(interior > 0 && exact == interior, "map %zu: %ld of %ld interior cells linear", m, exact, interior);
         CHECK(outside == 0, "map %zu: %ld cells outside the coarse range", m, outside);
     }
-    maps_free(fine, nf);
-    maps_free(coarse, nc);
+    rl__maps_free(fine, nf);
+    rl__maps_free(coarse, nc);
     rl_scene_destroy(s);
 }
 

@@ -69,10 +69,10 @@ static void ray_worker(void *p, unsigned index)
 {
     ray_job *job = p;
     uint64_t state = hash_mix(0x5eed, index), hits = 0;
-    double reach = 4.0 * tracer_extent(job->tracer), cpu = 0.0, wall = 0.0;
+    double reach = 4.0 * rl__tracer_extent(job->tracer), cpu = 0.0, wall = 0.0;
     v3 *org = malloc(RAY_CHUNK * sizeof *org), *dir = malloc(RAY_CHUNK * sizeof *dir);
     double *tn = malloc(RAY_CHUNK * sizeof *tn), *tf = malloc(RAY_CHUNK * sizeof *tf);
-    tracer_thread_init();
+    rl__tracer_thread_init();
     for (uint64_t done = 0; org && dir && tn && tf && done < job->per_thread; done += RAY_CHUNK) {
         size_t n = job->per_thread - done < RAY_CHUNK ? (size_t)(job->per_thread - done) : RAY_CHUNK;
         for (size_t i = 0; i < n; i++) {
@@ -84,7 +84,7 @@ static void ray_worker(void *p, unsigned index)
         for (size_t i = 0; i < n; i += RL_RAY_PACKET) {
             int occ[RL_RAY_PACKET];
             size_t m = n - i < RL_RAY_PACKET ? n - i : RL_RAY_PACKET;
-            tracer_occluded_n(job->tracer, m, org + i, dir + i, tn + i, tf + i, occ);
+            rl__tracer_occluded_n(job->tracer, m, org + i, dir + i, tn + i, tf + i, occ);
             for (size_t k = 0; k < m; k++)
                 hits += occ[k] != 0;
         }
@@ -116,12 +116,12 @@ rl_status rl_bench_rays(const rl_scene *scene, const rl_run_options *options, ui
     if (scene->npolygons == 0)
         return rl__fail(RL_ERR_ARG, "%s: the scene has no polygons to trace against", scene->path);
     rl_tracer *tracer = NULL;
-    st = tracer_new(scene, run.threads, &tracer);
+    st = rl__tracer_new(scene, run.threads, &tracer);
     if (st != RL_OK)
         return st;
     double *cdf = malloc(scene->npolygons * sizeof *cdf);
     if (!cdf) {
-        tracer_destroy(tracer);
+        rl__tracer_destroy(tracer);
         return rl__fail(RL_ERR_NOMEM, "out of memory");
     }
     double acc = 0;
@@ -134,6 +134,6 @@ rl_status rl_bench_rays(const rl_scene *scene, const rl_run_options *options, ui
     out->rays = job.per_thread * run.threads;
     out->occluded = atomic_load(&job.occluded);
     free(cdf);
-    tracer_destroy(tracer);
+    rl__tracer_destroy(tracer);
     return RL_OK;
 }

@@ -79,21 +79,21 @@ static void worker(void *p, unsigned index)
 {
     pass_job *job = p;
     rl_scratch scratch = {0};
-    tracer_thread_init();
+    rl__tracer_thread_init();
     for (;;) {
         size_t k = atomic_fetch_add(&job->next, 1);
         if (k >= job->nitems || atomic_load(&job->failed))
             break;
         const work_item *w = &job->items[k];
         double t0 = job->seconds ? ilf_clock_thread_cpu() : 0.0;
-        if (transfer_tile(&job->ctx, w->map, &job->maps[w->map], w->row0, w->row1, &scratch,
+        if (rl__transfer_tile(&job->ctx, w->map, &job->maps[w->map], w->row0, w->row1, &scratch,
                           &job->counters[index]) != 0)
             atomic_store(&job->failed, 1);
         if (job->seconds)
             job->seconds[k] = ilf_clock_thread_cpu() - t0;
         atomic_fetch_add(&job->done, 1);
     }
-    scratch_free(&scratch);
+    rl__scratch_free(&scratch);
 }
 
 /* Runs job on a team of n workers, reporting progress from the calling thread while they work.
@@ -391,9 +391,9 @@ rl_emitter *rl__primary_emitters(const rl_scene *scene, size_t extra, size_t *n)
     size_t m = 0;
     for (size_t k = 0; k < scene->npolygons; k++)
         if (positive3(scene->materials[scene->polygons[k].material].emission))
-            emitter_from_polygon(scene, (uint32_t)k, NULL, &e[m++]);
+            rl__emitter_from_polygon(scene, (uint32_t)k, NULL, &e[m++]);
     for (size_t k = 0; k < scene->nlightfields; k++)
-        emitter_from_lightfield(&scene->lightfields[k], &e[m++]);
+        rl__emitter_from_lightfield(&scene->lightfields[k], &e[m++]);
     *n = m;
     return e;
 }
@@ -406,7 +406,7 @@ size_t rl__append_bounce_emitters(const rl_scene *scene, const rl_map *maps, siz
         for (uint32_t c = 0; c < maps[m].ncells && !lit; c++)
             lit = maps[m].e_prev[c][0] > 0 || maps[m].e_prev[c][1] > 0 || maps[m].e_prev[c][2] > 0;
         if (lit)
-            emitter_from_polygon(scene, (uint32_t)maps[m].polygon, &maps[m], &e[n++]);
+            rl__emitter_from_polygon(scene, (uint32_t)maps[m].polygon, &maps[m], &e[n++]);
     }
     return n;
 }
@@ -432,15 +432,15 @@ static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, const rl__r
 {
     ctx->scene = scene;
     ctx->tracer = tracer;
-    ctx->occluders = tracer_occluders(tracer);
+    ctx->occluders = rl__tracer_occluders(tracer);
     ctx->sampling = sampling;
     ctx->pass = pass;
     ctx->emitters = e;
     ctx->nemitters = n;
     /* about eight single-precision ulps at the scene's extent */
-    ctx->centre = tracer_centre(tracer);
-    ctx->eps = 1e-6 * tracer_extent(tracer);
-    ctx->margin = 1e-9 * tracer_extent(tracer);
+    ctx->centre = rl__tracer_centre(tracer);
+    ctx->eps = 1e-6 * rl__tracer_extent(tracer);
+    ctx->margin = 1e-9 * rl__tracer_extent(tracer);
     /* ilf_clock_wall() is the monotonic clock the transfer compares the deadline with */
     ctx->deadline = run->time_budget > 0 ? ilf_clock_wall() + run->time_budget : 0.0;
 }
@@ -514,9 +514,9 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     if (!s)
         return rl__fail(RL_ERR_NOMEM, "out of memory");
     s->scene = scene;
-    rl_status st = maps_build(scene, &s->maps, &s->nmaps);
+    rl_status st = rl__maps_build(scene, &s->maps, &s->nmaps);
     if (st == RL_OK)
-        st = tracer_new(scene, run->threads, &s->tracer);
+        st = rl__tracer_new(scene, run->threads, &s->tracer);
     s->polygon_map = malloc((scene->npolygons + 1) * sizeof *s->polygon_map);
     s->passes = calloc(passes + 1, sizeof *s->passes);
     if (st == RL_OK && (!s->polygon_map || !s->passes))
@@ -540,7 +540,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     size_t ncoarse = 0;
     uint32_t factor = scene->sampling.bounce_cell_factor ? scene->sampling.bounce_cell_factor : 2;
     if (passes > 1 && factor > 1)
-        st = maps_build_sized(scene, scene->cell_size * factor, &coarse, &ncoarse);
+        st = rl__maps_build_sized(scene, scene->cell_size * factor, &coarse, &ncoarse);
     /* per-tile CPU times of the last pass: bounce passes after the first repeat its tiles and emitters */
     double *measured = NULL;
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
@@ -555,11 +555,11 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
                           gather_coarse ? ncoarse : s->nmaps, e, ne, span * p / passes, span / passes, &measured,
                           &s->passes[p]);
         for (size_t m = 0; gather_coarse && m < s->nmaps; m++)
-            map_interpolate(&coarse[m], &s->maps[m]);
+            rl__map_interpolate(&coarse[m], &s->maps[m]);
         close_pass(s->maps, s->nmaps);
         s->npasses = p + 1;
     }
-    maps_free(coarse, ncoarse);
+    rl__maps_free(coarse, ncoarse);
     free(measured);
     free(e);
     if (st != RL_OK) {

@@ -17,7 +17,7 @@
 /* Cells a scene may have in all: about 3 GiB of accumulators. */
 #define MAX_TOTAL_CELLS ((uint64_t)1 << 26)
 
-double polygon_area2(const v2 *p, uint32_t count)
+double rl__polygon_area2(const v2 *p, uint32_t count)
 {
     double a = 0.0;
     for (uint32_t i = 1; i + 1 < count; i++)
@@ -25,12 +25,12 @@ double polygon_area2(const v2 *p, uint32_t count)
     return 0.5 * a;
 }
 
-v2 sample_polygon(const v2 *p, uint32_t count, double a, double b)
+v2 rl__sample_polygon(const v2 *p, uint32_t count, double a, double b)
 {
     if (count < 3)
         return p[0];
     /* pick a fan triangle by area with a, then reuse a's remainder */
-    double total = polygon_area2(p, count), acc = 0.0;
+    double total = rl__polygon_area2(p, count), acc = 0.0;
     uint32_t t = 1;
     double pick = a * total, w = 0.0;
     for (; t + 1 < count; t++) {
@@ -67,7 +67,7 @@ static uint32_t clip_square(const rl_map *m, uint32_t i, uint32_t j, v2 *out)
     double x0 = m->u0 + i * m->cell, y0 = m->v0 + j * m->cell, x1 = x0 + m->cell, y1 = y0 + m->cell;
     const v2 square[4] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
     v2 scratch[RL_MAX_POLY_VERTS + 8];
-    return (uint32_t)clip_to_polygon(square, 4, m->poly, m->npoly, out, scratch);
+    return (uint32_t)rl__clip_to_polygon(square, 4, m->poly, m->npoly, out, scratch);
 }
 
 /* Fills the grid and cells of m. @return RL_OK, RL_ERR_NOMEM, or RL_ERR_INPUT
@@ -97,14 +97,14 @@ static rl_status map_cells(rl_map *m)
         return RL_ERR_NOMEM;
     /* Cells below tiny are clipping slivers along the border. Relative to the
      * polygon too: a polygon much smaller than a cell is one small cell, not none. */
-    const double full = m->cell * m->cell, tiny = 1e-12 * fmin(full, polygon_area2(m->poly, m->npoly));
+    const double full = m->cell * m->cell, tiny = 1e-12 * fmin(full, rl__polygon_area2(m->poly, m->npoly));
     v2 poly[RL_MAX_POLY_VERTS + 8];
     size_t npool = 0;
     m->ncells = 0;
     for (uint32_t j = 0; j < m->nv; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
             uint32_t count = clip_square(m, i, j, poly);
-            double area = count >= 3 ? polygon_area2(poly, count) : 0.0;
+            double area = count >= 3 ? rl__polygon_area2(poly, count) : 0.0;
             m->grid[(size_t)j * m->nu + i] = -1;
             if (!(area > tiny))
                 continue;
@@ -144,12 +144,12 @@ static rl_status map_accumulators(rl_map *m, int re_emits)
 
 static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map **maps, size_t *count);
 
-rl_status maps_build(const rl_scene *scene, rl_map **maps, size_t *count)
+rl_status rl__maps_build(const rl_scene *scene, rl_map **maps, size_t *count)
 {
     return build(scene, scene->cell_size, scene->sampling.bounces > 0, maps, count);
 }
 
-rl_status maps_build_sized(const rl_scene *scene, double cell, rl_map **maps, size_t *count)
+rl_status rl__maps_build_sized(const rl_scene *scene, double cell, rl_map **maps, size_t *count)
 {
     return build(scene, cell, 0, maps, count);
 }
@@ -189,7 +189,7 @@ static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map *
         else if (st == RL_ERR_NOMEM)
             rl__fail(st, "%s: %s: out of memory for its radiance map", scene->path, scene->polygons[k].label);
         if (st != RL_OK) {
-            maps_free(out, m);
+            rl__maps_free(out, m);
             return st;
         }
     }
@@ -198,7 +198,7 @@ static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map *
     return RL_OK;
 }
 
-rl_status map_point(v3 p, v3 n, rl_map *out)
+rl_status rl__map_point(v3 p, v3 n, rl_map *out)
 {
     memset(out, 0, sizeof *out);
     out->polygon = -1;
@@ -224,7 +224,7 @@ rl_status map_point(v3 p, v3 n, rl_map *out)
     return map_accumulators(out, 0);
 }
 
-void maps_free(rl_map *maps, size_t count)
+void rl__maps_free(rl_map *maps, size_t count)
 {
     for (size_t k = 0; maps && k < count; k++) {
         free(maps[k].grid);
@@ -237,7 +237,7 @@ void maps_free(rl_map *maps, size_t count)
     free(maps);
 }
 
-uint32_t map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out)
+uint32_t rl__map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out)
 {
     if (c->poly_count) {
         memcpy(out, m->pool + c->poly_first, c->poly_count * sizeof *out);
@@ -251,7 +251,7 @@ uint32_t map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out)
     return 4;
 }
 
-int64_t map_cell_at(const rl_map *m, v2 q)
+int64_t rl__map_cell_at(const rl_map *m, v2 q)
 {
     double fi = floor((q.x - m->u0) / m->cell), fj = floor((q.y - m->v0) / m->cell);
     if (!(fi >= 0 && fj >= 0 && fi < m->nu && fj < m->nv))
@@ -259,7 +259,7 @@ int64_t map_cell_at(const rl_map *m, v2 q)
     return m->grid[(size_t)fj * m->nu + (size_t)fi];
 }
 
-void map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3])
+void rl__map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3])
 {
     double a = (q.x - m->u0) / m->cell - 0.5, b = (q.y - m->v0) / m->cell - 0.5;
     double fa = floor(a), fb = floor(b), t = a - fa, s = b - fb;
@@ -277,7 +277,7 @@ void map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3])
             wsum += w;
         }
     if (!(wsum > 0)) { /* no centre around: the cell that holds q */
-        int64_t c = map_cell_at(m, q);
+        int64_t c = rl__map_cell_at(m, q);
         for (int ch = 0; ch < 3; ch++)
             out[ch] = c < 0 ? 0.0 : values[c][ch];
         return;
@@ -286,11 +286,11 @@ void map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3])
         out[ch] = acc[ch] / wsum;
 }
 
-void map_interpolate(const rl_map *coarse, rl_map *fine)
+void rl__map_interpolate(const rl_map *coarse, rl_map *fine)
 {
     for (uint32_t k = 0; k < fine->ncells; k++) {
         v2 poly[RL_MAX_POLY_VERTS + 4];
-        map_sample(coarse, polygon_centroid(poly, map_cell_polygon(fine, &fine->cells[k], poly)),
+        rl__map_sample(coarse, rl__polygon_centroid(poly, rl__map_cell_polygon(fine, &fine->cells[k], poly)),
                    (const double(*)[3])coarse->e_pass, fine->e_pass[k]);
     }
 }

@@ -40,43 +40,43 @@ typedef struct rl_map {
 
 /* Builds the maps of every receiving polygon (albedo > 0 in some channel).
  * @return RL_OK and *maps (count in *count); RL_ERR_NOMEM or RL_ERR_INPUT (too many cells). */
-rl_status maps_build(const rl_scene *scene, rl_map **maps, size_t *count);
+rl_status rl__maps_build(const rl_scene *scene, rl_map **maps, size_t *count);
 
-/* As maps_build(), with cells of side cell (m) instead of the scene's, for receivers that never
+/* As rl__maps_build(), with cells of side cell (m) instead of the scene's, for receivers that never
  * re-emit (no e_prev): the coarse grids of bounce passes. */
-rl_status maps_build_sized(const rl_scene *scene, double cell, rl_map **maps, size_t *count);
+rl_status rl__maps_build_sized(const rl_scene *scene, double cell, rl_map **maps, size_t *count);
 
 /* Gives in out the value of a field known per cell of m (values[cell]) at
  * frame point q: bilinear between the centres of the grid squares around q,
  * over those whose cells exist, so values are carried to the polygon's
  * edges and never across them; the value of q's own cell when no centre
  * around it has one. */
-void map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3]);
+void rl__map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3]);
 
 /* Sets fine->e_pass from coarse->e_pass, the same polygon's map on a grid
  * of larger cells with the same origin: bilinear between the coarse cells'
  * centres at each fine cell's centroid, over the coarse cells that exist
  * (so values are carried to the polygon's edges, never across them). */
-void map_interpolate(const rl_map *coarse, rl_map *fine);
+void rl__map_interpolate(const rl_map *coarse, rl_map *fine);
 
 /* Builds one point receiver at p facing n (unit). @return RL_OK or RL_ERR_NOMEM. */
-rl_status map_point(v3 p, v3 n, rl_map *out);
+rl_status rl__map_point(v3 p, v3 n, rl_map *out);
 
 /* Frees every map's arrays and the array itself. */
-void maps_free(rl_map *maps, size_t count);
+void rl__maps_free(rl_map *maps, size_t count);
 
 /* @return the clipped polygon of cell c in frame coordinates, in out (room for
  * RL_MAX_POLY_VERTS + 4); the vertex count. A point receiver gives its point. */
-uint32_t map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out);
+uint32_t rl__map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out);
 
 /* @return the cell of m containing frame point q, or -1. */
-int64_t map_cell_at(const rl_map *m, v2 q);
+int64_t rl__map_cell_at(const rl_map *m, v2 q);
 
 /* A point uniformly distributed over polygon p (count vertices, convex),
  * from two numbers in [0, 1); a point receiver (count 1) gives its point. */
-v2 sample_polygon(const v2 *p, uint32_t count, double a, double b);
+v2 rl__sample_polygon(const v2 *p, uint32_t count, double a, double b);
 
 /* @return the area of convex polygon p. */
-double polygon_area2(const v2 *p, uint32_t count);
+double rl__polygon_area2(const v2 *p, uint32_t count);
 
 #endif /* RELIGHT_MAPS_H */

@@ -78,7 +78,7 @@ static size_t node_part(const point_walk *w, uint32_t lv, uint64_t id, const v3 
     v3 g[3];
     for (int k = 0; k < 3; k++)
         g[k] = frame_vector(&w->e->frame, v[k]);
-    return clip_to_view(w->x, g, src, n, out);
+    return rl__clip_to_view(w->x, g, src, n, out);
 }
 
 /* Samples leaf part q (nq vertices) with k directions uniform in its solid
@@ -89,13 +89,13 @@ static void sample_leaf(point_walk *w, uint32_t lv, uint64_t id, const v3 *q, si
     const rl_emitter *e = w->e;
     v3 dir[RL_MAX_POLY_VERTS + 8];
     double om[RL_MAX_POLY_VERTS + 8];
-    double total = sph_fan(q, nq, w->x, dir, om);
+    double total = rl__sph_fan(q, nq, w->x, dir, om);
     if (!(total > 0))
         return;
     uint32_t k = w->rays;
     uint64_t key = hash_mix(
         hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), w->ei), w->receiver), lv), id);
-    lds_key lk = lds_make(key);
+    lds_key lk = rl__lds_make(key);
     double hx = v3_dot(v3_sub(w->x, e->frame.origin), e->frame.n);
     double sum[3] = {0, 0, 0}; /* light arriving */
     v3 org[RL_RAY_PACKET], rd[RL_RAY_PACKET];
@@ -105,7 +105,7 @@ static void sample_leaf(point_walk *w, uint32_t lv, uint64_t id, const v3 *q, si
     for (uint32_t i = 0; i <= k; i++) {
         if (nb == RL_RAY_PACKET || (i == k && nb > 0)) {
             w->cnt->rays_cast += nb;
-            tracer_occluded_n(ctx->tracer, nb, org, rd, tn, tf, occluded);
+            rl__tracer_occluded_n(ctx->tracer, nb, org, rd, tn, tf, occluded);
             for (size_t r = 0; r < nb; r++) {
                 w->cnt->rays_kept += !occluded[r];
                 for (int c = 0; !occluded[r] && c < 3; c++)
@@ -116,8 +116,8 @@ static void sample_leaf(point_walk *w, uint32_t lv, uint64_t id, const v3 *q, si
         if (i == k)
             break;
         double u[4];
-        lds4(&lk, i, u);
-        v3 to_s = sph_fan_sample(dir, om, nq, total, u[0], u[1]);
+        rl__lds4(&lk, i, u);
+        v3 to_s = rl__sph_fan_sample(dir, om, nq, total, u[0], u[1]);
         double cos_r = v3_dot(to_s, w->nx), dn = -v3_dot(to_s, e->frame.n);
         w->cnt->samples++;
         if (!(cos_r > 0) || !(dn > 0))
@@ -128,7 +128,7 @@ static void sample_leaf(point_walk *w, uint32_t lv, uint64_t id, const v3 *q, si
                 l[c] = e->emission[c];
         } else {
             v2 sq = frame_project(&e->frame, v3_madd(w->x, to_s, t));
-            emitter_radiance_at(e, sq, v3_scale(to_s, -1.0), l);
+            rl__emitter_radiance_at(e, sq, v3_scale(to_s, -1.0), l);
         }
         if (!(l[0] > 0 || l[1] > 0 || l[2] > 0))
             continue;
@@ -157,7 +157,7 @@ static void visit(point_walk *w, uint32_t lv, uint64_t id, const v3 *src, size_t
 {
     const rl_transfer_ctx *ctx = w->ctx;
     w->cnt->leaves_considered++;
-    if (w->e->kind == EM_SLAB && ctx->sampling->zero_culling && emitter_node_dark(w->e, lv, id)) {
+    if (w->e->kind == EM_SLAB && ctx->sampling->zero_culling && rl__emitter_node_dark(w->e, lv, id)) {
         w->cnt->leaves_culled++;
         return;
     }
@@ -167,7 +167,7 @@ static void visit(point_walk *w, uint32_t lv, uint64_t id, const v3 *src, size_t
         w->cnt->leaves_culled++;
         return; /* the node does not see S */
     }
-    rl_pyramid local, *pyr = pyramid_make(w->x, q, nq, w->eps, &local) ? &local : NULL;
+    rl_pyramid local, *pyr = rl__pyramid_make(w->x, q, nq, w->eps, &local) ? &local : NULL;
     rl_visibility vis = VIS_FREE;
     uint32_t *mine = w->occ + (size_t)depth * OCC_CAP;
     size_t nmine = 0;
@@ -176,15 +176,15 @@ static void visit(point_walk *w, uint32_t lv, uint64_t id, const v3 *src, size_t
     if (parent != VIS_FREE && pyr) {
         if (nlist == SIZE_MAX) {
             uint32_t *tmp = w->occ + (size_t)(WALK_LEVELS - 1) * OCC_CAP; /* the last level is never a node's */
-            size_t found = occluders_collect(ctx->occluders, pyr, w->e->polygon, tmp, OCC_CAP);
+            size_t found = rl__occluders_collect(ctx->occluders, pyr, w->e->polygon, tmp, OCC_CAP);
             if (found == SIZE_MAX) {
                 vis = VIS_PARTIAL;
                 nmine = SIZE_MAX;
             } else {
-                vis = occluders_classify(ctx->occluders, pyr, tmp, found, mine, &nmine);
+                vis = rl__occluders_classify(ctx->occluders, pyr, tmp, found, mine, &nmine);
             }
         } else {
-            vis = occluders_classify(ctx->occluders, pyr, list, nlist, mine, &nmine);
+            vis = rl__occluders_classify(ctx->occluders, pyr, list, nlist, mine, &nmine);
         }
     }
     if (vis == VIS_BLOCKED) {
@@ -207,7 +207,7 @@ static void visit(point_walk *w, uint32_t lv, uint64_t id, const v3 *src, size_t
         visit(w, 2 * lv, ch[k], q, nq, mine, nmine, vis, depth + 1);
 }
 
-int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver, v3 x, v3 nx, uint32_t rays,
+int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver, v3 x, v3 nx, uint32_t rays,
                  double out[3], rl_scratch *s, rl_counters *cnt)
 {
     const rl_emitter *e = &ctx->emitters[ei];
@@ -233,7 +233,7 @@ int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver, v3 
     w->occ = s->occ;
     w->out = out;
     w->cnt = cnt;
-    w->ns = clip_poly3(e->verts, e->nverts, x, nx, w->s);
+    w->ns = rl__clip_poly3(e->verts, e->nverts, x, nx, w->s);
     if (w->ns < 3) {
         free(w);
         return 0;
@@ -254,12 +254,12 @@ int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver, v3 
         uint32_t *top = w->occ + (size_t)(WALK_LEVELS - 2) * OCC_CAP;
         size_t n = 0;
         rl_visibility vis = VIS_FREE; /* without a pyramid, as in visit() */
-        if (pyramid_make(x, w->s, w->ns, w->eps, root)) {
-            size_t found = occluders_collect(ctx->occluders, root, e->polygon, w->occ, OCC_CAP);
+        if (rl__pyramid_make(x, w->s, w->ns, w->eps, root)) {
+            size_t found = rl__occluders_collect(ctx->occluders, root, e->polygon, w->occ, OCC_CAP);
             n = SIZE_MAX;
             vis = VIS_PARTIAL;
             if (found != SIZE_MAX)
-                vis = occluders_classify(ctx->occluders, root, w->occ, found, top, &n);
+                vis = rl__occluders_classify(ctx->occluders, root, w->occ, found, top, &n);
         }
         if (vis != VIS_BLOCKED) {
             if (vis == VIS_FREE && w->constant) {
@@ -277,11 +277,11 @@ int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver, v3 
     return 0;
 }
 
-double point_lambert(const rl_emitter *e, v3 x, v3 nx)
+double rl__point_lambert(const rl_emitter *e, v3 x, v3 nx)
 {
     v3 c[RL_MAX_POLY_VERTS + 2];
     if (!(v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0))
         return 0.0;
-    size_t n = clip_poly3(e->verts, e->nverts, x, nx, c);
+    size_t n = rl__clip_poly3(e->verts, e->nverts, x, nx, c);
     return n >= 3 ? lambert(x, nx, c, n) : 0.0;
 }

@@ -2,7 +2,7 @@
  * query.c - point queries (rl_irradiance, rl_irradiance_cluster): the
  * irradiance at given points, as Radiance's rtrace -I.
  *
- * Each point becomes a receiver of zero area facing its normal (map_point),
+ * Each point becomes a receiver of zero area facing its normal (rl__map_point),
  * and one more pass of the engine's pass runner (engine.c) gathers onto the
  * points from the scene's emitters and, with bounces, from the radiance maps
  * solved first, each re-emitting the irradiance summed over its passes.
@@ -28,11 +28,11 @@ static rl_status point_maps(const double *points, size_t count, rl_map **out)
         v3 p = v3_load(points + 6 * k), n = v3_load(points + 6 * k + 3);
         double len = v3_len(n);
         if (!isfinite(v3_maxabs(p)) || !isfinite(len) || !(len > 0)) {
-            maps_free(maps, k);
+            rl__maps_free(maps, k);
             return rl__fail(RL_ERR_ARG, "point %zu: position and normal must be finite, normal nonzero", k + 1);
         }
-        if (map_point(p, v3_scale(n, 1.0 / len), &maps[k]) != RL_OK) {
-            maps_free(maps, k + 1);
+        if (rl__map_point(p, v3_scale(n, 1.0 / len), &maps[k]) != RL_OK) {
+            rl__maps_free(maps, k + 1);
             return rl__fail(RL_ERR_NOMEM, "out of memory for %zu points", count);
         }
     }
@@ -88,6 +88,6 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
         run.progress(run.user, 1.0);
     free(e);
     rl_solution_destroy(sol);
-    maps_free(pts, count);
+    rl__maps_free(pts, count);
     return st;
 }

@@ -25,7 +25,7 @@ double rl_reference_polygon_irradiance(const double *verts, size_t count, const 
     v3 ns = v3_cross(v3_sub(p[1], p[0]), v3_sub(p[2], p[0]));
     if (!(v3_dot(v3_sub(xp, p[0]), ns) > 0))
         return 0.0;
-    size_t m = clip_poly3(p, count, xp, nn, c);
+    size_t m = rl__clip_poly3(p, count, xp, nn, c);
     if (m < 3)
         return 0.0;
     long double total = 0.0L;

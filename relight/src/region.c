@@ -19,7 +19,7 @@
 
 #include "region.h"
 
-size_t clip_poly3(const v3 *p, size_t count, v3 o, v3 n, v3 *out)
+size_t rl__clip_poly3(const v3 *p, size_t count, v3 o, v3 n, v3 *out)
 {
     size_t m = 0;
     for (size_t i = 0; i < count; i++) {
@@ -35,7 +35,7 @@ size_t clip_poly3(const v3 *p, size_t count, v3 o, v3 n, v3 *out)
     return m;
 }
 
-size_t clip_to_view(v3 x, const v3 g[3], const v3 *src, size_t n, v3 *out)
+size_t rl__clip_to_view(v3 x, const v3 g[3], const v3 *src, size_t n, v3 *out)
 {
     v3 buf[RL_MAX_POLY_VERTS + 8];
     const v3 *cur = src;
@@ -45,14 +45,14 @@ size_t clip_to_view(v3 x, const v3 g[3], const v3 *src, size_t n, v3 *out)
         v3 m = v3_cross(g[k], g[(k + 1) % 3]);
         if (v3_dot(m, g[(k + 2) % 3]) < 0)
             m = v3_scale(m, -1.0);
-        n = clip_poly3(cur, n, x, v3_scale(m, -1.0), dst[k]);
+        n = rl__clip_poly3(cur, n, x, v3_scale(m, -1.0), dst[k]);
         cur = dst[k];
     }
     return n >= 3 ? n : 0;
 }
 
 /* @return the centroid of the convex polygon p (count vertices). */
-v2 polygon_centroid(const v2 *p, uint32_t count)
+v2 rl__polygon_centroid(const v2 *p, uint32_t count)
 {
     double a = 0, cx = 0, cy = 0;
     for (uint32_t i = 1; i + 1 < count; i++) {
@@ -64,7 +64,7 @@ v2 polygon_centroid(const v2 *p, uint32_t count)
     return a > 0 ? (v2){cx / a, cy / a} : p[0];
 }
 
-size_t clip_poly2(const v2 *p, size_t count, rl_halfplane h, v2 *out)
+size_t rl__clip_poly2(const v2 *p, size_t count, rl_halfplane h, v2 *out)
 {
     size_t m = 0;
     for (size_t i = 0; i < count; i++) {
@@ -80,13 +80,13 @@ size_t clip_poly2(const v2 *p, size_t count, rl_halfplane h, v2 *out)
     return m;
 }
 
-size_t clip_to_polygon(const v2 *p, size_t count, const v2 *clip, size_t nclip, v2 *out, v2 *scratch)
+size_t rl__clip_to_polygon(const v2 *p, size_t count, const v2 *clip, size_t nclip, v2 *out, v2 *scratch)
 {
     v2 *cur = out, *next = scratch;
     if (p != out)
         memmove(out, p, count * sizeof *p);
     for (size_t e = 0; e < nclip && count > 0; e++) {
-        count = clip_poly2(cur, count, edge_halfplane(clip[e], clip[(e + 1) % nclip]), next);
+        count = rl__clip_poly2(cur, count, edge_halfplane(clip[e], clip[(e + 1) % nclip]), next);
         v2 *t = cur;
         cur = next;
         next = t;
@@ -96,7 +96,7 @@ size_t clip_to_polygon(const v2 *p, size_t count, const v2 *clip, size_t nclip, 
     return count;
 }
 
-size_t clip_to_region(const v2 *p, size_t count, const rl_region *r, v2 *out, size_t out_cap)
+size_t rl__clip_to_region(const v2 *p, size_t count, const rl_region *r, v2 *out, size_t out_cap)
 {
     if (r->empty)
         return 0;
@@ -109,7 +109,7 @@ size_t clip_to_region(const v2 *p, size_t count, const rl_region *r, v2 *out, si
     memcpy(cur, p, count * sizeof *p);
     size_t m = count;
     for (size_t k = 0; !r->all && k < r->count && m > 0; k++) {
-        m = clip_poly2(cur, m, r->h[k], next);
+        m = rl__clip_poly2(cur, m, r->h[k], next);
         v2 *t = cur;
         cur = next;
         next = t;
@@ -118,7 +118,7 @@ size_t clip_to_region(const v2 *p, size_t count, const rl_region *r, v2 *out, si
     return m;
 }
 
-int region_contains(const rl_region *r, v2 q)
+int rl__region_contains(const rl_region *r, v2 q)
 {
     if (r->empty)
         return 0;
@@ -130,7 +130,7 @@ int region_contains(const rl_region *r, v2 q)
     return 1;
 }
 
-size_t clip_cone(const v3 *g, size_t count, v3 n, v3 *out)
+size_t rl__clip_cone(const v3 *g, size_t count, v3 n, v3 *out)
 {
     size_t m = 0;
     for (size_t i = 0; i < count; i++) {
@@ -182,7 +182,7 @@ static void region_all(rl_region *r)
     r->count = 0;
 }
 
-void region_compute(const rl_frame *f, const v3 *s, size_t ns, const v3 *k, size_t nk, double margin,
+void rl__region_compute(const rl_frame *f, const v3 *s, size_t ns, const v3 *k, size_t nk, double margin,
                     rl_region *out)
 {
     enum { MAXH = RL_MAX_POLY_VERTS * 8 };

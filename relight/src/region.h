@@ -68,28 +68,28 @@ typedef struct rl_region {
 /* Clips the convex 3D polygon p (count vertices) to the half-space
  * dot(x - o, n) >= 0, writing at most count+1 vertices to out.
  * @return the vertex count of the result (0 if nothing remains). */
-size_t clip_poly3(const v3 *p, size_t count, v3 o, v3 n, v3 *out);
+size_t rl__clip_poly3(const v3 *p, size_t count, v3 o, v3 n, v3 *out);
 
 /* @return the centroid of the convex 2D polygon p (count >= 1 vertices; its first vertex if degenerate). */
-v2 polygon_centroid(const v2 *p, uint32_t count);
+v2 rl__polygon_centroid(const v2 *p, uint32_t count);
 
 /* Clips the convex 2D polygon p to half-plane h, writing at most count+1 vertices.
  * @return the vertex count of the result. */
-size_t clip_poly2(const v2 *p, size_t count, rl_halfplane h, v2 *out);
+size_t rl__clip_poly2(const v2 *p, size_t count, rl_halfplane h, v2 *out);
 
 /* Clips the convex 2D polygon p (count vertices) to the counter-clockwise
  * convex polygon clip (nclip vertices), into out; scratch is working space.
  * out and scratch each need room for count + nclip vertices; p may be out.
  * @return the vertex count of the result (0 if they do not overlap). */
-size_t clip_to_polygon(const v2 *p, size_t count, const v2 *clip, size_t nclip, v2 *out, v2 *scratch);
+size_t rl__clip_to_polygon(const v2 *p, size_t count, const v2 *clip, size_t nclip, v2 *out, v2 *scratch);
 
 /* Clips the convex 2D polygon p (count vertices, at most RL_MAX_POLY_VERTS) to every
  * half-plane of region r, into out (room for RL_MAX_POLY_VERTS + r->count vertices).
  * @return the vertex count (0 if the polygon misses the region). */
-size_t clip_to_region(const v2 *p, size_t count, const rl_region *r, v2 *out, size_t out_cap);
+size_t rl__clip_to_region(const v2 *p, size_t count, const rl_region *r, v2 *out, size_t out_cap);
 
 /* @return 1 if point q lies in region r. */
-int region_contains(const rl_region *r, v2 q);
+int rl__region_contains(const rl_region *r, v2 q);
 
 /*
  * Computes (S + K)_R: the points x of R's plane (frame f, front side along
@@ -102,17 +102,17 @@ int region_contains(const rl_region *r, v2 q);
  * smaller than the truth. Directions parallel to R's plane project to
  * infinity; working with homogeneous coordinates keeps every number finite.
  */
-void region_compute(const rl_frame *f, const v3 *s, size_t ns, const v3 *k, size_t nk, double margin,
+void rl__region_compute(const rl_frame *f, const v3 *s, size_t ns, const v3 *k, size_t nk, double margin,
                     rl_region *out);
 
 /* Clips the convex 3D polygon src (n vertices, at most RL_MAX_POLY_VERTS + 2)
  * to the points y seen from x along the cone of propagation directions g[0..3)
  * (x - y a nonnegative combination of g), into out (room for n + 3).
  * @return the vertex count (0 when fewer than 3 remain). */
-size_t clip_to_view(v3 x, const v3 g[3], const v3 *src, size_t n, v3 *out);
+size_t rl__clip_to_view(v3 x, const v3 g[3], const v3 *src, size_t n, v3 *out);
 
 /* Clips the cone spanned by generators g (count, a convex spherical polygon,
  * at most 6) to dot(d, n) <= 0. @return the generator count of the result. */
-size_t clip_cone(const v3 *g, size_t count, v3 n, v3 *out);
+size_t rl__clip_cone(const v3 *g, size_t count, v3 n, v3 *out);
 
 #endif /* RELIGHT_REGION_H */

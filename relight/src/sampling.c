@@ -25,9 +25,9 @@ static double radical_inverse(uint32_t i, uint32_t b)
 static void lds_fill(void);
 static pthread_once_t lds_once = PTHREAD_ONCE_INIT;
 
-lds_key lds_make(uint64_t key)
+lds_key rl__lds_make(uint64_t key)
 {
-    pthread_once(&lds_once, lds_fill); /* every key is made here, so lds4() may assume the table */
+    pthread_once(&lds_once, lds_fill); /* every key is made here, so rl__lds4() may assume the table */
     /* two hashes, each split into two 32-bit offsets: ample resolution for
      * a rotation, at half the hashing */
     lds_key k;
@@ -52,7 +52,7 @@ static void lds_fill(void)
             lds_table[j][i] = radical_inverse(i, bases[j]);
 }
 
-void lds4(const lds_key *k, uint32_t i, double u[4])
+void rl__lds4(const lds_key *k, uint32_t i, double u[4])
 {
     static const uint32_t bases[4] = {2, 3, 5, 7};
     for (int j = 0; j < 4; j++) {
@@ -62,7 +62,7 @@ void lds4(const lds_key *k, uint32_t i, double u[4])
     }
 }
 
-double spherical_triangle_area(v3 a, v3 b, v3 c)
+double rl__spherical_triangle_area(v3 a, v3 b, v3 c)
 {
     double num = fabs(v3_dot(a, v3_cross(b, c)));
     double den = 1.0 + v3_dot(a, b) + v3_dot(b, c) + v3_dot(c, a);
@@ -81,7 +81,7 @@ static v3 orthonormal_part(v3 v, v3 w)
     return v3_norm(v3_cross(w, h));
 }
 
-sph_tri sph_tri_make(v3 a, v3 b, v3 c, double omega)
+sph_tri rl__sph_tri_make(v3 a, v3 b, v3 c, double omega)
 {
     sph_tri t = {.a = a, .b = b, .c = c, .omega = omega, .planar = 1};
     if (!(omega > 1e-9))
@@ -100,7 +100,7 @@ sph_tri sph_tri_make(v3 a, v3 b, v3 c, double omega)
     return t;
 }
 
-v3 sph_tri_sample(const sph_tri *t, double u1, double u2)
+v3 rl__sph_tri_sample(const sph_tri *t, double u1, double u2)
 {
     if (t->planar) {
         double su = sqrt(u1);
@@ -121,25 +121,25 @@ v3 sph_tri_sample(const sph_tri *t, double u1, double u2)
     return v3_norm(p);
 }
 
-v3 sample_spherical_triangle(v3 a, v3 b, v3 c, double omega, double u1, double u2)
+v3 rl__sample_spherical_triangle(v3 a, v3 b, v3 c, double omega, double u1, double u2)
 {
-    sph_tri t = sph_tri_make(a, b, c, omega);
-    return sph_tri_sample(&t, u1, u2);
+    sph_tri t = rl__sph_tri_make(a, b, c, omega);
+    return rl__sph_tri_sample(&t, u1, u2);
 }
 
-double sph_fan(const v3 *p, size_t n, v3 x, v3 *dir, double *omega)
+double rl__sph_fan(const v3 *p, size_t n, v3 x, v3 *dir, double *omega)
 {
     double total = 0.0;
     for (size_t i = 0; i < n; i++)
         dir[i] = v3_norm(v3_sub(p[i], x));
     for (size_t i = 1; i + 1 < n; i++) {
-        omega[i] = spherical_triangle_area(dir[0], dir[i], dir[i + 1]);
+        omega[i] = rl__spherical_triangle_area(dir[0], dir[i], dir[i + 1]);
         total += omega[i];
     }
     return total;
 }
 
-v3 sph_fan_sample(const v3 *dir, const double *omega, size_t n, double total, double u1, double u2)
+v3 rl__sph_fan_sample(const v3 *dir, const double *omega, size_t n, double total, double u1, double u2)
 {
     /* pick triangle i with probability omega[i] / total, reusing u1's rest within it */
     double pick = u1 * total, acc = 0.0;
@@ -147,5 +147,5 @@ v3 sph_fan_sample(const v3 *dir, const double *omega, size_t n, double total, do
     for (; i + 2 < n && pick >= acc + omega[i]; i++)
         acc += omega[i];
     double r = omega[i] > 0 ? fmin(fmax((pick - acc) / omega[i], 0.0), 1.0) : 0.5;
-    return sample_spherical_triangle(dir[0], dir[i], dir[i + 1], omega[i], r, u2);
+    return rl__sample_spherical_triangle(dir[0], dir[i], dir[i + 1], omega[i], r, u2);
 }

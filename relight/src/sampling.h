@@ -26,12 +26,12 @@ typedef struct lds_key {
 } lds_key;
 
 /* @return the rotation drawn from key. */
-lds_key lds_make(uint64_t key);
+lds_key rl__lds_make(uint64_t key);
 
 /* Point i of a 4-D Halton sequence (bases 2, 3, 5, 7), shifted modulo 1 by
  * k's offsets: low discrepancy within one key, independent between keys.
  * Each u[j] is in [0, 1). */
-void lds4(const lds_key *k, uint32_t i, double u[4]);
+void rl__lds4(const lds_key *k, uint32_t i, double u[4]);
 
 /* A spherical triangle prepared for repeated uniform sampling (Arvo 1995). */
 typedef struct sph_tri {
@@ -45,24 +45,24 @@ typedef struct sph_tri {
 
 /* Prepares the triangle a, b, c (unit vectors) of solid angle omega. Below
  * 1e-9 sr the planar triangle is sampled and normalised (density error < 1e-9). */
-sph_tri sph_tri_make(v3 a, v3 b, v3 c, double omega);
+sph_tri rl__sph_tri_make(v3 a, v3 b, v3 c, double omega);
 
 /* A direction uniformly distributed in t, from u1, u2 in [0, 1). */
-v3 sph_tri_sample(const sph_tri *t, double u1, double u2);
+v3 rl__sph_tri_sample(const sph_tri *t, double u1, double u2);
 
 /* A direction uniformly distributed in the spherical triangle a, b, c (unit
- * vectors) of solid angle omega, from u1, u2 in [0, 1): sph_tri_make then sph_tri_sample. */
-v3 sample_spherical_triangle(v3 a, v3 b, v3 c, double omega, double u1, double u2);
+ * vectors) of solid angle omega, from u1, u2 in [0, 1): rl__sph_tri_make then rl__sph_tri_sample. */
+v3 rl__sample_spherical_triangle(v3 a, v3 b, v3 c, double omega, double u1, double u2);
 
 /* @return the solid angle of the spherical triangle a, b, c (unit vectors). */
-double spherical_triangle_area(v3 a, v3 b, v3 c);
+double rl__spherical_triangle_area(v3 a, v3 b, v3 c);
 
 /* The fan of convex polygon p (n vertices, 3 <= n) as seen from x: unit
  * directions dir[0..n) and the solid angles omega[i] of triangles (0, i, i+1)
  * for i in [1, n-1). @return their total, the polygon's solid angle. */
-double sph_fan(const v3 *p, size_t n, v3 x, v3 *dir, double *omega);
+double rl__sph_fan(const v3 *p, size_t n, v3 x, v3 *dir, double *omega);
 
-/* A direction uniformly distributed in a fan of sph_fan() (total > 0), from u1, u2 in [0, 1). */
-v3 sph_fan_sample(const v3 *dir, const double *omega, size_t n, double total, double u1, double u2);
+/* A direction uniformly distributed in a fan of rl__sph_fan() (total > 0), from u1, u2 in [0, 1). */
+v3 rl__sph_fan_sample(const v3 *dir, const double *omega, size_t n, double total, double u1, double u2);
 
 #endif /* RELIGHT_SAMPLING_H */

@@ -115,7 +115,7 @@ static void build(rl_occluders *o, size_t node, uint32_t first, uint32_t count)
     build(o, left + 1, first + half, count - half);
 }
 
-rl_status occluders_new(const rl_scene *scene, rl_occluders **out)
+rl_status rl__occluders_new(const rl_scene *scene, rl_occluders **out)
 {
     *out = NULL;
     rl_occluders *o = calloc(1, sizeof *o);
@@ -129,7 +129,7 @@ rl_status occluders_new(const rl_scene *scene, rl_occluders **out)
         o->nodes = malloc((2 * n + 1) * sizeof *o->nodes);
     }
     if (!o || !o->verts || !o->polys || !o->order || !o->nodes) {
-        occluders_destroy(o);
+        rl__occluders_destroy(o);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the occluder index of %zu polygons", n);
     }
     size_t at = 0;
@@ -156,7 +156,7 @@ rl_status occluders_new(const rl_scene *scene, rl_occluders **out)
     return RL_OK;
 }
 
-void occluders_destroy(rl_occluders *o)
+void rl__occluders_destroy(rl_occluders *o)
 {
     if (!o)
         return;
@@ -167,7 +167,7 @@ void occluders_destroy(rl_occluders *o)
     free(o);
 }
 
-int pyramid_make(v3 apex, const v3 *base, size_t nbase, double tol, rl_pyramid *p)
+int rl__pyramid_make(v3 apex, const v3 *base, size_t nbase, double tol, rl_pyramid *p)
 {
     if (nbase < 3 || nbase > RL_PYRAMID_MAX_BASE)
         return 0;
@@ -241,13 +241,13 @@ static int meets(const rl_occluders *o, const occ_poly *q, const rl_pyramid *p)
     size_t n = q->count;
     memcpy(cur, o->verts + q->first, n * sizeof *cur);
     for (size_t i = 0; i < p->nbase && n >= 3; i++) {
-        n = clip_poly3(cur, n, p->apex, p->side[i], next);
+        n = rl__clip_poly3(cur, n, p->apex, p->side[i], next);
         v3 *t = cur;
         cur = next;
         next = t;
     }
     if (n >= 3)
-        n = clip_poly3(cur, n, p->base[0], p->base_n, next), cur = next;
+        n = rl__clip_poly3(cur, n, p->base[0], p->base_n, next), cur = next;
     if (n < 3)
         return 0;
     v3 newell = {0, 0, 0};
@@ -278,7 +278,7 @@ static int blocks(const rl_occluders *o, const occ_poly *q, const rl_pyramid *p)
     return 1;
 }
 
-size_t occluders_collect(const rl_occluders *o, const rl_pyramid *p, int32_t skip, uint32_t *list, size_t cap)
+size_t rl__occluders_collect(const rl_occluders *o, const rl_pyramid *p, int32_t skip, uint32_t *list, size_t cap)
 {
     if (o->npolys == 0)
         return 0;
@@ -310,7 +310,7 @@ size_t occluders_collect(const rl_occluders *o, const rl_pyramid *p, int32_t ski
     return n;
 }
 
-rl_visibility occluders_classify(const rl_occluders *o, const rl_pyramid *p, const uint32_t *list, size_t n,
+rl_visibility rl__occluders_classify(const rl_occluders *o, const rl_pyramid *p, const uint32_t *list, size_t n,
                                  uint32_t *out, size_t *nout)
 {
     size_t m = 0;

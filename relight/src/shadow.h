@@ -45,26 +45,26 @@ typedef struct rl_pyramid {
 } rl_pyramid;
 
 /* Builds the index of every polygon of scene. @return RL_OK and *out, or RL_ERR_NOMEM. */
-rl_status occluders_new(const rl_scene *scene, rl_occluders **out);
+rl_status rl__occluders_new(const rl_scene *scene, rl_occluders **out);
 
 /* Releases the index. NULL is a no-op. */
-void occluders_destroy(rl_occluders *o);
+void rl__occluders_destroy(rl_occluders *o);
 
 /* Prepares pyramid p from apex and base (nbase >= 3 vertices, at most
  * RL_PYRAMID_MAX_BASE); tol as above. @return 0 if the base is degenerate
  * or holds the apex in its plane (then nothing can be said). */
-int pyramid_make(v3 apex, const v3 *base, size_t nbase, double tol, rl_pyramid *p);
+int rl__pyramid_make(v3 apex, const v3 *base, size_t nbase, double tol, rl_pyramid *p);
 
 /* Lists the polygons of o other than skip (-1: none) that meet pyramid p,
  * into list (room for cap). @return the count, or SIZE_MAX when more than
  * cap meet it (then treat the pyramid as PARTIAL and the list as unknown). */
-size_t occluders_collect(const rl_occluders *o, const rl_pyramid *p, int32_t skip, uint32_t *list, size_t cap);
+size_t rl__occluders_collect(const rl_occluders *o, const rl_pyramid *p, int32_t skip, uint32_t *list, size_t cap);
 
 /* Classifies pyramid p against the polygons in list (n of them, a superset
  * of those meeting p, as a parent pyramid's list is for its parts); writes
  * those that meet p to out (room for n; may not alias list) and their count
  * to *nout. @return FREE, BLOCKED or PARTIAL. */
-rl_visibility occluders_classify(const rl_occluders *o, const rl_pyramid *p, const uint32_t *list, size_t n,
+rl_visibility rl__occluders_classify(const rl_occluders *o, const rl_pyramid *p, const uint32_t *list, size_t n,
                                  uint32_t *out, size_t *nout);
 
 #endif /* RELIGHT_SHADOW_H */

@@ -17,8 +17,8 @@ void rl_solution_destroy(rl_solution *s)
 {
     if (!s)
         return;
-    maps_free(s->maps, s->nmaps);
-    tracer_destroy(s->tracer);
+    rl__maps_free(s->maps, s->nmaps);
+    rl__tracer_destroy(s->tracer);
     free(s->polygon_map);
     free(s->passes);
     free(s);
@@ -91,8 +91,8 @@ rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, do
             area[c] = cell->area;
         if (centre) {
             v2 poly[RL_MAX_POLY_VERTS + 8];
-            uint32_t n = map_cell_polygon(m, cell, poly);
-            v3_store(frame_point(&m->frame, polygon_centroid(poly, n)), centre + 3 * c);
+            uint32_t n = rl__map_cell_polygon(m, cell, poly);
+            v3_store(frame_point(&m->frame, rl__polygon_centroid(poly, n)), centre + 3 * c);
         }
         for (int ch = 0; ch < 3; ch++) {
             if (irradiance)

@@ -29,7 +29,7 @@ struct rl_tracer {
     double extent;
 };
 
-void tracer_thread_init(void)
+void rl__tracer_thread_init(void)
 {
 #if defined(__SSE__) || defined(__x86_64__)
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
@@ -64,7 +64,7 @@ static size_t triangle_count(const rl_scene *s)
     return n;
 }
 
-rl_status tracer_new(const rl_scene *s, unsigned threads, rl_tracer **out)
+rl_status rl__tracer_new(const rl_scene *s, unsigned threads, rl_tracer **out)
 {
     /* Embree counts the calling thread among its threads; without a count it takes every hardware thread */
     char config[32];
@@ -92,7 +92,7 @@ rl_status tracer_new(const rl_scene *s, unsigned threads, rl_tracer **out)
         t->prim_polygon = malloc(ntri * sizeof *t->prim_polygon);
         if (!vb || !ib || !t->prim_polygon) {
             rtcReleaseGeometry(g);
-            tracer_destroy(t);
+            rl__tracer_destroy(t);
             return rl__fail(RL_ERR_NOMEM, "out of memory for %zu triangles", ntri);
         }
         for (size_t k = 0; k < s->nvertices; k++)
@@ -114,19 +114,19 @@ rl_status tracer_new(const rl_scene *s, unsigned threads, rl_tracer **out)
     }
     rtcCommitScene(t->scene);
     if (rtcGetDeviceError(t->device) != RTC_ERROR_NONE) {
-        tracer_destroy(t);
+        rl__tracer_destroy(t);
         return rl__fail(RL_ERR_INTERNAL, "Embree failed to build the scene");
     }
-    rl_status st = occluders_new(s, &t->occluders);
+    rl_status st = rl__occluders_new(s, &t->occluders);
     if (st != RL_OK) {
-        tracer_destroy(t);
+        rl__tracer_destroy(t);
         return st;
     }
     *out = t;
     return RL_OK;
 }
 
-void tracer_destroy(rl_tracer *t)
+void rl__tracer_destroy(rl_tracer *t)
 {
     if (!t)
         return;
@@ -135,21 +135,21 @@ void tracer_destroy(rl_tracer *t)
     if (t->device)
         rtcReleaseDevice(t->device);
     free(t->prim_polygon);
-    occluders_destroy(t->occluders);
+    rl__occluders_destroy(t->occluders);
     free(t);
 }
 
-const rl_occluders *tracer_occluders(const rl_tracer *t)
+const rl_occluders *rl__tracer_occluders(const rl_tracer *t)
 {
     return t->occluders;
 }
 
-double tracer_extent(const rl_tracer *t)
+double rl__tracer_extent(const rl_tracer *t)
 {
     return t->extent;
 }
 
-v3 tracer_centre(const rl_tracer *t)
+v3 rl__tracer_centre(const rl_tracer *t)
 {
     return t->centre;
 }
@@ -172,7 +172,7 @@ static void make_ray(const rl_tracer *t, v3 org, v3 dir, double tnear, double tf
     r->flags = 0;
 }
 
-int tracer_occluded(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar)
+int rl__tracer_occluded(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar)
 {
     if (!(tfar > tnear))
         return 0;
@@ -194,7 +194,7 @@ static void lane_set(void *packet, size_t width, int f, size_t i, float v)
     ((float *)packet)[(size_t)f * width + i] = v;
 }
 
-void tracer_occluded_n(const rl_tracer *t, size_t n, const v3 *org, const v3 *dir, const double *tnear,
+void rl__tracer_occluded_n(const rl_tracer *t, size_t n, const v3 *org, const v3 *dir, const double *tnear,
                        const double *tfar, int *occluded)
 {
     union {
@@ -237,7 +237,7 @@ void tracer_occluded_n(const rl_tracer *t, size_t n, const v3 *org, const v3 *di
         occluded[i] = valid[i] && tf[i] < 0.0f;
 }
 
-int tracer_hit(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon, double *dist)
+int rl__tracer_hit(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon, double *dist)
 {
     struct RTCIntersectContext ctx;
     struct RTCRayHit rh;

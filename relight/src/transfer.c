@@ -46,10 +46,10 @@ static void emitter_finish(rl_emitter *e)
         e->poly2[i] = frame_project(&e->frame, e->verts[i]);
     for (uint32_t i = 0, j = e->nverts - 1; i < e->nverts; j = i++)
         e->edge[i] = edge_halfplane(e->poly2[j], e->poly2[i]);
-    e->area = polygon_area2(e->poly2, e->nverts);
+    e->area = rl__polygon_area2(e->poly2, e->nverts);
 }
 
-void emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, rl_emitter *e)
+void rl__emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, rl_emitter *e)
 {
     const rl_polygon *pg = &scene->polygons[k];
     memset(e, 0, sizeof *e);
@@ -71,7 +71,7 @@ void emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, 
     emitter_finish(e);
 }
 
-void emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e)
+void rl__emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e)
 {
     memset(e, 0, sizeof *e);
     e->kind = EM_SLAB;
@@ -165,7 +165,7 @@ static void leaf_make(const rl_transfer_ctx *ctx, const rl_emitter *e, uint32_t 
     L->planar = lv >= PLANAR_MIN_LEVEL;
     L->mix = 0;
     if (!L->planar) {
-        L->tri = sph_tri_make(v3_norm(L->p[0]), v3_norm(L->p[1]), v3_norm(L->p[2]), L->omega);
+        L->tri = rl__sph_tri_make(v3_norm(L->p[0]), v3_norm(L->p[1]), v3_norm(L->p[2]), L->omega);
         return;
     }
     double pw[3][3];
@@ -201,7 +201,7 @@ static v3 leaf_sample(const leaf *L, double u1, double u2, double *w, double lam
 {
     if (!L->planar) {
         *w = L->omega;
-        return sph_tri_sample(&L->tri, u1, u2);
+        return rl__sph_tri_sample(&L->tri, u1, u2);
     }
     double su = sqrt(u1), l[3] = {1.0 - su, su * (1.0 - u2), su * u2}, d[3];
     lfio_part_strata_sample(&L->st, 0, l, d, w, lam);
@@ -252,7 +252,7 @@ static void emitter_radiance(const rl_emitter *e, v2 q, v3 d, const leaf *L, con
             out[c] = e->emission[c];
         return;
     case EM_MAP: {
-        int64_t cell = map_cell_at(e->map, q);
+        int64_t cell = rl__map_cell_at(e->map, q);
         for (int c = 0; c < 3; c++)
             out[c] = cell < 0 ? 0.0 : e->map->albedo[c] * e->map->e_prev[cell][c] / PI;
         return;
@@ -281,12 +281,12 @@ static void emitter_radiance(const rl_emitter *e, v2 q, v3 d, const leaf *L, con
     }
 }
 
-void emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3])
+void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3])
 {
     emitter_radiance(e, q, d, NULL, NULL, out);
 }
 
-int emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id)
+int rl__emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id)
 {
     const lfio_slab *s = e->lf->slab;
     uint32_t n = lfio_slab_get_desc(s)->n;
@@ -351,7 +351,7 @@ static void batch_flush(const rl_transfer_ctx *ctx, ray_batch *b, rl_counters *c
     if (b->n == 0)
         return;
     cnt->rays_cast += b->n;
-    tracer_occluded_n(ctx->tracer, b->n, b->org, b->dir, b->tnear, b->tfar, occluded);
+    rl__tracer_occluded_n(ctx->tracer, b->n, b->org, b->dir, b->tnear, b->tfar, occluded);
     for (size_t i = 0; i < b->n; i++) {
         if (occluded[i])
             continue;
@@ -430,7 +430,7 @@ static int pair_small(const rl_transfer_ctx *ctx, const pair *p, const tile *t)
     double om[RL_MAX_POLY_VERTS + 2];
     for (size_t j = 0; j < t->npoly; j++) {
         v3 r = frame_point(&t->m->frame, t->poly[j]);
-        double omega = sph_fan(p->sclip, p->ns, r, dir, om), ext = 0.0;
+        double omega = rl__sph_fan(p->sclip, p->ns, r, dir, om), ext = 0.0;
         for (size_t a = 0; a < p->ns; a++)
             for (size_t b = a + 1; b < p->ns; b++)
                 ext = fmax(ext, acos(fmin(1.0, fmax(-1.0, v3_dot(dir[a], dir[b])))));
@@ -453,7 +453,7 @@ static int pair_setup(const rl_transfer_ctx *ctx, const rl_emitter *e, const til
         front = fmax(front, v3_dot(v3_sub(frame_point(rf, t->poly[j]), e->frame.origin), e->frame.n));
     if (!(front > 0))
         return 0;
-    p->ns = clip_poly3(e->verts, e->nverts, rf->origin, rf->n, p->sclip);
+    p->ns = rl__clip_poly3(e->verts, e->nverts, rf->origin, rf->n, p->sclip);
     for (size_t i = 0; i < p->ns; i++)
         lift = fmax(lift, v3_dot(v3_sub(p->sclip[i], rf->origin), rf->n));
     if (p->ns < 3 || !(lift > 0))
@@ -474,7 +474,7 @@ static size_t node_cone(const pair *p, const rl_frame *rf, uint32_t lv, uint64_t
     lfio_part_vertices(lv, id, v);
     for (int k = 0; k < 3; k++)
         gens[k] = frame_vector(&p->e->frame, v[k]);
-    return clip_cone(gens, 3, rf->n, clipped);
+    return rl__clip_cone(gens, 3, rf->n, clipped);
 }
 
 /* Computes the region of node (lv, id) for the emitter polygon src (ns
@@ -487,10 +487,10 @@ static size_t node_region(const rl_transfer_ctx *ctx, const pair *p, const v3 *s
     size_t nk = node_cone(p, &t->m->frame, lv, id, gens, kc);
     if (nk == 0)
         return 0;
-    region_compute(&t->m->frame, src, ns, kc, nk, ctx->margin, reg);
+    rl__region_compute(&t->m->frame, src, ns, kc, nk, ctx->margin, reg);
     if (reg->empty)
         return 0;
-    return clip_to_region(t->poly, t->npoly, reg, q, RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES);
+    return rl__clip_to_region(t->poly, t->npoly, reg, q, RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES);
 }
 
 /* Appends a leaf. @return 0, or -1 when memory runs out. */
@@ -532,7 +532,7 @@ static int walk(const rl_transfer_ctx *ctx, const pair *p, const tile *t, rl_scr
     while (top > 0 && rc == 0) {
         uint32_t lv = stack[top - 1].lv;
         uint64_t id = stack[--top].id;
-        int dark = p->e->kind == EM_SLAB && ctx->sampling->zero_culling && emitter_node_dark(p->e, lv, id);
+        int dark = p->e->kind == EM_SLAB && ctx->sampling->zero_culling && rl__emitter_node_dark(p->e, lv, id);
         if (dark || node_region(ctx, p, p->sclip, p->ns, t, lv, id, reg, q) == 0)
             continue;
         if (lv >= p->level) {
@@ -566,15 +566,15 @@ typedef struct origin_domain {
  * region to restrict origins to. @return 0 if the domain is empty. */
 static int cell_domain(const rl_map *m, uint32_t cell, const v2 *clip, size_t nclip, origin_domain *d)
 {
-    d->n = map_cell_polygon(m, &m->cells[cell], d->poly);
+    d->n = rl__map_cell_polygon(m, &m->cells[cell], d->poly);
     d->square = m->cells[cell].poly_count == 0 && !clip;
     d->weight = 1.0;
     if (!clip || !(m->cells[cell].area > 0))
         return 1;
     /* cell intersect region: clip the cell by the clipped region's edges */
     v2 buf[2][RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8];
-    size_t n = clip_to_polygon(d->poly, d->n, clip, nclip, buf[0], buf[1]);
-    double part = n >= 3 ? polygon_area2(buf[0], (uint32_t)n) : 0.0;
+    size_t n = rl__clip_to_polygon(d->poly, d->n, clip, nclip, buf[0], buf[1]);
+    double part = n >= 3 ? rl__polygon_area2(buf[0], (uint32_t)n) : 0.0;
     if (!(part > 0))
         return 0;
     d->weight = part / m->cells[cell].area;
@@ -587,7 +587,7 @@ static int cell_domain(const rl_map *m, uint32_t cell, const v2 *clip, size_t nc
 static v3 domain_point(const rl_map *m, const origin_domain *d, double a, double b)
 {
     v2 q = d->square ? (v2){d->poly[0].x + a * m->cell, d->poly[0].y + b * m->cell}
-                     : sample_polygon(d->poly, d->n, a, b);
+                     : rl__sample_polygon(d->poly, d->n, a, b);
     return frame_point(&m->frame, q);
 }
 
@@ -624,11 +624,11 @@ static int leaf_draw(const pair *p, const leaf *L, v3 x, double u1, double u2, v
     }
     v3 q[RL_MAX_POLY_VERTS + 8], dir[RL_MAX_POLY_VERTS + 8];
     double om[RL_MAX_POLY_VERTS + 8];
-    size_t nq = clip_to_view(x, L->p, p->sclip, p->ns, q);
-    double total = nq >= 3 ? sph_fan(q, nq, x, dir, om) : 0.0;
+    size_t nq = rl__clip_to_view(x, L->p, p->sclip, p->ns, q);
+    double total = nq >= 3 ? rl__sph_fan(q, nq, x, dir, om) : 0.0;
     if (!(total > 0))
         return 0;
-    *d = v3_scale(sph_fan_sample(dir, om, nq, total, u1, u2), -1.0);
+    *d = v3_scale(rl__sph_fan_sample(dir, om, nq, total, u1, u2), -1.0);
     *w = total;
     *lp = NULL;
     return 1;
@@ -644,7 +644,7 @@ static double gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile 
     if (!cell_domain(m, cell, clip, nclip, &dom))
         return 0.0;
     uint32_t k = ctx->sampling->rays_per_solid_angle;
-    lds_key key = lds_make(hash_mix(L->key, cell));
+    lds_key key = rl__lds_make(hash_mix(L->key, cell));
     /* draw a group of samples before shooting any: their square roots and
      * divisions are independent and overlap, where one sample at a time
      * would wait for each */
@@ -657,7 +657,7 @@ static double gather_cell(const rl_transfer_ctx *ctx, const pair *p, const tile 
         int drawn[GROUP];
         for (uint32_t i = 0; i < g; i++) {
             double u[4];
-            lds4(&key, i0 + i, u);
+            rl__lds4(&key, i0 + i, u);
             x[i] = domain_point(m, &dom, u[0], u[1]);
             drawn[i] = leaf_draw(p, L, x[i], u[2], u[3], &d[i], &w[i], lam[i], &lp[i]);
         }
@@ -712,10 +712,10 @@ static estimate node_estimate(const rl_transfer_ctx *ctx, const pair *p, const t
     ray_batch batch;
     batch.n = 0;
     uint64_t h = hash_mix(L->key, cell);
-    lds_key key = lds_make(salt ? hash_mix(h, salt) : h);
+    lds_key key = rl__lds_make(salt ? hash_mix(h, salt) : h);
     for (uint32_t i = 0; i < k; i++) {
         double u[4], w, lam[3];
-        lds4(&key, i, u);
+        rl__lds4(&key, i, u);
         acc[i][0] = acc[i][1] = acc[i][2] = 0.0;
         v3 d, x = domain_point(m, dom, u[0], u[1]);
         const leaf *lp;
@@ -802,8 +802,8 @@ static estimate adaptive_node(const rl_transfer_ctx *ctx, const pair *p, const t
 static int band_range(const v2 *q, size_t nq, double va, double vb, double *ulo, double *uhi)
 {
     v2 a[RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8], b[RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8];
-    size_t n = clip_poly2(q, nq, (rl_halfplane){0, 1, -va}, a);
-    n = clip_poly2(a, n, (rl_halfplane){0, -1, vb}, b);
+    size_t n = rl__clip_poly2(q, nq, (rl_halfplane){0, 1, -va}, a);
+    n = rl__clip_poly2(a, n, (rl_halfplane){0, -1, vb}, b);
     if (n == 0)
         return 0;
     *ulo = INFINITY;
@@ -884,7 +884,7 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const pair *p, const tile *t,
          * would only have drawn zeros */
         v3 box[4], src[RL_MAX_POLY_VERTS + 2];
         int sup = ctx->sampling->zero_culling ? leaf_support(p->e, &L, box) : 0;
-        size_t ns = sup > 0 ? clip_poly3(box, 4, m->frame.origin, m->frame.n, src) : 0;
+        size_t ns = sup > 0 ? rl__clip_poly3(box, 4, m->frame.origin, m->frame.n, src) : 0;
         double lift = 0.0;
         for (size_t k = 0; k < ns; k++)
             lift = fmax(lift, v3_dot(v3_sub(src[k], m->frame.origin), m->frame.n));
@@ -983,7 +983,7 @@ static uint32_t lambert_origins(const pair *p, const rl_map *m, const origin_dom
 }
 
 /* Transfer from emitter ei to every cell of the tile by the views of k
- * stratified origins per cell (point_gather(), one ray per solid angle a
+ * stratified origins per cell (rl__point_gather(), one ray per solid angle a
  * shadow boundary crosses, so k per cell and solid angle as elsewhere):
  * for pairs whose emitter subtends less than a solid angle, where leaves
  * aimed at it would mostly miss. A constant emitter's cell mean is then
@@ -1008,18 +1008,18 @@ static int gather_views(const rl_transfer_ctx *ctx, const pair *p, const tile *t
                 continue;
             uint32_t nl = e->kind == EM_CONST ? lambert_origins(p, m, &dom, k) : 0;
             uint64_t rk = hash_mix(hash_mix(t->map_index, (uint64_t)cell), UINT64_C(0x76696577)); /* "view" */
-            lds_key key = lds_make(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), rk));
+            lds_key key = rl__lds_make(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), rk));
             double seen[3] = {0, 0, 0}, unocc = 0.0, full = 0.0;
             for (uint32_t o = 0; o < k || o < nl; o++) {
                 double u[4];
-                lds4(&key, o, u);
+                rl__lds4(&key, o, u);
                 v3 x = domain_point(m, &dom, u[0], u[1]);
-                double f = nl ? point_lambert(e, x, m->frame.n) : 0.0;
+                double f = nl ? rl__point_lambert(e, x, m->frame.n) : 0.0;
                 full += f;
                 if (o >= k)
                     continue;
                 unocc += f;
-                if (point_gather(ctx, ei, hash_mix(rk, o), x, m->frame.n, 1, seen, s, cnt) != 0)
+                if (rl__point_gather(ctx, ei, hash_mix(rk, o), x, m->frame.n, 1, seen, s, cnt) != 0)
                     return -1;
             }
             /* constant: Lambert's mean times the fraction of the views' unoccluded light that arrived */
@@ -1060,14 +1060,14 @@ static void gather_lambert(const rl_transfer_ctx *ctx, const pair *p, const tile
             origin_domain dom;
             if (cell < 0 || !cell_domain(m, (uint32_t)cell, NULL, 0, &dom))
                 continue;
-            lds_key key = lds_make(hash_mix(
+            lds_key key = rl__lds_make(hash_mix(
                 hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), t->map_index), (uint64_t)cell));
             uint32_t no = lambert_origins(p, m, &dom, k);
             double f = 0.0;
             for (uint32_t o = 0; o < no; o++) {
                 double u[4];
-                lds4(&key, o, u);
-                f += point_lambert(e, domain_point(m, &dom, u[0], u[1]), m->frame.n);
+                rl__lds4(&key, o, u);
+                f += rl__point_lambert(e, domain_point(m, &dom, u[0], u[1]), m->frame.n);
             }
             if (!(f > 0))
                 continue;
@@ -1077,16 +1077,16 @@ static void gather_lambert(const rl_transfer_ctx *ctx, const pair *p, const tile
                 c = (v2){c.x + dom.poly[v].x / dom.n, c.y + dom.poly[v].y / dom.n};
             v3 dir[RL_MAX_POLY_VERTS + 2];
             double om[RL_MAX_POLY_VERTS + 2];
-            double leaves = ceil(sph_fan(p->sclip, p->ns, frame_point(&m->frame, c), dir, om) / leaf_sr);
+            double leaves = ceil(rl__sph_fan(p->sclip, p->ns, frame_point(&m->frame, c), dir, om) / leaf_sr);
             uint32_t nr = leaves >= 64.0 ? 64 * k : leaves <= 1.0 ? k : k * (uint32_t)leaves;
             double all = 0.0, seen[3] = {0, 0, 0};
             ray_batch batch;
             batch.n = 0;
             for (uint32_t r = 0; r < nr; r++) {
                 double u[4];
-                lds4(&key, r, u);
+                rl__lds4(&key, r, u);
                 v3 x = domain_point(m, &dom, u[0], u[1]);
-                v3 y = frame_point(&e->frame, sample_polygon(sp, (uint32_t)p->ns, u[2], u[3]));
+                v3 y = frame_point(&e->frame, rl__sample_polygon(sp, (uint32_t)p->ns, u[2], u[3]));
                 v3 to = v3_sub(y, x);
                 double dist = v3_len(to);
                 cnt->samples++;
@@ -1171,7 +1171,7 @@ static void baseline_sample(const rl_transfer_ctx *ctx, const pair *p, const rl_
         v2 sp[RL_MAX_POLY_VERTS + 2];
         for (size_t i = 0; i < p->ns; i++)
             sp[i] = frame_project(&e->frame, p->sclip[i]);
-        y = frame_point(&e->frame, sample_polygon(sp, (uint32_t)p->ns, u[2], u[3]));
+        y = frame_point(&e->frame, rl__sample_polygon(sp, (uint32_t)p->ns, u[2], u[3]));
         v3 r = v3_sub(y, x);
         dist = v3_len(r);
         if (!(dist > 0))
@@ -1182,10 +1182,10 @@ static void baseline_sample(const rl_transfer_ctx *ctx, const pair *p, const rl_
     } else {
         v3 dir[RL_MAX_POLY_VERTS + 2];
         double om[RL_MAX_POLY_VERTS + 2];
-        double total = sph_fan(p->sclip, p->ns, x, dir, om);
+        double total = rl__sph_fan(p->sclip, p->ns, x, dir, om);
         if (!(total > 0))
             return;
-        to_s = sph_fan_sample(dir, om, p->ns, total, u[2], u[3]);
+        to_s = rl__sph_fan_sample(dir, om, p->ns, total, u[2], u[3]);
         double dn = -v3_dot(to_s, e->frame.n);
         if (!(dn > 0))
             return;
@@ -1220,7 +1220,7 @@ static void gather_baseline(const rl_transfer_ctx *ctx, const tile *t, uint32_t 
     v2 sp[RL_MAX_POLY_VERTS + 2];
     for (size_t i = 0; i < p.ns; i++)
         sp[i] = frame_project(&p.e->frame, p.sclip[i]);
-    double s_area = polygon_area2(sp, (uint32_t)p.ns);
+    double s_area = rl__polygon_area2(sp, (uint32_t)p.ns);
     uint32_t n = ctx->sampling->samples_per_cell;
     for (uint32_t j = t->row0; j < t->row1; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
@@ -1228,16 +1228,16 @@ static void gather_baseline(const rl_transfer_ctx *ctx, const tile *t, uint32_t 
             if (cell < 0)
                 continue;
             v2 cp[RL_MAX_POLY_VERTS + 8];
-            uint32_t ncp = map_cell_polygon(m, &m->cells[cell], cp);
-            lds_key key = lds_make(hash_mix(
+            uint32_t ncp = rl__map_cell_polygon(m, &m->cells[cell], cp);
+            lds_key key = rl__lds_make(hash_mix(
                 hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), t->map_index), (uint64_t)cell));
             double acc[3] = {0, 0, 0};
             ray_batch batch;
             batch.n = 0;
             for (uint32_t s = 0; s < n; s++) {
                 double u[4];
-                lds4(&key, s, u);
-                v3 x = frame_point(&m->frame, sample_polygon(cp, ncp, u[0], u[1]));
+                rl__lds4(&key, s, u);
+                v3 x = frame_point(&m->frame, rl__sample_polygon(cp, ncp, u[0], u[1]));
                 baseline_sample(ctx, &p, &m->frame, x, u, s_area, acc, &batch, cnt);
             }
             batch_flush(ctx, &batch, cnt);
@@ -1248,7 +1248,7 @@ static void gather_baseline(const rl_transfer_ctx *ctx, const tile *t, uint32_t 
 
 /* ------------------------------------------------------------------ tiles */
 
-int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
+int rl__transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
                   rl_scratch *scratch, rl_counters *cnt)
 {
     tile *t = malloc(sizeof *t);
@@ -1264,8 +1264,8 @@ int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uin
     } else {
         v2 a[RL_MAX_POLY_VERTS + 4];
         double va = m->v0 + row0 * m->cell, vb = m->v0 + row1 * m->cell;
-        size_t n = clip_poly2(m->poly, m->npoly, (rl_halfplane){0, 1, -va}, a);
-        t->npoly = clip_poly2(a, n, (rl_halfplane){0, -1, vb}, t->poly);
+        size_t n = rl__clip_poly2(m->poly, m->npoly, (rl_halfplane){0, 1, -va}, a);
+        t->npoly = rl__clip_poly2(a, n, (rl_halfplane){0, -1, vb}, t->poly);
     }
     int rc = 0;
     rl_method method = ctx->sampling->method;
@@ -1273,7 +1273,7 @@ int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uin
         /* a point receiver is culled from its own view of each emitter */
         for (size_t e = 0; e < ctx->nemitters && rc == 0; e++) {
             cnt->pairs++;
-            rc = point_gather(ctx, (uint32_t)e, map_index, m->frame.origin, m->frame.n,
+            rc = rl__point_gather(ctx, (uint32_t)e, map_index, m->frame.origin, m->frame.n,
                               ctx->sampling->rays_per_solid_angle, m->e_pass[0], scratch, cnt);
         }
         free(t);
@@ -1289,7 +1289,7 @@ int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uin
     return rc;
 }
 
-void scratch_free(rl_scratch *s)
+void rl__scratch_free(rl_scratch *s)
 {
     free(s->occ);
     free(s->pair_total);

@@ -75,39 +75,39 @@ typedef struct rl_scratch {
 } rl_scratch;
 
 /* Frees what a scratch space holds (not the struct). */
-void scratch_free(rl_scratch *s);
+void rl__scratch_free(rl_scratch *s);
 
 /* Sets up emitter e from scene polygon k (EM_CONST, or EM_MAP when map is given). */
-void emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, rl_emitter *e);
+void rl__emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, rl_emitter *e);
 
 /* Sets up emitter e from light field lf. */
-void emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e);
+void rl__emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e);
 
 /* Radiance leaving emitter e at frame point q in propagation direction d (unit), W sr^-1 m^-2. */
-void emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3]);
+void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3]);
 
 /* @return 1 if solid angle id at level lv of light field emitter e
  * certainly carries no radiance (its mask and its neighbours' are clear). */
-int emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id);
+int rl__emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id);
 
 /* Adds to out the irradiance at point x (unit normal nx) from emitter ei,
  * by culled transfer from the point's own view (points.c): exact where a
  * part of the emitter is wholly seen or wholly hidden, `rays` samples in
  * each solid angle a shadow boundary crosses. receiver keys the samples.
  * @return 0, or -1 if scratch memory ran out. */
-int point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver, v3 x, v3 nx, uint32_t rays,
+int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver, v3 x, v3 nx, uint32_t rays,
                  double out[3], rl_scratch *s, rl_counters *cnt);
 
 /* @return the irradiance at x (unit normal nx) from emitter e of unit
  * radiance with nothing in between (Lambert's formula), exactly as
- * point_gather() computes an unoccluded constant emitter. */
-double point_lambert(const rl_emitter *e, v3 x, v3 nx);
+ * rl__point_gather() computes an unoccluded constant emitter. */
+double rl__point_lambert(const rl_emitter *e, v3 x, v3 nx);
 
 /* Adds to m->e_pass, for the cells in grid rows [row0, row1) of map m, the
  * irradiance from every emitter of ctx, by ctx->sampling->method. map_index
  * only keys the random sequences. Deterministic: the result depends on
  * nothing but the arguments. @return 0, or -1 if scratch memory ran out. */
-int transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
+int rl__transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
                   rl_scratch *scratch, rl_counters *cnt);
 
 #endif /* RELIGHT_TRANSFER_H */

@@ -6,7 +6,7 @@
  * Invariants: rendering only reads the solution; each image row is written
  * by the one worker that took it from an atomic counter, and a pixel's value
  * depends on nothing but its ray, so the image does not depend on the thread
- * count. Shading interpolates within one polygon's map only (map_sample).
+ * count. Shading interpolates within one polygon's map only (rl__map_sample).
  */
 #include <math.h>
 #include <stdatomic.h>
@@ -32,14 +32,14 @@ static int pick(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, int32_t *m
     double t;
     *map = -1;
     *cell = -1;
-    if (!tracer_hit(s->tracer, org, dir, 0.0, INFINITY, poly, &t))
+    if (!rl__tracer_hit(s->tracer, org, dir, 0.0, INFINITY, poly, &t))
         return 0;
     if (v3_dot(dir, v3_load(s->scene->polygons[*poly].normal)) >= 0)
         return 0; /* the back of a one-sided surface */
     *map = s->polygon_map[*poly];
     if (*map >= 0) {
         *at = frame_project(&s->maps[*map].frame, v3_madd(org, dir, t));
-        *cell = map_cell_at(&s->maps[*map], *at);
+        *cell = rl__map_cell_at(&s->maps[*map], *at);
     }
     return 1;
 }
@@ -59,7 +59,7 @@ static void shade(const rl_solution *s, v3 org, v3 dir, float out[3])
     if (cell >= 0 && s->flat)
         memcpy(e, s->maps[map].e_total[cell], sizeof e);
     else if (cell >= 0)
-        map_sample(&s->maps[map], at, (const double(*)[3])s->maps[map].e_total, e);
+        rl__map_sample(&s->maps[map], at, (const double(*)[3])s->maps[map].e_total, e);
     for (int c = 0; c < 3; c++)
         out[c] = (float)(mat->emission[c] + (cell >= 0 ? s->maps[map].albedo[c] * e[c] / RL__PI : 0.0));
 }
@@ -88,7 +88,7 @@ static void render_worker(void *p, unsigned index)
     (void)index; /* rows are shared through the counter */
     render_job *job = p;
     const rl_camera *cam = &job->s->scene->camera;
-    tracer_thread_init();
+    rl__tracer_thread_init();
     for (;;) {
         unsigned y = atomic_fetch_add(&job->next_row, 1);
         if (y >= cam->height)
