@@ -29,10 +29,11 @@
 #include "jsonout.h"
 #include "relight/engine.h"
 #include "relight_cli.h"
+#include "ilf/limits.h"
 
 #define PATH_BYTES 4096
-#define MAX_GRID 1024u
-#define MAX_SIDE 16384u
+#define MAX_GRID ILF_PROBE_MAX_GRID
+#define MAX_SIDE ILF_PROBE_MAX_SIDE
 
 typedef struct probes_options {
     const char *scene;

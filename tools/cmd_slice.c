@@ -30,8 +30,9 @@
 #include "tonemap.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
+#include "ilf/limits.h"
 
-#define SLICE_MAX_SIZE 8192u
+#define SLICE_MAX_SIZE ILF_SLICE_MAX_SIDE
 
 typedef enum slice_mode { SLICE_NONE, SLICE_POSITION, SLICE_DIRECTION, SLICE_TOWARD } slice_mode;
 typedef enum slice_layout { LAYOUT_UNFOLD, LAYOUT_LATLONG } slice_layout;

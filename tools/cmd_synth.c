@@ -26,10 +26,11 @@
 #include "commands.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
+#include "ilf/limits.h"
 
-#define SYNTH_MAX_SPOTS 64
-#define SYNTH_MAX_GRID 65536u
-#define SYNTH_MAX_SUPERSAMPLE 64u
+#define SYNTH_MAX_SPOTS ILF_SYNTH_MAX_SPOTS
+#define SYNTH_MAX_GRID ILF_SYNTH_MAX_GRID
+#define SYNTH_MAX_SUPERSAMPLE ILF_SYNTH_MAX_SUPERSAMPLE
 #define SYNTH_BATCH_BYTES ((size_t)64 << 20)
 
 typedef enum synth_kind { SYNTH_NONE, SYNTH_CONSTANT, SYNTH_RADIAL, SYNTH_SPOT } synth_kind;

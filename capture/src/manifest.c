@@ -19,9 +19,9 @@
 
 #include "internal.h"
 #include "manifest.h"
+#include "ilf/limits.h"
 
-#define PATH_MAX_BYTES 4095
-_Static_assert(CAP_MANIFEST_MAX_BYTES == ILF_MANIFEST_MAX_BYTES, "capture.h and ilf/limits.h disagree");
+#define PATH_MAX_BYTES ILF_PATH_MAX_BYTES
 #define DEFAULT_N 16u
 #define DEFAULT_SLAB "capture"
 

@@ -12,9 +12,10 @@
 
 #include "capture/capture.h"
 #include "ilf/json.h"
+#include "ilf/limits.h"
 
 /** Most positions a manifest may describe. */
-#define CAP__MAX_POSITIONS ((uint64_t)1 << 20)
+#define CAP__MAX_POSITIONS ILF_CAPTURE_MAX_POSITIONS
 
 typedef struct cap__entry {
     char element[64];  /* "positions[3]" or "pattern" */

@@ -23,9 +23,10 @@
 #include "ilf/hash.h"
 #include "ilf/pool.h"
 #include "internal.h"
+#include "ilf/limits.h"
 
-#define MAX_SIDE 16384
-#define MAX_STRATA 64u
+#define MAX_SIDE ILF_PROBE_MAX_SIDE
+#define MAX_STRATA ILF_PROBE_MAX_STRATA
 
 typedef struct render_job {
     const cap_probe_settings *s;

@@ -26,9 +26,10 @@
 #include "capture/reproject.h"
 #include "internal.h"
 #include "lfio/partition.h"
+#include "ilf/limits.h"
 
 #define DEFAULT_STRATA 2u
-#define MAX_STRATA 16u
+#define MAX_STRATA ILF_REPROJECT_MAX_STRATA
 /* Below this |t| (metres) the proxy point lies on the capture plane: the plain lookup is used. */
 #define ON_PLANE 1e-9
 

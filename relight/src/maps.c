@@ -12,10 +12,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ilf/limits.h"
+#include "lfio/radmap.h"
 #include "maps.h"
 
-/* Cells a scene may have in all: about 3 GiB of accumulators. */
-#define MAX_TOTAL_CELLS ((uint64_t)1 << 26)
+/* Cells a scene may have in all (ilf/limits.h says why). */
+#define MAX_TOTAL_CELLS ILF_MAP_MAX_CELLS
+_Static_assert(ILF_MAP_MAX_CELLS <= LFIO_RADMAP_MAX_CELLS, "a solved scene must fit a radiance-map file");
 
 double rl__polygon_area2(const v2 *p, uint32_t count)
 {

@@ -17,9 +17,10 @@
 #include <lfio/lightfield.h>
 
 #include "relight/scene.h"
+#include "ilf/limits.h"
 
 /* Most vertices one polygon may have (the engine's clipping buffers are sized by it). */
-#define RL_SCENE_MAX_POLY_VERTS 64
+#define RL_SCENE_MAX_POLY_VERTS ILF_POLYGON_MAX_VERTICES
 
 typedef struct rl_material {
     char name[64];

@@ -14,6 +14,8 @@
 #ifndef ILF_LIMITS_H
 #define ILF_LIMITS_H
 
+#include <stdint.h>
+
 /* Worker threads in one team. "0 = every core" asks for the online cores; no machine that runs a
  * 2026 build has more, and each thread costs a stack (8 MiB of address space) and a scratch buffer. */
 #define ILF_MAX_THREADS 1024u
@@ -73,5 +75,69 @@
 
 /* Words on one PLY header line ("property list uchar int vertex_indices" has 5). */
 #define ILF_PLY_MAX_WORDS 6
+
+/* ------------------------------------------------------------ capture */
+
+/* Light probe positions one manifest may describe (2^20): a capture grid of 1024 x 1024 probes is far
+ * beyond any rig, and the position table stays a few tens of MiB. */
+#define ILF_CAPTURE_MAX_POSITIONS ((uint64_t)1 << 20)
+
+/* Images in one exposure bracket (capture.h's CAP_BRACKET_MAX): HDR merges use 3 to 9; each image of a
+ * bracket is held in memory while the bracket is merged. */
+#define ILF_CAPTURE_MAX_BRACKET 16u
+
+/* Bytes of a file path a manifest may build (a directory joined with a file name or an expanded
+ * pattern): PATH_MAX on Linux less its terminator. */
+#define ILF_PATH_MAX_BYTES 4095
+
+/* Pixels along either side of a rendered light probe (capture's renderer, `ilf render-probes --size`):
+ * 16384^2 float RGB is 3 GiB, more than any probe grid needs. */
+#define ILF_PROBE_MAX_SIDE 16384
+
+/* Probes along either side of a rendered grid (`ilf render-probes --grid`): 1024^2 probes already
+ * exceeds ILF_CAPTURE_MAX_POSITIONS. */
+#define ILF_PROBE_MAX_GRID 1024u
+
+/* Stratified sub-samples per axis and pixel when rendering a probe: 64^2 = 4096 rays a pixel, past the
+ * point where more rays change an 8-bit or half-float image. */
+#define ILF_PROBE_MAX_STRATA 64u
+
+/* Proxy rectangles one depth correction may use (reproject.h's CAP_PROXY_MAX): each is tested against
+ * every reprojected ray, so the work grows with their number; rooms need tens. */
+#define ILF_PROXY_MAX_RECTANGLES 4096u
+
+/* Stratified directions per axis per solid angle when reprojecting (16^2 = 256 a solid angle): beyond
+ * it the error is the proxy's, not the sampling's. */
+#define ILF_REPROJECT_MAX_STRATA 16u
+
+/* ------------------------------------------------------------ relight */
+
+/* Vertices of one scene polygon. Larger convex faces are split into fans of polygons this size; the
+ * engine's clipping buffers on the stack are sized by it. */
+#define ILF_POLYGON_MAX_VERTICES 64
+
+/* Radiance-map cells one scene may have in all (2^26): about 3 GiB of accumulators; the same bound as
+ * a radiance-map file's (lfio/radmap.h, LFIO_RADMAP_MAX_CELLS), so every solved scene can be written. */
+#define ILF_MAP_MAX_CELLS ((uint64_t)1 << 26)
+
+/* Largest emission a material may have, W sr^-1 m^-2 (relight.h's RL_MAX_EMISSION): irradiance sums of
+ * such emitters stay far inside float32, the type of the radiance maps. */
+#define ILF_MAX_EMISSION 1e30
+
+/* ------------------------------------------------------------ tools */
+
+/* Pixels along either side of an `ilf slice` image: a slice shows one direction per pixel, and a
+ * partition finer than 8192^2 directions is not stored. */
+#define ILF_SLICE_MAX_SIDE 8192u
+
+/* Spot lights one `ilf synth` call may place (each is a command-line option). */
+#define ILF_SYNTH_MAX_SPOTS 64
+
+/* Positions along either side of a synthesised slab (`ilf synth --grid`); lfio's slab size limit
+ * usually binds first. */
+#define ILF_SYNTH_MAX_GRID 65536u
+
+/* Supersamples per axis when synthesising one radiance value (`ilf synth --supersample`). */
+#define ILF_SYNTH_MAX_SUPERSAMPLE 64u
 
 #endif /* ILF_LIMITS_H */

@@ -55,16 +55,17 @@
 #include "capture/common.h"
 #include "capture/projection.h"
 #include "lfio/lightfield.h"
+#include "ilf/limits.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 /** Most images in one exposure bracket. */
-#define CAP_BRACKET_MAX 16u
+#define CAP_BRACKET_MAX ILF_CAPTURE_MAX_BRACKET
 
 /** Largest manifest file accepted, bytes. */
-#define CAP_MANIFEST_MAX_BYTES ((size_t)64 << 20)
+#define CAP_MANIFEST_MAX_BYTES ILF_MANIFEST_MAX_BYTES
 
 /** How stored image values are decoded to linear light. */
 typedef enum cap_colour_space {

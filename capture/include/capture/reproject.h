@@ -52,13 +52,14 @@
 
 #include "capture/common.h"
 #include "lfio/lightfield.h"
+#include "ilf/limits.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 /** Most proxy rectangles one proxy may hold. */
-#define CAP_PROXY_MAX 4096u
+#define CAP_PROXY_MAX ILF_PROXY_MAX_RECTANGLES
 
 /** A loaded proxy: named rectangles with their sampling. Opaque, immutable. */
 typedef struct cap_proxy cap_proxy;

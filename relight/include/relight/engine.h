@@ -13,6 +13,7 @@
 #define RELIGHT_ENGINE_H
 
 #include "relight/scene.h"
+#include "ilf/limits.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -39,7 +40,7 @@ typedef struct rl_pass_stats {
 typedef void (*rl_progress_fn)(void *user, double done);
 
 /** Most worker threads a run may ask for (the cap of ilfkit's one thread pool). */
-#define RL_MAX_THREADS 1024u
+#define RL_MAX_THREADS ILF_MAX_THREADS
 
 /**
  * How to run one call, apart from what to compute: the scene's sampling

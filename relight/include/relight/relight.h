@@ -26,6 +26,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include "ilf/limits.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -62,7 +63,7 @@ int rl_method_parse(const char *name, rl_method *m);
 
 /** Largest emission a material may have, W sr^-1 m^-2: irradiance sums of
  * such emitters stay far inside float32, the type of the radiance maps. */
-#define RL_MAX_EMISSION 1e30
+#define RL_MAX_EMISSION ILF_MAX_EMISSION
 
 /** Sampling settings (scene key "sampling"): what to compute. How a call runs (threads, progress,
  * time budget) is not among them: see rl_run_options in relight/engine.h. */
