@@ -480,12 +480,55 @@ static void check_slab_edge_on(void)
     rl_scene_destroy(s);
 }
 
-/* Irradiance at one point from one emitter, every method, against Lambert.
- * Area sampling is held to tol_rel only when area_ok: a uniform density on
- * an emitter much larger than its distance, or one seen from next to it,
- * puts almost no samples where the integrand lives (its known failure, which
- * the other methods exist to avoid); there it must still be finite. */
-static void extreme_case(const char *name, const tpoly *em, const double pt[6], double tol_rel, int area_ok)
+/* The extremes as point queries, every method at its defaults. */
+#define EXTREME_POINTS 64
+#define NMETHODS 5
+static const rl_method all_methods[NMETHODS] = {RL_METHOD_CULLED, RL_METHOD_NAIVE, RL_METHOD_ADAPTIVE,
+                                                RL_METHOD_AREA, RL_METHOD_SOLIDANGLE};
+
+/* A deterministic uniform number in [0, 1) (an LCG: the cases must not depend on libc's rand). */
+static double uniform01(unsigned long long *state)
+{
+    *state = *state * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(*state >> 11) / 9007199254740992.0;
+}
+
+static void normalize3(double v[3])
+{
+    double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (int c = 0; c < 3; c++)
+        v[c] /= l;
+}
+
+static void cross3(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* The normal at x that is perpendicular to the direction u to c, in the vertical
+ * plane holding u, then tilted by angle a toward c: c sits on x's horizon for a = 0. */
+static void grazing_normal(const double x[3], const double c[3], double a, double out[3])
+{
+    double u[3] = {c[0] - x[0], c[1] - x[1], c[2] - x[2]}, up[3] = {0, 0, 1}, side[3], m[3];
+    normalize3(u);
+    cross3(u, up, side);
+    cross3(side, u, m);
+    normalize3(m);
+    for (int k = 0; k < 3; k++)
+        out[k] = cos(a) * m[k] + sin(a) * u[k];
+}
+
+/*
+ * Irradiance at EXTREME_POINTS points (x, y, z, normal) from one emitter of
+ * radiance 2 and nothing else, every method at the defaults (n = 32, k = 4,
+ * 128 samples): RMSE over the points relative to the largest Lambert value
+ * must be within tol[m] (culled, naive, adaptive, area, solidangle); a
+ * negative bound asserts only finite, non-negative values (a baseline that
+ * cannot see the case by construction, printed so that it is on record).
+ */
+static void extreme_points(const char *name, const tpoly *em, const double (*pts)[6], const double tol[NMETHODS])
 {
     char path[600];
     snprintf(path, sizeof path, "%s/extreme_%s.json", tmpdir, name);
@@ -493,41 +536,93 @@ static void extreme_case(const char *name, const tpoly *em, const double pt[6], 
     rl_scene *s = ts_load(path);
     if (!s)
         return;
-    double nrm[3] = {pt[3], pt[4], pt[5]}, l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
-    for (int c = 0; c < 3; c++)
-        nrm[c] /= l;
-    double ref = rl_reference_polygon_irradiance(&em->v[0][0], em->n, pt, nrm, 2.0);
-    const rl_method methods[] = {RL_METHOD_CULLED, RL_METHOD_AREA, RL_METHOD_SOLIDANGLE};
-    for (int m = 0; m < 3; m++) {
-        set_sampling(s, methods[m], 32, 16, 4096, 0);
-        double out[3] = {NAN, NAN, NAN};
-        CHECK(rl_irradiance(s, &run_opts, pt, 1, out, NULL) == RL_OK, "%s: %s", name, rl_errmsg());
-        int finite = isfinite(out[0]) && isfinite(out[1]) && isfinite(out[2]) && out[0] >= 0;
-        double err = fabs(out[0] - ref);
-        printf("extreme %-22s %-10s: %.6g vs %.6g (rel %.2g)\n", name, rl_method_name(methods[m]), out[0], ref,
-               ref > 0 ? err / ref : err);
-        int bounded = err <= tol_rel * ref + 1e-300 || (methods[m] == RL_METHOD_AREA && !area_ok);
-        CHECK(finite && bounded, "%s %s: %.6g vs reference %.6g", name, rl_method_name(methods[m]), out[0], ref);
+    double ref[EXTREME_POINTS], peak = 0;
+    for (int i = 0; i < EXTREME_POINTS; i++) {
+        double nrm[3] = {pts[i][3], pts[i][4], pts[i][5]};
+        normalize3(nrm);
+        ref[i] = rl_reference_polygon_irradiance(&em->v[0][0], (size_t)em->n, pts[i], nrm, 2.0);
+        peak = fmax(peak, ref[i]);
+    }
+    for (int m = 0; m < NMETHODS; m++) {
+        set_sampling(s, all_methods[m], 32, 4, 128, 2);
+        double out[3 * EXTREME_POINTS];
+        for (int i = 0; i < 3 * EXTREME_POINTS; i++)
+            out[i] = NAN;
+        CHECK(rl_irradiance(s, &run_opts, &pts[0][0], EXTREME_POINTS, out, NULL) == RL_OK, "%s: %s", name,
+              rl_errmsg());
+        double se = 0, worst = 0;
+        int bad = 0;
+        for (int i = 0; i < EXTREME_POINTS; i++) {
+            for (int c = 0; c < 3; c++)
+                bad += !(isfinite(out[3 * i + c]) && out[3 * i + c] >= 0);
+            double d = out[3 * i + 1] - ref[i];
+            se += d * d;
+            worst = fmax(worst, fabs(d));
+        }
+        double rel = sqrt(se / EXTREME_POINTS) / peak;
+        printf("extreme points %-19s %-10s: RMSE %.3g%%, max %.3g%% of peak %.4g%s\n", name,
+               rl_method_name(all_methods[m]), 100 * rel, 100 * worst / peak, peak,
+               tol[m] < 0 ? " (not bounded)" : "");
+        CHECK(bad == 0, "%s %s: %d values not finite or negative", name, rl_method_name(all_methods[m]), bad);
+        CHECK(tol[m] < 0 || rel <= tol[m], "%s %s: RMSE %.3g of peak above %.3g", name,
+              rl_method_name(all_methods[m]), rel, tol[m]);
     }
     rl_scene_destroy(s);
 }
 
+/*
+ * The cases of issue #13's table as point queries, spread as bench/points.sh
+ * spreads them, around a 1 m square 1 m up facing down (centre (0, 0, 1)).
+ * The default method is held to the product's targets: 1% on the ordinary
+ * case, 2% on every extreme. Area sampling is not bounded next to an edge
+ * (its estimator's variance is infinite there: 1/r^2 with r -> 0) nor under a
+ * 1e4 m emitter (almost every uniform sample lands where it carries nothing).
+ */
 static void check_extremes(void)
 {
-    const double below[6] = {0.1, 0.2, 0, 0, 0, 1};
-    tpoly tiny = ts_rect_z("light", -5e-6, -5e-6, 5e-6, 5e-6, 1.0, 0);
-    extreme_case("tiny_emitter_1e-5m", &tiny, below, 0.05, 1);
-    tpoly huge = ts_rect_z("light", -5e3, -5e3, 5e3, 5e3, 1.0, 0);
-    extreme_case("huge_emitter_1e4m", &huge, below, 0.02, 0);
-    tpoly far = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1000.0, 0);
-    extreme_case("emitter_1km_away", &far, below, 0.05, 1);
+    static double pts[EXTREME_POINTS][6];
+    unsigned long long rng = 7;
+    const double centre[3] = {0, 0, 1};
+    const double ordinary[NMETHODS] = {0.01, 0.01, 0.01, 0.02, 0.01};
+    const double extreme[NMETHODS] = {0.02, 0.02, 0.02, 0.02, 0.02};
+    const double area_blind[NMETHODS] = {0.02, 0.02, 0.02, -1, 0.02};
     tpoly unit = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
-    const double grazing[6] = {3.0, 0.0, 0.0, -1.0, 0.0, 0.02}; /* normal almost in the floor plane */
-    extreme_case("grazing_receiver", &unit, grazing, 0.05, 1);
-    const double touching[6] = {0.5, 0.0, 0.999, -1.0, 0.0, 0.0}; /* 1 mm below the emitter's edge, facing it */
-    extreme_case("touching_edge", &unit, touching, 0.05, 0);
-    const double edge_on[6] = {0.0, 0.0, 0.999999, 0.0, 0.0, 1.0}; /* just under the emitter, facing it edge-on */
-    extreme_case("point_just_below", &unit, edge_on, 0.05, 0);
+
+    for (int i = 0; i < EXTREME_POINTS; i++) { /* on the floor under and around it */
+        double p[6] = {-1.5 + 3 * uniform01(&rng), -1.5 + 3 * uniform01(&rng), 0, 0, 0, 1};
+        memcpy(pts[i], p, sizeof p);
+    }
+    extreme_points("floor", &unit, pts, ordinary);
+    tpoly far = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1000.0, 0);
+    extreme_points("emitter_1km_away", &far, pts, extreme);
+    tpoly tiny = ts_rect_z("light", -5e-6, -5e-6, 5e-6, 5e-6, 1.0, 0);
+    extreme_points("tiny_emitter_1e-5m", &tiny, pts, extreme);
+    tpoly huge = ts_rect_z("light", -5e3, -5e3, 5e3, 5e3, 1.0, 0);
+    extreme_points("huge_emitter_1e4m", &huge, pts, area_blind);
+    /* 1 m by 1.01e-6 m: the loader refuses aspect 1e-6 as degenerate (docs/scene.md) */
+    tpoly sliver = ts_rect_z("light", -0.5, -0.505e-6, 0.5, 0.505e-6, 1.0, 0);
+    extreme_points("sliver_emitter", &sliver, pts, extreme);
+
+    for (int i = 0; i < EXTREME_POINTS; i++) { /* 3 m away, 0.5 m under its plane, horizons through it */
+        double p[6] = {3, -0.5 + uniform01(&rng), 0.5, 0, 0, 0};
+        grazing_normal(p, centre, pow(10, -6 + 5 * uniform01(&rng)), p + 3);
+        memcpy(pts[i], p, sizeof p);
+    }
+    extreme_points("grazing_1e-6_to_0.1", &unit, pts, extreme);
+
+    for (int i = 0; i < EXTREME_POINTS; i++) { /* 1e-6 m under its plane, 0.5 .. 1.4 m off, facing it */
+        double p[6] = {1 + 0.9 * uniform01(&rng), -0.5 + uniform01(&rng), 1 - 1e-6, -1, 0, 0};
+        memcpy(pts[i], p, sizeof p);
+    }
+    extreme_points("edge_on", &unit, pts, extreme);
+
+    /* a vertical square standing on the floor (facing +x), points 1e-4 .. 1 m from its lower edge */
+    tpoly wall = {"light", 4, {{0, -0.5, 0}, {0, 0.5, 0}, {0, 0.5, 1}, {0, -0.5, 1}}};
+    for (int i = 0; i < EXTREME_POINTS; i++) {
+        double p[6] = {pow(10, -4 + 4 * uniform01(&rng)), -0.5 + uniform01(&rng), 0, 0, 0, 1};
+        memcpy(pts[i], p, sizeof p);
+    }
+    extreme_points("near_an_edge", &wall, pts, area_blind);
 }
 
 /*
@@ -576,7 +671,7 @@ static void check_map_extremes(void)
 {
     tpoly floor = ts_rect_z("grey", -0.5, -0.5, 0.5, 0.5, 0.0, 1);
     /* culled, naive, adaptive, area, solidangle */
-    const double ordinary[5] = {0.01, 0.01, 0.01, 0.03, 0.01}, small[5] = {0.02, -1, 0.04, 0.02, 0.02};
+    const double ordinary[5] = {0.01, 0.01, 0.01, 0.03, 0.01}, small[5] = {0.02, 0.02, 0.04, 0.02, 0.02};
     tpoly unit = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
     extreme_map("unit_over_floor", &unit, &floor, ordinary);
     tpoly tiny = ts_rect_z("light", -5e-6, -5e-6, 5e-6, 5e-6, 1.0, 0);
@@ -595,6 +690,25 @@ static void check_map_extremes(void)
     tpoly beside = ts_rect_z("grey", 0, -0.5, 1, 0.5, 0.0, 1);
     const double touch_tol[5] = {0.02, 0.02, 0.02, -1, 0.02};
     extreme_map("touching_edge", &wall, &beside, touch_tol);
+    /* a 1 m by 1.01e-6 m sliver over the floor: thinner than any leaf */
+    tpoly sliver = ts_rect_z("light", -0.5, -0.505e-6, 0.5, 0.505e-6, 1.0, 0);
+    extreme_map("sliver_emitter", &sliver, &floor, small);
+    /* a 0.5 m square 3 m away, 0.5 m under the emitter's plane, whose plane holds the direction
+     * to the emitter's centre tilted 1e-3 rad toward it: the emitter straddles its horizon */
+    {
+        const double c[3] = {3, 0, 0.5}, centre[3] = {0, 0, 1}, up[3] = {0, 0, 1};
+        double nrm[3], side[3], t[3];
+        grazing_normal(c, centre, 1e-3, nrm);
+        cross3(up, nrm, side); /* side, t, nrm right-handed: corners counter-clockwise about nrm */
+        normalize3(side);
+        cross3(nrm, side, t);
+        const double uv[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+        tpoly grazing = {"grey", 4, {{0}}};
+        for (int k = 0; k < 4; k++)
+            for (int a = 0; a < 3; a++)
+                grazing.v[k][a] = c[a] + 0.25 * (uv[k][0] * side[a] + uv[k][1] * t[a]);
+        extreme_map("grazing_receiver", &unit, &grazing, small);
+    }
 }
 
 /*
