@@ -327,7 +327,7 @@ static void check_lightfield_range(void)
  * polygon itself), and a 1e-6 m emitter of radiance 1e6 1 mm above the
  * floor at x = 20 m, which a point query there sees next to the sky. The
  * scene's half-extent is 5e4 m, so shadow rays stop short by
- * 1e-6 * 5e4 = 0.05 m (ray_eps in transfer.c): the 1 mm gap is below what
+ * 1e-6 * 5e4 = 0.05 m (pair_eps in relight/src/pair.c): the 1 mm gap is below what
  * single precision resolves at this size.
  */
 static void check_mixed_scales(void)

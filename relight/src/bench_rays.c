@@ -4,7 +4,7 @@
  *
  * Each worker draws a chunk of random shadow rays (uniform points on the
  * scene's polygons by area, cosine-distributed directions), then traces it
- * in packets exactly as transfer.c does, and only the tracing is timed.
+ * in packets exactly as the methods do (pair.c), and only the tracing is timed.
  * Invariants: worker k's rays come from a sequence keyed by k alone, so a
  * run's rays depend only on the thread count; the tracer is built with the
  * same thread count, and nothing else of the engine is involved.

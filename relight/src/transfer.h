@@ -1,35 +1,15 @@
 /*
- * transfer.h - gathering irradiance on receivers from emitters, by the four
- * methods (culled, naive, area, solidangle).
+ * transfer.h - one pass's transfer of light from emitters to receivers: what
+ * the workers share (context, per-thread scratch, counters), the tile entry
+ * point the scheduler calls, and the point receivers' own-view gather. The
+ * methods themselves sit behind method.h, each in a file of its own.
  */
 #ifndef RELIGHT_TRANSFER_H
 #define RELIGHT_TRANSFER_H
 
-#include "maps.h"
+#include "emitter.h"
 #include "shadow.h"
 #include "tracer.h"
-
-typedef enum em_kind {
-    EM_CONST, /* polygon of constant emission */
-    EM_MAP,   /* receiving polygon re-emitting albedo * E_prev / pi (a bounce) */
-    EM_SLAB   /* light field slab */
-} em_kind;
-
-/* An emitter: its polygon in world and frame coordinates and where its radiance comes from. */
-typedef struct rl_emitter {
-    em_kind kind;
-    int32_t polygon;      /* scene polygon, -1 for a slab */
-    rl_frame frame;       /* partition frame: pole = front normal */
-    v3 verts[RL_MAX_POLY_VERTS];
-    v2 poly2[RL_MAX_POLY_VERTS];
-    rl_halfplane edge[RL_MAX_POLY_VERTS]; /* inside: a x + b y + c >= 0 for each edge of poly2 */
-    uint32_t nverts;
-    double area;
-    float emission[3];         /* EM_CONST */
-    const rl_map *map;         /* EM_MAP */
-    const rl_lightfield *lf;   /* EM_SLAB */
-    double len_u, len_v;       /* EM_SLAB: edge lengths in the scene */
-} rl_emitter;
 
 /* Work counters of one pass; summed over threads. */
 typedef struct rl_counters {
@@ -76,19 +56,6 @@ typedef struct rl_scratch {
 
 /* Frees what a scratch space holds (not the struct). */
 void rl__scratch_free(rl_scratch *s);
-
-/* Sets up emitter e from scene polygon k (EM_CONST, or EM_MAP when map is given). */
-void rl__emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, rl_emitter *e);
-
-/* Sets up emitter e from light field lf. */
-void rl__emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e);
-
-/* Radiance leaving emitter e at frame point q in propagation direction d (unit), W sr^-1 m^-2. */
-void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3]);
-
-/* @return 1 if solid angle id at level lv of light field emitter e
- * certainly carries no radiance (its mask and its neighbours' are clear). */
-int rl__emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id);
 
 /* Adds to out the irradiance at point x (unit normal nx) from emitter ei,
  * by culled transfer from the point's own view (points.c): exact where a

@@ -1,0 +1,56 @@
+/*
+ * emitter.h - the emitters one pass gathers from: a polygon of constant
+ * emission, a receiving polygon re-emitting its last pass (a bounce), or a
+ * light field slab. Each carries a frame whose pole is its front normal, so
+ * that the partition's hemisphere 0 .. 4m^2-1 is exactly what it emits into.
+ */
+#ifndef RELIGHT_EMITTER_H
+#define RELIGHT_EMITTER_H
+
+#include "maps.h"
+
+typedef enum em_kind {
+    EM_CONST, /* polygon of constant emission */
+    EM_MAP,   /* receiving polygon re-emitting albedo * E_prev / pi (a bounce) */
+    EM_SLAB   /* light field slab */
+} em_kind;
+
+/* An emitter: its polygon in world and frame coordinates and where its radiance comes from. */
+typedef struct rl_emitter {
+    em_kind kind;
+    int32_t polygon;      /* scene polygon, -1 for a slab */
+    rl_frame frame;       /* partition frame: pole = front normal */
+    v3 verts[RL_MAX_POLY_VERTS];
+    v2 poly2[RL_MAX_POLY_VERTS];
+    rl_halfplane edge[RL_MAX_POLY_VERTS]; /* inside: a x + b y + c >= 0 for each edge of poly2 */
+    uint32_t nverts;
+    double area;
+    float emission[3];         /* EM_CONST */
+    const rl_map *map;         /* EM_MAP */
+    const rl_lightfield *lf;   /* EM_SLAB */
+    double len_u, len_v;       /* EM_SLAB: edge lengths in the scene */
+} rl_emitter;
+
+/* Sets up emitter e from scene polygon k (EM_CONST, or EM_MAP when map is given). */
+void rl__emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, rl_emitter *e);
+
+/* Sets up emitter e from light field lf. */
+void rl__emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e);
+
+/* Radiance leaving emitter e at frame point q in propagation direction d (unit), W sr^-1 m^-2. */
+void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3]);
+
+/* @return 1 if solid angle id at level lv of light field emitter e
+ * certainly carries no radiance (its mask and its neighbours' are clear). */
+int rl__emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id);
+
+/* @return 1 if frame point q lies in e's convex polygon. */
+static inline int rl__emitter_contains(const rl_emitter *e, v2 q)
+{
+    int inside = 1;
+    for (uint32_t i = 0; i < e->nverts; i++) /* no early exit: one branch per sample, not one per edge */
+        inside &= e->edge[i].a * q.x + e->edge[i].b * q.y + e->edge[i].c >= 0;
+    return inside;
+}
+
+#endif /* RELIGHT_EMITTER_H */

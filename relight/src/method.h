@@ -1,0 +1,258 @@
+/*
+ * method.h - the interface every transfer method implements, and the pieces
+ * the methods share.
+ *
+ * A method adds to the cells of one receiver tile the irradiance arriving
+ * from one emitter (rl_method_impl.gather). transfer.c cuts tiles, walks the
+ * emitters and picks the method through rl__method_for(); each method lives
+ * in a file of its own:
+ *
+ *   method_culled.c    culled and naive: the partition's solid angles of the
+ *                      pair, culled by projected Minkowski regions (culled)
+ *                      or all of them (naive), k rays per (cell, leaf)
+ *   method_adaptive.c  culled's leaves, each refined while its estimate is
+ *                      uncertain
+ *   method_baseline.c  area and solidangle sampling of the emitter
+ *
+ * and they share: leaves (leaf.c: a solid angle prepared for sampling),
+ * pairs, tiles, origin domains and shadow-ray packets (pair.c), and the
+ * estimators that replace leaves where leaves are the wrong tool (views.c:
+ * Lambert's formula times visibility for a constant emitter, exact views of
+ * an emitter smaller than a solid angle).
+ *
+ * Invariants: every estimate is a function of its arguments only (random
+ * numbers come from low-discrepancy sequences keyed by seed, pass, emitter,
+ * receiver, cell, level and leaf), so results do not depend on threads or on
+ * how rays are grouped into packets; culled and naive run the same code per
+ * (cell, leaf), so they agree bit for bit wherever no pair descends.
+ */
+#ifndef RELIGHT_METHOD_H
+#define RELIGHT_METHOD_H
+
+#include <string.h>
+
+#include <lfio/partition.h>
+
+#include "sampling.h"
+#include "transfer.h"
+
+#define RL_PI 3.14159265358979323846
+
+/* ------------------------------------------------------------------ leaves */
+
+/* Leaves from this level on are sampled on their planar lattice triangle and
+ * weighted by the Jacobian to the sphere, which varies by less than 1.5x
+ * within one of them: far cheaper than Arvo's warp (no trigonometry) for
+ * a negligible rise in variance. Coarser leaves (an octant's Jacobian
+ * spans 5.2x) keep the uniform warp. */
+#define RL_PLANAR_MIN_LEVEL 4
+
+/* A solid angle of emitter e's partition prepared for sampling: its
+ * directions and their weights, its sample key, and for a light field the
+ * slab-level interpolation its samples read. */
+typedef struct rl_leaf {
+    uint32_t lv;
+    uint64_t id;
+    double omega;         /* exact solid angle, sr */
+    uint64_t key;         /* hash of (seed, pass, emitter, receiver, level, id) */
+    int planar;
+    sph_tri tri;          /* !planar: Arvo's warp; every sample weighs omega */
+    v3 p[3];              /* planar: the lattice triangle's corners (|x|+|y|+|z| = 1 in e's frame), world */
+    lfio_part_strata st;  /* planar: the triangle's one stratum (lfio_part_strata_sample weighs each direction) */
+    int reach;            /* every corner direction leaves the emitter's front (p[k] . n > 0) */
+    v2 land[3];           /* then: corner k from origin x lands at project(x) - h(x) * land[k] on the emitter */
+    int mix;              /* planar, light field, at or below the slab's level: lfio_slab_radiance_mix() */
+    double to_slab[3][3]; /* mix: the slab-level triangle's barycentrics from the leaf's */
+    uint64_t ids[4];      /* mix: the slab-level solid angle holding the leaf, then its neighbours */
+} rl_leaf;
+
+/* Prepares solid angle id at level lv of emitter e (index ei) for receiver map map_index. */
+void rl__leaf_make(const rl_transfer_ctx *ctx, const rl_emitter *e, uint32_t ei, uint32_t map_index, uint32_t lv,
+                   uint64_t id, rl_leaf *L);
+
+/* @return a direction in leaf L from u1, u2 in [0, 1); *w its weight (the
+ * inverse of its density, so that the mean of w is the solid angle) and,
+ * for planar leaves, lam its barycentric coordinates on the triangle. */
+v3 rl__leaf_sample(const rl_leaf *L, double u1, double u2, double *w, double lam[3]);
+
+/* For a mixing leaf of light field e: the rectangle of the slab outside which every
+ * sample of L reads zero radiance, as 4 world corners (e's vertex order).
+ * @return 1, 0 when L cannot say (use the whole emitter), -1 when L reads only zeros. */
+int rl__leaf_support(const rl_emitter *e, const rl_leaf *L, v3 out[4]);
+
+/* Radiance leaving light field e at frame point q for a sample of mixing leaf
+ * L at barycentrics lam, read through the slab-level interpolation. */
+void rl__leaf_radiance_mix(const rl_emitter *e, v2 q, const rl_leaf *L, const double lam[3], double out[3]);
+
+/* Radiance leaving e at frame point q in propagation direction d; L (may be
+ * NULL) and lam, when L mixes, give the direction's slab interpolation directly. */
+static inline void rl__leaf_radiance(const rl_emitter *e, v2 q, v3 d, const rl_leaf *L, const double lam[3],
+                                     double out[3])
+{
+    if (e->kind == EM_CONST) {
+        for (int c = 0; c < 3; c++)
+            out[c] = e->emission[c];
+    } else if (L && L->mix) {
+        rl__leaf_radiance_mix(e, q, L, lam, out);
+    } else {
+        rl__emitter_radiance_at(e, q, d, out);
+    }
+}
+
+/* ------------------------------------------------- pairs, tiles and domains */
+
+/* What one (emitter, receiver tile) pair needs, computed once. */
+typedef struct rl_pair {
+    const rl_emitter *e;
+    v3 sclip[RL_MAX_POLY_VERTS + 2]; /* the emitter clipped to the tile's front half-space */
+    size_t ns;
+    uint32_t level;
+    int descended;
+    double eps; /* ray offset at both ends, m */
+} rl_pair;
+
+/* The tile: the part of map m in grid rows [row0, row1), as a 2D polygon. */
+typedef struct rl_tile {
+    rl_map *m;
+    uint32_t map_index, row0, row1;
+    v2 poly[RL_MAX_POLY_VERTS + 4];
+    size_t npoly;
+} rl_tile;
+
+/* Cuts t from grid rows [row0, row1) of map m (map_index keys its samples). */
+void rl__tile_make(rl_map *m, uint32_t map_index, uint32_t row0, uint32_t row1, rl_tile *t);
+
+/* Sets up pair p for emitter e and tile t; naive and descend 0 keep every
+ * pair at partition_n, others mark pairs whose emitter subtends less than a
+ * solid angle as descended. @return 0 if they cannot exchange light. */
+int rl__pair_setup(const rl_transfer_ctx *ctx, const rl_emitter *e, const rl_tile *t, rl_pair *p);
+
+/* Computes the region of node (lv, id) for the emitter polygon src (ns
+ * vertices, in front of the tile's plane) and its intersection with the
+ * tile into q (room for RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES).
+ * @return the vertex count of that intersection (0: cull). */
+size_t rl__node_region(const rl_transfer_ctx *ctx, const rl_pair *p, const v3 *src, size_t ns, const rl_tile *t,
+                       uint32_t lv, uint64_t id, rl_region *reg, v2 *q);
+
+/* Where the origins of one (cell, leaf) pair are drawn: the cell's polygon,
+ * or for a descended pair its part inside the region, and that part's
+ * share of the cell's area. */
+typedef struct rl_origin_domain {
+    v2 poly[RL_MAX_POLY_VERTS + 8];
+    uint32_t n;
+    int square;    /* a full square: sampled from its corner and side alone */
+    double weight; /* area of the part / area of the cell */
+} rl_origin_domain;
+
+/* Fills d for cell of map m; clip (nclip vertices), when not NULL, is the
+ * region to restrict origins to. @return 0 if the domain is empty. */
+int rl__cell_domain(const rl_map *m, uint32_t cell, const v2 *clip, size_t nclip, rl_origin_domain *d);
+
+/* @return a world origin in domain d of map m from two numbers in [0, 1). */
+static inline v3 rl__domain_point(const rl_map *m, const rl_origin_domain *d, double a, double b)
+{
+    v2 q = d->square ? (v2){d->poly[0].x + a * m->cell, d->poly[0].y + b * m->cell}
+                     : rl__sample_polygon(d->poly, d->n, a, b);
+    return frame_point(&m->frame, q);
+}
+
+/* ------------------------------------------------------------- shadow rays */
+
+/* Shadow rays waiting to be traced as one packet, each with the radiance
+ * it carries and the accumulator it adds to when unoccluded. Rays are added
+ * to their accumulators in the order they were pushed, so results do not
+ * depend on how rays are grouped into packets. Set n = 0 before use. */
+typedef struct rl_ray_batch {
+    size_t n;
+    v3 org[RL_RAY_PACKET], dir[RL_RAY_PACKET];
+    double tnear[RL_RAY_PACKET], tfar[RL_RAY_PACKET];
+    double l[RL_RAY_PACKET][3];
+    double *acc[RL_RAY_PACKET];
+} rl_ray_batch;
+
+/* Traces the pending rays of b and adds the unoccluded ones' radiance. */
+void rl__batch_flush(const rl_transfer_ctx *ctx, rl_ray_batch *b, rl_counters *cnt);
+
+/* Queues a shadow ray from org along unit dir over [tnear, tfar] carrying l into acc. */
+static inline void rl__batch_push(const rl_transfer_ctx *ctx, rl_ray_batch *b, v3 org, v3 dir, double tnear,
+                                  double tfar, const double l[3], double *acc, rl_counters *cnt)
+{
+    if (b->n == RL_RAY_PACKET)
+        rl__batch_flush(ctx, b, cnt);
+    size_t i = b->n++;
+    b->org[i] = org;
+    b->dir[i] = dir;
+    b->tnear[i] = tnear;
+    b->tfar[i] = tfar;
+    memcpy(b->l[i], l, sizeof b->l[i]);
+    b->acc[i] = acc;
+}
+
+/* Queues the ray back from receiver point x (normal nr) along -d to the
+ * pair's emitter, carrying the radiance sampled in leaf L (may be NULL) at
+ * barycentrics lam times weight w and the cosine at x, into acc; a ray that
+ * misses the emitter's polygon or carries nothing is counted, never traced. */
+void rl__shoot_back(const rl_transfer_ctx *ctx, const rl_pair *p, v3 x, v3 nr, v3 d, double w, const rl_leaf *L,
+                    const double lam[3], double *acc, rl_ray_batch *b, rl_counters *cnt);
+
+/* Draws the direction of one sample of leaf L from origin x, informed by
+ * the emitter for a constant one: d over the whole leaf when every direction
+ * of it reaches the emitter (*lp = L), else uniform in the part of the
+ * emitter the leaf sees (*lp = NULL, *w that solid angle). @return 0 when
+ * the leaf sees nothing of the emitter from x. */
+int rl__leaf_draw(const rl_pair *p, const rl_leaf *L, v3 x, double u1, double u2, v3 *d, double *w, double lam[3],
+                  const rl_leaf **lp);
+
+/* ------------------------------------------------------- exact estimators */
+
+/* Lambert's formula times the visible fraction, for a constant emitter and
+ * every cell of the tile (views.c). */
+void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei,
+                        rl_counters *cnt);
+
+/* Transfer from emitter ei to every cell of the tile from the exact views of
+ * stratified origins, for an emitter smaller than a solid angle (views.c).
+ * @return 0, or -1 if scratch memory ran out. */
+int rl__gather_views(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei, rl_scratch *s,
+                     rl_counters *cnt);
+
+/* ------------------------------------------------------- the leaf family */
+
+/* How a solid-angle method treats each kept leaf of a pair (method_culled.c
+ * runs the family; culled, naive and adaptive differ in these). */
+typedef struct rl_leaf_rows {
+    int culls;       /* walk and cull the hierarchy (else every leaf of the pair's level) */
+    int lambert;     /* a constant emitter under descend: Lambert times visibility instead of leaves */
+    int stages;      /* 1, or 2: stage 0 measures every cell, stage 1 estimates */
+    /* Before the stages: prepares s for tile t. @return 0 or -1. NULL: nothing. */
+    int (*prepare)(rl_scratch *s, const rl_tile *t);
+    /* Adds leaf L's light to cells i0..i1 of grid row j (clip: nclip vertices
+     * restricting origins, or NULL). @return 0 or -1 (memory). */
+    int (*row)(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, const rl_leaf *L, uint32_t ei,
+               const v2 *clip, size_t nclip, uint32_t j, uint32_t i0, uint32_t i1, rl_scratch *s, int stage,
+               rl_counters *cnt);
+} rl_leaf_rows;
+
+/* Gathers emitter ei into tile t by the leaves of their pair, each row of
+ * cells handed to rows->row. @return 0, or -1 if memory ran out. */
+int rl__leaves_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei, rl_scratch *s, rl_counters *cnt,
+                      const rl_leaf_rows *rows);
+
+/* ------------------------------------------------------------- the methods */
+
+/* One transfer method. */
+typedef struct rl_method_impl {
+    rl_method id;
+    /* 1: a point receiver gathers from its own view of each emitter (rl__point_gather) */
+    int point_view;
+    /* Adds to the tile's cells the irradiance from emitter ei. @return 0, or -1 if memory ran out. */
+    int (*gather)(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei, rl_scratch *s, rl_counters *cnt);
+} rl_method_impl;
+
+extern const rl_method_impl rl__method_culled, rl__method_naive, rl__method_adaptive, rl__method_area,
+    rl__method_solidangle;
+
+/* @return the implementation of method id, or NULL if there is none. */
+const rl_method_impl *rl__method_for(rl_method id);
+
+#endif /* RELIGHT_METHOD_H */

@@ -1,0 +1,298 @@
+/*
+ * method_culled.c - culled solid-angle transfer, the paper's method, and
+ * naive, its plain enumeration; and the leaf loop adaptive shares.
+ *
+ * For one receiver tile R and one emitter S, `culled` walks the partition's
+ * quad-tree in S's frame (pole = S's normal, so the hemisphere S emits into
+ * is exactly ids 0 .. 4m^2-1) from level 1 down to the pair's level m. A
+ * node is culled when its cone, clipped to directions arriving at R's
+ * front, is empty; when the projected Minkowski sum (S + w)_R misses the
+ * tile; or when a light field's zero-radiance mask rules out radiance in it
+ * and in its three neighbours (whose values the interpolation reads). The
+ * kept leaves are sorted by id and each is rasterised over the tile's cells;
+ * every (cell, leaf) pair traces k rays whose origins and directions come
+ * from a low-discrepancy sequence keyed by (seed, pass, emitter, receiver,
+ * cell, level, leaf).
+ *
+ * `naive` takes every leaf and every cell and otherwise runs the same code:
+ * a culled (cell, leaf) pair contributes exactly zero, and each cell adds
+ * its leaves in id order either way, so the two are bit-identical as long
+ * as no pair descends below partition_n.
+ *
+ * Where leaves are the wrong tool, both hand the pair to views.c: a constant
+ * emitter under `descend` gets Lambert's formula times visibility, and under
+ * culled an emitter smaller than a solid angle is gathered from exact views.
+ */
+#include <math.h>
+#include <stdlib.h>
+
+#include "method.h"
+
+#define STACK_DEPTH 512
+
+/* Appends a leaf. @return 0, or -1 when memory runs out. */
+static int push_leaf(rl_scratch *s, uint64_t id)
+{
+    if (s->nleaves == s->cap) {
+        size_t cap = s->cap ? 2 * s->cap : 1024;
+        uint64_t *grown = realloc(s->leaves, cap * sizeof *grown);
+        if (!grown)
+            return -1;
+        s->leaves = grown;
+        s->cap = cap;
+    }
+    s->leaves[s->nleaves++] = id;
+    return 0;
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Walks the hierarchy top-down, keeping the leaves at p->level that survive culling. */
+static int walk(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, rl_scratch *s, rl_counters *cnt)
+{
+    struct node { uint32_t lv; uint64_t id; } stack[STACK_DEPTH];
+    size_t top = 0;
+    rl_region *reg = malloc(sizeof *reg);
+    v2 *q = malloc((RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES) * sizeof *q);
+    if (!reg || !q) {
+        free(reg);
+        free(q);
+        return -1;
+    }
+    for (uint64_t id = 4; id-- > 0;)
+        stack[top++] = (struct node){1, id};
+    int rc = 0;
+    while (top > 0 && rc == 0) {
+        uint32_t lv = stack[top - 1].lv;
+        uint64_t id = stack[--top].id;
+        int dark = p->e->kind == EM_SLAB && ctx->sampling->zero_culling && rl__emitter_node_dark(p->e, lv, id);
+        if (dark || rl__node_region(ctx, p, p->sclip, p->ns, t, lv, id, reg, q) == 0)
+            continue;
+        if (lv >= p->level) {
+            rc = push_leaf(s, id);
+            continue;
+        }
+        uint64_t ch[4];
+        lfio_part_children(lv, id, ch);
+        for (int k = 3; k >= 0; k--)
+            stack[top++] = (struct node){2 * lv, ch[k]};
+    }
+    free(reg);
+    free(q);
+    uint64_t total = lfio_part_hemi_count(p->level);
+    cnt->leaves_considered += total;
+    cnt->leaves_culled += total - s->nleaves;
+    return rc;
+}
+
+/* Queues the k rays of (cell, leaf L) into acc.
+ * @return the factor that turns acc into the cell's irradiance (0: no rays). */
+static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t cell,
+                          const rl_leaf *L, const v2 *clip, size_t nclip, double *acc, rl_ray_batch *batch,
+                          rl_counters *cnt)
+{
+    rl_map *m = t->m;
+    rl_origin_domain dom;
+    if (!rl__cell_domain(m, cell, clip, nclip, &dom))
+        return 0.0;
+    uint32_t k = ctx->sampling->rays_per_solid_angle;
+    lds_key key = rl__lds_make(hash_mix(L->key, cell));
+    /* draw a group of samples before shooting any: their square roots and
+     * divisions are independent and overlap, where one sample at a time
+     * would wait for each */
+    enum { GROUP = 8 };
+    for (uint32_t i0 = 0; i0 < k; i0 += GROUP) {
+        uint32_t g = k - i0 < GROUP ? k - i0 : GROUP;
+        double w[GROUP], lam[GROUP][3];
+        v3 x[GROUP], d[GROUP];
+        const rl_leaf *lp[GROUP];
+        int drawn[GROUP];
+        for (uint32_t i = 0; i < g; i++) {
+            double u[4];
+            rl__lds4(&key, i0 + i, u);
+            x[i] = rl__domain_point(m, &dom, u[0], u[1]);
+            drawn[i] = rl__leaf_draw(p, L, x[i], u[2], u[3], &d[i], &w[i], lam[i], &lp[i]);
+        }
+        for (uint32_t i = 0; i < g; i++) {
+            if (drawn[i])
+                rl__shoot_back(ctx, p, x[i], m->frame.n, d[i], w[i], lp[i], lam[i], acc, batch, cnt);
+            else
+                cnt->samples++;
+        }
+    }
+    return dom.weight / k;
+}
+
+/* Gives the u range [*ulo, *uhi] of convex polygon q within the band v in [va, vb]. @return 0 if none. */
+static int band_range(const v2 *q, size_t nq, double va, double vb, double *ulo, double *uhi)
+{
+    v2 a[RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8], b[RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8];
+    size_t n = rl__clip_poly2(q, nq, (rl_halfplane){0, 1, -va}, a);
+    n = rl__clip_poly2(a, n, (rl_halfplane){0, -1, vb}, b);
+    if (n == 0)
+        return 0;
+    *ulo = INFINITY;
+    *uhi = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        *ulo = fmin(*ulo, b[i].x);
+        *uhi = fmax(*uhi, b[i].x);
+    }
+    return 1;
+}
+
+/* Makes room in s for a row of n cells' accumulators. @return 0 or -1. */
+static int row_reserve(rl_scratch *s, size_t n)
+{
+    if (n <= s->row_cap)
+        return 0;
+    double (*acc)[3] = realloc(s->row_acc, n * sizeof *acc);
+    if (acc)
+        s->row_acc = acc;
+    double *scale = acc ? realloc(s->row_scale, n * sizeof *scale) : NULL;
+    if (scale)
+        s->row_scale = scale;
+    if (!acc || !scale)
+        return -1;
+    s->row_cap = n;
+    return 0;
+}
+
+/* Culled's and naive's work on one row of cells for one leaf: every cell's
+ * k rays go out in packets, then each cell adds its estimate. */
+static int culled_row(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, const rl_leaf *L, uint32_t ei,
+                      const v2 *clip, size_t nclip, uint32_t j, uint32_t i0, uint32_t i1, rl_scratch *s, int stage,
+                      rl_counters *cnt)
+{
+    (void)ei;
+    (void)stage;
+    rl_map *m = t->m;
+    rl_ray_batch batch;
+    batch.n = 0;
+    for (uint32_t i = i0; i <= i1; i++) {
+        int32_t cell = m->grid[(size_t)j * m->nu + i];
+        double *acc = s->row_acc[i - i0];
+        acc[0] = acc[1] = acc[2] = 0.0;
+        s->row_scale[i - i0] =
+            cell < 0 ? 0.0 : gather_cell(ctx, p, t, (uint32_t)cell, L, clip, nclip, acc, &batch, cnt);
+    }
+    rl__batch_flush(ctx, &batch, cnt);
+    for (uint32_t i = i0; i <= i1; i++) {
+        int32_t cell = m->grid[(size_t)j * m->nu + i];
+        for (int c = 0; cell >= 0 && c < 3; c++)
+            m->e_pass[cell][c] += s->row_acc[i - i0][c] * s->row_scale[i - i0];
+    }
+    return 0;
+}
+
+/* Processes one kept leaf over the tile's cells, a row at a time, handing
+ * each row's cells that the leaf's region covers (every cell when the method
+ * does not cull) to rows->row. @return 0 or -1. */
+static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint64_t id,
+                       uint32_t emitter_index, const rl_leaf_rows *rows, rl_region *reg, v2 *q, rl_scratch *s,
+                       int stage, rl_counters *cnt)
+{
+    rl_map *m = t->m;
+    int culled = rows->culls;
+    rl_leaf L;
+    rl__leaf_make(ctx, p->e, emitter_index, t->map_index, p->level, id, &L);
+    size_t nq = 0;
+    if (culled) {
+        /* a light field's solid angle is culled against the part of the
+         * slab where its radiance is nonzero; cells outside that region
+         * would only have drawn zeros */
+        v3 box[4], src[RL_MAX_POLY_VERTS + 2];
+        int sup = ctx->sampling->zero_culling ? rl__leaf_support(p->e, &L, box) : 0;
+        size_t ns = sup > 0 ? rl__clip_poly3(box, 4, m->frame.origin, m->frame.n, src) : 0;
+        double lift = 0.0;
+        for (size_t k = 0; k < ns; k++)
+            lift = fmax(lift, v3_dot(v3_sub(src[k], m->frame.origin), m->frame.n));
+        if (sup < 0 || (sup > 0 && (ns < 3 || !(lift > 0))))
+            return 0;
+        nq = sup > 0 ? rl__node_region(ctx, p, src, ns, t, p->level, id, reg, q)
+                     : rl__node_region(ctx, p, p->sclip, p->ns, t, p->level, id, reg, q);
+        if (nq == 0)
+            return 0;
+    }
+    if (row_reserve(s, m->nu) != 0)
+        return -1;
+    const v2 *clip = culled && p->descended ? q : NULL;
+    for (uint32_t j = t->row0; j < t->row1; j++) {
+        uint32_t i0 = 0, i1 = m->nu - 1;
+        if (culled && m->polygon >= 0) {
+            double ulo, uhi, va = m->v0 + j * m->cell;
+            if (!band_range(q, nq, va, va + m->cell, &ulo, &uhi))
+                continue;
+            double fi0 = floor((ulo - m->u0) / m->cell), fi1 = floor((uhi - m->u0) / m->cell);
+            if (fi1 < 0 || fi0 > m->nu - 1)
+                continue;
+            i0 = fi0 < 0 ? 0 : (uint32_t)fi0;
+            i1 = fi1 > m->nu - 1 ? m->nu - 1 : (uint32_t)fi1;
+        }
+        if (rows->row(ctx, p, t, &L, emitter_index, clip, nq, j, i0, i1, s, stage, cnt) != 0)
+            return -1;
+    }
+    return 0;
+}
+
+int rl__leaves_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei, rl_scratch *s, rl_counters *cnt,
+                      const rl_leaf_rows *rows)
+{
+    rl_pair *p = malloc(sizeof *p);
+    rl_region *reg = malloc(sizeof *reg);
+    v2 *q = malloc((RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES) * sizeof *q);
+    int rc = (!p || !reg || !q) ? -1 : 0;
+    if (rc == 0 && rl__pair_setup(ctx, &ctx->emitters[ei], t, p)) {
+        cnt->pairs++;
+        cnt->pairs_descended += p->descended;
+        s->nleaves = 0;
+        if (rows->lambert && ctx->sampling->descend && p->e->kind == EM_CONST) {
+            /* a constant emitter: Lambert's formula, and rays for visibility alone */
+            rl__gather_lambert(ctx, p, t, ei, cnt);
+        } else if (rows->culls && p->descended) {
+            /* an emitter smaller than a solid angle: each cell's origins see it exactly */
+            rc = rl__gather_views(ctx, p, t, ei, s, cnt);
+        } else if (rows->culls) {
+            rc = walk(ctx, p, t, s, cnt);
+            if (rc == 0 && s->nleaves > 1)
+                qsort(s->leaves, s->nleaves, sizeof *s->leaves, cmp_u64);
+        } else {
+            uint64_t total = lfio_part_hemi_count(p->level);
+            cnt->leaves_considered += total;
+            for (uint64_t id = 0; id < total && rc == 0; id++)
+                rc = push_leaf(s, id);
+        }
+        if (rc == 0 && rows->prepare)
+            rc = rows->prepare(s, t);
+        for (int stage = 2 - rows->stages; stage <= 1 && rc == 0; stage++)
+            for (size_t k = 0; k < s->nleaves && rc == 0; k++)
+                rc = gather_leaf(ctx, p, t, s->leaves[k], ei, rows, reg, q, s, stage, cnt);
+    }
+    free(p);
+    free(reg);
+    free(q);
+    return rc;
+}
+
+/* culled: the surviving leaves, Lambert times visibility for constant
+ * emitters and exact views of small ones when descend is on. */
+static const rl_leaf_rows culled_rows = {.culls = 1, .lambert = 1, .stages = 1, .row = culled_row};
+
+/* naive: every leaf of partition_n through the same per-leaf code. */
+static const rl_leaf_rows naive_rows = {.culls = 0, .lambert = 1, .stages = 1, .row = culled_row};
+
+static int culled_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei, rl_scratch *s, rl_counters *cnt)
+{
+    return rl__leaves_gather(ctx, t, ei, s, cnt, &culled_rows);
+}
+
+static int naive_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei, rl_scratch *s, rl_counters *cnt)
+{
+    return rl__leaves_gather(ctx, t, ei, s, cnt, &naive_rows);
+}
+
+const rl_method_impl rl__method_culled = {.id = RL_METHOD_CULLED, .point_view = 1, .gather = culled_gather};
+const rl_method_impl rl__method_naive = {.id = RL_METHOD_NAIVE, .point_view = 0, .gather = naive_gather};
