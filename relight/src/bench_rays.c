@@ -1,6 +1,6 @@
 /*
  * bench_rays.c - rl_bench_rays(): the ray tracer alone, the ceiling that the
- * engine's ray rate is measured against (tools/bench*.c report it).
+ * engine's ray rate is measured against (`ilf bench --rays`, bench/src, reports it).
  *
  * Each worker draws a chunk of random shadow rays (uniform points on the
  * scene's polygons by area, cosine-distributed directions), then traces it
