@@ -23,6 +23,7 @@
 #include "cli.h"
 #include "ilf/hash.h"
 #include "ilf/pool.h"
+#include "ilf/vec.h"
 #include "commands.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
@@ -113,32 +114,13 @@ static const cli_usage synth_usage = {
     "ilf synth --kind spot --spot 0,0,-1:0,0,1:25:2:0.1 --spot 0.3,0,-0.5:0,0,1:40:1 -o spots.h5",
 };
 
-/* ------------------------------------------------------------ vectors */
-
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static double norm3(const double a[3])
-{
-    return sqrt(dot3(a, a));
-}
-
 /* ------------------------------------------------------------- models */
 
 static double radial_gain(const synth_model *m, const double x[3], const double w[3])
 {
     double r[3] = {x[0] - m->radial_centre[0], x[1] - m->radial_centre[1], x[2] - m->radial_centre[2]};
-    double len = norm3(r);
-    double cosine = dot3(w, r) / len;
+    double len = a3_len(r);
+    double cosine = a3_dot(w, r) / len;
     double g = (cosine - m->radial_cos_cone) / (1.0 - m->radial_cos_cone);
     return g > 0.0 ? g : 0.0;
 }
@@ -147,11 +129,11 @@ static double radial_gain(const synth_model *m, const double x[3], const double 
 static int sees_ball(const synth_spot *spot, const double x[3], const double w[3])
 {
     double d[3] = {x[0] - spot->centre[0], x[1] - spot->centre[1], x[2] - spot->centre[2]};
-    if (dot3(d, w) <= 0.0)
+    if (a3_dot(d, w) <= 0.0)
         return 0;
     double c[3];
-    cross3(d, w, c);
-    return norm3(c) < spot->radius;
+    a3_cross(d, w, c);
+    return a3_len(c) < spot->radius;
 }
 
 static double spot_gain(const synth_model *m, const double x[3], const double w[3])
@@ -161,7 +143,7 @@ static double spot_gain(const synth_model *m, const double x[3], const double w[
         const synth_spot *spot = &m->spots[k];
         if (!sees_ball(spot, x, w))
             continue;
-        double t = (dot3(w, spot->axis) - spot->cos_cone) / (1.0 - spot->cos_cone);
+        double t = (a3_dot(w, spot->axis) - spot->cos_cone) / (1.0 - spot->cos_cone);
         /* t <= 0 is outside the cone: dark for every falloff, so falloff 0 gives a hard edge. */
         if (t > 0.0)
             sum += pow(t < 1.0 ? t : 1.0, spot->falloff);
@@ -381,7 +363,7 @@ static int parse_spot_fields(char *fields[5], size_t count, synth_spot *spot, ch
             return 0;
         }
     }
-    double len = norm3(spot->axis);
+    double len = a3_len(spot->axis);
     if (!(len > 0.0) || !isfinite(len)) {
         snprintf(why, why_size, "the axis must be a nonzero direction");
         return 0;
@@ -563,7 +545,7 @@ static int check_size(const lfio_slab_desc *d)
 static void build_model(synth_options *o, const lfio_slab *slab, synth_model *m)
 {
     const lfio_slab_desc *d = lfio_slab_get_desc(slab);
-    double diagonal = sqrt(dot3(d->u, d->u) + dot3(d->v, d->v)); /* u and v are orthogonal */
+    double diagonal = sqrt(a3_dot(d->u, d->u) + a3_dot(d->v, d->v)); /* u and v are orthogonal */
     double e3_local[3] = {0, 0, 1}, e3[3];
     lfio_slab_to_world(slab, e3_local, e3);
     double depth = o->depth_given ? o->depth : 0.5 * diagonal;

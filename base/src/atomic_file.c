@@ -164,8 +164,7 @@ int ilf_atomic_commit(ilf_atomic *a, const char **step)
     return 0;
 }
 
-/* @return 0 once all size bytes are written to fd, or an errno value. */
-static int write_fully(int fd, const void *data, size_t size)
+int ilf_write_all(int fd, const void *data, size_t size)
 {
     const char *p = data;
     while (size > 0) {
@@ -186,7 +185,7 @@ int ilf_atomic_write(const char *path, const void *data, size_t size, const char
     int err = ilf_atomic_new(path, &a, step);
     if (err != 0)
         return err;
-    if ((err = write_fully(a->fd, data, size)) != 0)
+    if ((err = ilf_write_all(a->fd, data, size)) != 0)
         *step = "cannot write the temporary file";
     else
         err = ilf_atomic_commit(a, step);

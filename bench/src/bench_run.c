@@ -33,6 +33,7 @@
 
 #include "bench.h"
 #include "cli.h"
+#include "ilf/atomic_file.h"
 #include "jsonout.h"
 
 
@@ -58,22 +59,6 @@ void bench_reference_free(bench_reference *r)
 }
 
 /* ------------------------------------------------------------ forking */
-
-/* Writes size bytes to fd, resuming after signals. @return 1 when all were written. */
-static int write_record(int fd, const void *data, size_t size)
-{
-    const char *p = data;
-    while (size > 0) {
-        ssize_t n = write(fd, p, size);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n <= 0)
-            return 0;
-        p += n;
-        size -= (size_t)n;
-    }
-    return 1;
-}
 
 /* Reads up to size bytes from fd until end of file. @return the bytes read. */
 static size_t read_record(int fd, void *data, size_t size)
@@ -130,7 +115,7 @@ int bench_fork(bench_job_fn job, void *arg, bench_result *out)
     if (pid == 0) {
         close(fds[0]);
         job(arg, out);
-        int sent = write_record(fds[1], out, sizeof *out);
+        int sent = ilf_write_all(fds[1], out, sizeof *out) == 0;
         fflush(NULL);
         _exit(sent ? 0 : 1);
     }

@@ -38,7 +38,7 @@ static void slab_frame(const lfio_slab_desc *d, double frame[9])
     }
     cap__normalise(&frame[0]);
     cap__normalise(&frame[3]);
-    cap__cross(&frame[0], &frame[3], &frame[6]);
+    a3_cross(&frame[0], &frame[3], &frame[6]);
 }
 
 /* cap__position_fn: one position, from its images to rgb. */

@@ -44,30 +44,13 @@ cap_status cap__fail_text(cap_status status, const char *text);
 
 #else /* the helpers below are C only */
 
+#include "ilf/vec.h"
 #include "lfio/lightfield.h"
-
-static inline double cap__dot(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static inline void cap__cross(const double a[3], const double b[3], double out[3])
-{
-    double x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2], z = a[0] * b[1] - a[1] * b[0];
-    out[0] = x;
-    out[1] = y;
-    out[2] = z;
-}
-
-static inline double cap__norm(const double a[3])
-{
-    return sqrt(cap__dot(a, a));
-}
 
 /* Scales a to unit length. @return 1, or 0 (a untouched) if a is zero or not finite. */
 static inline int cap__normalise(double a[3])
 {
-    double len = cap__norm(a);
+    double len = a3_len(a);
     if (!(len > 0.0) || !isfinite(len))
         return 0;
     a[0] /= len;

@@ -85,12 +85,12 @@ static cap_status get_forward_up(const parser *p, const ilf_json *j, const char 
         return st;
     if (!cap__normalise(f))
         return cap__json_bad(p->path, fe, "must not be zero");
-    double along = cap__dot(u, f);
+    double along = a3_dot(u, f);
     for (int a = 0; a < 3; a++)
         u[a] -= along * f[a];
-    if (!(cap__norm(u) > 1e-9 * (1.0 + fabs(along))) || !cap__normalise(u))
+    if (!(a3_len(u) > 1e-9 * (1.0 + fabs(along))) || !cap__normalise(u))
         return cap__json_bad(p->path, elem, "up must not be zero or parallel to forward");
-    cap__cross(u, f, l);
+    a3_cross(u, f, l);
     for (int r = 0; r < 3; r++) {
         R[3 * r + 0] = f[r];
         R[3 * r + 1] = l[r];
@@ -706,7 +706,7 @@ cap_status cap__json_rectangle(const char *path, const ilf_json *obj, const char
     if (edges == LFIO_EDGES_LENGTH)
         return cap__json_bad(path, elem, "u and v must be nonzero (and their lengths finite)");
     if (edges == LFIO_EDGES_ORTHOGONAL)
-        return cap__json_bad(path, elem, "u and v must be orthogonal (u.v = %g)", cap__dot(d->u, d->v));
+        return cap__json_bad(path, elem, "u and v must be orthogonal (u.v = %g)", a3_dot(d->u, d->v));
     return CAP_OK;
 }
 

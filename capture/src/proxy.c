@@ -136,15 +136,15 @@ static const char *corners_rectangle(const double c[4][3], lfio_slab_desc *d)
         d->v[a] = c[3][a] - c[0][a];
         diag += (c[2][a] - c[0][a]) * (c[2][a] - c[0][a]);
     }
-    double lu = cap__norm(d->u), lv = cap__norm(d->v), miss = 0.0;
+    double lu = a3_len(d->u), lv = a3_len(d->v), miss = 0.0;
     for (int a = 0; a < 3; a++)
         miss = fmax(miss, fabs(c[2][a] - (c[0][a] + d->u[a] + d->v[a])));
     if (!(lu > 0.0) || !(lv > 0.0))
         return "has a zero-length edge";
-    if (fabs(cap__dot(d->u, d->v)) > RECT_TOL * lu * lv || miss > RECT_TOL * sqrt(diag))
+    if (fabs(a3_dot(d->u, d->v)) > RECT_TOL * lu * lv || miss > RECT_TOL * sqrt(diag))
         return "is not a rectangle (v0 v1 v2 v3 must be the corners in order around it)";
     /* lfio wants orthogonality to 1e-9: remove the part of v along u left by rounding. */
-    double along = cap__dot(d->u, d->v) / (lu * lu);
+    double along = a3_dot(d->u, d->v) / (lu * lu);
     for (int a = 0; a < 3; a++)
         d->v[a] -= along * d->u[a];
     return NULL;
@@ -172,8 +172,8 @@ static size_t find_partner(const ilf_mesh *m, const char *used, size_t t, double
     for (int k = 0; k < 3; k++) {
         double e[3] = {v[(k + 2) % 3][0] - v[(k + 1) % 3][0], v[(k + 2) % 3][1] - v[(k + 1) % 3][1],
                        v[(k + 2) % 3][2] - v[(k + 1) % 3][2]};
-        if (cap__norm(e) > longest) {
-            longest = cap__norm(e);
+        if (a3_len(e) > longest) {
+            longest = a3_len(e);
             opposite = k;
         }
     }

@@ -98,7 +98,7 @@ static void depth_corrected(const reproject_job *job, double s, double t_st, con
             lfio_slab_position(job->cap, i, j, x);
             for (int c = 0; c < 3; c++)
                 wk[c] = w[c] + (x[c] - p[c]) / t;
-            if (!cap__normalise(wk) || cap__dot(wk, job->cap_e3) <= 0.0)
+            if (!cap__normalise(wk) || a3_dot(wk, job->cap_e3) <= 0.0)
                 continue;
             captured_radiance(job, (i + 0.5) / job->cd->nu, (j + 0.5) / job->cd->nv, wk, value);
             for (int c = 0; c < 3; c++)
@@ -114,11 +114,11 @@ static void depth_corrected(const reproject_job *job, double s, double t_st, con
 static int trace_back(const reproject_job *job, const double y[3], const double w[3], double out[3])
 {
     out[0] = out[1] = out[2] = 0.0;
-    double denom = cap__dot(w, job->cap_e3);
+    double denom = a3_dot(w, job->cap_e3);
     if (!(denom > 1e-12))
         return 0;
     double to_plane[3] = {job->cd->origin[0] - y[0], job->cd->origin[1] - y[1], job->cd->origin[2] - y[2]};
-    double t = cap__dot(to_plane, job->cap_e3) / denom;
+    double t = a3_dot(to_plane, job->cap_e3) / denom;
     double p[3] = {y[0] + t * w[0], y[1] + t * w[1], y[2] + t * w[2]};
     double s, t_st;
     lfio_slab_locate(job->cap, p, &s, &t_st, NULL);

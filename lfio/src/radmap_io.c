@@ -24,6 +24,7 @@
 #include <string.h>
 
 #include "h5util.h"
+#include "ilf/vec.h"
 #include "internal.h"
 #include "lfio/radmap.h"
 #ifdef LFIO_MPI
@@ -136,11 +137,6 @@ static int all_finite(const double *v, size_t count)
     return 1;
 }
 
-/* @return a . b */
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 /* Checks that e1, e2 are unit and orthogonal and normal = e1 x e2. @return 1, or 0 with a reason in why. */
 static int check_frame(const lfio_radmap_patch *p, char *why, size_t why_size)
@@ -150,10 +146,10 @@ static int check_frame(const lfio_radmap_patch *p, char *why, size_t why_size)
                              p->e1[0] * p->e2[1] - p->e1[1] * p->e2[0]};
     if (!all_finite(p->origin, 3) || !all_finite(p->e1, 3) || !all_finite(p->e2, 3) || !all_finite(p->normal, 3))
         snprintf(why, why_size, "map frame is not finite");
-    else if (fabs(dot3(p->e1, p->e1) - 1) > FRAME_TOL || fabs(dot3(p->e2, p->e2) - 1) > FRAME_TOL)
+    else if (fabs(a3_dot(p->e1, p->e1) - 1) > FRAME_TOL || fabs(a3_dot(p->e2, p->e2) - 1) > FRAME_TOL)
         snprintf(why, why_size, "e1 and e2 must be unit vectors");
-    else if (fabs(dot3(p->e1, p->e2)) > FRAME_TOL)
-        snprintf(why, why_size, "e1 and e2 are not orthogonal (e1.e2 = %g)", dot3(p->e1, p->e2));
+    else if (fabs(a3_dot(p->e1, p->e2)) > FRAME_TOL)
+        snprintf(why, why_size, "e1 and e2 are not orthogonal (e1.e2 = %g)", a3_dot(p->e1, p->e2));
     else if (fabs(p->normal[0] - cross[0]) + fabs(p->normal[1] - cross[1]) + fabs(p->normal[2] - cross[2])
              > FRAME_TOL)
         snprintf(why, why_size, "normal is not e1 x e2");

@@ -14,14 +14,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ilf/vec.h"
 #include "internal.h"
 #include "mask.h"
 
-/* @return the dot product of a and b. */
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 /* @return 1 if all three components are finite. */
 static int finite3(const double a[3])
@@ -48,11 +44,11 @@ int lfio_slab_edges_check(const double u[3], const double v[3])
 {
     if (u == NULL || v == NULL || !finite3(u) || !finite3(v))
         return LFIO_EDGES_LENGTH;
-    double lu = sqrt(dot3(u, u)), lv = sqrt(dot3(v, v));
+    double lu = sqrt(a3_dot(u, u)), lv = sqrt(a3_dot(v, v));
     /* the product too: where it overflows, the orthogonality test below would pass anything */
     if (!(lu > 0.0) || !(lv > 0.0) || !isfinite(lu * lv))
         return LFIO_EDGES_LENGTH;
-    if (fabs(dot3(u, v)) > 1e-9 * lu * lv)
+    if (fabs(a3_dot(u, v)) > 1e-9 * lu * lv)
         return LFIO_EDGES_ORTHOGONAL;
     return LFIO_EDGES_OK;
 }
@@ -127,8 +123,8 @@ lfio_status lfio__check_desc(const lfio_slab_desc *d, char *why, size_t why_size
 static void make_frame(lfio_slab *s)
 {
     const double *u = s->desc.u, *v = s->desc.v;
-    s->len_u = sqrt(dot3(u, u));
-    s->len_v = sqrt(dot3(v, v));
+    s->len_u = sqrt(a3_dot(u, u));
+    s->len_v = sqrt(a3_dot(v, v));
     for (int k = 0; k < 3; k++) {
         s->e1[k] = u[k] / s->len_u;
         s->e2[k] = v[k] / s->len_v;
@@ -136,7 +132,7 @@ static void make_frame(lfio_slab *s)
     s->e3[0] = s->e1[1] * s->e2[2] - s->e1[2] * s->e2[1];
     s->e3[1] = s->e1[2] * s->e2[0] - s->e1[0] * s->e2[2];
     s->e3[2] = s->e1[0] * s->e2[1] - s->e1[1] * s->e2[0];
-    double l3 = sqrt(dot3(s->e3, s->e3));
+    double l3 = sqrt(a3_dot(s->e3, s->e3));
     for (int k = 0; k < 3; k++)
         s->e3[k] /= l3;
 }
@@ -322,7 +318,7 @@ lfio_status lfio_slab_position(const lfio_slab *s, uint32_t i, uint32_t j, doubl
 
 void lfio_slab_to_local(const lfio_slab *s, const double world[3], double local[3])
 {
-    double l0 = dot3(world, s->e1), l1 = dot3(world, s->e2), l2 = dot3(world, s->e3);
+    double l0 = a3_dot(world, s->e1), l1 = a3_dot(world, s->e2), l2 = a3_dot(world, s->e3);
     local[0] = l0;
     local[1] = l1;
     local[2] = l2;
@@ -340,11 +336,11 @@ void lfio_slab_locate(const lfio_slab *s, const double x[3], double *st_s, doubl
 {
     double r[3] = {x[0] - s->desc.origin[0], x[1] - s->desc.origin[1], x[2] - s->desc.origin[2]};
     if (st_s)
-        *st_s = dot3(r, s->e1) / s->len_u;
+        *st_s = a3_dot(r, s->e1) / s->len_u;
     if (st_t)
-        *st_t = dot3(r, s->e2) / s->len_v;
+        *st_t = a3_dot(r, s->e2) / s->len_v;
     if (dist)
-        *dist = dot3(r, s->e3);
+        *dist = a3_dot(r, s->e3);
 }
 
 /* Bilinear footprint of (st_s, st_t) over position centres, clamped at the border. */

@@ -34,7 +34,7 @@ typedef struct ray_job {
 /* @return a uniform double in [0, 1) from state. */
 static double next_unit(uint64_t *state)
 {
-    *state = hash_mix(*state, 0x632be59bd9b4e019ull);
+    *state = ilf_hash_mix(*state, 0x632be59bd9b4e019ull);
     return (*state >> 11) * (1.0 / 9007199254740992.0);
 }
 
@@ -68,7 +68,7 @@ static void random_ray(const ray_job *job, uint64_t *state, v3 *org, v3 *dir)
 static void ray_worker(void *p, unsigned index)
 {
     ray_job *job = p;
-    uint64_t state = hash_mix(0x5eed, index), hits = 0;
+    uint64_t state = ilf_hash_mix(0x5eed, index), hits = 0;
     double reach = 4.0 * rl__tracer_extent(job->tracer), cpu = 0.0, wall = 0.0;
     v3 *org = malloc(RAY_CHUNK * sizeof *org), *dir = malloc(RAY_CHUNK * sizeof *dir);
     double *tn = malloc(RAY_CHUNK * sizeof *tn), *tf = malloc(RAY_CHUNK * sizeof *tf);

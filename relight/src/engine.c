@@ -222,7 +222,7 @@ static uint32_t *deal_tiles(const rl_cluster *cl, const rl_map *maps, const work
     if (owner && order && load) {
         for (size_t k = 0; k < n; k++)
             order[k] = (dealt){measured ? measured[k] : tile_cells(maps, &items[k]) + TILE_SETUP_CELLS,
-                               hash_mix(0x9e3779b97f4a7c15u, k), k};
+                               ilf_hash_mix(0x9e3779b97f4a7c15u, k), k};
         qsort(order, n, sizeof *order, dearest_first);
         for (size_t k = 0; k < n; k++) {
             uint32_t least = 0;

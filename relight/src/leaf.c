@@ -43,7 +43,7 @@ void rl__leaf_make(const rl_transfer_ctx *ctx, const rl_emitter *e, uint32_t ei,
     L->lv = lv;
     L->id = id;
     L->omega = lfio_part_solid_angle(lv, id);
-    L->key = hash_mix(hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), map_index), lv), id);
+    L->key = ilf_hash_mix(ilf_hash_mix(rl__pair_key(ctx, ei, map_index), lv), id);
     for (int k = 0; k < 3; k++)
         L->p[k] = frame_vector(&e->frame, v[k]);
     /* in e's frame a corner is v[k] itself: it reaches the front when v[k].z > 0 */

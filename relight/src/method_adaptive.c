@@ -57,8 +57,8 @@ static estimate node_estimate(const rl_transfer_ctx *ctx, const rl_pair *p, cons
     double acc[ADAPTIVE_MAX_SAMPLES][3];
     rl_ray_batch batch;
     batch.n = 0;
-    uint64_t h = hash_mix(L->key, cell);
-    lds_key key = rl__lds_make(salt ? hash_mix(h, salt) : h);
+    uint64_t h = ilf_hash_mix(L->key, cell);
+    lds_key key = rl__lds_make(salt ? ilf_hash_mix(h, salt) : h);
     for (uint32_t i = 0; i < k; i++) {
         double u[4], w, lam[3];
         rl__lds4(&key, i, u);

@@ -100,7 +100,7 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
     if (!rl__cell_domain(m, cell, clip, nclip, &dom))
         return 0.0;
     uint32_t k = ctx->sampling->rays_per_solid_angle;
-    lds_key key = rl__lds_make(hash_mix(L->key, cell));
+    lds_key key = rl__lds_make(ilf_hash_mix(L->key, cell));
     /* draw a group of samples before shooting any: their square roots and
      * divisions are independent and overlap, where one sample at a time
      * would wait for each */

@@ -93,8 +93,7 @@ static void sample_leaf(point_walk *w, uint32_t lv, uint64_t id, const v3 *q, si
     if (!(total > 0))
         return;
     uint32_t k = w->rays;
-    uint64_t key = hash_mix(
-        hash_mix(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), w->ei), w->receiver), lv), id);
+    uint64_t key = ilf_hash_mix(ilf_hash_mix(rl__pair_key(ctx, w->ei, w->receiver), lv), id);
     lds_key lk = rl__lds_make(key);
     double hx = v3_dot(v3_sub(w->x, e->frame.origin), e->frame.n);
     double sum[3] = {0, 0, 0}; /* light arriving */

@@ -31,7 +31,7 @@ lds_key rl__lds_make(uint64_t key)
     /* two hashes, each split into two 32-bit offsets: ample resolution for
      * a rotation, at half the hashing */
     lds_key k;
-    uint64_t h[2] = {hash_mix(key, 1), hash_mix(key, 2)};
+    uint64_t h[2] = {ilf_hash_mix(key, 1), ilf_hash_mix(key, 2)};
     for (int j = 0; j < 4; j++)
         k.shift[j] = (double)((h[j / 2] >> (32 * (j % 2))) & 0xffffffffu) * (1.0 / 4294967296.0);
     return k;

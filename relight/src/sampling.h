@@ -1,6 +1,6 @@
 /*
- * sampling.h - deterministic sample sequences and warps: a hash for keys,
- * a scrambled 4-D Halton sequence, uniform directions in spherical
+ * sampling.h - deterministic sample sequences and warps (keys hashed by
+ * base's ilf_hash_mix): a scrambled 4-D Halton sequence, uniform directions in spherical
  * triangles (Arvo 1995), and exact spherical-triangle solid angles.
  */
 #ifndef RELIGHT_SAMPLING_H
@@ -9,16 +9,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "ilf/hash.h"
 #include "ilf/vec.h"
-
-/* @return a well-mixed 64-bit hash of h and x (order matters). */
-static inline uint64_t hash_mix(uint64_t h, uint64_t x)
-{
-    uint64_t z = h ^ (x + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2));
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
 
 /* The Cranley-Patterson rotation of one key: four offsets in [0, 1). */
 typedef struct lds_key {

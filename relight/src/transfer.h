@@ -8,6 +8,7 @@
 #define RELIGHT_TRANSFER_H
 
 #include "emitter.h"
+#include "ilf/hash.h"
 #include "shadow.h"
 #include "tracer.h"
 
@@ -53,6 +54,13 @@ typedef struct rl_scratch {
     uint32_t first_cell;  /* the tile's first cell index */
     uint32_t *occ;        /* point receivers: one list of possible occluders per level of the walk */
 } rl_scratch;
+
+/* @return the key of what one pass samples between emitter ei and a receiver
+ * (a map's index, or a point's key): every random sequence of the pair derives from it. */
+static inline uint64_t rl__pair_key(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver)
+{
+    return ilf_hash_mix(ilf_hash_mix(ilf_hash_mix(ctx->sampling->seed, ctx->pass), ei), receiver);
+}
 
 /* Frees what a scratch space holds (not the struct). */
 void rl__scratch_free(rl_scratch *s);

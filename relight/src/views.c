@@ -60,8 +60,9 @@ int rl__gather_views(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile
             if (cell < 0 || !rl__cell_domain(m, (uint32_t)cell, NULL, 0, &dom))
                 continue;
             uint32_t nl = e->kind == EM_CONST ? lambert_origins(p, m, &dom, k) : 0;
-            uint64_t rk = hash_mix(hash_mix(t->map_index, (uint64_t)cell), UINT64_C(0x76696577)); /* "view" */
-            lds_key key = rl__lds_make(hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), rk));
+            uint64_t rk = ilf_hash_mix(ilf_hash_mix(t->map_index, (uint64_t)cell), UINT64_C(0x76696577)); /* "view" */
+            uint64_t emitter_key = ilf_hash_mix(ilf_hash_mix(ctx->sampling->seed, ctx->pass), ei);
+            lds_key key = rl__lds_make(ilf_hash_mix(emitter_key, rk));
             double seen[3] = {0, 0, 0}, unocc = 0.0, full = 0.0;
             for (uint32_t o = 0; o < k || o < nl; o++) {
                 double u[4];
@@ -72,7 +73,7 @@ int rl__gather_views(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile
                 if (o >= k)
                     continue;
                 unocc += f;
-                if (rl__point_gather(ctx, ei, hash_mix(rk, o), x, m->frame.n, 1, seen, s, cnt) != 0)
+                if (rl__point_gather(ctx, ei, ilf_hash_mix(rk, o), x, m->frame.n, 1, seen, s, cnt) != 0)
                     return -1;
             }
             /* constant: Lambert's mean times the fraction of the views' unoccluded light that arrived */
@@ -114,8 +115,7 @@ void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
             rl_origin_domain dom;
             if (cell < 0 || !rl__cell_domain(m, (uint32_t)cell, NULL, 0, &dom))
                 continue;
-            lds_key key = rl__lds_make(hash_mix(
-                hash_mix(hash_mix(hash_mix(ctx->sampling->seed, ctx->pass), ei), t->map_index), (uint64_t)cell));
+            lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, ei, t->map_index), (uint64_t)cell));
             uint32_t no = lambert_origins(p, m, &dom, k);
             double f = 0.0;
             for (uint32_t o = 0; o < no; o++) {

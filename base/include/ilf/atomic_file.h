@@ -42,6 +42,9 @@ void ilf_atomic_release(ilf_atomic *a);
 /* Writes size bytes to path atomically. @return 0, or an errno value with *step set. */
 int ilf_atomic_write(const char *path, const void *data, size_t size, const char **step);
 
+/* Writes all size bytes to descriptor fd, resuming after signals and short writes. @return 0, or an errno value. */
+int ilf_write_all(int fd, const void *data, size_t size);
+
 /* @return 1 if entry (a file name, no folder) is a temporary of the destination named name under the rule above. */
 int ilf_atomic_is_temporary_of(const char *entry, const char *name);
 

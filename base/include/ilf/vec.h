@@ -35,6 +35,18 @@ static inline double dmax(double a, double b) { return a > b ? a : b; }
 static inline double dmin(double a, double b) { return a < b ? a : b; }
 static inline double v3_maxabs(v3 a) { return dmax(fabs(a.x), dmax(fabs(a.y), fabs(a.z))); }
 
+/* The same vocabulary for vectors kept as double[3] arrays (file formats,
+ * public APIs); a3_cross reads both inputs before writing, so out may alias one. */
+static inline double a3_dot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static inline double a3_len(const double a[3]) { return sqrt(a3_dot(a, a)); }
+static inline void a3_cross(const double a[3], const double b[3], double out[3])
+{
+    double x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2], z = a[0] * b[1] - a[1] * b[0];
+    out[0] = x;
+    out[1] = y;
+    out[2] = z;
+}
+
 static inline v2 v2_sub(v2 a, v2 b) { return (v2){a.x - b.x, a.y - b.y}; }
 /* @return the z component of the cross product (twice the signed area of 0, a, b). */
 static inline double v2_cross(v2 a, v2 b) { return a.x * b.y - a.y * b.x; }
