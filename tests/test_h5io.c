@@ -359,7 +359,7 @@ static int chunk_location(const char *path, const char *dset, haddr_t *addr, hsi
 static int flip_byte(const char *path, long offset)
 {
     int fd = open(path, O_RDWR);
-    unsigned char c;
+    unsigned char c = 0;
     int ok = fd >= 0 && pread(fd, &c, 1, offset) == 1;
     c ^= 0x5a;
     ok = ok && pwrite(fd, &c, 1, offset) == 1;

@@ -376,7 +376,7 @@ static int flip_chunk_byte(const char *path, const char *dset)
     H5Dclose(d);
     H5Fclose(f);
     int fd = open(path, O_RDWR);
-    unsigned char c;
+    unsigned char c = 0;
     int ok = rc >= 0 && size > 8 && fd >= 0 && pread(fd, &c, 1, (off_t)(addr + size / 2)) == 1;
     c ^= 0x5a;
     ok = ok && pwrite(fd, &c, 1, (off_t)(addr + size / 2)) == 1;
