@@ -4,16 +4,18 @@
 #   bench/reproduce.sh [OUT]      (default OUT = out/benchmarks; needs a built build/tools/ilf)
 #
 # Environment: ILF (default build/tools/ilf), QUICK=1 for a fast rehearsal
-# (fewer repeats, small sweeps). Every number BENCHMARKS.md quotes is in
+# (fewer repeats, small sweeps), REPEATS (default 5), RTRACE and OCONV for
+# the Radiance column of the point queries (bench/points.sh; skipped
+# without). Every number BENCHMARKS.md quotes is in
 # OUT/results.txt or in the bench folders below it. Runs that are compared
 # run alternately, so machine noise hits both sides alike; the medians of
-# the repeats are reported. Takes about 50 minutes on 2 cores.
+# the repeats are reported. Takes about an hour on 2 cores.
 set -eu
 cd "$(dirname "$0")/.."
 ILF=${ILF:-build/tools/ilf}
 OUT=${1:-out/benchmarks}
 QUICK=${QUICK:-0}
-REPEATS=5
+REPEATS=${REPEATS:-5}
 [ "$QUICK" = 1 ] && REPEATS=1
 mkdir -p "$OUT/relight"
 RES="$OUT/results.txt"
@@ -84,8 +86,9 @@ relight_pair beams_direct data/.bench_beams_paper.json --bounces 0 -- --bounces 
 say "beams_direct with view.exr/png: peak RSS $(cat "$OUT/relight/beams_view.rss") KiB"
 say "ilf info (no image, no scene): peak RSS $( /usr/bin/time -f %M "$ILF" info data/beams_lightfield.h5 2>&1 >/dev/null | tail -1) KiB"
 say ""
-say "## 2. Paper settings, 2 bounces (the paper's 36.85 s -> 20.39 s run)"
-[ "$QUICK" = 1 ] || relight_pair beams_bounces data/.bench_beams_paper.json --bounces 2 -- --bounces 2 --zero-culling 0
+say "## 2. Paper settings, 2 bounces (the paper's 36.85 s -> 20.39 s run): bounces gathered on cells twice"
+say "   as large (the default) and on every cell (--bounce-cell-factor 1, the engine before issue #14)"
+[ "$QUICK" = 1 ] || relight_pair beams_bounces data/.bench_beams_paper.json --bounces 2 -- --bounces 2 --bounce-cell-factor 1
 say ""
 say "## 3. classroom, direct: default cells, and the paper's 1.5 million"
 relight_pair classroom data/classroom.json --bounces 0 -- --bounces 0 --threads 1
@@ -112,7 +115,7 @@ say ""
 say "## 5. Sweeps (speed against accuracy)"
 SWEEP_OPTS="--time-limit 60 --reference-samples 8192"
 [ "$QUICK" = 1 ] && SWEEP_OPTS="--quick --time-limit 10"
-for s in beams_diffuse beams classroom; do
+for s in beams_diffuse beams classroom classroom_lightfield; do
     # shellcheck disable=SC2086
     "$ILF" bench "data/$s.json" -o "$OUT/sweep_$s" --cache "$OUT/cache" --quiet $SWEEP_OPTS || true
     say "sweep $s: $OUT/sweep_$s/summary.md"
@@ -123,4 +126,8 @@ say "## 6. Scaling"
 # shellcheck disable=SC2086
 "$ILF" bench --scaling data/beams.json -o "$OUT/scaling_beams" --quiet --time-limit 120 || true
 say "scaling: $OUT/scaling_beams"
+
+say ""
+say "## 7. Point queries (ilf irradiance; Radiance's rtrace -I beside it when RTRACE is set)"
+ILF="$ILF" REPEATS=$([ "$QUICK" = 1 ] && echo 1 || echo 3) sh bench/points.sh "$OUT/points" | tee -a "$RES"
 say "done"
