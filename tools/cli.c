@@ -594,11 +594,15 @@ static void remove_temporaries(const char *path)
     closedir(dir);
 }
 
-/* Removes staging folder path and every file in it (it holds no folders). */
+/* Removes staging folder path and every file in it (it holds no folders). The command's own
+ * threads go on writing while this runs, so a file may appear after the folder was read: the
+ * folder is emptied again until rmdir succeeds, after which nothing can be created in it. */
 static void remove_folder(const char *path)
 {
-    DIR *dir = opendir(path);
-    if (dir != NULL) {
+    for (int attempt = 0; attempt < 1000; attempt++) {
+        DIR *dir = opendir(path);
+        if (dir == NULL)
+            return;
         for (struct dirent *e; (e = readdir(dir)) != NULL;) {
             char victim[8192];
             if (strcmp(e->d_name, ".") != 0 && strcmp(e->d_name, "..") != 0
@@ -606,8 +610,9 @@ static void remove_folder(const char *path)
                 unlink(victim);
         }
         closedir(dir);
+        if (rmdir(path) == 0 || errno != ENOTEMPTY)
+            return;
     }
-    rmdir(path);
 }
 
 /* Watcher thread: waits for a signal, removes every registered output's temporaries, ends the process. */
