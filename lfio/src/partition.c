@@ -503,11 +503,17 @@ int lfio_part_strata_sample(const lfio_part_strata *st, uint32_t s, const double
                             double lam[3])
 {
     uint32_t k = st->k, c, r, upper;
-    if (!stratum_cell(k, s, &c, &r, &upper))
-        return 0;
     double g[3];
-    /* for k = 1 every step below is exact, so g = l: a caller's own warp passes through */
-    if (!upper) {
+    if (k == 1) {
+        /* one stratum, the whole triangle: every step of the general case is exact
+         * (c = r = 0, divisions by 1), so g = l bit for bit; relight takes this path
+         * once per sample, where the stratum search's square root and divisions show */
+        if (s != 0)
+            return 0;
+        memcpy(g, l, sizeof g);
+    } else if (!stratum_cell(k, s, &c, &r, &upper)) {
+        return 0;
+    } else if (!upper) {
         g[0] = ((double)(k - c - r - 1) + l[0]) / k;
         g[1] = (c + l[1]) / k;
         g[2] = (r + l[2]) / k;
