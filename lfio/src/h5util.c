@@ -637,21 +637,6 @@ static int small_metadata_cache(hid_t fapl)
     return H5Pset_mdc_config(fapl, &cfg) < 0 ? -1 : 0;
 }
 
-/* Writes size bytes of data to fd, resuming after partial writes and signals. @return 0 or an errno value. */
-static int write_all(int fd, const unsigned char *data, size_t size)
-{
-    while (size > 0) {
-        ssize_t n = write(fd, data, size);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n <= 0)
-            return n < 0 ? errno : EIO;
-        data += n;
-        size -= (size_t)n;
-    }
-    return 0;
-}
-
 /* The core driver's file buffer, allocated through these callbacks so that its bytes can be written
  * out without a copy. The driver holds one buffer per file; udata is shared, not copied. */
 typedef struct core_image {
@@ -712,7 +697,7 @@ static herr_t image_udata_free(void *udata)
  * a real file: a flush failing inside H5Dclose/H5Fclose leaves a freed file
  * registered, and the process crashes at exit (HDFFV-11052, fixed in 1.14.1).
  * In memory nothing can fail that way; the bytes then go to disk through
- * write_all(), whose errors are ordinary. The driver's buffer is allocated
+ * ilf_write_all(), whose errors are ordinary. The driver's buffer is allocated
  * through core_image, so the bytes are written from it directly: memory about
  * the size of the file, once.
  * @return LFIO_OK; an error (LFIO_ERR_IO naming the temporary's failure).
@@ -750,7 +735,7 @@ static lfio_status build_and_write(const char *path, const char *name, lfio__h5_
     if (st == LFIO_OK)
         st = finish_superblock(path, ci.buf, (size_t)bytes);
     int err = 0;
-    if (st == LFIO_OK && (err = write_all(fd, ci.buf, (size_t)bytes)) != 0)
+    if (st == LFIO_OK && (err = ilf_write_all(fd, ci.buf, (size_t)bytes)) != 0)
         st = lfio__fail(LFIO_ERR_IO, "%s: cannot write the temporary file: %s", path, strerror(err));
     if (file >= 0 && H5Fclose(file) < 0 && st == LFIO_OK)
         st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot close the file in memory");
