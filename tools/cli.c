@@ -686,8 +686,11 @@ static void watch(const char *path, int is_folder)
 char *cli_staging_make(char *template)
 {
     /* Created and registered under the lock the watcher takes before it cleans up: a signal that
-     * arrives in between waits for the registration, so it never leaves the folder behind. */
+     * arrives in between waits for the registration, so it never leaves the folder behind. The
+     * handlers go in first: a signal between mkdtemp and their installation would end the process
+     * with the folder in place (starting the watcher's thread is slow under AddressSanitizer). */
     pthread_mutex_lock(&watched_lock);
+    start_watcher();
     char *made = mkdtemp(template);
     int saved = errno;
     if (made != NULL)
