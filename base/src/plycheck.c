@@ -223,14 +223,32 @@ static int header_property(ply_cursor *c, ply_header *h, const unsigned char *w[
 }
 
 /* Parses the header of c's file into h, up to and including the end_header line. @return 1, or 0 with the problem. */
+/* @return 1 if some line of d (size bytes) starts with the word end_header. */
+static int has_end_header(const unsigned char *d, size_t size)
+{
+    static const char word[] = "end_header";
+    for (size_t p = 0; p + sizeof word - 1 <= size; p++)
+        if ((p == 0 || d[p - 1] == '\n') && memcmp(d + p, word, sizeof word - 1) == 0)
+            return 1;
+    return 0;
+}
+
 static int parse_header(ply_cursor *c, ply_header *h)
 {
     const unsigned char *d = c->data;
+    /* said first, so that what is not PLY at all (or cut in its header) is called that */
+    if (!has_end_header(d, c->size))
+        return fail(c, "PLY header: no end_header line (the file is truncated or not PLY)");
     for (size_t line = 0; c->pos < c->size; line++) {
         const unsigned char *nl = memchr(d + c->pos, '\n', c->size - c->pos);
         size_t end = nl ? (size_t)(nl - d) : c->size;
         const unsigned char *w[PLY_MAX_WORDS];
         size_t wl[PLY_MAX_WORDS];
+        /* A header is text: assimp reads a NUL or another control byte differently from this
+         * check (a NUL ends its word), so a line holding one could declare counts unseen here. */
+        for (size_t p = c->pos; p < end; p++)
+            if (d[p] < 0x20 && d[p] != '\t' && d[p] != '\r')
+                return fail(c, "PLY header: control byte 0x%02x on line %zu", d[p], line + 1);
         size_t n = split_line(d, c->pos, end, w, wl);
         c->pos = nl ? end + 1 : c->size;
         int ok = 1;
@@ -246,6 +264,10 @@ static int parse_header(ply_cursor *c, ply_header *h)
             ok = header_element(c, h, w, wl, n);
         else if (word_is(w[0], wl[0], "property"))
             ok = header_property(c, h, w, wl, n);
+        else
+            /* an unknown keyword: a reader that took it for a misspelt one would see other counts */
+            return fail(c, "PLY header: unknown keyword '%.*s' on line %zu", (int)(wl[0] > 40 ? 40 : wl[0]),
+                        (const char *)w[0], line + 1);
         if (!ok)
             return 0;
     }
