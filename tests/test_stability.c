@@ -526,8 +526,8 @@ static void check_grazing(void)
  * culled cells see it with the plain method's k rays per solid angle, which
  * almost surely all miss it with descent off: those maps are checked for
  * finiteness and culled == naive only, and their error is printed. With
- * descent (the default) each cell gathers it from its origins' exact views,
- * within 2% of Lambert (RMSE) at the default k = 4 (k = 1 is printed); an unoccluded point query is Lambert's
+ * descent (the default) each cell gathers it by Lambert's formula times
+ * sampled visibility, within 2% of Lambert (RMSE) at the default k = 4 (k = 1 is printed); an unoccluded point query is Lambert's
  * formula itself (1e-6). Area and solid-angle sampling are checked too.
  */
 static void sliver_emitter(const tpoly *lamp, const tpoly *floor)
@@ -545,14 +545,14 @@ static void sliver_emitter(const tpoly *lamp, const tpoly *floor)
                e.max, 100 * e.max / e.peak, e.peak);
     }
     rl_solution_destroy(sol);
-    /* with descent (the default), cells gather a small emitter from their origins' exact views */
+    /* with descent (the default), cells gather a constant emitter by Lambert's formula times visibility */
     for (uint32_t k = 1; k <= 4; k *= 4) {
         ts_set_sampling(s, RL_METHOD_CULLED, 16, k, 16, 1, 0);
         sol = ts_relight(s, "sliver emitter, descend");
         if (!sol)
             continue;
         ts_errors e = ts_errors_vs_reference(sol, (size_t)ts_map_of(sol, 1), &em, 1, 16);
-        printf("sliver emitter (aspect 1.01e-6)    culled k=%u views: RMSE %.3g%%, max %.3g%% of the peak %.4g\n", k,
+        printf("sliver emitter (aspect 1.01e-6)    culled k=%u descend: RMSE %.3g%%, max %.3g%% of the peak %.4g\n", k,
                100 * e.rmse / e.peak, 100 * e.max / e.peak, e.peak);
         CHECK(k < 4 || e.rmse < 0.02 * e.peak, "sliver emitter, culled with descent, k=%u: RMSE %.3g of peak %.3g", k,
               e.rmse, e.peak);

@@ -16,9 +16,10 @@
  *
  * and they share: leaves (leaf.c: a solid angle prepared for sampling),
  * pairs, tiles, origin domains and shadow-ray packets (pair.c), and the
- * estimators that replace leaves where leaves are the wrong tool (views.c:
- * Lambert's formula times visibility for a constant emitter, exact views of
- * an emitter smaller than a solid angle).
+ * estimator that replaces leaves where leaves are the wrong tool (views.c:
+ * Lambert's formula times visibility for a constant emitter, and times the
+ * weighted mean of radiance * visibility for an emitter smaller than a
+ * solid angle).
  *
  * Invariants: every estimate is a function of its arguments only (random
  * numbers come from low-discrepancy sequences keyed by seed, pass, emitter,
@@ -205,16 +206,11 @@ int rl__leaf_draw(const rl_pair *p, const rl_leaf *L, v3 x, double u1, double u2
 
 /* ------------------------------------------------------- exact estimators */
 
-/* Lambert's formula times the visible fraction, for a constant emitter and
- * every cell of the tile (views.c). */
+/* Lambert's formula times the weighted mean of radiance * visibility, for
+ * every cell of the tile: a constant emitter, or one smaller than a solid
+ * angle (views.c). */
 void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei,
                         rl_counters *cnt);
-
-/* Transfer from emitter ei to every cell of the tile from the exact views of
- * stratified origins, for an emitter smaller than a solid angle (views.c).
- * @return 0, or -1 if scratch memory ran out. */
-int rl__gather_views(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei, rl_scratch *s,
-                     rl_counters *cnt);
 
 /* ------------------------------------------------------- the leaf family */
 

@@ -21,7 +21,8 @@
  *
  * Where leaves are the wrong tool, both hand the pair to views.c: a constant
  * emitter under `descend` gets Lambert's formula times visibility, and under
- * culled an emitter smaller than a solid angle is gathered from exact views.
+ * culled so does an emitter smaller than a solid angle (times its weighted
+ * mean radiance).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -249,12 +250,11 @@ int rl__leaves_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei,
         cnt->pairs++;
         cnt->pairs_descended += p->descended;
         s->nleaves = 0;
-        if (rows->lambert && ctx->sampling->descend && p->e->kind == EM_CONST) {
-            /* a constant emitter: Lambert's formula, and rays for visibility alone */
+        int lambert = ctx->sampling->descend &&
+                      ((rows->lambert && p->e->kind == EM_CONST) || (rows->culls && p->descended));
+        if (lambert) {
+            /* Lambert's formula, and rays for visibility (and the radiance of light fields) alone */
             rl__gather_lambert(ctx, p, t, ei, cnt);
-        } else if (rows->culls && p->descended) {
-            /* an emitter smaller than a solid angle: each cell's origins see it exactly */
-            rc = rl__gather_views(ctx, p, t, ei, s, cnt);
         } else if (rows->culls) {
             rc = walk(ctx, p, t, s, cnt);
             if (rc == 0 && s->nleaves > 1)
@@ -277,8 +277,8 @@ int rl__leaves_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei,
     return rc;
 }
 
-/* culled: the surviving leaves, Lambert times visibility for constant
- * emitters and exact views of small ones when descend is on. */
+/* culled: the surviving leaves; Lambert times visibility for constant
+ * emitters and for small ones when descend is on. */
 static const rl_leaf_rows culled_rows = {.culls = 1, .lambert = 1, .stages = 1, .row = culled_row};
 
 /* naive: every leaf of partition_n through the same per-leaf code. */

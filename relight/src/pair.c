@@ -96,7 +96,8 @@ void rl__tile_make(rl_map *m, uint32_t map_index, uint32_t row0, uint32_t row1, 
  * corner of the tile, in solid angle or in angular width -- exact solid
  * angles, so an emitter seen edge-on or a sliver counts as small. Leaves
  * aimed at such an emitter would mostly miss it; such pairs are gathered
- * from each cell origin's exact view instead (rl__gather_views()). */
+ * by Lambert's formula times sampled radiance and visibility instead
+ * (rl__gather_lambert()). */
 static int pair_small(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t)
 {
     double m = ctx->sampling->partition_n, subtended = 0.0, width = 0.0;

@@ -79,9 +79,9 @@ typedef struct rl_sampling {
                                         interpolate onto the cells bilinearly, as indirect light is smooth;
                                         1: on every cell; 0 (default): 2 */
     uint64_t seed;                 /**< default 1 */
-    uint32_t descend;              /**< 1 (default, direct pass): pairs whose emitter subtends less than a
-                                        solid angle are gathered from exact views, and constant emitters use
-                                        Lambert's formula times the sampled arriving fraction; 0: the plain
+    uint32_t descend;              /**< 1 (default, direct pass): constant emitters, and emitters that subtend
+                                        less than a solid angle, use Lambert's formula times the sampled
+                                        arriving light (radiance * visibility); 0: the plain
                                         estimator at partition_n everywhere, the paper's method */
     uint32_t zero_culling;         /**< 1 (default): culled and adaptive skip light field solid angles that the
                                         zero-radiance mask rules out, and cells that only the slab's dark
