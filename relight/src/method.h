@@ -108,8 +108,9 @@ typedef struct rl_pair {
     v3 sclip[RL_MAX_POLY_VERTS + 2]; /* the emitter clipped to the tile's front half-space */
     size_t ns;
     uint32_t level;
-    int descended;
-    double eps; /* ray offset at both ends, m */
+    int descended;  /* the emitter subtends less than a solid angle of level from every corner of the tile */
+    double leaves;  /* the most solid angles of level it subtends from a tile corner or its centroid's foot */
+    double eps;     /* ray offset at both ends, m */
 } rl_pair;
 
 /* The tile: the part of map m in grid rows [row0, row1), as a 2D polygon. */
@@ -135,19 +136,15 @@ int rl__pair_setup(const rl_transfer_ctx *ctx, const rl_emitter *e, const rl_til
 size_t rl__node_region(const rl_transfer_ctx *ctx, const rl_pair *p, const v3 *src, size_t ns, const rl_tile *t,
                        uint32_t lv, uint64_t id, rl_region *reg, v2 *q);
 
-/* Where the origins of one (cell, leaf) pair are drawn: the cell's polygon,
- * or for a descended pair its part inside the region, and that part's
- * share of the cell's area. */
+/* Where the origins of a cell are drawn: the cell's polygon. */
 typedef struct rl_origin_domain {
     v2 poly[RL_MAX_POLY_VERTS + 8];
     uint32_t n;
-    int square;    /* a full square: sampled from its corner and side alone */
-    double weight; /* area of the part / area of the cell */
+    int square; /* a full square: sampled from its corner and side alone */
 } rl_origin_domain;
 
-/* Fills d for cell of map m; clip (nclip vertices), when not NULL, is the
- * region to restrict origins to. @return 0 if the domain is empty. */
-int rl__cell_domain(const rl_map *m, uint32_t cell, const v2 *clip, size_t nclip, rl_origin_domain *d);
+/* Fills d for cell of map m. */
+void rl__cell_domain(const rl_map *m, uint32_t cell, rl_origin_domain *d);
 
 /* @return a world origin in domain d of map m from two numbers in [0, 1). */
 static inline v3 rl__domain_point(const rl_map *m, const rl_origin_domain *d, double a, double b)
@@ -206,9 +203,16 @@ int rl__leaf_draw(const rl_pair *p, const rl_leaf *L, v3 x, double u1, double u2
 
 /* ------------------------------------------------------- exact estimators */
 
+/* An emitter that subtends fewer solid angles of partition_n than this
+ * from a receiver tile (rl_pair.leaves) is gathered by Lambert's formula
+ * under culled and naive when descend is on: leaves a few solid angles
+ * across are mostly half empty, while the area-weighted mean is noisy only
+ * for a near, large emitter (docs/methods.md has the measurements). */
+#define RL_LAMBERT_LEAVES 64.0
+
 /* Lambert's formula times the weighted mean of radiance * visibility, for
- * every cell of the tile: a constant emitter, or one smaller than a solid
- * angle (views.c). */
+ * every cell of the tile: a constant emitter, or one a few solid angles
+ * across (views.c). */
 void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei,
                         rl_counters *cnt);
 
@@ -222,11 +226,9 @@ typedef struct rl_leaf_rows {
     int stages;      /* 1, or 2: stage 0 measures every cell, stage 1 estimates */
     /* Before the stages: prepares s for tile t. @return 0 or -1. NULL: nothing. */
     int (*prepare)(rl_scratch *s, const rl_tile *t);
-    /* Adds leaf L's light to cells i0..i1 of grid row j (clip: nclip vertices
-     * restricting origins, or NULL). @return 0 or -1 (memory). */
+    /* Adds leaf L's light to cells i0..i1 of grid row j. @return 0 or -1 (memory). */
     int (*row)(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, const rl_leaf *L, uint32_t ei,
-               const v2 *clip, size_t nclip, uint32_t j, uint32_t i0, uint32_t i1, rl_scratch *s, int stage,
-               rl_counters *cnt);
+               uint32_t j, uint32_t i0, uint32_t i1, rl_scratch *s, int stage, rl_counters *cnt);
 } rl_leaf_rows;
 
 /* Gathers emitter ei into tile t by the leaves of their pair, each row of

@@ -151,16 +151,17 @@ static estimate adaptive_node(const rl_transfer_ctx *ctx, const rl_pair *p, cons
  * each (cell, leaf) node to an equal share of the cell's error budget:
  * target_error * total / sqrt(leaves). */
 static int adaptive_row(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, const rl_leaf *L,
-                        uint32_t ei, const v2 *clip, size_t nq, uint32_t j, uint32_t i0, uint32_t i1, rl_scratch *s,
-                        int stage, rl_counters *cnt)
+                        uint32_t ei, uint32_t j, uint32_t i0, uint32_t i1, rl_scratch *s, int stage,
+                        rl_counters *cnt)
 {
     rl_map *m = t->m;
     uint32_t max_level = p->level >= (1u << 18) ? (1u << 20) : 4 * p->level;
     for (uint32_t i = i0; i <= i1; i++) {
         int32_t cell = m->grid[(size_t)j * m->nu + i];
         rl_origin_domain dom;
-        if (cell < 0 || !rl__cell_domain(m, (uint32_t)cell, clip, nq, &dom))
+        if (cell < 0)
             continue;
+        rl__cell_domain(m, (uint32_t)cell, &dom);
         size_t slot = (size_t)cell - s->first_cell;
         double tol = INFINITY;
         if (stage == 1 && s->pair_leaves[slot] > 0)
@@ -168,15 +169,15 @@ static int adaptive_row(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
         /* stage 0 needs only each cell's total over all its leaves: one sample a leaf */
         estimate est = stage == 0 ? node_estimate(ctx, p, t, &dom, (uint32_t)cell, L, 1, SALT_BUDGET, cnt)
                                   : adaptive_node(ctx, p, t, &dom, (uint32_t)cell, ei, L, max_level, tol, cnt);
-        double y = dom.weight * (est.e[0] + est.e[1] + est.e[2]) / 3;
+        double y = (est.e[0] + est.e[1] + est.e[2]) / 3;
         if (stage == 0) {
             s->pair_total[slot] += y;
             s->pair_leaves[slot] += y > 0;
             continue;
         }
         for (int c = 0; c < 3; c++)
-            m->e_pass[cell][c] += dom.weight * est.e[c];
-        cnt->variance += dom.weight * dom.weight * est.var;
+            m->e_pass[cell][c] += est.e[c];
+        cnt->variance += est.var;
     }
     return 0;
 }

@@ -19,10 +19,11 @@
  * its leaves in id order either way, so the two are bit-identical as long
  * as no pair descends below partition_n.
  *
- * Where leaves are the wrong tool, both hand the pair to views.c: a constant
- * emitter under `descend` gets Lambert's formula times visibility, and under
- * culled so does an emitter smaller than a solid angle (times its weighted
- * mean radiance).
+ * Where leaves are the wrong tool, both hand the pair to views.c under
+ * `descend`: a constant emitter gets Lambert's formula times visibility,
+ * and so does an emitter fewer than RL_LAMBERT_LEAVES solid angles across
+ * (times its weighted mean radiance); culled also hands over a pair that
+ * descends (thinner than a solid angle), which naive keeps.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -93,13 +94,11 @@ static int walk(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, 
 /* Queues the k rays of (cell, leaf L) into acc.
  * @return the factor that turns acc into the cell's irradiance (0: no rays). */
 static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t cell,
-                          const rl_leaf *L, const v2 *clip, size_t nclip, double *acc, rl_ray_batch *batch,
-                          rl_counters *cnt)
+                          const rl_leaf *L, double *acc, rl_ray_batch *batch, rl_counters *cnt)
 {
     rl_map *m = t->m;
     rl_origin_domain dom;
-    if (!rl__cell_domain(m, cell, clip, nclip, &dom))
-        return 0.0;
+    rl__cell_domain(m, cell, &dom);
     uint32_t k = ctx->sampling->rays_per_solid_angle;
     lds_key key = rl__lds_make(ilf_hash_mix(L->key, cell));
     /* draw a group of samples before shooting any: their square roots and
@@ -125,7 +124,7 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
                 cnt->samples++;
         }
     }
-    return dom.weight / k;
+    return 1.0 / k;
 }
 
 /* Gives the u range [*ulo, *uhi] of convex polygon q within the band v in [va, vb]. @return 0 if none. */
@@ -165,8 +164,7 @@ static int row_reserve(rl_scratch *s, size_t n)
 /* Culled's and naive's work on one row of cells for one leaf: every cell's
  * k rays go out in packets, then each cell adds its estimate. */
 static int culled_row(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, const rl_leaf *L, uint32_t ei,
-                      const v2 *clip, size_t nclip, uint32_t j, uint32_t i0, uint32_t i1, rl_scratch *s, int stage,
-                      rl_counters *cnt)
+                      uint32_t j, uint32_t i0, uint32_t i1, rl_scratch *s, int stage, rl_counters *cnt)
 {
     (void)ei;
     (void)stage;
@@ -178,7 +176,7 @@ static int culled_row(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_til
         double *acc = s->row_acc[i - i0];
         acc[0] = acc[1] = acc[2] = 0.0;
         s->row_scale[i - i0] =
-            cell < 0 ? 0.0 : gather_cell(ctx, p, t, (uint32_t)cell, L, clip, nclip, acc, &batch, cnt);
+            cell < 0 ? 0.0 : gather_cell(ctx, p, t, (uint32_t)cell, L, acc, &batch, cnt);
     }
     rl__batch_flush(ctx, &batch, cnt);
     for (uint32_t i = i0; i <= i1; i++) {
@@ -220,7 +218,6 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
     }
     if (row_reserve(s, m->nu) != 0)
         return -1;
-    const v2 *clip = culled && p->descended ? q : NULL;
     for (uint32_t j = t->row0; j < t->row1; j++) {
         uint32_t i0 = 0, i1 = m->nu - 1;
         if (culled && m->polygon >= 0) {
@@ -233,7 +230,7 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
             i0 = fi0 < 0 ? 0 : (uint32_t)fi0;
             i1 = fi1 > m->nu - 1 ? m->nu - 1 : (uint32_t)fi1;
         }
-        if (rows->row(ctx, p, t, &L, emitter_index, clip, nq, j, i0, i1, s, stage, cnt) != 0)
+        if (rows->row(ctx, p, t, &L, emitter_index, j, i0, i1, s, stage, cnt) != 0)
             return -1;
     }
     return 0;
@@ -251,7 +248,8 @@ int rl__leaves_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei,
         cnt->pairs_descended += p->descended;
         s->nleaves = 0;
         int lambert = ctx->sampling->descend &&
-                      ((rows->lambert && p->e->kind == EM_CONST) || (rows->culls && p->descended));
+                      ((rows->lambert && (p->e->kind == EM_CONST || p->leaves < RL_LAMBERT_LEAVES)) ||
+                       (rows->culls && p->descended));
         if (lambert) {
             /* Lambert's formula, and rays for visibility (and the radiance of light fields) alone */
             rl__gather_lambert(ctx, p, t, ei, cnt);
@@ -278,7 +276,7 @@ int rl__leaves_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei,
 }
 
 /* culled: the surviving leaves; Lambert times visibility for constant
- * emitters and for small ones when descend is on. */
+ * emitters and for small or thin ones when descend is on. */
 static const rl_leaf_rows culled_rows = {.culls = 1, .lambert = 1, .stages = 1, .row = culled_row};
 
 /* naive: every leaf of partition_n through the same per-leaf code. */

@@ -91,28 +91,59 @@ void rl__tile_make(rl_map *m, uint32_t map_index, uint32_t row0, uint32_t row1, 
     }
 }
 
-/* @return 1 if the pair's emitter subtends less than one solid angle of
- * partition_n (about 2*pi / (4 m^2) sr, about 1.26 / m rad across) from every
- * corner of the tile, in solid angle or in angular width -- exact solid
- * angles, so an emitter seen edge-on or a sliver counts as small. Leaves
- * aimed at such an emitter would mostly miss it; such pairs are gathered
- * by Lambert's formula times sampled radiance and visibility instead
- * (rl__gather_lambert()). */
-static int pair_small(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t)
+/* @return the solid angle (sr) of the pair's clipped emitter seen from r;
+ * *width gets that over its angular extent (rad). */
+static double subtended_from(const rl_pair *p, v3 r, double *width)
 {
-    double m = ctx->sampling->partition_n, subtended = 0.0, width = 0.0;
     v3 dir[RL_MAX_POLY_VERTS + 2];
     double om[RL_MAX_POLY_VERTS + 2];
-    for (size_t j = 0; j < t->npoly; j++) {
-        v3 r = frame_point(&t->m->frame, t->poly[j]);
-        double omega = rl__sph_fan(p->sclip, p->ns, r, dir, om), ext = 0.0;
-        for (size_t a = 0; a < p->ns; a++)
-            for (size_t b = a + 1; b < p->ns; b++)
-                ext = fmax(ext, acos(fmin(1.0, fmax(-1.0, v3_dot(dir[a], dir[b])))));
-        subtended = fmax(subtended, omega);
-        width = fmax(width, ext > 0 ? omega / ext : 0.0);
+    double omega = rl__sph_fan(p->sclip, p->ns, r, dir, om), ext = 0.0;
+    for (size_t a = 0; a < p->ns; a++)
+        for (size_t b = a + 1; b < p->ns; b++)
+            ext = fmax(ext, acos(fmin(1.0, fmax(-1.0, v3_dot(dir[a], dir[b])))));
+    *width = ext > 0 ? omega / ext : 0.0;
+    return omega;
+}
+
+/* @return 1 if q lies in the convex polygon poly (n vertices, either turn). */
+static int convex_contains(const v2 *poly, size_t n, v2 q)
+{
+    int left = 0, right = 0;
+    for (size_t i = 0; i < n; i++) {
+        v2 a = poly[i], b = poly[(i + 1) % n];
+        double c = (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x);
+        left |= c > 0;
+        right |= c < 0;
     }
-    return 1.6 / (m * m) > subtended || 1.26 / m > width;
+    return !(left && right);
+}
+
+/* Measures the pair's emitter from the tile. @return 1 if it subtends less
+ * than one solid angle of partition_n (about 2*pi / (4 m^2) sr, about
+ * 1.26 / m rad across) from every corner of the tile, in solid angle or in
+ * angular width -- exact solid angles, so an emitter seen edge-on or a
+ * sliver counts as small. Leaves aimed at such an emitter would mostly miss
+ * it; such pairs are gathered by Lambert's formula times sampled radiance
+ * and visibility instead (rl__gather_lambert()). *leaves gets the most
+ * solid angles it subtends from a corner or from the foot of its centroid
+ * on the tile (where a near emitter looks largest). */
+static int pair_measure(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, double *leaves)
+{
+    double m = ctx->sampling->partition_n, subtended = 0.0, width = 0.0, w;
+    for (size_t j = 0; j < t->npoly; j++) {
+        subtended = fmax(subtended, subtended_from(p, frame_point(&t->m->frame, t->poly[j]), &w));
+        width = fmax(width, w);
+    }
+    int small = 1.6 / (m * m) > subtended || 1.26 / m > width;
+    v3 c = {0, 0, 0};
+    for (size_t i = 0; i < p->ns; i++)
+        c = v3_add(c, v3_scale(p->sclip[i], 1.0 / (double)p->ns));
+    v2 foot = frame_project(&t->m->frame, c);
+    double peak = subtended;
+    if (t->npoly >= 3 && convex_contains(t->poly, t->npoly, foot))
+        peak = fmax(peak, subtended_from(p, frame_point(&t->m->frame, foot), &w));
+    *leaves = peak / (2.0 * RL_PI / (4.0 * m * m));
+    return small;
 }
 
 int rl__pair_setup(const rl_transfer_ctx *ctx, const rl_emitter *e, const rl_tile *t, rl_pair *p)
@@ -135,7 +166,8 @@ int rl__pair_setup(const rl_transfer_ctx *ctx, const rl_emitter *e, const rl_til
     /* naive never descends: it is the plain enumeration of partition_n */
     int plain = ctx->sampling->method == RL_METHOD_NAIVE || !ctx->sampling->descend;
     p->level = ctx->sampling->partition_n;
-    p->descended = !plain && pair_small(ctx, p, t);
+    int small = pair_measure(ctx, p, t, &p->leaves);
+    p->descended = !plain && small;
     p->eps = pair_eps(ctx, p, t->m, t->poly, t->npoly);
     return 1;
 }
@@ -164,21 +196,8 @@ size_t rl__node_region(const rl_transfer_ctx *ctx, const rl_pair *p, const v3 *s
     return rl__clip_to_region(t->poly, t->npoly, reg, q, RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES);
 }
 
-int rl__cell_domain(const rl_map *m, uint32_t cell, const v2 *clip, size_t nclip, rl_origin_domain *d)
+void rl__cell_domain(const rl_map *m, uint32_t cell, rl_origin_domain *d)
 {
     d->n = rl__map_cell_polygon(m, &m->cells[cell], d->poly);
-    d->square = m->cells[cell].poly_count == 0 && !clip;
-    d->weight = 1.0;
-    if (!clip || !(m->cells[cell].area > 0))
-        return 1;
-    /* cell intersect region: clip the cell by the clipped region's edges */
-    v2 buf[2][RL_MAX_POLY_VERTS + RL_REGION_MAX_PLANES + 8];
-    size_t n = rl__clip_to_polygon(d->poly, d->n, clip, nclip, buf[0], buf[1]);
-    double part = n >= 3 ? rl__polygon_area2(buf[0], (uint32_t)n) : 0.0;
-    if (!(part > 0))
-        return 0;
-    d->weight = part / m->cells[cell].area;
-    d->n = (uint32_t)(n < RL_MAX_POLY_VERTS + 8 ? n : RL_MAX_POLY_VERTS + 8);
-    memcpy(d->poly, buf[0], d->n * sizeof *d->poly);
-    return 1;
+    d->square = m->cells[cell].poly_count == 0;
 }

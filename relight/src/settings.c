@@ -40,7 +40,7 @@ static const rl_setting_info settings[] = {
     {"bounce_cell_factor", "bounce-cell-factor", "F", RL_SETTING_UINT32, FIELD(bounce_cell_factor), 0, 64, 0, 0,
      "bounces gather on cells F times larger, interpolated; 1 = every cell, 0 = 2"},
     {"descend", "descend", "0|1", RL_SETTING_UINT32, FIELD(descend), 0, 1, 0, 1,
-     "1: Lambert's formula times sampled visibility for diffuse and small emitters"},
+     "1: Lambert's formula times sampled light for diffuse and small emitters"},
     {"zero_culling", "zero-culling", "0|1", RL_SETTING_UINT32, FIELD(zero_culling), 0, 1, 0, 1,
      "1: cull light field directions and cells by zero radiance"},
     {"seed", "seed", "S", RL_SETTING_UINT64, FIELD(seed), 0, JSON_EXACT_MAX, RL_SETTING_TEXT_BOUNDS, 1,

@@ -5,9 +5,9 @@
  *
  * A constant emitter leaves nothing unknown but visibility: its unoccluded
  * irradiance is Lambert's closed form, so rays are spent on the visible
- * fraction alone. An emitter smaller than one solid angle of the partition
- * (far, small, a sliver) would be missed by most of the leaves aimed at it;
- * for it, a light field's or a bounce map's cell mean is Lambert's formula
+ * fraction alone. An emitter only a few solid angles of the partition
+ * across (far, small, a sliver; RL_LAMBERT_LEAVES) would be missed by most
+ * of the leaves aimed at it; for it, a light field's cell mean is Lambert's formula
  * (as if its radiance were 1) times the mean of radiance * visibility over
  * uniform points of the emitter weighted by cos cos / r^2. Seen from afar
  * those weights vary little, so the mean is well estimated; a constant
@@ -82,8 +82,9 @@ void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
         for (uint32_t i = 0; i < m->nu; i++) {
             int32_t cell = m->grid[(size_t)j * m->nu + i];
             rl_origin_domain dom;
-            if (cell < 0 || !rl__cell_domain(m, (uint32_t)cell, NULL, 0, &dom))
+            if (cell < 0)
                 continue;
+            rl__cell_domain(m, (uint32_t)cell, &dom);
             lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, ei, t->map_index), (uint64_t)cell));
             uint32_t no = lambert_origins(p, m, &dom, k);
             double f = 0.0;
