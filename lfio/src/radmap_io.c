@@ -36,6 +36,12 @@
 /* Rows per chunk: a few hundred KiB of cells, a whole polygon of vertices. */
 #define CELL_CHUNK 16384
 #define VERTEX_CHUNK 1024
+/* Cell datasets smaller than this are stored without shuffle and deflate:
+ * zlib would save a few hundred bytes of each and costs a stream set-up of
+ * about 64 KiB each time. The light-field classroom at 1.3 M cells: 64% of
+ * its 15,155 cell datasets are this small; its file is 8% larger (38.5
+ * against 35.7 MB) and written in 0.83x the time. */
+#define DEFLATE_MIN_BYTES 1024
 /* Tolerance on the map frame's unit, orthogonal, right-handed axes. */
 #define FRAME_TOL 1e-6
 
@@ -91,7 +97,7 @@ static void patch_layout(enum map_ds which, uint32_t nverts, uint32_t ncells, lf
     l->size = m->size;
     l->units = m->units;
     l->axes = m->axes;
-    l->deflate = m->deflate;
+    l->deflate = m->deflate && rows * (hsize_t)(m->width ? m->width : 1) * m->size >= DEFLATE_MIN_BYTES;
 }
 
 /* @return the native memory type of dataset which. */

@@ -62,9 +62,11 @@ static uint32_t view_rays(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
  * (clipped to the receiver's front) weighted by cos cos / r^2, view_rays()
  * of them (for a constant emitter, its radiance times the fraction of light
  * that arrives). No ray is traced where a light field or a bounce map is
- * dark. For a constant emitter: unoccluded cells get Lambert's field, cells in full shadow
- * exactly 0: rays are spent on visibility alone, which is all a constant
- * emitter leaves unknown. A ratio of two estimates is consistent rather
+ * dark, and Lambert's mean (the costlier half) is taken only where some
+ * light arrived: a cell in shadow or facing a dark light field gets its
+ * exact 0 from the rays alone. For a constant emitter: unoccluded cells
+ * get Lambert's field, cells in full shadow exactly 0: rays are spent on
+ * visibility alone, which is all a constant emitter leaves unknown. A ratio of two estimates is consistent rather
  * than unbiased (by O(1 / rays) in a penumbra; the white-furnace test
  * bounds it); Lambert minus the sampled loss would be unbiased, but it
  * dips below zero in shadows. The solid angles play no part: no sample is
@@ -86,15 +88,6 @@ void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
                 continue;
             rl__cell_domain(m, (uint32_t)cell, &dom);
             lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, ei, t->map_index), (uint64_t)cell));
-            uint32_t no = lambert_origins(p, m, &dom, k);
-            double f = 0.0;
-            for (uint32_t o = 0; o < no; o++) {
-                double u[4];
-                rl__lds4(&key, o, u);
-                f += rl__point_lambert(e, rl__domain_point(m, &dom, u[0], u[1]), m->frame.n);
-            }
-            if (!(f > 0))
-                continue;
             uint32_t nr = view_rays(ctx, p, m, &dom);
             double all = 0.0, seen[3] = {0, 0, 0};
             rl_ray_batch batch;
@@ -128,7 +121,18 @@ void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
                            seen, cnt);
             }
             rl__batch_flush(ctx, &batch, cnt);
-            if (!(all > 0))
+            /* no light arrives (shadow, or a light field dark toward the cell): the cell gets exactly 0,
+             * and Lambert's mean, the costlier half, is not needed */
+            if (!(all > 0) || !(seen[0] > 0 || seen[1] > 0 || seen[2] > 0))
+                continue;
+            uint32_t no = lambert_origins(p, m, &dom, k);
+            double f = 0.0;
+            for (uint32_t o = 0; o < no; o++) {
+                double u[4];
+                rl__lds4(&key, o, u);
+                f += rl__point_lambert(e, rl__domain_point(m, &dom, u[0], u[1]), m->frame.n);
+            }
+            if (!(f > 0))
                 continue;
             /* a constant emitter: its radiance times Lambert's mean times the fraction that arrived;
              * otherwise Lambert's mean times the weighted mean of radiance * visibility */
