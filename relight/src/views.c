@@ -7,9 +7,10 @@
  * irradiance is Lambert's closed form, so rays are spent on the visible
  * fraction alone. An emitter only a few solid angles of the partition
  * across (far, small, a sliver; RL_LAMBERT_LEAVES) would be missed by most
- * of the leaves aimed at it; for it, a light field's cell mean is Lambert's formula
- * (as if its radiance were 1) times the mean of radiance * visibility over
- * uniform points of the emitter weighted by cos cos / r^2. Seen from afar
+ * of the leaves aimed at it; for it, a light field's cell mean is
+ * Lambert's formula (as if its radiance were 1) times the mean of
+ * radiance * visibility over uniform points of the emitter weighted by
+ * cos cos / r^2. Seen from afar
  * those weights vary little, so the mean is well estimated; a constant
  * emitter is the case where the radiance term is the constant itself.
  * Origins come from one low-discrepancy sequence per (seed, pass, emitter,
@@ -21,6 +22,16 @@
 
 #include "method.h"
 
+/* @return the world point at the vertex mean of domain dom of map m: where a
+ * cell's view of an emitter is measured. */
+static v3 domain_centre(const rl_map *m, const rl_origin_domain *dom)
+{
+    v2 c = {0, 0};
+    for (uint32_t i = 0; i < dom->n; i++)
+        c = (v2){c.x + dom->poly[i].x / dom->n, c.y + dom->poly[i].y / dom->n};
+    return frame_point(&m->frame, c);
+}
+
 /* @return how many origins the mean of Lambert's formula over a cell takes
  * (rl__gather_lambert()). The formula is smooth except near the
  * emitter's plane, where it falls to 0 with the distance to that plane;
@@ -29,30 +40,24 @@
  * origins for 0.25 m cells 1 m under a 1 m emitter, 0.12% at 64; 0.98%
  * at 29 and 0.16% at 256 for cells 1 mm to 0.5 m under an emitter seen
  * edge-on. So the count follows that ratio, from k to 64 k. */
-static uint32_t lambert_origins(const rl_pair *p, const rl_map *m, const rl_origin_domain *dom, uint32_t k)
+static uint32_t lambert_origins(const rl_pair *p, const rl_map *m, v3 centre, uint32_t k)
 {
-    v2 c = {0, 0};
-    for (uint32_t i = 0; i < dom->n; i++)
-        c = (v2){c.x + dom->poly[i].x / dom->n, c.y + dom->poly[i].y / dom->n};
-    double h = fabs(v3_dot(v3_sub(frame_point(&m->frame, c), p->e->frame.origin), p->e->frame.n));
+    double h = fabs(v3_dot(v3_sub(centre, p->e->frame.origin), p->e->frame.n));
     double want = 72.0 * k * m->cell / dmax(h, 1e-300);
     return want >= 64.0 * k ? 64 * k : want <= k ? k : (uint32_t)ceil(want);
 }
 
 /* @return the shadow rays a cell takes for pair p: k per solid angle of
- * partition_n that the emitter subtends from the centre of domain dom (at
- * least k, at most 64 k), so that k and partition_n keep their meaning of
- * "how finely light is resolved". */
-static uint32_t view_rays(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_map *m, const rl_origin_domain *dom)
+ * partition_n that the emitter subtends from the cell's centre (at least
+ * k, at most 64 k), so that k and partition_n keep their meaning of "how
+ * finely light is resolved". */
+static uint32_t view_rays(const rl_transfer_ctx *ctx, const rl_pair *p, v3 centre)
 {
     uint32_t k = ctx->sampling->rays_per_solid_angle, n = ctx->sampling->partition_n;
     double leaf_sr = 2.0 * RL_PI / (4.0 * n * n);
-    v2 c = {0, 0};
-    for (uint32_t v = 0; v < dom->n; v++)
-        c = (v2){c.x + dom->poly[v].x / dom->n, c.y + dom->poly[v].y / dom->n};
     v3 dir[RL_MAX_POLY_VERTS + 2];
     double om[RL_MAX_POLY_VERTS + 2];
-    double leaves = ceil(rl__sph_fan(p->sclip, p->ns, frame_point(&m->frame, c), dir, om) / leaf_sr);
+    double leaves = ceil(rl__sph_fan(p->sclip, p->ns, centre, dir, om) / leaf_sr);
     return leaves >= 64.0 ? 64 * k : leaves <= 1.0 ? k : k * (uint32_t)leaves;
 }
 
@@ -66,9 +71,9 @@ static uint32_t view_rays(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
  * light arrived: a cell in shadow or facing a dark light field gets its
  * exact 0 from the rays alone. For a constant emitter: unoccluded cells
  * get Lambert's field, cells in full shadow exactly 0: rays are spent on
- * visibility alone, which is all a constant emitter leaves unknown. A ratio of two estimates is consistent rather
- * than unbiased (by O(1 / rays) in a penumbra; the white-furnace test
- * bounds it); Lambert minus the sampled loss would be unbiased, but it
+ * visibility alone, which is all a constant emitter leaves unknown. A
+ * ratio of two estimates is consistent rather than unbiased (by O(1 / rays)
+ * in a penumbra; the white-furnace test bounds it); Lambert minus the sampled loss would be unbiased, but it
  * dips below zero in shadows. The solid angles play no part: no sample is
  * wasted on directions that miss the emitter. */
 void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei,
@@ -88,7 +93,8 @@ void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
                 continue;
             rl__cell_domain(m, (uint32_t)cell, &dom);
             lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, ei, t->map_index), (uint64_t)cell));
-            uint32_t nr = view_rays(ctx, p, m, &dom);
+            v3 centre = domain_centre(m, &dom);
+            uint32_t nr = view_rays(ctx, p, centre);
             double all = 0.0, seen[3] = {0, 0, 0};
             rl_ray_batch batch;
             batch.n = 0;
@@ -125,7 +131,7 @@ void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
              * and Lambert's mean, the costlier half, is not needed */
             if (!(all > 0) || !(seen[0] > 0 || seen[1] > 0 || seen[2] > 0))
                 continue;
-            uint32_t no = lambert_origins(p, m, &dom, k);
+            uint32_t no = lambert_origins(p, m, centre, k);
             double f = 0.0;
             for (uint32_t o = 0; o < no; o++) {
                 double u[4];
