@@ -196,10 +196,11 @@ static void check_unoccluded(void)
     rl_scene_destroy(s);
 }
 
-/* An occluded room: culled and naive must agree bit for bit, and thread counts must not matter. */
-static void check_identities(void)
+/* An occluded room: culled and naive must agree bit for bit, and thread counts must not matter, with the
+ * bounce pass gathered by each method's own transfer (bounce_rays 0) or by first-hit rays (bounce_rays). */
+static void check_identities(uint32_t bounce_rays)
 {
-    char path[600];
+    char path[600], rest[200];
     snprintf(path, sizeof path, "%s/occluded.json", tmpdir);
     tpoly p[] = {
         ts_rect_z("light", -0.4, -0.4, 0.4, 0.4, 2.0, 0),
@@ -209,7 +210,9 @@ static void check_identities(void)
         ts_rect_z("grey", -0.5, -0.3, 0.3, 0.5, 1.0, 1), /* and its top */
         {"grey", 4, {{-2, -2, 0}, {-2, 2, 0}, {-2, 2, 2.2}, {-2, -2, 2.2}}}, /* a wall facing +x */
     };
-    ts_write_scene(path, MATS, p, 6, "\"radiance_maps\": {\"cell_size\": 0.2}, \"sampling\": {\"bounces\": 1}");
+    snprintf(rest, sizeof rest, "\"radiance_maps\": {\"cell_size\": 0.2}, \"sampling\": {\"bounces\": 1, \"bounce_rays\": %u}",
+             bounce_rays);
+    ts_write_scene(path, MATS, p, 6, rest);
     rl_scene *s = ts_load(path);
     if (!s)
         return;
@@ -224,13 +227,21 @@ static void check_identities(void)
     rl_relight(s, &run_opts, &sol[3]);
     if (sol[0] && sol[1] && sol[2] && sol[3]) {
         /* the bounce pass gathers by solid angles (the direct one from this
-         * constant emitter by Lambert's formula, the same code for both) */
+         * constant emitter by Lambert's formula, the same code for both), or
+         * by first hits, the same for every method */
         rl_pass_stats a, b, a1;
         rl_solution_pass_stats(sol[0], 1, &a1);
         rl_solution_pass_stats(sol[1], 1, &b);
-        CHECK(a1.solid_angles_culled > 0 && b.solid_angles_culled == 0, "culled culls, naive does not");
-        CHECK(a1.samples < b.samples, "culling saves rays: %llu vs %llu", (unsigned long long)a1.samples,
-              (unsigned long long)b.samples);
+        if (bounce_rays == 0) {
+            CHECK(a1.solid_angles_culled > 0 && b.solid_angles_culled == 0, "culled culls, naive does not");
+            CHECK(a1.samples < b.samples, "culling saves rays: %llu vs %llu", (unsigned long long)a1.samples,
+                  (unsigned long long)b.samples);
+        } else {
+            CHECK(a1.pairs == 0 && a1.samples == b.samples && a1.samples % bounce_rays == 0 &&
+                      a1.rays_kept > 0 && a1.rays_kept < a1.rays_cast,
+                  "first-hit bounce: %llu samples, %llu of %llu rays kept", (unsigned long long)a1.samples,
+                  (unsigned long long)a1.rays_kept, (unsigned long long)a1.rays_cast);
+        }
         rl_solution_pass_stats(sol[0], 0, &a);
         CHECK(a.pairs_descended == 0 && a1.pairs_descended == 0, "no pair descends in this scene: %llu, %llu",
               (unsigned long long)a.pairs_descended, (unsigned long long)a1.pairs_descended);
@@ -274,6 +285,10 @@ static void check_identities(void)
     }
     for (int k = 0; k < 4; k++)
         rl_solution_destroy(sol[k]);
+    if (bounce_rays > 0) {
+        rl_scene_destroy(s);
+        return;
+    }
     /* adaptive refines where samples disagree, deterministically, for any thread count */
     rl_solution *ad[2] = {NULL, NULL};
     for (int k = 0; k < 2; k++) {
@@ -953,7 +968,8 @@ int main(int argc, char **argv)
         check_one_thread(); /* first, before any other run has started threads */
         check_unoccluded();
         check_shading();
-        check_identities();
+        check_identities(0);
+        check_identities(64);
         check_lightfield();
     }
     return check_report();

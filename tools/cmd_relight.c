@@ -557,21 +557,20 @@ static cJSON *pass_json(uint32_t k, const rl_pass_stats *s)
     return p;
 }
 
-/* @return the sampling settings as a JSON object, or NULL when memory runs out. */
+/* @return every sampling setting (the settings table's keys and order) as a JSON object, or NULL when
+ * memory runs out. */
 static cJSON *settings_json(const rl_sampling *s)
 {
     cJSON *j = cJSON_CreateObject();
-    if (j == NULL)
-        return NULL;
-    cJSON_AddStringToObject(j, "method", rl_method_name(s->method));
-    add_count(j, "partition_n", s->partition_n);
-    add_count(j, "rays_per_solid_angle", s->rays_per_solid_angle);
-    add_count(j, "samples_per_cell", s->samples_per_cell);
-    add_count(j, "bounces", s->bounces);
-    add_count(j, "seed", s->seed);
-    add_count(j, "descend", s->descend);
-    add_count(j, "bounce_cell_factor", s->bounce_cell_factor);
-    add_count(j, "zero_culling", s->zero_culling);
+    for (size_t k = 0; j != NULL && k < rl_sampling_setting_count(); k++) {
+        const rl_setting_info *info = rl_sampling_setting(k);
+        double v = 0.0;
+        rl_sampling_get(s, k, &v);
+        if (info->type == RL_SETTING_METHOD)
+            cJSON_AddStringToObject(j, info->key, rl_method_name(s->method));
+        else
+            cJSON_AddNumberToObject(j, info->key, v);
+    }
     return j;
 }
 

@@ -11,7 +11,7 @@
  * the scene file's bytes; the bytes of every file its "meshes" and
  * "lightfields" entries name (files those name in turn, such as an OBJ's
  * .mtl, are not included); the cell size; and the reference settings
- * (method, samples, seeds, bounces, bounce level, partition level, descent).
+ * (method, samples, seeds, bounces, bounce level, cell factor and rays, partition level, descent).
  *
  * Invariants: a cached reference is used only when both files read back
  * whole and the sidecar carries the same key; the computation runs in a
@@ -111,10 +111,11 @@ static int reference_key(const bench_config *cfg, const rl_scene *scene, uint64_
     char settings[512];
     snprintf(settings, sizeof settings,
              "cell_size=%.17g method=solidangle samples=%" PRIu32 " seeds=%" PRIu64 ",%" PRIu64
-             " bounces=%" PRIu32 " bounce_partition_n=%" PRIu32 " bounce_cell_factor=%" PRIu32 " partition_n=%" PRIu32
+             " bounces=%" PRIu32 " bounce_partition_n=%" PRIu32 " bounce_cell_factor=%" PRIu32 " bounce_rays=%" PRIu32
+             " partition_n=%" PRIu32
              " descend=%" PRIu32,
              rl_scene_cell_size(scene), cfg->reference_samples, REFERENCE_SEEDS[0], REFERENCE_SEEDS[1], s->bounces,
-             s->bounce_partition_n, s->bounce_cell_factor, s->partition_n, s->descend);
+             s->bounce_partition_n, s->bounce_cell_factor, s->bounce_rays, s->partition_n, s->descend);
     *key = fnv1a(h, settings, strlen(settings));
     cJSON_Delete(root);
     free(text);

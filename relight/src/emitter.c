@@ -68,6 +68,13 @@ void rl__emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e)
     emitter_finish(e);
 }
 
+/* Writes the radiance re-emitted by cell of map m (-1: none), albedo * E_prev / pi. */
+static void map_radiance(const rl_map *m, int64_t cell, double out[3])
+{
+    for (int c = 0; c < 3; c++)
+        out[c] = cell < 0 ? 0.0 : m->albedo[c] * m->e_prev[cell][c] / RL_PI;
+}
+
 void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3])
 {
     switch (e->kind) {
@@ -75,12 +82,9 @@ void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3])
         for (int c = 0; c < 3; c++)
             out[c] = e->emission[c];
         return;
-    case EM_MAP: {
-        int64_t cell = rl__map_cell_at(e->map, q);
-        for (int c = 0; c < 3; c++)
-            out[c] = cell < 0 ? 0.0 : e->map->albedo[c] * e->map->e_prev[cell][c] / RL_PI;
+    case EM_MAP:
+        map_radiance(e->map, rl__map_cell_at(e->map, q), out);
         return;
-    }
     case EM_SLAB: {
         float rgb[3] = {0, 0, 0};
         /* back to the slab's own frame: the transform's rotation, transposed */
@@ -93,6 +97,15 @@ void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3])
         return;
     }
     }
+}
+
+void rl__emitter_radiance_near(const rl_emitter *e, v2 q, v3 d, double out[3])
+{
+    if (e->kind != EM_MAP) {
+        rl__emitter_radiance_at(e, q, d, out);
+        return;
+    }
+    map_radiance(e->map, rl__map_cell_near(e->map, q), out);
 }
 
 int rl__emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id)

@@ -262,6 +262,21 @@ int64_t rl__map_cell_at(const rl_map *m, v2 q)
     return m->grid[(size_t)fj * m->nu + (size_t)fi];
 }
 
+int64_t rl__map_cell_near(const rl_map *m, v2 q)
+{
+    if (m->nu == 0 || m->nv == 0)
+        return -1;
+    double fi = floor((q.x - m->u0) / m->cell), fj = floor((q.y - m->v0) / m->cell);
+    int64_t i = fi < 0 ? 0 : fi > m->nu - 1 ? (int64_t)m->nu - 1 : (int64_t)fi;
+    int64_t j = fj < 0 ? 0 : fj > m->nv - 1 ? (int64_t)m->nv - 1 : (int64_t)fj;
+    for (int64_t r = 0; r < 9; r++) {
+        int64_t ii = i + (r == 0 ? 0 : r % 3 - 1), jj = j + (r == 0 ? 0 : r / 3 - 1);
+        if (ii >= 0 && jj >= 0 && ii < m->nu && jj < m->nv && m->grid[jj * m->nu + ii] >= 0)
+            return m->grid[jj * m->nu + ii];
+    }
+    return -1;
+}
+
 void rl__map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3])
 {
     double a = (q.x - m->u0) / m->cell - 0.5, b = (q.y - m->v0) / m->cell - 0.5;

@@ -72,6 +72,10 @@ uint32_t rl__map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out);
 /* @return the cell of m containing frame point q, or -1. */
 int64_t rl__map_cell_at(const rl_map *m, v2 q);
 
+/* @return the cell of m holding frame point q, or, when q falls just outside the polygon's cells
+ * (rounding at an edge), the first cell of the 3 x 3 grid squares around the nearest square; -1 if none. */
+int64_t rl__map_cell_near(const rl_map *m, v2 q);
+
 /* A point uniformly distributed over polygon p (count vertices, convex),
  * from two numbers in [0, 1); a point receiver (count 1) gives its point. */
 v2 rl__sample_polygon(const v2 *p, uint32_t count, double a, double b);

@@ -40,7 +40,7 @@ lds_key rl__lds_make(uint64_t key)
 /* Radical inverses of the first points, computed once: most (cell, solid
  * angle) pairs draw only a handful of samples, and the divisions of
  * radical_inverse() would otherwise dominate the sequence's cost. */
-#define LDS_TABLE 256
+#define LDS_TABLE 1024
 static double lds_table[4][LDS_TABLE];
 
 /* Fills lds_table. */

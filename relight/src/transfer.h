@@ -38,6 +38,7 @@ typedef struct rl_transfer_ctx {
     v3 centre;     /* where the tracer recentres the scene */
     double eps;    /* distance below which single precision cannot resolve the scene itself, m */
     double margin; /* outward margin of every Minkowski region, m */
+    const int32_t *emitter_of_polygon; /* bounce passes with bounce_rays: each scene polygon's emitter, or -1 */
     double deadline; /* adaptive: CLOCK_MONOTONIC seconds after which nothing is refined; 0 = none */
 } rl_transfer_ctx;
 
@@ -84,5 +85,11 @@ double rl__point_lambert(const rl_emitter *e, v3 x, v3 nx);
  * nothing but the arguments. @return 0, or -1 if scratch memory ran out. */
 int rl__transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
                   rl_scratch *scratch, rl_counters *cnt);
+
+/* A bounce pass by first-hit rays from each cell's hemisphere (bounce.c): adds to m->e_pass, for
+ * the cells in grid rows [row0, row1) of map m, the irradiance re-emitted by the surfaces its
+ * sampling->bounce_rays cosine-weighted rays per cell first meet (ctx->emitter_of_polygon). */
+void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
+                     rl_counters *cnt);
 
 #endif /* RELIGHT_TRANSFER_H */
