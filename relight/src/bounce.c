@@ -22,6 +22,7 @@
  * re-emits nothing, carries zero.
  */
 #include <math.h>
+#include <stdlib.h>
 
 #include "method.h"
 
@@ -44,32 +45,72 @@ static void concentric_disc(double a, double b, double *x, double *y)
     *y = r * sin(phi);
 }
 
-/* @return the index into ctx->emitters of the polygon a ray hit, or -1. */
-static int32_t emitter_of(const rl_transfer_ctx *ctx, uint32_t polygon)
+rl_status rl__glow_new(const rl_scene *scene, const rl_emitter *e, size_t ne, rl_glow **out)
 {
-    return polygon < ctx->scene->npolygons ? ctx->emitter_of_polygon[polygon] : -1;
+    rl_glow *glow = calloc(scene->npolygons ? scene->npolygons : 1, sizeof *glow);
+    *out = NULL;
+    if (!glow)
+        return RL_ERR_NOMEM;
+    for (size_t k = 0; k < ne; k++) {
+        const rl_map *m = e[k].map;
+        if (e[k].kind != EM_MAP || e[k].polygon < 0 || (size_t)e[k].polygon >= scene->npolygons)
+            continue;
+        rl_glow *g = &glow[e[k].polygon];
+        size_t squares = (size_t)m->nu * m->nv;
+        g->rad = malloc((squares ? squares : 1) * sizeof *g->rad);
+        if (!g->rad) {
+            rl__glow_free(glow, scene->npolygons);
+            return RL_ERR_NOMEM;
+        }
+        g->map = m;
+        for (uint32_t j = 0; j < m->nv; j++)
+            for (uint32_t i = 0; i < m->nu; i++) {
+                v2 centre = {m->u0 + (i + 0.5) * m->cell, m->v0 + (j + 0.5) * m->cell};
+                double l[3];
+                rl__map_radiance(m, rl__map_cell_near(m, centre), l);
+                for (int c = 0; c < 3; c++)
+                    g->rad[(size_t)j * m->nu + i][c] = (float)l[c];
+            }
+    }
+    *out = glow;
+    return RL_OK;
 }
 
-/* Adds to out the radiance arriving at x along unit d: what the first surface hit re-emits towards x. */
-static void first_hit_radiance(const rl_transfer_ctx *ctx, v3 x, v3 d, double tnear, double out[3],
-                               rl_counters *cnt)
+void rl__glow_free(rl_glow *glow, size_t npolygons)
 {
-    uint32_t polygon;
-    double dist;
-    cnt->rays_cast++;
-    if (!rl__tracer_hit(ctx->tracer, x, d, tnear, INFINITY, &polygon, &dist))
-        return;
-    int32_t k = emitter_of(ctx, polygon);
-    if (k < 0)
-        return;
-    const rl_emitter *e = &ctx->emitters[k];
-    if (!(v3_dot(d, e->frame.n) < 0))
-        return; /* its back: surfaces emit from their front alone */
-    double l[3];
-    rl__emitter_radiance_near(e, frame_project(&e->frame, v3_madd(x, d, dist)), d, l);
-    cnt->rays_kept++;
-    for (int c = 0; c < 3; c++)
-        out[c] += l[c];
+    for (size_t k = 0; glow && k < npolygons; k++)
+        free(glow[k].rad);
+    free(glow);
+}
+
+/* Traces the n rays of a packet from x[i] along unit d[i] and adds, in ray order, the radiance each
+ * one's first hit re-emits towards it into acc. */
+static void trace_packet(const rl_transfer_ctx *ctx, size_t n, const v3 *x, const v3 *d, const double *tnear,
+                         double acc[3], rl_counters *cnt)
+{
+    double tfar[RL_RAY_PACKET], dist[RL_RAY_PACKET];
+    uint32_t polygon[RL_RAY_PACKET];
+    for (size_t i = 0; i < n; i++)
+        tfar[i] = INFINITY;
+    rl__tracer_hit_n(ctx->tracer, n, x, d, tnear, tfar, polygon, dist);
+    cnt->rays_cast += n;
+    for (size_t i = 0; i < n; i++) {
+        if (polygon[i] >= ctx->scene->npolygons)
+            continue;
+        const rl_glow *g = &ctx->glow[polygon[i]];
+        const rl_map *m = g->map;
+        if (!m || !(v3_dot(d[i], m->frame.n) < 0))
+            continue; /* re-emits nothing, or its back: surfaces emit from their front alone */
+        v2 q = frame_project(&m->frame, v3_madd(x[i], d[i], dist[i]));
+        /* the square holding the hit, clamped to the grid: rounding may put it just outside */
+        double fi = floor((q.x - m->u0) / m->cell), fj = floor((q.y - m->v0) / m->cell);
+        size_t gi = fi < 0 ? 0 : fi > m->nu - 1 ? m->nu - 1 : (size_t)fi;
+        size_t gj = fj < 0 ? 0 : fj > m->nv - 1 ? m->nv - 1 : (size_t)fj;
+        const float *l = g->rad[gj * m->nu + gi];
+        cnt->rays_kept++;
+        for (int c = 0; c < 3; c++)
+            acc[c] += l[c];
+    }
 }
 
 void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
@@ -86,18 +127,24 @@ void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, 
             rl__cell_domain(m, (uint32_t)cell, &dom);
             lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, UINT32_MAX, map_index), (uint64_t)cell));
             double acc[3] = {0, 0, 0};
-            for (uint32_t s = 0; s < n; s++) {
-                double u[4];
-                rl__lds4(&key, s, u);
-                /* the direction, where the light varies most, takes the sequence's best-spread pair of
-                 * dimensions (bases 2 and 3); cosine-weighted: a uniform point of the unit disc
-                 * (concentric map, which keeps strata compact) lifted onto the hemisphere */
-                double dx, dy;
-                concentric_disc(u[0], u[1], &dx, &dy);
-                double cz = sqrt(fmax(0.0, 1.0 - dx * dx - dy * dy));
-                v3 d = v3_madd(v3_madd(v3_scale(f->n, cz), f->e1, dx), f->e2, dy);
-                v3 x = rl__domain_point(m, &dom, u[2], u[3]);
-                first_hit_radiance(ctx, x, d, ctx->eps / fmax(cz, 1e-3), acc, cnt);
+            for (uint32_t s0 = 0; s0 < n; s0 += RL_RAY_PACKET) {
+                size_t np = n - s0 < RL_RAY_PACKET ? n - s0 : RL_RAY_PACKET;
+                v3 x[RL_RAY_PACKET], d[RL_RAY_PACKET];
+                double tnear[RL_RAY_PACKET];
+                for (size_t k = 0; k < np; k++) {
+                    double u[4];
+                    rl__lds4(&key, s0 + (uint32_t)k, u);
+                    /* the direction, where the light varies most, takes the sequence's best-spread pair
+                     * of dimensions (bases 2 and 3); cosine-weighted: a uniform point of the unit disc
+                     * (concentric map, which keeps strata compact) lifted onto the hemisphere */
+                    double dx, dy;
+                    concentric_disc(u[0], u[1], &dx, &dy);
+                    double cz = sqrt(fmax(0.0, 1.0 - dx * dx - dy * dy));
+                    d[k] = v3_madd(v3_madd(v3_scale(f->n, cz), f->e1, dx), f->e2, dy);
+                    x[k] = rl__domain_point(m, &dom, u[2], u[3]);
+                    tnear[k] = ctx->eps / fmax(cz, 1e-3);
+                }
+                trace_packet(ctx, np, x, d, tnear, acc, cnt);
             }
             cnt->samples += n;
             for (int c = 0; c < 3; c++)

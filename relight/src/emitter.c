@@ -68,13 +68,6 @@ void rl__emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e)
     emitter_finish(e);
 }
 
-/* Writes the radiance re-emitted by cell of map m (-1: none), albedo * E_prev / pi. */
-static void map_radiance(const rl_map *m, int64_t cell, double out[3])
-{
-    for (int c = 0; c < 3; c++)
-        out[c] = cell < 0 ? 0.0 : m->albedo[c] * m->e_prev[cell][c] / RL_PI;
-}
-
 void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3])
 {
     switch (e->kind) {
@@ -83,7 +76,7 @@ void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3])
             out[c] = e->emission[c];
         return;
     case EM_MAP:
-        map_radiance(e->map, rl__map_cell_at(e->map, q), out);
+        rl__map_radiance(e->map, rl__map_cell_at(e->map, q), out);
         return;
     case EM_SLAB: {
         float rgb[3] = {0, 0, 0};
@@ -97,15 +90,6 @@ void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3])
         return;
     }
     }
-}
-
-void rl__emitter_radiance_near(const rl_emitter *e, v2 q, v3 d, double out[3])
-{
-    if (e->kind != EM_MAP) {
-        rl__emitter_radiance_at(e, q, d, out);
-        return;
-    }
-    map_radiance(e->map, rl__map_cell_near(e->map, q), out);
 }
 
 int rl__emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id)

@@ -40,10 +40,6 @@ void rl__emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e);
 /* Radiance leaving emitter e at frame point q in propagation direction d (unit), W sr^-1 m^-2. */
 void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3]);
 
-/* As rl__emitter_radiance_at(), for a point known to lie on e (a ray's hit): a re-emitting map reads
- * its nearest cell when rounding puts q just outside its cells. */
-void rl__emitter_radiance_near(const rl_emitter *e, v2 q, v3 d, double out[3]);
-
 /* @return 1 if solid angle id at level lv of light field emitter e
  * certainly carries no radiance (its mask and its neighbours' are clear). */
 int rl__emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id);

@@ -459,25 +459,19 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
     rl_sampling sampling = pass_sampling(&scene->sampling, gather_level_pass);
     make_ctx(scene, tracer, run, pass, &sampling, e, ne, &job.ctx);
     job.maps = maps;
-    /* a bounce pass of rl__solve() with bounce_rays gathers by first hits, which need each polygon's emitter */
-    int32_t *emitter_of = NULL;
+    /* a bounce pass of rl__solve() with bounce_rays gathers by first hits, which read each polygon's glow */
+    rl_glow *glow = NULL;
     if (gather_level_pass > 0 && sampling.bounce_rays > 0) {
-        emitter_of = malloc((scene->npolygons ? scene->npolygons : 1) * sizeof *emitter_of);
-        if (!emitter_of)
+        if (rl__glow_new(scene, e, ne, &glow) != RL_OK)
             return rl__fail(RL_ERR_NOMEM, "out of memory for the bounce pass");
-        for (size_t k = 0; k < scene->npolygons; k++)
-            emitter_of[k] = -1;
-        for (size_t k = 0; k < ne; k++)
-            if (e[k].polygon >= 0)
-                emitter_of[e[k].polygon] = (int32_t)k;
-        job.ctx.emitter_of_polygon = emitter_of;
+        job.ctx.glow = glow;
     }
     size_t nall = 0;
     work_item *all = make_tiles(maps, nmaps, &nall);
     share sh = {0};
     if (!all || (cl && share_deal(cl, maps, all, nall, *measured, &sh) != 0)) {
         free(all);
-        free(emitter_of);
+        rl__glow_free(glow, scene->npolygons);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
     }
     job.items = cl ? sh.mine : all;
@@ -497,7 +491,7 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
     if (rc == 0 && cl && sum_stats(cl, st) != 0)
         rc = -2, why = "the exchange of statistics between ranks failed";
     free(all);
-    free(emitter_of);
+    rl__glow_free(glow, scene->npolygons);
     share_free(&sh);
     if (rc != 0)
         return rl__fail(rc == -2 ? RL_ERR_IO : RL_ERR_NOMEM, "pass %u: %s", pass, why);

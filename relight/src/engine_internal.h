@@ -13,8 +13,6 @@
 #include "relight/engine.h"
 #include "transfer.h"
 
-#define RL__PI 3.14159265358979323846
-
 struct rl_solution {
     const rl_scene *scene;
     rl_map *maps;

@@ -76,6 +76,9 @@ int64_t rl__map_cell_at(const rl_map *m, v2 q);
  * (rounding at an edge), the first cell of the 3 x 3 grid squares around the nearest square; -1 if none. */
 int64_t rl__map_cell_near(const rl_map *m, v2 q);
 
+/* Writes the radiance cell of m (-1: none) re-emits in a bounce, albedo * E_prev / pi, W sr^-1 m^-2. */
+void rl__map_radiance(const rl_map *m, int64_t cell, double out[3]);
+
 /* A point uniformly distributed over polygon p (count vertices, convex),
  * from two numbers in [0, 1); a point receiver (count 1) gives its point. */
 v2 rl__sample_polygon(const v2 *p, uint32_t count, double a, double b);

@@ -37,8 +37,6 @@
 #include "sampling.h"
 #include "transfer.h"
 
-#define RL_PI 3.14159265358979323846
-
 /* ------------------------------------------------------------------ leaves */
 
 /* Leaves from this level on are sampled on their planar lattice triangle and

@@ -19,6 +19,9 @@
 #include "relight/scene.h"
 #include "ilf/limits.h"
 
+/* pi, for the engine's every radiance-irradiance conversion. */
+#define RL_PI 3.14159265358979323846
+
 /* Most vertices one polygon may have (the engine's clipping buffers are sized by it). */
 #define RL_SCENE_MAX_POLY_VERTS ILF_POLYGON_MAX_VERTICES
 

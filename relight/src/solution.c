@@ -98,7 +98,7 @@ rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, do
             if (irradiance)
                 irradiance[3 * c + ch] = saturate_float(m->e_total[c][ch]);
             if (radiosity)
-                radiosity[3 * c + ch] = saturate_float(RL__PI * m->emission[ch] + m->albedo[ch] * m->e_total[c][ch]);
+                radiosity[3 * c + ch] = saturate_float(RL_PI * m->emission[ch] + m->albedo[ch] * m->e_total[c][ch]);
         }
     }
     return RL_OK;

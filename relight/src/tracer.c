@@ -237,6 +237,41 @@ void rl__tracer_occluded_n(const rl_tracer *t, size_t n, const v3 *org, const v3
         occluded[i] = valid[i] && tf[i] < 0.0f;
 }
 
+void rl__tracer_hit_n(const rl_tracer *t, size_t n, const v3 *org, const v3 *dir, const double *tnear,
+                      const double *tfar, uint32_t *polygon, double *dist)
+{
+    _Alignas(64) struct RTCRayHit16 rh;
+    _Alignas(64) int valid[16];
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    for (size_t i = 0; i < 16; i++) {
+        int on = i < n && tfar[i] > tnear[i];
+        valid[i] = on ? -1 : 0;
+        v3 o = on ? v3_sub(org[i], t->centre) : v3_make(0, 0, 0);
+        v3 d = on ? dir[i] : v3_make(0, 0, 1);
+        rh.ray.org_x[i] = (float)o.x;
+        rh.ray.org_y[i] = (float)o.y;
+        rh.ray.org_z[i] = (float)o.z;
+        rh.ray.dir_x[i] = (float)d.x;
+        rh.ray.dir_y[i] = (float)d.y;
+        rh.ray.dir_z[i] = (float)d.z;
+        rh.ray.tnear[i] = on ? (float)tnear[i] : 0.0f;
+        rh.ray.tfar[i] = on ? (float)tfar[i] : 0.0f;
+        rh.ray.time[i] = 0.0f;
+        rh.ray.mask[i] = 0xffffffffu;
+        rh.ray.id[i] = (unsigned)i;
+        rh.ray.flags[i] = 0;
+        rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect16(valid, t->scene, &ctx, &rh);
+    for (size_t i = 0; i < n; i++) {
+        int hit = valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+        polygon[i] = hit ? t->prim_polygon[rh.hit.primID[i]] : UINT32_MAX;
+        dist[i] = hit ? rh.ray.tfar[i] : 0.0;
+    }
+}
+
 int rl__tracer_hit(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon, double *dist)
 {
     struct RTCIntersectContext ctx;

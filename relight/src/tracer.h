@@ -37,6 +37,11 @@ int rl__tracer_occluded(const rl_tracer *t, v3 org, v3 dir, double tnear, double
 void rl__tracer_occluded_n(const rl_tracer *t, size_t n, const v3 *org, const v3 *dir, const double *tnear,
                        const double *tfar, int *occluded);
 
+/* Finds the first polygon hit by each of n <= RL_RAY_PACKET rays at once (one packet of 16):
+ * polygon[i] and dist[i] as rl__tracer_hit() gives them, polygon[i] = UINT32_MAX where ray i hits none. */
+void rl__tracer_hit_n(const rl_tracer *t, size_t n, const v3 *org, const v3 *dir, const double *tnear,
+                      const double *tfar, uint32_t *polygon, double *dist);
+
 /* Finds the first polygon hit in [tnear, tfar]. @return 1 with *polygon and *dist, or 0. */
 int rl__tracer_hit(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon, double *dist);
 

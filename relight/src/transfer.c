@@ -38,7 +38,7 @@ int rl__transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m,
         }
         return rc;
     }
-    if (ctx->emitter_of_polygon && m->polygon >= 0) {
+    if (ctx->glow && m->polygon >= 0) {
         rl__bounce_tile(ctx, map_index, m, row0, row1, cnt);
         return 0;
     }

@@ -38,7 +38,7 @@ typedef struct rl_transfer_ctx {
     v3 centre;     /* where the tracer recentres the scene */
     double eps;    /* distance below which single precision cannot resolve the scene itself, m */
     double margin; /* outward margin of every Minkowski region, m */
-    const int32_t *emitter_of_polygon; /* bounce passes with bounce_rays: each scene polygon's emitter, or -1 */
+    const struct rl_glow *glow; /* bounce passes with bounce_rays: what each scene polygon re-emits (bounce.c) */
     double deadline; /* adaptive: CLOCK_MONOTONIC seconds after which nothing is refined; 0 = none */
 } rl_transfer_ctx;
 
@@ -86,9 +86,24 @@ double rl__point_lambert(const rl_emitter *e, v3 x, v3 nx);
 int rl__transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
                   rl_scratch *scratch, rl_counters *cnt);
 
+/* What a bounce pass by first hits reads of one scene polygon: the radiance its map re-emits from each
+ * grid square (float; a square without a cell holds its nearest cell's, so that a hit rounded just
+ * past the cells still reads its own), W sr^-1 m^-2. map NULL: the polygon re-emits nothing. */
+typedef struct rl_glow {
+    const rl_map *map;
+    float (*rad)[3]; /* [map->nu * map->nv] */
+} rl_glow;
+
+/* Builds the glow of every scene polygon from the bounce emitters e[0 .. ne) (EM_MAP), one per
+ * polygon, in *out ([scene->npolygons]). @return RL_OK, or RL_ERR_NOMEM (nothing to free). */
+rl_status rl__glow_new(const rl_scene *scene, const rl_emitter *e, size_t ne, rl_glow **out);
+
+/* Frees glow (npolygons entries, as built). NULL is a no-op. */
+void rl__glow_free(rl_glow *glow, size_t npolygons);
+
 /* A bounce pass by first-hit rays from each cell's hemisphere (bounce.c): adds to m->e_pass, for
  * the cells in grid rows [row0, row1) of map m, the irradiance re-emitted by the surfaces its
- * sampling->bounce_rays cosine-weighted rays per cell first meet (ctx->emitter_of_polygon). */
+ * sampling->bounce_rays cosine-weighted rays per cell first meet (ctx->glow). */
 void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
                      rl_counters *cnt);
 

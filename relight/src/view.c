@@ -61,7 +61,7 @@ static void shade(const rl_solution *s, v3 org, v3 dir, float out[3])
     else if (cell >= 0)
         rl__map_sample(&s->maps[map], at, (const double(*)[3])s->maps[map].e_total, e);
     for (int c = 0; c < 3; c++)
-        out[c] = (float)(mat->emission[c] + (cell >= 0 ? s->maps[map].albedo[c] * e[c] / RL__PI : 0.0));
+        out[c] = (float)(mat->emission[c] + (cell >= 0 ? s->maps[map].albedo[c] * e[c] / RL_PI : 0.0));
 }
 
 rl_status rl_solution_set_smooth(rl_solution *s, int smooth)
@@ -134,7 +134,7 @@ static rl_status render(const char *call, const rl_solution *s, const rl_run_opt
     job.forward = v3_norm(v3_sub(v3_load(cam->look_at), v3_load(cam->position)));
     job.right = v3_norm(v3_cross(job.forward, v3_load(cam->up)));
     job.up = v3_cross(job.right, job.forward);
-    job.tan_half = tan(cam->fov_deg * RL__PI / 360.0);
+    job.tan_half = tan(cam->fov_deg * RL_PI / 360.0);
     job.aspect = (double)cam->width / cam->height;
     atomic_init(&job.next_row, 0);
     ilf_parallel(run.threads, render_worker, &job);
