@@ -86,9 +86,9 @@ relight_pair beams_direct data/.bench_beams_paper.json --bounces 0 -- --bounces 
 say "beams_direct with view.exr/png: peak RSS $(cat "$OUT/relight/beams_view.rss") KiB"
 say "ilf info (no image, no scene): peak RSS $( /usr/bin/time -f %M "$ILF" info data/beams_lightfield.h5 2>&1 >/dev/null | tail -1) KiB"
 say ""
-say "## 2. Paper settings, 2 bounces (the paper's 36.85 s -> 20.39 s run): bounces gathered on cells twice"
-say "   as large (the default) and on every cell (--bounce-cell-factor 1, the engine before issue #14)"
-[ "$QUICK" = 1 ] || relight_pair beams_bounces data/.bench_beams_paper.json --bounces 2 -- --bounces 2 --bounce-cell-factor 1
+say "## 2. Paper settings, 2 bounces (the paper's 36.85 s -> 20.39 s run): bounces by first-hit rays (the default)"
+say "   and by the method's transfer from every lit polygon (--bounce-rays 0, the gather before 2026-11-25's evening)"
+[ "$QUICK" = 1 ] || relight_pair beams_bounces data/.bench_beams_paper.json --bounces 2 -- --bounces 2 --bounce-rays 0
 say ""
 say "## 3. classroom, direct: default cells, and the paper's 1.5 million"
 relight_pair classroom data/classroom.json --bounces 0 -- --bounces 0 --threads 1
