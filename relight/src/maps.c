@@ -139,8 +139,10 @@ static rl_status map_cells(rl_map *m)
 static rl_status map_accumulators(rl_map *m, int re_emits)
 {
     size_t n = m->ncells ? m->ncells : 1;
-    m->e_total = calloc(n, sizeof *m->e_total);
     m->e_pass = calloc(n, sizeof *m->e_pass);
+    /* a map that never re-emits has one pass to hold (the direct pass, or one bounce gathered on
+     * coarse cells): its total is that pass's array, 24 bytes a cell fewer */
+    m->e_total = re_emits ? calloc(n, sizeof *m->e_total) : m->e_pass;
     m->e_prev = re_emits ? calloc(n, sizeof *m->e_prev) : NULL;
     return m->e_total && m->e_pass && (m->e_prev || !re_emits) ? RL_OK : RL_ERR_NOMEM;
 }
@@ -233,7 +235,8 @@ void rl__maps_free(rl_map *maps, size_t count)
         free(maps[k].grid);
         free(maps[k].cells);
         free(maps[k].pool);
-        free(maps[k].e_total);
+        if (maps[k].e_total != maps[k].e_pass)
+            free(maps[k].e_total);
         free(maps[k].e_pass);
         free(maps[k].e_prev);
     }

@@ -31,7 +31,8 @@ typedef struct rl_map {
     rl_cell *cells;
     uint32_t ncells;
     v2 *pool;              /* clipped cell polygons */
-    double (*e_total)[3];  /* irradiance summed over passes */
+    double (*e_total)[3];  /* irradiance summed over passes; the same array as e_pass in a map without
+                              e_prev (one pass: nothing to sum) */
     double (*e_pass)[3];   /* irradiance of the current pass */
     double (*e_prev)[3];   /* irradiance of the previous pass: what bounces re-emit; NULL without bounces */
     float albedo[3];
