@@ -38,6 +38,9 @@ def main(argv):
     w = area / area.sum()
     ref, run = ref_t - ref_d, run_t - run_d
     mean = float((w * ref).sum())
+    if not mean > 0:
+        sys.stderr.write("bounce_error.py: %s and %s hold no bounce light to compare with\n" % (argv[1], argv[2]))
+        return 2
     rmse = float(np.sqrt((w * (run - ref) ** 2).sum()))
     print("bounce light mean %.6g W/m2; run's mean %+.3f%%; RMSE %.2f%% of the mean; largest difference %.1f%%"
           % (mean, 100 * ((w * run).sum() / mean - 1), 100 * rmse / mean, 100 * np.abs(run - ref).max() / mean))

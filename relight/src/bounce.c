@@ -13,13 +13,16 @@
  * each ray carries pi * L. With p(w) = cos / pi the estimate of a cell is
  * pi times the mean radiance its rays meet, unbiased for any scene; in a
  * closed room of uniform radiosity B every ray returns B / pi exactly, so
- * the white furnace holds with no variance at all (tests/test_furnace.c).
+ * in the white furnace a bounce adds no noise of its own to what the
+ * previous pass left (tests/test_furnace.c).
  *
  * Invariants: a cell's rays depend only on (seed, pass, receiver map,
  * cell), drawn from the 4-D Halton sequence (two numbers for the origin in
  * the cell, two for the direction), so results do not depend on threads;
  * a ray that leaves the scene, or meets a surface's back or a surface that
- * re-emits nothing, carries zero.
+ * re-emits nothing, carries zero; where two polygons lie back to back, a ray
+ * that Embree gives the back of one reads the front of the other, as a
+ * shadow ray stopping short of the emitter's plane would.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -97,10 +100,18 @@ static void trace_packet(const rl_transfer_ctx *ctx, size_t n, const v3 *x, cons
     for (size_t i = 0; i < n; i++) {
         if (polygon[i] >= ctx->scene->npolygons)
             continue;
+        if (!(v3_dot(d[i], v3_load(ctx->scene->polygons[polygon[i]].normal)) < 0)) {
+            /* a back: opaque, unless a polygon lies back to back with it there (a panel modelled as two
+             * faces), whose front the ray meets at the same distance up to rounding */
+            double w = ctx->eps + 1e-6 * dist[i];
+            if (!rl__tracer_hit_front(ctx->tracer, x[i], d[i], fmax(tnear[i], dist[i] - w), dist[i] + w, &polygon[i],
+                                      &dist[i]))
+                continue;
+        }
         const rl_glow *g = &ctx->glow[polygon[i]];
         const rl_map *m = g->map;
-        if (!m || !(v3_dot(d[i], m->frame.n) < 0))
-            continue; /* re-emits nothing, or its back: surfaces emit from their front alone */
+        if (!m)
+            continue; /* re-emits nothing */
         v2 q = frame_project(&m->frame, v3_madd(x[i], d[i], dist[i]));
         /* the square holding the hit, clamped to the grid: rounding may put it just outside */
         double fi = floor((q.x - m->u0) / m->cell), fj = floor((q.y - m->v0) / m->cell);

@@ -185,7 +185,8 @@ static uint32_t tile_cells(const rl_map *maps, const work_item *w)
 
 /* The expected cost of a tile with no measurement: its cells, plus what setting up any tile costs
  * (its emitter pairs, its clipping), in cells. Fitted to the classroom's tiles (cost = a cells + b):
- * b is about 0 cells in the direct pass, 9 in a bounce pass (3,035 emitters, every tile paired with each). */
+ * b is about 0 cells in the direct pass, 9 in a bounce pass by the method (3,035 emitters, every tile paired
+ * with each); a first-hit bounce pass costs its cells alone. */
 #define TILE_SETUP_CELLS 8.0
 
 /* A tile in the deal: its expected cost and a fixed hash that orders equal costs. */
@@ -411,8 +412,8 @@ size_t rl__append_bounce_emitters(const rl_scene *scene, const rl_map *maps, siz
     return n;
 }
 
-/* @return the sampling of pass p. Bounce passes use bounce_partition_n and
- * never descend: their emitters are every lit surface, which at a coarse
+/* @return the sampling of pass p. Bounce passes by the method (bounce_rays 0) use bounce_partition_n
+ * and never descend: their emitters are every lit surface, which at a coarse
  * level nearly all subtend less than a solid angle, and descending for each
  * would cost more than the smooth indirect light is worth. */
 static rl_sampling pass_sampling(const rl_sampling *s, uint32_t p)
@@ -507,13 +508,16 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
  * its pass array already holds it). */
 static void close_pass(rl_map *maps, size_t nmaps)
 {
-    for (size_t m = 0; m < nmaps; m++)
-        for (uint32_t c = 0; maps[m].e_total != maps[m].e_pass && c < maps[m].ncells; c++)
+    for (size_t m = 0; m < nmaps; m++) {
+        if (maps[m].e_total == maps[m].e_pass)
+            continue;
+        for (uint32_t c = 0; c < maps[m].ncells; c++)
             for (int k = 0; k < 3; k++) {
                 maps[m].e_total[c][k] += maps[m].e_pass[c][k];
                 if (maps[m].e_prev != NULL)
                     maps[m].e_prev[c][k] = maps[m].e_pass[c][k];
             }
+    }
 }
 
 rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *run, uint32_t passes, double span,

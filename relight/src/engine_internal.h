@@ -52,7 +52,8 @@ rl_emitter *rl__primary_emitters(const rl_scene *scene, size_t extra, size_t *n)
 size_t rl__append_bounce_emitters(const rl_scene *scene, const rl_map *maps, size_t nmaps, rl_emitter *e, size_t n);
 
 /* Runs one pass over maps with emitters e; gather_level_pass chooses the partition level (0: partition_n,
- * else the bounce level). base and span place it within the run's progress. With several ranks,
+ * else the bounce level) and, > 0 with sampling.bounce_rays > 0, the first-hit gather from the maps the
+ * emitters re-emit (bounce.c) for every polygon's map. base and span place it within the run's progress. With several ranks,
  * *measured holds the previous pass's per-tile CPU times (NULL: none) and receives this pass's.
  * @return RL_OK or an error. */
 rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_cluster *cl, const rl__run *run,

@@ -134,8 +134,9 @@ static rl_status map_cells(rl_map *m)
     return RL_OK;
 }
 
-/* Allocates the accumulators of m: e_prev only when it re-emits (bounces follow), so a direct-only
- * run keeps 48 bytes a cell instead of 72. @return RL_OK or RL_ERR_NOMEM. */
+/* Allocates the accumulators of m: a total, a pass and e_prev only when it re-emits (bounces follow),
+ * else one array for all, so a direct-only run keeps 24 bytes a cell instead of 72.
+ * @return RL_OK or RL_ERR_NOMEM. */
 static rl_status map_accumulators(rl_map *m, int re_emits)
 {
     size_t n = m->ncells ? m->ncells : 1;
@@ -278,8 +279,10 @@ int64_t rl__map_cell_near(const rl_map *m, v2 q)
     double fi = floor((q.x - m->u0) / m->cell), fj = floor((q.y - m->v0) / m->cell);
     int64_t i = fi < 0 ? 0 : fi > m->nu - 1 ? (int64_t)m->nu - 1 : (int64_t)fi;
     int64_t j = fj < 0 ? 0 : fj > m->nv - 1 ? (int64_t)m->nv - 1 : (int64_t)fj;
-    for (int64_t r = 0; r < 9; r++) {
-        int64_t ii = i + (r == 0 ? 0 : r % 3 - 1), jj = j + (r == 0 ? 0 : r / 3 - 1);
+    /* the square itself, then the four that share a side with it, then the four corners */
+    static const int8_t around[9][2] = {{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
+    for (int r = 0; r < 9; r++) {
+        int64_t ii = i + around[r][0], jj = j + around[r][1];
         if (ii >= 0 && jj >= 0 && ii < m->nu && jj < m->nv && m->grid[jj * m->nu + ii] >= 0)
             return m->grid[jj * m->nu + ii];
     }

@@ -73,8 +73,8 @@ uint32_t rl__map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out);
 /* @return the cell of m containing frame point q, or -1. */
 int64_t rl__map_cell_at(const rl_map *m, v2 q);
 
-/* @return the cell of m holding frame point q, or, when q falls just outside the polygon's cells
- * (rounding at an edge), the first cell of the 3 x 3 grid squares around the nearest square; -1 if none. */
+/* @return the cell of m holding frame point q (clamped to the grid), or, when that square has no cell
+ * (rounding at an edge), the first found of its side neighbours, then of its corner neighbours; -1 if none. */
 int64_t rl__map_cell_near(const rl_map *m, v2 q);
 
 /* Writes the radiance cell of m (-1: none) re-emits in a bounce, albedo * E_prev / pi, W sr^-1 m^-2. */

@@ -67,7 +67,7 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
     double share = SOLVE_SHARE(bounces);
     st = rl__solve(scene, cl, &run, bounces, share, &sol);
     size_t ne = 0;
-    rl_emitter *e = st == RL_OK ? rl__primary_emitters(scene, sol->nmaps, &ne) : NULL;
+    rl_emitter *e = st == RL_OK ? rl__primary_emitters(scene, bounces > 0 ? sol->nmaps : 0, &ne) : NULL;
     if (st == RL_OK && !e)
         st = rl__fail(RL_ERR_NOMEM, "out of memory for emitters");
     if (st == RL_OK && bounces > 0) {

@@ -24,6 +24,7 @@ struct rl_tracer {
     RTCDevice device;
     RTCScene scene;
     uint32_t *prim_polygon;
+    v3 *front;               /* [npolygons]: each polygon's front normal, for rl__tracer_hit_front() */
     rl_occluders *occluders; /* exact pyramid queries beside the rays */
     v3 centre;
     double extent;
@@ -80,7 +81,15 @@ rl_status rl__tracer_new(const rl_scene *s, unsigned threads, rl_tracer **out)
         return rl__fail(RL_ERR_INTERNAL, "Embree could not start (rtcNewDevice failed)");
     }
     t->scene = rtcNewScene(t->device);
-    rtcSetSceneFlags(t->scene, RTC_SCENE_FLAG_ROBUST);
+    /* the context filter lets rl__tracer_hit_front() skip back faces; other calls set none */
+    rtcSetSceneFlags(t->scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+    t->front = malloc((s->npolygons ? s->npolygons : 1) * sizeof *t->front);
+    if (!t->front) {
+        rl__tracer_destroy(t);
+        return rl__fail(RL_ERR_NOMEM, "out of memory for the ray tracer");
+    }
+    for (size_t k = 0; k < s->npolygons; k++)
+        t->front[k] = v3_load(s->polygons[k].normal);
     rtcSetSceneBuildQuality(t->scene, RTC_BUILD_QUALITY_HIGH);
     size_t ntri = triangle_count(s);
     if (ntri > 0) {
@@ -135,6 +144,7 @@ void rl__tracer_destroy(rl_tracer *t)
     if (t->device)
         rtcReleaseDevice(t->device);
     free(t->prim_polygon);
+    free(t->front);
     rl__occluders_destroy(t->occluders);
     free(t);
 }
@@ -237,6 +247,8 @@ void rl__tracer_occluded_n(const rl_tracer *t, size_t n, const v3 *org, const v3
         occluded[i] = valid[i] && tf[i] < 0.0f;
 }
 
+_Static_assert(RL_RAY_PACKET <= 16, "rl__tracer_hit_n() traces one packet of 16");
+
 void rl__tracer_hit_n(const rl_tracer *t, size_t n, const v3 *org, const v3 *dir, const double *tnear,
                       const double *tfar, uint32_t *polygon, double *dist)
 {
@@ -270,6 +282,48 @@ void rl__tracer_hit_n(const rl_tracer *t, size_t n, const v3 *org, const v3 *dir
         polygon[i] = hit ? t->prim_polygon[rh.hit.primID[i]] : UINT32_MAX;
         dist[i] = hit ? rh.ray.tfar[i] : 0.0;
     }
+}
+
+/* An intersection context that also carries the tracer, for front_faces_only(). */
+typedef struct front_context {
+    struct RTCIntersectContext base; /* first: Embree passes a pointer to it back to the filter */
+    const rl_tracer *t;
+} front_context;
+
+/* Context filter of rl__tracer_hit_front(): rejects every hit on a polygon's back. RTCRayN and RTCHitN
+ * are arrays of N lanes per field: the direction is fields 4 to 6 of the ray, primID field 5 of the hit. */
+static void front_faces_only(const struct RTCFilterFunctionNArguments *args)
+{
+    const front_context *fc = (const front_context *)args->context;
+    const float *ray = (const float *)args->ray;
+    const unsigned *hit = (const unsigned *)args->hit;
+    unsigned n = args->N;
+    for (unsigned i = 0; i < n; i++) {
+        if (args->valid[i] == 0)
+            continue;
+        v3 d = v3_make(ray[4 * n + i], ray[5 * n + i], ray[6 * n + i]);
+        if (!(v3_dot(d, fc->t->front[fc->t->prim_polygon[hit[5 * n + i]]]) < 0))
+            args->valid[i] = 0;
+    }
+}
+
+int rl__tracer_hit_front(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon,
+                         double *dist)
+{
+    front_context fc;
+    struct RTCRayHit rh;
+    rtcInitIntersectContext(&fc.base);
+    fc.base.filter = front_faces_only;
+    fc.t = t;
+    make_ray(t, org, dir, tnear, tfar, &rh.ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(t->scene, &fc.base, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return 0;
+    *polygon = t->prim_polygon[rh.hit.primID];
+    *dist = rh.ray.tfar;
+    return 1;
 }
 
 int rl__tracer_hit(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon, double *dist)

@@ -29,7 +29,7 @@ void rl__tracer_destroy(rl_tracer *t);
 /* @return 1 if any polygon meets the ray org + s*dir for s in [tnear, tfar] (dir unit). */
 int rl__tracer_occluded(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar);
 
-/* Most rays one rl__tracer_occluded_n() call takes. */
+/* Most rays one rl__tracer_occluded_n() or rl__tracer_hit_n() call takes (hit_n traces 16 lanes). */
 #define RL_RAY_PACKET 16
 
 /* Tests n <= RL_RAY_PACKET rays at once (packets of 4, 8 or 16, as n
@@ -41,6 +41,12 @@ void rl__tracer_occluded_n(const rl_tracer *t, size_t n, const v3 *org, const v3
  * polygon[i] and dist[i] as rl__tracer_hit() gives them, polygon[i] = UINT32_MAX where ray i hits none. */
 void rl__tracer_hit_n(const rl_tracer *t, size_t n, const v3 *org, const v3 *dir, const double *tnear,
                       const double *tfar, uint32_t *polygon, double *dist);
+
+/* Finds the first polygon in [tnear, tfar] whose front faces the ray (dot(dir, normal) < 0), passing
+ * through backs: what a ray that met a back finds where two polygons coincide back to back.
+ * @return 1 with *polygon and *dist, or 0. */
+int rl__tracer_hit_front(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon,
+                         double *dist);
 
 /* Finds the first polygon hit in [tnear, tfar]. @return 1 with *polygon and *dist, or 0. */
 int rl__tracer_hit(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon, double *dist);

@@ -16,7 +16,7 @@
 typedef struct rl_counters {
     uint64_t samples;           /* sample rays generated */
     uint64_t rays_cast;         /* rays handed to Embree */
-    uint64_t rays_kept;         /* rays that reached the emitter unoccluded */
+    uint64_t rays_kept;         /* rays that reached the emitter unoccluded (first hits: that met a re-emitter) */
     uint64_t leaves_considered; /* (pair, solid angle) leaves of the hierarchy considered */
     uint64_t leaves_culled;     /* of those, culled before any ray */
     uint64_t pairs;             /* (emitter, receiver tile) pairs that can exchange light */
@@ -80,15 +80,17 @@ int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver,
 double rl__point_lambert(const rl_emitter *e, v3 x, v3 nx);
 
 /* Adds to m->e_pass, for the cells in grid rows [row0, row1) of map m, the
- * irradiance from every emitter of ctx, by ctx->sampling->method. map_index
+ * irradiance from every emitter of ctx, by ctx->sampling->method; when
+ * ctx->glow is set (a bounce pass by first hits), by rl__bounce_tile()
+ * instead, for every map of a polygon. map_index
  * only keys the random sequences. Deterministic: the result depends on
  * nothing but the arguments. @return 0, or -1 if scratch memory ran out. */
 int rl__transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
                   rl_scratch *scratch, rl_counters *cnt);
 
 /* What a bounce pass by first hits reads of one scene polygon: the radiance its map re-emits from each
- * grid square (float; a square without a cell holds its nearest cell's, so that a hit rounded just
- * past the cells still reads its own), W sr^-1 m^-2. map NULL: the polygon re-emits nothing. */
+ * grid square (float; a square without a cell holds a neighbour's, rl__map_cell_near(), so that a hit
+ * rounded just past the cells still reads light), W sr^-1 m^-2. map NULL: the polygon re-emits nothing. */
 typedef struct rl_glow {
     const rl_map *map;
     float (*rad)[3]; /* [map->nu * map->nv] */

@@ -25,7 +25,9 @@ typedef struct rl_pass_stats {
     double cpu_seconds;           /**< process CPU time of the pass, all threads */
     uint64_t samples;             /**< sample rays generated */
     uint64_t rays_cast;           /**< rays handed to the ray tracer */
-    uint64_t rays_kept;           /**< rays that reached their emitter unoccluded */
+    uint64_t rays_kept;           /**< rays that reached their emitter unoccluded (a first-hit bounce pass:
+                                       rays whose first hit re-emits light; it has no pairs or solid angles,
+                                       and its samples are its rays) */
     uint64_t solid_angles_considered; /**< (emitter, receiver, solid angle) leaves considered */
     uint64_t solid_angles_culled; /**< of those, culled without a ray */
     uint64_t pairs;               /**< (emitter, receiver tile) pairs that can exchange light */
