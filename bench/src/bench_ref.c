@@ -93,6 +93,13 @@ static int hash_section_files(uint64_t *h, const char *scene, const cJSON *root,
     return 1;
 }
 
+/* @return the first-hit rays a cell the reference's bounce passes take: as many as its samples (a bounce
+ * gather as converged as its direct pass), or 0 where the scene gathers bounces by its method. */
+static uint32_t reference_bounce_rays(const bench_config *cfg, const rl_sampling *s)
+{
+    return s->bounce_rays > 0 ? cfg->reference_samples : 0;
+}
+
 /* Computes the cache key of the scene's reference with the given settings. @return 1, or 0 after reporting. */
 static int reference_key(const bench_config *cfg, const rl_scene *scene, uint64_t *key)
 {
@@ -115,7 +122,7 @@ static int reference_key(const bench_config *cfg, const rl_scene *scene, uint64_
              " partition_n=%" PRIu32
              " descend=%" PRIu32,
              rl_scene_cell_size(scene), cfg->reference_samples, REFERENCE_SEEDS[0], REFERENCE_SEEDS[1], s->bounces,
-             s->bounce_partition_n, s->bounce_cell_factor, s->bounce_rays > 0 ? cfg->reference_samples : 0, s->partition_n,
+             s->bounce_partition_n, s->bounce_cell_factor, reference_bounce_rays(cfg, s), s->partition_n,
              s->descend);
     *key = fnv1a(h, settings, strlen(settings));
     cJSON_Delete(root);
@@ -278,10 +285,7 @@ static rl_solution *reference_run(const reference_job *job, uint64_t seed, const
 {
     rl_sampling s = *rl_scene_sampling(job->scene);
     s.seed = seed;
-    /* with bounces, first-hit rays per cell as many as the reference's samples: a bounce gather as
-     * converged as its direct pass (bounce_rays 0 would tie its bounces to the runs' own method) */
-    if (s.bounce_rays > 0)
-        s.bounce_rays = job->cfg->reference_samples;
+    s.bounce_rays = reference_bounce_rays(job->cfg, &s);
     bench_result run;
     memset(&run, 0, sizeof run);
     bench_setting setting = {.method = RL_METHOD_SOLIDANGLE, .samples = job->cfg->reference_samples};

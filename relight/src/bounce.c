@@ -112,12 +112,7 @@ static void trace_packet(const rl_transfer_ctx *ctx, size_t n, const v3 *x, cons
         const rl_map *m = g->map;
         if (!m)
             continue; /* re-emits nothing */
-        v2 q = frame_project(&m->frame, v3_madd(x[i], d[i], dist[i]));
-        /* the square holding the hit, clamped to the grid: rounding may put it just outside */
-        double fi = floor((q.x - m->u0) / m->cell), fj = floor((q.y - m->v0) / m->cell);
-        size_t gi = fi < 0 ? 0 : fi > m->nu - 1 ? m->nu - 1 : (size_t)fi;
-        size_t gj = fj < 0 ? 0 : fj > m->nv - 1 ? m->nv - 1 : (size_t)fj;
-        const float *l = g->rad[gj * m->nu + gi];
+        const float *l = g->rad[rl__map_square_clamped(m, frame_project(&m->frame, v3_madd(x[i], d[i], dist[i])))];
         cnt->rays_kept++;
         for (int c = 0; c < 3; c++)
             acc[c] += l[c];

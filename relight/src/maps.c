@@ -276,9 +276,8 @@ int64_t rl__map_cell_near(const rl_map *m, v2 q)
 {
     if (m->nu == 0 || m->nv == 0)
         return -1;
-    double fi = floor((q.x - m->u0) / m->cell), fj = floor((q.y - m->v0) / m->cell);
-    int64_t i = fi < 0 ? 0 : fi > m->nu - 1 ? (int64_t)m->nu - 1 : (int64_t)fi;
-    int64_t j = fj < 0 ? 0 : fj > m->nv - 1 ? (int64_t)m->nv - 1 : (int64_t)fj;
+    size_t square = rl__map_square_clamped(m, q);
+    int64_t i = (int64_t)(square % m->nu), j = (int64_t)(square / m->nu);
     /* the square itself, then the four that share a side with it, then the four corners */
     static const int8_t around[9][2] = {{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
     for (int r = 0; r < 9; r++) {

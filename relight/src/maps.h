@@ -5,6 +5,7 @@
 #ifndef RELIGHT_MAPS_H
 #define RELIGHT_MAPS_H
 
+#include <math.h>
 #include <stdint.h>
 
 #include "region.h"
@@ -69,6 +70,16 @@ void rl__maps_free(rl_map *maps, size_t count);
 /* @return the clipped polygon of cell c in frame coordinates, in out (room for
  * RL_MAX_POLY_VERTS + 4); the vertex count. A point receiver gives its point. */
 uint32_t rl__map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out);
+
+/* @return the index (j * nu + i) of the grid square of m holding frame point q, clamped to the grid
+ * (rounding may put a point on the polygon just outside it); m has at least one square. */
+static inline size_t rl__map_square_clamped(const rl_map *m, v2 q)
+{
+    double fi = floor((q.x - m->u0) / m->cell), fj = floor((q.y - m->v0) / m->cell);
+    size_t i = fi < 0 ? 0 : fi > m->nu - 1 ? m->nu - 1 : (size_t)fi;
+    size_t j = fj < 0 ? 0 : fj > m->nv - 1 ? m->nv - 1 : (size_t)fj;
+    return j * m->nu + i;
+}
 
 /* @return the cell of m containing frame point q, or -1. */
 int64_t rl__map_cell_at(const rl_map *m, v2 q);

@@ -307,18 +307,15 @@ static void front_faces_only(const struct RTCFilterFunctionNArguments *args)
     }
 }
 
-int rl__tracer_hit_front(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon,
-                         double *dist)
+/* Traces one ray through ctx (its filter, if any) for its first hit. @return 1 with *polygon and *dist, or 0. */
+static int hit1(const rl_tracer *t, struct RTCIntersectContext *ctx, v3 org, v3 dir, double tnear, double tfar,
+                uint32_t *polygon, double *dist)
 {
-    front_context fc;
     struct RTCRayHit rh;
-    rtcInitIntersectContext(&fc.base);
-    fc.base.filter = front_faces_only;
-    fc.t = t;
     make_ray(t, org, dir, tnear, tfar, &rh.ray);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(t->scene, &fc.base, &rh);
+    rtcIntersect1(t->scene, ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
         return 0;
     *polygon = t->prim_polygon[rh.hit.primID];
@@ -326,18 +323,19 @@ int rl__tracer_hit_front(const rl_tracer *t, v3 org, v3 dir, double tnear, doubl
     return 1;
 }
 
+int rl__tracer_hit_front(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon,
+                         double *dist)
+{
+    front_context fc;
+    rtcInitIntersectContext(&fc.base);
+    fc.base.filter = front_faces_only;
+    fc.t = t;
+    return hit1(t, &fc.base, org, dir, tnear, tfar, polygon, dist);
+}
+
 int rl__tracer_hit(const rl_tracer *t, v3 org, v3 dir, double tnear, double tfar, uint32_t *polygon, double *dist)
 {
     struct RTCIntersectContext ctx;
-    struct RTCRayHit rh;
     rtcInitIntersectContext(&ctx);
-    make_ray(t, org, dir, tnear, tfar, &rh.ray);
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(t->scene, &ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
-        return 0;
-    *polygon = t->prim_polygon[rh.hit.primID];
-    *dist = rh.ray.tfar;
-    return 1;
+    return hit1(t, &ctx, org, dir, tnear, tfar, polygon, dist);
 }
