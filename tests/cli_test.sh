@@ -364,11 +364,14 @@ assert s["maps"] == 1 and s["cells"] == 64, s
 assert s["wall_seconds"] >= 0 and s["cpu_seconds"] >= 0, s
 assert s["ranks"] == 1 and s["radiance_write_seconds"] > 0 and "exchanges" not in s, s
 assert len(s["passes"]) == 2 and [p["pass"] for p in s["passes"]] == [0, 1], s["passes"]
-keys = {"wall_seconds", "cpu_seconds", "samples", "rays_cast", "rays_kept", "solid_angles_considered",
+keys = {"wall_seconds", "cpu_seconds", "samples", "rays_cast", "rays_kept", "rays_free", "solid_angles_considered",
         "solid_angles_culled", "pairs", "pairs_descended", "emitters"}
 assert all(keys <= set(p) for p in s["passes"]), s["passes"]
 d = s["passes"][0]
-assert d["rays_cast"] > 0 and 0 < d["rays_kept"] <= d["rays_cast"] and d["emitters"] == 1, d
+# nothing lies between lamp and floor: every direct ray is known to arrive, none is traced
+assert d["rays_cast"] == 0 and d["rays_kept"] == 0 and d["rays_free"] > 0 and d["emitters"] == 1, d
+b = s["passes"][1]
+assert b["rays_cast"] > 0 and b["rays_kept"] <= b["rays_cast"] and b["rays_free"] == 0, b  # first hits are all traced
 assert d["solid_angles_culled"] <= d["solid_angles_considered"], d
 ' "$RELIT/square/stats.json"
 if [ -n "$H5PY" ]; then

@@ -52,6 +52,42 @@ static inline tpoly ts_moved(tpoly p, const double t[3])
     return p;
 }
 
+/* A deterministic uniform number in [0, 1) (a 64-bit LCG's top 53 bits). */
+static uint64_t ts_rnd_state = 77;
+static inline double ts_rnd(void)
+{
+    ts_rnd_state = ts_rnd_state * 6364136223846793005ull + 1442695040888963407ull;
+    return (ts_rnd_state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* A random quad facing a random direction: centre in a 4 m box centred on
+ * the origin, sides 0.3 to 1.5 m. */
+static inline tpoly ts_random_quad(const char *mat)
+{
+    double c[3] = {4 * ts_rnd() - 2, 4 * ts_rnd() - 2, 4 * ts_rnd() - 2}, a[3], b[3], n[3];
+    double z = 2 * ts_rnd() - 1, phi = 6.283185307179586 * ts_rnd(), r = sqrt(1 - z * z);
+    n[0] = r * cos(phi);
+    n[1] = r * sin(phi);
+    n[2] = z;
+    double h[3] = {fabs(n[0]) < 0.9 ? 1 : 0, fabs(n[0]) < 0.9 ? 0 : 1, 0};
+    a[0] = h[1] * n[2] - h[2] * n[1];
+    a[1] = h[2] * n[0] - h[0] * n[2];
+    a[2] = h[0] * n[1] - h[1] * n[0];
+    double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    for (int k = 0; k < 3; k++)
+        a[k] /= la;
+    b[0] = n[1] * a[2] - n[2] * a[1];
+    b[1] = n[2] * a[0] - n[0] * a[2];
+    b[2] = n[0] * a[1] - n[1] * a[0];
+    double su = 0.3 + 1.2 * ts_rnd(), sv = 0.3 + 1.2 * ts_rnd();
+    tpoly p = {mat, 4, {{0}}};
+    const double corner[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+    for (int k = 0; k < 4; k++)
+        for (int q = 0; q < 3; q++)
+            p.v[k][q] = c[q] + 0.5 * su * corner[k][0] * a[q] + 0.5 * sv * corner[k][1] * b[q];
+    return p;
+}
+
 /* Writes a scene file: materials JSON, polygons, and the other top-level keys
  * (rest, without braces; may be NULL). Numbers are written with 17 digits, so
  * the loader sees exactly the doubles given. @return 1, or 0 if it cannot be written. */

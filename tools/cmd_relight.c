@@ -546,6 +546,7 @@ static cJSON *pass_json(uint32_t k, const rl_pass_stats *s)
     add_count(p, "samples", s->samples);
     add_count(p, "rays_cast", s->rays_cast);
     add_count(p, "rays_kept", s->rays_kept);
+    add_count(p, "rays_free", s->rays_free);
     add_count(p, "solid_angles_considered", s->solid_angles_considered);
     add_count(p, "solid_angles_culled", s->solid_angles_culled);
     add_count(p, "pairs", s->pairs);

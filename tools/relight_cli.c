@@ -179,8 +179,8 @@ void relight_print_pass(FILE *out, uint32_t k, const rl_pass_stats *s)
 {
     fprintf(out, "pass %" PRIu32 " (%s): %.3f s wall, %.3f s cpu, %" PRIu32 " emitter%s\n", k,
             k == 0 ? "direct" : "bounce", s->wall_seconds, s->cpu_seconds, s->emitters, s->emitters == 1 ? "" : "s");
-    fprintf(out, "  samples %" PRIu64 ", rays cast %" PRIu64 ", rays kept %" PRIu64 "\n", s->samples, s->rays_cast,
-            s->rays_kept);
+    fprintf(out, "  samples %" PRIu64 ", rays cast %" PRIu64 ", rays kept %" PRIu64 ", rays known free %" PRIu64 "\n",
+            s->samples, s->rays_cast, s->rays_kept, s->rays_free);
     fprintf(out, "  solid angles considered %" PRIu64 ", culled %" PRIu64 "; pairs %" PRIu64 ", descended %" PRIu64
                  "\n",
             s->solid_angles_considered, s->solid_angles_culled, s->pairs, s->pairs_descended);

@@ -130,6 +130,7 @@ static void sum_counters(const rl_counters *c, unsigned n, rl_pass_stats *st)
         st->samples += c[k].samples;
         st->rays_cast += c[k].rays_cast;
         st->rays_kept += c[k].rays_kept;
+        st->rays_free += c[k].rays_free;
         st->solid_angles_considered += c[k].leaves_considered;
         st->solid_angles_culled += c[k].leaves_culled;
         st->pairs += c[k].pairs;
@@ -358,17 +359,19 @@ static int sum_stats(const rl_cluster *cl, rl_pass_stats *st)
 {
     double v[] = {(double)st->samples, (double)st->rays_cast, (double)st->rays_kept,
                   (double)st->solid_angles_considered, (double)st->solid_angles_culled, (double)st->pairs,
-                  (double)st->pairs_descended, (double)st->refinements, st->estimated_rmse,
-                  (double)st->budget_reached, st->cpu_seconds};
+                  (double)st->pairs_descended, (double)st->refinements, (double)st->rays_free,
+                  st->estimated_rmse, (double)st->budget_reached, st->cpu_seconds};
     if (cl->sum(cl->user, v, sizeof v / sizeof v[0]) != 0)
         return -1;
     uint64_t *counts[] = {&st->samples, &st->rays_cast, &st->rays_kept, &st->solid_angles_considered,
-                          &st->solid_angles_culled, &st->pairs, &st->pairs_descended, &st->refinements};
-    for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++)
+                          &st->solid_angles_culled, &st->pairs, &st->pairs_descended, &st->refinements,
+                          &st->rays_free};
+    size_t nc = sizeof counts / sizeof counts[0];
+    for (size_t k = 0; k < nc; k++)
         *counts[k] = (uint64_t)v[k];
-    st->estimated_rmse = v[8];
-    st->budget_reached = v[9] > 0;
-    st->cpu_seconds = v[10];
+    st->estimated_rmse = v[nc];
+    st->budget_reached = v[nc + 1] > 0;
+    st->cpu_seconds = v[nc + 2];
     return 0;
 }
 

@@ -210,9 +210,11 @@ int rl__leaf_draw(const rl_pair *p, const rl_leaf *L, v3 x, double u1, double u2
 
 /* Lambert's formula times the weighted mean of radiance * visibility, for
  * every cell of the tile: a constant emitter, or one a few solid angles
- * across (views.c). */
-void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei,
-                        rl_counters *cnt);
+ * across (views.c). Blocks of cells that see all of the emitter or none of
+ * it (shadow.h) take the rays' outcome without tracing them.
+ * @return 0, or -1 if s ran out of memory. */
+int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei, rl_scratch *s,
+                       rl_counters *cnt);
 
 /* ------------------------------------------------------- the leaf family */
 

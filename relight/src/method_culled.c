@@ -252,7 +252,7 @@ int rl__leaves_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei,
                        (rows->culls && p->descended));
         if (lambert) {
             /* Lambert's formula, and rays for visibility (and the radiance of light fields) alone */
-            rl__gather_lambert(ctx, p, t, ei, cnt);
+            rc = rl__gather_lambert(ctx, p, t, ei, s, cnt);
         } else if (rows->culls) {
             rc = walk(ctx, p, t, s, cnt);
             if (rc == 0 && s->nleaves > 1)

@@ -166,7 +166,7 @@ static void visit(point_walk *w, uint32_t lv, uint64_t id, const v3 *src, size_t
         w->cnt->leaves_culled++;
         return; /* the node does not see S */
     }
-    rl_pyramid local, *pyr = rl__pyramid_make(w->x, q, nq, w->eps, &local) ? &local : NULL;
+    rl_beam local, *pyr = rl__beam_make(&w->x, 1, q, nq, w->eps, &local) ? &local : NULL;
     rl_visibility vis = VIS_FREE;
     uint32_t *mine = w->occ + (size_t)depth * OCC_CAP;
     size_t nmine = 0;
@@ -244,7 +244,7 @@ int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver,
         r = dmax(r, v3_maxabs(v3_sub(w->s[i], ctx->centre)));
     w->eps = dmax(1e-6 * r, ctx->eps);
     /* the whole view first: most points see most emitters unoccluded */
-    rl_pyramid *root = malloc(sizeof *root);
+    rl_beam *root = malloc(sizeof *root);
     if (!root) {
         free(w);
         return -1;
@@ -253,7 +253,7 @@ int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver,
         uint32_t *top = w->occ + (size_t)(WALK_LEVELS - 2) * OCC_CAP;
         size_t n = 0;
         rl_visibility vis = VIS_FREE; /* without a pyramid, as in visit() */
-        if (rl__pyramid_make(x, w->s, w->ns, w->eps, root)) {
+        if (rl__beam_make(&x, 1, w->s, w->ns, w->eps, root)) {
             size_t found = rl__occluders_collect(ctx->occluders, root, e->polygon, w->occ, OCC_CAP);
             n = SIZE_MAX;
             vis = VIS_PARTIAL;

@@ -1,12 +1,15 @@
 /*
  * shadow.c - an index of the scene's polygons (a bounding-box tree) and
- * exact tests of a polygon against a pyramid of segments (shadow.h).
+ * exact tests of a polygon against a beam of segments (shadow.h).
  *
- * A polygon P meets a pyramid when P clipped by the pyramid's side planes
- * and by its base plane keeps a positive area. P blocks the pyramid when
- * the apex and every base vertex lie strictly on opposite sides of P's
- * plane and the segment to every base vertex crosses P inside its edges:
- * P and the pyramid are convex, so then every segment crosses P. Points
+ * A beam is kept as the faces of the convex hull of its two ends: a side
+ * through each edge of either end and a vertex of the other, and the ends'
+ * planes (a pyramid's sides all pass through its apex). A polygon P meets
+ * the beam when P clipped by those faces keeps a positive area. P blocks
+ * the beam when every vertex of one end lies strictly on one side of P's
+ * plane and every vertex of the other strictly on the other, and the
+ * segment between every such pair of vertices crosses P inside its edges:
+ * the beam and P are convex, so then every segment crosses P. Points
  * within `tol` of a plane count as on it, and "inside P" needs a margin of
  * tol, so FREE and BLOCKED err towards PARTIAL, which only costs rays.
  *
@@ -167,87 +170,163 @@ void rl__occluders_destroy(rl_occluders *o)
     free(o);
 }
 
-int rl__pyramid_make(v3 apex, const v3 *base, size_t nbase, double tol, rl_pyramid *p)
+/* Adds the face through org with normal n (either way round) when every
+ * point of both ends lies on one side of it, within the rounding of its
+ * products (scale: the beam's extent). @return 1 if added. */
+static int add_face(rl_beam *p, v3 org, v3 n, double scale)
 {
-    if (nbase < 3 || nbase > RL_PYRAMID_MAX_BASE)
-        return 0;
-    v3 newell = {0, 0, 0}, c = {0, 0, 0};
-    for (size_t i = 0; i < nbase; i++) {
-        newell = v3_add(newell, v3_cross(base[i], base[(i + 1) % nbase]));
-        c = v3_add(c, base[i]);
-    }
-    double len = v3_len(newell);
+    double len = v3_len(n);
     if (!(len > 0))
         return 0;
-    c = v3_scale(c, 1.0 / (double)nbase);
-    p->base_n = v3_scale(newell, 1.0 / len);
-    double h = v3_dot(v3_sub(apex, base[0]), p->base_n);
-    if (!(fabs(h) > tol))
-        return 0;
-    if (h < 0)
-        p->base_n = v3_scale(p->base_n, -1.0);
-    p->apex = apex;
-    p->nbase = nbase;
-    p->tol = tol;
-    p->lo = p->hi = apex;
-    for (size_t i = 0; i < nbase; i++) {
-        p->base[i] = base[i];
-        p->lo = v3_min(p->lo, base[i]);
-        p->hi = v3_max(p->hi, base[i]);
-        v3 s = v3_cross(v3_sub(base[i], apex), v3_sub(base[(i + 1) % nbase], apex));
-        p->side[i] = v3_dot(s, v3_sub(c, apex)) < 0 ? v3_scale(s, -1.0) : s;
+    double lo = 0.0, hi = 0.0, slack = 1e-9 * len * scale;
+    for (size_t i = 0; i < p->na + p->nb; i++) {
+        double s = v3_dot(v3_sub(i < p->na ? p->a[i] : p->b[i - p->na], org), n);
+        lo = dmin(lo, s);
+        hi = dmax(hi, s);
     }
+    if (lo >= -slack && hi > slack)
+        p->nrm[p->nplanes] = n;
+    else if (hi <= slack && lo < -slack)
+        p->nrm[p->nplanes] = v3_scale(n, -1.0);
+    else
+        return 0;
+    p->org[p->nplanes++] = org;
     return 1;
 }
 
+/* @return the Newell normal of polygon v (n vertices), not normalised. */
+static v3 newell_normal(const v3 *v, size_t n)
+{
+    v3 s = {0, 0, 0};
+    for (size_t i = 0; i < n; i++)
+        s = v3_add(s, v3_cross(v[i], v[(i + 1) % n]));
+    return s;
+}
+
+/* Adds the faces of the hull of p's ends that hold an edge of `from` (n
+ * vertices) and a vertex of `to` (m): at most one per edge. */
+static void add_edge_faces(rl_beam *p, const v3 *from, size_t n, const v3 *to, size_t m, double scale)
+{
+    for (size_t i = 0; i < n; i++) {
+        v3 e = v3_sub(from[(i + 1) % n], from[i]);
+        for (size_t j = 0; j < m; j++)
+            if (add_face(p, from[i], v3_cross(e, v3_sub(to[j], from[i])), scale))
+                break;
+    }
+}
+
+int rl__beam_make(const v3 *a, size_t na, const v3 *b, size_t nb, double tol, rl_beam *p)
+{
+    if (na < 1 || nb < 3 || na > RL_BEAM_MAX_VERTS || nb > RL_BEAM_MAX_VERTS)
+        return 0;
+    v3 newell = newell_normal(b, nb), c = {0, 0, 0};
+    double len = v3_len(newell);
+    if (!(len > 0))
+        return 0;
+    for (size_t i = 0; i < nb; i++)
+        c = v3_add(c, b[i]);
+    c = v3_scale(c, 1.0 / (double)nb);
+    p->b_n = v3_scale(newell, 1.0 / len);
+    /* b's normal faces the point of a farthest from its plane; a within tol of that plane spans no volume */
+    double h = 0.0;
+    for (size_t i = 0; i < na; i++) {
+        double hi = v3_dot(v3_sub(a[i], b[0]), p->b_n);
+        if (fabs(hi) > fabs(h))
+            h = hi;
+    }
+    if (!(fabs(h) > tol))
+        return 0;
+    if (h < 0)
+        p->b_n = v3_scale(p->b_n, -1.0);
+    memcpy(p->a, a, na * sizeof *a);
+    memcpy(p->b, b, nb * sizeof *b);
+    p->na = na;
+    p->nb = nb;
+    p->tol = tol;
+    p->lo = p->hi = a[0];
+    for (size_t i = 0; i < na + nb; i++) {
+        v3 v = i < na ? a[i] : b[i - na];
+        p->lo = v3_min(p->lo, v);
+        p->hi = v3_max(p->hi, v);
+    }
+    p->nplanes = 0;
+    if (na == 1) {
+        /* a pyramid: a side through the apex and each edge of the base, then the base */
+        for (size_t i = 0; i < nb; i++) {
+            v3 s = v3_cross(v3_sub(b[i], a[0]), v3_sub(b[(i + 1) % nb], a[0]));
+            p->org[p->nplanes] = a[0];
+            p->nrm[p->nplanes++] = v3_dot(s, v3_sub(c, a[0])) < 0 ? v3_scale(s, -1.0) : s;
+        }
+        p->org[p->nplanes] = b[0];
+        p->nrm[p->nplanes++] = p->b_n;
+        return 1;
+    }
+    /* the convex hull of two planar polygons: every face holds an edge of one
+     * and a vertex of the other, or lies in either one's plane */
+    double scale = v3_maxabs(v3_sub(p->hi, p->lo));
+    add_edge_faces(p, a, na, b, nb, scale);
+    add_edge_faces(p, b, nb, a, na, scale);
+    if (na >= 3)
+        add_face(p, a[0], newell_normal(a, na), scale);
+    add_face(p, b[0], p->b_n, scale);
+    return p->nplanes >= 4;
+}
+
 /* @return 1 if shadow rays of p can never meet polygon q: its plane holds
- * the apex, or it lies in the base's plane. */
-static int unreachable(const rl_occluders *o, const occ_poly *q, const rl_pyramid *p)
+ * all of p's near end, or it lies in the far end's plane. */
+static int unreachable(const rl_occluders *o, const occ_poly *q, const rl_beam *p)
 {
     const v3 *v = o->verts + q->first;
-    if (fabs(v3_dot(v3_sub(p->apex, v[0]), q->n)) <= p->tol)
+    size_t i = 0;
+    while (i < p->na && fabs(v3_dot(v3_sub(p->a[i], v[0]), q->n)) <= p->tol)
+        i++;
+    if (i == p->na)
         return 1;
-    for (uint32_t i = 0; i < q->count; i++)
-        if (fabs(v3_dot(v3_sub(v[i], p->base[0]), p->base_n)) > p->tol)
+    for (uint32_t k = 0; k < q->count; k++)
+        if (fabs(v3_dot(v3_sub(v[k], p->b[0]), p->b_n)) > p->tol)
             return 0;
     return 1;
 }
 
-/* @return 1 if polygon q meets pyramid p in a positive area. */
-static int meets(const rl_occluders *o, const occ_poly *q, const rl_pyramid *p)
+/* @return the side of q's plane (1, -1; 0: on it or on both sides) on which every point of p's ends lies. */
+static int ends_side(const occ_poly *q, const v3 *v0, const rl_beam *p)
+{
+    int side = 2;
+    for (size_t i = 0; i < p->na + p->nb; i++) {
+        double s = v3_dot(v3_sub(i < p->na ? p->a[i] : p->b[i - p->na], *v0), q->n);
+        int si = s > 0 ? 1 : s < 0 ? -1 : 0;
+        if (si == 0 || (side != 2 && si != side))
+            return 0;
+        side = si;
+    }
+    return side;
+}
+
+/* @return 1 if polygon q meets beam p in a positive area. */
+static int meets(const rl_occluders *o, const occ_poly *q, const rl_beam *p)
 {
     /* cheap separations first: q wholly outside one face of p, or p wholly
      * on one side of q's plane; only what survives both is clipped */
     const v3 *v = o->verts + q->first;
-    for (size_t i = 0; i <= p->nbase; i++) {
-        v3 org = i < p->nbase ? p->apex : p->base[0], nrm = i < p->nbase ? p->side[i] : p->base_n;
+    for (size_t i = 0; i < p->nplanes; i++) {
         uint32_t k = 0;
-        while (k < q->count && v3_dot(v3_sub(v[k], org), nrm) < 0)
+        while (k < q->count && v3_dot(v3_sub(v[k], p->org[i]), p->nrm[i]) < 0)
             k++;
         if (k == q->count)
             return 0;
     }
-    double sa = v3_dot(v3_sub(p->apex, v[0]), q->n);
-    int side = sa > 0 ? 1 : sa < 0 ? -1 : 0;
-    for (size_t b = 0; side != 0 && b < p->nbase; b++) {
-        double sb = v3_dot(v3_sub(p->base[b], v[0]), q->n);
-        if ((sb > 0 ? 1 : sb < 0 ? -1 : 0) != side)
-            side = 0;
-    }
-    if (side != 0)
+    if (ends_side(q, &v[0], p) != 0)
         return 0;
-    v3 buf[2][RL_SCENE_MAX_POLY_VERTS + RL_PYRAMID_MAX_BASE + 2];
+    v3 buf[2][RL_SCENE_MAX_POLY_VERTS + RL_BEAM_MAX_PLANES + 2];
     v3 *cur = buf[0], *next = buf[1];
     size_t n = q->count;
     memcpy(cur, o->verts + q->first, n * sizeof *cur);
-    for (size_t i = 0; i < p->nbase && n >= 3; i++) {
-        n = rl__clip_poly3(cur, n, p->apex, p->side[i], next);
+    for (size_t i = 0; i < p->nplanes && n >= 3; i++) {
+        n = rl__clip_poly3(cur, n, p->org[i], p->nrm[i], next);
         v3 *t = cur;
         cur = next;
         next = t;
     }
-    if (n >= 3)
-        n = rl__clip_poly3(cur, n, p->base[0], p->base_n, next), cur = next;
     if (n < 3)
         return 0;
     v3 newell = {0, 0, 0};
@@ -256,29 +335,48 @@ static int meets(const rl_occluders *o, const occ_poly *q, const rl_pyramid *p)
     return v3_len(newell) > 1e-6 * p->tol * p->tol;
 }
 
-/* @return 1 if polygon q crosses every segment of pyramid p. */
-static int blocks(const rl_occluders *o, const occ_poly *q, const rl_pyramid *p)
+/* @return 1 if polygon q crosses every segment of beam p: its plane strictly
+ * parts the two ends, and the segment between every pair of their vertices
+ * crosses it inside its edges (the section of a convex hull by a plane that
+ * parts its ends is the hull of those crossings). */
+static int blocks(const rl_occluders *o, const occ_poly *q, const rl_beam *p)
 {
     const v3 *v = o->verts + q->first;
-    double sa = v3_dot(v3_sub(p->apex, v[0]), q->n);
-    if (!(fabs(sa) > p->tol))
-        return 0;
-    for (size_t b = 0; b < p->nbase; b++) {
-        double sb = v3_dot(v3_sub(p->base[b], v[0]), q->n);
-        if (!(sa > 0 ? sb < -p->tol : sb > p->tol))
+    for (size_t ia = 0; ia < p->na; ia++) {
+        double sa = v3_dot(v3_sub(p->a[ia], v[0]), q->n);
+        if (!(fabs(sa) > p->tol))
             return 0;
-        v3 h = v3_madd(p->apex, v3_sub(p->base[b], p->apex), sa / (sa - sb));
-        for (uint32_t i = 0; i < q->count; i++) {
-            v3 a = v[i], c = v[(i + 1) % q->count];
-            v3 m = v3_cross(q->n, v3_sub(c, a));
-            if (!(v3_dot(v3_sub(h, a), m) > p->tol * v3_len(m)))
+        if (ia > 0 && (sa > 0) != (v3_dot(v3_sub(p->a[0], v[0]), q->n) > 0))
+            return 0;
+        for (size_t b = 0; b < p->nb; b++) {
+            double sb = v3_dot(v3_sub(p->b[b], v[0]), q->n);
+            if (!(sa > 0 ? sb < -p->tol : sb > p->tol))
                 return 0;
+            v3 h = v3_madd(p->a[ia], v3_sub(p->b[b], p->a[ia]), sa / (sa - sb));
+            for (uint32_t i = 0; i < q->count; i++) {
+                v3 a = v[i], c = v[(i + 1) % q->count];
+                v3 m = v3_cross(q->n, v3_sub(c, a));
+                if (!(v3_dot(v3_sub(h, a), m) > p->tol * v3_len(m)))
+                    return 0;
+            }
         }
     }
     return 1;
 }
 
-size_t rl__occluders_collect(const rl_occluders *o, const rl_pyramid *p, int32_t skip, uint32_t *list, size_t cap)
+/* @return 1 if box [lo, hi] lies wholly outside some face of p. */
+static int box_outside(v3 lo, v3 hi, const rl_beam *p)
+{
+    for (size_t i = 0; i < p->nplanes; i++) {
+        v3 n = p->nrm[i];
+        v3 far = {n.x > 0 ? hi.x : lo.x, n.y > 0 ? hi.y : lo.y, n.z > 0 ? hi.z : lo.z};
+        if (v3_dot(v3_sub(far, p->org[i]), n) < 0)
+            return 1;
+    }
+    return 0;
+}
+
+size_t rl__occluders_collect(const rl_occluders *o, const rl_beam *p, int32_t skip, uint32_t *list, size_t cap)
 {
     if (o->npolys == 0)
         return 0;
@@ -287,7 +385,7 @@ size_t rl__occluders_collect(const rl_occluders *o, const rl_pyramid *p, int32_t
     stack[top++] = 0;
     while (top > 0) {
         const occ_node *nd = &o->nodes[stack[--top]];
-        if (!boxes_overlap(nd->lo, nd->hi, p->lo, p->hi))
+        if (!boxes_overlap(nd->lo, nd->hi, p->lo, p->hi) || box_outside(nd->lo, nd->hi, p))
             continue;
         if (nd->count == 0) {
             if (top + 2 > TREE_STACK)
@@ -310,7 +408,7 @@ size_t rl__occluders_collect(const rl_occluders *o, const rl_pyramid *p, int32_t
     return n;
 }
 
-rl_visibility rl__occluders_classify(const rl_occluders *o, const rl_pyramid *p, const uint32_t *list, size_t n,
+rl_visibility rl__occluders_classify(const rl_occluders *o, const rl_beam *p, const uint32_t *list, size_t n,
                                  uint32_t *out, size_t *nout)
 {
     size_t m = 0;

@@ -56,6 +56,8 @@ int rl__transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m,
 void rl__scratch_free(rl_scratch *s)
 {
     free(s->occ);
+    free(s->vis);
+    free(s->block_occ);
     free(s->pair_total);
     free(s->pair_leaves);
     free(s->leaves);

@@ -17,6 +17,7 @@ typedef struct rl_counters {
     uint64_t samples;           /* sample rays generated */
     uint64_t rays_cast;         /* rays handed to Embree */
     uint64_t rays_kept;         /* rays that reached the emitter unoccluded (first hits: that met a re-emitter) */
+    uint64_t rays_free;         /* rays not traced because an exact test found them unoccluded */
     uint64_t leaves_considered; /* (pair, solid angle) leaves of the hierarchy considered */
     uint64_t leaves_culled;     /* of those, culled before any ray */
     uint64_t pairs;             /* (emitter, receiver tile) pairs that can exchange light */
@@ -54,6 +55,9 @@ typedef struct rl_scratch {
     size_t pair_cap;
     uint32_t first_cell;  /* the tile's first cell index */
     uint32_t *occ;        /* point receivers: one list of possible occluders per level of the walk */
+    uint8_t *vis;         /* Lambert's gather: each grid square's rl_visibility of the current emitter */
+    size_t vis_cap;
+    uint32_t *block_occ;  /* and the possible occluders of each level of its blocks */
 } rl_scratch;
 
 /* @return the key of what one pass samples between emitter ei and a receiver

@@ -17,8 +17,21 @@
  * map, cell), so results are deterministic; they are exact where a cell is
  * wholly lit by a constant emitter or wholly in shadow, and consistent (a
  * ratio of two estimates) in between, which the white-furnace test bounds.
+ *
+ * Before any ray, the tile is split into blocks of cells, halving the
+ * longer side, and the beam of segments from each block to the emitter is
+ * classified exactly (shadow.h) against the polygons its parent's beam met:
+ * a block that no polygon meets is FREE, one that a single polygon crosses
+ * wholly is BLOCKED, and only PARTIAL blocks split further (down to
+ * BLOCK_MIN_SQUARES). A BLOCKED cell gets 0 with no sample; a FREE cell
+ * adds each ray's radiance as if it were traced (a constant emitter's cell
+ * skips its samples: its visible fraction is 1); only PARTIAL cells trace.
+ * So the rays go where shadows are, and the result is the rays' own except
+ * where single precision would have stopped a ray grazing a plane.
  */
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include "method.h"
 
@@ -61,6 +74,100 @@ static uint32_t view_rays(const rl_transfer_ctx *ctx, const rl_pair *p, v3 centr
     return leaves >= 64.0 ? 64 * k : leaves <= 1.0 ? k : k * (uint32_t)leaves;
 }
 
+/* Blocks of cells are classified down to this many grid squares; below it
+ * a block's rays cost less than telling its beam apart. */
+#define BLOCK_MIN_SQUARES 4u
+/* Deepest split of a tile into blocks, and the occluders one level's list holds. */
+#define BLOCK_LEVELS 40
+#define BLOCK_OCC_CAP 256u
+
+/* What classify_block() shares down its splits. */
+typedef struct block_walk {
+    const rl_transfer_ctx *ctx;
+    const rl_pair *p;
+    const rl_tile *t;
+    rl_scratch *s;
+    rl_beam *beam;
+} block_walk;
+
+/* Marks grid squares [i0, i1) x [j0, j1) of the tile as vis. */
+static void block_mark(const block_walk *w, uint32_t i0, uint32_t i1, uint32_t j0, uint32_t j1, rl_visibility vis)
+{
+    uint32_t nu = w->t->m->nu;
+    for (uint32_t j = j0; j < j1; j++)
+        memset(w->s->vis + (size_t)(j - w->t->row0) * nu + i0, (int)vis, i1 - i0);
+}
+
+/* Classifies the segments from grid squares [i0, i1) x [j0, j1) of the tile
+ * (clipped to its polygon) to the pair's emitter, given a superset of the
+ * polygons meeting them (list, n; SIZE_MAX: unknown), and marks each square
+ * FREE, BLOCKED or, where it stays undecided, PARTIAL. A PARTIAL block is
+ * split in two across its longer side with the polygons found to meet it. */
+static void classify_block(const block_walk *w, uint32_t i0, uint32_t i1, uint32_t j0, uint32_t j1,
+                           const uint32_t *list, size_t n, int depth)
+{
+    const rl_map *m = w->t->m;
+    v2 sq[4] = {{m->u0 + i0 * m->cell, m->v0 + j0 * m->cell},
+                {m->u0 + i1 * m->cell, m->v0 + j0 * m->cell},
+                {m->u0 + i1 * m->cell, m->v0 + j1 * m->cell},
+                {m->u0 + i0 * m->cell, m->v0 + j1 * m->cell}};
+    v2 clip[RL_MAX_POLY_VERTS + 8], tmp[RL_MAX_POLY_VERTS + 8];
+    size_t nc = rl__clip_to_polygon(sq, 4, w->t->poly, w->t->npoly, clip, tmp);
+    v3 a[RL_MAX_POLY_VERTS + 8];
+    for (size_t k = 0; k < nc; k++)
+        a[k] = frame_point(&m->frame, clip[k]);
+    rl_visibility vis = VIS_PARTIAL;
+    uint32_t *mine = w->s->block_occ + (size_t)depth * BLOCK_OCC_CAP;
+    size_t nmine = SIZE_MAX;
+    if (nc >= 3 && depth + 1 < BLOCK_LEVELS && rl__beam_make(a, nc, w->p->sclip, w->p->ns, w->p->eps, w->beam)) {
+        const rl_occluders *occ = w->ctx->occluders;
+        if (n == SIZE_MAX) {
+            uint32_t *found = w->s->block_occ + (size_t)(BLOCK_LEVELS - 1) * BLOCK_OCC_CAP;
+            size_t nf = rl__occluders_collect(occ, w->beam, w->p->e->polygon, found, BLOCK_OCC_CAP);
+            if (nf != SIZE_MAX)
+                vis = rl__occluders_classify(occ, w->beam, found, nf, mine, &nmine);
+        } else {
+            vis = rl__occluders_classify(occ, w->beam, list, n, mine, &nmine);
+        }
+    }
+    if (vis != VIS_PARTIAL || (size_t)(i1 - i0) * (j1 - j0) <= BLOCK_MIN_SQUARES || nc < 3 ||
+        depth + 2 >= BLOCK_LEVELS) {
+        block_mark(w, i0, i1, j0, j1, vis);
+        return;
+    }
+    if (i1 - i0 >= j1 - j0) {
+        uint32_t mid = i0 + (i1 - i0) / 2;
+        classify_block(w, i0, mid, j0, j1, mine, nmine, depth + 1);
+        classify_block(w, mid, i1, j0, j1, mine, nmine, depth + 1);
+    } else {
+        uint32_t mid = j0 + (j1 - j0) / 2;
+        classify_block(w, i0, i1, j0, mid, mine, nmine, depth + 1);
+        classify_block(w, i0, i1, mid, j1, mine, nmine, depth + 1);
+    }
+}
+
+/* Fills s->vis with each grid square's view of the pair's emitter (squares
+ * without a cell get whatever their block got). @return 0, or -1 without memory. */
+static int classify_tile(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, rl_scratch *s)
+{
+    size_t squares = (size_t)t->m->nu * (t->row1 - t->row0);
+    if (squares > s->vis_cap) {
+        uint8_t *grown = realloc(s->vis, squares);
+        if (!grown)
+            return -1;
+        s->vis = grown;
+        s->vis_cap = squares;
+    }
+    if (!s->block_occ && !(s->block_occ = malloc((size_t)BLOCK_LEVELS * BLOCK_OCC_CAP * sizeof *s->block_occ)))
+        return -1;
+    block_walk w = {ctx, p, t, s, malloc(sizeof(rl_beam))};
+    if (!w.beam)
+        return -1;
+    classify_block(&w, 0, t->m->nu, t->row0, t->row1, NULL, SIZE_MAX, 0);
+    free(w.beam);
+    return 0;
+}
+
 /* Transfer from emitter ei to every cell of the tile: Lambert's formula
  * averaged over lambert_origins() origins of the cell, times the mean of
  * radiance * visibility over shadow rays to uniform points of the emitter
@@ -76,10 +183,12 @@ static uint32_t view_rays(const rl_transfer_ctx *ctx, const rl_pair *p, v3 centr
  * in a penumbra; the white-furnace test bounds it); Lambert minus the sampled loss would be unbiased, but it
  * dips below zero in shadows. The solid angles play no part: no sample is
  * wasted on directions that miss the emitter. */
-void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei,
-                        rl_counters *cnt)
+int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei, rl_scratch *s,
+                       rl_counters *cnt)
 {
     rl_map *m = t->m;
+    if (classify_tile(ctx, p, t, s) != 0)
+        return -1;
     const rl_emitter *e = p->e;
     uint32_t k = ctx->sampling->rays_per_solid_angle;
     v2 sp[RL_MAX_POLY_VERTS + 2];
@@ -89,13 +198,20 @@ void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
         for (uint32_t i = 0; i < m->nu; i++) {
             int32_t cell = m->grid[(size_t)j * m->nu + i];
             rl_origin_domain dom;
-            if (cell < 0)
-                continue;
+            rl_visibility vis = (rl_visibility)s->vis[(size_t)(j - t->row0) * m->nu + i];
+            if (cell < 0 || vis == VIS_BLOCKED)
+                continue; /* in full shadow: rays would all be stopped, and the cell gets 0 */
             rl__cell_domain(m, (uint32_t)cell, &dom);
             lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, ei, t->map_index), (uint64_t)cell));
             v3 centre = domain_centre(m, &dom);
             uint32_t nr = view_rays(ctx, p, centre);
             double all = 0.0, seen[3] = {0, 0, 0};
+            if (vis == VIS_FREE && e->kind == EM_CONST) {
+                /* wholly lit by a constant emitter: the rays would measure a visible fraction of exactly 1 */
+                cnt->rays_free += nr;
+                all = seen[0] = seen[1] = seen[2] = 1.0;
+                nr = 0;
+            }
             rl_ray_batch batch;
             batch.n = 0;
             for (uint32_t r = 0; r < nr; r++) {
@@ -123,8 +239,15 @@ void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
                     for (int c = 0; c < 3; c++)
                         l[c] *= rad[c];
                 }
+                if (vis == VIS_FREE) {
+                    /* every ray would arrive: add it as the batch would, in order */
+                    for (int c = 0; c < 3; c++)
+                        seen[c] += l[c];
+                    cnt->rays_free++;
+                    continue;
+                }
                 rl__batch_push(ctx, &batch, x, to, p->eps / fmax(cos_r, 1e-3), dist - p->eps / fmax(cos_s, 1e-3), l,
-                           seen, cnt);
+                               seen, cnt);
             }
             rl__batch_flush(ctx, &batch, cnt);
             /* no light arrives (shadow, or a light field dark toward the cell): the cell gets exactly 0,
@@ -146,5 +269,5 @@ void rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
                 m->e_pass[cell][ch] += e->kind == EM_CONST ? e->emission[ch] * (f / no * fmin(seen[0] / all, 1.0))
                                                            : f / no * (seen[ch] / all);
         }
+    return 0;
 }
-

@@ -28,6 +28,8 @@ typedef struct rl_pass_stats {
     uint64_t rays_kept;           /**< rays that reached their emitter unoccluded (a first-hit bounce pass:
                                        rays whose first hit re-emits light; it has no pairs or solid angles,
                                        and its samples are its rays) */
+    uint64_t rays_free;           /**< rays not traced, known to arrive: an exact test found nothing between
+                                       their cell and the emitter (counted apart from rays_cast and rays_kept) */
     uint64_t solid_angles_considered; /**< (emitter, receiver, solid angle) leaves considered */
     uint64_t solid_angles_culled; /**< of those, culled without a ray */
     uint64_t pairs;               /**< (emitter, receiver tile) pairs that can exchange light */

@@ -1,0 +1,143 @@
+/*
+ * test_shadow.c - the exact visibility of beams (relight/src/shadow.h)
+ * against brute force: segments between random points of a beam's two
+ * ends, intersected in double precision with every polygon of the scene.
+ *
+ * Scenes of random quads go through the real loader; each beam runs from a
+ * random small quad or a point (a pyramid) to another small quad. What must
+ * hold: a beam classified FREE has no segment meeting any polygon; one
+ * classified BLOCKED has every segment meeting one; and the list of polygons
+ * collected for a beam holds every polygon some segment meets (a superset is
+ * what lets a block's parts be classified against its list). Every outcome
+ * must occur, so that none of these checks is vacuous.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "check.h"
+#include "relight_scenes.h"
+#include "shadow.h"
+
+#define SCENES 40
+#define BEAMS_PER_SCENE 60
+#define SEGMENTS 300
+#define CAP 64
+
+/* @return a point of quad v (4 vertices, a parallelogram) from two numbers in [0, 1). */
+static v3 quad_point(const v3 *v, double s, double t)
+{
+    return v3_add(v[0], v3_add(v3_scale(v3_sub(v[1], v[0]), s), v3_scale(v3_sub(v[3], v[0]), t)));
+}
+
+/* A random quad shrunk about its centre by f, as world points. */
+static void small_quad(double f, v3 out[4])
+{
+    tpoly q = ts_random_quad("grey");
+    v3 c = {0, 0, 0};
+    for (int k = 0; k < 4; k++)
+        c = v3_add(c, v3_scale(v3_load(q.v[k]), 0.25));
+    for (int k = 0; k < 4; k++)
+        out[k] = v3_add(c, v3_scale(v3_sub(v3_load(q.v[k]), c), f));
+}
+
+/* @return 1 if segment x -> y meets polygon k of s at a parameter in
+ * (margin, 1 - margin) and a point at least margin inside its edges
+ * (margin < 0 widens it: a lenient test). */
+static int segment_meets(const rl_scene *s, size_t k, v3 x, v3 y, double margin)
+{
+    const rl_polygon *pg = &s->polygons[k];
+    v3 n = v3_load(pg->normal), v0 = v3_load(s->vertices[pg->first]);
+    double hx = v3_dot(v3_sub(x, v0), n), hy = v3_dot(v3_sub(y, v0), n);
+    if ((hx > 0) == (hy > 0) || hx == hy)
+        return 0;
+    double t = hx / (hx - hy);
+    if (!(t > margin && t < 1 - margin))
+        return 0;
+    v3 h = v3_madd(x, v3_sub(y, x), t);
+    for (uint32_t i = 0; i < pg->count; i++) {
+        v3 a = v3_load(s->vertices[pg->first + i]), b = v3_load(s->vertices[pg->first + (i + 1) % pg->count]);
+        v3 m = v3_cross(n, v3_sub(b, a));
+        if (!(v3_dot(v3_sub(h, a), m) > margin * v3_len(m)))
+            return 0;
+    }
+    return 1;
+}
+
+int main(void)
+{
+    const char *tmp = getenv("ILF_TEST_TMP") ? getenv("ILF_TEST_TMP") : "/tmp";
+    long outcomes[3] = {0, 0, 0}, overflowed = 0, segments = 0, tried[2] = {0, 0}, made[2] = {0, 0};
+    rl_beam *beam = malloc(sizeof *beam);
+    if (!beam)
+        return 1;
+    for (int sc = 0; sc < SCENES; sc++) {
+        char path[1100];
+        snprintf(path, sizeof path, "%s/shadow_%d.json", tmp, sc);
+        tpoly p[12];
+        for (int k = 0; k < 12; k++)
+            p[k] = ts_random_quad("grey");
+        ts_write_scene(path, "{\"grey\": {\"albedo\": [0.5, 0.5, 0.5]}}", p, 12, NULL);
+        rl_scene *s = ts_load(path);
+        rl_occluders *occ = NULL;
+        CHECK(s && rl__occluders_new(s, &occ) == RL_OK, "scene %d and its occluder index", sc);
+        for (int bi = 0; occ && bi < BEAMS_PER_SCENE; bi++) {
+            v3 a[4], b[4];
+            size_t na = bi % 2 ? 4 : 1; /* every other beam a pyramid */
+            small_quad(0.3, a);
+            small_quad(0.3, b);
+            if (na == 1)
+                a[0] = quad_point(a, 0.5, 0.5);
+            tried[na > 1]++;
+            if (!rl__beam_make(a, na, b, 4, 1e-9, beam))
+                continue; /* b's plane holds a, or nearly: possible, but rare */
+            made[na > 1]++;
+            uint32_t list[CAP], mine[CAP];
+            size_t n = rl__occluders_collect(occ, beam, -1, list, CAP), nmine = 0;
+            if (n == SIZE_MAX) {
+                overflowed++;
+                continue;
+            }
+            rl_visibility vis = rl__occluders_classify(occ, beam, list, n, mine, &nmine);
+            outcomes[vis]++;
+            int in_list[12] = {0};
+            for (size_t i = 0; i < n; i++)
+                in_list[list[i]] = 1;
+            int free_ok = 1, blocked_ok = 1, list_ok = 1;
+            for (int sg = 0; sg < SEGMENTS; sg++, segments++) {
+                /* the first segments join vertices, where the classification is tightest */
+                v3 x = na == 1 ? a[0] : sg < 16 ? a[sg % 4] : quad_point(a, ts_rnd(), ts_rnd());
+                v3 y = sg < 16 ? b[(sg / 4) % 4] : quad_point(b, ts_rnd(), ts_rnd());
+                int met_any = 0;
+                for (size_t k = 0; k < s->npolygons; k++) {
+                    if (segment_meets(s, k, x, y, 1e-7)) {
+                        met_any = 1;
+                        list_ok &= in_list[k];
+                    }
+                    if (vis == VIS_BLOCKED)
+                        met_any |= segment_meets(s, k, x, y, -1e-7);
+                }
+                if (vis == VIS_FREE && met_any)
+                    free_ok = 0;
+                if (vis == VIS_BLOCKED && !met_any)
+                    blocked_ok = 0;
+            }
+            CHECK(free_ok, "scene %d beam %d: FREE, but a segment meets a polygon", sc, bi);
+            CHECK(blocked_ok, "scene %d beam %d: BLOCKED, but a segment passes", sc, bi);
+            CHECK(list_ok, "scene %d beam %d: a polygon a segment meets is missing from the collected list", sc, bi);
+            CHECK(vis != VIS_PARTIAL || nmine > 0, "scene %d beam %d: PARTIAL names no polygon", sc, bi);
+        }
+        rl__occluders_destroy(occ);
+        rl_scene_destroy(s);
+    }
+    printf("beams: %ld free, %ld partial, %ld blocked, %ld over the list's capacity; %ld segments\n", outcomes[0],
+           outcomes[1], outcomes[2], overflowed, segments);
+    CHECK(made[0] >= 0.95 * tried[0] && made[1] >= 0.95 * tried[1], "beams made: %ld of %ld pyramids, %ld of %ld",
+          made[0], tried[0], made[1], tried[1]);
+    CHECK(outcomes[VIS_FREE] > 0 && outcomes[VIS_PARTIAL] > 0 && outcomes[VIS_BLOCKED] > 0,
+          "every outcome occurs: %ld free, %ld partial, %ld blocked", outcomes[0], outcomes[1], outcomes[2]);
+    free(beam);
+    return check_report();
+}
