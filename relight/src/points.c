@@ -53,9 +53,7 @@ typedef struct point_walk {
     rl_counters *cnt;
 } point_walk;
 
-/* @return (1/2) sum over edges of theta_i (n . g_i): the irradiance at x
- * (unit normal n) from the convex polygon q of unit radiance, unoccluded. */
-static double lambert(v3 x, v3 n, const v3 *q, size_t nq)
+double rl__polygon_lambert(v3 x, v3 n, const v3 *q, size_t nq)
 {
     double total = 0.0;
     v3 a = v3_norm(v3_sub(q[nq - 1], x));
@@ -191,7 +189,7 @@ static void visit(point_walk *w, uint32_t lv, uint64_t id, const v3 *src, size_t
         return;
     }
     if (vis == VIS_FREE && w->constant) {
-        double f = lambert(w->x, w->nx, q, nq);
+        double f = rl__polygon_lambert(w->x, w->nx, q, nq);
         for (int c = 0; c < 3; c++)
             w->out[c] += w->e->emission[c] * f;
         return;
@@ -262,7 +260,7 @@ int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver,
         }
         if (vis != VIS_BLOCKED) {
             if (vis == VIS_FREE && w->constant) {
-                double f = lambert(x, nx, w->s, w->ns);
+                double f = rl__polygon_lambert(x, nx, w->s, w->ns);
                 for (int c = 0; c < 3; c++)
                     out[c] += e->emission[c] * f;
             } else {
@@ -282,5 +280,5 @@ double rl__point_lambert(const rl_emitter *e, v3 x, v3 nx)
     if (!(v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0))
         return 0.0;
     size_t n = rl__clip_poly3(e->verts, e->nverts, x, nx, c);
-    return n >= 3 ? lambert(x, nx, c, n) : 0.0;
+    return n >= 3 ? rl__polygon_lambert(x, nx, c, n) : 0.0;
 }

@@ -78,6 +78,10 @@ void rl__scratch_free(rl_scratch *s);
 int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver, v3 x, v3 nx, uint32_t rays,
                  double out[3], rl_scratch *s, rl_counters *cnt);
 
+/* @return (1/2) sum over edges of theta_i (n . g_i): the irradiance at x (unit normal n) from the
+ * convex polygon q (nq vertices, all in front of x's plane) of unit radiance, unoccluded. */
+double rl__polygon_lambert(v3 x, v3 n, const v3 *q, size_t nq);
+
 /* @return the irradiance at x (unit normal nx) from emitter e of unit
  * radiance with nothing in between (Lambert's formula), exactly as
  * rl__point_gather() computes an unoccluded constant emitter. */

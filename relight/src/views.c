@@ -76,7 +76,7 @@ static uint32_t view_rays(const rl_transfer_ctx *ctx, const rl_pair *p, v3 centr
 
 /* Blocks of cells are classified down to this many grid squares; below it
  * a block's rays cost less than telling its beam apart. */
-#define BLOCK_MIN_SQUARES 4u
+#define BLOCK_MIN_SQUARES 16u
 /* Deepest split of a tile into blocks, and the occluders one level's list holds. */
 #define BLOCK_LEVELS 40
 #define BLOCK_OCC_CAP 256u
@@ -259,7 +259,10 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
             for (uint32_t o = 0; o < no; o++) {
                 double u[4];
                 rl__lds4(&key, o, u);
-                f += rl__point_lambert(e, rl__domain_point(m, &dom, u[0], u[1]), m->frame.n);
+                /* the emitter clipped to the tile's plane is the same for every origin on it */
+                v3 x = rl__domain_point(m, &dom, u[0], u[1]);
+                if (v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0)
+                    f += rl__polygon_lambert(x, m->frame.n, p->sclip, p->ns);
             }
             if (!(f > 0))
                 continue;
