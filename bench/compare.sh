@@ -52,11 +52,13 @@ reference() {
     sed -n 's/.*`\([^`]*ref-[0-9a-f]*\.h5\)`.*/\1/p' "$d/summary.md" | head -1
 }
 
-# compare NAME SCENE OPTS: OLD and NEW alternately, REPEATS times each, then their medians and errors
+# compare NAME SCENE OPTS: OLD and NEW alternately, REPEATS times each, then their medians, their errors
+# against the reference (none with NOREF=1: scenes too large for one) and NEW's difference from OLD
 compare() {
     name=$1 scene=$2
     shift 2
-    ref=$(reference "$scene" 0)
+    ref=""
+    [ "${NOREF:-0}" = 1 ] || ref=$(reference "$scene" 0)
     for s in old new; do eval "t_$s='' d_$s=''"; done
     i=0
     while [ $i -lt "$REPEATS" ]; do
@@ -74,8 +76,9 @@ compare() {
         e=n/a
         [ -n "$ref" ] && e=$(rmse "$ref" "$OUT/$name-$s-0/radiance.h5")
         # shellcheck disable=SC2086
-        say "$name [$*] $s: total $(median $t) s, direct $(median $d) s wall; cells $(stat "$OUT/$name-$s-0/stats.json" cells); RMSE vs reference $e"
+        say "$name [$*] $s: total $(median $t) s, direct $(median $d) s wall; cells $(stat "$OUT/$name-$s-0/stats.json" cells); rays cast $(stat "$OUT/$name-$s-0/stats.json" passes 0 rays_cast); RMSE vs reference $e"
     done
+    say "$name: RMSE of new against old $(rmse "$OUT/$name-old-0/radiance.h5" "$OUT/$name-new-0/radiance.h5")"
 }
 
 say ""
@@ -83,12 +86,25 @@ say "## direct light, default settings (error against the direct-light reference
 compare beams_lightfield data/beams.json --bounces 0
 compare beams_diffuse data/beams_diffuse.json --bounces 0
 compare classroom data/classroom.json --bounces 0
+# classroom_lightfield.h5 is generated, not kept (as in bench/reproduce.sh)
+[ -e data/classroom_lightfield.h5 ] || {
+    $py data/gen_scenes.py --out "$OUT/scenes" --ilf "$NEW" > /dev/null
+    cp "$OUT/scenes/classroom_lightfield.h5" data/
+}
+NOREF=1 compare classroom_lightfield data/classroom_lightfield.json --bounces 0
+
+say ""
+say "## the classroom at the paper's 1.3 M cells, direct light (no reference: new against old)"
+sed "s/\"cell_size\": *[0-9.]*/\"cell_size\": 0.018/" data/classroom.json > data/.compare_classroom_paper.json
+sed "s/\"cell_size\": *[0-9.]*/\"cell_size\": 0.018/" data/classroom_lightfield.json > data/.compare_classroom_lf_paper.json
+trap 'rm -f data/.compare_*.json' EXIT
+NOREF=1 compare classroom_paper data/.compare_classroom_paper.json --bounces 0
+NOREF=1 compare classroom_lf_paper data/.compare_classroom_lf_paper.json --bounces 0
 
 say ""
 say "## beams at the paper's cells with its 2 bounces; error of the total against a fine run of NEW"
 say "## (every cell, bounce level 16, 8 rays: its own error is not negligible, a guide only)"
 sed "s/\"cell_size\": *[0-9.]*/\"cell_size\": 0.0325/" data/beams.json > data/.compare_beams_paper.json
-trap 'rm -f data/.compare_beams_paper.json' EXIT
 for s in old new; do eval "t_$s=''"; done
 i=0
 while [ $i -lt "$REPEATS" ]; do
