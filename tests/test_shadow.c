@@ -32,6 +32,15 @@ static v3 quad_point(const v3 *v, double s, double t)
     return v3_add(v[0], v3_add(v3_scale(v3_sub(v[1], v[0]), s), v3_scale(v3_sub(v[3], v[0]), t)));
 }
 
+/* The part of scene quad v (a parallelogram) of parameters [s0, s0 + f] x [t0, t0 + f]: a patch lying on it. */
+static void quad_patch(const v3 *v, double s0, double t0, double f, v3 out[4])
+{
+    out[0] = quad_point(v, s0, t0);
+    out[1] = quad_point(v, s0 + f, t0);
+    out[2] = quad_point(v, s0 + f, t0 + f);
+    out[3] = quad_point(v, s0, t0 + f);
+}
+
 /* A random quad shrunk about its centre by f, as world points. */
 static void small_quad(double f, v3 out[4])
 {
@@ -79,6 +88,18 @@ int main(void)
         tpoly p[12];
         for (int k = 0; k < 12; k++)
             p[k] = ts_random_quad("grey");
+        if (sc % 2) {
+            /* quad 1 hinged on quad 0's first edge, leaning over it by 60 degrees: its plane holds
+             * part of a near end on quad 0 touching that edge, which must not make it unreachable */
+            v3 v0 = v3_load(p[0].v[0]), v1 = v3_load(p[0].v[1]), w = v3_sub(v3_load(p[0].v[3]), v0);
+            v3 axis = v3_norm(v3_sub(v1, v0));
+            double c = 0.5, sn = sqrt(0.75);
+            v3 r = v3_add(v3_add(v3_scale(w, c), v3_scale(v3_cross(axis, w), sn)),
+                          v3_scale(axis, v3_dot(axis, w) * (1 - c)));
+            v3 hinge[4] = {v1, v0, v3_add(v0, r), v3_add(v1, r)};
+            for (int k = 0; k < 4; k++)
+                v3_store(hinge[k], p[1].v[k]);
+        }
         ts_write_scene(path, "{\"grey\": {\"albedo\": [0.5, 0.5, 0.5]}}", p, 12, NULL);
         rl_scene *s = ts_load(path);
         rl_occluders *occ = NULL;
@@ -86,8 +107,23 @@ int main(void)
         for (int bi = 0; occ && bi < BEAMS_PER_SCENE; bi++) {
             v3 a[4], b[4];
             size_t na = bi % 2 ? 4 : 1; /* every other beam a pyramid */
+            int32_t skip = -1;
             small_quad(0.3, a);
             small_quad(0.3, b);
+            if (bi % 4 == 3) {
+                /* as the engine makes them: from a patch of one scene quad to a patch of another, which
+                 * is skipped; both lie in the ends' planes, which the rule for such planes must pass */
+                int k1 = sc % 2 ? 0 : (int)(ts_rnd() * 12), k2 = (k1 + 2 + (int)(ts_rnd() * 10)) % 12;
+                v3 q1[4], q2[4];
+                for (int k = 0; k < 4; k++) {
+                    q1[k] = v3_load(p[k1].v[k]);
+                    q2[k] = v3_load(p[k2].v[k]);
+                }
+                /* on the hinge's edge (t = 0) in scenes that have one */
+                quad_patch(q1, 0.6 * ts_rnd(), sc % 2 ? 0.0 : 0.6 * ts_rnd(), 0.4, a);
+                quad_patch(q2, 0.6 * ts_rnd(), 0.6 * ts_rnd(), 0.4, b);
+                skip = k2;
+            }
             if (na == 1)
                 a[0] = quad_point(a, 0.5, 0.5);
             tried[na > 1]++;
@@ -95,7 +131,7 @@ int main(void)
                 continue; /* b's plane holds a, or nearly: possible, but rare */
             made[na > 1]++;
             uint32_t list[CAP], mine[CAP];
-            size_t n = rl__occluders_collect(occ, beam, -1, list, CAP), nmine = 0;
+            size_t n = rl__occluders_collect(occ, beam, skip, list, CAP), nmine = 0;
             if (n == SIZE_MAX) {
                 overflowed++;
                 continue;
@@ -112,6 +148,8 @@ int main(void)
                 v3 y = sg < 16 ? b[(sg / 4) % 4] : quad_point(b, ts_rnd(), ts_rnd());
                 int met_any = 0;
                 for (size_t k = 0; k < s->npolygons; k++) {
+                    if ((int32_t)k == skip)
+                        continue;
                     if (segment_meets(s, k, x, y, 1e-7)) {
                         met_any = 1;
                         list_ok &= in_list[k];

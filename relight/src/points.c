@@ -49,6 +49,7 @@ typedef struct point_walk {
     double eps;
     int constant; /* EM_CONST: Lambert's formula applies */
     uint32_t *occ; /* WALK_LEVELS lists of OCC_CAP */
+    rl_beam *beam; /* the room of the beam a node classifies (not needed once it recurses) */
     double *out;
     rl_counters *cnt;
 } point_walk;
@@ -164,7 +165,7 @@ static void visit(point_walk *w, uint32_t lv, uint64_t id, const v3 *src, size_t
         w->cnt->leaves_culled++;
         return; /* the node does not see S */
     }
-    rl_beam local, *pyr = rl__beam_make(&w->x, 1, q, nq, w->eps, &local) ? &local : NULL;
+    rl_beam *pyr = rl__beam_make(&w->x, 1, q, nq, w->eps, w->beam) ? w->beam : NULL;
     rl_visibility vis = VIS_FREE;
     uint32_t *mine = w->occ + (size_t)depth * OCC_CAP;
     size_t nmine = 0;
@@ -210,11 +211,10 @@ int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver,
     const rl_emitter *e = &ctx->emitters[ei];
     if (!(v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0))
         return 0; /* behind the emitter, or in its plane */
-    if (!s->occ) {
-        s->occ = malloc((size_t)WALK_LEVELS * OCC_CAP * sizeof *s->occ);
-        if (!s->occ)
-            return -1;
-    }
+    if (!s->occ && !(s->occ = malloc((size_t)WALK_LEVELS * OCC_CAP * sizeof *s->occ)))
+        return -1;
+    if (!s->beam && !(s->beam = malloc(sizeof *s->beam)))
+        return -1;
     point_walk *w = malloc(sizeof *w);
     if (!w)
         return -1;
@@ -228,6 +228,7 @@ int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver,
     w->nx = nx;
     w->constant = e->kind == EM_CONST;
     w->occ = s->occ;
+    w->beam = s->beam;
     w->out = out;
     w->cnt = cnt;
     w->ns = rl__clip_poly3(e->verts, e->nverts, x, nx, w->s);
@@ -242,11 +243,7 @@ int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver,
         r = dmax(r, v3_maxabs(v3_sub(w->s[i], ctx->centre)));
     w->eps = dmax(1e-6 * r, ctx->eps);
     /* the whole view first: most points see most emitters unoccluded */
-    rl_beam *root = malloc(sizeof *root);
-    if (!root) {
-        free(w);
-        return -1;
-    }
+    rl_beam *root = s->beam; /* classified before visit() reuses it */
     {
         uint32_t *top = w->occ + (size_t)(WALK_LEVELS - 2) * OCC_CAP;
         size_t n = 0;
@@ -269,7 +266,6 @@ int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver,
             }
         }
     }
-    free(root);
     free(w);
     return 0;
 }

@@ -4,7 +4,8 @@
  *
  * A beam is kept as the faces of the convex hull of its two ends: a side
  * through each edge of either end and a vertex of the other, and the ends'
- * planes (a pyramid's sides all pass through its apex). A polygon P meets
+ * planes (a pyramid's sides all pass through its apex), each checked to
+ * hold both ends on its inner side. A polygon P meets
  * the beam when P clipped by those faces keeps a positive area. P blocks
  * the beam when every vertex of one end lies strictly on one side of P's
  * plane and every vertex of the other strictly on the other, and the
@@ -219,13 +220,10 @@ int rl__beam_make(const v3 *a, size_t na, const v3 *b, size_t nb, double tol, rl
 {
     if (na < 1 || nb < 3 || na > RL_BEAM_MAX_VERTS || nb > RL_BEAM_MAX_VERTS)
         return 0;
-    v3 newell = newell_normal(b, nb), c = {0, 0, 0};
+    v3 newell = newell_normal(b, nb);
     double len = v3_len(newell);
     if (!(len > 0))
         return 0;
-    for (size_t i = 0; i < nb; i++)
-        c = v3_add(c, b[i]);
-    c = v3_scale(c, 1.0 / (double)nb);
     p->b_n = v3_scale(newell, 1.0 / len);
     /* b's normal faces the point of a farthest from its plane; a within tol of that plane spans no volume */
     double h = 0.0;
@@ -250,22 +248,20 @@ int rl__beam_make(const v3 *a, size_t na, const v3 *b, size_t nb, double tol, rl
         p->hi = v3_max(p->hi, v);
     }
     p->nplanes = 0;
-    if (na == 1) {
-        /* a pyramid: a side through the apex and each edge of the base, then the base */
-        for (size_t i = 0; i < nb; i++) {
-            v3 s = v3_cross(v3_sub(b[i], a[0]), v3_sub(b[(i + 1) % nb], a[0]));
-            p->org[p->nplanes] = a[0];
-            p->nrm[p->nplanes++] = v3_dot(s, v3_sub(c, a[0])) < 0 ? v3_scale(s, -1.0) : s;
-        }
-        p->org[p->nplanes] = b[0];
-        p->nrm[p->nplanes++] = p->b_n;
-        return 1;
-    }
-    /* the convex hull of two planar polygons: every face holds an edge of one
-     * and a vertex of the other, or lies in either one's plane */
+    /* the convex hull of two planar polygons (a point: a pyramid): every face
+     * holds an edge of one and a vertex of the other, or lies in either one's
+     * plane; each is kept only once every point of both ends is checked to lie
+     * on its inner side, so that a vertex a rounding away from its neighbours'
+     * line cannot turn a face into one that cuts the beam */
     double scale = v3_maxabs(v3_sub(p->hi, p->lo));
-    add_edge_faces(p, a, na, b, nb, scale);
-    add_edge_faces(p, b, nb, a, na, scale);
+    if (na == 1) {
+        /* a pyramid's sides, through its apex (where point queries have always measured them from) */
+        for (size_t i = 0; i < nb; i++)
+            add_face(p, a[0], v3_cross(v3_sub(b[i], a[0]), v3_sub(b[(i + 1) % nb], a[0])), scale);
+    } else {
+        add_edge_faces(p, a, na, b, nb, scale);
+        add_edge_faces(p, b, nb, a, na, scale);
+    }
     if (na >= 3)
         add_face(p, a[0], newell_normal(a, na), scale);
     add_face(p, b[0], p->b_n, scale);

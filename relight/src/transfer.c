@@ -58,6 +58,7 @@ void rl__scratch_free(rl_scratch *s)
     free(s->occ);
     free(s->vis);
     free(s->block_occ);
+    free(s->beam);
     free(s->pair_total);
     free(s->pair_leaves);
     free(s->leaves);

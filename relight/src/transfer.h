@@ -58,6 +58,7 @@ typedef struct rl_scratch {
     uint8_t *vis;         /* Lambert's gather: each grid square's rl_visibility of the current emitter */
     size_t vis_cap;
     uint32_t *block_occ;  /* and the possible occluders of each level of its blocks */
+    struct rl_beam *beam; /* one beam's room (shadow.h), for Lambert's gather and point receivers */
 } rl_scratch;
 
 /* @return the key of what one pass samples between emitter ei and a receiver

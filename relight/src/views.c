@@ -27,7 +27,10 @@
  * adds each ray's radiance as if it were traced (a constant emitter's cell
  * skips its samples: its visible fraction is 1); only PARTIAL cells trace.
  * So the rays go where shadows are, and the result is the rays' own except
- * where single precision would have stopped a ray grazing a plane.
+ * at the scale of a ray's end offsets: where single precision would have
+ * stopped a ray grazing a plane, or where a ray would have started (or
+ * stopped) past an occluder closer than its offset (up to 1000 eps at
+ * grazing angles), which the exact test counts.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -160,11 +163,10 @@ static int classify_tile(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_
     }
     if (!s->block_occ && !(s->block_occ = malloc((size_t)BLOCK_LEVELS * BLOCK_OCC_CAP * sizeof *s->block_occ)))
         return -1;
-    block_walk w = {ctx, p, t, s, malloc(sizeof(rl_beam))};
-    if (!w.beam)
+    if (!s->beam && !(s->beam = malloc(sizeof *s->beam)))
         return -1;
+    block_walk w = {ctx, p, t, s, s->beam};
     classify_block(&w, 0, t->m->nu, t->row0, t->row1, NULL, SIZE_MAX, 0);
-    free(w.beam);
     return 0;
 }
 
