@@ -269,12 +269,3 @@ int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver,
     free(w);
     return 0;
 }
-
-double rl__point_lambert(const rl_emitter *e, v3 x, v3 nx)
-{
-    v3 c[RL_MAX_POLY_VERTS + 2];
-    if (!(v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0))
-        return 0.0;
-    size_t n = rl__clip_poly3(e->verts, e->nverts, x, nx, c);
-    return n >= 3 ? rl__polygon_lambert(x, nx, c, n) : 0.0;
-}

@@ -83,11 +83,6 @@ int rl__point_gather(const rl_transfer_ctx *ctx, uint32_t ei, uint64_t receiver,
  * convex polygon q (nq vertices, all in front of x's plane) of unit radiance, unoccluded. */
 double rl__polygon_lambert(v3 x, v3 n, const v3 *q, size_t nq);
 
-/* @return the irradiance at x (unit normal nx) from emitter e of unit
- * radiance with nothing in between (Lambert's formula), exactly as
- * rl__point_gather() computes an unoccluded constant emitter. */
-double rl__point_lambert(const rl_emitter *e, v3 x, v3 nx);
-
 /* Adds to m->e_pass, for the cells in grid rows [row0, row1) of map m, the
  * irradiance from every emitter of ctx, by ctx->sampling->method; when
  * ctx->glow is set (a bounce pass by first hits), by rl__bounce_tile()
