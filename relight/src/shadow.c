@@ -171,6 +171,12 @@ void rl__occluders_destroy(rl_occluders *o)
     free(o);
 }
 
+/* @return point i of p's ends: the near end's vertices, then the far end's. */
+static inline v3 end_point(const rl_beam *p, size_t i)
+{
+    return i < p->na ? p->a[i] : p->b[i - p->na];
+}
+
 /* Adds the face through org with normal n (either way round) when every
  * point of both ends lies on one side of it, within the rounding of its
  * products (scale: the beam's extent). @return 1 if added. */
@@ -181,7 +187,7 @@ static int add_face(rl_beam *p, v3 org, v3 n, double scale)
         return 0;
     double lo = 0.0, hi = 0.0, slack = 1e-9 * len * scale;
     for (size_t i = 0; i < p->na + p->nb; i++) {
-        double s = v3_dot(v3_sub(i < p->na ? p->a[i] : p->b[i - p->na], org), n);
+        double s = v3_dot(v3_sub(end_point(p, i), org), n);
         lo = dmin(lo, s);
         hi = dmax(hi, s);
     }
@@ -243,9 +249,8 @@ int rl__beam_make(const v3 *a, size_t na, const v3 *b, size_t nb, double tol, rl
     p->tol = tol;
     p->lo = p->hi = a[0];
     for (size_t i = 0; i < na + nb; i++) {
-        v3 v = i < na ? a[i] : b[i - na];
-        p->lo = v3_min(p->lo, v);
-        p->hi = v3_max(p->hi, v);
+        p->lo = v3_min(p->lo, end_point(p, i));
+        p->hi = v3_max(p->hi, end_point(p, i));
     }
     p->nplanes = 0;
     /* the convex hull of two planar polygons (a point: a pyramid): every face
@@ -289,7 +294,7 @@ static int ends_side(const occ_poly *q, const v3 *v0, const rl_beam *p)
 {
     int side = 2;
     for (size_t i = 0; i < p->na + p->nb; i++) {
-        double s = v3_dot(v3_sub(i < p->na ? p->a[i] : p->b[i - p->na], *v0), q->n);
+        double s = v3_dot(v3_sub(end_point(p, i), *v0), q->n);
         int si = s > 0 ? 1 : s < 0 ? -1 : 0;
         if (si == 0 || (side != 2 && si != side))
             return 0;
@@ -338,11 +343,10 @@ static int meets(const rl_occluders *o, const occ_poly *q, const rl_beam *p)
 static int blocks(const rl_occluders *o, const occ_poly *q, const rl_beam *p)
 {
     const v3 *v = o->verts + q->first;
+    int near_above = v3_dot(v3_sub(p->a[0], v[0]), q->n) > 0; /* the side every near vertex must share */
     for (size_t ia = 0; ia < p->na; ia++) {
         double sa = v3_dot(v3_sub(p->a[ia], v[0]), q->n);
-        if (!(fabs(sa) > p->tol))
-            return 0;
-        if (ia > 0 && (sa > 0) != (v3_dot(v3_sub(p->a[0], v[0]), q->n) > 0))
+        if (!(fabs(sa) > p->tol) || (sa > 0) != near_above)
             return 0;
         for (size_t b = 0; b < p->nb; b++) {
             double sb = v3_dot(v3_sub(p->b[b], v[0]), q->n);
