@@ -25,7 +25,7 @@ struct rl_tracer {
     RTCScene scene;
     uint32_t *prim_polygon;
     v3 *front;               /* [npolygons]: each polygon's front normal, for rl__tracer_hit_front() */
-    rl_occluders *occluders; /* exact pyramid queries beside the rays */
+    rl_occluders *occluders; /* exact beam queries beside the rays (shadow.h) */
     v3 centre;
     double extent;
 };
