@@ -52,6 +52,7 @@ void rl__leaf_make(const rl_transfer_ctx *ctx, const rl_emitter *e, uint32_t ei,
         L->land[k] = (v2){v[k][0] / v[k][2], v[k][1] / v[k][2]};
     L->planar = lv >= RL_PLANAR_MIN_LEVEL;
     L->mix = 0;
+    L->nshared = 0;
     if (!L->planar) {
         L->tri = rl__sph_tri_make(v3_norm(L->p[0]), v3_norm(L->p[1]), v3_norm(L->p[2]), L->omega);
         return;
@@ -124,16 +125,44 @@ int rl__leaf_support(const rl_emitter *e, const rl_leaf *L, v3 out[4])
     return 1;
 }
 
-void rl__leaf_radiance_mix(const rl_emitter *e, v2 q, const rl_leaf *L, const double lam[3], double out[3])
+/* Gives the slab interpolation weights (of L->ids) of the direction at barycentrics lam of mixing leaf L. */
+static void mix_weights(const rl_leaf *L, const double lam[3], double w[4])
 {
-    float rgb[3] = {0, 0, 0};
-    double ls[3], w[4];
+    double ls[3];
     for (int r = 0; r < 3; r++)
         ls[r] = L->to_slab[r][0] * lam[0] + L->to_slab[r][1] * lam[1] + L->to_slab[r][2] * lam[2];
     lfio_part_interp_weights(ls, w);
-    lfio_slab_radiance_mix(e->lf->slab, q.x / e->len_u, q.y / e->len_v, L->ids, w, rgb);
+}
+
+void rl__leaf_radiance_weighted(const rl_emitter *e, v2 q, const rl_leaf *L, const double wd[4], double out[3])
+{
+    float rgb[3] = {0, 0, 0};
+    lfio_slab_radiance_mix(e->lf->slab, q.x / e->len_u, q.y / e->len_v, L->ids, wd, rgb);
     for (int c = 0; c < 3; c++)
         out[c] = rgb[c];
+}
+
+void rl__leaf_radiance_mix(const rl_emitter *e, v2 q, const rl_leaf *L, const double lam[3], double out[3])
+{
+    double w[4];
+    mix_weights(L, lam, w);
+    rl__leaf_radiance_weighted(e, q, L, w, out);
+}
+
+void rl__leaf_share(rl_leaf *L, uint32_t k)
+{
+    L->nshared = 0;
+    if (!L->mix || k > RL_LEAF_SHARED)
+        return;
+    /* a sequence of the leaf's own, apart from the cells' (keyed by leaf and cell) */
+    lds_key key = rl__lds_make(ilf_hash_mix(L->key, UINT64_MAX));
+    for (uint32_t i = 0; i < k; i++) {
+        double u[4], lam[3];
+        rl__lds4(&key, i, u);
+        L->sd[i] = rl__leaf_sample(L, u[0], u[1], &L->sw[i], lam);
+        mix_weights(L, lam, L->swd[i]);
+    }
+    L->nshared = k;
 }
 
 /* Draws the direction of one sample of leaf L from origin x, informed by

@@ -28,16 +28,26 @@ double rl__polygon_area2(const v2 *p, uint32_t count)
     return 0.5 * a;
 }
 
-v2 rl__sample_polygon(const v2 *p, uint32_t count, double a, double b)
+void rl__polygon_sampler_init(rl_polygon_sampler *s, const v2 *p, uint32_t count)
 {
+    s->p = p;
+    s->count = count;
+    s->total = count < 3 ? 0.0 : rl__polygon_area2(p, count);
+    for (uint32_t t = 1; t + 1 < count; t++)
+        s->w[t] = 0.5 * v2_cross(v2_sub(p[t], p[0]), v2_sub(p[t + 1], p[0]));
+}
+
+v2 rl__polygon_sampler_point(const rl_polygon_sampler *s, double a, double b)
+{
+    const v2 *p = s->p;
+    uint32_t count = s->count;
     if (count < 3)
         return p[0];
     /* pick a fan triangle by area with a, then reuse a's remainder */
-    double total = rl__polygon_area2(p, count), acc = 0.0;
+    double acc = 0.0, pick = a * s->total, w = 0.0;
     uint32_t t = 1;
-    double pick = a * total, w = 0.0;
     for (; t + 1 < count; t++) {
-        w = 0.5 * v2_cross(v2_sub(p[t], p[0]), v2_sub(p[t + 1], p[0]));
+        w = s->w[t];
         if (pick < acc + w || t + 2 == count)
             break;
         acc += w;
@@ -47,6 +57,13 @@ v2 rl__sample_polygon(const v2 *p, uint32_t count, double a, double b)
     double su = sqrt(r);
     double l0 = 1 - su, l1 = su * (1 - b), l2 = su * b;
     return (v2){l0 * p[0].x + l1 * p[t].x + l2 * p[t + 1].x, l0 * p[0].y + l1 * p[t].y + l2 * p[t + 1].y};
+}
+
+v2 rl__sample_polygon(const v2 *p, uint32_t count, double a, double b)
+{
+    rl_polygon_sampler s;
+    rl__polygon_sampler_init(&s, p, count);
+    return rl__polygon_sampler_point(&s, a, b);
 }
 
 /* Sets up m's frame and 2D polygon from scene polygon k. */

@@ -91,8 +91,24 @@ int64_t rl__map_cell_near(const rl_map *m, v2 q);
 /* Writes the radiance cell of m (-1: none) re-emits in a bounce, albedo * E_prev / pi, W sr^-1 m^-2. */
 void rl__map_radiance(const rl_map *m, int64_t cell, double out[3]);
 
-/* A point uniformly distributed over polygon p (count vertices, convex),
- * from two numbers in [0, 1); a point receiver (count 1) gives its point. */
+/* A convex polygon prepared for drawing many uniform points: its fan
+ * triangles' areas, computed once. It points at the polygon, which must
+ * outlive it. */
+typedef struct rl_polygon_sampler {
+    const v2 *p;
+    uint32_t count;
+    double total;                  /* the polygon's area */
+    double w[RL_MAX_POLY_VERTS + 8]; /* w[t]: the area of fan triangle p[0], p[t], p[t + 1] */
+} rl_polygon_sampler;
+
+/* Prepares s for polygon p (count vertices, convex, at most RL_MAX_POLY_VERTS + 8). */
+void rl__polygon_sampler_init(rl_polygon_sampler *s, const v2 *p, uint32_t count);
+
+/* A point uniformly distributed over s's polygon, from two numbers in
+ * [0, 1); a point receiver (count 1) gives its point. */
+v2 rl__polygon_sampler_point(const rl_polygon_sampler *s, double a, double b);
+
+/* The same for a polygon used once. */
 v2 rl__sample_polygon(const v2 *p, uint32_t count, double a, double b);
 
 /* @return the area of convex polygon p. */

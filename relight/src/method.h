@@ -46,6 +46,9 @@
  * spans 5.2x) keep the uniform warp. */
 #define RL_PLANAR_MIN_LEVEL 4
 
+/* Most directions a mixing leaf draws once for all its cells (rl__leaf_share()). */
+#define RL_LEAF_SHARED 16
+
 /* A solid angle of emitter e's partition prepared for sampling: its
  * directions and their weights, its sample key, and for a light field the
  * slab-level interpolation its samples read. */
@@ -63,6 +66,10 @@ typedef struct rl_leaf {
     int mix;              /* planar, light field, at or below the slab's level: lfio_slab_radiance_mix() */
     double to_slab[3][3]; /* mix: the slab-level triangle's barycentrics from the leaf's */
     uint64_t ids[4];      /* mix: the slab-level solid angle holding the leaf, then its neighbours */
+    uint32_t nshared;     /* mix: directions drawn once for every cell (rl__leaf_share()), or 0 */
+    v3 sd[RL_LEAF_SHARED];          /* their directions, */
+    double sw[RL_LEAF_SHARED];      /* weights */
+    double swd[RL_LEAF_SHARED][4];  /* and slab interpolation weights of ids */
 } rl_leaf;
 
 /* Prepares solid angle id at level lv of emitter e (index ei) for receiver map map_index. */
@@ -82,6 +89,16 @@ int rl__leaf_support(const rl_emitter *e, const rl_leaf *L, v3 out[4]);
 /* Radiance leaving light field e at frame point q for a sample of mixing leaf
  * L at barycentrics lam, read through the slab-level interpolation. */
 void rl__leaf_radiance_mix(const rl_emitter *e, v2 q, const rl_leaf *L, const double lam[3], double out[3]);
+
+/* The same for a direction whose slab interpolation weights wd (of L->ids) are known. */
+void rl__leaf_radiance_weighted(const rl_emitter *e, v2 q, const rl_leaf *L, const double wd[4], double out[3]);
+
+/* Draws k directions of mixing leaf L once, from L's own key, for every
+ * cell to share (their origins stay each cell's own): a cell's k samples
+ * have the distribution they had, and the direction's weight and slab
+ * interpolation are worked out k times per leaf instead of k per cell. A
+ * leaf that does not mix, or k above RL_LEAF_SHARED, keeps nshared 0. */
+void rl__leaf_share(rl_leaf *L, uint32_t k);
 
 /* Radiance leaving e at frame point q in propagation direction d; L (may be
  * NULL) and lam, when L mixes, give the direction's slab interpolation directly. */
@@ -138,7 +155,8 @@ size_t rl__node_region(const rl_transfer_ctx *ctx, const rl_pair *p, const v3 *s
 typedef struct rl_origin_domain {
     v2 poly[RL_MAX_POLY_VERTS + 8];
     uint32_t n;
-    int square; /* a full square: sampled from its corner and side alone */
+    int square;            /* a full square: sampled from its corner and side alone */
+    rl_polygon_sampler ps; /* otherwise: poly prepared for sampling (points into this struct) */
 } rl_origin_domain;
 
 /* Fills d for cell of map m. */
@@ -148,7 +166,7 @@ void rl__cell_domain(const rl_map *m, uint32_t cell, rl_origin_domain *d);
 static inline v3 rl__domain_point(const rl_map *m, const rl_origin_domain *d, double a, double b)
 {
     v2 q = d->square ? (v2){d->poly[0].x + a * m->cell, d->poly[0].y + b * m->cell}
-                     : rl__sample_polygon(d->poly, d->n, a, b);
+                     : rl__polygon_sampler_point(&d->ps, a, b);
     return frame_point(&m->frame, q);
 }
 
@@ -187,9 +205,10 @@ static inline void rl__batch_push(const rl_transfer_ctx *ctx, rl_ray_batch *b, v
 /* Queues the ray back from receiver point x (normal nr) along -d to the
  * pair's emitter, carrying the radiance sampled in leaf L (may be NULL) at
  * barycentrics lam times weight w and the cosine at x, into acc; a ray that
- * misses the emitter's polygon or carries nothing is counted, never traced. */
+ * misses the emitter's polygon or carries nothing is counted, never traced.
+ * wd (NULL: from lam) gives a shared direction's slab interpolation weights. */
 void rl__shoot_back(const rl_transfer_ctx *ctx, const rl_pair *p, v3 x, v3 nr, v3 d, double w, const rl_leaf *L,
-                    const double lam[3], double *acc, rl_ray_batch *b, rl_counters *cnt);
+                    const double lam[3], const double *wd, double *acc, rl_ray_batch *b, rl_counters *cnt);
 
 /* Draws the direction of one sample of leaf L from origin x, informed by
  * the emitter for a constant one: d over the whole leaf when every direction
@@ -223,6 +242,7 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
 typedef struct rl_leaf_rows {
     int culls;       /* walk and cull the hierarchy (else every leaf of the pair's level) */
     int lambert;     /* a constant emitter under descend: Lambert times visibility instead of leaves */
+    int shares;      /* a light field's leaf draws its directions once for all cells (rl__leaf_share()) */
     int stages;      /* 1, or 2: stage 0 measures every cell, stage 1 estimates */
     /* Before the stages: prepares s for tile t. @return 0 or -1. NULL: nothing. */
     int (*prepare)(rl_scratch *s, const rl_tile *t);

@@ -66,7 +66,7 @@ static estimate node_estimate(const rl_transfer_ctx *ctx, const rl_pair *p, cons
         v3 d, x = rl__domain_point(m, dom, u[0], u[1]);
         const rl_leaf *lp;
         if (rl__leaf_draw(p, L, x, u[2], u[3], &d, &w, lam, &lp))
-            rl__shoot_back(ctx, p, x, m->frame.n, d, w, lp, lam, acc[i], &batch, cnt);
+            rl__shoot_back(ctx, p, x, m->frame.n, d, w, lp, lam, NULL, acc[i], &batch, cnt);
         else
             cnt->samples++;
     }

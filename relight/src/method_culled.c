@@ -101,6 +101,20 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
     rl__cell_domain(m, cell, &dom);
     uint32_t k = ctx->sampling->rays_per_solid_angle;
     lds_key key = rl__lds_make(ilf_hash_mix(L->key, cell));
+    if (L->nshared == k) {
+        /* the leaf's shared directions, from origins of the cell's own */
+        const rl_emitter *e = p->e;
+        for (uint32_t i = 0; i < k; i++) {
+            double u[4];
+            rl__lds4(&key, i, u);
+            v3 x = rl__domain_point(m, &dom, u[0], u[1]);
+            if (v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0)
+                rl__shoot_back(ctx, p, x, m->frame.n, L->sd[i], L->sw[i], L, NULL, L->swd[i], acc, batch, cnt);
+            else
+                cnt->samples++;
+        }
+        return 1.0 / k;
+    }
     /* draw a group of samples before shooting any: their square roots and
      * divisions are independent and overlap, where one sample at a time
      * would wait for each */
@@ -119,7 +133,7 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
         }
         for (uint32_t i = 0; i < g; i++) {
             if (drawn[i])
-                rl__shoot_back(ctx, p, x[i], m->frame.n, d[i], w[i], lp[i], lam[i], acc, batch, cnt);
+                rl__shoot_back(ctx, p, x[i], m->frame.n, d[i], w[i], lp[i], lam[i], NULL, acc, batch, cnt);
             else
                 cnt->samples++;
         }
@@ -198,6 +212,8 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
     int culled = rows->culls;
     rl_leaf L;
     rl__leaf_make(ctx, p->e, emitter_index, t->map_index, p->level, id, &L);
+    if (rows->shares)
+        rl__leaf_share(&L, ctx->sampling->rays_per_solid_angle);
     size_t nq = 0;
     if (culled) {
         /* a light field's solid angle is culled against the part of the
@@ -277,10 +293,10 @@ int rl__leaves_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei,
 
 /* culled: the surviving leaves; Lambert times visibility for constant
  * emitters and for small or thin ones when descend is on. */
-static const rl_leaf_rows culled_rows = {.culls = 1, .lambert = 1, .stages = 1, .row = culled_row};
+static const rl_leaf_rows culled_rows = {.culls = 1, .lambert = 1, .shares = 1, .stages = 1, .row = culled_row};
 
 /* naive: every leaf of partition_n through the same per-leaf code. */
-static const rl_leaf_rows naive_rows = {.culls = 0, .lambert = 1, .stages = 1, .row = culled_row};
+static const rl_leaf_rows naive_rows = {.culls = 0, .lambert = 1, .shares = 1, .stages = 1, .row = culled_row};
 
 static int culled_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei, rl_scratch *s, rl_counters *cnt)
 {

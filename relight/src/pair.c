@@ -51,7 +51,7 @@ void rl__batch_flush(const rl_transfer_ctx *ctx, rl_ray_batch *b, rl_counters *c
  * nothing in between; a ray carrying no radiance is never traced, since it
  * could add nothing. */
 void rl__shoot_back(const rl_transfer_ctx *ctx, const rl_pair *p, v3 x, v3 nr, v3 d, double w, const rl_leaf *L,
-                    const double lam[3], double *acc, rl_ray_batch *b, rl_counters *cnt)
+                    const double lam[3], const double *wd, double *acc, rl_ray_batch *b, rl_counters *cnt)
 {
     const rl_emitter *e = p->e;
     double cos_r = -v3_dot(d, nr), dn = v3_dot(d, e->frame.n);
@@ -65,7 +65,10 @@ void rl__shoot_back(const rl_transfer_ctx *ctx, const rl_pair *p, v3 x, v3 nr, v
     if (!rl__emitter_contains(e, q))
         return;
     double l[3];
-    rl__leaf_radiance(e, q, d, L, lam, l);
+    if (wd)
+        rl__leaf_radiance_weighted(e, q, L, wd, l);
+    else
+        rl__leaf_radiance(e, q, d, L, lam, l);
     if (!(l[0] > 0 || l[1] > 0 || l[2] > 0))
         return;
     for (int c = 0; c < 3; c++)
@@ -200,4 +203,6 @@ void rl__cell_domain(const rl_map *m, uint32_t cell, rl_origin_domain *d)
 {
     d->n = rl__map_cell_polygon(m, &m->cells[cell], d->poly);
     d->square = m->cells[cell].poly_count == 0;
+    if (!d->square)
+        rl__polygon_sampler_init(&d->ps, d->poly, d->n);
 }

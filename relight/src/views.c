@@ -196,6 +196,8 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
     v2 sp[RL_MAX_POLY_VERTS + 2];
     for (size_t i = 0; i < p->ns; i++)
         sp[i] = frame_project(&e->frame, p->sclip[i]);
+    rl_polygon_sampler emitter_points;
+    rl__polygon_sampler_init(&emitter_points, sp, (uint32_t)p->ns);
     for (uint32_t j = t->row0; j < t->row1; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
             int32_t cell = m->grid[(size_t)j * m->nu + i];
@@ -220,7 +222,7 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
                 double u[4];
                 rl__lds4(&key, r, u);
                 v3 x = rl__domain_point(m, &dom, u[0], u[1]);
-                v3 y = frame_point(&e->frame, rl__sample_polygon(sp, (uint32_t)p->ns, u[2], u[3]));
+                v3 y = frame_point(&e->frame, rl__polygon_sampler_point(&emitter_points, u[2], u[3]));
                 v3 to = v3_sub(y, x);
                 double dist = v3_len(to);
                 cnt->samples++;
