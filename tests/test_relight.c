@@ -468,6 +468,74 @@ static uint64_t check_culled_naive(rl_scene *s, const char *what)
     return samples;
 }
 
+/* Writes a slab of n whose radiance is a lobe tilted off its normal, varying
+ * across its 4 x 4 positions: every interpolation weight shows. */
+static void write_lobe_lightfield(const char *path, uint32_t n)
+{
+    lfio_slab_desc d;
+    lfio_slab *slab = NULL;
+    lfio_lightfield *lf = NULL;
+    lfio_slab_desc_init(&d);
+    strcpy(d.name, "light");
+    d.origin[0] = d.origin[1] = -0.5;
+    d.nu = d.nv = 4;
+    d.n = n;
+    lfio_slab_new(&d, &slab);
+    uint64_t nd = lfio_slab_dir_count(slab);
+    for (uint64_t k = 0; k < nd; k++) {
+        double w[3];
+        lfio_part_centroid(n, k, w);
+        double lobe = fmax(0.0, 0.6 * w[0] + 0.8 * w[2]);
+        for (uint32_t j = 0; j < 4; j++)
+            for (uint32_t i = 0; i < 4; i++) {
+                float v = (float)((1.0 + 0.5 * i - 0.2 * j) * pow(lobe, 8.0));
+                lfio_slab_write(slab, k, i, j, (const float[3]){v, v, v});
+            }
+    }
+    lfio_lightfield_new(&lf);
+    lfio_lightfield_take_slab(lf, slab);
+    CHECK(lfio_lightfield_write(lf, path) == LFIO_OK, "write %s: %s", path, lfio_errmsg());
+    lfio_lightfield_destroy(lf);
+}
+
+/* Culled's solid angles below the slab's level draw their directions once for
+ * all cells, with the slab's interpolation weights: on a slab whose radiance
+ * varies with direction and position they must agree with area sampling,
+ * which reads the slab at each point's own direction, within both
+ * estimators' noise. The scene at path reads the slab from lfpath. */
+static void check_shared_directions(const char *path, const char *lfpath)
+{
+    write_lobe_lightfield(lfpath, 8);
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    rl_solution *a = NULL, *b = NULL;
+    set_sampling(s, RL_METHOD_CULLED, 32, 4, 16, 0);
+    rl_relight(s, &run_opts, &a);
+    set_sampling(s, RL_METHOD_AREA, 32, 4, 16384, 0);
+    rl_relight(s, &run_opts, &b);
+    if (a && b) {
+        ts_cells ca = ts_cells_get(a, 0), cb = ts_cells_get(b, 0);
+        double peak = 0, sq = 0, sum_a = 0, sum_b = 0;
+        for (uint32_t q = 0; q < ca.n; q++) {
+            peak = fmax(peak, cb.e[3 * q]);
+            sq += (ca.e[3 * q] - cb.e[3 * q]) * (ca.e[3 * q] - cb.e[3 * q]);
+            sum_a += ca.e[3 * q];
+            sum_b += cb.e[3 * q];
+        }
+        double rmse = ca.n ? sqrt(sq / ca.n) / peak : 1.0;
+        printf("tilted lobe, culled n = 32 against area sampling: RMSE %.3f%% of the peak, sums %.4g vs %.4g\n",
+               100 * rmse, sum_a, sum_b);
+        CHECK(peak > 0 && rmse < 0.01, "shared directions: RMSE %.4g of the peak against area sampling", rmse);
+        CHECK(fabs(sum_a - sum_b) < 0.005 * sum_b, "shared directions: total %.6g against %.6g", sum_a, sum_b);
+        ts_cells_free(&ca);
+        ts_cells_free(&cb);
+    }
+    rl_solution_destroy(a);
+    rl_solution_destroy(b);
+    rl_scene_destroy(s);
+}
+
 /* A constant light field is a diffuse emitter; a sparse one is culled by its mask. */
 static void check_lightfield(void)
 {
@@ -513,6 +581,7 @@ static void check_lightfield(void)
         samples[sparse] = check_culled_naive(s, sparse ? "sparse light field" : "masked light field");
         rl_scene_destroy(s);
     }
+    check_shared_directions(path, lfpath);
     printf("light field samples, culled: %llu dense, %llu one strip per direction\n",
            (unsigned long long)samples[0], (unsigned long long)samples[1]);
     /* without the support both would draw exactly as many samples */
