@@ -105,8 +105,8 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
         /* the leaf's shared directions, from origins of the cell's own */
         const rl_emitter *e = p->e;
         for (uint32_t i = 0; i < k; i++) {
-            double u[4];
-            rl__lds4(&key, i, u);
+            double u[2];
+            rl__lds2(&key, i, u);
             v3 x = rl__domain_point(m, &dom, u[0], u[1]);
             if (v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0)
                 rl__shoot_back(ctx, p, x, m->frame.n, L->sd[i], L->sw[i], L, NULL, L->swd[i], acc, batch, cnt);

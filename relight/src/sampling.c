@@ -10,8 +10,7 @@
 
 #include "sampling.h"
 
-/* @return the radical inverse of i in base b. */
-static double radical_inverse(uint32_t i, uint32_t b)
+double rl__radical_inverse(uint32_t i, uint32_t b)
 {
     double inv = 1.0 / b, f = inv, r = 0.0;
     while (i) {
@@ -22,7 +21,17 @@ static double radical_inverse(uint32_t i, uint32_t b)
     return r;
 }
 
-static void lds_fill(void);
+double rl__lds_table[4][RL_LDS_TABLE];
+
+/* Fills rl__lds_table. */
+static void lds_fill(void)
+{
+    static const uint32_t bases[4] = {2, 3, 5, 7};
+    for (int j = 0; j < 4; j++)
+        for (uint32_t i = 0; i < RL_LDS_TABLE; i++)
+            rl__lds_table[j][i] = rl__radical_inverse(i, bases[j]);
+}
+
 static pthread_once_t lds_once = PTHREAD_ONCE_INIT;
 
 lds_key rl__lds_make(uint64_t key)
@@ -35,31 +44,6 @@ lds_key rl__lds_make(uint64_t key)
     for (int j = 0; j < 4; j++)
         k.shift[j] = (double)((h[j / 2] >> (32 * (j % 2))) & 0xffffffffu) * (1.0 / 4294967296.0);
     return k;
-}
-
-/* Radical inverses of the first points, computed once: most (cell, solid
- * angle) pairs draw only a handful of samples, and the divisions of
- * radical_inverse() would otherwise dominate the sequence's cost. */
-#define LDS_TABLE 1024
-static double lds_table[4][LDS_TABLE];
-
-/* Fills lds_table. */
-static void lds_fill(void)
-{
-    static const uint32_t bases[4] = {2, 3, 5, 7};
-    for (int j = 0; j < 4; j++)
-        for (uint32_t i = 0; i < LDS_TABLE; i++)
-            lds_table[j][i] = radical_inverse(i, bases[j]);
-}
-
-void rl__lds4(const lds_key *k, uint32_t i, double u[4])
-{
-    static const uint32_t bases[4] = {2, 3, 5, 7};
-    for (int j = 0; j < 4; j++) {
-        double x = (i < LDS_TABLE ? lds_table[j][i] : radical_inverse(i, bases[j])) + k->shift[j];
-        x = x >= 1.0 ? x - 1.0 : x;
-        u[j] = x < 1.0 ? x : 0x1.fffffffffffffp-1;
-    }
 }
 
 double rl__spherical_triangle_area(v3 a, v3 b, v3 c)
