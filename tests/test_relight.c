@@ -511,9 +511,9 @@ static void check_shared_directions(const char *path, const char *lfpath)
         return;
     rl_solution *a = NULL, *b = NULL;
     set_sampling(s, RL_METHOD_CULLED, 32, 4, 16, 0);
-    rl_relight(s, &run_opts, &a);
+    CHECK(rl_relight(s, &run_opts, &a) == RL_OK, "lobe, culled: %s", rl_errmsg());
     set_sampling(s, RL_METHOD_AREA, 32, 4, 16384, 0);
-    rl_relight(s, &run_opts, &b);
+    CHECK(rl_relight(s, &run_opts, &b) == RL_OK, "lobe, area: %s", rl_errmsg());
     if (a && b) {
         ts_cells ca = ts_cells_get(a, 0), cb = ts_cells_get(b, 0);
         double peak = 0, sq = 0, sum_a = 0, sum_b = 0;

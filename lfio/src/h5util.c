@@ -32,10 +32,12 @@
 
 /* Growth step of the in-memory file image while writing. */
 #define CORE_INCREMENT ((size_t)8 << 20)
-/* Most bytes HDF5's metadata cache holds per open file. Its default (32 MiB,
- * grown on demand) kept tens of MiB of object headers alive while a
- * radiance-map file of thousands of maps was written; lfio touches each
- * object once, in order, so a small cache costs no extra I/O worth noting. */
+/* Most bytes HDF5's metadata cache holds per open file, as the cache counts
+ * them (serialised sizes: objects' decoded headers come on top, which is why
+ * writers also evict objects on close). Its default (32 MiB, grown on
+ * demand) kept tens of MiB alive while a radiance-map file of thousands of
+ * maps was written; lfio touches each object once, in order, so a small
+ * cache costs no extra I/O worth noting. */
 #define METADATA_CACHE_MAX ((size_t)2 << 20)
 
 /* ------------------------------------------------------------------- errors */
@@ -715,17 +717,19 @@ static lfio_status build_and_write(const char *path, const char *name, lfio__h5_
                                              image_udata_copy, image_udata_free, &ci};
     hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
     /* Version 1.8+ structures carry metadata checksums; strong close releases every
-     * object with the file, so no forgotten id outlives it. Evicting each object from the
-     * metadata cache when it is closed keeps memory to the objects open at once: otherwise
-     * HDF5 held every written object's decoded header (attributes, dataspaces) until the
-     * file closed, 24 MB for the classroom's 3,035 maps, whose bytes the cache's 2 MiB bound
-     * does not count. */
+     * object with the file, so no forgotten id outlives it. */
     if (fapl < 0 || H5Pset_fapl_core(fapl, CORE_INCREMENT, 0) < 0
         || H5Pset_file_image_callbacks(fapl, &callbacks) < 0
         || H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST) < 0
-        || H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0 || small_metadata_cache(fapl) < 0
-        || H5Pset_evict_on_close(fapl, 1) < 0)
+        || H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0 || small_metadata_cache(fapl) < 0)
         st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot set file access properties");
+    /* Evicting each object from the metadata cache when it is closed keeps memory to the
+     * objects open at once: otherwise HDF5 held every written object's decoded header
+     * (attributes, dataspaces) until the file closed, 24 MB for the classroom's 3,035 maps.
+     * An optimisation only: a parallel HDF5 before 1.14.3 refuses it for every driver, and
+     * the file is the same without it. */
+    if (st == LFIO_OK && H5Pset_evict_on_close(fapl, 1) < 0)
+        H5Eclear2(H5E_DEFAULT); /* no stale entry for a later failure's message */
     /* name only identifies the in-memory file: the core driver creates nothing on disk. */
     hid_t file = st == LFIO_OK ? H5Fcreate(name, H5F_ACC_TRUNC, H5P_DEFAULT, fapl) : -1;
     if (st == LFIO_OK && file < 0)

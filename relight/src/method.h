@@ -93,11 +93,13 @@ void rl__leaf_radiance_mix(const rl_emitter *e, v2 q, const rl_leaf *L, const do
 /* The same for a direction whose slab interpolation weights wd (of L->ids) are known. */
 void rl__leaf_radiance_weighted(const rl_emitter *e, v2 q, const rl_leaf *L, const double wd[4], double out[3]);
 
-/* Draws k directions of mixing leaf L once, from L's own key, for every
- * cell to share (their origins stay each cell's own): a cell's k samples
- * have the distribution they had, and the direction's weight and slab
- * interpolation are worked out k times per leaf instead of k per cell. A
- * leaf that does not mix, or k above RL_LEAF_SHARED, keeps nshared 0. */
+/* Draws k directions of mixing leaf L once, from coordinates 0 and 1 of
+ * L's own sequence, for every cell to share (each cell pairs them with
+ * origins from coordinates 2 and 3 of its own): each sample taken alone has
+ * the distribution it had, a cell's k pairs still form a shifted 4-D
+ * sequence, and the direction's weight and slab interpolation are worked
+ * out k times per leaf instead of k per cell. A leaf that does not mix, or
+ * k above RL_LEAF_SHARED, keeps nshared 0. */
 void rl__leaf_share(rl_leaf *L, uint32_t k);
 
 /* Radiance leaving e at frame point q in propagation direction d; L (may be
@@ -156,7 +158,7 @@ typedef struct rl_origin_domain {
     v2 poly[RL_MAX_POLY_VERTS + 8];
     uint32_t n;
     int square;            /* a full square: sampled from its corner and side alone */
-    rl_polygon_sampler ps; /* otherwise: poly prepared for sampling (points into this struct) */
+    rl_polygon_sampler ps; /* otherwise: poly prepared for sampling (points into this struct: never copy one) */
 } rl_origin_domain;
 
 /* Fills d for cell of map m. */

@@ -47,7 +47,9 @@ static int budget_spent(const rl_transfer_ctx *ctx)
 /* Estimates what solid angle id at level lv sends into one cell's domain
  * with count samples of the low-discrepancy sequence keyed by salt (salt 0:
  * the one culled uses, so an unrefined adaptive leaf equals culled's
- * estimate); the variance comes from the spread of the samples. */
+ * estimate, except for a light field's nested leaves, whose directions
+ * culled draws once for all cells); the variance comes from the spread of
+ * the samples. */
 static estimate node_estimate(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t,
                               const rl_origin_domain *dom, uint32_t cell, const rl_leaf *L, uint32_t count,
                               uint64_t salt, rl_counters *cnt)

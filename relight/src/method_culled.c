@@ -12,7 +12,9 @@
  * kept leaves are sorted by id and each is rasterised over the tile's cells;
  * every (cell, leaf) pair traces k rays whose origins and directions come
  * from a low-discrepancy sequence keyed by (seed, pass, emitter, receiver,
- * cell, level, leaf).
+ * cell, level, leaf), except that a light field's leaf nested in its slab
+ * draws its k directions once from its own key (rl__leaf_share()) and each
+ * cell only its origins.
  *
  * `naive` takes every leaf and every cell and otherwise runs the same code:
  * a culled (cell, leaf) pair contributes exactly zero, and each cell adds
@@ -101,17 +103,19 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
     rl__cell_domain(m, cell, &dom);
     uint32_t k = ctx->sampling->rays_per_solid_angle;
     lds_key key = rl__lds_make(ilf_hash_mix(L->key, cell));
-    if (L->nshared == k) {
-        /* the leaf's shared directions, from origins of the cell's own */
-        const rl_emitter *e = p->e;
+    if (L->nshared > 0 && L->nshared == k) {
+        /* The leaf's shared directions (coordinates 0 and 1 of its own
+         * sequence) with origins from coordinates 2 and 3 of the cell's, so
+         * that each cell's k pairs are the points of a shifted 4-D sequence
+         * as before: the same two coordinates for both would tie each
+         * direction to its origin, and a cell's error would stop falling
+         * with k. A light field's leaf is blind (rl__leaf_draw() draws over
+         * all of it whatever the origin), which is what lets cells share
+         * its directions; rl__shoot_back() counts and drops what lands
+         * behind or beside the emitter, as the draw would have. */
         for (uint32_t i = 0; i < k; i++) {
-            double u[2];
-            rl__lds2(&key, i, u);
-            v3 x = rl__domain_point(m, &dom, u[0], u[1]);
-            if (v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0)
-                rl__shoot_back(ctx, p, x, m->frame.n, L->sd[i], L->sw[i], L, NULL, L->swd[i], acc, batch, cnt);
-            else
-                cnt->samples++;
+            v3 x = rl__domain_point(m, &dom, rl__lds_coord(&key, i, 2), rl__lds_coord(&key, i, 3));
+            rl__shoot_back(ctx, p, x, m->frame.n, L->sd[i], L->sw[i], L, NULL, L->swd[i], acc, batch, cnt);
         }
         return 1.0 / k;
     }
@@ -212,8 +216,6 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
     int culled = rows->culls;
     rl_leaf L;
     rl__leaf_make(ctx, p->e, emitter_index, t->map_index, p->level, id, &L);
-    if (rows->shares)
-        rl__leaf_share(&L, ctx->sampling->rays_per_solid_angle);
     size_t nq = 0;
     if (culled) {
         /* a light field's solid angle is culled against the part of the
@@ -234,6 +236,8 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
     }
     if (row_reserve(s, m->nu) != 0)
         return -1;
+    if (rows->shares)
+        rl__leaf_share(&L, ctx->sampling->rays_per_solid_angle);
     for (uint32_t j = t->row0; j < t->row1; j++) {
         uint32_t i0 = 0, i1 = m->nu - 1;
         if (culled && m->polygon >= 0) {

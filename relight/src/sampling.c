@@ -36,7 +36,7 @@ static pthread_once_t lds_once = PTHREAD_ONCE_INIT;
 
 lds_key rl__lds_make(uint64_t key)
 {
-    pthread_once(&lds_once, lds_fill); /* every key is made here, so rl__lds4() may assume the table */
+    pthread_once(&lds_once, lds_fill); /* every key is made here, so rl__lds_coord() may assume the table */
     /* two hashes, each split into two 32-bit offsets: ample resolution for
      * a rotation, at half the hashing */
     lds_key k;
