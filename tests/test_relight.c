@@ -383,21 +383,37 @@ static void check_identities(uint32_t bounce_rays)
     rl_scene_destroy(s);
 }
 
+/* @return a new slab "light" of partition n: 4 x 4 positions over a 1 m square at the origin facing +z, all zero. */
+static lfio_slab *test_slab_new(uint32_t n)
+{
+    lfio_slab_desc d;
+    lfio_slab *slab = NULL;
+    lfio_slab_desc_init(&d);
+    strcpy(d.name, "light");
+    d.origin[0] = d.origin[1] = -0.5;
+    d.nu = d.nv = 4;
+    d.n = n;
+    CHECK(lfio_slab_new(&d, &slab) == LFIO_OK, "new slab: %s", lfio_errmsg());
+    return slab;
+}
+
+/* Writes slab (taken) as the one slab of the light field file path. */
+static void test_slab_write(const char *path, lfio_slab *slab)
+{
+    lfio_lightfield *lf = NULL;
+    lfio_lightfield_new(&lf);
+    lfio_lightfield_take_slab(lf, slab);
+    CHECK(lfio_lightfield_write(lf, path) == LFIO_OK, "write %s: %s", path, lfio_errmsg());
+    lfio_lightfield_destroy(lf);
+}
+
 /* Writes a one-slab light field: a 1 m square at the origin facing +z, constant
  * radiance c in a cone around +z of half-angle cone_deg (every direction if >= 90).
  * sparse: each direction lights only one column of positions, a different
  * one per direction, so that each solid angle's support is a strip of the slab. */
 static void write_lightfield(const char *path, float c, double cone_deg, uint32_t n, int sparse)
 {
-    lfio_slab_desc d;
-    lfio_slab *slab = NULL;
-    lfio_lightfield *lf = NULL;
-    lfio_slab_desc_init(&d);
-    strcpy(d.name, "light");
-    d.origin[0] = d.origin[1] = -0.5;
-    d.nu = d.nv = 4;
-    d.n = n;
-    lfio_slab_new(&d, &slab);
+    lfio_slab *slab = test_slab_new(n);
     uint64_t nd = lfio_slab_dir_count(slab);
     float *rgb = calloc(nd * 3, sizeof *rgb);
     for (uint64_t k = 0; k < nd; k++) {
@@ -414,10 +430,7 @@ static void write_lightfield(const char *path, float c, double cone_deg, uint32_
             for (uint32_t i = 0; i < 4; i++)
                 if (i != k % 4)
                     lfio_slab_write(slab, k, i, j, (const float[3]){0, 0, 0});
-    lfio_lightfield_new(&lf);
-    lfio_lightfield_take_slab(lf, slab);
-    CHECK(lfio_lightfield_write(lf, path) == LFIO_OK, "write %s: %s", path, lfio_errmsg());
-    lfio_lightfield_destroy(lf);
+    test_slab_write(path, slab);
     free(rgb);
 }
 
@@ -472,15 +485,7 @@ static uint64_t check_culled_naive(rl_scene *s, const char *what)
  * across its 4 x 4 positions: every interpolation weight shows. */
 static void write_lobe_lightfield(const char *path, uint32_t n)
 {
-    lfio_slab_desc d;
-    lfio_slab *slab = NULL;
-    lfio_lightfield *lf = NULL;
-    lfio_slab_desc_init(&d);
-    strcpy(d.name, "light");
-    d.origin[0] = d.origin[1] = -0.5;
-    d.nu = d.nv = 4;
-    d.n = n;
-    lfio_slab_new(&d, &slab);
+    lfio_slab *slab = test_slab_new(n);
     uint64_t nd = lfio_slab_dir_count(slab);
     for (uint64_t k = 0; k < nd; k++) {
         double w[3];
@@ -492,10 +497,7 @@ static void write_lobe_lightfield(const char *path, uint32_t n)
                 lfio_slab_write(slab, k, i, j, (const float[3]){v, v, v});
             }
     }
-    lfio_lightfield_new(&lf);
-    lfio_lightfield_take_slab(lf, slab);
-    CHECK(lfio_lightfield_write(lf, path) == LFIO_OK, "write %s: %s", path, lfio_errmsg());
-    lfio_lightfield_destroy(lf);
+    test_slab_write(path, slab);
 }
 
 /* Culled's solid angles below the slab's level draw their directions once for

@@ -157,9 +157,8 @@ void rl__leaf_share(rl_leaf *L, uint32_t k)
     /* a sequence of the leaf's own, apart from the cells' (keyed by leaf and cell) */
     lds_key key = rl__lds_make(ilf_hash_mix(L->key, UINT64_MAX));
     for (uint32_t i = 0; i < k; i++) {
-        double u[2], lam[3];
-        rl__lds2(&key, i, u);
-        L->sd[i] = rl__leaf_sample(L, u[0], u[1], &L->sw[i], lam);
+        double lam[3];
+        L->sd[i] = rl__leaf_sample(L, rl__lds_coord(&key, i, 0), rl__lds_coord(&key, i, 1), &L->sw[i], lam);
         mix_weights(L, lam, L->swd[i]);
     }
     L->nshared = k;

@@ -30,11 +30,16 @@ double rl__polygon_area2(const v2 *p, uint32_t count)
 
 void rl__polygon_sampler_init(rl_polygon_sampler *s, const v2 *p, uint32_t count)
 {
+    /* the fan's doubled areas once, summed as rl__polygon_area2() sums them */
+    double a = 0.0;
+    for (uint32_t t = 1; t + 1 < count; t++) {
+        double c = v2_cross(v2_sub(p[t], p[0]), v2_sub(p[t + 1], p[0]));
+        a += c;
+        s->w[t] = 0.5 * c;
+    }
     s->p = p;
     s->count = count;
-    s->total = count < 3 ? 0.0 : rl__polygon_area2(p, count);
-    for (uint32_t t = 1; t + 1 < count; t++)
-        s->w[t] = 0.5 * v2_cross(v2_sub(p[t], p[0]), v2_sub(p[t + 1], p[0]));
+    s->total = 0.5 * a;
 }
 
 v2 rl__polygon_sampler_point(const rl_polygon_sampler *s, double a, double b)

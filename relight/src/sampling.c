@@ -26,10 +26,9 @@ double rl__lds_table[4][RL_LDS_TABLE];
 /* Fills rl__lds_table. */
 static void lds_fill(void)
 {
-    static const uint32_t bases[4] = {2, 3, 5, 7};
     for (int j = 0; j < 4; j++)
         for (uint32_t i = 0; i < RL_LDS_TABLE; i++)
-            rl__lds_table[j][i] = rl__radical_inverse(i, bases[j]);
+            rl__lds_table[j][i] = rl__radical_inverse(i, rl__lds_bases[j]);
 }
 
 static pthread_once_t lds_once = PTHREAD_ONCE_INIT;

@@ -27,14 +27,16 @@ lds_key rl__lds_make(uint64_t key);
 #define RL_LDS_TABLE 1024
 extern double rl__lds_table[4][RL_LDS_TABLE];
 
+/* The sequence's bases, one per coordinate. */
+static const uint32_t rl__lds_bases[4] = {2, 3, 5, 7};
+
 /* @return the radical inverse of i in base b. */
 double rl__radical_inverse(uint32_t i, uint32_t b);
 
 /* @return coordinate j (0..3) of point i of the sequence of k (rl__lds4()). */
 static inline double rl__lds_coord(const lds_key *k, uint32_t i, int j)
 {
-    static const uint32_t bases[4] = {2, 3, 5, 7};
-    double x = (i < RL_LDS_TABLE ? rl__lds_table[j][i] : rl__radical_inverse(i, bases[j])) + k->shift[j];
+    double x = (i < RL_LDS_TABLE ? rl__lds_table[j][i] : rl__radical_inverse(i, rl__lds_bases[j])) + k->shift[j];
     x = x >= 1.0 ? x - 1.0 : x;
     return x < 1.0 ? x : 0x1.fffffffffffffp-1;
 }
@@ -48,12 +50,6 @@ static inline void rl__lds4(const lds_key *k, uint32_t i, double u[4])
         u[j] = rl__lds_coord(k, i, j);
 }
 
-/* The first two coordinates of rl__lds4()'s point i, alone. */
-static inline void rl__lds2(const lds_key *k, uint32_t i, double u[2])
-{
-    for (int j = 0; j < 2; j++)
-        u[j] = rl__lds_coord(k, i, j);
-}
 
 /* A spherical triangle prepared for repeated uniform sampling (Arvo 1995). */
 typedef struct sph_tri {
