@@ -77,8 +77,9 @@ for kt in "1 2" "2 1" "2 2" "3 1"; do
 done
 check "h5diff sees a different seed (the comparison can fail)" \
     bash -c "'$ilf' relight scene.json -o seed --threads 1 --quiet --seed 9 --no-view && ! h5diff -q ref/radiance.h5 seed/radiance.h5 >/dev/null"
-check "stats.json of a 2-rank run names 2 ranks and an exchange per pass" \
-    python3 -c "import json; d = json.load(open('k2t1/stats.json')); assert d['ranks'] == 2 and len(d['exchanges']) == 3 and all(x['bytes'] > 0 for x in d['exchanges']), d"
+# a bounce pass exchanges twice when it gathers some cells on their own (near an occluder) after the larger ones
+check "stats.json of a 2-rank run names 2 ranks and an exchange per pass, two for a bounce pass with cells of its own" \
+    python3 -c "import json; d = json.load(open('k2t1/stats.json')); assert d['ranks'] == 2 and len(d['exchanges']) == 1 + sum(1 + (p['cells_direct'] > 0) for p in d['passes'][1:]) > 3 and all(x['bytes'] > 0 for x in d['exchanges']), d"
 "$ilf" relight scene.json -o ref_adaptive --threads 1 --quiet --method adaptive --no-view --bounces 1
 "${mpirun[@]}" -n 3 "$ilf_mpi" relight scene.json -o adaptive3 --threads 1 --quiet --method adaptive --no-view --bounces 1
 check "adaptive: 3 ranks give the maps of one process" h5diff -q ref_adaptive/radiance.h5 adaptive3/radiance.h5

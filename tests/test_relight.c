@@ -11,6 +11,7 @@
  * distant emitters, and a light field slab seen edge-on.
  */
 #include <dirent.h>
+#include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -254,6 +255,80 @@ static void check_back_to_back(void)
               order, ceiling[0], ceiling[1]);
         rl_scene_destroy(s);
     }
+}
+
+/*
+ * Bounce light at a contact: a fin stands on a floor, lit on its left face
+ * only. After one bounce the floor right of the fin sees nothing that
+ * re-emits (the fin's right face is dark), so its bounce light is exactly
+ * zero there, while left of the fin it is brightest. Bounce passes gather on
+ * cells four times larger and interpolate; interpolating across the fin
+ * would carry the left's light onto the right. The first gather finds the
+ * cells whose rays meet the fin within half a (larger) cell above the
+ * floor's interior, and the floor's cells that would read them are gathered
+ * on their own: the right side must stay zero, and only cells near the fin
+ * may be gathered so.
+ */
+static void check_contact_bounce(void)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/contact.json", tmpdir);
+    tpoly fin_left = {"grey", 4, {{1, 0.3, 0}, {1, 0.3, 0.5}, {1, 1.7, 0.5}, {1, 1.7, 0}}};
+    tpoly fin_right = {"grey", 4, {{1, 1.7, 0}, {1, 1.7, 0.5}, {1, 0.3, 0.5}, {1, 0.3, 0}}};
+    tpoly p[] = {ts_rect_z("grey", 0, 0, 2, 2, 0, 1), fin_left, fin_right,
+                 ts_rect_z("light", 0.2, 0.3, 0.8, 1.7, 1.0, 0)};
+    ts_write_scene(path, MATS, p, 4, "\"radiance_maps\": {\"cell_size\": 0.05}");
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    ts_cells floor[2];
+    rl_pass_stats bounce = {0};
+    for (int b = 0; b < 2; b++) {
+        set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 2);
+        rl_sampling smp = *rl_scene_sampling(s);
+        smp.bounces = (uint32_t)b;
+        smp.bounce_cell_factor = 4;
+        smp.bounce_rays = 64;
+        CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
+        rl_solution *sol = NULL;
+        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "contact: %s", rl_errmsg());
+        if (!sol) {
+            rl_scene_destroy(s);
+            if (b == 1)
+                ts_cells_free(&floor[0]);
+            return;
+        }
+        floor[b] = ts_cells_get(sol, (size_t)ts_map_of(sol, 0));
+        if (b == 1)
+            CHECK(rl_solution_pass_stats(sol, 1, &bounce) == RL_OK, "pass stats: %s", rl_errmsg());
+        rl_solution_destroy(sol);
+    }
+    long right = 0, lit_right = 0, left = 0, lit_left = 0;
+    for (uint32_t k = 0; k < floor[1].n && floor[0].n == floor[1].n; k++) {
+        double x = floor[1].info.u0 + (floor[1].ij[2 * k] + 0.5) * floor[1].info.cell_size;
+        double y = floor[1].info.v0 + (floor[1].ij[2 * k + 1] + 0.5) * floor[1].info.cell_size;
+        double light = (double)floor[1].e[3 * k + 1] - floor[0].e[3 * k + 1];
+        if (y < 0.5 || y > 1.5)
+            continue; /* round the fin's ends light reaches the right side */
+        if (x > 1.0)
+            right++, lit_right += light != 0.0;
+        else if (x > 0.8)
+            left++, lit_left += light > 0.0;
+    }
+    printf("contact: bounce light on %ld of %ld floor cells right of the fin, on %ld of %ld left of it; %" PRIu64
+           " cells gathered on their own\n", lit_right, right, lit_left, left, bounce.cells_direct);
+    CHECK(right > 0 && lit_right == 0, "contact: %ld of %ld floor cells right of the fin got bounce light", lit_right,
+          right);
+    CHECK(left > 0 && lit_left == left, "contact: %ld of %ld floor cells left of the fin lit", lit_left, left);
+    /* near the fin only: a larger cell (0.2 m) is flagged when its rays meet the fin within 0.1 m, so
+     * those touching x = 1 within the fin's length; the cells that read them lie within 0.3 m of
+     * x = 1 and within 0.2 m of the fin's ends: 12 columns by 36 rows of the floor at most, and none
+     * of the fin's own (the floor meets it at its edge) */
+    CHECK(bounce.cells_direct > 0 && bounce.cells_direct <= 12 * 36, "contact: %" PRIu64
+          " cells gathered on their own of %u on the floor", bounce.cells_direct, floor[1].n);
+    ts_cells_free(&floor[0]);
+    ts_cells_free(&floor[1]);
+    rl_scene_destroy(s);
 }
 
 /* An occluded room: culled and naive must agree bit for bit, and thread counts must not matter, with the
@@ -1067,6 +1142,7 @@ int main(int argc, char **argv)
         check_identities(0);
         check_identities(64);
         check_back_to_back();
+        check_contact_bounce();
         check_lightfield();
     }
     return check_report();

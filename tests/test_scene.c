@@ -718,6 +718,69 @@ static void test_interpolation(void)
     rl_scene_destroy(s);
 }
 
+/*
+ * rl__polygon_holds(), which tells an occluder above a polygon's inside from
+ * one at its edge, and rl__map_mark_direct(), which marks the cells whose
+ * interpolation would read a flagged coarse cell: exactly the fine cells
+ * whose centroid lies less than one coarse cell from the flagged cell's
+ * centre along both axes (where its bilinear weight is positive).
+ */
+static void test_mark_direct(void)
+{
+    const v2 square[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    const v2 tri[3] = {{0, 0}, {2, 0}, {0, 1}};
+    CHECK(rl__polygon_holds(square, 4, (v2){0.5, 0.5}, 0.49) && !rl__polygon_holds(square, 4, (v2){0.5, 0.5}, 0.51),
+          "holds: the square's centre is 0.5 from its edges");
+    CHECK(rl__polygon_holds(square, 4, (v2){1.0, 0.5}, 0.0) && !rl__polygon_holds(square, 4, (v2){1.0, 0.5}, 1e-9) &&
+              !rl__polygon_holds(square, 4, (v2){1.1, 0.5}, 0.0) && !rl__polygon_holds(square, 4, (v2){0.5, -1e-9}, 0),
+          "holds: on an edge only with no margin, never outside");
+    CHECK(rl__polygon_holds(tri, 3, (v2){0.5, 0.25}, 0.2) && !rl__polygon_holds(tri, 3, (v2){1.2, 0.5}, 0.0),
+          "holds: a triangle's inside and a point past its long edge");
+    write_text("mark.json", "{\"materials\": {\"g\": {}}, \"polygons\": ["
+                            "{\"material\": \"g\", \"vertices\": [[0,0,0],[2,0,0],[2,1.5,0],[0,1.5,0]]}],"
+                            "\"radiance_maps\": {\"cell_size\": 0.05}}");
+    rl_scene *s = load(tmpdir, "mark.json");
+    rl_map *fine = NULL, *coarse = NULL;
+    size_t nf = 0, nc = 0;
+    if (!s || rl__maps_build(s, &fine, &nf) != RL_OK || rl__maps_build_sized(s, 0.2, &coarse, &nc) != RL_OK ||
+        nf != 1 || nc != 1) {
+        CHECK(0, "maps: %s", rl_errmsg());
+        rl__maps_free(fine, nf);
+        rl__maps_free(coarse, nc);
+        rl_scene_destroy(s);
+        return;
+    }
+    rl_map *c = &coarse[0], *f = &fine[0];
+    uint8_t *near = calloc(c->ncells, 1), *subset = calloc(f->ncells, 1);
+    c->near = near;
+    CHECK(rl__map_mark_direct(c, f, subset) == 0, "mark: nothing flagged, nothing marked");
+    for (int flagged = 0; flagged < 2; flagged++) {
+        /* an inside cell, then the corner cell */
+        uint32_t ci = flagged ? 0 : 4, cj = flagged ? 0 : 3;
+        int32_t cell = c->grid[(size_t)cj * c->nu + ci];
+        memset(near, 0, c->ncells);
+        near[cell] = 1;
+        uint32_t marked = rl__map_mark_direct(c, f, subset), want = 0, agree = 0;
+        for (uint32_t k = 0; k < f->ncells; k++) {
+            double x = f->u0 + (f->cells[k].i + 0.5) * f->cell, y = f->v0 + (f->cells[k].j + 0.5) * f->cell;
+            double cx = c->u0 + (ci + 0.5) * c->cell, cy = c->v0 + (cj + 0.5) * c->cell;
+            /* a fine cell beyond the outermost coarse centres reads that centre alone */
+            double dx = fabs(x - cx), dy = fabs(y - cy);
+            int w = (dx < c->cell || (ci == 0 && x < cx)) && (dy < c->cell || (cj == 0 && y < cy));
+            want += (uint32_t)w;
+            agree += (uint32_t)(w == subset[k]);
+        }
+        CHECK(marked == want && agree == f->ncells && want > 0, "mark: %u marked, %u expected, %u of %u agree",
+              marked, want, agree, f->ncells);
+    }
+    c->near = NULL;
+    free(near);
+    free(subset);
+    rl__maps_free(fine, nf);
+    rl__maps_free(coarse, nc);
+    rl_scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 3) {
@@ -742,5 +805,6 @@ int main(int argc, char **argv)
     test_run_options();
     test_data();
     test_interpolation();
+    test_mark_direct();
     return check_report();
 }

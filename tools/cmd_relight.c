@@ -553,6 +553,7 @@ static cJSON *pass_json(uint32_t k, const rl_pass_stats *s)
     add_count(p, "pairs_descended", s->pairs_descended);
     add_count(p, "emitters", s->emitters);
     add_count(p, "refinements", s->refinements);
+    add_count(p, "cells_direct", s->cells_direct);
     cJSON_AddNumberToObject(p, "estimated_rmse", s->estimated_rmse);
     cJSON_AddBoolToObject(p, "budget_reached", s->budget_reached != 0);
     return p;

@@ -184,6 +184,8 @@ void relight_print_pass(FILE *out, uint32_t k, const rl_pass_stats *s)
     fprintf(out, "  solid angles considered %" PRIu64 ", culled %" PRIu64 "; pairs %" PRIu64 ", descended %" PRIu64
                  "\n",
             s->solid_angles_considered, s->solid_angles_culled, s->pairs, s->pairs_descended);
+    if (s->cells_direct > 0)
+        fprintf(out, "  cells gathered on their own, not interpolated: %" PRIu64 "\n", s->cells_direct);
     if (s->refinements > 0 || s->estimated_rmse > 0)
         fprintf(out, "  adaptive: %" PRIu64 " refinements, estimated RMSE %.4g W m^-2%s\n", s->refinements,
                 s->estimated_rmse, s->budget_reached ? ", time budget reached" : "");

@@ -86,10 +86,23 @@ void rl__glow_free(rl_glow *glow, size_t npolygons)
     free(glow);
 }
 
-/* Traces the n rays of a packet from x[i] along unit d[i] and adds, in ray order, the radiance each
- * one's first hit re-emits towards it into acc. */
-static void trace_packet(const rl_transfer_ctx *ctx, size_t n, const v3 *x, const v3 *d, const double *tnear,
-                         double acc[3], rl_counters *cnt)
+/* @return 1 if a hit at distance dist, point p, from a cell of m lies closer than half a cell above the
+ * inside of m's polygon, or anywhere when the polygon is under three cells across: an occluder there
+ * makes the light change within a cell, which interpolation from larger cells would blur. A surface
+ * meeting a wide polygon at its edge (a wall at a floor) does not count: the interpolation carries
+ * values to the edge, and its light varies slowly along it. */
+static int hit_is_near(const rl_map *m, double dist, v3 p)
+{
+    return dist < 0.5 * m->cell &&
+           (m->nu < 3 || m->nv < 3 ||
+            rl__polygon_holds(m->poly, m->npoly, frame_project(&m->frame, p), 1e-3 * m->cell));
+}
+
+/* Traces the n rays of a packet from x[i] along unit d[i], from a cell of map m, and adds, in ray
+ * order, the radiance each one's first hit re-emits towards it into acc; sets *near when m->near is
+ * set and a hit is near (hit_is_near()). */
+static void trace_packet(const rl_transfer_ctx *ctx, const rl_map *m, size_t n, const v3 *x, const v3 *d,
+                         const double *tnear, double acc[3], int *near, rl_counters *cnt)
 {
     double tfar[RL_RAY_PACKET], dist[RL_RAY_PACKET];
     uint32_t polygon[RL_RAY_PACKET];
@@ -100,6 +113,8 @@ static void trace_packet(const rl_transfer_ctx *ctx, size_t n, const v3 *x, cons
     for (size_t i = 0; i < n; i++) {
         if (polygon[i] >= ctx->scene->npolygons)
             continue;
+        if (m->near && !*near)
+            *near = hit_is_near(m, dist[i], v3_madd(x[i], d[i], dist[i]));
         if (!(v3_dot(d[i], v3_load(ctx->scene->polygons[polygon[i]].normal)) < 0)) {
             /* a back: opaque, unless a polygon lies back to back with it there (a panel modelled as two
              * faces), whose front the ray meets at the same distance up to rounding */
@@ -109,10 +124,10 @@ static void trace_packet(const rl_transfer_ctx *ctx, size_t n, const v3 *x, cons
                 continue;
         }
         const rl_glow *g = &ctx->glow[polygon[i]];
-        const rl_map *m = g->map;
-        if (!m)
+        const rl_map *hm = g->map;
+        if (!hm)
             continue; /* re-emits nothing */
-        const float *l = g->rad[rl__map_square_clamped(m, frame_project(&m->frame, v3_madd(x[i], d[i], dist[i])))];
+        const float *l = g->rad[rl__map_square_clamped(hm, frame_project(&hm->frame, v3_madd(x[i], d[i], dist[i])))];
         cnt->rays_kept++;
         for (int c = 0; c < 3; c++)
             acc[c] += l[c];
@@ -127,12 +142,13 @@ void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, 
     for (uint32_t j = row0; j < row1; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
             int32_t cell = m->grid[(size_t)j * m->nu + i];
-            if (cell < 0)
+            if (cell < 0 || (m->subset && !m->subset[cell]))
                 continue;
             rl_origin_domain dom;
             rl__cell_domain(m, (uint32_t)cell, &dom);
             lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, UINT32_MAX, map_index), (uint64_t)cell));
             double acc[3] = {0, 0, 0};
+            int near = 0;
             for (uint32_t s0 = 0; s0 < n; s0 += RL_RAY_PACKET) {
                 size_t np = n - s0 < RL_RAY_PACKET ? n - s0 : RL_RAY_PACKET;
                 v3 x[RL_RAY_PACKET], d[RL_RAY_PACKET];
@@ -150,8 +166,10 @@ void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, 
                     x[k] = rl__domain_point(m, &dom, u[2], u[3]);
                     tnear[k] = ctx->eps / fmax(cz, 1e-3);
                 }
-                trace_packet(ctx, np, x, d, tnear, acc, cnt);
+                trace_packet(ctx, m, np, x, d, tnear, acc, &near, cnt);
             }
+            if (m->near)
+                m->near[cell] = (uint8_t)near;
             cnt->samples += n;
             for (int c = 0; c < 3; c++)
                 m->e_pass[cell][c] += RL_PI * acc[c] / n;

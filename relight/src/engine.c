@@ -141,28 +141,6 @@ static void sum_counters(const rl_counters *c, unsigned n, rl_pass_stats *st)
     }
 }
 
-/* Splits every map into tiles of about TILE_CELLS grid squares. @return the items (count in *n) or NULL. */
-static work_item *make_tiles(const rl_map *maps, size_t nmaps, size_t *n)
-{
-    size_t count = 0, k = 0;
-    for (size_t m = 0; m < nmaps; m++) {
-        uint32_t rows = maps[m].nu >= TILE_CELLS ? 1 : TILE_CELLS / maps[m].nu;
-        count += (maps[m].nv + rows - 1) / rows;
-    }
-    work_item *items = malloc((count ? count : 1) * sizeof *items);
-    if (!items)
-        return NULL;
-    for (size_t m = 0; m < nmaps; m++) {
-        uint32_t rows = maps[m].nu >= TILE_CELLS ? 1 : TILE_CELLS / maps[m].nu;
-        for (uint32_t r = 0; r < maps[m].nv; r += rows)
-            items[k++] = (work_item){(uint32_t)m, r, r + rows < maps[m].nv ? r + rows : maps[m].nv};
-    }
-    *n = count;
-    return items;
-}
-
-/* ------------------------------------------------------------ several ranks */
-
 /* @return the first cell of map m in grid row j or after: cells are numbered row by row. */
 static uint32_t first_cell_of_row(const rl_map *m, uint32_t j)
 {
@@ -177,12 +155,49 @@ static uint32_t first_cell_of_row(const rl_map *m, uint32_t j)
     return lo;
 }
 
-/* @return the number of cells of tile w. */
+/* @return the number of cells of tile w (a run of consecutive cells). */
 static uint32_t tile_cells(const rl_map *maps, const work_item *w)
 {
     const rl_map *m = &maps[w->map];
     return first_cell_of_row(m, w->row1) - first_cell_of_row(m, w->row0);
 }
+
+/* @return the number of cells of tile w that a pass gathers: those of rl_map.subset when it is set. */
+static uint32_t tile_work(const rl_map *maps, const work_item *w)
+{
+    const rl_map *m = &maps[w->map];
+    if (!m->subset)
+        return tile_cells(maps, w);
+    uint32_t n = 0;
+    for (uint32_t c = first_cell_of_row(m, w->row0), c1 = first_cell_of_row(m, w->row1); c < c1; c++)
+        n += m->subset[c] != 0;
+    return n;
+}
+
+/* Splits every map into tiles of about TILE_CELLS grid squares, leaving out those with no cell to gather.
+ * @return the items (count in *n) or NULL. */
+static work_item *make_tiles(const rl_map *maps, size_t nmaps, size_t *n)
+{
+    size_t count = 0, k = 0;
+    for (size_t m = 0; m < nmaps; m++) {
+        uint32_t rows = maps[m].nu >= TILE_CELLS ? 1 : TILE_CELLS / maps[m].nu;
+        count += (maps[m].nv + rows - 1) / rows;
+    }
+    work_item *items = malloc((count ? count : 1) * sizeof *items);
+    if (!items)
+        return NULL;
+    for (size_t m = 0; m < nmaps; m++) {
+        uint32_t rows = maps[m].nu >= TILE_CELLS ? 1 : TILE_CELLS / maps[m].nu;
+        for (uint32_t r = 0; r < maps[m].nv; r += rows) {
+            items[k] = (work_item){(uint32_t)m, r, r + rows < maps[m].nv ? r + rows : maps[m].nv};
+            k += tile_work(maps, &items[k]) > 0;
+        }
+    }
+    *n = k;
+    return items;
+}
+
+/* ------------------------------------------------------------ several ranks */
 
 /* The expected cost of a tile with no measurement: its cells, plus what setting up any tile costs
  * (its emitter pairs, its clipping), in cells. Fitted to the classroom's tiles (cost = a cells + b):
@@ -223,7 +238,7 @@ static uint32_t *deal_tiles(const rl_cluster *cl, const rl_map *maps, const work
     double *load = calloc(cl->ranks, sizeof *load);
     if (owner && order && load) {
         for (size_t k = 0; k < n; k++)
-            order[k] = (dealt){measured ? measured[k] : tile_cells(maps, &items[k]) + TILE_SETUP_CELLS,
+            order[k] = (dealt){measured ? measured[k] : tile_work(maps, &items[k]) + TILE_SETUP_CELLS,
                                ilf_hash_mix(0x9e3779b97f4a7c15u, k), k};
         qsort(order, n, sizeof *order, dearest_first);
         for (size_t k = 0; k < n; k++) {
@@ -523,6 +538,100 @@ static void close_pass(rl_map *maps, size_t nmaps)
     }
 }
 
+/* Cells that bounce passes on larger cells gather themselves. The first pass's gather on the larger
+ * cells flags those near an occluder (rl_map.near); the cells of the scene's maps whose
+ * interpolation would read a flagged cell, or that lie on a polygon too narrow for it, are then
+ * gathered on their own (rl_map.subset), in this and every later bounce pass: the flags are geometry,
+ * the same in every pass. */
+typedef struct refine {
+    uint8_t *near;   /* one flag per larger cell, all maps in order */
+    uint8_t *subset; /* one mark per cell of the scene's maps, in order */
+    size_t nnear;
+    uint64_t marked; /* cells marked in subset */
+    int ready;       /* subset filled (after the first bounce pass's larger gather) */
+    double *measured;
+    rl_map *coarse;
+    size_t ncoarse;
+} refine;
+
+/* Allocates rf's flags and points each larger map's near at its share. @return 0 or -1 (memory). */
+static int refine_new(rl_map *coarse, size_t ncoarse, const rl_map *maps, refine *rf)
+{
+    size_t nc = 0, nf = 0;
+    for (size_t m = 0; m < ncoarse; m++)
+        nc += coarse[m].ncells, nf += maps[m].ncells;
+    rf->near = calloc(nc ? nc : 1, 1);
+    rf->subset = calloc(nf ? nf : 1, 1);
+    if (!rf->near || !rf->subset)
+        return -1;
+    rf->nnear = nc;
+    rf->coarse = coarse;
+    rf->ncoarse = ncoarse;
+    for (size_t m = 0, at = 0; m < ncoarse; at += coarse[m++].ncells)
+        coarse[m].near = rf->near + at;
+    return 0;
+}
+
+static void refine_free(refine *rf, rl_map *maps, size_t nmaps)
+{
+    for (size_t m = 0; m < nmaps; m++)
+        maps[m].subset = NULL;
+    for (size_t m = 0; m < rf->ncoarse; m++)
+        rf->coarse[m].near = NULL;
+    free(rf->near);
+    free(rf->subset);
+    free(rf->measured);
+}
+
+/* Marks the cells that gather themselves from the larger maps' flags (summed over ranks first: each rank
+ * gathered its own tiles). @return 0 or -1 (memory or the exchange failed). */
+static int refine_mark(const rl_cluster *cl, rl_map *maps, size_t nmaps, refine *rf)
+{
+    if (cl) {
+        double *v = malloc((rf->nnear ? rf->nnear : 1) * sizeof *v);
+        if (!v)
+            return -1;
+        for (size_t k = 0; k < rf->nnear; k++)
+            v[k] = rf->near[k];
+        int rc = cl->sum(cl->user, v, rf->nnear);
+        for (size_t k = 0; k < rf->nnear; k++)
+            rf->near[k] = v[k] > 0;
+        free(v);
+        if (rc != 0)
+            return -1;
+    }
+    for (size_t m = 0, at = 0; m < nmaps; at += maps[m++].ncells) {
+        rf->marked += rl__map_mark_direct(&rf->coarse[m], &maps[m], rf->subset + at);
+        maps[m].subset = rf->subset + at;
+    }
+    for (size_t m = 0; m < rf->ncoarse; m++)
+        rf->coarse[m].near = NULL; /* flagged once: later passes only read the marks */
+    rf->ready = 1;
+    return 0;
+}
+
+/* Gathers pass p on the marked cells of the scene's maps and adds its statistics to the pass's.
+ * @return RL_OK or the failure. */
+static rl_status refine_pass(const rl_scene *scene, rl_solution *s, const rl_cluster *cl, const rl__run *run,
+                             uint32_t p, const rl_emitter *e, size_t ne, double base, double span, refine *rf)
+{
+    if (!rf->ready && refine_mark(cl, s->maps, s->nmaps, rf) != 0)
+        return rl__fail(cl ? RL_ERR_IO : RL_ERR_NOMEM, "pass %u: marking the bounce cells failed", p);
+    rl_pass_stats more;
+    if (rf->marked == 0)
+        return RL_OK;
+    rl_status st = rl__run_pass(scene, s->tracer, cl, run, p, p, s->maps, s->nmaps, e, ne, base, span,
+                                &rf->measured, &more);
+    rl_pass_stats *to = &s->passes[p];
+    to->wall_seconds += more.wall_seconds;
+    to->cpu_seconds += more.cpu_seconds;
+    to->samples += more.samples;
+    to->rays_cast += more.rays_cast;
+    to->rays_kept += more.rays_kept;
+    to->cells_direct = rf->marked;
+    return st;
+}
+
 rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *run, uint32_t passes, double span,
                     rl_solution **out)
 {
@@ -560,24 +669,32 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     uint32_t factor = scene->sampling.bounce_cell_factor ? scene->sampling.bounce_cell_factor : 2;
     if (passes > 1 && factor > 1)
         st = rl__maps_build_sized(scene, scene->cell_size * factor, &coarse, &ncoarse);
+    refine rf = {0};
+    if (st == RL_OK && coarse && scene->sampling.bounce_rays > 0 && refine_new(coarse, ncoarse, s->maps, &rf) != 0)
+        st = rl__fail(RL_ERR_NOMEM, "out of memory for the bounce cells");
     /* per-tile CPU times of the last pass: bounce passes after the first repeat its tiles and emitters */
     double *measured = NULL;
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
         int gather_coarse = p > 0 && coarse;
+        double base = span * p / passes, part = span / passes;
         if (p > 0)
             ne = rl__append_bounce_emitters(scene, s->maps, s->nmaps, e, 0);
         if (p < 2) {
             free(measured);
             measured = NULL;
         }
+        if (gather_coarse && rf.near)
+            part *= 0.75; /* the rest for the cells gathered themselves */
         st = rl__run_pass(scene, s->tracer, cl, run, p, p, gather_coarse ? coarse : s->maps,
-                          gather_coarse ? ncoarse : s->nmaps, e, ne, span * p / passes, span / passes, &measured,
-                          &s->passes[p]);
+                          gather_coarse ? ncoarse : s->nmaps, e, ne, base, part, &measured, &s->passes[p]);
+        if (st == RL_OK && gather_coarse && rf.near)
+            st = refine_pass(scene, s, cl, run, p, e, ne, base + part, part / 3, &rf);
         for (size_t m = 0; gather_coarse && m < s->nmaps; m++)
             rl__map_interpolate(&coarse[m], &s->maps[m]);
         close_pass(s->maps, s->nmaps);
         s->npasses = p + 1;
     }
+    refine_free(&rf, s->maps, s->nmaps);
     rl__maps_free(coarse, ncoarse);
     free(measured);
     free(e);

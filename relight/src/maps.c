@@ -20,6 +20,20 @@
 #define MAX_TOTAL_CELLS ILF_MAP_MAX_CELLS
 _Static_assert(ILF_MAP_MAX_CELLS <= LFIO_RADMAP_MAX_CELLS, "a solved scene must fit a radiance-map file");
 
+int rl__polygon_holds(const v2 *p, uint32_t count, v2 q, double margin)
+{
+    for (uint32_t i = 0; i < count; i++) {
+        v2 a = p[i], b = p[(i + 1) % count];
+        double ex = b.x - a.x, ey = b.y - a.y, len = sqrt(ex * ex + ey * ey);
+        /* signed distance to the left of the edge: inside for a counter-clockwise polygon */
+        if (!(len > 0))
+            continue;
+        if ((ex * (q.y - a.y) - ey * (q.x - a.x)) / len < margin)
+            return 0;
+    }
+    return 1;
+}
+
 double rl__polygon_area2(const v2 *p, uint32_t count)
 {
     double a = 0.0;
@@ -226,6 +240,26 @@ static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map *
     return RL_OK;
 }
 
+uint32_t rl__map_mark_direct(const rl_map *coarse, const rl_map *fine, uint8_t *subset)
+{
+    uint32_t marked = 0;
+    for (uint32_t k = 0; k < fine->ncells; k++) {
+        int mark = 0;
+        if (coarse->near) {
+            v2 poly[RL_MAX_POLY_VERTS + 4];
+            int32_t cell[4];
+            double w[4], wsum;
+            v2 q = rl__polygon_centroid(poly, rl__map_cell_polygon(fine, &fine->cells[k], poly));
+            uint32_t n = rl__map_stencil(coarse, q, cell, w, &wsum);
+            for (uint32_t s = 0; s < n && !mark; s++)
+                mark = coarse->near[cell[s]] != 0;
+        }
+        subset[k] = (uint8_t)mark;
+        marked += (uint32_t)mark;
+    }
+    return marked;
+}
+
 rl_status rl__map_point(v3 p, v3 n, rl_map *out)
 {
     memset(out, 0, sizeof *out);
@@ -310,36 +344,52 @@ int64_t rl__map_cell_near(const rl_map *m, v2 q)
     return -1;
 }
 
-void rl__map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3])
+uint32_t rl__map_stencil(const rl_map *m, v2 q, int32_t cell[4], double w[4], double *sum)
 {
     double a = (q.x - m->u0) / m->cell - 0.5, b = (q.y - m->v0) / m->cell - 0.5;
     double fa = floor(a), fb = floor(b), t = a - fa, s = b - fb;
-    double acc[3] = {0, 0, 0}, wsum = 0.0;
+    double wsum = 0.0;
+    uint32_t n = 0;
     for (int dj = 0; dj <= 1; dj++)
         for (int di = 0; di <= 1; di++) {
-            double ci = fa + di, cj = fb + dj, w = (di ? t : 1 - t) * (dj ? s : 1 - s);
-            if (ci < 0 || cj < 0 || ci >= m->nu || cj >= m->nv || !(w > 0))
+            double ci = fa + di, cj = fb + dj, wk = (di ? t : 1 - t) * (dj ? s : 1 - s);
+            if (ci < 0 || cj < 0 || ci >= m->nu || cj >= m->nv || !(wk > 0))
                 continue;
             int32_t c = m->grid[(size_t)cj * m->nu + (size_t)ci];
             if (c < 0)
                 continue; /* outside the polygon: the others carry the value to the edge */
-            for (int ch = 0; ch < 3; ch++)
-                acc[ch] += w * values[c][ch];
-            wsum += w;
+            cell[n] = c;
+            w[n++] = wk;
+            wsum += wk;
         }
-    if (!(wsum > 0)) { /* no centre around: the cell that holds q */
+    *sum = wsum;
+    return n;
+}
+
+void rl__map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3])
+{
+    int32_t cell[4];
+    double w[4], wsum;
+    uint32_t n = rl__map_stencil(m, q, cell, w, &wsum);
+    if (n == 0) { /* no centre around: the cell that holds q */
         int64_t c = rl__map_cell_at(m, q);
         for (int ch = 0; ch < 3; ch++)
             out[ch] = c < 0 ? 0.0 : values[c][ch];
         return;
     }
-    for (int ch = 0; ch < 3; ch++)
-        out[ch] = acc[ch] / wsum;
+    for (int ch = 0; ch < 3; ch++) {
+        double acc = 0.0;
+        for (uint32_t k = 0; k < n; k++)
+            acc += w[k] * values[cell[k]][ch];
+        out[ch] = acc / wsum;
+    }
 }
 
 void rl__map_interpolate(const rl_map *coarse, rl_map *fine)
 {
     for (uint32_t k = 0; k < fine->ncells; k++) {
+        if (fine->subset && fine->subset[k])
+            continue; /* gathered itself */
         v2 poly[RL_MAX_POLY_VERTS + 4];
         rl__map_sample(coarse, rl__polygon_centroid(poly, rl__map_cell_polygon(fine, &fine->cells[k], poly)),
                    (const double(*)[3])coarse->e_pass, fine->e_pass[k]);

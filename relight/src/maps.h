@@ -38,6 +38,12 @@ typedef struct rl_map {
     double (*e_prev)[3];   /* irradiance of the previous pass: what bounces re-emit; NULL without bounces */
     float albedo[3];
     float emission[3];
+    /* Borrowed, NULL unless a bounce pass by first hits sets them (rl__solve() owns the arrays):
+     * near[cell] is set to 1 by the gather when one of the cell's rays meets a surface closer than half
+     * a cell above the polygon's interior, where its light can change within the cell; a gather visits
+     * only the cells with subset[cell] != 0 when subset is set. */
+    uint8_t *near;
+    const uint8_t *subset;
 } rl_map;
 
 /* Builds the maps of every receiving polygon (albedo > 0 in some channel).
@@ -55,11 +61,21 @@ rl_status rl__maps_build_sized(const rl_scene *scene, double cell, rl_map **maps
  * around it has one. */
 void rl__map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3]);
 
+/* The bilinear stencil of frame point q on m's grid: up to four cells whose centres surround q, over
+ * those that exist, with positive weights w (divide by their sum, *sum). @return their count (0: no
+ * centre around q). */
+uint32_t rl__map_stencil(const rl_map *m, v2 q, int32_t cell[4], double w[4], double *sum);
+
 /* Sets fine->e_pass from coarse->e_pass, the same polygon's map on a grid
  * of larger cells with the same origin: bilinear between the coarse cells'
  * centres at each fine cell's centroid, over the coarse cells that exist
  * (so values are carried to the polygon's edges, never across them). */
 void rl__map_interpolate(const rl_map *coarse, rl_map *fine);
+
+/* Marks in subset (fine->ncells entries) the cells of fine that bounce passes gather themselves
+ * instead of interpolating from coarse: those whose stencil on coarse holds a cell with coarse->near
+ * set. @return how many cells it marked. */
+uint32_t rl__map_mark_direct(const rl_map *coarse, const rl_map *fine, uint8_t *subset);
 
 /* Builds one point receiver at p facing n (unit). @return RL_OK or RL_ERR_NOMEM. */
 rl_status rl__map_point(v3 p, v3 n, rl_map *out);
@@ -113,5 +129,9 @@ v2 rl__sample_polygon(const v2 *p, uint32_t count, double a, double b);
 
 /* @return the area of convex polygon p. */
 double rl__polygon_area2(const v2 *p, uint32_t count);
+
+/* @return 1 if q lies inside the convex counter-clockwise polygon p (count vertices) at least margin
+ * (>= 0, in p's units) from each of its edges, else 0. */
+int rl__polygon_holds(const v2 *p, uint32_t count, v2 q, double margin);
 
 #endif /* RELIGHT_MAPS_H */

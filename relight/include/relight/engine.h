@@ -38,6 +38,8 @@ typedef struct rl_pass_stats {
     uint64_t refinements;         /**< adaptive: (cell, solid angle) nodes split into their children */
     double estimated_rmse;        /**< adaptive: the estimator's own RMSE over cells, W m^-2 (0 otherwise) */
     int budget_reached;           /**< adaptive: 1 if the time budget stopped refinement */
+    uint64_t cells_direct;        /**< a first-hit bounce pass on larger cells: cells gathered on their own
+                                       (near an occluder, or on a narrow polygon) instead of interpolated */
 } rl_pass_stats;
 
 /** Progress callback: done in [0, 1] over the whole run, never decreasing. Called from the calling thread only. */
