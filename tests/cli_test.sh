@@ -358,14 +358,14 @@ import json, sys
 s = json.load(open(sys.argv[1]))
 assert s["scene"].endswith("cli_square.json") and s["method"] == "culled", s
 assert s["settings"]["partition_n"] == 8 and s["settings"]["rays_per_solid_angle"] == 1, s["settings"]
-assert s["settings"]["bounce_rays"] == 512 and "target_error" in s["settings"] and len(s["settings"]) == 12, s["settings"]
+assert s["settings"]["bounce_rays"] == 256 and "target_error" in s["settings"] and len(s["settings"]) == 12, s["settings"]
 assert s["settings"]["bounces"] == 1 and s["threads"] == 2, s
 assert s["maps"] == 1 and s["cells"] == 64, s
 assert s["wall_seconds"] >= 0 and s["cpu_seconds"] >= 0, s
 assert s["ranks"] == 1 and s["radiance_write_seconds"] > 0 and "exchanges" not in s, s
 assert len(s["passes"]) == 2 and [p["pass"] for p in s["passes"]] == [0, 1], s["passes"]
 keys = {"wall_seconds", "cpu_seconds", "samples", "rays_cast", "rays_kept", "rays_free", "solid_angles_considered",
-        "solid_angles_culled", "pairs", "pairs_descended", "emitters"}
+        "solid_angles_culled", "pairs", "pairs_descended", "emitters", "cells_direct"}
 assert all(keys <= set(p) for p in s["passes"]), s["passes"]
 d = s["passes"][0]
 # nothing lies between lamp and floor: every direct ray is known to arrive, none is traced

@@ -692,7 +692,7 @@ static void test_interpolation(void)
             lo = fmin(lo, c->e_pass[k][0]);
             hi = fmax(hi, c->e_pass[k][0]);
         }
-        rl__map_interpolate(c, f);
+        rl__map_interpolate(c, NULL, f);
         long exact = 0, interior = 0, outside = 0;
         for (uint32_t k = 0; k < f->ncells; k++) {
             v2 poly[RL_MAX_POLY_VERTS + 4];
@@ -720,10 +720,9 @@ static void test_interpolation(void)
 
 /*
  * rl__polygon_holds(), which tells an occluder above a polygon's inside from
- * one at its edge, and rl__map_mark_direct(), which marks the cells whose
- * interpolation would read a flagged coarse cell: exactly the fine cells
- * whose centroid lies less than one coarse cell from the flagged cell's
- * centre along both axes (where its bilinear weight is positive).
+ * one at its edge, and rl__map_mark_direct(), which marks the fine cells of
+ * every coarse cell that is flagged or has a flagged neighbour: exactly the
+ * fine cells whose centroid lies in the 3 x 3 coarse cells around the flag.
  */
 static void test_mark_direct(void)
 {
@@ -751,30 +750,45 @@ static void test_mark_direct(void)
         return;
     }
     rl_map *c = &coarse[0], *f = &fine[0];
-    uint8_t *near = calloc(c->ncells, 1), *subset = calloc(f->ncells, 1);
+    uint8_t *near = calloc(c->ncells, 1), *gathered = calloc(c->ncells, 1), *subset = calloc(f->ncells, 1);
     c->near = near;
-    CHECK(rl__map_mark_direct(c, f, subset) == 0, "mark: nothing flagged, nothing marked");
+    CHECK(rl__map_mark_direct(c, f, gathered, subset) == 0, "mark: nothing flagged, nothing marked");
     for (int flagged = 0; flagged < 2; flagged++) {
         /* an inside cell, then the corner cell */
         uint32_t ci = flagged ? 0 : 4, cj = flagged ? 0 : 3;
         int32_t cell = c->grid[(size_t)cj * c->nu + ci];
         memset(near, 0, c->ncells);
         near[cell] = 1;
-        uint32_t marked = rl__map_mark_direct(c, f, subset), want = 0, agree = 0;
+        uint32_t marked = rl__map_mark_direct(c, f, gathered, subset), want = 0, agree = 0;
         for (uint32_t k = 0; k < f->ncells; k++) {
-            double x = f->u0 + (f->cells[k].i + 0.5) * f->cell, y = f->v0 + (f->cells[k].j + 0.5) * f->cell;
-            double cx = c->u0 + (ci + 0.5) * c->cell, cy = c->v0 + (cj + 0.5) * c->cell;
-            /* a fine cell beyond the outermost coarse centres reads that centre alone */
-            double dx = fabs(x - cx), dy = fabs(y - cy);
-            int w = (dx < c->cell || (ci == 0 && x < cx)) && (dy < c->cell || (cj == 0 && y < cy));
+            /* the fine grid nests in the coarse one: 4 x 4 fine cells to a coarse cell */
+            long di = (long)(f->cells[k].i / 4) - (long)ci, dj = (long)(f->cells[k].j / 4) - (long)cj;
+            int w = labs(di) <= 1 && labs(dj) <= 1;
             want += (uint32_t)w;
             agree += (uint32_t)(w == subset[k]);
         }
         CHECK(marked == want && agree == f->ncells && want > 0, "mark: %u marked, %u expected, %u of %u agree",
               marked, want, agree, f->ncells);
+        uint32_t ngathered = 0;
+        for (uint32_t k = 0; k < c->ncells; k++) {
+            ngathered += gathered[k];
+            for (int ch = 0; ch < 3; ch++)
+                c->e_pass[k][ch] = gathered[k] ? 1e6 : 1.0;
+        }
+        CHECK(ngathered == (flagged ? 4u : 9u), "mark: %u coarse cells gathered", ngathered);
+        /* the interpolated cells never read a gathered coarse cell */
+        f->subset = subset;
+        rl__map_interpolate(c, gathered, f);
+        f->subset = NULL;
+        uint32_t ones = 0;
+        for (uint32_t k = 0; k < f->ncells; k++)
+            ones += !subset[k] && f->e_pass[k][0] == 1.0 && f->e_pass[k][2] == 1.0;
+        CHECK(ones == f->ncells - marked, "mark: %u of %u interpolated cells read only the others", ones,
+              f->ncells - marked);
     }
     c->near = NULL;
     free(near);
+    free(gathered);
     free(subset);
     rl__maps_free(fine, nf);
     rl__maps_free(coarse, nc);

@@ -539,13 +539,15 @@ static void close_pass(rl_map *maps, size_t nmaps)
 }
 
 /* Cells that bounce passes on larger cells gather themselves. The first pass's gather on the larger
- * cells flags those near an occluder (rl_map.near); the cells of the scene's maps whose
- * interpolation would read a flagged cell, or that lie on a polygon too narrow for it, are then
- * gathered on their own (rl_map.subset), in this and every later bounce pass: the flags are geometry,
- * the same in every pass. */
+ * cells flags those near an occluder (rl_map.near); the cells of the scene's maps that lie in a
+ * flagged larger cell or in one of its eight neighbours are then gathered on their own
+ * (rl_map.subset), and the others interpolated from the larger cells around them but those
+ * (rl__map_mark_direct()), in this and every later bounce pass: the flags are geometry, the same in
+ * every pass. */
 typedef struct refine {
-    uint8_t *near;   /* one flag per larger cell, all maps in order */
-    uint8_t *subset; /* one mark per cell of the scene's maps, in order */
+    uint8_t *near;     /* one flag per larger cell, all maps in order */
+    uint8_t *gathered; /* one mark per larger cell whose area is gathered on its own cells, in order */
+    uint8_t *subset;   /* one mark per cell of the scene's maps, in order */
     size_t nnear;
     uint64_t marked; /* cells marked in subset */
     int ready;       /* subset filled (after the first bounce pass's larger gather) */
@@ -561,8 +563,9 @@ static int refine_new(rl_map *coarse, size_t ncoarse, const rl_map *maps, refine
     for (size_t m = 0; m < ncoarse; m++)
         nc += coarse[m].ncells, nf += maps[m].ncells;
     rf->near = calloc(nc ? nc : 1, 1);
+    rf->gathered = calloc(nc ? nc : 1, 1);
     rf->subset = calloc(nf ? nf : 1, 1);
-    if (!rf->near || !rf->subset)
+    if (!rf->near || !rf->gathered || !rf->subset)
         return -1;
     rf->nnear = nc;
     rf->coarse = coarse;
@@ -579,6 +582,7 @@ static void refine_free(refine *rf, rl_map *maps, size_t nmaps)
     for (size_t m = 0; m < rf->ncoarse; m++)
         rf->coarse[m].near = NULL;
     free(rf->near);
+    free(rf->gathered);
     free(rf->subset);
     free(rf->measured);
 }
@@ -600,8 +604,8 @@ static int refine_mark(const rl_cluster *cl, rl_map *maps, size_t nmaps, refine 
         if (rc != 0)
             return -1;
     }
-    for (size_t m = 0, at = 0; m < nmaps; at += maps[m++].ncells) {
-        rf->marked += rl__map_mark_direct(&rf->coarse[m], &maps[m], rf->subset + at);
+    for (size_t m = 0, at = 0, cat = 0; m < nmaps; at += maps[m].ncells, cat += rf->coarse[m++].ncells) {
+        rf->marked += rl__map_mark_direct(&rf->coarse[m], &maps[m], rf->gathered + cat, rf->subset + at);
         maps[m].subset = rf->subset + at;
     }
     for (size_t m = 0; m < rf->ncoarse; m++)
@@ -666,7 +670,10 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     /* bounce passes gather on coarser cells when asked: indirect light is smooth */
     rl_map *coarse = NULL;
     size_t ncoarse = 0;
-    uint32_t factor = scene->sampling.bounce_cell_factor ? scene->sampling.bounce_cell_factor : 2;
+    /* by default 4 for the first-hit gather, which gathers the cells near occluders on their own; 2 for
+     * the methods' own, which interpolates everywhere (as before the first-hit gather's flags) */
+    uint32_t factor = scene->sampling.bounce_cell_factor ? scene->sampling.bounce_cell_factor
+                      : scene->sampling.bounce_rays > 0 ? 4 : 2;
     if (passes > 1 && factor > 1)
         st = rl__maps_build_sized(scene, scene->cell_size * factor, &coarse, &ncoarse);
     refine rf = {0};
@@ -689,8 +696,8 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
                           gather_coarse ? ncoarse : s->nmaps, e, ne, base, part, &measured, &s->passes[p]);
         if (st == RL_OK && gather_coarse && rf.near)
             st = refine_pass(scene, s, cl, run, p, e, ne, base + part, part / 3, &rf);
-        for (size_t m = 0; gather_coarse && m < s->nmaps; m++)
-            rl__map_interpolate(&coarse[m], &s->maps[m]);
+        for (size_t m = 0, cat = 0; gather_coarse && m < s->nmaps; cat += coarse[m++].ncells)
+            rl__map_interpolate(&coarse[m], rf.ready ? rf.gathered + cat : NULL, &s->maps[m]);
         close_pass(s->maps, s->nmaps);
         s->npasses = p + 1;
     }

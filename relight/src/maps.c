@@ -240,22 +240,31 @@ static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map *
     return RL_OK;
 }
 
-uint32_t rl__map_mark_direct(const rl_map *coarse, const rl_map *fine, uint8_t *subset)
+/* @return 1 if coarse cell c or one of the eight around it is flagged near. */
+static int near_around(const rl_map *coarse, const rl_cell *c)
 {
+    for (int dj = -1; dj <= 1; dj++)
+        for (int di = -1; di <= 1; di++) {
+            int64_t i = (int64_t)c->i + di, j = (int64_t)c->j + dj;
+            if (i < 0 || j < 0 || i >= coarse->nu || j >= coarse->nv)
+                continue;
+            int32_t n = coarse->grid[(size_t)j * coarse->nu + (size_t)i];
+            if (n >= 0 && coarse->near[n])
+                return 1;
+        }
+    return 0;
+}
+
+uint32_t rl__map_mark_direct(const rl_map *coarse, const rl_map *fine, uint8_t *gathered, uint8_t *subset)
+{
+    for (uint32_t c = 0; c < coarse->ncells; c++)
+        gathered[c] = coarse->near && near_around(coarse, &coarse->cells[c]);
     uint32_t marked = 0;
     for (uint32_t k = 0; k < fine->ncells; k++) {
-        int mark = 0;
-        if (coarse->near) {
-            v2 poly[RL_MAX_POLY_VERTS + 4];
-            int32_t cell[4];
-            double w[4], wsum;
-            v2 q = rl__polygon_centroid(poly, rl__map_cell_polygon(fine, &fine->cells[k], poly));
-            uint32_t n = rl__map_stencil(coarse, q, cell, w, &wsum);
-            for (uint32_t s = 0; s < n && !mark; s++)
-                mark = coarse->near[cell[s]] != 0;
-        }
-        subset[k] = (uint8_t)mark;
-        marked += (uint32_t)mark;
+        v2 poly[RL_MAX_POLY_VERTS + 4];
+        int64_t home = rl__map_cell_at(coarse, rl__polygon_centroid(poly, rl__map_cell_polygon(fine, &fine->cells[k], poly)));
+        subset[k] = (uint8_t)(home < 0 ? coarse->near != NULL : gathered[home]);
+        marked += subset[k];
     }
     return marked;
 }
@@ -344,7 +353,10 @@ int64_t rl__map_cell_near(const rl_map *m, v2 q)
     return -1;
 }
 
-uint32_t rl__map_stencil(const rl_map *m, v2 q, int32_t cell[4], double w[4], double *sum)
+/* The bilinear stencil of frame point q on m's grid: up to four cells whose centres surround q, over
+ * those that exist and are not marked in skip (NULL: none), with positive weights w (divide by their
+ * sum, *sum). @return their count (0: no centre around q). */
+static uint32_t map_stencil(const rl_map *m, const uint8_t *skip, v2 q, int32_t cell[4], double w[4], double *sum)
 {
     double a = (q.x - m->u0) / m->cell - 0.5, b = (q.y - m->v0) / m->cell - 0.5;
     double fa = floor(a), fb = floor(b), t = a - fa, s = b - fb;
@@ -356,7 +368,7 @@ uint32_t rl__map_stencil(const rl_map *m, v2 q, int32_t cell[4], double w[4], do
             if (ci < 0 || cj < 0 || ci >= m->nu || cj >= m->nv || !(wk > 0))
                 continue;
             int32_t c = m->grid[(size_t)cj * m->nu + (size_t)ci];
-            if (c < 0)
+            if (c < 0 || (skip && skip[c]))
                 continue; /* outside the polygon: the others carry the value to the edge */
             cell[n] = c;
             w[n++] = wk;
@@ -366,11 +378,12 @@ uint32_t rl__map_stencil(const rl_map *m, v2 q, int32_t cell[4], double w[4], do
     return n;
 }
 
-void rl__map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3])
+/* rl__map_sample() over the cells not marked in skip (NULL: every cell). */
+static void map_sample_skipping(const rl_map *m, const uint8_t *skip, v2 q, const double (*values)[3], double out[3])
 {
     int32_t cell[4];
     double w[4], wsum;
-    uint32_t n = rl__map_stencil(m, q, cell, w, &wsum);
+    uint32_t n = map_stencil(m, skip, q, cell, w, &wsum);
     if (n == 0) { /* no centre around: the cell that holds q */
         int64_t c = rl__map_cell_at(m, q);
         for (int ch = 0; ch < 3; ch++)
@@ -385,13 +398,19 @@ void rl__map_sample(const rl_map *m, v2 q, const double (*values)[3], double out
     }
 }
 
-void rl__map_interpolate(const rl_map *coarse, rl_map *fine)
+void rl__map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3])
+{
+    map_sample_skipping(m, NULL, q, values, out);
+}
+
+void rl__map_interpolate(const rl_map *coarse, const uint8_t *gathered, rl_map *fine)
 {
     for (uint32_t k = 0; k < fine->ncells; k++) {
         if (fine->subset && fine->subset[k])
             continue; /* gathered itself */
         v2 poly[RL_MAX_POLY_VERTS + 4];
-        rl__map_sample(coarse, rl__polygon_centroid(poly, rl__map_cell_polygon(fine, &fine->cells[k], poly)),
-                   (const double(*)[3])coarse->e_pass, fine->e_pass[k]);
+        map_sample_skipping(coarse, gathered,
+                            rl__polygon_centroid(poly, rl__map_cell_polygon(fine, &fine->cells[k], poly)),
+                            (const double(*)[3])coarse->e_pass, fine->e_pass[k]);
     }
 }

@@ -61,21 +61,21 @@ rl_status rl__maps_build_sized(const rl_scene *scene, double cell, rl_map **maps
  * around it has one. */
 void rl__map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3]);
 
-/* The bilinear stencil of frame point q on m's grid: up to four cells whose centres surround q, over
- * those that exist, with positive weights w (divide by their sum, *sum). @return their count (0: no
- * centre around q). */
-uint32_t rl__map_stencil(const rl_map *m, v2 q, int32_t cell[4], double w[4], double *sum);
-
 /* Sets fine->e_pass from coarse->e_pass, the same polygon's map on a grid
- * of larger cells with the same origin: bilinear between the coarse cells'
- * centres at each fine cell's centroid, over the coarse cells that exist
- * (so values are carried to the polygon's edges, never across them). */
-void rl__map_interpolate(const rl_map *coarse, rl_map *fine);
+ * of larger cells with the same origin, for the cells not in fine->subset:
+ * bilinear between the coarse cells' centres at each fine cell's centroid,
+ * over the coarse cells that exist and are not marked in gathered (NULL:
+ * none), so values are carried to a polygon's edges and to the region
+ * gathered on its own, never across them. */
+void rl__map_interpolate(const rl_map *coarse, const uint8_t *gathered, rl_map *fine);
 
-/* Marks in subset (fine->ncells entries) the cells of fine that bounce passes gather themselves
- * instead of interpolating from coarse: those whose stencil on coarse holds a cell with coarse->near
- * set. @return how many cells it marked. */
-uint32_t rl__map_mark_direct(const rl_map *coarse, const rl_map *fine, uint8_t *subset);
+/* Marks the cells that bounce passes gather on their own instead of interpolating: in gathered
+ * (coarse->ncells entries) every coarse cell that has coarse->near set or a neighbour (of eight) that
+ * has, and in subset (fine->ncells entries) the fine cells whose centroid lies in one of those. The
+ * cells of a coarse cell are thus either all gathered on their own, or all interpolated from coarse
+ * cells of which none is flagged and whose own area no gathered cell takes (so none is counted twice).
+ * @return how many fine cells it marked. */
+uint32_t rl__map_mark_direct(const rl_map *coarse, const rl_map *fine, uint8_t *gathered, uint8_t *subset);
 
 /* Builds one point receiver at p facing n (unit). @return RL_OK or RL_ERR_NOMEM. */
 rl_status rl__map_point(v3 p, v3 n, rl_map *out);

@@ -76,11 +76,13 @@ typedef struct rl_sampling {
     uint32_t bounce_partition_n;   /**< with bounce_rays 0, the partition level of those passes (which never descend); 0 (default): partition_n / 4, at least 1.
                                         Indirect light is smooth, and a bounce pass gathers from every surface */
     uint32_t bounce_cell_factor;   /**< bounce passes gather on cells this many times larger (1 .. 64) and
-                                        interpolate onto the cells bilinearly, as indirect light is smooth;
-                                        1: on every cell; 0 (default): 2 */
+                                        interpolate onto the cells bilinearly, as indirect light is smooth,
+                                        except near occluders (with bounce_rays > 0: cells whose rays meet a
+                                        surface within half a larger cell are gathered on their own);
+                                        1: on every cell; 0 (default): 4, or 2 with bounce_rays 0 */
     uint32_t bounce_rays;          /**< bounce passes: rays per (bounce) cell, cosine-weighted over the cell's
                                         own hemisphere, each reading the radiance re-emitted where it first
-                                        hits; default 512. 0: the method's own transfer from each lit polygon
+                                        hits; default 256. 0: the method's own transfer from each lit polygon
                                         (bounce_partition_n), as the direct pass does */
     uint64_t seed;                 /**< default 1 */
     uint32_t descend;              /**< 1 (default, direct pass): constant emitters, and emitters that subtend
