@@ -329,14 +329,54 @@ static void check_contact_bounce(void)
           right);
     CHECK(left > 0 && lit_left == left, "contact: %ld of %ld floor cells left of the fin lit", lit_left, left);
     /* near the fin only: a larger cell (0.2 m) is flagged when its rays meet the fin within 0.1 m, so
-     * those touching x = 1 within the fin's length; they and their neighbours are gathered on their
-     * own: larger cells within 0.4 m of x = 1, 16 columns of the floor's 40, and none of the fin's
-     * own cells (the floor meets it at its edge) */
-    CHECK(bounce.cells_direct > 0 && bounce.cells_direct <= 16 * 40, "contact: %" PRIu64
+     * those touching x = 1 (columns 4 and 5 of 10) within the fin's length (rows 1 to 8); they and
+     * their neighbours are gathered on their own: columns 3 to 6, every row, 16 x 40 of the floor's
+     * cells, and none of the fin's own (the floor meets it at its edge) */
+    CHECK(bounce.cells_direct == 16 * 40, "contact: %" PRIu64
           " cells gathered on their own of %u on the floor", bounce.cells_direct, floor[1].n);
     ts_cells_free(&floor[0]);
     ts_cells_free(&floor[1]);
     rl_scene_destroy(s);
+}
+
+/*
+ * A wall meeting a floor at the floor's edge does not make either gather on
+ * its own cells (interpolation carries light to an edge, and it varies
+ * slowly along one); a low wall there, under three larger cells high, does:
+ * its whole height lies within a larger cell of the floor, so all of its
+ * cells are gathered on their own, and still none of the floor's.
+ */
+static void check_narrow_wall(void)
+{
+    for (int low = 0; low < 2; low++) {
+        char path[600];
+        snprintf(path, sizeof path, "%s/narrow.json", tmpdir);
+        double h = low ? 0.3 : 1.0;
+        tpoly wall = {"grey", 4, {{2, 0, 0}, {2, 0, h}, {2, 2, h}, {2, 2, 0}}}; /* faces -x, at the floor's edge */
+        tpoly p[] = {ts_rect_z("grey", 0, 0, 2, 2, 0, 1), wall, ts_rect_z("light", 0.5, 0.5, 1.5, 1.5, 1.5, 0)};
+        ts_write_scene(path, MATS, p, 3, "\"radiance_maps\": {\"cell_size\": 0.05}");
+        rl_scene *s = ts_load(path);
+        if (!s)
+            return;
+        set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 2);
+        rl_sampling smp = *rl_scene_sampling(s);
+        smp.bounces = 1;
+        smp.bounce_cell_factor = 4;
+        smp.bounce_rays = 64;
+        CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
+        rl_solution *sol = NULL;
+        rl_pass_stats bounce = {0};
+        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "narrow wall: %s", rl_errmsg());
+        if (sol)
+            CHECK(rl_solution_pass_stats(sol, 1, &bounce) == RL_OK, "pass stats: %s", rl_errmsg());
+        /* the low wall: 6 rows of 40 cells */
+        uint64_t want = low ? 6 * 40 : 0;
+        printf("narrow wall: %.1f m high, %" PRIu64 " cells gathered on their own\n", h, bounce.cells_direct);
+        CHECK(sol && bounce.cells_direct == want, "narrow wall %.1f m high: %" PRIu64 " cells on their own, not %"
+              PRIu64, h, bounce.cells_direct, want);
+        rl_solution_destroy(sol);
+        rl_scene_destroy(s);
+    }
 }
 
 /* An occluded room: culled and naive must agree bit for bit, and thread counts must not matter, with the
@@ -1151,6 +1191,7 @@ int main(int argc, char **argv)
         check_identities(64);
         check_back_to_back();
         check_contact_bounce();
+        check_narrow_wall();
         check_lightfield();
     }
     return check_report();

@@ -26,7 +26,8 @@
 #include "job_mpi.h"
 #include "lfio/radmap_mpi.h"
 
-#define MAX_EXCHANGES 64
+/* one exchange a pass, two for a bounce pass that gathers cells on their own: 64 bounces at most */
+#define MAX_EXCHANGES (2 * 64 + 1)
 
 static MPI_Comm job_comm = MPI_COMM_NULL;
 static int this_rank = 0, rank_count = 1, ranks_on_node = 1;

@@ -146,7 +146,10 @@ void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, 
                 continue;
             rl_origin_domain dom;
             rl__cell_domain(m, (uint32_t)cell, &dom);
-            lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, UINT32_MAX, map_index), (uint64_t)cell));
+            /* the cells gathered on their own (subset) draw from sequences apart from the larger cells'
+             * of the same pass, map and index */
+            uint32_t level = m->subset ? UINT32_MAX - 1 : UINT32_MAX;
+            lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, level, map_index), (uint64_t)cell));
             double acc[3] = {0, 0, 0};
             int near = 0;
             for (uint32_t s0 = 0; s0 < n; s0 += RL_RAY_PACKET) {

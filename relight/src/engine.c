@@ -18,6 +18,7 @@
  * solution.c, the camera view in view.c, point queries in query.c and the
  * ray benchmark in bench_rays.c.
  */
+#include <assert.h>
 #include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -588,7 +589,7 @@ static void refine_free(refine *rf, rl_map *maps, size_t nmaps)
 }
 
 /* Marks the cells that gather themselves from the larger maps' flags (summed over ranks first: each rank
- * gathered its own tiles). @return 0 or -1 (memory or the exchange failed). */
+ * gathered its own tiles). @return 0, -1 (out of memory) or -2 (the exchange failed). */
 static int refine_mark(const rl_cluster *cl, rl_map *maps, size_t nmaps, refine *rf)
 {
     if (cl) {
@@ -602,7 +603,7 @@ static int refine_mark(const rl_cluster *cl, rl_map *maps, size_t nmaps, refine 
             rf->near[k] = v[k] > 0;
         free(v);
         if (rc != 0)
-            return -1;
+            return -2;
     }
     for (size_t m = 0, at = 0, cat = 0; m < nmaps; at += maps[m].ncells, cat += rf->coarse[m++].ncells) {
         rf->marked += rl__map_mark_direct(&rf->coarse[m], &maps[m], rf->gathered + cat, rf->subset + at);
@@ -619,8 +620,11 @@ static int refine_mark(const rl_cluster *cl, rl_map *maps, size_t nmaps, refine 
 static rl_status refine_pass(const rl_scene *scene, rl_solution *s, const rl_cluster *cl, const rl__run *run,
                              uint32_t p, const rl_emitter *e, size_t ne, double base, double span, refine *rf)
 {
-    if (!rf->ready && refine_mark(cl, s->maps, s->nmaps, rf) != 0)
-        return rl__fail(cl ? RL_ERR_IO : RL_ERR_NOMEM, "pass %u: marking the bounce cells failed", p);
+    int rc = rf->ready ? 0 : refine_mark(cl, s->maps, s->nmaps, rf);
+    if (rc == -1)
+        return rl__fail(RL_ERR_NOMEM, "pass %u: out of memory marking the bounce cells", p);
+    if (rc == -2)
+        return rl__fail(RL_ERR_IO, "pass %u: the exchange of bounce cell flags between ranks failed", p);
     rl_pass_stats more;
     if (rf->marked == 0)
         return RL_OK;
@@ -676,6 +680,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
                       : scene->sampling.bounce_rays > 0 ? 4 : 2;
     if (passes > 1 && factor > 1)
         st = rl__maps_build_sized(scene, scene->cell_size * factor, &coarse, &ncoarse);
+    assert(!coarse || ncoarse == s->nmaps); /* one map per receiving polygon, in order, at any cell size */
     refine rf = {0};
     if (st == RL_OK && coarse && scene->sampling.bounce_rays > 0 && refine_new(coarse, ncoarse, s->maps, &rf) != 0)
         st = rl__fail(RL_ERR_NOMEM, "out of memory for the bounce cells");

@@ -38,10 +38,11 @@ typedef struct rl_map {
     double (*e_prev)[3];   /* irradiance of the previous pass: what bounces re-emit; NULL without bounces */
     float albedo[3];
     float emission[3];
-    /* Borrowed, NULL unless a bounce pass by first hits sets them (rl__solve() owns the arrays):
-     * near[cell] is set to 1 by the gather when one of the cell's rays meets a surface closer than half
-     * a cell above the polygon's interior, where its light can change within the cell; a gather visits
-     * only the cells with subset[cell] != 0 when subset is set. */
+    /* Borrowed, NULL unless rl__solve() (which owns the arrays) points them for a bounce pass by first
+     * hits: rl__bounce_tile() sets near[cell] to 1 when one of the cell's rays meets a surface closer
+     * than half a cell above the polygon's inside, or anywhere when the polygon is under three cells
+     * across, where the light can change within the cell; and gathers only the cells with
+     * subset[cell] != 0 when subset is set. */
     uint8_t *near;
     const uint8_t *subset;
 } rl_map;
@@ -71,7 +72,8 @@ void rl__map_interpolate(const rl_map *coarse, const uint8_t *gathered, rl_map *
 
 /* Marks the cells that bounce passes gather on their own instead of interpolating: in gathered
  * (coarse->ncells entries) every coarse cell that has coarse->near set or a neighbour (of eight) that
- * has, and in subset (fine->ncells entries) the fine cells whose centroid lies in one of those. The
+ * has, and in subset (fine->ncells entries) the fine cells whose centroid lies in one of those (or in
+ * no coarse cell, by rounding, when coarse->near is set). The
  * cells of a coarse cell are thus either all gathered on their own, or all interpolated from coarse
  * cells of which none is flagged and whose own area no gathered cell takes (so none is counted twice).
  * @return how many fine cells it marked. */

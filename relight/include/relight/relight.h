@@ -77,8 +77,9 @@ typedef struct rl_sampling {
                                         Indirect light is smooth, and a bounce pass gathers from every surface */
     uint32_t bounce_cell_factor;   /**< bounce passes gather on cells this many times larger (1 .. 64) and
                                         interpolate onto the cells bilinearly, as indirect light is smooth,
-                                        except near occluders (with bounce_rays > 0: cells whose rays meet a
-                                        surface within half a larger cell are gathered on their own);
+                                        except near occluders (with bounce_rays > 0: the cells of a larger
+                                        cell whose rays meet a surface within half a larger cell above its
+                                        polygon's inside, and of its eight neighbours, gather on their own);
                                         1: on every cell; 0 (default): 4, or 2 with bounce_rays 0 */
     uint32_t bounce_rays;          /**< bounce passes: rays per (bounce) cell, cosine-weighted over the cell's
                                         own hemisphere, each reading the radiance re-emitted where it first
