@@ -159,7 +159,9 @@ static lfio_status xfer(const char *path, const char *obj, hid_t dset, int write
         return LFIO_OK;
     lfio_status st = LFIO_OK;
     hid_t fspace = H5Dget_space(dset);
-    hid_t mspace = H5Screate_simple(1, &nelem, NULL);
+    /* the memory space has the selection's shape (buf is packed row-major): HDF5 then copies whole
+     * rows, where a flat one against a 2-D selection took its element-by-element iterator */
+    hid_t mspace = H5Screate_simple(rank, count, NULL);
     herr_t rc = -1;
     int selected = fspace >= 0 && mspace >= 0
                    && (mine ? H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, NULL, count, NULL)
