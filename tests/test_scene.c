@@ -751,54 +751,48 @@ static void test_mark_direct(void)
     }
     rl_map *c = &coarse[0], *f = &fine[0];
     uint8_t *near = calloc(c->ncells, 1), *gathered = calloc(c->ncells, 1), *subset = calloc(f->ncells, 1);
-    if (!near || !gathered || !subset) {
-        CHECK(0, "mark: out of memory");
-        free(near);
-        free(gathered);
-        free(subset);
-        rl__maps_free(fine, nf);
-        rl__maps_free(coarse, nc);
-        rl_scene_destroy(s);
-        return;
-    }
-    c->near = near;
-    CHECK(rl__map_mark_direct(c, f, gathered, subset) == 0, "mark: nothing flagged, nothing marked");
-    for (int flagged = 0; flagged < 2; flagged++) {
-        /* an inside cell, then the corner cell */
-        uint32_t ci = flagged ? 0 : 4, cj = flagged ? 0 : 3;
-        int32_t cell = c->grid[(size_t)cj * c->nu + ci];
-        memset(near, 0, c->ncells);
-        near[cell] = 1;
-        uint32_t marked = rl__map_mark_direct(c, f, gathered, subset), want = 0, agree = 0;
-        for (uint32_t k = 0; k < f->ncells; k++) {
-            /* the fine grid nests in the coarse one: 4 x 4 fine cells to a coarse cell */
-            long di = (long)(f->cells[k].i / 4) - (long)ci, dj = (long)(f->cells[k].j / 4) - (long)cj;
-            int w = labs(di) <= 1 && labs(dj) <= 1;
-            want += (uint32_t)w;
-            agree += (uint32_t)(w == subset[k]);
+    CHECK(near && gathered && subset, "mark: out of memory");
+    if (near && gathered && subset) {
+        c->near = near;
+        CHECK(rl__map_mark_direct(c, f, gathered, subset) == 0, "mark: nothing flagged, nothing marked");
+        for (int flagged = 0; flagged < 2; flagged++) {
+            /* an inside cell, then the corner cell */
+            uint32_t ci = flagged ? 0 : 4, cj = flagged ? 0 : 3;
+            int32_t cell = c->grid[(size_t)cj * c->nu + ci];
+            memset(near, 0, c->ncells);
+            near[cell] = 1;
+            uint32_t marked = rl__map_mark_direct(c, f, gathered, subset), want = 0, agree = 0;
+            for (uint32_t k = 0; k < f->ncells; k++) {
+                /* the fine grid nests in the coarse one: 4 x 4 fine cells to a coarse cell */
+                long di = (long)(f->cells[k].i / 4) - (long)ci, dj = (long)(f->cells[k].j / 4) - (long)cj;
+                int w = labs(di) <= 1 && labs(dj) <= 1;
+                want += (uint32_t)w;
+                agree += (uint32_t)(w == subset[k]);
+            }
+            CHECK(marked == want && agree == f->ncells && want > 0, "mark: %u marked, %u expected, %u of %u agree",
+                  marked, want, agree, f->ncells);
+            uint32_t ngathered = 0;
+            for (uint32_t k = 0; k < c->ncells; k++) {
+                ngathered += gathered[k];
+                for (int ch = 0; ch < 3; ch++)
+                    c->e_pass[k][ch] = gathered[k] ? 1e6 : 1.0;
+            }
+            CHECK(ngathered == (flagged ? 4u : 9u), "mark: %u coarse cells gathered", ngathered);
+            /* the interpolated cells never read a gathered coarse cell, and the gathered cells keep theirs */
+            for (uint32_t k = 0; k < f->ncells; k++)
+                f->e_pass[k][0] = f->e_pass[k][2] = -7.0;
+            f->subset = subset;
+            rl__map_interpolate(c, gathered, f);
+            f->subset = NULL;
+            uint32_t ones = 0, kept = 0;
+            for (uint32_t k = 0; k < f->ncells; k++) {
+                ones += !subset[k] && f->e_pass[k][0] == 1.0 && f->e_pass[k][2] == 1.0;
+                kept += subset[k] && f->e_pass[k][0] == -7.0 && f->e_pass[k][2] == -7.0;
+            }
+            CHECK(ones == f->ncells - marked && kept == marked,
+                  "mark: %u of %u interpolated cells read only the others, %u of %u gathered cells untouched", ones,
+                  f->ncells - marked, kept, marked);
         }
-        CHECK(marked == want && agree == f->ncells && want > 0, "mark: %u marked, %u expected, %u of %u agree",
-              marked, want, agree, f->ncells);
-        uint32_t ngathered = 0;
-        for (uint32_t k = 0; k < c->ncells; k++) {
-            ngathered += gathered[k];
-            for (int ch = 0; ch < 3; ch++)
-                c->e_pass[k][ch] = gathered[k] ? 1e6 : 1.0;
-        }
-        CHECK(ngathered == (flagged ? 4u : 9u), "mark: %u coarse cells gathered", ngathered);
-        /* the interpolated cells never read a gathered coarse cell, and the gathered cells keep theirs */
-        for (uint32_t k = 0; k < f->ncells; k++)
-            f->e_pass[k][0] = f->e_pass[k][2] = -7.0;
-        f->subset = subset;
-        rl__map_interpolate(c, gathered, f);
-        f->subset = NULL;
-        uint32_t ones = 0, kept = 0;
-        for (uint32_t k = 0; k < f->ncells; k++) {
-            ones += !subset[k] && f->e_pass[k][0] == 1.0 && f->e_pass[k][2] == 1.0;
-            kept += subset[k] && f->e_pass[k][0] == -7.0 && f->e_pass[k][2] == -7.0;
-        }
-        CHECK(ones == f->ncells - marked && kept == marked, "mark: %u of %u interpolated cells read only the others, "
-              "%u of %u gathered cells untouched", ones, f->ncells - marked, kept, marked);
     }
     c->near = NULL;
     free(near);

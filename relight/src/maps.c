@@ -262,7 +262,8 @@ uint32_t rl__map_mark_direct(const rl_map *coarse, const rl_map *fine, uint8_t *
     uint32_t marked = 0;
     for (uint32_t k = 0; k < fine->ncells; k++) {
         v2 poly[RL_MAX_POLY_VERTS + 4];
-        int64_t home = rl__map_cell_at(coarse, rl__polygon_centroid(poly, rl__map_cell_polygon(fine, &fine->cells[k], poly)));
+        v2 q = rl__polygon_centroid(poly, rl__map_cell_polygon(fine, &fine->cells[k], poly));
+        int64_t home = rl__map_cell_at(coarse, q);
         subset[k] = (uint8_t)(home < 0 ? coarse->near != NULL : gathered[home]);
         marked += subset[k];
     }
@@ -353,49 +354,33 @@ int64_t rl__map_cell_near(const rl_map *m, v2 q)
     return -1;
 }
 
-/* The bilinear stencil of frame point q on m's grid: up to four cells whose centres surround q, over
- * those that exist and are not marked in skip (NULL: none), with positive weights w (divide by their
- * sum, *sum). @return their count (0: no centre around q). */
-static uint32_t map_stencil(const rl_map *m, const uint8_t *skip, v2 q, int32_t cell[4], double w[4], double *sum)
+/* rl__map_sample() over the cells not marked in skip (NULL: every cell), which count as outside the
+ * polygon. */
+static void map_sample_skipping(const rl_map *m, const uint8_t *skip, v2 q, const double (*values)[3], double out[3])
 {
     double a = (q.x - m->u0) / m->cell - 0.5, b = (q.y - m->v0) / m->cell - 0.5;
     double fa = floor(a), fb = floor(b), t = a - fa, s = b - fb;
-    double wsum = 0.0;
-    uint32_t n = 0;
+    double acc[3] = {0, 0, 0}, wsum = 0.0;
     for (int dj = 0; dj <= 1; dj++)
         for (int di = 0; di <= 1; di++) {
-            double ci = fa + di, cj = fb + dj, wk = (di ? t : 1 - t) * (dj ? s : 1 - s);
-            if (ci < 0 || cj < 0 || ci >= m->nu || cj >= m->nv || !(wk > 0))
+            double ci = fa + di, cj = fb + dj, w = (di ? t : 1 - t) * (dj ? s : 1 - s);
+            if (ci < 0 || cj < 0 || ci >= m->nu || cj >= m->nv || !(w > 0))
                 continue;
             int32_t c = m->grid[(size_t)cj * m->nu + (size_t)ci];
             if (c < 0 || (skip && skip[c]))
                 continue; /* outside the polygon: the others carry the value to the edge */
-            cell[n] = c;
-            w[n++] = wk;
-            wsum += wk;
+            for (int ch = 0; ch < 3; ch++)
+                acc[ch] += w * values[c][ch];
+            wsum += w;
         }
-    *sum = wsum;
-    return n;
-}
-
-/* rl__map_sample() over the cells not marked in skip (NULL: every cell). */
-static void map_sample_skipping(const rl_map *m, const uint8_t *skip, v2 q, const double (*values)[3], double out[3])
-{
-    int32_t cell[4];
-    double w[4], wsum;
-    uint32_t n = map_stencil(m, skip, q, cell, w, &wsum);
-    if (n == 0) { /* no centre around: the cell that holds q */
+    if (!(wsum > 0)) { /* no centre around: the cell that holds q */
         int64_t c = rl__map_cell_at(m, q);
         for (int ch = 0; ch < 3; ch++)
             out[ch] = c < 0 ? 0.0 : values[c][ch];
         return;
     }
-    for (int ch = 0; ch < 3; ch++) {
-        double acc = 0.0;
-        for (uint32_t k = 0; k < n; k++)
-            acc += w[k] * values[cell[k]][ch];
-        out[ch] = acc / wsum;
-    }
+    for (int ch = 0; ch < 3; ch++)
+        out[ch] = acc[ch] / wsum;
 }
 
 void rl__map_sample(const rl_map *m, v2 q, const double (*values)[3], double out[3])
