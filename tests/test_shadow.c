@@ -19,6 +19,7 @@
 
 #include "check.h"
 #include "relight_scenes.h"
+#include "segment_meets.h"
 #include "shadow.h"
 
 #define SCENES 40
@@ -52,27 +53,14 @@ static void small_quad(double f, v3 out[4])
         out[k] = v3_add(c, v3_scale(v3_sub(v3_load(q.v[k]), c), f));
 }
 
-/* @return 1 if segment x -> y meets polygon k of s at a parameter in
- * (margin, 1 - margin) and a point at least margin inside its edges
- * (margin < 0 widens it: a lenient test). */
+/* @return 1 if segment x -> y meets polygon k of s (ts_segment_meets()). */
 static int segment_meets(const rl_scene *s, size_t k, v3 x, v3 y, double margin)
 {
     const rl_polygon *pg = &s->polygons[k];
-    v3 n = v3_load(pg->normal), v0 = v3_load(s->vertices[pg->first]);
-    double hx = v3_dot(v3_sub(x, v0), n), hy = v3_dot(v3_sub(y, v0), n);
-    if ((hx > 0) == (hy > 0) || hx == hy)
-        return 0;
-    double t = hx / (hx - hy);
-    if (!(t > margin && t < 1 - margin))
-        return 0;
-    v3 h = v3_madd(x, v3_sub(y, x), t);
-    for (uint32_t i = 0; i < pg->count; i++) {
-        v3 a = v3_load(s->vertices[pg->first + i]), b = v3_load(s->vertices[pg->first + (i + 1) % pg->count]);
-        v3 m = v3_cross(n, v3_sub(b, a));
-        if (!(v3_dot(v3_sub(h, a), m) > margin * v3_len(m)))
-            return 0;
-    }
-    return 1;
+    v3 v[RL_SCENE_MAX_POLY_VERTS];
+    for (uint32_t i = 0; i < pg->count; i++)
+        v[i] = v3_load(s->vertices[pg->first + i]);
+    return ts_segment_meets(v, pg->count, v3_load(pg->normal), x, y, margin);
 }
 
 int main(void)

@@ -443,6 +443,80 @@ static void check_support(float threshold)
     lfio_slab_destroy(s);
 }
 
+/* A blend over the support of its directions reads what the mix reads, to
+ * float rounding, at points all over the slab and past its edges; a box
+ * cut short reads 0 outside it and the mix inside; bad boxes are refused. */
+static void check_blend(void)
+{
+    lfio_slab *s = make_slab(6, 5, 4, 0);
+    uint64_t ndir = lfio_slab_dir_count(s);
+    float img[6 * 5 * 3];
+    for (uint64_t k = 0; k < ndir; k++) {
+        /* each direction lit on a rectangle of its own, so supports differ */
+        uint32_t i0 = k % 3, j0 = k % 2, i1 = i0 + 2 + k % 2, j1 = j0 + 1 + k % 3;
+        for (uint32_t j = 0; j < 5; j++)
+            for (uint32_t i = 0; i < 6; i++)
+                for (int c = 0; c < 3; c++)
+                    img[(j * 6 + i) * 3 + c] =
+                        (i >= i0 && i <= i1 && j >= j0 && j <= j1) ? (float)(1 + (k * 5 + i * 3 + j * 7 + c) % 13) : 0.0f;
+        CHECK(lfio_slab_write_direction(s, k, img) == LFIO_OK, "write: %s", lfio_errmsg());
+    }
+    uint32_t(*sup)[4] = malloc(ndir * sizeof *sup);
+    CHECK(sup && lfio_slab_support(s, sup) == LFIO_OK, "support");
+    float table[6 * 5 * 3], cut[6 * 5 * 3];
+    long worst_ppm = 0, outside_bad = 0, inside_bad = 0;
+    for (int trial = 0; trial < 200 && sup; trial++) {
+        double d[3] = {rng_unit() - 0.5, rng_unit() - 0.5, rng_unit() + 0.05}, wd[4];
+        uint64_t ids[4];
+        lfio_part_interp(4, d, ids, wd);
+        uint32_t box[4] = {UINT32_MAX, 0, UINT32_MAX, 0};
+        for (int k = 0; k < 4; k++) {
+            const uint32_t *b = sup[ids[k] < ndir ? ids[k] : ids[0]];
+            box[0] = b[0] < box[0] ? b[0] : box[0], box[1] = b[1] > box[1] ? b[1] : box[1];
+            box[2] = b[2] < box[2] ? b[2] : box[2], box[3] = b[3] > box[3] ? b[3] : box[3];
+        }
+        CHECK(lfio_slab_blend(s, ids, wd, box, table) == LFIO_OK, "blend: %s", lfio_errmsg());
+        uint32_t small[4] = {box[0] + 1, box[1], box[2], box[3] - 1};
+        int has_small = small[0] <= small[1] && small[2] <= small[3];
+        if (has_small)
+            CHECK(lfio_slab_blend(s, ids, wd, small, cut) == LFIO_OK, "blend a part: %s", lfio_errmsg());
+        for (int q = 0; q < 50; q++) {
+            double a = rng_unit() * 1.4 - 0.2, b = rng_unit() * 1.4 - 0.2;
+            float mix[3], got[3], part[3];
+            lfio_slab_radiance_mix(s, a, b, ids, wd, mix);
+            lfio_slab_blend_radiance(s, box, table, a, b, got);
+            for (int c = 0; c < 3; c++) {
+                long ppm = (long)(1e6 * fabs(got[c] - mix[c]) / (fabs(mix[c]) + 1e-3));
+                worst_ppm = ppm > worst_ppm ? ppm : worst_ppm;
+            }
+            if (!has_small)
+                continue;
+            /* a point whose four taps all lie outside the part reads 0; all inside, the mix */
+            lfio_slab_blend_radiance(s, small, cut, a, b, part);
+            double gu = fmin(fmax(a * 6 - 0.5, 0), 5), gv = fmin(fmax(b * 5 - 0.5, 0), 4);
+            uint32_t i0 = (uint32_t)gu, j0 = (uint32_t)gv, i1 = i0 + 1 < 6 ? i0 + 1 : i0, j1 = j0 + 1 < 5 ? j0 + 1 : j0;
+            int all_out = i1 < small[0] || i0 > small[1] || j1 < small[2] || j0 > small[3];
+            int all_in = i0 >= small[0] && i1 <= small[1] && j0 >= small[2] && j1 <= small[3];
+            if (all_out && (part[0] != 0 || part[1] != 0 || part[2] != 0))
+                outside_bad++;
+            if (all_in && fabs(part[1] - mix[1]) > 1e-5 * (fabs(mix[1]) + 1))
+                inside_bad++;
+        }
+    }
+    CHECK(worst_ppm <= 2, "blend reads the mix to float rounding: worst %ld ppm", worst_ppm);
+    CHECK(outside_bad == 0 && inside_bad == 0, "a part of the box: %ld wrong outside, %ld inside", outside_bad,
+          inside_bad);
+    uint64_t ids[4] = {1, 2, 3, 4};
+    double wd[4] = {0.25, 0.25, 0.25, 0.25};
+    uint32_t outside[4] = {0, 6, 0, 1}, empty[4] = {2, 1, 0, 1}, ok[4] = {0, 5, 0, 4};
+    CHECK(lfio_slab_blend(s, ids, wd, outside, table) == LFIO_ERR_ARG, "a box past the slab refused");
+    CHECK(lfio_slab_blend(s, ids, wd, empty, table) == LFIO_ERR_ARG, "an empty box refused");
+    ids[0] = ndir;
+    CHECK(lfio_slab_blend(s, ids, wd, ok, table) == LFIO_ERR_ARG, "an unstored direction refused");
+    free(sup);
+    lfio_slab_destroy(s);
+}
+
 int main(void)
 {
     check_support(0.0f);
@@ -450,6 +524,7 @@ int main(void)
     check_validation();
     check_frames();
     check_writes_and_queries();
+    check_blend();
     for (uint32_t n = 1; n <= 32; n *= 2)
         check_constant_field(n);
     check_constant_field(5);

@@ -349,25 +349,39 @@ typedef struct footprint {
     double w[4];
 } footprint;
 
-/* @return the bilinear footprint of (a, b) over the grid. */
-static footprint bilinear(const lfio_slab *s, double a, double b)
+/* The two columns and rows around (a, b) and the fractions between them. */
+typedef struct corners {
+    uint32_t i0, i1, j0, j1;
+    double fu, fv;
+} corners;
+
+/* @return the position centres around (a, b), clamped at the border. */
+static corners bilinear_corners(const lfio_slab *s, double a, double b)
 {
-    footprint f;
+    corners c;
     double gu = a * s->desc.nu - 0.5, gv = b * s->desc.nv - 0.5, mu = s->desc.nu - 1, mv = s->desc.nv - 1;
     /* clamped by comparisons, not fmin/fmax: this is the hot path of relighting */
     gu = gu > 0.0 ? (gu < mu ? gu : mu) : 0.0;
     gv = gv > 0.0 ? (gv < mv ? gv : mv) : 0.0;
-    uint32_t i0 = (uint32_t)gu, j0 = (uint32_t)gv;
-    uint32_t i1 = i0 + 1 < s->desc.nu ? i0 + 1 : i0, j1 = j0 + 1 < s->desc.nv ? j0 + 1 : j0;
-    double fu = gu - i0, fv = gv - j0;
-    f.pos[0] = (uint64_t)j0 * s->desc.nu + i0;
-    f.pos[1] = (uint64_t)j0 * s->desc.nu + i1;
-    f.pos[2] = (uint64_t)j1 * s->desc.nu + i0;
-    f.pos[3] = (uint64_t)j1 * s->desc.nu + i1;
-    f.w[0] = (1 - fu) * (1 - fv);
-    f.w[1] = fu * (1 - fv);
-    f.w[2] = (1 - fu) * fv;
-    f.w[3] = fu * fv;
+    c.i0 = (uint32_t)gu, c.j0 = (uint32_t)gv;
+    c.i1 = c.i0 + 1 < s->desc.nu ? c.i0 + 1 : c.i0, c.j1 = c.j0 + 1 < s->desc.nv ? c.j0 + 1 : c.j0;
+    c.fu = gu - c.i0, c.fv = gv - c.j0;
+    return c;
+}
+
+/* @return the bilinear footprint of (a, b) over the grid. */
+static footprint bilinear(const lfio_slab *s, double a, double b)
+{
+    corners c = bilinear_corners(s, a, b);
+    footprint f;
+    f.pos[0] = (uint64_t)c.j0 * s->desc.nu + c.i0;
+    f.pos[1] = (uint64_t)c.j0 * s->desc.nu + c.i1;
+    f.pos[2] = (uint64_t)c.j1 * s->desc.nu + c.i0;
+    f.pos[3] = (uint64_t)c.j1 * s->desc.nu + c.i1;
+    f.w[0] = (1 - c.fu) * (1 - c.fv);
+    f.w[1] = c.fu * (1 - c.fv);
+    f.w[2] = (1 - c.fu) * c.fv;
+    f.w[3] = c.fu * c.fv;
     return f;
 }
 
@@ -456,6 +470,51 @@ lfio_status lfio_slab_radiance_mix(const lfio_slab *s, double st_s, double st_t,
                           s->desc.name);
     mix_directions(s, bilinear(s, st_s, st_t), ids, w, rgb);
     return LFIO_OK;
+}
+
+lfio_status lfio_slab_blend(const lfio_slab *s, const uint64_t ids[4], const double w[4], const uint32_t box[4],
+                            float *rgb)
+{
+    if (ids[0] >= s->ndir || box[0] > box[1] || box[2] > box[3] || box[1] >= s->desc.nu || box[3] >= s->desc.nv)
+        return lfio__fail(LFIO_ERR_ARG, "slab '%s': a blend needs a stored direction first and a box within the slab",
+                          s->desc.name);
+    uint32_t ni = box[1] - box[0] + 1;
+    for (uint32_t j = box[2]; j <= box[3]; j++) {
+        float *row = rgb + (size_t)(j - box[2]) * ni * 3;
+        for (size_t c = 0; c < (size_t)ni * 3; c++)
+            row[c] = 0.0f;
+        for (int k = 0; k < 4; k++) {
+            if (!(w[k] > 0.0))
+                continue;
+            uint64_t id = ids[k] < s->ndir ? ids[k] : ids[0]; /* as mix_directions() */
+            const float *src = s->radiance + (id * s->npos + (uint64_t)j * s->desc.nu + box[0]) * 3;
+            float wk = (float)w[k];
+            for (size_t c = 0; c < (size_t)ni * 3; c++)
+                row[c] += wk * src[c];
+        }
+    }
+    return LFIO_OK;
+}
+
+void lfio_slab_blend_radiance(const lfio_slab *s, const uint32_t box[4], const float *rgb, double st_s,
+                              double st_t, float out[3])
+{
+    corners c = bilinear_corners(s, st_s, st_t);
+    uint32_t ni = box[1] - box[0] + 1, is[2] = {c.i0, c.i1}, js[2] = {c.j0, c.j1};
+    double wu[2] = {1 - c.fu, c.fu}, wv[2] = {1 - c.fv, c.fv};
+    float acc[3] = {0, 0, 0};
+    /* taps in mix_directions()'s order, each weighed as bilinear() weighs it */
+    for (int b = 0; b < 2; b++)
+        for (int a = 0; a < 2; a++) {
+            uint32_t i = is[a], j = js[b];
+            if (i < box[0] || i > box[1] || j < box[2] || j > box[3])
+                continue;
+            const float *p = rgb + ((size_t)(j - box[2]) * ni + (i - box[0])) * 3;
+            float wq = (float)(wu[a] * wv[b]);
+            for (int ch = 0; ch < 3; ch++)
+                acc[ch] += wq * p[ch];
+        }
+    memcpy(out, acc, sizeof acc);
 }
 
 lfio_status lfio_slab_irradiance(const lfio_slab *s, double st_s, double st_t, double rgb[3])

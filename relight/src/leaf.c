@@ -53,6 +53,7 @@ void rl__leaf_make(const rl_transfer_ctx *ctx, const rl_emitter *e, uint32_t ei,
     L->planar = lv >= RL_PLANAR_MIN_LEVEL;
     L->mix = 0;
     L->nshared = 0;
+    L->blend = NULL;
     if (!L->planar) {
         L->tri = rl__sph_tri_make(v3_norm(L->p[0]), v3_norm(L->p[1]), v3_norm(L->p[2]), L->omega);
         return;
@@ -94,14 +95,12 @@ v3 rl__leaf_sample(const rl_leaf *L, double u1, double u2, double *w, double lam
     return v3_load(d);
 }
 
-int rl__leaf_support(const rl_emitter *e, const rl_leaf *L, v3 out[4])
+/* Gives in b the slab positions outside which every direction L mixes is
+ * zero. @return 0 when there are none. */
+static int support_box(const rl_emitter *e, const rl_leaf *L, uint32_t b[4])
 {
-    if (!L->mix)
-        return 0;
-    const lfio_slab *slab = e->lf->slab;
-    const lfio_slab_desc *d = lfio_slab_get_desc(slab);
-    uint64_t ndir = lfio_slab_dir_count(slab);
-    uint32_t b[4] = {UINT32_MAX, 0, UINT32_MAX, 0};
+    uint64_t ndir = lfio_slab_dir_count(e->lf->slab);
+    b[0] = UINT32_MAX, b[1] = 0, b[2] = UINT32_MAX, b[3] = 0;
     for (int k = 0; k < 4; k++) {
         const uint32_t *s = e->lf->support[L->ids[k] < ndir ? L->ids[k] : L->ids[0]];
         if (s[0] > s[1])
@@ -111,7 +110,16 @@ int rl__leaf_support(const rl_emitter *e, const rl_leaf *L, v3 out[4])
         b[2] = s[2] < b[2] ? s[2] : b[2];
         b[3] = s[3] > b[3] ? s[3] : b[3];
     }
-    if (b[0] == UINT32_MAX)
+    return b[0] != UINT32_MAX;
+}
+
+int rl__leaf_support(const rl_emitter *e, const rl_leaf *L, v3 out[4])
+{
+    if (!L->mix)
+        return 0;
+    const lfio_slab_desc *d = lfio_slab_get_desc(e->lf->slab);
+    uint32_t b[4];
+    if (!support_box(e, L, b))
         return -1;
     /* bilinear interpolation between position centres reaches half a
      * position past the last nonzero centre, and the border clamps */
@@ -149,11 +157,11 @@ void rl__leaf_radiance_mix(const rl_emitter *e, v2 q, const rl_leaf *L, const do
     rl__leaf_radiance_weighted(e, q, L, w, out);
 }
 
-void rl__leaf_share(rl_leaf *L, uint32_t k)
+uint32_t rl__leaf_share(rl_leaf *L, uint32_t k)
 {
     L->nshared = 0;
     if (!L->mix || k > RL_LEAF_SHARED)
-        return;
+        return 0;
     /* a sequence of the leaf's own, apart from the cells' (keyed by leaf and cell) */
     lds_key key = rl__lds_make(ilf_hash_mix(L->key, UINT64_MAX));
     for (uint32_t i = 0; i < k; i++) {
@@ -161,7 +169,64 @@ void rl__leaf_share(rl_leaf *L, uint32_t k)
         L->sd[i] = rl__leaf_sample(L, rl__lds_coord(&key, i, 0), rl__lds_coord(&key, i, 1), &L->sw[i], lam);
         mix_weights(L, lam, L->swd[i]);
     }
-    L->nshared = k;
+    return L->nshared = k;
+}
+
+void rl__leaf_plan(rl_leaf *L, const rl_emitter *e, const rl_frame *rf, double eps)
+{
+    const rl_frame *ef = &e->frame;
+    v3 o = v3_sub(rf->origin, ef->origin);
+    for (uint32_t i = 0; i < L->nshared; i++) {
+        rl_shared_plan *pl = &L->plan[i];
+        v3 d = L->sd[i];
+        double cos_r = -v3_dot(d, rf->n), dn = v3_dot(d, ef->n);
+        pl->live = cos_r > 0 && dn > 0;
+        if (!pl->live)
+            continue;
+        /* an origin x = rf.origin + u e1 + v e2 lies h(x) above the emitter's
+         * plane, and its ray lands at x - d h(x) / dn: both affine in (u, v) */
+        double h[3] = {v3_dot(o, ef->n), v3_dot(rf->e1, ef->n), v3_dot(rf->e2, ef->n)};
+        double de1 = v3_dot(d, ef->e1), de2 = v3_dot(d, ef->e2);
+        double px[3] = {v3_dot(o, ef->e1), v3_dot(rf->e1, ef->e1), v3_dot(rf->e2, ef->e1)};
+        double py[3] = {v3_dot(o, ef->e2), v3_dot(rf->e1, ef->e2), v3_dot(rf->e2, ef->e2)};
+        for (int c = 0; c < 3; c++) {
+            pl->t[c] = h[c] / dn;
+            pl->qx[c] = px[c] - de1 * pl->t[c];
+            pl->qy[c] = py[c] - de2 * pl->t[c];
+        }
+        pl->back = v3_scale(d, -1.0);
+        pl->tnear = eps / dmax(cos_r, 1e-3);
+        pl->tshort = eps / dmax(dn, 1e-3);
+        pl->scale = cos_r * L->sw[i];
+    }
+}
+
+size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L)
+{
+    if (L->nshared == 0 || !support_box(e, L, L->box))
+        return 0;
+    return (size_t)L->nshared * (L->box[1] - L->box[0] + 1) * (L->box[3] - L->box[2] + 1) * 3;
+}
+
+void rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables)
+{
+    size_t per = rl__leaf_blend_size(e, L) / L->nshared;
+    for (uint32_t i = 0; i < L->nshared; i++)
+        lfio_slab_blend(e->lf->slab, L->ids, L->swd[i], L->box, tables + i * per);
+    L->blend = tables;
+    L->blend_stride = per;
+}
+
+void rl__leaf_shared_radiance(const rl_emitter *e, v2 q, const rl_leaf *L, uint32_t i, double out[3])
+{
+    if (!L->blend) {
+        rl__leaf_radiance_weighted(e, q, L, L->swd[i], out);
+        return;
+    }
+    float rgb[3];
+    lfio_slab_blend_radiance(e->lf->slab, L->box, L->blend + i * L->blend_stride, q.x / e->len_u, q.y / e->len_v, rgb);
+    for (int c = 0; c < 3; c++)
+        out[c] = rgb[c];
 }
 
 /* Draws the direction of one sample of leaf L from origin x, informed by

@@ -52,6 +52,18 @@
 /* A solid angle of emitter e's partition prepared for sampling: its
  * directions and their weights, its sample key, and for a light field the
  * slab-level interpolation its samples read. */
+/* A leaf's shared direction seen from one receiver plane: what its samples
+ * need that their origins do not change (rl__leaf_plan()). The affine maps
+ * take an origin's map coordinates (u, v) as c[0] + c[1] u + c[2] v. */
+typedef struct rl_shared_plan {
+    int live;            /* the direction leaves the emitter's front and arrives at the receiver's */
+    v3 back;             /* the ray's direction, toward the emitter */
+    double tnear, tshort; /* the ray starts tnear past its origin and stops tshort short of the emitter */
+    double scale;        /* the cosine at the receiver times the direction's weight */
+    double t[3];         /* the distance to the emitter's plane along back */
+    double qx[3], qy[3]; /* where the ray lands, in the emitter's frame */
+} rl_shared_plan;
+
 typedef struct rl_leaf {
     uint32_t lv;
     uint64_t id;
@@ -70,6 +82,10 @@ typedef struct rl_leaf {
     v3 sd[RL_LEAF_SHARED];          /* their directions, */
     double sw[RL_LEAF_SHARED];      /* weights */
     double swd[RL_LEAF_SHARED][4];  /* and slab interpolation weights of ids */
+    rl_shared_plan plan[RL_LEAF_SHARED]; /* each shared direction seen from the current receiver plane */
+    uint32_t box[4];      /* blend: the slab positions outside which ids read zero */
+    const float *blend;   /* their mix for each shared direction (rl__leaf_blend()), or NULL */
+    size_t blend_stride;  /* floats from one shared direction's table to the next */
 } rl_leaf;
 
 /* Prepares solid angle id at level lv of emitter e (index ei) for receiver map map_index. */
@@ -93,14 +109,29 @@ void rl__leaf_radiance_mix(const rl_emitter *e, v2 q, const rl_leaf *L, const do
 /* The same for a direction whose slab interpolation weights wd (of L->ids) are known. */
 void rl__leaf_radiance_weighted(const rl_emitter *e, v2 q, const rl_leaf *L, const double wd[4], double out[3]);
 
+/* Radiance leaving light field e at frame point q along shared direction i of L. */
+void rl__leaf_shared_radiance(const rl_emitter *e, v2 q, const rl_leaf *L, uint32_t i, double out[3]);
+
 /* Draws k directions of mixing leaf L once, from coordinates 0 and 1 of
  * L's own sequence, for every cell to share (each cell pairs them with
  * origins from coordinates 2 and 3 of its own): each sample taken alone has
  * the distribution it had, a cell's k pairs still form a shifted 4-D
  * sequence, and the direction's weight and slab interpolation are worked
  * out k times per leaf instead of k per cell. A leaf that does not mix, or
- * k above RL_LEAF_SHARED, keeps nshared 0. */
-void rl__leaf_share(rl_leaf *L, uint32_t k);
+ * k above RL_LEAF_SHARED, keeps nshared 0. @return nshared. */
+uint32_t rl__leaf_share(rl_leaf *L, uint32_t k);
+
+/* Works out L->plan for the shared directions of L seen from the receiver
+ * plane rf (origin offsets eps, m), for rl__shoot_shared(). */
+void rl__leaf_plan(rl_leaf *L, const rl_emitter *e, const rl_frame *rf, double eps);
+
+/* @return how many floats rl__leaf_blend() needs for the shared directions
+ * of L (setting L->box), 0 when L reads only zeros or does not share. */
+size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L);
+
+/* Mixes the slab's directions for each shared direction of L over L->box
+ * into tables (rl__leaf_blend_size() floats), which L then reads. */
+void rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables);
 
 /* Radiance leaving e at frame point q in propagation direction d; L (may be
  * NULL) and lam, when L mixes, give the direction's slab interpolation directly. */
@@ -164,12 +195,17 @@ typedef struct rl_origin_domain {
 /* Fills d for cell of map m. */
 void rl__cell_domain(const rl_map *m, uint32_t cell, rl_origin_domain *d);
 
+/* @return the map coordinates of an origin in domain d of map m from two numbers in [0, 1). */
+static inline v2 rl__domain_uv(const rl_map *m, const rl_origin_domain *d, double a, double b)
+{
+    return d->square ? (v2){d->poly[0].x + a * m->cell, d->poly[0].y + b * m->cell}
+                     : rl__polygon_sampler_point(&d->ps, a, b);
+}
+
 /* @return a world origin in domain d of map m from two numbers in [0, 1). */
 static inline v3 rl__domain_point(const rl_map *m, const rl_origin_domain *d, double a, double b)
 {
-    v2 q = d->square ? (v2){d->poly[0].x + a * m->cell, d->poly[0].y + b * m->cell}
-                     : rl__polygon_sampler_point(&d->ps, a, b);
-    return frame_point(&m->frame, q);
+    return frame_point(&m->frame, rl__domain_uv(m, d, a, b));
 }
 
 /* ------------------------------------------------------------- shadow rays */
@@ -220,6 +256,60 @@ void rl__shoot_back(const rl_transfer_ctx *ctx, const rl_pair *p, v3 x, v3 nr, v
 int rl__leaf_draw(const rl_pair *p, const rl_leaf *L, v3 x, double u1, double u2, v3 *d, double *w, double lam[3],
                   const rl_leaf **lp);
 
+/* ------------------------------------ shadows of a leaf's shared directions */
+
+/* One polygon's shadow along one shared direction, on the receiver's map:
+ * convex, edges[first .. first+n) as half-planes (inside: >= 0). */
+typedef struct rl_shadow_poly {
+    double ulo, uhi, vlo, vhi;
+    uint32_t first, n;
+} rl_shadow_poly;
+
+/* The shadows of the current (tile, leaf) (leaf_shadow.c), per thread. */
+typedef struct rl_shadows {
+    int known; /* 1: a sample's origin in no shadow of its direction arrives, in one is stopped */
+    uint32_t nshared;
+    rl_shadow_poly *polys; /* direction i's: polys[start[i] .. start[i+1]) */
+    size_t npolys, cap_polys;
+    rl_halfplane *edges;
+    size_t nedges, cap_edges;
+    uint32_t start[RL_LEAF_SHARED + 1];
+    uint32_t *active; /* the current row's: direction i's active[row_first[i] ..] (row_count[i]) */
+    size_t active_cap;
+    uint32_t row_first[RL_LEAF_SHARED], row_count[RL_LEAF_SHARED];
+    uint32_t *cand; /* the polygons collected for the pair's beam */
+} rl_shadows;
+
+/* Works out s->shadows for leaf L (its shared directions planned) from
+ * tile t; s->shadows->known = 0 when nothing can be said and rays must
+ * tell. @return 0, or -1 without memory. */
+int rl__shadows_build(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, const rl_leaf *L,
+                      rl_scratch *s);
+
+/* Selects the shadows that meet the map rectangle [ulo, uhi] x [vlo, vhi] (one row's cells). */
+void rl__shadows_row(rl_shadows *sh, double ulo, double uhi, double vlo, double vhi);
+
+/* @return 1 if map point uv lies in a selected shadow of shared direction i. */
+static inline int rl__shadowed(const rl_shadows *sh, uint32_t i, v2 uv)
+{
+    for (uint32_t k = 0; k < sh->row_count[i]; k++) {
+        const rl_shadow_poly *sp = &sh->polys[sh->active[sh->row_first[i] + k]];
+        if (uv.x < sp->ulo || uv.x > sp->uhi || uv.y < sp->vlo || uv.y > sp->vhi)
+            continue;
+        int inside = 1;
+        for (uint32_t e = 0; e < sp->n; e++) {
+            const rl_halfplane *h = &sh->edges[sp->first + e];
+            inside &= h->a * uv.x + h->b * uv.y + h->c >= 0;
+        }
+        if (inside)
+            return 1;
+    }
+    return 0;
+}
+
+/* Frees sh. NULL is a no-op. */
+void rl__shadows_free(rl_shadows *sh);
+
 /* ------------------------------------------------------- exact estimators */
 
 /* An emitter that subtends fewer solid angles of partition_n than this
@@ -245,6 +335,7 @@ typedef struct rl_leaf_rows {
     int culls;       /* walk and cull the hierarchy (else every leaf of the pair's level) */
     int lambert;     /* a constant emitter under descend: Lambert times visibility instead of leaves */
     int shares;      /* a light field's leaf draws its directions once for all cells (rl__leaf_share()) */
+    int shadows;     /* and their visibility comes from their shadows (leaf_shadow.c), not rays, where known */
     int stages;      /* 1, or 2: stage 0 measures every cell, stage 1 estimates */
     /* Before the stages: prepares s for tile t. @return 0 or -1. NULL: nothing. */
     int (*prepare)(rl_scratch *s, const rl_tile *t);

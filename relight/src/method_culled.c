@@ -93,10 +93,45 @@ static int walk(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, 
     return rc;
 }
 
+/* rl__shoot_back() for shared direction i of L (planned, rl__leaf_plan())
+ * from the origin at map coordinates uv of m, with what the origin does
+ * not change worked out once; sh (NULL: unknown, trace a ray) gives the
+ * direction's shadows on m. */
+static inline void shoot_shared(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_map *m, const rl_leaf *L,
+                                const rl_shadows *sh, uint32_t i, v2 uv, double *acc, rl_ray_batch *b,
+                                rl_counters *cnt)
+{
+    const rl_shared_plan *pl = &L->plan[i];
+    if (!pl->live)
+        return;
+    double t = pl->t[0] + pl->t[1] * uv.x + pl->t[2] * uv.y;
+    if (!(t > 0))
+        return;
+    v2 q = {pl->qx[0] + pl->qx[1] * uv.x + pl->qx[2] * uv.y, pl->qy[0] + pl->qy[1] * uv.x + pl->qy[2] * uv.y};
+    if (!rl__emitter_contains(p->e, q))
+        return;
+    double l[3];
+    rl__leaf_shared_radiance(p->e, q, L, i, l);
+    if (!(l[0] > 0 || l[1] > 0 || l[2] > 0))
+        return;
+    for (int c = 0; c < 3; c++)
+        l[c] *= pl->scale;
+    if (sh) {
+        /* the shadows are known: no ray */
+        if (rl__shadowed(sh, i, uv))
+            return;
+        for (int c = 0; c < 3; c++)
+            acc[c] += l[c];
+        cnt->rays_free++;
+        return;
+    }
+    rl__batch_push(ctx, b, frame_point(&m->frame, uv), pl->back, pl->tnear, t - pl->tshort, l, acc, cnt);
+}
+
 /* Queues the k rays of (cell, leaf L) into acc.
  * @return the factor that turns acc into the cell's irradiance (0: no rays). */
 static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t cell,
-                          const rl_leaf *L, double *acc, rl_ray_batch *batch, rl_counters *cnt)
+                          const rl_leaf *L, const rl_shadows *sh, double *acc, rl_ray_batch *batch, rl_counters *cnt)
 {
     rl_map *m = t->m;
     rl_origin_domain dom;
@@ -113,10 +148,10 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
          * all of it whatever the origin), which is what lets cells share
          * its directions; rl__shoot_back() counts and drops what lands
          * behind or beside the emitter, as the draw would have. */
-        for (uint32_t i = 0; i < k; i++) {
-            v3 x = rl__domain_point(m, &dom, rl__lds_coord(&key, i, 2), rl__lds_coord(&key, i, 3));
-            rl__shoot_back(ctx, p, x, m->frame.n, L->sd[i], L->sw[i], L, NULL, L->swd[i], acc, batch, cnt);
-        }
+        cnt->samples += k;
+        for (uint32_t i = 0; i < k; i++)
+            shoot_shared(ctx, p, m, L, sh, i, rl__domain_uv(m, &dom, rl__lds_coord(&key, i, 2), rl__lds_coord(&key, i, 3)),
+                         acc, batch, cnt);
         return 1.0 / k;
     }
     /* draw a group of samples before shooting any: their square roots and
@@ -179,6 +214,25 @@ static int row_reserve(rl_scratch *s, size_t n)
     return 0;
 }
 
+/* Makes room in s for n floats of blend tables. @return 0 or -1. */
+static int blend_reserve(rl_scratch *s, size_t n)
+{
+    if (n <= s->blend_cap)
+        return 0;
+    float *grown = realloc(s->blend, n * sizeof *grown);
+    if (!grown)
+        return -1;
+    s->blend = grown;
+    s->blend_cap = n;
+    return 0;
+}
+
+/* @return the current leaf's shadows when they are known (its shared directions need no rays), else NULL. */
+static rl_shadows *rows_shadows(rl_scratch *s, const rl_leaf *L)
+{
+    return L->nshared > 0 && s->shadows && s->shadows->known ? s->shadows : NULL;
+}
+
 /* Culled's and naive's work on one row of cells for one leaf: every cell's
  * k rays go out in packets, then each cell adds its estimate. */
 static int culled_row(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, const rl_leaf *L, uint32_t ei,
@@ -189,12 +243,16 @@ static int culled_row(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_til
     rl_map *m = t->m;
     rl_ray_batch batch;
     batch.n = 0;
+    rl_shadows *sh = rows_shadows(s, L);
+    if (sh) {
+        double va = m->v0 + j * m->cell;
+        rl__shadows_row(sh, m->u0 + i0 * m->cell, m->u0 + (i1 + 1.0) * m->cell, va, va + m->cell);
+    }
     for (uint32_t i = i0; i <= i1; i++) {
         int32_t cell = m->grid[(size_t)j * m->nu + i];
         double *acc = s->row_acc[i - i0];
         acc[0] = acc[1] = acc[2] = 0.0;
-        s->row_scale[i - i0] =
-            cell < 0 ? 0.0 : gather_cell(ctx, p, t, (uint32_t)cell, L, acc, &batch, cnt);
+        s->row_scale[i - i0] = cell < 0 ? 0.0 : gather_cell(ctx, p, t, (uint32_t)cell, L, sh, acc, &batch, cnt);
     }
     rl__batch_flush(ctx, &batch, cnt);
     for (uint32_t i = i0; i <= i1; i++) {
@@ -236,8 +294,24 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
     }
     if (row_reserve(s, m->nu) != 0)
         return -1;
-    if (rows->shares)
-        rl__leaf_share(&L, ctx->sampling->rays_per_solid_angle);
+    if (rows->shares && rl__leaf_share(&L, ctx->sampling->rays_per_solid_angle) > 0) {
+        rl__leaf_plan(&L, p->e, &m->frame, p->eps);
+        /* one mix of the slab's directions per shared direction, read 4 taps
+         * a sample instead of 16: a table costs about what 4 taps save on
+         * as many samples as it has positions, so it is built when it has
+         * no more positions than the tile has cells (not the leaf's own
+         * share of them, which naive does not know, and culled must agree) */
+        size_t floats = rl__leaf_blend_size(p->e, &L);
+        if (floats > 0 && floats / (3 * L.nshared) <= (size_t)m->nu * (t->row1 - t->row0)) {
+            if (blend_reserve(s, floats) != 0)
+                return -1;
+            rl__leaf_blend(p->e, &L, s->blend);
+        }
+    }
+    if (s->shadows)
+        s->shadows->known = 0;
+    if (rows->shadows && L.nshared > 0 && rl__shadows_build(ctx, p, t, &L, s) != 0)
+        return -1;
     for (uint32_t j = t->row0; j < t->row1; j++) {
         uint32_t i0 = 0, i1 = m->nu - 1;
         if (culled && m->polygon >= 0) {
@@ -297,10 +371,12 @@ int rl__leaves_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei,
 
 /* culled: the surviving leaves; Lambert times visibility for constant
  * emitters and for small or thin ones when descend is on. */
-static const rl_leaf_rows culled_rows = {.culls = 1, .lambert = 1, .shares = 1, .stages = 1, .row = culled_row};
+static const rl_leaf_rows culled_rows = {
+    .culls = 1, .lambert = 1, .shares = 1, .shadows = 1, .stages = 1, .row = culled_row};
 
 /* naive: every leaf of partition_n through the same per-leaf code. */
-static const rl_leaf_rows naive_rows = {.culls = 0, .lambert = 1, .shares = 1, .stages = 1, .row = culled_row};
+static const rl_leaf_rows naive_rows = {
+    .culls = 0, .lambert = 1, .shares = 1, .shadows = 1, .stages = 1, .row = culled_row};
 
 static int culled_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_t ei, rl_scratch *s, rl_counters *cnt)
 {

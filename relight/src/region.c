@@ -155,9 +155,8 @@ static int cmp_v2(const void *pa, const void *pb)
     return (a->y > b->y) - (a->y < b->y);
 }
 
-/* 2D convex hull by Andrew's monotone chain; pts is sorted in place and hull
- * needs room for 2n points. @return the hull size, counter-clockwise. */
-static size_t convex_hull(v2 *pts, size_t n, v2 *hull)
+/* Andrew's monotone chain. */
+size_t rl__convex_hull2(v2 *pts, size_t n, v2 *hull)
 {
     qsort(pts, n, sizeof *pts, cmp_v2);
     size_t k = 0;
@@ -243,7 +242,7 @@ void rl__region_compute(const rl_frame *f, const v3 *s, size_t ns, const v3 *k, 
         v3 q = v3_scale(h3[i], 1.0 / dc);
         pts[i] = (v2){v3_dot(q, a), v3_dot(q, b)};
     }
-    size_t m = convex_hull(pts, nh, hull);
+    size_t m = rl__convex_hull2(pts, nh, hull);
     if (m < 3) {
         region_all(out);
         return;

@@ -73,6 +73,10 @@ size_t rl__clip_poly3(const v3 *p, size_t count, v3 o, v3 n, v3 *out);
 /* @return the centroid of the convex 2D polygon p (count >= 1 vertices; its first vertex if degenerate). */
 v2 rl__polygon_centroid(const v2 *p, uint32_t count);
 
+/* Writes the convex hull of pts (n points, sorted in place) to hull (room
+ * for 2n points). @return its vertex count, counter-clockwise. */
+size_t rl__convex_hull2(v2 *pts, size_t n, v2 *hull);
+
 /* Clips the convex 2D polygon p to half-plane h, writing at most count+1 vertices.
  * @return the vertex count of the result. */
 size_t rl__clip_poly2(const v2 *p, size_t count, rl_halfplane h, v2 *out);

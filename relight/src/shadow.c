@@ -408,6 +408,12 @@ size_t rl__occluders_collect(const rl_occluders *o, const rl_beam *p, int32_t sk
     return n;
 }
 
+size_t rl__occluders_polygon(const rl_occluders *o, uint32_t k, const v3 **verts)
+{
+    *verts = o->verts + o->polys[k].first;
+    return o->polys[k].count;
+}
+
 rl_visibility rl__occluders_classify(const rl_occluders *o, const rl_beam *p, const uint32_t *list, size_t n,
                                  uint32_t *out, size_t *nout)
 {

@@ -66,6 +66,10 @@ int rl__beam_make(const v3 *a, size_t na, const v3 *b, size_t nb, double tol, rl
  * cap meet it (then treat the beam as PARTIAL and the list as unknown). */
 size_t rl__occluders_collect(const rl_occluders *o, const rl_beam *p, int32_t skip, uint32_t *list, size_t cap);
 
+/* Gives in *verts polygon k's world vertices (counter-clockwise about its
+ * normal). @return their count. */
+size_t rl__occluders_polygon(const rl_occluders *o, uint32_t k, const v3 **verts);
+
 /* Classifies beam p against the polygons in list (n of them, a superset
  * of those meeting p, as a parent beam's list is for its parts); writes
  * those that meet p to out (room for n; may not alias list) and their count

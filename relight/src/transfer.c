@@ -59,6 +59,8 @@ void rl__scratch_free(rl_scratch *s)
     free(s->vis);
     free(s->block_occ);
     free(s->beam);
+    free(s->blend);
+    rl__shadows_free(s->shadows);
     free(s->pair_total);
     free(s->pair_leaves);
     free(s->leaves);

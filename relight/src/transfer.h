@@ -59,6 +59,9 @@ typedef struct rl_scratch {
     size_t vis_cap;
     uint32_t *block_occ;  /* and the possible occluders of each level of its blocks */
     struct rl_beam *beam; /* one beam's room (shadow.h), for Lambert's gather and point receivers */
+    float *blend;         /* a light field leaf's mixed radiance tables (rl__leaf_blend()) */
+    struct rl_shadows *shadows; /* the current leaf's shadows (leaf_shadow.c) */
+    size_t blend_cap;
 } rl_scratch;
 
 /* @return the key of what one pass samples between emitter ei and a receiver

@@ -209,6 +209,29 @@ lfio_status lfio_slab_radiance_mix(const lfio_slab *s, double st_s, double st_t,
                                    const double w[4], float rgb[3]);
 
 /**
+ * Blends the given directions with weights w, as lfio_slab_radiance_mix()
+ * mixes them, at every position of box = {i_min, i_max, j_min, j_max}
+ * (inclusive, within the slab) into rgb: (i_max - i_min + 1) * (j_max -
+ * j_min + 1) RGB triples, row by row. For a caller that reads one mix at
+ * many points: lfio_slab_blend_radiance() then takes 4 taps a point
+ * instead of 16. Thread-safe.
+ * @return LFIO_OK; LFIO_ERR_ARG if ids[0] is not stored or box is empty or outside the slab.
+ */
+lfio_status lfio_slab_blend(const lfio_slab *s, const uint64_t ids[4], const double w[4], const uint32_t box[4],
+                            float *rgb);
+
+/**
+ * Radiance at (s, t) from rgb, an lfio_slab_blend() table over box,
+ * bilinear between position centres as lfio_slab_radiance_mix(); positions
+ * outside box read 0, so a box that holds every nonzero position of the
+ * blended directions (lfio_slab_support()) gives their mix up to float
+ * rounding. s and t should be finite (a NaN reads the first position).
+ * Thread-safe.
+ */
+void lfio_slab_blend_radiance(const lfio_slab *s, const uint32_t box[4], const float *rgb, double st_s,
+                              double st_t, float out[3]);
+
+/**
  * Irradiance at (s, t) on a surface facing -e3 that receives the light
  * crossing the slab: sum over dirs of L * projected solid angle about e3,
  * radiance bilinear over positions, piecewise constant over solid angles.

@@ -1,0 +1,190 @@
+/*
+ * leaf_shadow.c - exact visibility for the shared directions of a solid
+ * angle seen from a receiver tile, without rays.
+ *
+ * All cells of a tile pair a leaf's shared direction d with their own
+ * origins (rl__leaf_share()), so the rays of one direction are parallel:
+ * each goes from an origin x on the receiver's plane along b = -d, over
+ * [tnear, t(x) - tshort]. A scene polygon P stops the ray from x exactly
+ * when P, cut to the points at least tnear * cos_r above the receiver's
+ * plane and at least tshort * dn below the emitter's (the ray's interval
+ * in those terms), meets the line through x along b: when x lies in the
+ * projection of the cut P along b onto the receiver's plane. So for each
+ * direction the polygons cast convex shadows on the tile's map, and a
+ * sample is blocked exactly when its origin lies in one; nothing is traced.
+ *
+ * The polygons that can matter are collected once per (tile, leaf) by the
+ * beam from the whole tile to where the leaf's directions from it land on
+ * the emitter (shadow.h): a superset of every polygon any of its rays can
+ * meet. Built from the tile, not from the part a method looks at, so that
+ * culled and naive see the same shadows. When nothing can be said (a leaf
+ * grazing the emitter's plane, more polygons than the list holds), the
+ * shadows are unknown and the caller traces rays.
+ *
+ * Exact up to double rounding, where Embree's single precision decides a
+ * ray grazing an edge; a point on a shadow's edge counts as blocked.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "method.h"
+
+/* Most polygons one (tile, leaf) may collect before its shadows count as unknown. */
+#define SHADOW_CANDIDATES 256u
+
+/* Makes room for n more items of size sz in *buf (holding *len of *cap). @return 0 or -1. */
+static int grow(void **buf, size_t *cap, size_t len, size_t n, size_t sz)
+{
+    if (len + n <= *cap)
+        return 0;
+    size_t c = *cap ? *cap : 64;
+    while (c < len + n)
+        c *= 2;
+    void *g = realloc(*buf, c * sz);
+    if (!g)
+        return -1;
+    *buf = g;
+    *cap = c;
+    return 0;
+}
+
+void rl__shadows_free(rl_shadows *sh)
+{
+    if (!sh)
+        return;
+    free(sh->polys);
+    free(sh->edges);
+    free(sh->active);
+    free(sh->cand);
+    free(sh);
+}
+
+/* Writes to out (room for RL_BEAM_MAX_VERTS) where leaf L's directions
+ * from the tile polygon a (na world vertices) land on the pair's clipped
+ * emitter: the hull of where its corner directions from a's vertices land
+ * (landing is affine in the origin and projective in the direction, so
+ * every landing point is inside it), clipped to the emitter.
+ * @return the vertex count, 0 if nothing can be said. */
+static size_t footprint(const rl_pair *p, const rl_leaf *L, const v3 *a, size_t na, v3 *out)
+{
+    const rl_emitter *e = p->e;
+    v2 pts[3 * RL_BEAM_MAX_VERTS], hull[6 * RL_BEAM_MAX_VERTS], src[RL_MAX_POLY_VERTS + 2];
+    if (na > RL_BEAM_MAX_VERTS)
+        return 0;
+    for (size_t i = 0; i < na; i++) {
+        v3 rel = v3_sub(a[i], e->frame.origin);
+        double h = dmax(v3_dot(rel, e->frame.n), 0.0); /* a is cut to the emitter's front: only rounding is below */
+        v2 px = {v3_dot(rel, e->frame.e1), v3_dot(rel, e->frame.e2)};
+        for (int k = 0; k < 3; k++)
+            pts[3 * i + k] = (v2){px.x - h * L->land[k].x, px.y - h * L->land[k].y};
+    }
+    size_t nh = rl__convex_hull2(pts, 3 * na, hull);
+    if (nh < 3 || nh + p->ns > RL_BEAM_MAX_VERTS)
+        return 0;
+    for (size_t k = 0; k < p->ns; k++)
+        src[k] = frame_project(&e->frame, p->sclip[k]);
+    v2 clip[RL_BEAM_MAX_VERTS], tmp[RL_BEAM_MAX_VERTS];
+    size_t nc = rl__clip_to_polygon(src, p->ns, hull, nh, clip, tmp);
+    for (size_t i = 0; i < nc; i++)
+        out[i] = frame_point(&e->frame, clip[i]);
+    return nc >= 3 ? nc : 0;
+}
+
+/* Adds the shadow of polygon v (n world vertices) along shared direction
+ * plan pl onto map frame f. @return 0, or -1 without memory. */
+static int add_shadow(rl_shadows *sh, const rl_frame *f, const rl_emitter *e, const rl_shared_plan *pl, const v3 *v,
+                      size_t n)
+{
+    v3 a[RL_SCENE_MAX_POLY_VERTS + 4], b[RL_SCENE_MAX_POLY_VERTS + 4];
+    double cos_r = v3_dot(pl->back, f->n), dn = -v3_dot(pl->back, e->frame.n);
+    /* the ray's interval: at least tnear * cos_r above the receiver, tshort * dn below the emitter */
+    size_t m = rl__clip_poly3(v, n, v3_madd(f->origin, f->n, pl->tnear * cos_r), f->n, a);
+    m = m >= 3 ? rl__clip_poly3(a, m, v3_madd(e->frame.origin, e->frame.n, pl->tshort * dn), e->frame.n, b) : 0;
+    if (m < 3)
+        return 0;
+    v2 q[RL_SCENE_MAX_POLY_VERTS + 4];
+    double area = 0.0;
+    for (size_t k = 0; k < m; k++) {
+        double h = v3_dot(v3_sub(b[k], f->origin), f->n);
+        q[k] = frame_project(f, v3_madd(b[k], pl->back, -h / cos_r));
+    }
+    for (size_t k = 0; k < m; k++)
+        area += q[k].x * q[(k + 1) % m].y - q[(k + 1) % m].x * q[k].y;
+    if (!(area != 0.0))
+        return 0; /* seen edge-on: a shadow of no area stops no sample */
+    if (grow((void **)&sh->polys, &sh->cap_polys, sh->npolys, 1, sizeof *sh->polys) != 0 ||
+        grow((void **)&sh->edges, &sh->cap_edges, sh->nedges, m, sizeof *sh->edges) != 0)
+        return -1;
+    rl_shadow_poly *sp = &sh->polys[sh->npolys++];
+    sp->first = (uint32_t)sh->nedges;
+    sp->n = (uint32_t)m;
+    sp->ulo = sp->vlo = INFINITY;
+    sp->uhi = sp->vhi = -INFINITY;
+    for (size_t k = 0; k < m; k++) {
+        /* counter-clockwise edges keep the inside on their left */
+        v2 p0 = q[area > 0 ? k : m - 1 - k], p1 = q[area > 0 ? (k + 1) % m : (2 * m - 2 - k) % m];
+        sh->edges[sh->nedges++] = edge_halfplane(p0, p1);
+        sp->ulo = fmin(sp->ulo, q[k].x), sp->uhi = fmax(sp->uhi, q[k].x);
+        sp->vlo = fmin(sp->vlo, q[k].y), sp->vhi = fmax(sp->vhi, q[k].y);
+    }
+    return 0;
+}
+
+int rl__shadows_build(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, const rl_leaf *L,
+                      rl_scratch *s)
+{
+    if (!s->shadows && !(s->shadows = calloc(1, sizeof *s->shadows)))
+        return -1;
+    rl_shadows *sh = s->shadows;
+    sh->known = 0;
+    sh->npolys = sh->nedges = 0;
+    if (!L->reach || L->nshared == 0 || t->npoly < 3 || !ctx->occluders)
+        return 0;
+    if (!s->beam && !(s->beam = malloc(sizeof *s->beam)))
+        return -1;
+    if (!sh->cand && !(sh->cand = malloc(SHADOW_CANDIDATES * sizeof *sh->cand)))
+        return -1;
+    const rl_map *m = t->m;
+    v3 tile[RL_BEAM_MAX_VERTS], a[RL_BEAM_MAX_VERTS + 1], far[RL_BEAM_MAX_VERTS];
+    if (t->npoly > RL_BEAM_MAX_VERTS - 1)
+        return 0;
+    for (size_t k = 0; k < t->npoly; k++)
+        tile[k] = frame_point(&m->frame, t->poly[k]);
+    /* origins behind the emitter's plane shoot nothing: the beam starts from the rest */
+    size_t na = rl__clip_poly3(tile, t->npoly, p->e->frame.origin, p->e->frame.n, a);
+    size_t nf = na >= 3 ? footprint(p, L, a, na, far) : 0;
+    if (nf == 0 || !rl__beam_make(a, na, far, nf, p->eps, s->beam))
+        return 0;
+    size_t nc = rl__occluders_collect(ctx->occluders, s->beam, p->e->polygon, sh->cand, SHADOW_CANDIDATES);
+    if (nc == SIZE_MAX)
+        return 0;
+    for (uint32_t i = 0; i < L->nshared; i++) {
+        sh->start[i] = (uint32_t)sh->npolys;
+        for (size_t c = 0; c < nc && L->plan[i].live; c++) {
+            const v3 *v;
+            size_t n = rl__occluders_polygon(ctx->occluders, sh->cand[c], &v);
+            if (add_shadow(sh, &m->frame, p->e, &L->plan[i], v, n) != 0)
+                return -1;
+        }
+    }
+    sh->start[L->nshared] = (uint32_t)sh->npolys;
+    sh->nshared = L->nshared;
+    if (grow((void **)&sh->active, &sh->active_cap, 0, sh->npolys + 1, sizeof *sh->active) != 0)
+        return -1;
+    sh->known = 1;
+    return 0;
+}
+
+void rl__shadows_row(rl_shadows *sh, double ulo, double uhi, double vlo, double vhi)
+{
+    uint32_t at = 0;
+    for (uint32_t i = 0; i < sh->nshared; i++) {
+        sh->row_first[i] = at;
+        for (uint32_t k = sh->start[i]; k < sh->start[i + 1]; k++) {
+            const rl_shadow_poly *sp = &sh->polys[k];
+            if (sp->uhi >= ulo && sp->ulo <= uhi && sp->vhi >= vlo && sp->vlo <= vhi)
+                sh->active[at++] = k;
+        }
+        sh->row_count[i] = at - sh->row_first[i];
+    }
+}
