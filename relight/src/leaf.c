@@ -113,23 +113,32 @@ static int support_box(const rl_emitter *e, const rl_leaf *L, uint32_t b[4])
     return b[0] != UINT32_MAX;
 }
 
+/* Gives in r = {s0, s1, t0, t1} (e's frame, m) the rectangle of slab e
+ * outside which positions b read zero: bilinear interpolation between
+ * position centres reaches half a position past the last nonzero centre,
+ * and the border clamps. */
+static void support_rect(const rl_emitter *e, const uint32_t b[4], double r[4])
+{
+    const lfio_slab_desc *d = lfio_slab_get_desc(e->lf->slab);
+    r[0] = (b[0] == 0 ? 0.0 : (b[0] - 0.5) / d->nu) * e->len_u;
+    r[1] = (b[1] + 1 >= d->nu ? 1.0 : (b[1] + 1.5) / d->nu) * e->len_u;
+    r[2] = (b[2] == 0 ? 0.0 : (b[2] - 0.5) / d->nv) * e->len_v;
+    r[3] = (b[3] + 1 >= d->nv ? 1.0 : (b[3] + 1.5) / d->nv) * e->len_v;
+}
+
 int rl__leaf_support(const rl_emitter *e, const rl_leaf *L, v3 out[4])
 {
     if (!L->mix)
         return 0;
-    const lfio_slab_desc *d = lfio_slab_get_desc(e->lf->slab);
     uint32_t b[4];
+    double r[4];
     if (!support_box(e, L, b))
         return -1;
-    /* bilinear interpolation between position centres reaches half a
-     * position past the last nonzero centre, and the border clamps */
-    double s0 = b[0] == 0 ? 0.0 : (b[0] - 0.5) / d->nu, s1 = b[1] + 1 >= d->nu ? 1.0 : (b[1] + 1.5) / d->nu;
-    double t0 = b[2] == 0 ? 0.0 : (b[2] - 0.5) / d->nv, t1 = b[3] + 1 >= d->nv ? 1.0 : (b[3] + 1.5) / d->nv;
-    s0 *= e->len_u, s1 *= e->len_u, t0 *= e->len_v, t1 *= e->len_v;
-    out[0] = frame_point(&e->frame, (v2){s0, t0});
-    out[1] = frame_point(&e->frame, (v2){s1, t0});
-    out[2] = frame_point(&e->frame, (v2){s1, t1});
-    out[3] = frame_point(&e->frame, (v2){s0, t1});
+    support_rect(e, b, r);
+    out[0] = frame_point(&e->frame, (v2){r[0], r[2]});
+    out[1] = frame_point(&e->frame, (v2){r[1], r[2]});
+    out[2] = frame_point(&e->frame, (v2){r[1], r[3]});
+    out[3] = frame_point(&e->frame, (v2){r[0], r[3]});
     return 1;
 }
 
@@ -215,6 +224,7 @@ void rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables)
         lfio_slab_blend(e->lf->slab, L->ids, L->swd[i], L->box, tables + i * per);
     L->blend = tables;
     L->blend_stride = per;
+    support_rect(e, L->box, L->rect);
 }
 
 void rl__leaf_shared_radiance(const rl_emitter *e, v2 q, const rl_leaf *L, uint32_t i, double out[3])

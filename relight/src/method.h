@@ -86,6 +86,7 @@ typedef struct rl_leaf {
     uint32_t box[4];      /* blend: the slab positions outside which ids read zero */
     const float *blend;   /* their mix for each shared direction (rl__leaf_blend()), or NULL */
     size_t blend_stride;  /* floats from one shared direction's table to the next */
+    double rect[4];       /* blend: {s0, s1, t0, t1} of e's frame, within the slab, outside which it reads 0 */
 } rl_leaf;
 
 /* Prepares solid angle id at level lv of emitter e (index ei) for receiver map map_index. */

@@ -108,7 +108,9 @@ static inline void shoot_shared(const rl_transfer_ctx *ctx, const rl_pair *p, co
     if (!(t > 0))
         return;
     v2 q = {pl->qx[0] + pl->qx[1] * uv.x + pl->qx[2] * uv.y, pl->qy[0] + pl->qy[1] * uv.x + pl->qy[2] * uv.y};
-    if (!rl__emitter_contains(p->e, q))
+    /* with a blend, outside its rectangle (which the slab holds) reads 0 */
+    if (L->blend ? !(q.x >= L->rect[0] && q.x <= L->rect[1] && q.y >= L->rect[2] && q.y <= L->rect[3])
+                 : !rl__emitter_contains(p->e, q))
         return;
     double l[3];
     rl__leaf_shared_radiance(p->e, q, L, i, l);
