@@ -503,17 +503,22 @@ void lfio_slab_blend_radiance(const lfio_slab *s, const uint32_t box[4], const f
     uint32_t ni = box[1] - box[0] + 1, is[2] = {c.i0, c.i1}, js[2] = {c.j0, c.j1};
     double wu[2] = {1 - c.fu, c.fu}, wv[2] = {1 - c.fv, c.fv};
     float acc[3] = {0, 0, 0};
-    /* taps in mix_directions()'s order, each weighed as bilinear() weighs it */
-    for (int b = 0; b < 2; b++)
+    /* taps in mix_directions()'s order, each weighed as bilinear() weighs it;
+     * unsigned wrap-around makes one comparison per axis test both ends */
+    for (int b = 0; b < 2; b++) {
+        uint32_t j = js[b] - box[2];
+        if (j > box[3] - box[2])
+            continue;
         for (int a = 0; a < 2; a++) {
-            uint32_t i = is[a], j = js[b];
-            if (i < box[0] || i > box[1] || j < box[2] || j > box[3])
+            uint32_t i = is[a] - box[0];
+            if (i >= ni)
                 continue;
-            const float *p = rgb + ((size_t)(j - box[2]) * ni + (i - box[0])) * 3;
+            const float *p = rgb + ((size_t)j * ni + i) * 3;
             float wq = (float)(wu[a] * wv[b]);
             for (int ch = 0; ch < 3; ch++)
                 acc[ch] += wq * p[ch];
         }
+    }
     memcpy(out, acc, sizeof acc);
 }
 

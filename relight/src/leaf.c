@@ -225,18 +225,8 @@ void rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables)
     L->blend = tables;
     L->blend_stride = per;
     support_rect(e, L->box, L->rect);
-}
-
-void rl__leaf_shared_radiance(const rl_emitter *e, v2 q, const rl_leaf *L, uint32_t i, double out[3])
-{
-    if (!L->blend) {
-        rl__leaf_radiance_weighted(e, q, L, L->swd[i], out);
-        return;
-    }
-    float rgb[3];
-    lfio_slab_blend_radiance(e->lf->slab, L->box, L->blend + i * L->blend_stride, q.x / e->len_u, q.y / e->len_v, rgb);
-    for (int c = 0; c < 3; c++)
-        out[c] = rgb[c];
+    L->inv_len[0] = 1.0 / e->len_u;
+    L->inv_len[1] = 1.0 / e->len_v;
 }
 
 /* Draws the direction of one sample of leaf L from origin x, informed by

@@ -24,6 +24,7 @@
  * Exact up to double rounding, where Embree's single precision decides a
  * ray grazing an edge; a point on a shadow's edge counts as blocked.
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -54,6 +55,7 @@ void rl__shadows_free(rl_shadows *sh)
         return;
     free(sh->polys);
     free(sh->edges);
+    free(sh->verts);
     free(sh->active);
     free(sh->cand);
     free(sh);
@@ -113,7 +115,8 @@ static int add_shadow(rl_shadows *sh, const rl_frame *f, const rl_emitter *e, co
     if (!(area != 0.0))
         return 0; /* seen edge-on: a shadow of no area stops no sample */
     if (grow((void **)&sh->polys, &sh->cap_polys, sh->npolys, 1, sizeof *sh->polys) != 0 ||
-        grow((void **)&sh->edges, &sh->cap_edges, sh->nedges, m, sizeof *sh->edges) != 0)
+        grow((void **)&sh->edges, &sh->cap_edges, sh->nedges, m, sizeof *sh->edges) != 0 ||
+        grow((void **)&sh->verts, &sh->cap_verts, sh->nedges, m, sizeof *sh->verts) != 0)
         return -1;
     rl_shadow_poly *sp = &sh->polys[sh->npolys++];
     sp->first = (uint32_t)sh->nedges;
@@ -123,6 +126,7 @@ static int add_shadow(rl_shadows *sh, const rl_frame *f, const rl_emitter *e, co
     for (size_t k = 0; k < m; k++) {
         /* counter-clockwise edges keep the inside on their left */
         v2 p0 = q[area > 0 ? k : m - 1 - k], p1 = q[area > 0 ? (k + 1) % m : (2 * m - 2 - k) % m];
+        sh->verts[sh->nedges] = p0;
         sh->edges[sh->nedges++] = edge_halfplane(p0, p1);
         sp->ulo = fmin(sp->ulo, q[k].x), sp->uhi = fmax(sp->uhi, q[k].x);
         sp->vlo = fmin(sp->vlo, q[k].y), sp->vhi = fmax(sp->vhi, q[k].y);
@@ -175,6 +179,26 @@ int rl__shadows_build(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_til
     return 0;
 }
 
+/* Gives in [*lo, *hi] the extent in u of shadow sp within the band v in [va, vb]. @return 0 if they miss. */
+static int band_extent(const rl_shadows *sh, const rl_shadow_poly *sp, double va, double vb, double *lo, double *hi)
+{
+    *lo = INFINITY, *hi = -INFINITY;
+    for (uint32_t e = 0; e < sp->n; e++) {
+        v2 a = sh->verts[sp->first + e], b = sh->verts[sp->first + (e + 1) % sp->n];
+        if (a.y >= va && a.y <= vb)
+            *lo = fmin(*lo, a.x), *hi = fmax(*hi, a.x);
+        /* where the edge crosses either side of the band */
+        for (int k = 0; k < 2; k++) {
+            double v = k ? vb : va;
+            if ((a.y < v) != (b.y < v)) {
+                double u = a.x + (b.x - a.x) * ((v - a.y) / (b.y - a.y));
+                *lo = fmin(*lo, u), *hi = fmax(*hi, u);
+            }
+        }
+    }
+    return *lo <= *hi;
+}
+
 void rl__shadows_row(rl_shadows *sh, double ulo, double uhi, double vlo, double vhi)
 {
     uint32_t at = 0;
@@ -182,8 +206,11 @@ void rl__shadows_row(rl_shadows *sh, double ulo, double uhi, double vlo, double 
         sh->row_first[i] = at;
         for (uint32_t k = sh->start[i]; k < sh->start[i + 1]; k++) {
             const rl_shadow_poly *sp = &sh->polys[k];
-            if (sp->uhi >= ulo && sp->ulo <= uhi && sp->vhi >= vlo && sp->vlo <= vhi)
-                sh->active[at++] = k;
+            double lo, hi;
+            if (sp->uhi < ulo || sp->ulo > uhi || sp->vhi < vlo || sp->vlo > vhi ||
+                !band_extent(sh, sp, vlo, vhi, &lo, &hi) || hi < ulo || lo > uhi)
+                continue;
+            sh->active[at++] = (struct rl_shadow_span){k, lo, hi};
         }
         sh->row_count[i] = at - sh->row_first[i];
     }

@@ -87,6 +87,7 @@ typedef struct rl_leaf {
     const float *blend;   /* their mix for each shared direction (rl__leaf_blend()), or NULL */
     size_t blend_stride;  /* floats from one shared direction's table to the next */
     double rect[4];       /* blend: {s0, s1, t0, t1} of e's frame, within the slab, outside which it reads 0 */
+    double inv_len[2];    /* blend: 1 / the slab's side lengths, from e's frame to (s, t) */
 } rl_leaf;
 
 /* Prepares solid angle id at level lv of emitter e (index ei) for receiver map map_index. */
@@ -109,9 +110,6 @@ void rl__leaf_radiance_mix(const rl_emitter *e, v2 q, const rl_leaf *L, const do
 
 /* The same for a direction whose slab interpolation weights wd (of L->ids) are known. */
 void rl__leaf_radiance_weighted(const rl_emitter *e, v2 q, const rl_leaf *L, const double wd[4], double out[3]);
-
-/* Radiance leaving light field e at frame point q along shared direction i of L. */
-void rl__leaf_shared_radiance(const rl_emitter *e, v2 q, const rl_leaf *L, uint32_t i, double out[3]);
 
 /* Draws k directions of mixing leaf L once, from coordinates 0 and 1 of
  * L's own sequence, for every cell to share (each cell pairs them with
@@ -273,9 +271,13 @@ typedef struct rl_shadows {
     rl_shadow_poly *polys; /* direction i's: polys[start[i] .. start[i+1]) */
     size_t npolys, cap_polys;
     rl_halfplane *edges;
-    size_t nedges, cap_edges;
+    v2 *verts;       /* the shadows' corners, edges[e] running from verts[e] */
+    size_t nedges, cap_edges, cap_verts;
     uint32_t start[RL_LEAF_SHARED + 1];
-    uint32_t *active; /* the current row's: direction i's active[row_first[i] ..] (row_count[i]) */
+    struct rl_shadow_span {
+        uint32_t poly;
+        double ulo, uhi; /* its extent within the current row */
+    } *active;       /* the current row's: direction i's active[row_first[i] ..] (row_count[i]) */
     size_t active_cap;
     uint32_t row_first[RL_LEAF_SHARED], row_count[RL_LEAF_SHARED];
     uint32_t *cand; /* the polygons collected for the pair's beam */
@@ -287,16 +289,18 @@ typedef struct rl_shadows {
 int rl__shadows_build(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, const rl_leaf *L,
                       rl_scratch *s);
 
-/* Selects the shadows that meet the map rectangle [ulo, uhi] x [vlo, vhi] (one row's cells). */
+/* Selects the shadows that meet the map rectangle [ulo, uhi] x [vlo, vhi]
+ * (one row's cells), each with its extent in u within [vlo, vhi]. */
 void rl__shadows_row(rl_shadows *sh, double ulo, double uhi, double vlo, double vhi);
 
 /* @return 1 if map point uv lies in a selected shadow of shared direction i. */
 static inline int rl__shadowed(const rl_shadows *sh, uint32_t i, v2 uv)
 {
     for (uint32_t k = 0; k < sh->row_count[i]; k++) {
-        const rl_shadow_poly *sp = &sh->polys[sh->active[sh->row_first[i] + k]];
-        if (uv.x < sp->ulo || uv.x > sp->uhi || uv.y < sp->vlo || uv.y > sp->vhi)
+        const struct rl_shadow_span *sa = &sh->active[sh->row_first[i] + k];
+        if (uv.x < sa->ulo || uv.x > sa->uhi)
             continue;
+        const rl_shadow_poly *sp = &sh->polys[sa->poly];
         int inside = 1;
         for (uint32_t e = 0; e < sp->n; e++) {
             const rl_halfplane *h = &sh->edges[sp->first + e];

@@ -30,6 +30,8 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include <lfio/lightfield.h>
+
 #include "method.h"
 
 #define STACK_DEPTH 512
@@ -108,12 +110,20 @@ static inline void shoot_shared(const rl_transfer_ctx *ctx, const rl_pair *p, co
     if (!(t > 0))
         return;
     v2 q = {pl->qx[0] + pl->qx[1] * uv.x + pl->qx[2] * uv.y, pl->qy[0] + pl->qy[1] * uv.x + pl->qy[2] * uv.y};
-    /* with a blend, outside its rectangle (which the slab holds) reads 0 */
-    if (L->blend ? !(q.x >= L->rect[0] && q.x <= L->rect[1] && q.y >= L->rect[2] && q.y <= L->rect[3])
-                 : !rl__emitter_contains(p->e, q))
-        return;
     double l[3];
-    rl__leaf_shared_radiance(p->e, q, L, i, l);
+    if (L->blend) {
+        /* outside the blend's rectangle (which the slab holds) every tap reads 0 */
+        if (!(q.x >= L->rect[0] && q.x <= L->rect[1] && q.y >= L->rect[2] && q.y <= L->rect[3]))
+            return;
+        float rgb[3];
+        lfio_slab_blend_radiance(p->e->lf->slab, L->box, L->blend + i * L->blend_stride, q.x * L->inv_len[0],
+                                 q.y * L->inv_len[1], rgb);
+        l[0] = rgb[0], l[1] = rgb[1], l[2] = rgb[2];
+    } else {
+        if (!rl__emitter_contains(p->e, q))
+            return;
+        rl__leaf_radiance_weighted(p->e, q, L, L->swd[i], l);
+    }
     if (!(l[0] > 0 || l[1] > 0 || l[2] > 0))
         return;
     for (int c = 0; c < 3; c++)
