@@ -182,21 +182,25 @@ int rl__shadows_build(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_til
 /* Gives in [*lo, *hi] the extent in u of shadow sp within the band v in [va, vb]. @return 0 if they miss. */
 static int band_extent(const rl_shadows *sh, const rl_shadow_poly *sp, double va, double vb, double *lo, double *hi)
 {
-    *lo = INFINITY, *hi = -INFINITY;
+    double l = INFINITY, h = -INFINITY; /* compared, not fmin/fmax: libm calls on a hot path */
     for (uint32_t e = 0; e < sp->n; e++) {
-        v2 a = sh->verts[sp->first + e], b = sh->verts[sp->first + (e + 1) % sp->n];
-        if (a.y >= va && a.y <= vb)
-            *lo = fmin(*lo, a.x), *hi = fmax(*hi, a.x);
+        v2 a = sh->verts[sp->first + e], b = sh->verts[sp->first + (e + 1 < sp->n ? e + 1 : 0)];
+        if (a.y >= va && a.y <= vb) {
+            l = a.x < l ? a.x : l;
+            h = a.x > h ? a.x : h;
+        }
         /* where the edge crosses either side of the band */
         for (int k = 0; k < 2; k++) {
             double v = k ? vb : va;
             if ((a.y < v) != (b.y < v)) {
                 double u = a.x + (b.x - a.x) * ((v - a.y) / (b.y - a.y));
-                *lo = fmin(*lo, u), *hi = fmax(*hi, u);
+                l = u < l ? u : l;
+                h = u > h ? u : h;
             }
         }
     }
-    return *lo <= *hi;
+    *lo = l, *hi = h;
+    return l <= h;
 }
 
 void rl__shadows_row(rl_shadows *sh, double ulo, double uhi, double vlo, double vhi)
