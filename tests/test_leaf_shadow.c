@@ -5,14 +5,16 @@
  * intersected in double precision with every polygon of the scene.
  *
  * Scenes of random quads go through the real loader, between a receiver
- * plane below and a tilted emitter plane above, two of them upright through
- * those planes; each leaf is a small
+ * plane below (tilted, or an upright wall through the emitter's plane) and
+ * a tilted emitter plane above, two of them upright through those planes
+ * and one an octagon; each leaf is a small
  * random triangle of directions with four directions drawn inside it.
  * What must hold, for every sample whose ray lands on the emitter: a
  * segment that crosses a polygon well inside lies in a shadow, and one
  * that misses every polygon by a margin lies in none. Blocked and free
- * samples must both occur, and the shadows must be known for most leaves,
- * so that neither check is vacuous.
+ * samples must both occur, and the shadows must be known for nearly every
+ * leaf that casts rays, so that neither check is vacuous; the plan of each
+ * ray must match the direct computation.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -42,7 +44,8 @@ static rl_frame frame_at(v3 o, v3 n)
 int main(void)
 {
     const char *tmp = getenv("ILF_TEST_TMP") ? getenv("ILF_TEST_TMP") : "/tmp";
-    long blocked = 0, arrived = 0, known = 0, leaves = 0, wrong_free = 0, wrong_blocked = 0;
+    long blocked = 0, arrived = 0, known = 0, leaves = 0, wrong_free = 0, wrong_blocked = 0, plan_bad = 0, dead = 0, casting = 0,
+         unknown_casting = 0;
     rl_map *map = calloc(1, sizeof *map);
     rl_emitter *e = calloc(1, sizeof *e);
     rl_pair *p = calloc(1, sizeof *p);
@@ -68,6 +71,15 @@ int main(void)
                 q[k].v[v][2] = z0 + at[v][1];
             }
         }
+        /* and one quad replaced by a tilted octagon */
+        double oc[3] = {2 * ts_rnd() - 1, 2 * ts_rnd() - 1, 2 * ts_rnd() - 1};
+        q[9].n = 8;
+        for (int v = 0; v < 8; v++) {
+            double a = 6.283185307179586 * v / 8, r = 0.8;
+            q[9].v[v][0] = oc[0] + r * cos(a);
+            q[9].v[v][1] = oc[1] + r * sin(a);
+            q[9].v[v][2] = oc[2] + 0.3 * r * cos(a);
+        }
         ts_write_scene(path, "{\"grey\": {\"albedo\": [0.5, 0.5, 0.5]}}", q, 12, NULL);
         rl_scene *s = ts_load(path);
         rl_occluders *occ = NULL;
@@ -76,8 +88,11 @@ int main(void)
             rl_scene_destroy(s);
             continue;
         }
-        /* the receiver: the square [-3, 3]^2 of the plane z = -3, facing up */
-        map->frame = frame_at((v3){0, 0, -3}, (v3){0, 0, 1});
+        /* the receiver: the square [-3, 3]^2 of a plane facing up at z = -3, tilted by up to 30
+         * degrees; every third scene an upright wall at x = -3 instead, reaching past the emitter's
+         * plane (its top is cut off) and seeing some of each leaf's directions from behind */
+        v3 rn = sc % 3 == 2 ? (v3){1, 0, 0.05 * ts_rnd()} : (v3){ts_rnd() - 0.5, ts_rnd() - 0.5, 2};
+        map->frame = frame_at(sc % 3 == 2 ? (v3){-3, 0, 1} : (v3){0, 0, -3}, v3_norm(rn));
         map->polygon = -1;
         t->m = map;
         t->npoly = 4;
@@ -124,20 +139,34 @@ int main(void)
             leaves++;
             CHECK(rl__shadows_build(&ctx, p, t, L, &scratch) == 0, "scene %d leaf %d: shadows built", sc, lf);
             const rl_shadows *sh = scratch.shadows;
-            if (!sh || !sh->known)
-                continue;
-            known++;
+            int is_known = sh && sh->known, casts = 0;
+            known += is_known;
             for (int o = 0; o < ORIGINS; o++) {
                 v2 uv = {6 * ts_rnd() - 3, 6 * ts_rnd() - 3};
                 v3 x = frame_point(&map->frame, uv);
-                rl__shadows_row(scratch.shadows, uv.x, uv.x, uv.y, uv.y);
+                if (is_known)
+                    rl__shadows_row(scratch.shadows, uv.x, uv.x, uv.y, uv.y);
                 for (uint32_t i = 0; i < SHARED; i++) {
                     const rl_shared_plan *pl = &L->plan[i];
                     double tt = pl->t[0] + pl->t[1] * uv.x + pl->t[2] * uv.y;
                     v2 land = {pl->qx[0] + pl->qx[1] * uv.x + pl->qx[2] * uv.y,
                                pl->qy[0] + pl->qy[1] * uv.x + pl->qy[2] * uv.y};
+                    /* the plan against the direct computation rl__shoot_back() makes */
+                    v3 d = L->sd[i];
+                    double cos_r = -v3_dot(d, map->frame.n), dn = v3_dot(d, e->frame.n);
+                    double hx = v3_dot(v3_sub(x, e->frame.origin), e->frame.n), td = hx / dn;
+                    v2 qd = frame_project(&e->frame, v3_madd(x, d, -td));
+                    dead += !pl->live;
+                    if (pl->live != (cos_r > 0 && dn > 0))
+                        plan_bad++;
+                    if (pl->live && (fabs(tt - td) > 1e-9 * (1 + fabs(td)) || fabs(land.x - qd.x) > 1e-9 * (1 + fabs(td)) ||
+                                     fabs(land.y - qd.y) > 1e-9 * (1 + fabs(td))))
+                        plan_bad++;
                     if (!pl->live || !(tt > 0) || fabs(land.x) > 3 || fabs(land.y) > 3)
                         continue; /* the ray would not be cast */
+                    casts = 1;
+                    if (!is_known)
+                        continue;
                     v3 from = v3_madd(x, pl->back, pl->tnear), to = v3_madd(x, pl->back, tt - pl->tshort);
                     int surely = 0, maybe = 0;
                     for (uint32_t k = 0; k < npolys; k++) {
@@ -154,16 +183,21 @@ int main(void)
                     wrong_blocked += !maybe && shadowed;
                 }
             }
+            casting += casts;
+            unknown_casting += casts && !is_known;
         }
         rl__scratch_free(&scratch);
         rl__occluders_destroy(occ);
         rl_scene_destroy(s);
     }
-    printf("leaves: %ld of %ld with known shadows; samples: %ld blocked, %ld arrive\n", known, leaves, blocked,
-           arrived);
+    printf("leaves: %ld of %ld with known shadows, %ld of %ld casting rays unknown; samples: %ld blocked, %ld arrive, %ld facing away\n", known, leaves,
+           unknown_casting, casting, blocked, arrived, dead);
+    CHECK(plan_bad == 0, "%ld samples whose planned ray differs from the direct computation", plan_bad);
+    CHECK(dead > 0, "some shared directions miss the receiver's front (%ld)", dead);
     CHECK(wrong_free == 0, "%ld samples whose segment crosses a polygon lie in no shadow", wrong_free);
     CHECK(wrong_blocked == 0, "%ld samples whose segment misses every polygon lie in a shadow", wrong_blocked);
-    CHECK(known >= 0.9 * leaves, "shadows known for %ld of %ld leaves", known, leaves);
+    CHECK(unknown_casting <= 0.05 * casting, "shadows unknown for %ld of the %ld leaves that cast rays",
+          unknown_casting, casting);
     CHECK(blocked > 1000 && arrived > 1000, "both outcomes occur: %ld blocked, %ld arrive", blocked, arrived);
     free(map);
     free(e);

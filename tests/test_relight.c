@@ -661,6 +661,125 @@ static void check_shared_directions(const char *path, const char *lfpath)
     rl_scene_destroy(s);
 }
 
+/* Lambert's formula at x (normal +z, below z = 1) for the part of the slab square
+ * [-0.5, 0.5]^2 at z = 1 (radiance L, facing down) that blocker q (a convex quad
+ * between them) leaves visible: the slab minus its part inside q's shadow from x. */
+static double blocked_slab_irradiance(const tpoly *q, const double x[3], double L)
+{
+    const double up[3] = {0, 0, 1};
+    tpoly slab = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
+    double whole = rl_reference_polygon_irradiance(&slab.v[0][0], 4, x, up, L);
+    /* the blocker's shadow on the slab's plane, seen from x, counter-clockwise seen from below */
+    double sh[16][2], tmp[16][2];
+    int n = 0;
+    for (int k = 0; k < 4; k++) {
+        double t = (1.0 - x[2]) / (q->v[k][2] - x[2]);
+        sh[n][0] = x[0] + (q->v[k][0] - x[0]) * t;
+        sh[n][1] = x[1] + (q->v[k][1] - x[1]) * t;
+        n++;
+    }
+    double area = 0;
+    for (int k = 0; k < n; k++)
+        area += sh[k][0] * sh[(k + 1) % n][1] - sh[(k + 1) % n][0] * sh[k][1];
+    /* clipped to the slab's square, one side at a time */
+    const double lim[4][3] = {{1, 0, 0.5}, {-1, 0, 0.5}, {0, 1, 0.5}, {0, -1, 0.5}}; /* a u + b v <= c */
+    for (int e = 0; e < 4 && n > 0; e++) {
+        int m = 0;
+        for (int k = 0; k < n; k++) {
+            const double *a = sh[k], *b = sh[(k + 1) % n];
+            double da = lim[e][2] - lim[e][0] * a[0] - lim[e][1] * a[1];
+            double db = lim[e][2] - lim[e][0] * b[0] - lim[e][1] * b[1];
+            if (da >= 0)
+                tmp[m][0] = a[0], tmp[m][1] = a[1], m++;
+            if ((da >= 0) != (db >= 0)) {
+                double t = da / (da - db);
+                tmp[m][0] = a[0] + (b[0] - a[0]) * t, tmp[m][1] = a[1] + (b[1] - a[1]) * t, m++;
+            }
+        }
+        memcpy(sh, tmp, (size_t)m * sizeof sh[0]);
+        n = m;
+    }
+    if (n < 3)
+        return whole;
+    /* the emitter's orientation: counter-clockwise seen from below, where x is */
+    double v[16][3];
+    for (int k = 0; k < n; k++) {
+        int from = area < 0 ? k : n - 1 - k;
+        v[k][0] = sh[from][0], v[k][1] = sh[from][1], v[k][2] = 1.0;
+    }
+    return whole - rl_reference_polygon_irradiance(&v[0][0], (size_t)n, x, up, L);
+}
+
+/* A constant light field over a floor, a tilted quad between them: every
+ * solid angle's shared directions meet shadows (relight/src/leaf_shadow.c).
+ * Culled and naive must still agree bit for bit, and culled must match
+ * Lambert's formula for the part of the slab each point of a cell sees. */
+static void check_lightfield_blocker(void)
+{
+    char lfpath[600], path[600];
+    snprintf(lfpath, sizeof lfpath, "%s/blocker_lf.h5", tmpdir);
+    write_lightfield(lfpath, 2.0f, 180, 8, 0);
+    snprintf(path, sizeof path, "%s/lf_blocker.json", tmpdir);
+    tpoly p[2] = {ts_rect_z("grey", -1, -1, 1, 1, 0.0, 1), ts_rect_z("black", -0.3, -0.35, 0.25, 0.2, 0.5, 1)};
+    p[1].v[1][2] = p[1].v[2][2] = 0.6; /* tilted: its plane is parallel to neither the floor nor the slab */
+    char rest[1024];
+    snprintf(rest, sizeof rest,
+             "\"radiance_maps\": {\"cell_size\": 0.1}, \"lightfields\": [{\"file\": \"blocker_lf.h5\", \"slab\": "
+             "\"light\", \"transform\": [[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]}]");
+    ts_write_scene(path, MATS, p, 2, rest);
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    rl_solution *a = NULL, *b = NULL;
+    set_sampling(s, RL_METHOD_CULLED, 32, 8, 16, 0);
+    CHECK(rl_relight(s, &run_opts, &a) == RL_OK, "blocked light field, culled: %s", rl_errmsg());
+    set_sampling(s, RL_METHOD_NAIVE, 32, 8, 16, 0);
+    CHECK(rl_relight(s, &run_opts, &b) == RL_OK, "blocked light field, naive: %s", rl_errmsg());
+    long total;
+    if (a && b)
+        CHECK(ts_differing(a, b, &total) == 0, "blocked light field: culled == naive");
+    if (a) {
+        rl_pass_stats st;
+        rl_solution_pass_stats(a, 0, &st);
+        CHECK(st.rays_free > st.samples / 4 && st.rays_cast < st.samples / 100,
+              "blocked light field: shadows decide (%llu samples, %llu free, %llu traced)",
+              (unsigned long long)st.samples, (unsigned long long)st.rays_free, (unsigned long long)st.rays_cast);
+        rl_map_info info;
+        rl_solution_map_info(a, 0, &info);
+        uint32_t n, *ij;
+        double *centre;
+        float *e = map_irradiance(a, 0, &n, &centre, &ij);
+        double peak = 0, se = 0, shade = 0;
+        for (uint32_t c = 0; c < n; c++) {
+            double ref = 0;
+            for (int i = 0; i < 8; i++)
+                for (int j = 0; j < 8; j++) {
+                    double u = info.u0 + (ij[2 * c] + (i + 0.5) / 8) * info.cell_size;
+                    double v = info.v0 + (ij[2 * c + 1] + (j + 0.5) / 8) * info.cell_size, x[3];
+                    for (int k = 0; k < 3; k++)
+                        x[k] = info.origin[k] + u * info.e1[k] + v * info.e2[k];
+                    ref += blocked_slab_irradiance(&p[1], x, 2.0) / 64;
+                }
+            tpoly slab = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
+            double xc[3] = {centre[3 * c], centre[3 * c + 1], 0}, up[3] = {0, 0, 1};
+            shade = fmax(shade, rl_reference_polygon_irradiance(&slab.v[0][0], 4, xc, up, 2.0) - ref);
+            peak = fmax(peak, ref);
+            se += (e[3 * c + 1] - ref) * (e[3 * c + 1] - ref);
+        }
+        double rmse = n ? sqrt(se / n) / peak : 1;
+        printf("constant light field behind a tilted blocker, culled: RMSE %.4f%% of the peak (deepest shade %.3g)\n",
+               100 * rmse, shade);
+        CHECK(shade > 0.3 * peak, "the blocker shades the floor: %.3g of %.3g", shade, peak);
+        CHECK(rmse < 0.015, "blocked light field: RMSE %.4g of the peak against Lambert's formula", rmse);
+        free(e);
+        free(centre);
+        free(ij);
+    }
+    rl_solution_destroy(a);
+    rl_solution_destroy(b);
+    rl_scene_destroy(s);
+}
+
 /* A constant light field is a diffuse emitter; a sparse one is culled by its mask. */
 static void check_lightfield(void)
 {
@@ -707,6 +826,7 @@ static void check_lightfield(void)
         rl_scene_destroy(s);
     }
     check_shared_directions(path, lfpath);
+    check_lightfield_blocker();
     printf("light field samples, culled: %llu dense, %llu one strip per direction\n",
            (unsigned long long)samples[0], (unsigned long long)samples[1]);
     /* without the support both would draw exactly as many samples */

@@ -217,16 +217,18 @@ size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L)
     return (size_t)L->nshared * (L->box[1] - L->box[0] + 1) * (L->box[3] - L->box[2] + 1) * 3;
 }
 
-void rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables)
+int rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables)
 {
     size_t per = rl__leaf_blend_size(e, L) / L->nshared;
     for (uint32_t i = 0; i < L->nshared; i++)
-        lfio_slab_blend(e->lf->slab, L->ids, L->swd[i], L->box, tables + i * per);
+        if (lfio_slab_blend(e->lf->slab, L->ids, L->swd[i], L->box, tables + i * per) != LFIO_OK)
+            return -1;
     L->blend = tables;
     L->blend_stride = per;
     support_rect(e, L->box, L->rect);
     L->inv_len[0] = 1.0 / e->len_u;
     L->inv_len[1] = 1.0 / e->len_v;
+    return 0;
 }
 
 /* Draws the direction of one sample of leaf L from origin x, informed by

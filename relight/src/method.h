@@ -49,9 +49,6 @@
 /* Most directions a mixing leaf draws once for all its cells (rl__leaf_share()). */
 #define RL_LEAF_SHARED 16
 
-/* A solid angle of emitter e's partition prepared for sampling: its
- * directions and their weights, its sample key, and for a light field the
- * slab-level interpolation its samples read. */
 /* A leaf's shared direction seen from one receiver plane: what its samples
  * need that their origins do not change (rl__leaf_plan()). The affine maps
  * take an origin's map coordinates (u, v) as c[0] + c[1] u + c[2] v. */
@@ -64,6 +61,9 @@ typedef struct rl_shared_plan {
     double qx[3], qy[3]; /* where the ray lands, in the emitter's frame */
 } rl_shared_plan;
 
+/* A solid angle of emitter e's partition prepared for sampling: its
+ * directions and their weights, its sample key, and for a light field the
+ * slab-level interpolation its samples read. */
 typedef struct rl_leaf {
     uint32_t lv;
     uint64_t id;
@@ -121,7 +121,7 @@ void rl__leaf_radiance_weighted(const rl_emitter *e, v2 q, const rl_leaf *L, con
 uint32_t rl__leaf_share(rl_leaf *L, uint32_t k);
 
 /* Works out L->plan for the shared directions of L seen from the receiver
- * plane rf (origin offsets eps, m), for rl__shoot_shared(). */
+ * plane rf (origin offsets eps, m), for the shared samples of method_culled.c. */
 void rl__leaf_plan(rl_leaf *L, const rl_emitter *e, const rl_frame *rf, double eps);
 
 /* @return how many floats rl__leaf_blend() needs for the shared directions
@@ -129,8 +129,9 @@ void rl__leaf_plan(rl_leaf *L, const rl_emitter *e, const rl_frame *rf, double e
 size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L);
 
 /* Mixes the slab's directions for each shared direction of L over L->box
- * into tables (rl__leaf_blend_size() floats), which L then reads. */
-void rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables);
+ * into tables (rl__leaf_blend_size() floats), which L then reads.
+ * @return 0, or -1 if lfio refused (L then reads the slab as before). */
+int rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables);
 
 /* Radiance leaving e at frame point q in propagation direction d; L (may be
  * NULL) and lam, when L mixes, give the direction's slab interpolation directly. */

@@ -158,7 +158,7 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
          * direction to its origin, and a cell's error would stop falling
          * with k. A light field's leaf is blind (rl__leaf_draw() draws over
          * all of it whatever the origin), which is what lets cells share
-         * its directions; rl__shoot_back() counts and drops what lands
+         * its directions; shoot_shared() counts and drops what lands
          * behind or beside the emitter, as the draw would have. */
         cnt->samples += k;
         for (uint32_t i = 0; i < k; i++)
@@ -258,7 +258,11 @@ static int culled_row(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_til
     rl_shadows *sh = rows_shadows(s, L);
     if (sh) {
         double va = m->v0 + j * m->cell;
-        rl__shadows_row(sh, m->u0 + i0 * m->cell, m->u0 + (i1 + 1.0) * m->cell, va, va + m->cell);
+        /* a hair wider than the row: a cell's clipped corner may round past its square, and culled
+         * (which visits part of a row) must select every shadow naive does for the cells both visit */
+        double pad = 1e-9 * m->cell;
+        rl__shadows_row(sh, m->u0 + i0 * m->cell - pad, m->u0 + (i1 + 1.0) * m->cell + pad, va - pad,
+                        va + m->cell + pad);
     }
     for (uint32_t i = i0; i <= i1; i++) {
         int32_t cell = m->grid[(size_t)j * m->nu + i];
@@ -317,7 +321,7 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
         if (floats > 0 && floats / (3 * L.nshared) <= (size_t)m->nu * (t->row1 - t->row0)) {
             if (blend_reserve(s, floats) != 0)
                 return -1;
-            rl__leaf_blend(p->e, &L, s->blend);
+            (void)rl__leaf_blend(p->e, &L, s->blend); /* refused: L reads the slab itself */
         }
     }
     if (s->shadows)

@@ -29,7 +29,9 @@ typedef struct rl_pass_stats {
                                        rays whose first hit re-emits light; it has no pairs or solid angles,
                                        and its samples are its rays) */
     uint64_t rays_free;           /**< rays not traced, known to arrive: an exact test found nothing between
-                                       their cell and the emitter (counted apart from rays_cast and rays_kept) */
+                                       their cell and the emitter, or, for a light field's shared directions,
+                                       their origin in none of the direction's shadows (counted apart from
+                                       rays_cast and rays_kept) */
     uint64_t solid_angles_considered; /**< (emitter, receiver, solid angle) leaves considered */
     uint64_t solid_angles_culled; /**< of those, culled without a ray */
     uint64_t pairs;               /**< (emitter, receiver tile) pairs that can exchange light */
