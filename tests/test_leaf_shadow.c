@@ -44,8 +44,8 @@ static rl_frame frame_at(v3 o, v3 n)
 int main(void)
 {
     const char *tmp = getenv("ILF_TEST_TMP") ? getenv("ILF_TEST_TMP") : "/tmp";
-    long blocked = 0, arrived = 0, known = 0, leaves = 0, wrong_free = 0, wrong_blocked = 0, plan_bad = 0, dead = 0, casting = 0,
-         unknown_casting = 0;
+    long blocked = 0, arrived = 0, known = 0, leaves = 0, wrong_free = 0, wrong_blocked = 0, plan_bad = 0, dead = 0;
+    long casting = 0, unknown_casting = 0;
     rl_map *map = calloc(1, sizeof *map);
     rl_emitter *e = calloc(1, sizeof *e);
     rl_pair *p = calloc(1, sizeof *p);
@@ -159,8 +159,9 @@ int main(void)
                     dead += !pl->live;
                     if (pl->live != (cos_r > 0 && dn > 0))
                         plan_bad++;
-                    if (pl->live && (fabs(tt - td) > 1e-9 * (1 + fabs(td)) || fabs(land.x - qd.x) > 1e-9 * (1 + fabs(td)) ||
-                                     fabs(land.y - qd.y) > 1e-9 * (1 + fabs(td))))
+                    double tol = 1e-9 * (1 + fabs(td));
+                    if (pl->live &&
+                        (fabs(tt - td) > tol || fabs(land.x - qd.x) > tol || fabs(land.y - qd.y) > tol))
                         plan_bad++;
                     if (!pl->live || !(tt > 0) || fabs(land.x) > 3 || fabs(land.y) > 3)
                         continue; /* the ray would not be cast */
@@ -190,8 +191,9 @@ int main(void)
         rl__occluders_destroy(occ);
         rl_scene_destroy(s);
     }
-    printf("leaves: %ld of %ld with known shadows, %ld of %ld casting rays unknown; samples: %ld blocked, %ld arrive, %ld facing away\n", known, leaves,
-           unknown_casting, casting, blocked, arrived, dead);
+    printf("leaves: %ld of %ld with known shadows, %ld of %ld casting rays unknown; "
+           "samples: %ld blocked, %ld arrive, %ld facing away\n",
+           known, leaves, unknown_casting, casting, blocked, arrived, dead);
     CHECK(plan_bad == 0, "%ld samples whose planned ray differs from the direct computation", plan_bad);
     CHECK(dead > 0, "some shared directions miss the receiver's front (%ld)", dead);
     CHECK(wrong_free == 0, "%ld samples whose segment crosses a polygon lie in no shadow", wrong_free);

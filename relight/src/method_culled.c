@@ -14,7 +14,11 @@
  * from a low-discrepancy sequence keyed by (seed, pass, emitter, receiver,
  * cell, level, leaf), except that a light field's leaf nested in its slab
  * draws its k directions once from its own key (rl__leaf_share()) and each
- * cell only its origins.
+ * cell only its origins. Those shared directions' rays are parallel, so
+ * their visibility comes from the occluders' shadows along each direction
+ * on the tile (leaf_shadow.c) rather than from Embree, wherever the shadows
+ * can be worked out; both methods build them from the whole tile, so they
+ * see the same ones.
  *
  * `naive` takes every leaf and every cell and otherwise runs the same code:
  * a culled (cell, leaf) pair contributes exactly zero, and each cell adds
@@ -161,9 +165,10 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
          * its directions; shoot_shared() counts and drops what lands
          * behind or beside the emitter, as the draw would have. */
         cnt->samples += k;
-        for (uint32_t i = 0; i < k; i++)
-            shoot_shared(ctx, p, m, L, sh, i, rl__domain_uv(m, &dom, rl__lds_coord(&key, i, 2), rl__lds_coord(&key, i, 3)),
-                         acc, batch, cnt);
+        for (uint32_t i = 0; i < k; i++) {
+            v2 uv = rl__domain_uv(m, &dom, rl__lds_coord(&key, i, 2), rl__lds_coord(&key, i, 3));
+            shoot_shared(ctx, p, m, L, sh, i, uv, acc, batch, cnt);
+        }
         return 1.0 / k;
     }
     /* draw a group of samples before shooting any: their square roots and
@@ -246,7 +251,8 @@ static rl_shadows *rows_shadows(rl_scratch *s, const rl_leaf *L)
 }
 
 /* Culled's and naive's work on one row of cells for one leaf: every cell's
- * k rays go out in packets, then each cell adds its estimate. */
+ * k rays go out in packets (or, where the leaf's shadows are known, its
+ * samples are settled without rays), then each cell adds its estimate. */
 static int culled_row(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, const rl_leaf *L, uint32_t ei,
                       uint32_t j, uint32_t i0, uint32_t i1, rl_scratch *s, int stage, rl_counters *cnt)
 {
