@@ -28,24 +28,19 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mesh.h"
 #include "method.h"
 
 /* Most polygons one (tile, leaf) may collect before its shadows count as unknown. */
 #define SHADOW_CANDIDATES 256u
 
-/* Makes room for n more items of size sz in *buf (holding *len of *cap). @return 0 or -1. */
-static int grow(void **buf, size_t *cap, size_t len, size_t n, size_t sz)
+/* Makes *arr hold need items of size bytes (rl__grow()). @return 0, or -1 with *arr as it was. */
+static int reserve(void **arr, size_t *cap, size_t need, size_t size)
 {
-    if (len + n <= *cap)
-        return 0;
-    size_t c = *cap ? *cap : 64;
-    while (c < len + n)
-        c *= 2;
-    void *g = realloc(*buf, c * sz);
+    void *g = rl__grow(*arr, cap, need, size);
     if (!g)
         return -1;
-    *buf = g;
-    *cap = c;
+    *arr = g;
     return 0;
 }
 
@@ -114,9 +109,9 @@ static int add_shadow(rl_shadows *sh, const rl_frame *f, const rl_emitter *e, co
         area += q[k].x * q[(k + 1) % m].y - q[(k + 1) % m].x * q[k].y;
     if (!(area != 0.0))
         return 0; /* seen edge-on: a shadow of no area stops no sample */
-    if (grow((void **)&sh->polys, &sh->cap_polys, sh->npolys, 1, sizeof *sh->polys) != 0 ||
-        grow((void **)&sh->edges, &sh->cap_edges, sh->nedges, m, sizeof *sh->edges) != 0 ||
-        grow((void **)&sh->verts, &sh->cap_verts, sh->nedges, m, sizeof *sh->verts) != 0)
+    if (reserve((void **)&sh->polys, &sh->cap_polys, sh->npolys + 1, sizeof *sh->polys) != 0 ||
+        reserve((void **)&sh->edges, &sh->cap_edges, sh->nedges + m, sizeof *sh->edges) != 0 ||
+        reserve((void **)&sh->verts, &sh->cap_verts, sh->nedges + m, sizeof *sh->verts) != 0)
         return -1;
     rl_shadow_poly *sp = &sh->polys[sh->npolys++];
     sp->first = (uint32_t)sh->nedges;
@@ -173,7 +168,7 @@ int rl__shadows_build(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_til
     }
     sh->start[L->nshared] = (uint32_t)sh->npolys;
     sh->nshared = L->nshared;
-    if (grow((void **)&sh->active, &sh->active_cap, 0, sh->npolys + 1, sizeof *sh->active) != 0)
+    if (reserve((void **)&sh->active, &sh->active_cap, sh->npolys + 1, sizeof *sh->active) != 0)
         return -1;
     sh->known = 1;
     return 0;

@@ -36,6 +36,7 @@
 
 #include <lfio/lightfield.h>
 
+#include "mesh.h"
 #include "method.h"
 
 #define STACK_DEPTH 512
@@ -231,16 +232,13 @@ static int row_reserve(rl_scratch *s, size_t n)
     return 0;
 }
 
-/* Makes room in s for n floats of blend tables. @return 0 or -1. */
+/* Makes room in s for n floats of blend tables (rl__grow()). @return 0 or -1. */
 static int blend_reserve(rl_scratch *s, size_t n)
 {
-    if (n <= s->blend_cap)
-        return 0;
-    float *grown = realloc(s->blend, n * sizeof *grown);
+    float *grown = rl__grow(s->blend, &s->blend_cap, n, sizeof *grown);
     if (!grown)
         return -1;
     s->blend = grown;
-    s->blend_cap = n;
     return 0;
 }
 
