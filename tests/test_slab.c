@@ -464,7 +464,7 @@ static void check_blend(void)
     uint32_t(*sup)[4] = malloc(ndir * sizeof *sup);
     CHECK(sup && lfio_slab_support(s, sup) == LFIO_OK, "support");
     float table[6 * 5 * 3], cut[6 * 5 * 3];
-    long worst_ppm = 0, outside_bad = 0, inside_bad = 0;
+    long worst_ppm = 0, outside_bad = 0, inside_bad = 0, rect_bad = 0, grid_bad = 0, beyond = 0;
     for (int trial = 0; trial < 200 && sup; trial++) {
         double d[3] = {rng_unit() - 0.5, rng_unit() - 0.5, rng_unit() + 0.05}, wd[4];
         uint64_t ids[4];
@@ -485,6 +485,18 @@ static void check_blend(void)
             float mix[3], got[3], part[3];
             lfio_slab_radiance_mix(s, a, b, ids, wd, mix);
             lfio_slab_blend_radiance(s, box, table, a, b, got);
+            /* the inline lookup in grid coordinates reads the same, and outside
+             * the grid's rectangle every tap lies outside the box */
+            lfio_blend_grid g;
+            lfio_slab_blend_grid(s, box, &g);
+            double ga = a * 6 - 0.5, gb = b * 5 - 0.5;
+            float at[3];
+            lfio_blend_at(&g, table, ga, gb, at);
+            grid_bad += at[0] != got[0] || at[1] != got[1] || at[2] != got[2];
+            if (!(ga >= g.rect[0] && ga <= g.rect[1] && gb >= g.rect[2] && gb <= g.rect[3])) {
+                beyond++;
+                rect_bad += mix[0] != 0 || mix[1] != 0 || mix[2] != 0 || got[0] != 0 || got[1] != 0 || got[2] != 0;
+            }
             for (int c = 0; c < 3; c++) {
                 long ppm = (long)(1e6 * fabs(got[c] - mix[c]) / (fabs(mix[c]) + 1e-3));
                 worst_ppm = ppm > worst_ppm ? ppm : worst_ppm;
@@ -504,6 +516,8 @@ static void check_blend(void)
         }
     }
     CHECK(worst_ppm <= 2, "blend reads the mix to float rounding: worst %ld ppm", worst_ppm);
+    CHECK(grid_bad == 0, "lfio_blend_at() differs from lfio_slab_blend_radiance() at %ld points", grid_bad);
+    CHECK(beyond > 100 && rect_bad == 0, "%ld of %ld points outside the grid's rectangle read light", rect_bad, beyond);
     CHECK(outside_bad == 0 && inside_bad == 0, "a part of the box: %ld wrong outside, %ld inside", outside_bad,
           inside_bad);
     uint64_t ids[4] = {1, 2, 3, 4};

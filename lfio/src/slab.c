@@ -359,13 +359,9 @@ typedef struct corners {
 static corners bilinear_corners(const lfio_slab *s, double a, double b)
 {
     corners c;
-    double gu = a * s->desc.nu - 0.5, gv = b * s->desc.nv - 0.5, mu = s->desc.nu - 1, mv = s->desc.nv - 1;
-    /* clamped by comparisons, not fmin/fmax: this is the hot path of relighting */
-    gu = gu > 0.0 ? (gu < mu ? gu : mu) : 0.0;
-    gv = gv > 0.0 ? (gv < mv ? gv : mv) : 0.0;
-    c.i0 = (uint32_t)gu, c.j0 = (uint32_t)gv;
+    c.fu = lfio_grid_split(a * s->desc.nu - 0.5, s->desc.nu - 1.0, &c.i0);
+    c.fv = lfio_grid_split(b * s->desc.nv - 0.5, s->desc.nv - 1.0, &c.j0);
     c.i1 = c.i0 + 1 < s->desc.nu ? c.i0 + 1 : c.i0, c.j1 = c.j0 + 1 < s->desc.nv ? c.j0 + 1 : c.j0;
-    c.fu = gu - c.i0, c.fv = gv - c.j0;
     return c;
 }
 
@@ -496,30 +492,25 @@ lfio_status lfio_slab_blend(const lfio_slab *s, const uint64_t ids[4], const dou
     return LFIO_OK;
 }
 
+void lfio_slab_blend_grid(const lfio_slab *s, const uint32_t box[4], lfio_blend_grid *g)
+{
+    g->hi[0] = s->desc.nu - 1.0;
+    g->hi[1] = s->desc.nv - 1.0;
+    /* from the centre of the zero position before the box to the one after it,
+     * or without end past the slab's edge, whose position holds its value */
+    g->rect[0] = box[0] == 0 ? -INFINITY : box[0] - 1.0;
+    g->rect[1] = box[1] + 1 >= s->desc.nu ? INFINITY : box[1] + 1.0;
+    g->rect[2] = box[2] == 0 ? -INFINITY : box[2] - 1.0;
+    g->rect[3] = box[3] + 1 >= s->desc.nv ? INFINITY : box[3] + 1.0;
+    memcpy(g->box, box, sizeof g->box);
+}
+
 void lfio_slab_blend_radiance(const lfio_slab *s, const uint32_t box[4], const float *rgb, double st_s,
                               double st_t, float out[3])
 {
-    corners c = bilinear_corners(s, st_s, st_t);
-    uint32_t ni = box[1] - box[0] + 1, is[2] = {c.i0, c.i1}, js[2] = {c.j0, c.j1};
-    double wu[2] = {1 - c.fu, c.fu}, wv[2] = {1 - c.fv, c.fv};
-    float acc[3] = {0, 0, 0};
-    /* taps in mix_directions()'s order, each weighed as bilinear() weighs it;
-     * unsigned wrap-around makes one comparison per axis test both ends */
-    for (int b = 0; b < 2; b++) {
-        uint32_t j = js[b] - box[2];
-        if (j > box[3] - box[2])
-            continue;
-        for (int a = 0; a < 2; a++) {
-            uint32_t i = is[a] - box[0];
-            if (i >= ni)
-                continue;
-            const float *p = rgb + ((size_t)j * ni + i) * 3;
-            float wq = (float)(wu[a] * wv[b]);
-            for (int ch = 0; ch < 3; ch++)
-                acc[ch] += wq * p[ch];
-        }
-    }
-    memcpy(out, acc, sizeof acc);
+    lfio_blend_grid g;
+    lfio_slab_blend_grid(s, box, &g);
+    lfio_blend_at(&g, rgb, st_s * s->desc.nu - 0.5, st_t * s->desc.nv - 0.5, out);
 }
 
 lfio_status lfio_slab_irradiance(const lfio_slab *s, double st_s, double st_t, double rgb[3])

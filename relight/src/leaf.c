@@ -225,9 +225,24 @@ int rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables)
             return -1;
     L->blend = tables;
     L->blend_stride = per;
-    support_rect(e, L->box, L->rect);
-    L->inv_len[0] = 1.0 / e->len_u;
-    L->inv_len[1] = 1.0 / e->len_v;
+    const lfio_slab_desc *d = lfio_slab_get_desc(e->lf->slab);
+    lfio_slab_blend_grid(e->lf->slab, L->box, &L->grid);
+    /* grid coordinates g = s * nu - 0.5, s = q / len: affine in the origin's as q is */
+    double fu = d->nu / e->len_u, fv = d->nv / e->len_v;
+    for (uint32_t i = 0; i < L->nshared; i++) {
+        rl_shared_plan *pl = &L->plan[i];
+        for (int c = 0; c < 3; c++) {
+            pl->gu[c] = pl->qx[c] * fu;
+            pl->gv[c] = pl->qy[c] * fv;
+        }
+        pl->gu[0] -= 0.5;
+        pl->gv[0] -= 0.5;
+    }
+    /* where the tables may be read, cut to the slab (the emitter) */
+    L->grect[0] = dmax(L->grid.rect[0], -0.5);
+    L->grect[1] = dmin(L->grid.rect[1], d->nu - 0.5);
+    L->grect[2] = dmax(L->grid.rect[2], -0.5);
+    L->grect[3] = dmin(L->grid.rect[3], d->nv - 0.5);
     return 0;
 }
 

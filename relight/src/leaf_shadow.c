@@ -209,7 +209,14 @@ void rl__shadows_row(rl_shadows *sh, double ulo, double uhi, double vlo, double 
             if (sp->uhi < ulo || sp->ulo > uhi || sp->vhi < vlo || sp->vlo > vhi ||
                 !band_extent(sh, sp, vlo, vhi, &lo, &hi) || hi < ulo || lo > uhi)
                 continue;
-            sh->active[at++] = (struct rl_shadow_span){k, lo, hi};
+            /* kept in order of ulo (insertion: a row holds a few), so that a
+             * point's test stops at the first span starting past it */
+            uint32_t pos = at++;
+            while (pos > sh->row_first[i] && sh->active[pos - 1].ulo > lo) {
+                sh->active[pos] = sh->active[pos - 1];
+                pos--;
+            }
+            sh->active[pos] = (struct rl_shadow_span){k, lo, hi};
         }
         sh->row_count[i] = at - sh->row_first[i];
     }

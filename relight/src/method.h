@@ -59,6 +59,7 @@ typedef struct rl_shared_plan {
     double scale;        /* the cosine at the receiver times the direction's weight */
     double t[3];         /* the distance to the emitter's plane along back */
     double qx[3], qy[3]; /* where the ray lands, in the emitter's frame */
+    double gu[3], gv[3]; /* blend: where it lands in the slab's grid coordinates (lfio_blend_grid) */
 } rl_shared_plan;
 
 /* A solid angle of emitter e's partition prepared for sampling: its
@@ -86,8 +87,8 @@ typedef struct rl_leaf {
     uint32_t box[4];      /* blend: the slab positions outside which ids read zero */
     const float *blend;   /* their mix for each shared direction (rl__leaf_blend()), or NULL */
     size_t blend_stride;  /* floats from one shared direction's table to the next */
-    double rect[4];       /* blend: {s0, s1, t0, t1} of e's frame, within the slab, outside which it reads 0 */
-    double inv_len[2];    /* blend: 1 / the slab's side lengths, from e's frame to (s, t) */
+    lfio_blend_grid grid; /* blend: the tables' grid */
+    double grect[4];      /* blend: {gu0, gu1, gv0, gv1} in grid coordinates, within the slab, outside which it reads 0 */
 } rl_leaf;
 
 /* Prepares solid angle id at level lv of emitter e (index ei) for receiver map map_index. */
@@ -129,7 +130,8 @@ void rl__leaf_plan(rl_leaf *L, const rl_emitter *e, const rl_frame *rf, double e
 size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L);
 
 /* Mixes the slab's directions for each shared direction of L over L->box
- * into tables (rl__leaf_blend_size() floats), which L then reads.
+ * into tables (rl__leaf_blend_size() floats), which L then reads, and
+ * carries L->plan (rl__leaf_plan(), before) into the tables' grid.
  * @return 0, or -1 if lfio refused (L then reads the slab as before). */
 int rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables);
 
@@ -278,7 +280,7 @@ typedef struct rl_shadows {
     struct rl_shadow_span {
         uint32_t poly;
         double ulo, uhi; /* its extent within the current row */
-    } *active;       /* the current row's: direction i's active[row_first[i] ..] (row_count[i]) */
+    } *active;       /* the current row's: direction i's active[row_first[i] ..] (row_count[i]), by ulo */
     size_t active_cap;
     uint32_t row_first[RL_LEAF_SHARED], row_count[RL_LEAF_SHARED];
     uint32_t *cand; /* the polygons collected for the pair's beam */
@@ -299,7 +301,9 @@ static inline int rl__shadowed(const rl_shadows *sh, uint32_t i, v2 uv)
 {
     for (uint32_t k = 0; k < sh->row_count[i]; k++) {
         const struct rl_shadow_span *sa = &sh->active[sh->row_first[i] + k];
-        if (uv.x < sa->ulo || uv.x > sa->uhi)
+        if (uv.x < sa->ulo)
+            return 0; /* and so do the spans after it, in order of ulo */
+        if (uv.x > sa->uhi)
             continue;
         const rl_shadow_poly *sp = &sh->polys[sa->poly];
         int inside = 1;

@@ -114,18 +114,22 @@ static inline void shoot_shared(const rl_transfer_ctx *ctx, const rl_pair *p, co
     double t = pl->t[0] + pl->t[1] * uv.x + pl->t[2] * uv.y;
     if (!(t > 0))
         return;
-    v2 q = {pl->qx[0] + pl->qx[1] * uv.x + pl->qx[2] * uv.y, pl->qy[0] + pl->qy[1] * uv.x + pl->qy[2] * uv.y};
     double l[3];
     if (L->blend) {
+        double gu = pl->gu[0] + pl->gu[1] * uv.x + pl->gu[2] * uv.y, gv = pl->gv[0] + pl->gv[1] * uv.x + pl->gv[2] * uv.y;
         /* outside the blend's rectangle (which the slab holds) every tap reads 0 */
-        if (!(q.x >= L->rect[0] && q.x <= L->rect[1] && q.y >= L->rect[2] && q.y <= L->rect[3]))
+        if (!(gu >= L->grect[0] && gu <= L->grect[1] && gv >= L->grect[2] && gv <= L->grect[3]))
+            return;
+        if (sh && rl__shadowed(sh, i, uv))
             return;
         float rgb[3];
-        lfio_slab_blend_radiance(p->e->lf->slab, L->box, L->blend + i * L->blend_stride, q.x * L->inv_len[0],
-                                 q.y * L->inv_len[1], rgb);
+        lfio_blend_at(&L->grid, L->blend + i * L->blend_stride, gu, gv, rgb);
         l[0] = rgb[0], l[1] = rgb[1], l[2] = rgb[2];
     } else {
+        v2 q = {pl->qx[0] + pl->qx[1] * uv.x + pl->qx[2] * uv.y, pl->qy[0] + pl->qy[1] * uv.x + pl->qy[2] * uv.y};
         if (!rl__emitter_contains(p->e, q))
+            return;
+        if (sh && rl__shadowed(sh, i, uv))
             return;
         rl__leaf_radiance_weighted(p->e, q, L, L->swd[i], l);
     }
@@ -135,8 +139,6 @@ static inline void shoot_shared(const rl_transfer_ctx *ctx, const rl_pair *p, co
         l[c] *= pl->scale;
     if (sh) {
         /* the shadows are known: no ray */
-        if (rl__shadowed(sh, i, uv))
-            return;
         for (int c = 0; c < 3; c++)
             acc[c] += l[c];
         cnt->rays_free++;
@@ -145,7 +147,8 @@ static inline void shoot_shared(const rl_transfer_ctx *ctx, const rl_pair *p, co
     rl__batch_push(ctx, b, frame_point(&m->frame, uv), pl->back, pl->tnear, t - pl->tshort, l, acc, cnt);
 }
 
-/* Queues the k rays of (cell, leaf L) into acc.
+/* Queues the k rays of (cell, leaf L) into acc; sh (NULL: unknown) gives
+ * the shadows of L's shared directions.
  * @return the factor that turns acc into the cell's irradiance (0: no rays). */
 static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t cell,
                           const rl_leaf *L, const rl_shadows *sh, double *acc, rl_ray_batch *batch, rl_counters *cnt)
@@ -322,7 +325,8 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
          * no more positions than the tile has cells (not the leaf's own
          * share of them, which naive does not know, and culled must agree) */
         size_t floats = rl__leaf_blend_size(p->e, &L);
-        if (floats > 0 && floats / (3 * L.nshared) <= (size_t)m->nu * (t->row1 - t->row0)) {
+        size_t positions = floats > 0 ? ((size_t)L.box[1] - L.box[0] + 1) * ((size_t)L.box[3] - L.box[2] + 1) : 0;
+        if (floats > 0 && positions <= (size_t)m->nu * (t->row1 - t->row0)) {
             if (blend_reserve(s, floats) != 0)
                 return -1;
             (void)rl__leaf_blend(p->e, &L, s->blend); /* refused: L reads the slab itself */

@@ -232,6 +232,67 @@ void lfio_slab_blend_radiance(const lfio_slab *s, const uint32_t box[4], const f
                               double st_t, float out[3]);
 
 /**
+ * The slab's position grid as lfio_blend_at() reads an lfio_slab_blend()
+ * table: grid coordinates (gu, gv) = (s * nu - 0.5, t * nv - 0.5) put the
+ * centre of position (i, j) at (i, j). For a caller whose (s, t) are affine
+ * in its own coordinates, so that it can fold this map into theirs.
+ */
+typedef struct lfio_blend_grid {
+    double hi[2];     /**< nu - 1, nv - 1: gu and gv are clamped to [0, hi], the edges' values held */
+    double rect[4];   /**< {gu_min, gu_max, gv_min, gv_max}: outside it the table reads 0 (infinite past the slab's
+                           edges, where the edges' values hold) */
+    uint32_t box[4];  /**< the table's positions, as lfio_slab_blend() took them */
+} lfio_blend_grid;
+
+/**
+ * Clamps grid coordinate g (lfio_blend_grid) to [0, hi] and splits it into
+ * the position centre at or below it, *i, and the fraction past it.
+ * @return the fraction, in [0, 1).
+ */
+static inline double lfio_grid_split(double g, double hi, uint32_t *i)
+{
+    /* clamped by comparisons, not fmin/fmax: this is the hot path of relighting */
+    g = g > 0.0 ? (g < hi ? g : hi) : 0.0;
+    *i = (uint32_t)g;
+    return g - *i;
+}
+
+/** Describes the grid of s for a table over box (not checked: as given to lfio_slab_blend()). */
+void lfio_slab_blend_grid(const lfio_slab *s, const uint32_t box[4], lfio_blend_grid *g);
+
+/**
+ * lfio_slab_blend_radiance() at grid coordinates (gu, gv) of g (finite):
+ * the same value, inline for callers that look up many points.
+ */
+static inline void lfio_blend_at(const lfio_blend_grid *g, const float *rgb, double gu, double gv, float out[3])
+{
+    uint32_t i0, j0;
+    double fu = lfio_grid_split(gu, g->hi[0], &i0), fv = lfio_grid_split(gv, g->hi[1], &j0);
+    /* relative to the box; unsigned wrap-around makes one comparison per
+     * tap test both ends. Past the slab's last position a tap's weight is
+     * 0 (fu or fv is 0 there), and it reads 0 as outside the box. */
+    uint32_t ni = g->box[1] - g->box[0] + 1, nj = g->box[3] - g->box[2] + 1;
+    uint32_t is[2] = {i0 - g->box[0], i0 + 1 - g->box[0]}, js[2] = {j0 - g->box[2], j0 + 1 - g->box[2]};
+    double wu[2] = {1 - fu, fu}, wv[2] = {1 - fv, fv};
+    float acc[3] = {0, 0, 0};
+    for (int b = 0; b < 2; b++) {
+        if (js[b] >= nj)
+            continue;
+        for (int a = 0; a < 2; a++) {
+            if (is[a] >= ni)
+                continue;
+            const float *p = rgb + ((size_t)js[b] * ni + is[a]) * 3;
+            float wq = (float)(wu[a] * wv[b]);
+            for (int c = 0; c < 3; c++)
+                acc[c] += wq * p[c];
+        }
+    }
+    out[0] = acc[0];
+    out[1] = acc[1];
+    out[2] = acc[2];
+}
+
+/**
  * Irradiance at (s, t) on a surface facing -e3 that receives the light
  * crossing the slab: sum over dirs of L * projected solid angle about e3,
  * radiance bilinear over positions, piecewise constant over solid angles.
