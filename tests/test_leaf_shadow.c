@@ -137,7 +137,7 @@ int main(void)
             }
             rl__leaf_plan(L, e, &map->frame, p->eps);
             leaves++;
-            CHECK(rl__shadows_build(&ctx, p, t, L, &scratch) == 0, "scene %d leaf %d: shadows built", sc, lf);
+            CHECK(rl__shadows_build(&ctx, p, t, L, NULL, &scratch) == 0, "scene %d leaf %d: shadows built", sc, lf);
             const rl_shadows *sh = scratch.shadows;
             int is_known = sh && sh->known, casts = 0;
             known += is_known;

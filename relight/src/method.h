@@ -287,10 +287,12 @@ typedef struct rl_shadows {
 } rl_shadows;
 
 /* Works out s->shadows for leaf L (its shared directions planned) from
- * tile t; s->shadows->known = 0 when nothing can be said and rays must
- * tell. @return 0, or -1 without memory. */
+ * tile t, or from the part of it within the map rectangle within = {u0, u1,
+ * v0, v1} (NULL: all of it), which must hold every origin whose sample can
+ * carry light; s->shadows->known = 0 when nothing can be said and rays
+ * must tell. @return 0, or -1 without memory. */
 int rl__shadows_build(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, const rl_leaf *L,
-                      rl_scratch *s);
+                      const double *within, rl_scratch *s);
 
 /* Selects the shadows that meet the map rectangle [ulo, uhi] x [vlo, vhi]
  * (one row's cells), each with its extent in u within [vlo, vhi]. */

@@ -334,7 +334,15 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
     }
     if (s->shadows)
         s->shadows->known = 0;
-    if (rows->shadows && L.nshared > 0 && rl__shadows_build(ctx, p, t, &L, s) != 0)
+    /* culled's shadows from the rectangle around the leaf's region alone: an
+     * origin outside the region sees only where the leaf reads zero, so its
+     * verdict does not matter, and a narrower beam collects fewer polygons */
+    double within[4] = {INFINITY, -INFINITY, INFINITY, -INFINITY}, pad = 1e-6 * m->cell;
+    for (size_t k = 0; k < nq; k++) {
+        within[0] = dmin(within[0], q[k].x - pad), within[1] = dmax(within[1], q[k].x + pad);
+        within[2] = dmin(within[2], q[k].y - pad), within[3] = dmax(within[3], q[k].y + pad);
+    }
+    if (rows->shadows && L.nshared > 0 && rl__shadows_build(ctx, p, t, &L, culled ? within : NULL, s) != 0)
         return -1;
     for (uint32_t j = t->row0; j < t->row1; j++) {
         uint32_t i0 = 0, i1 = m->nu - 1;
