@@ -14,10 +14,12 @@
  * sample is blocked exactly when its origin lies in one; nothing is traced.
  *
  * The polygons that can matter are collected once per (tile, leaf) by the
- * beam from the whole tile to where the leaf's directions from it land on
- * the emitter (shadow.h): a superset of every polygon any of its rays can
- * meet. Built from the tile, not from the part a method looks at, so that
- * culled and naive see the same shadows. When nothing can be said (a leaf
+ * beam from the tile to where the leaf's directions from it land on the
+ * emitter (shadow.h): a superset of every polygon any of its rays can meet.
+ * Naive takes the whole tile; culled only the rectangle around the leaf's
+ * region, since an origin outside the region sees only where the leaf reads
+ * zero. Both sets of shadows are exact for every sample that can carry
+ * light, so the two methods agree. When nothing can be said (a leaf
  * grazing the emitter's plane, more polygons than the list holds), the
  * shadows are unknown and the caller traces rays.
  *
