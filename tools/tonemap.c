@@ -14,11 +14,41 @@
 
 #include "image/image.h"
 
-/* qsort order of floats, ascending. */
-static int compare_floats(const void *a, const void *b)
+/* @return the k-th smallest of v[0 .. n) (k < n), reordering v: Hoare's
+ * selection with a median-of-three pivot, linear on average where a sort of
+ * a 640x480 view's values took 48 ms. */
+static float select_kth(float *v, size_t n, size_t k)
 {
-    float x = *(const float *)a, y = *(const float *)b;
-    return (x > y) - (x < y);
+    size_t lo = 0, hi = n - 1;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        float a = v[lo], b = v[mid], c = v[hi];
+        float pivot = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
+        size_t i = lo, j = hi;
+        /* after the sweep, v[lo .. j] <= pivot <= v[i .. hi], with j < i */
+        while (i <= j) {
+            while (v[i] < pivot)
+                i++;
+            while (v[j] > pivot)
+                j--;
+            if (i <= j) {
+                float t = v[i];
+                v[i] = v[j];
+                v[j] = t;
+                i++;
+                if (j == 0)
+                    break;
+                j--;
+            }
+        }
+        if (k <= j)
+            hi = j;
+        else if (k >= i)
+            lo = i;
+        else
+            return v[k]; /* between the parts: equal to the pivot */
+    }
+    return v[k];
 }
 
 /* @return the chosen measure of one RGB pixel. */
@@ -44,9 +74,8 @@ int tone_percentile_scale(const float *pixels, size_t count, int channels, tone_
     }
     double scale = 1.0;
     if (lit > 0) {
-        qsort(values, lit, sizeof(float), compare_floats);
         size_t rank = (size_t)ceil(percentile * (double)lit);
-        scale = target / values[rank > 0 ? (rank <= lit ? rank : lit) - 1 : 0];
+        scale = target / select_kth(values, lit, rank > 0 ? (rank <= lit ? rank : lit) - 1 : 0);
     }
     free(values);
     *scale_out = scale;

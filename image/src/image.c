@@ -205,6 +205,14 @@ static const img__module *need_module(const char *path, const char *doing, img_s
     return module;
 }
 
+img_status img_load(char *err, size_t errlen)
+{
+    pthread_once(&module_once, load_module);
+    if (module == NULL)
+        return fail(IMG_ERR_OUTPUT, err, errlen, "image support is not available (%s)", load_failure);
+    return IMG_OK;
+}
+
 /* ------------------------------------------------------------ names and formats */
 
 /* @return the extension of path's last component without its dot, "" if none. */

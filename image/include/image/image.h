@@ -5,7 +5,7 @@
  * (relight's view, slices, rendered probes) with it. It depends on base/ only.
  *
  * OpenImageIO is loaded lazily: image/src/image.c implements these functions
- * and, on the first img_write() or img_read() of the process, loads the image
+ * and, on the first img_write(), img_read() or img_load() of the process, loads the image
  * module libilfkit_oiio.so (image/src/oiio_module.cpp, the only file of ilfkit
  * that includes OpenImageIO headers) with dlopen(), once, thread-safely;
  * programs that never read or write an image never map OpenImageIO. The module
@@ -106,6 +106,15 @@ img_status img_write(const char *path, int width, int height, int channels, cons
  * @return IMG_OK and *img filled; IMG_ERR_INPUT (missing, a folder, unreadable, not an image, too large, no image module) or IMG_ERR_NOMEM with *img zeroed; IMG_ERR_ARG if path or img is NULL.
  */
 img_status img_read(const char *path, img_image *img, char *err, size_t errlen);
+
+/**
+ * Loads the image module now, as the first img_write() or img_read() would,
+ * so that a program can have it loaded on one thread while another works
+ * (loading OpenImageIO's libraries takes about 0.4 s). Thread-safe; a read or
+ * write that starts meanwhile waits for it; later calls return at once.
+ * @return IMG_OK; IMG_ERR_OUTPUT with a message naming each module path tried when none loads.
+ */
+img_status img_load(char *err, size_t errlen);
 
 /** Releases img's pixels and zeroes it. NULL is a no-op. */
 void img_free(img_image *img);
