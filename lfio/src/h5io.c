@@ -48,6 +48,8 @@
 #define BLOCK_ELEMS 196608
 /* Absolute tolerance of lfio_verify() for recomputed doubles. */
 #define VERIFY_TOL 1e-12
+/* zlib level of radiance and coverage: written once by a capture, read many times. */
+#define LF_DEFLATE_LEVEL 4
 /* Largest chunk cache given to one radiance dataset of a reader. */
 #define READER_CACHE_MAX ((size_t)64 << 20)
 
@@ -117,7 +119,7 @@ static void ds_spec_make(const lfio_slab_desc *d, enum ds_kind kind, uint32_t ma
         sp->lay.size = 4;
         sp->lay.units = units_name(d->units);
         sp->lay.axes = "dir:v:u:rgb";
-        sp->lay.deflate = 1;
+        sp->lay.deflate = LF_DEFLATE_LEVEL;
         break;
     case DS_COVERAGE:
         /* Radiance's layout without its channels, chunked alike so the same reads stay cheap. */
@@ -129,7 +131,7 @@ static void ds_spec_make(const lfio_slab_desc *d, enum ds_kind kind, uint32_t ma
         sp->lay.size = 1;
         sp->lay.units = "1";
         sp->lay.axes = "dir:v:u";
-        sp->lay.deflate = 1;
+        sp->lay.deflate = LF_DEFLATE_LEVEL;
         break;
     case DS_DIRECTION:
         snprintf(sp->lay.name, sizeof sp->lay.name, "direction");

@@ -479,7 +479,7 @@ lfio_status lfio__h5_create_dataset(const char *path, const char *gobj, hid_t g,
     int ok = lcpl >= 0 && dcpl >= 0 && space >= 0
              && (!nested || H5Pset_create_intermediate_group(lcpl, 1) >= 0)
              && H5Pset_chunk(dcpl, l->rank, l->chunk) >= 0
-             && (!l->deflate || (H5Pset_shuffle(dcpl) >= 0 && H5Pset_deflate(dcpl, 4) >= 0))
+             && (!l->deflate || (H5Pset_shuffle(dcpl) >= 0 && H5Pset_deflate(dcpl, (unsigned)l->deflate) >= 0))
              && H5Pset_fletcher32(dcpl) >= 0;
     if (ok)
         *out = H5Dcreate2(g, l->name, lfio__h5_file_type(l), space, lcpl, dcpl, H5P_DEFAULT);

@@ -121,7 +121,7 @@ typedef struct lfio__h5_layout {
     size_t size;        /* element size in bytes: 4 or 8 for floats, 1 or 4 for integers */
     const char *units;  /* value of the "units" attribute */
     const char *axes;   /* value of the "axes" attribute */
-    int deflate;        /* nonzero: shuffle and deflate (zlib level 4) before the checksum */
+    int deflate;        /* 1 to 9: shuffle and deflate at that zlib level before the checksum; 0: neither */
 } lfio__h5_layout;
 
 /* @return the little-endian file datatype of layout l. */
