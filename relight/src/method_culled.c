@@ -155,9 +155,7 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
 {
     rl_map *m = t->m;
     rl_origin_domain dom;
-    rl__cell_domain(m, cell, &dom);
     uint32_t k = ctx->sampling->rays_per_solid_angle;
-    lds_key key = rl__lds_make(ilf_hash_mix(L->key, cell));
     if (L->nshared > 0 && L->nshared == k) {
         /* The leaf's shared directions (coordinates 0 and 1 of its own
          * sequence) with origins from coordinates 2 and 3 of the cell's, so
@@ -167,14 +165,24 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
          * with k. A light field's leaf is blind (rl__leaf_draw() draws over
          * all of it whatever the origin), which is what lets cells share
          * its directions; shoot_shared() counts and drops what lands
-         * behind or beside the emitter, as the draw would have. */
+         * behind or beside the emitter, as the draw would have. A whole
+         * square cell needs no domain: its corner comes from its indices. */
+        const rl_cell *c = &m->cells[cell];
+        int square = c->poly_count == 0;
+        v2 corner = {m->u0 + c->i * m->cell, m->v0 + c->j * m->cell};
+        if (!square)
+            rl__cell_domain(m, cell, &dom);
+        lds_key key = rl__lds_make_last2(ilf_hash_mix(L->key, cell));
         cnt->samples += k;
         for (uint32_t i = 0; i < k; i++) {
-            v2 uv = rl__domain_uv(m, &dom, rl__lds_coord(&key, i, 2), rl__lds_coord(&key, i, 3));
+            double a = rl__lds_coord(&key, i, 2), b = rl__lds_coord(&key, i, 3);
+            v2 uv = square ? (v2){corner.x + a * m->cell, corner.y + b * m->cell} : rl__domain_uv(m, &dom, a, b);
             shoot_shared(ctx, p, m, L, sh, i, uv, acc, batch, cnt);
         }
         return 1.0 / k;
     }
+    rl__cell_domain(m, cell, &dom);
+    lds_key key = rl__lds_make(ilf_hash_mix(L->key, cell));
     /* draw a group of samples before shooting any: their square roots and
      * divisions are independent and overlap, where one sample at a time
      * would wait for each */

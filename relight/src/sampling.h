@@ -20,6 +20,18 @@ typedef struct lds_key {
 /* @return the rotation drawn from key. */
 lds_key rl__lds_make(uint64_t key);
 
+/* @return rl__lds_make(key)'s shifts of coordinates 2 and 3, the others 0:
+ * for a caller that reads only those (a cell's origins for shared
+ * directions), at one hash instead of two. Needs an rl__lds_make() first
+ * in the process (the table). */
+static inline lds_key rl__lds_make_last2(uint64_t key)
+{
+    uint64_t h = ilf_hash_mix(key, 2); /* rl__lds_make()'s second hash */
+    lds_key k = {{0.0, 0.0, (double)(h & 0xffffffffu) * (1.0 / 4294967296.0),
+                  (double)(h >> 32) * (1.0 / 4294967296.0)}};
+    return k;
+}
+
 /* Radical inverses in bases 2, 3, 5, 7 of the first RL_LDS_TABLE points,
  * filled once by the first rl__lds_make(): most (cell, solid angle) pairs
  * draw only a handful of samples, and the divisions of the radical inverse
