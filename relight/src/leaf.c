@@ -210,25 +210,14 @@ void rl__leaf_plan(rl_leaf *L, const rl_emitter *e, const rl_frame *rf, double e
     }
 }
 
-size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L)
+size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L, const double from[4])
 {
     if (L->nshared == 0 || !support_box(e, L, L->box))
         return 0;
-    return (size_t)L->nshared * (L->box[1] - L->box[0] + 1) * (L->box[3] - L->box[2] + 1) * 3;
-}
-
-int rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables)
-{
-    size_t per = rl__leaf_blend_size(e, L) / L->nshared;
-    for (uint32_t i = 0; i < L->nshared; i++)
-        if (lfio_slab_blend(e->lf->slab, L->ids, L->swd[i], L->box, tables + i * per) != LFIO_OK)
-            return -1;
-    L->blend = tables;
-    L->blend_stride = per;
     const lfio_slab_desc *d = lfio_slab_get_desc(e->lf->slab);
-    lfio_slab_blend_grid(e->lf->slab, L->box, &L->grid);
     /* grid coordinates g = s * nu - 0.5, s = q / len: affine in the origin's as q is */
     double fu = d->nu / e->len_u, fv = d->nv / e->len_v;
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (uint32_t i = 0; i < L->nshared; i++) {
         rl_shared_plan *pl = &L->plan[i];
         for (int c = 0; c < 3; c++) {
@@ -237,7 +226,40 @@ int rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables)
         }
         pl->gu[0] -= 0.5;
         pl->gv[0] -= 0.5;
+        for (int k = 0; k < 4 && pl->live; k++) {
+            /* the landing is affine: its extremes over the rectangle are at its corners */
+            double u = from[k % 2], v = from[2 + k / 2];
+            double g[2] = {pl->gu[0] + pl->gu[1] * u + pl->gu[2] * v, pl->gv[0] + pl->gv[1] * u + pl->gv[2] * v};
+            for (int a = 0; a < 2; a++)
+                lo[a] = dmin(lo[a], g[a]), hi[a] = dmax(hi[a], g[a]);
+        }
     }
+    /* the positions a landing's taps reach (the one at or below it and the
+     * next), cut to the support: an origin within from reads nothing else */
+    uint32_t b[4];
+    double n[2] = {d->nu, d->nv};
+    for (int a = 0; a < 2; a++) {
+        double first = dmax(floor(lo[a]), 0.0), last = dmin(floor(hi[a]) + 1.0, n[a] - 1.0);
+        b[2 * a] = first <= last ? (uint32_t)first : 1, b[2 * a + 1] = first <= last ? (uint32_t)last : 0;
+    }
+    if (b[0] <= b[1] && b[2] <= b[3] && b[0] <= L->box[1] && b[1] >= L->box[0] && b[2] <= L->box[3] &&
+        b[3] >= L->box[2]) {
+        L->box[0] = b[0] > L->box[0] ? b[0] : L->box[0], L->box[1] = b[1] < L->box[1] ? b[1] : L->box[1];
+        L->box[2] = b[2] > L->box[2] ? b[2] : L->box[2], L->box[3] = b[3] < L->box[3] ? b[3] : L->box[3];
+    }
+    return (size_t)L->nshared * (L->box[1] - L->box[0] + 1) * (L->box[3] - L->box[2] + 1) * 3;
+}
+
+int rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables)
+{
+    size_t per = (size_t)(L->box[1] - L->box[0] + 1) * (L->box[3] - L->box[2] + 1) * 3;
+    for (uint32_t i = 0; i < L->nshared; i++)
+        if (lfio_slab_blend(e->lf->slab, L->ids, L->swd[i], L->box, tables + i * per) != LFIO_OK)
+            return -1;
+    L->blend = tables;
+    L->blend_stride = per;
+    const lfio_slab_desc *d = lfio_slab_get_desc(e->lf->slab);
+    lfio_slab_blend_grid(e->lf->slab, L->box, &L->grid);
     /* where the tables may be read, cut to the slab (the emitter) */
     L->grect[0] = dmax(L->grid.rect[0], -0.5);
     L->grect[1] = dmin(L->grid.rect[1], d->nu - 0.5);

@@ -84,7 +84,7 @@ typedef struct rl_leaf {
     double sw[RL_LEAF_SHARED];      /* weights */
     double swd[RL_LEAF_SHARED][4];  /* and slab interpolation weights of ids */
     rl_shared_plan plan[RL_LEAF_SHARED]; /* each shared direction seen from the current receiver plane */
-    uint32_t box[4];      /* blend: the slab positions outside which ids read zero */
+    uint32_t box[4];      /* blend: the slab positions outside which ids read zero, or which no origin reaches */
     const float *blend;   /* their mix for each shared direction (rl__leaf_blend()), or NULL */
     size_t blend_stride;  /* floats from one shared direction's table to the next */
     lfio_blend_grid grid; /* blend: the tables' grid */
@@ -126,13 +126,15 @@ uint32_t rl__leaf_share(rl_leaf *L, uint32_t k);
 void rl__leaf_plan(rl_leaf *L, const rl_emitter *e, const rl_frame *rf, double eps);
 
 /* @return how many floats rl__leaf_blend() needs for the shared directions
- * of L (setting L->box), 0 when L reads only zeros or does not share. */
-size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L);
+ * of L (planned, rl__leaf_plan()) seen from origins in the map rectangle
+ * from = {u0, u1, v0, v1}, 0 when L reads only zeros or does not share.
+ * Sets L->box, the slab positions where L is nonzero that those origins'
+ * samples reach, and L->plan's landings in the slab's grid coordinates. */
+size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L, const double from[4]);
 
 /* Mixes the slab's directions for each shared direction of L over L->box
- * into tables (rl__leaf_blend_size() floats), which L then reads, and
- * carries L->plan (rl__leaf_plan(), before) into the tables' grid.
- * @return 0, or -1 if lfio refused (L then reads the slab as before). */
+ * (rl__leaf_blend_size(), before) into tables (that many floats), which L
+ * then reads. @return 0, or -1 if lfio refused (L then reads the slab as before). */
 int rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables);
 
 /* Radiance leaving e at frame point q in propagation direction d; L (may be

@@ -325,6 +325,19 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
     }
     if (row_reserve(s, m->nu) != 0)
         return -1;
+    /* where the origins that matter lie: the rectangle around the leaf's
+     * region for culled (an origin outside it sees only where the leaf reads
+     * zero), the tile's rows for naive */
+    double within[4] = {m->u0, m->u0 + (double)m->nu * m->cell, m->v0 + (double)t->row0 * m->cell,
+                        m->v0 + (double)t->row1 * m->cell};
+    if (culled) {
+        double pad = 1e-6 * m->cell;
+        within[0] = within[2] = INFINITY, within[1] = within[3] = -INFINITY;
+        for (size_t k = 0; k < nq; k++) {
+            within[0] = dmin(within[0], q[k].x - pad), within[1] = dmax(within[1], q[k].x + pad);
+            within[2] = dmin(within[2], q[k].y - pad), within[3] = dmax(within[3], q[k].y + pad);
+        }
+    }
     if (rows->shares && rl__leaf_share(&L, ctx->sampling->rays_per_solid_angle) > 0) {
         rl__leaf_plan(&L, p->e, &m->frame, p->eps);
         /* one mix of the slab's directions per shared direction, read 4 taps
@@ -333,8 +346,11 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
          * sample per direction, so it is built when it has at most 4 times as
          * many positions as the tile has cells (not the leaf's own share of
          * them, which naive does not know, and culled must agree). 1, 4 and
-         * 16 times: 'beams' at 47k cells 8.67, 8.49 and 8.50 G instructions */
-        size_t floats = rl__leaf_blend_size(p->e, &L);
+         * 16 times: 'beams' at 47k cells 8.67, 8.49 and 8.50 G instructions.
+         * Its box holds only the positions the origins within reach: culled's
+         * and naive's tables then differ only where no sample that can carry
+         * light reads them. */
+        size_t floats = rl__leaf_blend_size(p->e, &L, within);
         size_t positions = floats > 0 ? ((size_t)L.box[1] - L.box[0] + 1) * ((size_t)L.box[3] - L.box[2] + 1) : 0;
         if (floats > 0 && positions <= 4 * (size_t)m->nu * (t->row1 - t->row0)) {
             if (blend_reserve(s, floats) != 0)
@@ -344,14 +360,7 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
     }
     if (s->shadows)
         s->shadows->known = 0;
-    /* culled's shadows from the rectangle around the leaf's region alone: an
-     * origin outside the region sees only where the leaf reads zero, so its
-     * verdict does not matter, and a narrower beam collects fewer polygons */
-    double within[4] = {INFINITY, -INFINITY, INFINITY, -INFINITY}, pad = 1e-6 * m->cell;
-    for (size_t k = 0; k < nq; k++) {
-        within[0] = dmin(within[0], q[k].x - pad), within[1] = dmax(within[1], q[k].x + pad);
-        within[2] = dmin(within[2], q[k].y - pad), within[3] = dmax(within[3], q[k].y + pad);
-    }
+    /* culled's shadows from the rectangle alone too: a narrower beam collects fewer polygons */
     if (rows->shadows && L.nshared > 0 && rl__shadows_build(ctx, p, t, &L, culled ? within : NULL, s) != 0)
         return -1;
     for (uint32_t j = t->row0; j < t->row1; j++) {
