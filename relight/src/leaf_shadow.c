@@ -53,6 +53,7 @@ void rl__shadows_free(rl_shadows *sh)
     free(sh->polys);
     free(sh->edges);
     free(sh->verts);
+    free(sh->du_dv);
     free(sh->active);
     free(sh->cand);
     free(sh);
@@ -113,7 +114,8 @@ static int add_shadow(rl_shadows *sh, const rl_frame *f, const rl_emitter *e, co
         return 0; /* seen edge-on: a shadow of no area stops no sample */
     if (reserve((void **)&sh->polys, &sh->cap_polys, sh->npolys + 1, sizeof *sh->polys) != 0 ||
         reserve((void **)&sh->edges, &sh->cap_edges, sh->nedges + m, sizeof *sh->edges) != 0 ||
-        reserve((void **)&sh->verts, &sh->cap_verts, sh->nedges + m, sizeof *sh->verts) != 0)
+        reserve((void **)&sh->verts, &sh->cap_verts, sh->nedges + m, sizeof *sh->verts) != 0 ||
+        reserve((void **)&sh->du_dv, &sh->cap_slopes, sh->nedges + m, sizeof *sh->du_dv) != 0)
         return -1;
     rl_shadow_poly *sp = &sh->polys[sh->npolys++];
     sp->first = (uint32_t)sh->nedges;
@@ -124,6 +126,7 @@ static int add_shadow(rl_shadows *sh, const rl_frame *f, const rl_emitter *e, co
         /* counter-clockwise edges keep the inside on their left */
         v2 p0 = q[area > 0 ? k : m - 1 - k], p1 = q[area > 0 ? (k + 1) % m : (2 * m - 2 - k) % m];
         sh->verts[sh->nedges] = p0;
+        sh->du_dv[sh->nedges] = p1.y != p0.y ? (p1.x - p0.x) / (p1.y - p0.y) : 0.0;
         sh->edges[sh->nedges++] = edge_halfplane(p0, p1);
         sp->ulo = fmin(sp->ulo, q[k].x), sp->uhi = fmax(sp->uhi, q[k].x);
         sp->vlo = fmin(sp->vlo, q[k].y), sp->vhi = fmax(sp->vhi, q[k].y);
@@ -195,6 +198,7 @@ static int band_extent(const rl_shadows *sh, const rl_shadow_poly *sp, double va
     double l = INFINITY, h = -INFINITY; /* compared, not fmin/fmax: libm calls on a hot path */
     for (uint32_t e = 0; e < sp->n; e++) {
         v2 a = sh->verts[sp->first + e], b = sh->verts[sp->first + (e + 1 < sp->n ? e + 1 : 0)];
+        double slope = sh->du_dv[sp->first + e];
         if (a.y >= va && a.y <= vb) {
             l = a.x < l ? a.x : l;
             h = a.x > h ? a.x : h;
@@ -203,7 +207,7 @@ static int band_extent(const rl_shadows *sh, const rl_shadow_poly *sp, double va
         for (int k = 0; k < 2; k++) {
             double v = k ? vb : va;
             if ((a.y < v) != (b.y < v)) {
-                double u = a.x + (b.x - a.x) * ((v - a.y) / (b.y - a.y));
+                double u = a.x + (v - a.y) * slope;
                 l = u < l ? u : l;
                 h = u > h ? u : h;
             }

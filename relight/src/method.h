@@ -277,7 +277,8 @@ typedef struct rl_shadows {
     size_t npolys, cap_polys;
     rl_halfplane *edges;
     v2 *verts;       /* the shadows' corners, edges[e] running from verts[e] */
-    size_t nedges, cap_edges, cap_verts;
+    double *du_dv;   /* edge e's change of u per unit of v (0 when level): rows cross it by a multiply */
+    size_t nedges, cap_edges, cap_verts, cap_slopes;
     uint32_t start[RL_LEAF_SHARED + 1];
     struct rl_shadow_span {
         uint32_t poly;
