@@ -106,6 +106,8 @@ static void trace_packet(const rl_transfer_ctx *ctx, const rl_map *m, size_t n, 
 {
     double tfar[RL_RAY_PACKET], dist[RL_RAY_PACKET];
     uint32_t polygon[RL_RAY_PACKET];
+    const float *hit[RL_RAY_PACKET];
+    size_t kept = 0;
     for (size_t i = 0; i < n; i++)
         tfar[i] = INFINITY;
     rl__tracer_hit_n(ctx->tracer, n, x, d, tnear, tfar, polygon, dist);
@@ -127,11 +129,16 @@ static void trace_packet(const rl_transfer_ctx *ctx, const rl_map *m, size_t n, 
         const rl_map *hm = g->map;
         if (!hm)
             continue; /* re-emits nothing */
-        const float *l = g->rad[rl__map_square_clamped(hm, frame_project(&hm->frame, v3_madd(x[i], d[i], dist[i])))];
-        cnt->rays_kept++;
-        for (int c = 0; c < 3; c++)
-            acc[c] += l[c];
+        /* the hits land anywhere in the scene's maps: ask for every hit's
+         * radiance first, add them after, so that the cache misses overlap */
+        hit[kept] = g->rad[rl__map_square_clamped(hm, frame_project(&hm->frame, v3_madd(x[i], d[i], dist[i])))];
+        __builtin_prefetch(hit[kept]);
+        kept++;
     }
+    cnt->rays_kept += kept;
+    for (size_t k = 0; k < kept; k++)
+        for (int c = 0; c < 3; c++)
+            acc[c] += hit[k][c];
 }
 
 void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
