@@ -253,9 +253,14 @@ size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L, const double from[4]
 int rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables)
 {
     size_t per = (size_t)(L->box[1] - L->box[0] + 1) * (L->box[3] - L->box[2] + 1) * 3;
-    for (uint32_t i = 0; i < L->nshared; i++)
-        if (lfio_slab_blend(e->lf->slab, L->ids, L->swd[i], L->box, tables + i * per) != LFIO_OK)
+    for (uint32_t i = 0; i < L->nshared; i++) {
+        /* the direction's scale (cosine times weight) mixed in: a sample then only adds what it reads */
+        double w[4], scale = L->plan[i].live ? L->plan[i].scale : 0.0;
+        for (int k = 0; k < 4; k++)
+            w[k] = L->swd[i][k] * scale;
+        if (lfio_slab_blend(e->lf->slab, L->ids, w, L->box, tables + i * per) != LFIO_OK)
             return -1;
+    }
     L->blend = tables;
     L->blend_stride = per;
     const lfio_slab_desc *d = lfio_slab_get_desc(e->lf->slab);

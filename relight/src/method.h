@@ -85,7 +85,7 @@ typedef struct rl_leaf {
     double swd[RL_LEAF_SHARED][4];  /* and slab interpolation weights of ids */
     rl_shared_plan plan[RL_LEAF_SHARED]; /* each shared direction seen from the current receiver plane */
     uint32_t box[4];      /* blend: the slab positions outside which ids read zero, or which no origin reaches */
-    const float *blend;   /* their mix for each shared direction (rl__leaf_blend()), or NULL */
+    const float *blend;   /* their mix for each shared direction, times its plan's scale (rl__leaf_blend()), or NULL */
     size_t blend_stride;  /* floats from one shared direction's table to the next */
     lfio_blend_grid grid; /* blend: the tables' grid */
     double grect[4];      /* blend: {gu0, gu1, gv0, gv1} in grid coordinates, within the slab, outside which it reads 0 */
@@ -134,7 +134,8 @@ size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L, const double from[4]
 
 /* Mixes the slab's directions for each shared direction of L over L->box
  * (rl__leaf_blend_size(), before) into tables (that many floats), which L
- * then reads. @return 0, or -1 if lfio refused (L then reads the slab as before). */
+ * then reads: radiance times the direction's plan scale.
+ * @return 0, or -1 if lfio refused (L then reads the slab as before). */
 int rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables);
 
 /* Radiance leaving e at frame point q in propagation direction d; L (may be

@@ -122,8 +122,10 @@ static inline void shoot_shared(const rl_transfer_ctx *ctx, const rl_pair *p, co
             return;
         if (sh && rl__shadowed(sh, i, uv))
             return;
-        float rgb[3];
+        float rgb[3]; /* the scale is in the table */
         lfio_blend_at(&L->grid, L->blend + i * L->blend_stride, gu, gv, rgb);
+        if (!(rgb[0] > 0 || rgb[1] > 0 || rgb[2] > 0))
+            return;
         l[0] = rgb[0], l[1] = rgb[1], l[2] = rgb[2];
     } else {
         v2 q = {pl->qx[0] + pl->qx[1] * uv.x + pl->qx[2] * uv.y, pl->qy[0] + pl->qy[1] * uv.x + pl->qy[2] * uv.y};
@@ -132,11 +134,11 @@ static inline void shoot_shared(const rl_transfer_ctx *ctx, const rl_pair *p, co
         if (sh && rl__shadowed(sh, i, uv))
             return;
         rl__leaf_radiance_weighted(p->e, q, L, L->swd[i], l);
+        if (!(l[0] > 0 || l[1] > 0 || l[2] > 0))
+            return;
+        for (int c = 0; c < 3; c++)
+            l[c] *= pl->scale;
     }
-    if (!(l[0] > 0 || l[1] > 0 || l[2] > 0))
-        return;
-    for (int c = 0; c < 3; c++)
-        l[c] *= pl->scale;
     if (sh) {
         /* the shadows are known: no ray */
         for (int c = 0; c < 3; c++)
