@@ -503,6 +503,8 @@ void lfio_slab_blend_grid(const lfio_slab *s, const uint32_t box[4], lfio_blend_
     g->rect[2] = box[2] == 0 ? -INFINITY : box[2] - 1.0;
     g->rect[3] = box[3] + 1 >= s->desc.nv ? INFINITY : box[3] + 1.0;
     memcpy(g->box, box, sizeof g->box);
+    g->ni = box[1] - box[0] + 1;
+    g->nj = box[3] - box[2] + 1;
 }
 
 void lfio_slab_blend_radiance(const lfio_slab *s, const uint32_t box[4], const float *rgb, double st_s,

@@ -242,6 +242,7 @@ typedef struct lfio_blend_grid {
     double rect[4];   /**< {gu_min, gu_max, gv_min, gv_max}: outside it the table reads 0 (infinite past the slab's
                            edges, where the edges' values hold) */
     uint32_t box[4];  /**< the table's positions, as lfio_slab_blend() took them */
+    uint32_t ni, nj;  /**< the table's positions along s and t: box[1] - box[0] + 1, box[3] - box[2] + 1 */
 } lfio_blend_grid;
 
 /**
@@ -271,17 +272,17 @@ static inline void lfio_blend_at(const lfio_blend_grid *g, const float *rgb, dou
     /* relative to the box; unsigned wrap-around makes one comparison per
      * tap test both ends. Past the slab's last position a tap's weight is
      * 0 (fu or fv is 0 there), and it reads 0 as outside the box. */
-    uint32_t ni = g->box[1] - g->box[0] + 1, nj = g->box[3] - g->box[2] + 1;
-    uint32_t is[2] = {i0 - g->box[0], i0 + 1 - g->box[0]}, js[2] = {j0 - g->box[2], j0 + 1 - g->box[2]};
+    uint32_t ia = i0 - g->box[0], ja = j0 - g->box[2];
     double wu[2] = {1 - fu, fu}, wv[2] = {1 - fv, fv};
     float acc[3] = {0, 0, 0};
-    for (int b = 0; b < 2; b++) {
-        if (js[b] >= nj)
+    for (uint32_t b = 0; b < 2; b++) {
+        if (ja + b >= g->nj)
             continue;
-        for (int a = 0; a < 2; a++) {
-            if (is[a] >= ni)
+        const float *row = rgb + (size_t)(ja + b) * g->ni * 3;
+        for (uint32_t a = 0; a < 2; a++) {
+            if (ia + a >= g->ni)
                 continue;
-            const float *p = rgb + ((size_t)js[b] * ni + is[a]) * 3;
+            const float *p = row + (size_t)(ia + a) * 3;
             float wq = (float)(wu[a] * wv[b]);
             for (int c = 0; c < 3; c++)
                 acc[c] += wq * p[c];
