@@ -14,7 +14,10 @@
  * that misses every polygon by a margin lies in none. Blocked and free
  * samples must both occur, and the shadows must be known for nearly every
  * leaf that casts rays, so that neither check is vacuous; the plan of each
- * ray must match the direct computation.
+ * ray must match the direct computation; and shadows built from a random
+ * rectangle of the tile alone (culled's, around a solid angle's region)
+ * must decide every origin inside it as the whole tile's do, with fewer
+ * shadows somewhere.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -45,6 +48,7 @@ int main(void)
 {
     const char *tmp = getenv("ILF_TEST_TMP") ? getenv("ILF_TEST_TMP") : "/tmp";
     long blocked = 0, arrived = 0, known = 0, leaves = 0, wrong_free = 0, wrong_blocked = 0, plan_bad = 0, dead = 0;
+    long part_compared = 0, part_differ = 0, part_fewer = 0;
     long casting = 0, unknown_casting = 0;
     rl_map *map = calloc(1, sizeof *map);
     rl_emitter *e = calloc(1, sizeof *e);
@@ -111,8 +115,9 @@ int main(void)
         rl_transfer_ctx ctx;
         memset(&ctx, 0, sizeof ctx);
         ctx.occluders = occ;
-        rl_scratch scratch;
+        rl_scratch scratch, part;
         memset(&scratch, 0, sizeof scratch);
+        memset(&part, 0, sizeof part);
         uint32_t npolys = (uint32_t)rl_scene_polygon_count(s);
         for (int lf = 0; lf < LEAVES_PER_SCENE; lf++) {
             /* a triangle of directions about 0.1 rad across, leaving the emitter's front */
@@ -186,14 +191,41 @@ int main(void)
             }
             casting += casts;
             unknown_casting += casts && !is_known;
+            /* shadows from a part of the tile alone (culled's rectangle around a
+             * solid angle's region) decide every origin in that part alike */
+            double within[4] = {6 * ts_rnd() - 3, 0, 6 * ts_rnd() - 3, 0};
+            within[1] = within[0] + (3 - within[0]) * ts_rnd();
+            within[3] = within[2] + (3 - within[2]) * ts_rnd();
+            CHECK(rl__shadows_build(&ctx, p, t, L, within, &part) == 0, "scene %d leaf %d: part's shadows", sc, lf);
+            if (is_known && part.shadows->known) {
+                for (int o = 0; o < ORIGINS / 4; o++) {
+                    v2 uv = {within[0] + (within[1] - within[0]) * ts_rnd(),
+                             within[2] + (within[3] - within[2]) * ts_rnd()};
+                    rl__shadows_row(scratch.shadows, uv.x, uv.x, uv.y, uv.y);
+                    rl__shadows_row(part.shadows, uv.x, uv.x, uv.y, uv.y);
+                    for (uint32_t i = 0; i < SHARED; i++) {
+                        if (!L->plan[i].live)
+                            continue;
+                        part_compared++;
+                        part_differ += rl__shadowed(scratch.shadows, i, uv) != rl__shadowed(part.shadows, i, uv);
+                    }
+                }
+                part_fewer += part.shadows->npolys < scratch.shadows->npolys;
+            }
         }
         rl__scratch_free(&scratch);
+        rl__scratch_free(&part);
         rl__occluders_destroy(occ);
         rl_scene_destroy(s);
     }
     printf("leaves: %ld of %ld with known shadows, %ld of %ld casting rays unknown; "
            "samples: %ld blocked, %ld arrive, %ld facing away\n",
            known, leaves, unknown_casting, casting, blocked, arrived, dead);
+    printf("shadows from a part of the tile: %ld verdicts compared, %ld leaves with fewer shadows\n", part_compared,
+           part_fewer);
+    CHECK(part_compared > 1000 && part_differ == 0, "%ld of %ld verdicts in a part of the tile differ from the whole's",
+          part_differ, part_compared);
+    CHECK(part_fewer > 0, "a part of the tile casts fewer shadows somewhere");
     CHECK(plan_bad == 0, "%ld samples whose planned ray differs from the direct computation", plan_bad);
     CHECK(dead > 0, "some shared directions miss the receiver's front (%ld)", dead);
     CHECK(wrong_free == 0, "%ld samples whose segment crosses a polygon lie in no shadow", wrong_free);

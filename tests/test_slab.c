@@ -480,19 +480,34 @@ static void check_blend(void)
         int has_small = small[0] <= small[1] && small[2] <= small[3];
         if (has_small)
             CHECK(lfio_slab_blend(s, ids, wd, small, cut) == LFIO_OK, "blend a part: %s", lfio_errmsg());
+        /* the inline lookup at grid coordinates where taps switch: position
+         * centres, half-way, the box's edges and the rows past them, past the
+         * slab's edges (the rectangle's ends, inclusive) */
+        lfio_blend_grid grid;
+        lfio_slab_blend_grid(s, box, &grid);
+        const double us[] = {-1.5, -0.5, 0.0, box[0] - 1.0, box[0] - 0.5, box[0], box[0] + 0.5,
+                             box[1], box[1] + 0.5, box[1] + 1.0, 5.0, 5.5, 6.2};
+        const double vs[] = {-0.7, 0.0, box[2] - 1.0, box[2], box[3], box[3] + 0.25, box[3] + 1.0, 4.0, 4.9};
+        for (size_t iu = 0; iu < sizeof us / sizeof *us; iu++)
+            for (size_t iv = 0; iv < sizeof vs / sizeof *vs; iv++) {
+                double gu = us[iu], gv = vs[iv];
+                if (!(gu >= grid.rect[0] && gu <= grid.rect[1] && gv >= grid.rect[2] && gv <= grid.rect[3]))
+                    continue;
+                float at[3], mix[3];
+                lfio_blend_at(&grid, table, gu, gv, at);
+                lfio_slab_radiance_mix(s, (gu + 0.5) / 6, (gv + 0.5) / 5, ids, wd, mix);
+                for (int c = 0; c < 3; c++)
+                    grid_bad += fabs(at[c] - mix[c]) > 2e-6 * (fabs(mix[c]) + 1e-3);
+            }
         for (int q = 0; q < 50; q++) {
             double a = rng_unit() * 1.4 - 0.2, b = rng_unit() * 1.4 - 0.2;
             float mix[3], got[3], part[3];
             lfio_slab_radiance_mix(s, a, b, ids, wd, mix);
             lfio_slab_blend_radiance(s, box, table, a, b, got);
-            /* the inline lookup in grid coordinates reads the same, and outside
-             * the grid's rectangle every tap lies outside the box */
+            /* outside the grid's rectangle every tap lies outside the box */
             lfio_blend_grid g;
             lfio_slab_blend_grid(s, box, &g);
             double ga = a * 6 - 0.5, gb = b * 5 - 0.5;
-            float at[3];
-            lfio_blend_at(&g, table, ga, gb, at);
-            grid_bad += at[0] != got[0] || at[1] != got[1] || at[2] != got[2];
             if (!(ga >= g.rect[0] && ga <= g.rect[1] && gb >= g.rect[2] && gb <= g.rect[3])) {
                 beyond++;
                 rect_bad += mix[0] != 0 || mix[1] != 0 || mix[2] != 0 || got[0] != 0 || got[1] != 0 || got[2] != 0;
@@ -516,7 +531,8 @@ static void check_blend(void)
         }
     }
     CHECK(worst_ppm <= 2, "blend reads the mix to float rounding: worst %ld ppm", worst_ppm);
-    CHECK(grid_bad == 0, "lfio_blend_at() differs from lfio_slab_blend_radiance() at %ld points", grid_bad);
+    CHECK(grid_bad == 0, "lfio_blend_at() differs from the mix at %ld grid points on position centres, box "
+                         "edges and past the slab", grid_bad);
     CHECK(beyond > 100 && rect_bad == 0, "%ld of %ld points outside the grid's rectangle read light", rect_bad, beyond);
     CHECK(outside_bad == 0 && inside_bad == 0, "a part of the box: %ld wrong outside, %ld inside", outside_bad,
           inside_bad);

@@ -132,7 +132,9 @@ static void trace_packet(const rl_transfer_ctx *ctx, const rl_map *m, size_t n, 
         /* the hits land anywhere in the scene's maps: ask for every hit's
          * radiance first, add them after, so that the cache misses overlap */
         hit[kept] = g->rad[rl__map_square_clamped(hm, frame_project(&hm->frame, v3_madd(x[i], d[i], dist[i])))];
+#if defined(__GNUC__)
         __builtin_prefetch(hit[kept]);
+#endif
         kept++;
     }
     cnt->rays_kept += kept;

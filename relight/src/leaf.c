@@ -218,6 +218,7 @@ size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L, const double from[4]
     /* grid coordinates g = s * nu - 0.5, s = q / len: affine in the origin's as q is */
     double fu = d->nu / e->len_u, fv = d->nv / e->len_v;
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    int finite = 1;
     for (uint32_t i = 0; i < L->nshared; i++) {
         rl_shared_plan *pl = &L->plan[i];
         for (int c = 0; c < 3; c++) {
@@ -230,6 +231,7 @@ size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L, const double from[4]
             /* the landing is affine: its extremes over the rectangle are at its corners */
             double u = from[k % 2], v = from[2 + k / 2];
             double g[2] = {pl->gu[0] + pl->gu[1] * u + pl->gu[2] * v, pl->gv[0] + pl->gv[1] * u + pl->gv[2] * v};
+            finite &= isfinite(g[0]) && isfinite(g[1]);
             for (int a = 0; a < 2; a++)
                 lo[a] = dmin(lo[a], g[a]), hi[a] = dmax(hi[a], g[a]);
         }
@@ -242,7 +244,8 @@ size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L, const double from[4]
         double first = dmax(floor(lo[a]), 0.0), last = dmin(floor(hi[a]) + 1.0, n[a] - 1.0);
         b[2 * a] = first <= last ? (uint32_t)first : 1, b[2 * a + 1] = first <= last ? (uint32_t)last : 0;
     }
-    if (b[0] <= b[1] && b[2] <= b[3] && b[0] <= L->box[1] && b[1] >= L->box[0] && b[2] <= L->box[3] &&
+    /* a landing out of range (a direction grazing the emitter's plane) keeps the whole support */
+    if (finite && b[0] <= b[1] && b[2] <= b[3] && b[0] <= L->box[1] && b[1] >= L->box[0] && b[2] <= L->box[3] &&
         b[3] >= L->box[2]) {
         L->box[0] = b[0] > L->box[0] ? b[0] : L->box[0], L->box[1] = b[1] < L->box[1] ? b[1] : L->box[1];
         L->box[2] = b[2] > L->box[2] ? b[2] : L->box[2], L->box[3] = b[3] < L->box[3] ? b[3] : L->box[3];

@@ -16,10 +16,10 @@
  * The polygons that can matter are collected once per (tile, leaf) by the
  * beam from the tile to where the leaf's directions from it land on the
  * emitter (shadow.h): a superset of every polygon any of its rays can meet.
- * Naive takes the whole tile; culled only the rectangle around the leaf's
- * region, since an origin outside the region sees only where the leaf reads
- * zero. Both sets of shadows are exact for every sample that can carry
- * light, so the two methods agree. When nothing can be said (a leaf
+ * Culled and naive give the rectangle around the leaf's region on the tile
+ * when they know it (an origin outside the region sees only where the leaf
+ * reads zero), the same for both, so that they decide alike. When nothing
+ * can be said (a leaf
  * grazing the emitter's plane, more polygons than the list holds), the
  * shadows are unknown and the caller traces rays.
  *

@@ -308,32 +308,33 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
     rl_leaf L;
     rl__leaf_make(ctx, p->e, emitter_index, t->map_index, p->level, id, &L);
     size_t nq = 0;
-    if (culled) {
-        /* a light field's solid angle is culled against the part of the
-         * slab where its radiance is nonzero; cells outside that region
-         * would only have drawn zeros */
+    /* The leaf's region on the tile: where its directions can see the part of
+     * the emitter (for a light field, of the slab where its radiance is
+     * nonzero) they can reach. Culled visits only the cells it meets; both
+     * methods build a sharing leaf's tables and shadows for the rectangle
+     * around it alone (an origin outside sees only where the leaf reads
+     * zero), so that they decide and read alike. */
+    if (culled || (rows->shares && L.mix)) {
         v3 box[4], src[RL_MAX_POLY_VERTS + 2];
         int sup = ctx->sampling->zero_culling ? rl__leaf_support(p->e, &L, box) : 0;
         size_t ns = sup > 0 ? rl__clip_poly3(box, 4, m->frame.origin, m->frame.n, src) : 0;
         double lift = 0.0;
         for (size_t k = 0; k < ns; k++)
             lift = fmax(lift, v3_dot(v3_sub(src[k], m->frame.origin), m->frame.n));
-        if (sup < 0 || (sup > 0 && (ns < 3 || !(lift > 0))))
-            return 0;
-        nq = sup > 0 ? rl__node_region(ctx, p, src, ns, t, p->level, id, reg, q)
-                     : rl__node_region(ctx, p, p->sclip, p->ns, t, p->level, id, reg, q);
-        if (nq == 0)
+        int dark = sup < 0 || (sup > 0 && (ns < 3 || !(lift > 0)));
+        if (!dark)
+            nq = sup > 0 ? rl__node_region(ctx, p, src, ns, t, p->level, id, reg, q)
+                         : rl__node_region(ctx, p, p->sclip, p->ns, t, p->level, id, reg, q);
+        if (culled && nq == 0)
             return 0;
     }
     if (row_reserve(s, m->nu) != 0)
         return -1;
-    /* where the origins that matter lie: the rectangle around the leaf's
-     * region for culled (an origin outside it sees only where the leaf reads
-     * zero), the tile's rows for naive */
-    double within[4] = {m->u0, m->u0 + (double)m->nu * m->cell, m->v0 + (double)t->row0 * m->cell,
-                        m->v0 + (double)t->row1 * m->cell};
-    if (culled) {
-        double pad = 1e-6 * m->cell;
+    /* the rectangle around the region (the tile's rows without one, where every sample reads zero) */
+    double pad = 1e-6 * m->cell;
+    double within[4] = {m->u0 - pad, m->u0 + (double)m->nu * m->cell + pad, m->v0 + (double)t->row0 * m->cell - pad,
+                        m->v0 + (double)t->row1 * m->cell + pad};
+    if (nq > 0) {
         within[0] = within[2] = INFINITY, within[1] = within[3] = -INFINITY;
         for (size_t k = 0; k < nq; k++) {
             within[0] = dmin(within[0], q[k].x - pad), within[1] = dmax(within[1], q[k].x + pad);
@@ -346,12 +347,9 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
          * a sample (inline) instead of 16 (a call): a position of a table
          * costs about what a sample saves, and a tile's cells each draw one
          * sample per direction, so it is built when it has at most 4 times as
-         * many positions as the tile has cells (not the leaf's own share of
-         * them, which naive does not know, and culled must agree). 1, 4 and
-         * 16 times: 'beams' at 47k cells 8.67, 8.49 and 8.50 G instructions.
-         * Its box holds only the positions the origins within reach: culled's
-         * and naive's tables then differ only where no sample that can carry
-         * light reads them. */
+         * many positions as the tile has cells (1, 4 and 16 times: 'beams' at
+         * 47k cells 8.67, 8.49 and 8.50 G instructions). Its box holds only
+         * the positions that origins within the rectangle reach. */
         size_t floats = rl__leaf_blend_size(p->e, &L, within);
         size_t positions = floats > 0 ? ((size_t)L.box[1] - L.box[0] + 1) * ((size_t)L.box[3] - L.box[2] + 1) : 0;
         if (floats > 0 && positions <= 4 * (size_t)m->nu * (t->row1 - t->row0)) {
@@ -362,8 +360,8 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
     }
     if (s->shadows)
         s->shadows->known = 0;
-    /* culled's shadows from the rectangle alone too: a narrower beam collects fewer polygons */
-    if (rows->shadows && L.nshared > 0 && rl__shadows_build(ctx, p, t, &L, culled ? within : NULL, s) != 0)
+    /* the shadows from the rectangle alone too: a narrower beam collects fewer polygons */
+    if (rows->shadows && L.nshared > 0 && rl__shadows_build(ctx, p, t, &L, nq > 0 ? within : NULL, s) != 0)
         return -1;
     for (uint32_t j = t->row0; j < t->row1; j++) {
         uint32_t i0 = 0, i1 = m->nu - 1;

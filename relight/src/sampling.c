@@ -36,12 +36,9 @@ static pthread_once_t lds_once = PTHREAD_ONCE_INIT;
 lds_key rl__lds_make(uint64_t key)
 {
     pthread_once(&lds_once, lds_fill); /* every key is made here, so rl__lds_coord() may assume the table */
-    /* two hashes, each split into two 32-bit offsets: ample resolution for
-     * a rotation, at half the hashing */
     lds_key k;
-    uint64_t h[2] = {ilf_hash_mix(key, 1), ilf_hash_mix(key, 2)};
-    for (int j = 0; j < 4; j++)
-        k.shift[j] = (double)((h[j / 2] >> (32 * (j % 2))) & 0xffffffffu) * (1.0 / 4294967296.0);
+    rl__lds_shift_pair(&k, 0, ilf_hash_mix(key, 1));
+    rl__lds_shift_pair(&k, 2, ilf_hash_mix(key, 2));
     return k;
 }
 

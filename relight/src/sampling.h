@@ -20,15 +20,22 @@ typedef struct lds_key {
 /* @return the rotation drawn from key. */
 lds_key rl__lds_make(uint64_t key);
 
+/* Sets the shifts of coordinates j and j + 1 of k from one hash h: its low
+ * and high 32 bits, ample resolution for a rotation at half the hashing. */
+static inline void rl__lds_shift_pair(lds_key *k, int j, uint64_t h)
+{
+    k->shift[j] = (double)(h & 0xffffffffu) * (1.0 / 4294967296.0);
+    k->shift[j + 1] = (double)(h >> 32) * (1.0 / 4294967296.0);
+}
+
 /* @return rl__lds_make(key)'s shifts of coordinates 2 and 3, the others 0:
  * for a caller that reads only those (a cell's origins for shared
  * directions), at one hash instead of two. Needs an rl__lds_make() first
  * in the process (the table). */
 static inline lds_key rl__lds_make_last2(uint64_t key)
 {
-    uint64_t h = ilf_hash_mix(key, 2); /* rl__lds_make()'s second hash */
-    lds_key k = {{0.0, 0.0, (double)(h & 0xffffffffu) * (1.0 / 4294967296.0),
-                  (double)(h >> 32) * (1.0 / 4294967296.0)}};
+    lds_key k = {{0.0, 0.0, 0.0, 0.0}};
+    rl__lds_shift_pair(&k, 2, ilf_hash_mix(key, 2));
     return k;
 }
 
