@@ -250,12 +250,12 @@ size_t rl__leaf_blend_size(const rl_emitter *e, rl_leaf *L, const double from[4]
         L->box[0] = b[0] > L->box[0] ? b[0] : L->box[0], L->box[1] = b[1] < L->box[1] ? b[1] : L->box[1];
         L->box[2] = b[2] > L->box[2] ? b[2] : L->box[2], L->box[3] = b[3] < L->box[3] ? b[3] : L->box[3];
     }
-    return (size_t)L->nshared * (L->box[1] - L->box[0] + 1) * (L->box[3] - L->box[2] + 1) * 3;
+    return L->nshared * rl__box_positions(L->box) * 3;
 }
 
 int rl__leaf_blend(const rl_emitter *e, rl_leaf *L, float *tables)
 {
-    size_t per = (size_t)(L->box[1] - L->box[0] + 1) * (L->box[3] - L->box[2] + 1) * 3;
+    size_t per = rl__box_positions(L->box) * 3;
     for (uint32_t i = 0; i < L->nshared; i++) {
         /* the direction's scale (cosine times weight) mixed in: a sample then only adds what it reads */
         double w[4], scale = L->plan[i].live ? L->plan[i].scale : 0.0;

@@ -150,23 +150,22 @@ int rl__shadows_build(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_til
         return -1;
     const rl_map *m = t->m;
     v3 tile[RL_BEAM_MAX_VERTS], a[RL_BEAM_MAX_VERTS + 1], far[RL_BEAM_MAX_VERTS];
-    v2 cut[2][RL_BEAM_MAX_VERTS + 4];
+    v2 cut[RL_BEAM_MAX_VERTS + 4], scratch[RL_BEAM_MAX_VERTS + 4];
     if (t->npoly > RL_BEAM_MAX_VERTS - 5)
         return 0;
-    /* the tile, cut to the rectangle where origins can carry light */
-    size_t nt = t->npoly;
-    memcpy(cut[0], t->poly, nt * sizeof *t->poly);
-    for (int k = 0; within && k < 4 && nt >= 3; k++) {
-        rl_halfplane h = {k == 0 ? 1 : k == 1 ? -1 : 0, k == 2 ? 1 : k == 3 ? -1 : 0, 0};
-        h.c = k % 2 == 0 ? -within[k] : within[k];
-        nt = rl__clip_poly2(cut[k % 2], nt, h, cut[(k + 1) % 2]); /* four cuts end in cut[0] */
+    /* the tile, cut to the rectangle where origins can carry light (counter-clockwise) */
+    size_t nt = 0;
+    if (within) {
+        const v2 rect[4] = {{within[0], within[2]}, {within[1], within[2]}, {within[1], within[3]},
+                            {within[0], within[3]}};
+        nt = rl__clip_to_polygon(t->poly, t->npoly, rect, 4, cut, scratch);
     }
-    if (nt < 3) { /* a sliver: the whole tile */
+    if (nt < 3) { /* no rectangle, or a sliver: the whole tile */
         nt = t->npoly;
-        memcpy(cut[0], t->poly, nt * sizeof *t->poly);
+        memcpy(cut, t->poly, nt * sizeof *t->poly);
     }
     for (size_t k = 0; k < nt; k++)
-        tile[k] = frame_point(&m->frame, cut[0][k]);
+        tile[k] = frame_point(&m->frame, cut[k]);
     /* origins behind the emitter's plane shoot nothing: the beam starts from the rest */
     size_t na = rl__clip_poly3(tile, nt, p->e->frame.origin, p->e->frame.n, a);
     size_t nf = na >= 3 ? footprint(p, L, a, na, far) : 0;

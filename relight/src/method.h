@@ -125,6 +125,12 @@ uint32_t rl__leaf_share(rl_leaf *L, uint32_t k);
  * plane rf (origin offsets eps, m), for the shared samples of method_culled.c. */
 void rl__leaf_plan(rl_leaf *L, const rl_emitter *e, const rl_frame *rf, double eps);
 
+/* @return the slab positions in box = {i_min, i_max, j_min, j_max} (inclusive). */
+static inline size_t rl__box_positions(const uint32_t box[4])
+{
+    return ((size_t)box[1] - box[0] + 1) * ((size_t)box[3] - box[2] + 1);
+}
+
 /* @return how many floats rl__leaf_blend() needs for the shared directions
  * of L (planned, rl__leaf_plan()) seen from origins in the map rectangle
  * from = {u0, u1, v0, v1}, 0 when L reads only zeros or does not share.

@@ -351,8 +351,7 @@ static int gather_leaf(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
          * 47k cells 8.67, 8.49 and 8.50 G instructions). Its box holds only
          * the positions that origins within the rectangle reach. */
         size_t floats = rl__leaf_blend_size(p->e, &L, within);
-        size_t positions = floats > 0 ? ((size_t)L.box[1] - L.box[0] + 1) * ((size_t)L.box[3] - L.box[2] + 1) : 0;
-        if (floats > 0 && positions <= 4 * (size_t)m->nu * (t->row1 - t->row0)) {
+        if (floats > 0 && rl__box_positions(L.box) <= 4 * (size_t)m->nu * (t->row1 - t->row0)) {
             if (blend_reserve(s, floats) != 0)
                 return -1;
             (void)rl__leaf_blend(p->e, &L, s->blend); /* refused: L reads the slab itself */
