@@ -9,6 +9,7 @@
  * direction through the slab's own rotation. Leaves that nest in the slab's
  * partition read it faster through rl__leaf_radiance_mix() (leaf.c).
  */
+#include <math.h>
 #include <string.h>
 
 #include <lfio/partition.h>
@@ -109,5 +110,122 @@ int rl__emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id)
     for (int k = 0; k < 3; k++)
         if (nb[k] < lfio_part_hemi_count(lv) && lfio_slab_mask_test(s, lv, nb[k]))
             return 0;
+    return 1;
+}
+
+/* ------------------------------------------------ where a light field is lit
+ *
+ * Seen from a small receiver, a light field is often dark over most of its
+ * slab: what reaches the receiver leaves along the few directions of the cone
+ * from the slab to it, and each direction is lit over part of the positions
+ * alone. rl__emitter_lit_rect() bounds that part. Directions are placed on
+ * the slab's diamond, (a, b) = (l0, l1) / |l|_1 for l in the slab's frame
+ * with l2 > 0, where the partition's lattice is a grid of unit squares of
+ * side 1/n, each cut by its diagonal into two triangles. A table built once
+ * per slab holds, for every square, the positions its two triangles and
+ * their interpolation neighbours read (what lfio_slab_radiance_interp()
+ * mixes anywhere in it); a cone's box of squares gives the union. */
+
+void rl__cone_support_fill(const lfio_slab *slab, const uint32_t (*support)[4], uint32_t (*cone)[4])
+{
+    uint32_t n = lfio_slab_get_desc(slab)->n, side = 2 * n;
+    uint64_t ndir = lfio_slab_dir_count(slab);
+    for (uint32_t ib = 0; ib < side; ib++)
+        for (uint32_t ia = 0; ia < side; ia++) {
+            uint32_t *box = cone[(size_t)ib * side + ia];
+            box[0] = box[2] = UINT32_MAX;
+            box[1] = box[3] = 0;
+            /* the square's lattice corner (xi, yi) in its quadrant, and the quadrant's signs */
+            uint32_t xi = ia >= n ? ia - n : n - 1 - ia, yi = ib >= n ? ib - n : n - 1 - ib;
+            double sx = ia >= n ? 1.0 : -1.0, sy = ib >= n ? 1.0 : -1.0;
+            for (int t = 0; t < 2; t++) {
+                /* centroids: the lower-left triangle, then the upper-right (inside the diamond only) */
+                double cx = xi + (t ? 2.0 : 1.0) / 3.0, cy = yi + (t ? 2.0 : 1.0) / 3.0;
+                if (cx + cy >= (double)n)
+                    continue;
+                double d[3] = {sx * cx, sy * cy, (double)n - cx - cy};
+                uint64_t ids[4];
+                if (!lfio_part_id(n, d, &ids[0]) || !lfio_part_neighbours(n, ids[0], ids + 1))
+                    continue;
+                for (int k = 0; k < 4; k++) {
+                    if (ids[k] >= ndir) /* behind the slab: lfio gives its share to the triangle itself */
+                        continue;
+                    rl__box_union(box, support[ids[k]]);
+                }
+            }
+            if (box[0] == UINT32_MAX)
+                box[0] = 1, box[1] = 0;
+        }
+}
+
+void rl__emitter_support_rect(const rl_emitter *e, const uint32_t b[4], double r[4])
+{
+    /* bilinear interpolation between position centres reaches half a position past the last nonzero
+     * centre, and the border clamps */
+    const lfio_slab_desc *d = lfio_slab_get_desc(e->lf->slab);
+    r[0] = (b[0] == 0 ? 0.0 : (b[0] - 0.5) / d->nu) * e->len_u;
+    r[1] = (b[1] + 1 >= d->nu ? 1.0 : (b[1] + 1.5) / d->nu) * e->len_u;
+    r[2] = (b[2] == 0 ? 0.0 : (b[2] - 0.5) / d->nv) * e->len_v;
+    r[3] = (b[3] + 1 >= d->nv ? 1.0 : (b[3] + 1.5) / d->nv) * e->len_v;
+}
+
+/* @return t / (|t| + 1): a diamond coordinate where the other one is 0, t being the direction's slope. */
+static double diamond_axis(double t)
+{
+    return t / (fabs(t) + 1.0);
+}
+
+/* @return the index of the diamond's square column holding coordinate a of n, clamped. */
+static uint32_t diamond_square(double a, uint32_t n)
+{
+    double g = floor((a + 1.0) * n);
+    return g <= 0.0 ? 0 : g >= 2.0 * n - 1 ? 2 * n - 1 : (uint32_t)g;
+}
+
+int rl__emitter_lit_rect(const rl_emitter *e, const v3 *x, uint32_t nx, const v2 *y, uint32_t ny, double r[4])
+{
+    const rl_lightfield *lf = e->lf;
+    uint32_t n = lfio_slab_get_desc(lf->slab)->n;
+    /* the box of the cone's image on the diamond: its extreme rays' images, and where the cone crosses
+     * l0 = 0 or l1 = 0 (the image bends there), the range of the other coordinate on that plane, which
+     * its slope's range over the extreme rays bounds */
+    double a0 = INFINITY, a1 = -INFINITY, b0 = INFINITY, b1 = -INFINITY;
+    double su0 = INFINITY, su1 = -INFINITY, sv0 = INFINITY, sv1 = -INFINITY;
+    int upos = 0, uneg = 0, vpos = 0, vneg = 0;
+    for (uint32_t i = 0; i < nx; i++) {
+        v3 rel = v3_sub(x[i], e->frame.origin);
+        double xu = v3_dot(rel, e->frame.e1), xv = v3_dot(rel, e->frame.e2), h = v3_dot(rel, e->frame.n);
+        if (!(h > 0.0) || !isfinite(h))
+            return 0;
+        for (uint32_t j = 0; j < ny; j++) {
+            double du = xu - y[j].x, dv = xv - y[j].y, l1 = fabs(du) + fabs(dv) + h;
+            double a = du / l1, b = dv / l1, su = du / h, sv = dv / h;
+            /* comparisons, not fmin/fmax (calls here): no value is NaN, h > 0 being finite */
+            a0 = a < a0 ? a : a0, a1 = a > a1 ? a : a1, b0 = b < b0 ? b : b0, b1 = b > b1 ? b : b1;
+            su0 = su < su0 ? su : su0, su1 = su > su1 ? su : su1, sv0 = sv < sv0 ? sv : sv0, sv1 = sv > sv1 ? sv : sv1;
+            upos |= du >= 0.0, uneg |= du <= 0.0, vpos |= dv >= 0.0, vneg |= dv <= 0.0;
+        }
+    }
+    if (upos && uneg) {
+        a0 = fmin(a0, 0.0), a1 = fmax(a1, 0.0);
+        b0 = fmin(b0, diamond_axis(sv0)), b1 = fmax(b1, diamond_axis(sv1));
+    }
+    if (vpos && vneg) {
+        b0 = fmin(b0, 0.0), b1 = fmax(b1, 0.0);
+        a0 = fmin(a0, diamond_axis(su0)), a1 = fmax(a1, diamond_axis(su1));
+    }
+    if (!(a0 <= a1) || !(b0 <= b1))
+        return 0;
+    /* a margin for the slab's own frame (orthogonal to 1e-9) and lfio's rounding of the same direction */
+    const double margin = 1e-6;
+    uint32_t ia0 = diamond_square(a0 - margin, n), ia1 = diamond_square(a1 + margin, n);
+    uint32_t ib0 = diamond_square(b0 - margin, n), ib1 = diamond_square(b1 + margin, n);
+    uint32_t box[4] = {UINT32_MAX, 0, UINT32_MAX, 0};
+    for (uint32_t ib = ib0; ib <= ib1; ib++)
+        for (uint32_t ia = ia0; ia <= ia1; ia++)
+            rl__box_union(box, lf->cone_support[(size_t)ib * 2 * n + ia]);
+    if (box[0] == UINT32_MAX)
+        return -1;
+    rl__emitter_support_rect(e, box, r);
     return 1;
 }

@@ -44,6 +44,38 @@ void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3]);
  * certainly carries no radiance (its mask and its neighbours' are clear). */
 int rl__emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id);
 
+/* Widens box b = {i0, i1, j0, j1} of slab positions (start from
+ * {UINT32_MAX, 0, UINT32_MAX, 0}) to hold box s too, unless s is empty (s[0] > s[1]). */
+static inline void rl__box_union(uint32_t b[4], const uint32_t s[4])
+{
+    if (s[0] > s[1])
+        return;
+    b[0] = s[0] < b[0] ? s[0] : b[0];
+    b[1] = s[1] > b[1] ? s[1] : b[1];
+    b[2] = s[2] < b[2] ? s[2] : b[2];
+    b[3] = s[3] > b[3] ? s[3] : b[3];
+}
+
+/* Fills cone, (2n)^2 boxes of slab positions {i0, i1, j0, j1} for a slab of
+ * partition n, from support (lfio_slab_support()): square (ia, ib) of the
+ * slab's direction diamond, a = l0 / |l|_1 in [(ia - n) / n, (ia - n + 1) / n)
+ * and b = l1 / |l|_1 likewise (l the direction in the slab's frame, l2 > 0),
+ * gets every position that a direction there reads with its interpolation
+ * neighbours (i0 > i1: none). See rl__emitter_lit_rect(). */
+void rl__cone_support_fill(const lfio_slab *slab, const uint32_t (*support)[4], uint32_t (*cone)[4]);
+
+/* Gives in r = {s0, s1, t0, t1} (e's frame, m) the rectangle of light field
+ * emitter e outside which it sends nothing toward any point of the convex
+ * hull of the nx world points x from any point of its frame polygon y (ny
+ * vertices): the slab's support over the directions of that cone.
+ * @return 1 with r set, 0 when there is no bound (a point of x on or behind
+ * the slab's plane), -1 when e is dark toward every such point. */
+int rl__emitter_lit_rect(const rl_emitter *e, const v3 *x, uint32_t nx, const v2 *y, uint32_t ny, double r[4]);
+
+/* Gives in r = {s0, s1, t0, t1} (e's frame, m) the rectangle of light field
+ * emitter e outside which positions b = {i0, i1, j0, j1} read zero. */
+void rl__emitter_support_rect(const rl_emitter *e, const uint32_t b[4], double r[4]);
+
 /* @return 1 if frame point q lies in e's convex polygon. */
 static inline int rl__emitter_contains(const rl_emitter *e, v2 q)
 {

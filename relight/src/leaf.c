@@ -101,29 +101,9 @@ static int support_box(const rl_emitter *e, const rl_leaf *L, uint32_t b[4])
 {
     uint64_t ndir = lfio_slab_dir_count(e->lf->slab);
     b[0] = UINT32_MAX, b[1] = 0, b[2] = UINT32_MAX, b[3] = 0;
-    for (int k = 0; k < 4; k++) {
-        const uint32_t *s = e->lf->support[L->ids[k] < ndir ? L->ids[k] : L->ids[0]];
-        if (s[0] > s[1])
-            continue;
-        b[0] = s[0] < b[0] ? s[0] : b[0];
-        b[1] = s[1] > b[1] ? s[1] : b[1];
-        b[2] = s[2] < b[2] ? s[2] : b[2];
-        b[3] = s[3] > b[3] ? s[3] : b[3];
-    }
+    for (int k = 0; k < 4; k++)
+        rl__box_union(b, e->lf->support[L->ids[k] < ndir ? L->ids[k] : L->ids[0]]);
     return b[0] != UINT32_MAX;
-}
-
-/* Gives in r = {s0, s1, t0, t1} (e's frame, m) the rectangle of slab e
- * outside which positions b read zero: bilinear interpolation between
- * position centres reaches half a position past the last nonzero centre,
- * and the border clamps. */
-static void support_rect(const rl_emitter *e, const uint32_t b[4], double r[4])
-{
-    const lfio_slab_desc *d = lfio_slab_get_desc(e->lf->slab);
-    r[0] = (b[0] == 0 ? 0.0 : (b[0] - 0.5) / d->nu) * e->len_u;
-    r[1] = (b[1] + 1 >= d->nu ? 1.0 : (b[1] + 1.5) / d->nu) * e->len_u;
-    r[2] = (b[2] == 0 ? 0.0 : (b[2] - 0.5) / d->nv) * e->len_v;
-    r[3] = (b[3] + 1 >= d->nv ? 1.0 : (b[3] + 1.5) / d->nv) * e->len_v;
 }
 
 int rl__leaf_support(const rl_emitter *e, const rl_leaf *L, v3 out[4])
@@ -134,7 +114,7 @@ int rl__leaf_support(const rl_emitter *e, const rl_leaf *L, v3 out[4])
     double r[4];
     if (!support_box(e, L, b))
         return -1;
-    support_rect(e, b, r);
+    rl__emitter_support_rect(e, b, r);
     out[0] = frame_point(&e->frame, (v2){r[0], r[2]});
     out[1] = frame_point(&e->frame, (v2){r[1], r[2]});
     out[2] = frame_point(&e->frame, (v2){r[1], r[3]});

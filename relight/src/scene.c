@@ -27,6 +27,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "emitter.h"
 #include "mesh.h"
 #include "ilf/json.h"
 #include "ilf/limits.h"
@@ -468,16 +469,20 @@ static void slab_names(const lfio_lightfield *lf, char *buf, size_t cap)
                  lfio_slab_get_desc(lfio_lightfield_slab(lf, k))->name);
 }
 
-/* @return a new table of the boxes of positions holding each stored
- * direction's nonzero radiance (see rl_lightfield.support), or NULL when
- * memory runs out. */
-static uint32_t (*slab_support_new(const lfio_slab *slab))[4]
+/* Sets lf's tables of the boxes of positions holding each stored direction's
+ * nonzero radiance and each diamond square's (rl_lightfield.support and
+ * cone_support), in one allocation. @return 0, or -1 when memory runs out. */
+static int slab_support_new(rl_lightfield *lf)
 {
-    uint64_t ndir = lfio_slab_dir_count(slab);
-    uint32_t (*box)[4] = malloc((ndir ? ndir : 1) * sizeof *box);
-    if (box != NULL)
-        lfio_slab_support(slab, box);
-    return box;
+    uint64_t ndir = lfio_slab_dir_count(lf->slab), n = lfio_slab_get_desc(lf->slab)->n;
+    uint32_t (*box)[4] = malloc((ndir + 4 * n * n) * sizeof *box);
+    if (box == NULL)
+        return -1;
+    lfio_slab_support(lf->slab, box);
+    rl__cone_support_fill(lf->slab, (const uint32_t(*)[4])box, box + ndir);
+    lf->support = box;
+    lf->cone_support = box + ndir;
+    return 0;
 }
 
 /* Picks lf's slab given by sj: a name, an index, or NULL for slab 0. @return RL_OK or RL_ERR_INPUT. */
@@ -560,8 +565,9 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
     const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
     if ((same = earlier_lightfield(b->scene, lf, NULL, lf->slab)) != NULL) {
         lf->support = same->support;
+        lf->cone_support = same->cone_support;
     } else {
-        if (!(lf->support = slab_support_new(lf->slab)))
+        if (slab_support_new(lf) != 0)
             return rl__fail(RL_ERR_NOMEM, "%s: %s: out of memory", b->file, elem);
         lf->owns_support = 1;
     }

@@ -54,6 +54,9 @@ typedef struct rl_lightfield {
      * [j0, j1] holding all its nonzero radiance (i0 > i1: none). Owned.
      * The engine shrinks each solid angle's emitter to it. Owned when owns_support. */
     uint32_t (*support)[4];
+    /* Per square of the slab's direction diamond, the positions its directions read with their
+     * interpolation neighbours (rl__cone_support_fill()). In support's allocation. */
+    uint32_t (*cone_support)[4];
 } rl_lightfield;
 
 typedef struct rl_camera {

@@ -48,6 +48,17 @@ static v3 domain_centre(const rl_map *m, const rl_origin_domain *dom)
     return frame_point(&m->frame, c);
 }
 
+/* Bounds where light field emitter e (frame polygon y, ny vertices) can light
+ * domain dom of map m from (rl__emitter_lit_rect()). @return as it does. */
+static int cell_lit_rect(const rl_map *m, const rl_origin_domain *dom, const rl_emitter *e, const v2 *y, uint32_t ny,
+                         double r[4])
+{
+    v3 x[RL_MAX_POLY_VERTS + 8];
+    for (uint32_t i = 0; i < dom->n; i++)
+        x[i] = frame_point(&m->frame, dom->poly[i]);
+    return rl__emitter_lit_rect(e, x, dom->n, y, ny, r);
+}
+
 /* @return how many origins the mean of Lambert's formula over a cell takes
  * (rl__gather_lambert()). The formula is smooth except near the
  * emitter's plane, where it falls to 0 with the distance to that plane;
@@ -67,13 +78,13 @@ static uint32_t lambert_origins(const rl_pair *p, const rl_map *m, v3 centre, ui
  * partition_n that the emitter subtends from the cell's centre (at least
  * k, at most 64 k), so that k and partition_n keep their meaning of "how
  * finely light is resolved". */
-static uint32_t view_rays(const rl_transfer_ctx *ctx, const rl_pair *p, v3 centre)
+static uint32_t view_rays(const rl_transfer_ctx *ctx, const v3 *q, size_t nq, v3 centre)
 {
     uint32_t k = ctx->sampling->rays_per_solid_angle, n = ctx->sampling->partition_n;
     double leaf_sr = 2.0 * RL_PI / (4.0 * n * n);
     v3 dir[RL_MAX_POLY_VERTS + 2];
     double om[RL_MAX_POLY_VERTS + 2];
-    double leaves = ceil(rl__sph_fan(p->sclip, p->ns, centre, dir, om) / leaf_sr);
+    double leaves = ceil(rl__sph_fan(q, nq, centre, dir, om) / leaf_sr);
     return leaves >= 64.0 ? 64 * k : leaves <= 1.0 ? k : k * (uint32_t)leaves;
 }
 
@@ -207,8 +218,32 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
                 continue; /* in full shadow: rays would all be stopped, and the cell gets 0 */
             rl__cell_domain(m, (uint32_t)cell, &dom);
             lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, ei, t->map_index), (uint64_t)cell));
+            /* a light field lights the cell from part of its slab at most: the rest reads zero, unlooked */
+            double lit[4];
+            int bounded = e->kind == EM_SLAB ? cell_lit_rect(m, &dom, e, sp, (uint32_t)p->ns, lit) : 0;
+            if (bounded < 0)
+                continue; /* dark toward the whole cell: it gets 0 */
+            /* the emitter this cell samples: the pair's, or its part the rectangle holds, which carries all
+             * the light that can reach the cell (the estimator is the same on either) */
+            const v3 *eq = p->sclip;
+            size_t neq = p->ns;
+            const rl_polygon_sampler *points = &emitter_points;
+            v3 part[RL_MAX_POLY_VERTS + 6];
+            v2 lp[RL_MAX_POLY_VERTS + 6]; /* part_points reads it */
+            rl_polygon_sampler part_points;
+            if (bounded) {
+                v2 rect[4] = {{lit[0], lit[2]}, {lit[1], lit[2]}, {lit[1], lit[3]}, {lit[0], lit[3]}},
+                   scratch[RL_MAX_POLY_VERTS + 6];
+                neq = rl__clip_to_polygon(sp, p->ns, rect, 4, lp, scratch);
+                if (neq < 3 || !(rl__polygon_area2(lp, (uint32_t)neq) > 0.0))
+                    continue;
+                for (size_t v = 0; v < neq; v++)
+                    part[v] = frame_point(&e->frame, lp[v]);
+                rl__polygon_sampler_init(&part_points, lp, (uint32_t)neq);
+                eq = part, points = &part_points;
+            }
             v3 centre = domain_centre(m, &dom);
-            uint32_t nr = view_rays(ctx, p, centre);
+            uint32_t nr = view_rays(ctx, eq, neq, centre);
             double all = 0.0, seen[3] = {0, 0, 0};
             if (vis == VIS_FREE && e->kind == EM_CONST) {
                 /* wholly lit by a constant emitter: the rays would measure a visible fraction of exactly 1 */
@@ -222,7 +257,7 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
                 double u[4];
                 rl__lds4(&key, r, u);
                 v3 x = rl__domain_point(m, &dom, u[0], u[1]);
-                v3 y = frame_point(&e->frame, rl__polygon_sampler_point(&emitter_points, u[2], u[3]));
+                v3 y = frame_point(&e->frame, rl__polygon_sampler_point(points, u[2], u[3]));
                 v3 to = v3_sub(y, x);
                 double dist = v3_len(to);
                 cnt->samples++;
@@ -266,7 +301,7 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
                 /* the emitter clipped to the tile's plane is the same for every origin on it */
                 v3 x = rl__domain_point(m, &dom, u[0], u[1]);
                 if (v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0)
-                    f += rl__polygon_lambert(x, m->frame.n, p->sclip, p->ns);
+                    f += rl__polygon_lambert(x, m->frame.n, eq, neq);
             }
             if (!(f > 0))
                 continue;

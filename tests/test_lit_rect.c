@@ -1,0 +1,209 @@
+/*
+ * test_lit_rect.c - the rectangle outside which a light field sends nothing
+ * toward a receiver (rl__emitter_lit_rect(), relight/src/emitter.c), checked
+ * against the radiance itself.
+ *
+ * A slab lit like a lamp (each position lit along directions near the line
+ * from a point behind it, plus scattered single values) is placed with a
+ * random rotation. For random receivers (a few points, from a millimetre to
+ * half a metre across, near and far, ahead, grazing, and behind the slab's
+ * plane) and random parts of the slab, every pair of a point of the
+ * receiver's hull and a point of the part where rl__emitter_radiance_at()
+ * reads light must have the part's point inside the rectangle, and a receiver
+ * called dark must read none. The rectangle must also be smaller than the slab
+ * for many receivers, or the bound would be true and useless.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <lfio/lightfield.h>
+#include <lfio/partition.h>
+
+#include "check.h"
+#include "method.h"
+#include "scene_internal.h"
+
+static uint64_t rng_state = 0x9e3779b97f4a7c15ull;
+
+/* @return a uniform number in [0, 1). */
+static double rnd(void)
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 7;
+    rng_state ^= rng_state << 17;
+    return (double)(rng_state >> 11) / 9007199254740992.0;
+}
+
+/* @return a slab of partition n, nu x nu positions over 1 m, lit around the rays from a point 0.4 m behind it
+ * within a cone of half-angle cone_deg, plus scattered lone values; with cone_deg 0, each direction at
+ * one position of its own; below 0, directions grazing along v alone. */
+static lfio_slab *lamp_slab_new(uint32_t n, uint32_t nu, double cone_deg)
+{
+    lfio_slab_desc d;
+    lfio_slab *slab = NULL;
+    lfio_slab_desc_init(&d);
+    strcpy(d.name, "lamp");
+    d.origin[0] = d.origin[1] = -0.5;
+    d.nu = d.nv = nu;
+    d.n = n;
+    CHECK(lfio_slab_new(&d, &slab) == LFIO_OK, "new slab: %s", lfio_errmsg());
+    double cos_cone = cos(cone_deg * 3.14159265358979323846 / 180.0);
+    uint64_t nd = lfio_slab_dir_count(slab);
+    for (uint64_t k = 0; k < nd; k++) {
+        double w[3];
+        lfio_part_centroid(n, k, w);
+        for (uint32_t j = 0; j < nu; j++)
+            for (uint32_t i = 0; i < nu; i++) {
+                double c[3] = {-0.5 + (i + 0.5) / nu, -0.5 + (j + 0.5) / nu, 0.4}; /* from p = (0, 0, -0.4) */
+                double cw = (c[0] * w[0] + c[1] * w[1] + c[2] * w[2]) / sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+                /* cone_deg 0: each direction lit at one position alone, so that every square of the
+                 * diamond a bound leaves out shows; below 0: only directions grazing the slab along v,
+                 * which a receiver just above the slab's middle sees between its corners, not at them */
+                int lit = cone_deg > 0.0   ? cw > cos_cone || rnd() < 0.002
+                          : cone_deg == 0.0 ? (i + nu * j) == (k * 2654435761u) % (nu * nu)
+                                            : fabs(w[1]) > 0.7 * (fabs(w[0]) + fabs(w[1]) + fabs(w[2]));
+                float v = lit ? (float)(1.0 + rnd()) : 0.0f;
+                lfio_slab_write(slab, k, i, j, (const float[3]){v, v, v});
+            }
+    }
+    return slab;
+}
+
+/* Gives rot a random rotation (det +1). */
+static void random_rotation(double rot[3][3])
+{
+    double q[4], len = 0.0;
+    for (int k = 0; k < 4; k++)
+        q[k] = rnd() - 0.5, len += q[k] * q[k];
+    len = sqrt(len);
+    double a = q[0] / len, b = q[1] / len, c = q[2] / len, d = q[3] / len;
+    double r[3][3] = {{a * a + b * b - c * c - d * d, 2 * (b * c - a * d), 2 * (b * d + a * c)},
+                      {2 * (b * c + a * d), a * a - b * b + c * c - d * d, 2 * (c * d - a * b)},
+                      {2 * (b * d - a * c), 2 * (c * d + a * b), a * a - b * b - c * c + d * d}};
+    memcpy(rot, r, sizeof r);
+}
+
+/* Places slab in lf with a random rotation and translation, with its support tables as the scene loader makes them. */
+static void place(rl_lightfield *lf, const lfio_slab *slab)
+{
+    memset(lf, 0, sizeof *lf);
+    lf->slab = slab;
+    lf->scale = 1.0;
+    random_rotation(lf->rot);
+    const lfio_slab_desc *d = lfio_slab_get_desc(slab);
+    double t[3] = {rnd() * 4 - 2, rnd() * 4 - 2, rnd() * 4 - 2};
+    for (int r = 0; r < 3; r++) {
+        lf->origin[r] = t[r], lf->u[r] = lf->v[r] = 0.0;
+        for (int c = 0; c < 3; c++) {
+            lf->origin[r] += lf->rot[r][c] * d->origin[c];
+            lf->u[r] += lf->rot[r][c] * d->u[c];
+            lf->v[r] += lf->rot[r][c] * d->v[c];
+        }
+    }
+    uint64_t nd = lfio_slab_dir_count(slab);
+    lf->support = malloc((nd + 4 * (size_t)d->n * d->n) * sizeof *lf->support);
+    lfio_slab_support(slab, lf->support);
+    lf->cone_support = lf->support + nd;
+    rl__cone_support_fill(slab, (const uint32_t(*)[4])lf->support, lf->cone_support);
+}
+
+/* @return a random point of the convex hull of the n points p (weights skewed at times to reach corners). */
+static v2 hull_point2(const v2 *p, uint32_t n)
+{
+    double w[RL_MAX_POLY_VERTS], sum = 0.0, skew = rnd() < 0.5 ? 1.0 : 6.0;
+    v2 q = {0, 0};
+    for (uint32_t i = 0; i < n; i++)
+        w[i] = pow(rnd(), skew), sum += w[i];
+    for (uint32_t i = 0; i < n; i++)
+        q.x += p[i].x * w[i] / sum, q.y += p[i].y * w[i] / sum;
+    return q;
+}
+
+static v3 hull_point3(const v3 *p, uint32_t n)
+{
+    double w[8], sum = 0.0, skew = rnd() < 0.5 ? 1.0 : 6.0;
+    v3 q = {0, 0, 0};
+    for (uint32_t i = 0; i < n; i++)
+        w[i] = pow(rnd(), skew), sum += w[i];
+    for (uint32_t i = 0; i < n; i++)
+        q = v3_add(q, v3_scale(p[i], w[i] / sum));
+    return q;
+}
+
+/* One slab, many receivers: the bound's promise at random pairs of points. */
+static void check_slab(uint32_t n, uint32_t nu, double cone_deg, int receivers, long *tight, long *bounded)
+{
+    lfio_slab *slab = lamp_slab_new(n, nu, cone_deg);
+    rl_lightfield lf;
+    place(&lf, slab);
+    rl_emitter e;
+    rl__emitter_from_lightfield(&lf, &e);
+    for (int r = 0; r < receivers; r++) {
+        /* the receiver: 1 to 8 points around a centre given in the slab's frame */
+        double size = pow(10.0, -3.0 + 2.7 * rnd()), h = rnd() < 0.1 ? size * (rnd() - 0.5) : pow(10.0, -2.0 + 2.5 * rnd());
+        v2 c2 = {-1.5 + 4.0 * rnd(), -1.5 + 4.0 * rnd()};
+        v3 centre = v3_add(frame_point(&e.frame, c2), v3_scale(e.frame.n, h));
+        v3 x[8];
+        uint32_t nx = 1 + (uint32_t)(rnd() * 8);
+        for (uint32_t i = 0; i < nx; i++)
+            x[i] = v3_add(centre, (v3){size * (rnd() - 0.5), size * (rnd() - 0.5), size * (rnd() - 0.5)});
+        /* the part of the slab: all of it, or cut by a random line through it */
+        v2 y[RL_MAX_POLY_VERTS];
+        uint32_t ny = e.nverts;
+        memcpy(y, e.poly2, ny * sizeof *y);
+        if (rnd() < 0.5) {
+            v2 a = hull_point2(e.poly2, e.nverts), b = hull_point2(e.poly2, e.nverts);
+            v2 cut[RL_MAX_POLY_VERTS];
+            uint32_t nc = (uint32_t)rl__clip_poly2(y, ny, edge_halfplane(a, b), cut);
+            if (nc >= 3 && rl__polygon_area2(cut, nc) > 1e-6)
+                memcpy(y, cut, nc * sizeof *y), ny = nc;
+        }
+        double rect[4];
+        int got = rl__emitter_lit_rect(&e, x, nx, y, ny, rect);
+        int behind = 0;
+        for (uint32_t i = 0; i < nx; i++)
+            behind |= !(v3_dot(v3_sub(x[i], e.frame.origin), e.frame.n) > 0.0);
+        CHECK(got == 0 || !behind, "receiver %d: a point behind the slab's plane but a bound %d", r, got);
+        if (got == 1) {
+            (*bounded)++;
+            *tight += (rect[1] - rect[0]) * (rect[3] - rect[2]) < 0.8 * e.len_u * e.len_v;
+        }
+        for (int k = 0; k < 400; k++) {
+            v3 xp = hull_point3(x, nx);
+            v2 q = hull_point2(y, ny);
+            v3 d = v3_sub(xp, frame_point(&e.frame, q));
+            double len = v3_len(d), rad[3];
+            if (!(len > 0.0) || !(v3_dot(d, e.frame.n) > 0.0))
+                continue;
+            rl__emitter_radiance_at(&e, q, v3_scale(d, 1.0 / len), rad);
+            if (!(rad[0] > 0.0))
+                continue;
+            CHECK(got >= 0, "receiver %d (size %g, height %g): called dark but reads %g at (%g, %g)", r, size, h, rad[0],
+                  q.x, q.y);
+            if (got == 1)
+                CHECK(q.x >= rect[0] - 1e-12 && q.x <= rect[1] + 1e-12 && q.y >= rect[2] - 1e-12 &&
+                          q.y <= rect[3] + 1e-12,
+                      "receiver %d (size %g, height %g): light at (%g, %g) outside [%g, %g] x [%g, %g]", r, size, h,
+                      q.x, q.y, rect[0], rect[1], rect[2], rect[3]);
+        }
+    }
+    free(lf.support);
+    lfio_slab_destroy(slab);
+}
+
+int main(void)
+{
+    long tight = 0, bounded = 0;
+    for (int s = 0; s < 6; s++) {
+        check_slab(8, 12, 15.0, 300, &tight, &bounded);
+        check_slab(16, 16, 20.0, 300, &tight, &bounded);
+        check_slab(4, 5, 30.0, 100, &tight, &bounded);
+        check_slab(8, 16, 0.0, 300, &tight, &bounded);
+        check_slab(8, 4, -1.0, 300, &tight, &bounded);
+    }
+    printf("%ld of %ld bounded receivers see light from under 80%% of the slab\n", tight, bounded);
+    CHECK(bounded > 2000 && tight > bounded / 8, "the bound should narrow the slab often: %ld of %ld", tight, bounded);
+    return check_report();
+}
