@@ -12,7 +12,11 @@
  * radiance * visibility over uniform points of the emitter weighted by
  * cos cos / r^2. Seen from afar
  * those weights vary little, so the mean is well estimated; a constant
- * emitter is the case where the radiance term is the constant itself.
+ * emitter is the case where the radiance term is the constant itself. A
+ * light field is first cut, per cell, to the rectangle of its slab outside
+ * which it sends nothing toward the cell (rl__emitter_lit_rect()): the same
+ * estimator on the part that holds all the cell's light, and no sample at
+ * all where the slab is dark toward the cell.
  * Origins come from one low-discrepancy sequence per (seed, pass, emitter,
  * map, cell), so results are deterministic; they are exact where a cell is
  * wholly lit by a constant emitter or wholly in shadow, and consistent (a
