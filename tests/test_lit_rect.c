@@ -9,9 +9,11 @@
  * half a metre across, near and far, ahead, grazing, and behind the slab's
  * plane) and random parts of the slab, every pair of a point of the
  * receiver's hull and a point of the part where rl__emitter_radiance_at()
- * reads light must have the part's point inside the rectangle, and a receiver
- * called dark must read none. The rectangle must also be smaller than the slab
- * for many receivers, or the bound would be true and useless.
+ * reads light must have the part's point inside the rectangle and must not be
+ * called dark by rl__emitter_dark_at(), and a receiver called dark must read
+ * none. The rectangle must also be smaller than the slab for many receivers,
+ * and the test along a direction must find much of the darkness, or either
+ * bound would be true and useless.
  */
 #include <math.h>
 #include <stdio.h>
@@ -102,11 +104,8 @@ static void place(rl_lightfield *lf, const lfio_slab *slab)
             lf->v[r] += lf->rot[r][c] * d->v[c];
         }
     }
-    uint64_t nd = lfio_slab_dir_count(slab);
-    lf->support = malloc((nd + 4 * (size_t)d->n * d->n) * sizeof *lf->support);
-    lfio_slab_support(slab, lf->support);
-    lf->cone_support = lf->support + nd;
-    rl__cone_support_fill(slab, (const uint32_t(*)[4])lf->support, lf->cone_support);
+    lf->nu = d->nu, lf->nv = d->nv, lf->n = d->n;
+    CHECK(rl__lightfield_tables_make(lf) == 0, "tables");
 }
 
 /* @return a random point of the convex hull of the n points p (weights skewed at times to reach corners). */
@@ -133,7 +132,8 @@ static v3 hull_point3(const v3 *p, uint32_t n)
 }
 
 /* One slab, many receivers: the bound's promise at random pairs of points. */
-static void check_slab(uint32_t n, uint32_t nu, double cone_deg, int receivers, long *tight, long *bounded)
+static void check_slab(uint32_t n, uint32_t nu, double cone_deg, int receivers, long *tight, long *bounded,
+                       long *dark_pairs, long *dark_called)
 {
     lfio_slab *slab = lamp_slab_new(n, nu, cone_deg);
     rl_lightfield lf;
@@ -178,10 +178,16 @@ static void check_slab(uint32_t n, uint32_t nu, double cone_deg, int receivers, 
             if (!(len > 0.0) || !(v3_dot(d, e.frame.n) > 0.0))
                 continue;
             rl__emitter_radiance_at(&e, q, v3_scale(d, 1.0 / len), rad);
-            if (!(rad[0] > 0.0))
+            int called_dark = rl__emitter_dark_at(&e, q, v3_dot(d, e.frame.e1) / len, v3_dot(d, e.frame.e2) / len,
+                                                  v3_dot(d, e.frame.n) / len);
+            if (!(rad[0] > 0.0)) {
+                *dark_pairs += 1, *dark_called += called_dark;
                 continue;
+            }
             CHECK(got >= 0, "receiver %d (size %g, height %g): called dark but reads %g at (%g, %g)", r, size, h, rad[0],
                   q.x, q.y);
+            CHECK(!called_dark, "receiver %d (size %g, height %g): light at (%g, %g) called dark along its direction", r, size, h, q.x,
+                  q.y);
             if (got == 1)
                 CHECK(q.x >= rect[0] - 1e-12 && q.x <= rect[1] + 1e-12 && q.y >= rect[2] - 1e-12 &&
                           q.y <= rect[3] + 1e-12,
@@ -189,21 +195,24 @@ static void check_slab(uint32_t n, uint32_t nu, double cone_deg, int receivers, 
                       q.x, q.y, rect[0], rect[1], rect[2], rect[3]);
         }
     }
-    free(lf.support);
+    rl__lightfield_tables_free(&lf);
     lfio_slab_destroy(slab);
 }
 
 int main(void)
 {
-    long tight = 0, bounded = 0;
+    long tight = 0, bounded = 0, dark_pairs = 0, dark_called = 0;
     for (int s = 0; s < 6; s++) {
-        check_slab(8, 12, 15.0, 300, &tight, &bounded);
-        check_slab(16, 16, 20.0, 300, &tight, &bounded);
-        check_slab(4, 5, 30.0, 100, &tight, &bounded);
-        check_slab(8, 16, 0.0, 300, &tight, &bounded);
-        check_slab(8, 4, -1.0, 300, &tight, &bounded);
+        check_slab(8, 12, 15.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
+        check_slab(16, 16, 20.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
+        check_slab(4, 5, 30.0, 100, &tight, &bounded, &dark_pairs, &dark_called);
+        check_slab(8, 16, 0.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
+        check_slab(8, 4, -1.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
     }
     printf("%ld of %ld bounded receivers see light from under 80%% of the slab\n", tight, bounded);
+    printf("%ld of %ld pairs of points that read zero are called dark along their direction\n", dark_called, dark_pairs);
+    CHECK(dark_called > dark_pairs / 4, "the per-direction test should find most darkness: %ld of %ld", dark_called,
+          dark_pairs);
     CHECK(bounded > 2000 && tight > bounded / 8, "the bound should narrow the slab often: %ld of %ld", tight, bounded);
     return check_report();
 }

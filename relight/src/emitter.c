@@ -10,6 +10,7 @@
  * partition read it faster through rl__leaf_radiance_mix() (leaf.c).
  */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include <lfio/partition.h>
@@ -126,36 +127,94 @@ int rl__emitter_node_dark(const rl_emitter *e, uint32_t lv, uint64_t id)
  * their interpolation neighbours read (what lfio_slab_radiance_interp()
  * mixes anywhere in it); a cone's box of squares gives the union. */
 
-void rl__cone_support_fill(const lfio_slab *slab, const uint32_t (*support)[4], uint32_t (*cone)[4])
+/* Calls visit(ctx, id) for each stored direction that lfio mixes somewhere in square (ia, ib) of the
+ * diamond of a slab of partition n with ndir stored directions: its triangles and their neighbours. */
+static void square_directions(uint32_t n, uint64_t ndir, uint32_t ia, uint32_t ib,
+                              void (*visit)(void *ctx, uint64_t id), void *ctx)
 {
-    uint32_t n = lfio_slab_get_desc(slab)->n, side = 2 * n;
-    uint64_t ndir = lfio_slab_dir_count(slab);
+    /* the square's lattice corner (xi, yi) in its quadrant, and the quadrant's signs */
+    uint32_t xi = ia >= n ? ia - n : n - 1 - ia, yi = ib >= n ? ib - n : n - 1 - ib;
+    double sx = ia >= n ? 1.0 : -1.0, sy = ib >= n ? 1.0 : -1.0;
+    for (int t = 0; t < 2; t++) {
+        /* centroids: the lower-left triangle, then the upper-right (inside the diamond only) */
+        double cx = xi + (t ? 2.0 : 1.0) / 3.0, cy = yi + (t ? 2.0 : 1.0) / 3.0;
+        if (cx + cy >= (double)n)
+            continue;
+        double d[3] = {sx * cx, sy * cy, (double)n - cx - cy};
+        uint64_t ids[4];
+        if (!lfio_part_id(n, d, &ids[0]) || !lfio_part_neighbours(n, ids[0], ids + 1))
+            continue;
+        for (int k = 0; k < 4; k++)
+            if (ids[k] < ndir) /* one behind the slab: lfio gives its share to the triangle itself */
+                visit(ctx, ids[k]);
+    }
+}
+
+/* What square_directions() visits for: one square's box and bits, from the per-direction ones. */
+typedef struct square_union {
+    const rl_lightfield *lf;
+    const uint64_t *dir_bits;
+    uint32_t *box;
+    uint64_t *bits;
+} square_union;
+
+static void square_add(void *ctx, uint64_t id)
+{
+    square_union *u = ctx;
+    rl__box_union(u->box, u->lf->support[id]);
+    for (uint32_t w = 0; w < u->lf->lit_words; w++)
+        u->bits[w] |= u->dir_bits[id * u->lf->lit_words + w];
+}
+
+int rl__lightfield_tables_make(rl_lightfield *lf)
+{
+    const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
+    uint64_t ndir = lfio_slab_dir_count(lf->slab), npos = (uint64_t)d->nu * d->nv, side = 2 * (uint64_t)d->n;
+    lf->support = malloc((ndir + side * side) * sizeof *lf->support);
+    if (lf->support == NULL)
+        return -1;
+    lfio_slab_support(lf->slab, lf->support);
+    lf->cone_support = lf->support + ndir;
+    /* lit positions per square, for slabs of up to RL_LIT_MAX_POSITIONS positions (a word per 64) */
+    lf->lit_words = npos <= RL_LIT_MAX_POSITIONS ? (uint32_t)((npos + 63) / 64) : 0;
+    uint64_t *dir_bits = NULL;
+    if (lf->lit_words) {
+        lf->cone_bits = calloc(side * side * lf->lit_words, sizeof *lf->cone_bits);
+        dir_bits = calloc(ndir * lf->lit_words, sizeof *dir_bits);
+        if (lf->cone_bits == NULL || dir_bits == NULL) {
+            free(dir_bits);
+            rl__lightfield_tables_free(lf);
+            return -1;
+        }
+        const float *rad = lfio_slab_radiance(lf->slab);
+        for (uint64_t k = 0; k < ndir; k++)
+            for (uint64_t q = 0; q < npos; q++) {
+                const float *v = rad + (k * npos + q) * 3;
+                if (v[0] != 0.0f || v[1] != 0.0f || v[2] != 0.0f)
+                    dir_bits[k * lf->lit_words + q / 64] |= (uint64_t)1 << (q % 64);
+            }
+    }
     for (uint32_t ib = 0; ib < side; ib++)
         for (uint32_t ia = 0; ia < side; ia++) {
-            uint32_t *box = cone[(size_t)ib * side + ia];
+            size_t sq = (size_t)ib * side + ia;
+            uint32_t *box = lf->cone_support[sq];
             box[0] = box[2] = UINT32_MAX;
             box[1] = box[3] = 0;
-            /* the square's lattice corner (xi, yi) in its quadrant, and the quadrant's signs */
-            uint32_t xi = ia >= n ? ia - n : n - 1 - ia, yi = ib >= n ? ib - n : n - 1 - ib;
-            double sx = ia >= n ? 1.0 : -1.0, sy = ib >= n ? 1.0 : -1.0;
-            for (int t = 0; t < 2; t++) {
-                /* centroids: the lower-left triangle, then the upper-right (inside the diamond only) */
-                double cx = xi + (t ? 2.0 : 1.0) / 3.0, cy = yi + (t ? 2.0 : 1.0) / 3.0;
-                if (cx + cy >= (double)n)
-                    continue;
-                double d[3] = {sx * cx, sy * cy, (double)n - cx - cy};
-                uint64_t ids[4];
-                if (!lfio_part_id(n, d, &ids[0]) || !lfio_part_neighbours(n, ids[0], ids + 1))
-                    continue;
-                for (int k = 0; k < 4; k++) {
-                    if (ids[k] >= ndir) /* behind the slab: lfio gives its share to the triangle itself */
-                        continue;
-                    rl__box_union(box, support[ids[k]]);
-                }
-            }
+            square_union u = {lf, dir_bits, box, lf->lit_words ? lf->cone_bits + sq * lf->lit_words : NULL};
+            square_directions(d->n, ndir, ia, ib, square_add, &u);
             if (box[0] == UINT32_MAX)
                 box[0] = 1, box[1] = 0;
         }
+    free(dir_bits);
+    return 0;
+}
+
+void rl__lightfield_tables_free(rl_lightfield *lf)
+{
+    free(lf->support);
+    free(lf->cone_bits);
+    lf->support = lf->cone_support = NULL;
+    lf->cone_bits = NULL;
 }
 
 void rl__emitter_support_rect(const rl_emitter *e, const uint32_t b[4], double r[4])

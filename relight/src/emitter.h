@@ -56,13 +56,21 @@ static inline void rl__box_union(uint32_t b[4], const uint32_t s[4])
     b[3] = s[3] > b[3] ? s[3] : b[3];
 }
 
-/* Fills cone, (2n)^2 boxes of slab positions {i0, i1, j0, j1} for a slab of
- * partition n, from support (lfio_slab_support()): square (ia, ib) of the
- * slab's direction diamond, a = l0 / |l|_1 in [(ia - n) / n, (ia - n + 1) / n)
- * and b = l1 / |l|_1 likewise (l the direction in the slab's frame, l2 > 0),
- * gets every position that a direction there reads with its interpolation
- * neighbours (i0 > i1: none). See rl__emitter_lit_rect(). */
-void rl__cone_support_fill(const lfio_slab *slab, const uint32_t (*support)[4], uint32_t (*cone)[4]);
+/* Slabs of up to this many positions get, besides boxes, the bits of the lit positions (rl__emitter_dark_at()). */
+#define RL_LIT_MAX_POSITIONS 4096u
+
+/* Builds lf's tables of where its slab is lit (rl_lightfield.support,
+ * cone_support, cone_bits): per stored direction the box of positions
+ * holding its nonzero radiance; per square (ia, ib) of the slab's direction
+ * diamond, a = l0 / |l|_1 in [(ia - n) / n, (ia - n + 1) / n) and b = l1 /
+ * |l|_1 likewise (l the direction in the slab's frame, l2 > 0), the box and
+ * the bits of every position that a direction there reads with its
+ * interpolation neighbours. @return 0, or -1 when memory runs out (nothing
+ * left allocated). */
+int rl__lightfield_tables_make(rl_lightfield *lf);
+
+/* Frees what rl__lightfield_tables_make() built (none built: a no-op). */
+void rl__lightfield_tables_free(rl_lightfield *lf);
 
 /* Gives in r = {s0, s1, t0, t1} (e's frame, m) the rectangle of light field
  * emitter e outside which it sends nothing toward any point of the convex
@@ -71,6 +79,39 @@ void rl__cone_support_fill(const lfio_slab *slab, const uint32_t (*support)[4], 
  * @return 1 with r set, 0 when there is no bound (a point of x on or behind
  * the slab's plane), -1 when e is dark toward every such point. */
 int rl__emitter_lit_rect(const rl_emitter *e, const v3 *x, uint32_t nx, const v2 *y, uint32_t ny, double r[4]);
+
+/* @return 1 if light field emitter e certainly reads zero at frame point q
+ * along propagation direction l = (l0, l1, l2) in its frame (l2 > 0): no tap
+ * that lfio's bilinear interpolation takes there is lit along any direction
+ * mixed in l's square of the diamond (rl__lightfield_tables_make()); 0 when
+ * it may not, or when the slab has no bits or l lies within rounding of a
+ * square's side. */
+static inline int rl__emitter_dark_at(const rl_emitter *e, v2 q, double l0, double l1, double l2)
+{
+    const rl_lightfield *lf = e->lf;
+    if (lf->lit_words == 0)
+        return 0;
+    double inv = (double)lf->n / (fabs(l0) + fabs(l1) + l2), ga = l0 * inv + lf->n, gb = l1 * inv + lf->n;
+    if (!(ga >= 0.0 && gb >= 0.0 && ga < 2.0 * lf->n && gb < 2.0 * lf->n))
+        return 0;
+    uint32_t ia = (uint32_t)ga, ib = (uint32_t)gb;
+    /* lfio finds the direction from the slab's own frame, equal to e's to rounding (its edges are
+     * orthogonal to 1e-9): near a side of the square it may place it in the next one */
+    const double margin = 1e-6;
+    if (ga - ia < margin || ga - ia > 1.0 - margin || gb - ib < margin || gb - ib > 1.0 - margin)
+        return 0;
+    uint32_t nu = lf->nu, nv = lf->nv, i0, j0;
+    /* the taps as lfio_slab_radiance_interp() finds them, from the same arithmetic */
+    lfio_grid_split(q.x / e->len_u * nu - 0.5, nu - 1.0, &i0);
+    lfio_grid_split(q.y / e->len_v * nv - 0.5, nv - 1.0, &j0);
+    uint32_t i1 = i0 + 1 < nu ? i0 + 1 : i0, j1 = j0 + 1 < nv ? j0 + 1 : j0;
+    uint32_t p[4] = {j0 * nu + i0, j0 * nu + i1, j1 * nu + i0, j1 * nu + i1};
+    const uint64_t *bits = lf->cone_bits + ((size_t)ib * 2 * lf->n + ia) * lf->lit_words;
+    uint64_t any = 0;
+    for (int k = 0; k < 4; k++)
+        any |= bits[p[k] / 64] >> (p[k] % 64);
+    return !(any & 1);
+}
 
 /* Gives in r = {s0, s1, t0, t1} (e's frame, m) the rectangle of light field
  * emitter e outside which positions b = {i0, i1, j0, j1} read zero. */

@@ -469,22 +469,6 @@ static void slab_names(const lfio_lightfield *lf, char *buf, size_t cap)
                  lfio_slab_get_desc(lfio_lightfield_slab(lf, k))->name);
 }
 
-/* Sets lf's tables of the boxes of positions holding each stored direction's
- * nonzero radiance and each diamond square's (rl_lightfield.support and
- * cone_support), in one allocation. @return 0, or -1 when memory runs out. */
-static int slab_support_new(rl_lightfield *lf)
-{
-    uint64_t ndir = lfio_slab_dir_count(lf->slab), n = lfio_slab_get_desc(lf->slab)->n;
-    uint32_t (*box)[4] = malloc((ndir + 4 * n * n) * sizeof *box);
-    if (box == NULL)
-        return -1;
-    lfio_slab_support(lf->slab, box);
-    rl__cone_support_fill(lf->slab, (const uint32_t(*)[4])box, box + ndir);
-    lf->support = box;
-    lf->cone_support = box + ndir;
-    return 0;
-}
-
 /* Picks lf's slab given by sj: a name, an index, or NULL for slab 0. @return RL_OK or RL_ERR_INPUT. */
 static rl_status pick_slab(const rl_build *b, const ilf_json *sj, const char *elem, rl_lightfield *lf)
 {
@@ -563,11 +547,14 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
     if ((st = pick_slab(b, sj, sub, lf)) != RL_OK)
         return st;
     const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
+    lf->nu = d->nu, lf->nv = d->nv, lf->n = d->n;
     if ((same = earlier_lightfield(b->scene, lf, NULL, lf->slab)) != NULL) {
         lf->support = same->support;
         lf->cone_support = same->cone_support;
+        lf->cone_bits = same->cone_bits;
+        lf->lit_words = same->lit_words;
     } else {
-        if (slab_support_new(lf) != 0)
+        if (rl__lightfield_tables_make(lf) != 0)
             return rl__fail(RL_ERR_NOMEM, "%s: %s: out of memory", b->file, elem);
         lf->owns_support = 1;
     }
@@ -817,7 +804,7 @@ void rl_scene_destroy(rl_scene *s)
         if (s->lightfields[k].owns_lf)
             lfio_lightfield_destroy(s->lightfields[k].lf);
         if (s->lightfields[k].owns_support)
-            free(s->lightfields[k].support);
+            rl__lightfield_tables_free(&s->lightfields[k]);
     }
     free(s->lightfields);
     free(s->materials);

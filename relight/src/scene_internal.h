@@ -54,9 +54,13 @@ typedef struct rl_lightfield {
      * [j0, j1] holding all its nonzero radiance (i0 > i1: none). Owned.
      * The engine shrinks each solid angle's emitter to it. Owned when owns_support. */
     uint32_t (*support)[4];
-    /* Per square of the slab's direction diamond, the positions its directions read with their
-     * interpolation neighbours (rl__cone_support_fill()). In support's allocation. */
+    /* Per square of the slab's direction diamond, the box of positions its directions read with
+     * their interpolation neighbours, and (lit_words > 0) their bits, lit_words a square
+     * (rl__lightfield_tables_make()). cone_support is in support's allocation. */
     uint32_t (*cone_support)[4];
+    uint64_t *cone_bits;
+    uint32_t lit_words;
+    uint32_t nu, nv, n; /* the slab's positions and partition level */
 } rl_lightfield;
 
 typedef struct rl_camera {

@@ -236,7 +236,8 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
             v2 lp[RL_MAX_POLY_VERTS + 6]; /* part_points reads it */
             rl_polygon_sampler part_points;
             if (bounded) {
-                v2 rect[4] = {{lit[0], lit[2]}, {lit[1], lit[2]}, {lit[1], lit[3]}, {lit[0], lit[3]}},
+                const double *r = lit;
+                v2 rect[4] = {{r[0], r[2]}, {r[1], r[2]}, {r[1], r[3]}, {r[0], r[3]}},
                    scratch[RL_MAX_POLY_VERTS + 6];
                 neq = rl__clip_to_polygon(sp, p->ns, rect, 4, lp, scratch);
                 if (neq < 3 || !(rl__polygon_area2(lp, (uint32_t)neq) > 0.0))
@@ -276,7 +277,11 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
                 if (e->kind != EM_CONST) {
                     /* a light field or a bounce: its radiance there, and no ray where it is dark */
                     double rad[3];
-                    rl__emitter_radiance_at(e, frame_project(&e->frame, y), v3_scale(to, -1.0), rad);
+                    v2 q = frame_project(&e->frame, y);
+                    if (e->kind == EM_SLAB &&
+                        rl__emitter_dark_at(e, q, -v3_dot(to, e->frame.e1), -v3_dot(to, e->frame.e2), cos_s))
+                        continue; /* no tap lit along its direction's square: it would read 0 */
+                    rl__emitter_radiance_at(e, q, v3_scale(to, -1.0), rad);
                     if (!(rad[0] > 0 || rad[1] > 0 || rad[2] > 0))
                         continue;
                     for (int c = 0; c < 3; c++)
