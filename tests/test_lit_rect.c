@@ -199,8 +199,31 @@ static void check_slab(uint32_t n, uint32_t nu, double cone_deg, int receivers, 
     lfio_slab_destroy(slab);
 }
 
+/* A slab too finely divided for the tables of squares: no bound, and nothing called dark. */
+static void check_no_tables(void)
+{
+    lfio_slab_desc d;
+    lfio_slab *slab = NULL;
+    lfio_slab_desc_init(&d);
+    strcpy(d.name, "fine");
+    d.n = RL_CONE_MAX_SIDE / 2 + 1;
+    CHECK(lfio_slab_new(&d, &slab) == LFIO_OK, "new slab: %s", lfio_errmsg());
+    rl_lightfield lf;
+    place(&lf, slab);
+    CHECK(lf.cone_support == NULL && lf.lit_words == 0, "no tables of squares at n = %u", d.n);
+    rl_emitter e;
+    rl__emitter_from_lightfield(&lf, &e);
+    v3 x = v3_add(frame_point(&e.frame, (v2){0.5, 0.5}), e.frame.n);
+    double rect[4];
+    CHECK(rl__emitter_lit_rect(&e, &x, 1, e.poly2, e.nverts, rect) == 0, "no bound without tables");
+    CHECK(!rl__emitter_dark_at(&e, (v2){0.5, 0.5}, 0.0, 0.0, 1.0), "nothing dark without bits");
+    rl__lightfield_tables_free(&lf);
+    lfio_slab_destroy(slab);
+}
+
 int main(void)
 {
+    check_no_tables();
     long tight = 0, bounded = 0, dark_pairs = 0, dark_called = 0;
     for (int s = 0; s < 6; s++) {
         check_slab(8, 12, 15.0, 300, &tight, &bounded, &dark_pairs, &dark_called);

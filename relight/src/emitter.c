@@ -170,13 +170,17 @@ int rl__lightfield_tables_make(rl_lightfield *lf)
 {
     const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
     uint64_t ndir = lfio_slab_dir_count(lf->slab), npos = (uint64_t)d->nu * d->nv, side = 2 * (uint64_t)d->n;
-    lf->support = malloc((ndir + side * side) * sizeof *lf->support);
+    /* the squares' tables only while they stay small beside what they speed up (a slab of partition
+     * 256 and 4096 positions takes 12 MiB; the largest partitions would take gigabytes) */
+    uint64_t words = (npos + 63) / 64, squares = side <= RL_CONE_MAX_SIDE ? side * side : 0;
+    lf->support = malloc((ndir + squares) * sizeof *lf->support);
     if (lf->support == NULL)
         return -1;
     lfio_slab_support(lf->slab, lf->support);
-    lf->cone_support = lf->support + ndir;
+    lf->cone_support = squares ? lf->support + ndir : NULL;
+    lf->cone_bits = NULL;
     /* lit positions per square, for slabs of up to RL_LIT_MAX_POSITIONS positions (a word per 64) */
-    lf->lit_words = npos <= RL_LIT_MAX_POSITIONS ? (uint32_t)((npos + 63) / 64) : 0;
+    lf->lit_words = squares && npos <= RL_LIT_MAX_POSITIONS ? (uint32_t)words : 0;
     uint64_t *dir_bits = NULL;
     if (lf->lit_words) {
         lf->cone_bits = calloc(side * side * lf->lit_words, sizeof *lf->cone_bits);
@@ -194,7 +198,7 @@ int rl__lightfield_tables_make(rl_lightfield *lf)
                     dir_bits[k * lf->lit_words + q / 64] |= (uint64_t)1 << (q % 64);
             }
     }
-    for (uint32_t ib = 0; ib < side; ib++)
+    for (uint32_t ib = 0; ib < side && squares; ib++)
         for (uint32_t ia = 0; ia < side; ia++) {
             size_t sq = (size_t)ib * side + ia;
             uint32_t *box = lf->cone_support[sq];
@@ -245,6 +249,8 @@ int rl__emitter_lit_rect(const rl_emitter *e, const v3 *x, uint32_t nx, const v2
 {
     const rl_lightfield *lf = e->lf;
     uint32_t n = lfio_slab_get_desc(lf->slab)->n;
+    if (lf->cone_support == NULL)
+        return 0;
     /* the box of the cone's image on the diamond: its extreme rays' images, and where the cone crosses
      * l0 = 0 or l1 = 0 (the image bends there), the range of the other coordinate on that plane, which
      * its slope's range over the extreme rays bounds */

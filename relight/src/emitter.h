@@ -56,6 +56,9 @@ static inline void rl__box_union(uint32_t b[4], const uint32_t s[4])
     b[3] = s[3] > b[3] ? s[3] : b[3];
 }
 
+/* Slabs of partition n with 2n up to this get tables of their direction diamond's squares. */
+#define RL_CONE_MAX_SIDE 512u
+
 /* Slabs of up to this many positions get, besides boxes, the bits of the lit positions (rl__emitter_dark_at()). */
 #define RL_LIT_MAX_POSITIONS 4096u
 
@@ -65,8 +68,9 @@ static inline void rl__box_union(uint32_t b[4], const uint32_t s[4])
  * diamond, a = l0 / |l|_1 in [(ia - n) / n, (ia - n + 1) / n) and b = l1 /
  * |l|_1 likewise (l the direction in the slab's frame, l2 > 0), the box and
  * the bits of every position that a direction there reads with its
- * interpolation neighbours. @return 0, or -1 when memory runs out (nothing
- * left allocated). */
+ * interpolation neighbours (slabs of partition above RL_CONE_MAX_SIDE / 2:
+ * the directions' boxes alone, cone_support NULL). @return 0, or -1 when
+ * memory runs out (nothing left allocated). */
 int rl__lightfield_tables_make(rl_lightfield *lf);
 
 /* Frees what rl__lightfield_tables_make() built (none built: a no-op). */
@@ -77,7 +81,8 @@ void rl__lightfield_tables_free(rl_lightfield *lf);
  * hull of the nx world points x from any point of its frame polygon y (ny
  * vertices): the slab's support over the directions of that cone.
  * @return 1 with r set, 0 when there is no bound (a point of x on or behind
- * the slab's plane), -1 when e is dark toward every such point. */
+ * the slab's plane, or no table of squares), -1 when e is dark toward every
+ * such point. */
 int rl__emitter_lit_rect(const rl_emitter *e, const v3 *x, uint32_t nx, const v2 *y, uint32_t ny, double r[4]);
 
 /* @return 1 if light field emitter e certainly reads zero at frame point q
