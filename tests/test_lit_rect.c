@@ -9,9 +9,10 @@
  * half a metre across, near and far, ahead, grazing, and behind the slab's
  * plane) and random parts of the slab, every pair of a point of the
  * receiver's hull and a point of the part where rl__emitter_radiance_at()
- * reads light must have the part's point inside the rectangle and must not be
- * called dark by rl__emitter_dark_at(), and a receiver called dark must read
- * none. The rectangle must also be smaller than the slab for many receivers,
+ * reads light (lfio's own lookup) must have the part's point inside the
+ * rectangle and must not be called dark by rl__emitter_dark_at(), a receiver
+ * called dark must read none, and rl__emitter_radiance_at() (which skips
+ * the lookup where it is called dark) must read what lfio does. The rectangle must also be smaller than the slab for many receivers,
  * and the test along a direction must find much of the darkness, or either
  * bound would be true and useless.
  */
@@ -131,6 +132,18 @@ static v3 hull_point3(const v3 *p, uint32_t n)
     return q;
 }
 
+/* The reference: emitter e's radiance at frame point q along d (unit, world) straight from lfio, as
+ * rl__emitter_radiance_at() reads it but without its test for darkness. */
+static double slab_radiance(const rl_emitter *e, v2 q, v3 d)
+{
+    const double(*r)[3] = e->lf->rot;
+    double ds[3] = {r[0][0] * d.x + r[1][0] * d.y + r[2][0] * d.z, r[0][1] * d.x + r[1][1] * d.y + r[2][1] * d.z,
+                    r[0][2] * d.x + r[1][2] * d.y + r[2][2] * d.z};
+    float rgb[3] = {0, 0, 0};
+    lfio_slab_radiance_interp(e->lf->slab, q.x / e->len_u, q.y / e->len_v, ds, rgb);
+    return rgb[0];
+}
+
 /* One slab, many receivers: the bound's promise at random pairs of points. */
 static void check_slab(uint32_t n, uint32_t nu, double cone_deg, int receivers, long *tight, long *bounded,
                        long *dark_pairs, long *dark_called)
@@ -178,6 +191,9 @@ static void check_slab(uint32_t n, uint32_t nu, double cone_deg, int receivers, 
             if (!(len > 0.0) || !(v3_dot(d, e.frame.n) > 0.0))
                 continue;
             rl__emitter_radiance_at(&e, q, v3_scale(d, 1.0 / len), rad);
+            double ref = slab_radiance(&e, q, v3_scale(d, 1.0 / len));
+            CHECK(rad[0] == ref, "receiver %d: the engine reads %g where lfio reads %g", r, rad[0], ref);
+            rad[0] = ref;
             int called_dark = rl__emitter_dark_at(&e, q, v3_dot(d, e.frame.e1) / len, v3_dot(d, e.frame.e2) / len,
                                                   v3_dot(d, e.frame.n) / len);
             if (!(rad[0] > 0.0)) {

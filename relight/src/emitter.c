@@ -81,6 +81,12 @@ void rl__emitter_radiance_at(const rl_emitter *e, v2 q, v3 d, double out[3])
         rl__map_radiance(e->map, rl__map_cell_at(e->map, q), out);
         return;
     case EM_SLAB: {
+        /* where no tap is lit along d's square of the diamond, lfio would mix zeros: 0 without the lookup */
+        double l2 = v3_dot(d, e->frame.n);
+        if (l2 > 0.0 && rl__emitter_dark_at(e, q, v3_dot(d, e->frame.e1), v3_dot(d, e->frame.e2), l2)) {
+            out[0] = out[1] = out[2] = 0.0;
+            return;
+        }
         float rgb[3] = {0, 0, 0};
         /* back to the slab's own frame: the transform's rotation, transposed */
         const double (*r)[3] = e->lf->rot;

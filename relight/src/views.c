@@ -277,11 +277,7 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
                 if (e->kind != EM_CONST) {
                     /* a light field or a bounce: its radiance there, and no ray where it is dark */
                     double rad[3];
-                    v2 q = frame_project(&e->frame, y);
-                    if (e->kind == EM_SLAB &&
-                        rl__emitter_dark_at(e, q, -v3_dot(to, e->frame.e1), -v3_dot(to, e->frame.e2), cos_s))
-                        continue; /* no tap lit along its direction's square: it would read 0 */
-                    rl__emitter_radiance_at(e, q, v3_scale(to, -1.0), rad);
+                    rl__emitter_radiance_at(e, frame_project(&e->frame, y), v3_scale(to, -1.0), rad);
                     if (!(rad[0] > 0 || rad[1] > 0 || rad[2] > 0))
                         continue;
                     for (int c = 0; c < 3; c++)
