@@ -71,7 +71,12 @@ v2 rl__polygon_sampler_point(const rl_polygon_sampler *s, double a, double b)
             break;
         acc += w;
     }
-    double r = w > 0 ? fmin(fmax((pick - acc) / w, 0.0), 1.0) : 0.5;
+    /* clamped by comparisons, not fmin/fmax (calls in this hot path): the quotient is finite */
+    double r = 0.5;
+    if (w > 0) {
+        r = (pick - acc) / w;
+        r = r > 0.0 ? (r < 1.0 ? r : 1.0) : 0.0;
+    }
     /* uniform in a triangle: the square-root warp */
     double su = sqrt(r);
     double l0 = 1 - su, l1 = su * (1 - b), l2 = su * b;
