@@ -236,8 +236,7 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
             v2 lp[RL_MAX_POLY_VERTS + 6]; /* part_points reads it */
             rl_polygon_sampler part_points;
             if (bounded) {
-                const double *r = lit;
-                v2 rect[4] = {{r[0], r[2]}, {r[1], r[2]}, {r[1], r[3]}, {r[0], r[3]}},
+                v2 rect[4] = {{lit[0], lit[2]}, {lit[1], lit[2]}, {lit[1], lit[3]}, {lit[0], lit[3]}},
                    scratch[RL_MAX_POLY_VERTS + 6];
                 neq = rl__clip_to_polygon(sp, p->ns, rect, 4, lp, scratch);
                 if (neq < 3 || !(rl__polygon_area2(lp, (uint32_t)neq) > 0.0))
