@@ -257,6 +257,7 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
             }
             rl_ray_batch batch;
             batch.n = 0;
+            cnt->samples += nr; /* counted once: a store per sample costs more than it says */
             for (uint32_t r = 0; r < nr; r++) {
                 double u[4];
                 rl__lds4(&key, r, u);
@@ -264,7 +265,6 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
                 v3 y = frame_point(&e->frame, rl__polygon_sampler_point(points, u[2], u[3]));
                 v3 to = v3_sub(y, x);
                 double dist = v3_len(to);
-                cnt->samples++;
                 if (!(dist > 0))
                     continue;
                 to = v3_scale(to, 1.0 / dist);
