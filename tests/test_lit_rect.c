@@ -42,14 +42,17 @@ static double rnd(void)
 /* @return a slab of partition n, nu x nu positions over 1 m, lit around the rays from a point 0.4 m behind it
  * within a cone of half-angle cone_deg, plus scattered lone values; with cone_deg 0, each direction at
  * one position of its own; below 0, directions grazing along v alone. */
-static lfio_slab *lamp_slab_new(uint32_t n, uint32_t nu, double cone_deg)
+static lfio_slab *lamp_slab_new(uint32_t n, uint32_t nu, uint32_t nv, double cone_deg)
 {
     lfio_slab_desc d;
     lfio_slab *slab = NULL;
     lfio_slab_desc_init(&d);
     strcpy(d.name, "lamp");
-    d.origin[0] = d.origin[1] = -0.5;
-    d.nu = d.nv = nu;
+    /* nv != nu: a slab 0.6 m along v, so that swapping the axes anywhere shows */
+    double lv = nv == nu ? 1.0 : 0.6;
+    d.origin[0] = -0.5, d.origin[1] = -0.5 * lv;
+    d.v[1] = lv;
+    d.nu = nu, d.nv = nv;
     d.n = n;
     CHECK(lfio_slab_new(&d, &slab) == LFIO_OK, "new slab: %s", lfio_errmsg());
     double cos_cone = cos(cone_deg * 3.14159265358979323846 / 180.0);
@@ -57,15 +60,15 @@ static lfio_slab *lamp_slab_new(uint32_t n, uint32_t nu, double cone_deg)
     for (uint64_t k = 0; k < nd; k++) {
         double w[3];
         lfio_part_centroid(n, k, w);
-        for (uint32_t j = 0; j < nu; j++)
+        for (uint32_t j = 0; j < nv; j++)
             for (uint32_t i = 0; i < nu; i++) {
-                double c[3] = {-0.5 + (i + 0.5) / nu, -0.5 + (j + 0.5) / nu, 0.4}; /* from p = (0, 0, -0.4) */
+                double c[3] = {-0.5 + (i + 0.5) / nu, lv * (-0.5 + (j + 0.5) / nv), 0.4}; /* from p = (0, 0, -0.4) */
                 double cw = (c[0] * w[0] + c[1] * w[1] + c[2] * w[2]) / sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
                 /* cone_deg 0: each direction lit at one position alone, so that every square of the
                  * diamond a bound leaves out shows; below 0: only directions grazing the slab along v,
                  * which a receiver just above the slab's middle sees between its corners, not at them */
                 int lit = cone_deg > 0.0   ? cw > cos_cone || rnd() < 0.002
-                          : cone_deg == 0.0 ? (i + nu * j) == (k * 2654435761u) % (nu * nu)
+                          : cone_deg == 0.0 ? (i + nu * j) == (k * 2654435761u) % (nu * nv)
                                             : fabs(w[1]) > 0.7 * (fabs(w[0]) + fabs(w[1]) + fabs(w[2]));
                 float v = lit ? (float)(1.0 + rnd()) : 0.0f;
                 lfio_slab_write(slab, k, i, j, (const float[3]){v, v, v});
@@ -88,21 +91,22 @@ static void random_rotation(double rot[3][3])
     memcpy(rot, r, sizeof r);
 }
 
-/* Places slab in lf with a random rotation and translation, with its support tables as the scene loader makes them. */
-static void place(rl_lightfield *lf, const lfio_slab *slab)
+/* Places slab in lf scaled by scale, with a random rotation and translation, with its support tables as the
+ * scene loader makes them. */
+static void place(rl_lightfield *lf, const lfio_slab *slab, double scale)
 {
     memset(lf, 0, sizeof *lf);
     lf->slab = slab;
-    lf->scale = 1.0;
+    lf->scale = scale;
     random_rotation(lf->rot);
     const lfio_slab_desc *d = lfio_slab_get_desc(slab);
     double t[3] = {rnd() * 4 - 2, rnd() * 4 - 2, rnd() * 4 - 2};
     for (int r = 0; r < 3; r++) {
         lf->origin[r] = t[r], lf->u[r] = lf->v[r] = 0.0;
         for (int c = 0; c < 3; c++) {
-            lf->origin[r] += lf->rot[r][c] * d->origin[c];
-            lf->u[r] += lf->rot[r][c] * d->u[c];
-            lf->v[r] += lf->rot[r][c] * d->v[c];
+            lf->origin[r] += scale * lf->rot[r][c] * d->origin[c];
+            lf->u[r] += scale * lf->rot[r][c] * d->u[c];
+            lf->v[r] += scale * lf->rot[r][c] * d->v[c];
         }
     }
     lf->nu = d->nu, lf->nv = d->nv, lf->n = d->n;
@@ -145,12 +149,12 @@ static double slab_radiance(const rl_emitter *e, v2 q, v3 d)
 }
 
 /* One slab, many receivers: the bound's promise at random pairs of points. */
-static void check_slab(uint32_t n, uint32_t nu, double cone_deg, int receivers, long *tight, long *bounded,
-                       long *dark_pairs, long *dark_called)
+static void check_slab(uint32_t n, uint32_t nu, uint32_t nv, double cone_deg, double scale, int receivers,
+                       long *tight, long *bounded, long *dark_pairs, long *dark_called)
 {
-    lfio_slab *slab = lamp_slab_new(n, nu, cone_deg);
+    lfio_slab *slab = lamp_slab_new(n, nu, nv, cone_deg);
     rl_lightfield lf;
-    place(&lf, slab);
+    place(&lf, slab, scale);
     rl_emitter e;
     rl__emitter_from_lightfield(&lf, &e);
     for (int r = 0; r < receivers; r++) {
@@ -222,10 +226,12 @@ static void check_no_tables(void)
     lfio_slab *slab = NULL;
     lfio_slab_desc_init(&d);
     strcpy(d.name, "fine");
-    d.n = RL_CONE_MAX_SIDE / 2 + 1;
+    /* the smallest partition whose (2n)^2 boxes of 16 bytes pass the limit */
+    while ((uint64_t)(2 * d.n) * (2 * d.n) * 16 <= RL_CONE_MAX_BYTES)
+        d.n++;
     CHECK(lfio_slab_new(&d, &slab) == LFIO_OK, "new slab: %s", lfio_errmsg());
     rl_lightfield lf;
-    place(&lf, slab);
+    place(&lf, slab, 1.0);
     CHECK(lf.cone_support == NULL && lf.lit_words == 0, "no tables of squares at n = %u", d.n);
     rl_emitter e;
     rl__emitter_from_lightfield(&lf, &e);
@@ -242,11 +248,15 @@ int main(void)
     check_no_tables();
     long tight = 0, bounded = 0, dark_pairs = 0, dark_called = 0;
     for (int s = 0; s < 6; s++) {
-        check_slab(8, 12, 15.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
-        check_slab(16, 16, 20.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
-        check_slab(4, 5, 30.0, 100, &tight, &bounded, &dark_pairs, &dark_called);
-        check_slab(8, 16, 0.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
-        check_slab(8, 4, -1.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
+        check_slab(8, 12, 12, 15.0, 1.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
+        check_slab(16, 16, 16, 20.0, 1.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
+        check_slab(4, 5, 5, 30.0, 1.0, 100, &tight, &bounded, &dark_pairs, &dark_called);
+        check_slab(8, 16, 16, 0.0, 1.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
+        check_slab(8, 4, 4, -1.0, 1.0, 300, &tight, &bounded, &dark_pairs, &dark_called);
+        /* a grid longer along u than v on a slab shorter along v, scaled; and a finer partition */
+        check_slab(8, 12, 5, 0.0, 1.7, 300, &tight, &bounded, &dark_pairs, &dark_called);
+        check_slab(16, 9, 14, 15.0, 0.4, 300, &tight, &bounded, &dark_pairs, &dark_called);
+        check_slab(64, 6, 6, 0.0, 1.0, 100, &tight, &bounded, &dark_pairs, &dark_called);
     }
     printf("%ld of %ld bounded receivers see light from under 80%% of the slab\n", tight, bounded);
     printf("%ld of %ld pairs of points that read zero are called dark along their direction\n", dark_called, dark_pairs);

@@ -176,9 +176,9 @@ int rl__lightfield_tables_make(rl_lightfield *lf)
 {
     const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
     uint64_t ndir = lfio_slab_dir_count(lf->slab), npos = (uint64_t)d->nu * d->nv, side = 2 * (uint64_t)d->n;
-    /* the squares' tables only while they stay small beside what they speed up (a slab of partition
-     * 256 and 4096 positions takes 12 MiB; the largest partitions would take gigabytes) */
-    uint64_t words = (npos + 63) / 64, squares = side <= RL_CONE_MAX_SIDE ? side * side : 0;
+    /* the squares' tables only while they stay small (the finest partitions would take gigabytes): 16 bytes
+     * of box a square, a word of bits a square and a direction (as many) per 64 positions */
+    uint64_t words = (npos + 63) / 64, squares = side * side * 16 <= RL_CONE_MAX_BYTES ? side * side : 0;
     lf->support = malloc((ndir + squares) * sizeof *lf->support);
     if (lf->support == NULL)
         return -1;
@@ -186,7 +186,8 @@ int rl__lightfield_tables_make(rl_lightfield *lf)
     lf->cone_support = squares ? lf->support + ndir : NULL;
     lf->cone_bits = NULL;
     /* lit positions per square, for slabs of up to RL_LIT_MAX_POSITIONS positions (a word per 64) */
-    lf->lit_words = squares && npos <= RL_LIT_MAX_POSITIONS ? (uint32_t)words : 0;
+    int bits = squares && npos <= RL_LIT_MAX_POSITIONS && squares * words * 8 <= RL_CONE_MAX_BYTES;
+    lf->lit_words = bits ? (uint32_t)words : 0;
     uint64_t *dir_bits = NULL;
     if (lf->lit_words) {
         lf->cone_bits = calloc(side * side * lf->lit_words, sizeof *lf->cone_bits);
@@ -225,6 +226,7 @@ void rl__lightfield_tables_free(rl_lightfield *lf)
     free(lf->cone_bits);
     lf->support = lf->cone_support = NULL;
     lf->cone_bits = NULL;
+    lf->lit_words = 0;
 }
 
 void rl__emitter_support_rect(const rl_emitter *e, const uint32_t b[4], double r[4])
@@ -254,7 +256,7 @@ static uint32_t diamond_square(double a, uint32_t n)
 int rl__emitter_lit_rect(const rl_emitter *e, const v3 *x, uint32_t nx, const v2 *y, uint32_t ny, double r[4])
 {
     const rl_lightfield *lf = e->lf;
-    uint32_t n = lfio_slab_get_desc(lf->slab)->n;
+    uint32_t n = lf->n;
     if (lf->cone_support == NULL)
         return 0;
     /* the box of the cone's image on the diamond: its extreme rays' images, and where the cone crosses
@@ -291,6 +293,8 @@ int rl__emitter_lit_rect(const rl_emitter *e, const v3 *x, uint32_t nx, const v2
     const double margin = 1e-6;
     uint32_t ia0 = diamond_square(a0 - margin, n), ia1 = diamond_square(a1 + margin, n);
     uint32_t ib0 = diamond_square(b0 - margin, n), ib1 = diamond_square(b1 + margin, n);
+    if ((uint64_t)(ia1 - ia0 + 1) * (ib1 - ib0 + 1) > RL_CONE_MAX_SQUARES)
+        return 0;
     uint32_t box[4] = {UINT32_MAX, 0, UINT32_MAX, 0};
     for (uint32_t ib = ib0; ib <= ib1; ib++)
         for (uint32_t ia = ia0; ia <= ia1; ia++)

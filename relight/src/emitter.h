@@ -56,8 +56,14 @@ static inline void rl__box_union(uint32_t b[4], const uint32_t s[4])
     b[3] = s[3] > b[3] ? s[3] : b[3];
 }
 
-/* Slabs of partition n with 2n up to this get tables of their direction diamond's squares. */
-#define RL_CONE_MAX_SIDE 512u
+/* The most bytes each table of a slab's direction diamond's squares may take
+ * (their boxes; their bits, and the bits' per-direction draft): a slab
+ * whose table would be larger gets none (rl__lightfield_tables_make()). */
+#define RL_CONE_MAX_BYTES ((uint64_t)16 << 20)
+
+/* A cone of directions covering more squares than this gets no bound: the union would cost more
+ * than the samples it spares (rl__emitter_lit_rect()). */
+#define RL_CONE_MAX_SQUARES 4096u
 
 /* Slabs of up to this many positions get, besides boxes, the bits of the lit positions (rl__emitter_dark_at()). */
 #define RL_LIT_MAX_POSITIONS 4096u
@@ -68,9 +74,10 @@ static inline void rl__box_union(uint32_t b[4], const uint32_t s[4])
  * diamond, a = l0 / |l|_1 in [(ia - n) / n, (ia - n + 1) / n) and b = l1 /
  * |l|_1 likewise (l the direction in the slab's frame, l2 > 0), the box and
  * the bits of every position that a direction there reads with its
- * interpolation neighbours (slabs of partition above RL_CONE_MAX_SIDE / 2:
- * the directions' boxes alone, cone_support NULL). @return 0, or -1 when
- * memory runs out (nothing left allocated). */
+ * interpolation neighbours. A table that would pass RL_CONE_MAX_BYTES is not
+ * built: no boxes of squares (cone_support NULL, and then no bits either),
+ * or no bits (lit_words 0).
+ * @return 0, or -1 when memory runs out (nothing left allocated). */
 int rl__lightfield_tables_make(rl_lightfield *lf);
 
 /* Frees what rl__lightfield_tables_make() built (none built: a no-op). */
@@ -79,18 +86,20 @@ void rl__lightfield_tables_free(rl_lightfield *lf);
 /* Gives in r = {s0, s1, t0, t1} (e's frame, m) the rectangle of light field
  * emitter e outside which it sends nothing toward any point of the convex
  * hull of the nx world points x from any point of its frame polygon y (ny
- * vertices): the slab's support over the directions of that cone.
- * @return 1 with r set, 0 when there is no bound (a point of x on or behind
- * the slab's plane, or no table of squares), -1 when e is dark toward every
- * such point. */
+ * vertices): the slab's support over the directions of that cone. There is
+ * no bound when a point of x is on or behind the slab's plane, when the slab
+ * has no table of squares, or when the cone covers more than
+ * RL_CONE_MAX_SQUARES of them.
+ * @return 1 with r set, 0 without a bound, -1 when e is dark toward every such point. */
 int rl__emitter_lit_rect(const rl_emitter *e, const v3 *x, uint32_t nx, const v2 *y, uint32_t ny, double r[4]);
 
-/* @return 1 if light field emitter e certainly reads zero at frame point q
+/* Tells whether light field emitter e certainly reads zero at frame point q
  * along propagation direction l = (l0, l1, l2) in its frame (l2 > 0): no tap
  * that lfio's bilinear interpolation takes there is lit along any direction
- * mixed in l's square of the diamond (rl__lightfield_tables_make()); 0 when
- * it may not, or when the slab has no bits or l lies within rounding of a
- * square's side. */
+ * mixed in l's square of the diamond (rl__lightfield_tables_make()). It
+ * cannot tell when the slab has no bits, or when l lies within rounding of a
+ * square's side.
+ * @return 1 if dark, 0 if it may be lit. */
 static inline int rl__emitter_dark_at(const rl_emitter *e, v2 q, double l0, double l1, double l2)
 {
     const rl_lightfield *lf = e->lf;
@@ -100,9 +109,10 @@ static inline int rl__emitter_dark_at(const rl_emitter *e, v2 q, double l0, doub
     if (!(ga >= 0.0 && gb >= 0.0 && ga < 2.0 * lf->n && gb < 2.0 * lf->n))
         return 0;
     uint32_t ia = (uint32_t)ga, ib = (uint32_t)gb;
-    /* lfio finds the direction from the slab's own frame, equal to e's to rounding (its edges are
-     * orthogonal to 1e-9): near a side of the square it may place it in the next one */
-    const double margin = 1e-6;
+    /* lfio finds the direction from the slab's own frame, equal to e's to rounding (the edges and the
+     * transform's rotation are orthogonal to 1e-9): within 1e-6 of a side on the diamond (n times that in
+     * squares) it may place it in the next square */
+    const double margin = 1e-6 * lf->n;
     if (ga - ia < margin || ga - ia > 1.0 - margin || gb - ib < margin || gb - ib > 1.0 - margin)
         return 0;
     uint32_t nu = lf->nu, nv = lf->nv, i0, j0;
