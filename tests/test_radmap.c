@@ -506,6 +506,13 @@ int main(void)
 
     char good[512], empty[512], lonely[512];
     test_round_trip(patches, 3, tmp_path(good, sizeof good, "good.h5"));
+    /* the chunks compressed by lfio on one thread and on several (three of the big patch's chunks at once):
+     * HDF5 checks each chunk's checksum as it reads them back */
+    lfio_radmap_set_threads(1);
+    test_round_trip(patches, 3, good);
+    lfio_radmap_set_threads(3);
+    test_round_trip(patches, 3, good);
+    lfio_radmap_set_threads(0);
     test_round_trip(patches, 3, good); /* replaces an existing file */
     test_round_trip(NULL, 0, tmp_path(empty, sizeof empty, "no_patches.h5"));
     test_round_trip(&patches[1], 1, tmp_path(lonely, sizeof lonely, "empty_patch.h5"));

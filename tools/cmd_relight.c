@@ -456,6 +456,8 @@ static int write_radiance(relight_run *run)
     const char *path = run->staged[OUT_RADIANCE];
     patch_arrays arrays = {run->solution, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
     double t0 = cli_clock_seconds(CLOCK_MONOTONIC);
+    /* the chunks are compressed on the threads the engine used */
+    lfio_radmap_set_threads(relight_threads_used(&run->run_options));
     lfio_status st = job_radmap_write(path, RELIGHT_CREATOR, run->o->scene, n, describe_map, &arrays);
     int code = ILF_EXIT_OK;
     /* describe_map reported its own failures; lfio's are reported here */

@@ -23,12 +23,20 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "chunks.h"
 #include "h5util.h"
+#include "ilf/pool.h"
 #include "ilf/vec.h"
 #include "internal.h"
 #include "lfio/radmap.h"
 #ifdef LFIO_MPI
 #include "lfio/radmap_mpi.h"
+#endif
+
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define ILF_LITTLE_ENDIAN 1
+#else
+#define ILF_LITTLE_ENDIAN 0
 #endif
 
 #define FORMAT_NAME "ilfkit-radiance-maps"
@@ -285,37 +293,133 @@ static lfio_status write_patch_attrs(const char *path, const char *obj, hid_t g,
     return st;
 }
 
-/* Writes patch p as group /patches/k of the file whose "patches" group is patches; its arrays only when
- * mine (a collective write's other ranks take part with nothing). */
-static lfio_status write_patch(const char *path, hid_t patches, size_t k, const lfio_radmap_patch *p, int mine)
+/* A patch being written: its group and datasets, and the chunks filtered apart (chunks.h). */
+typedef struct patch_write {
+    const char *path;
+    hid_t patches;
+    size_t k;
+    const lfio_radmap_patch *p;
+    int mine, direct;
+    char obj[64];
+    hid_t g, d[MAP_DS_COUNT];
+    lfio__h5_layout lay[MAP_DS_COUNT];
+    lfio_status st;
+} patch_write;
+
+/* Creates w's group, its attributes and its datasets, and writes the datasets that HDF5 filters itself
+ * (all of them unless w->direct, else the ones without deflate); stops at the first failure (w->st). */
+static void patch_objects(void *arg)
 {
-    char obj[64], name[24];
-    snprintf(name, sizeof name, "%zu", k);
-    snprintf(obj, sizeof obj, "/patches/%zu", k);
-    hid_t g;
-    lfio_status st = lfio__h5_create_group(path, obj, patches, name, &g);
-    if (st != LFIO_OK)
-        return st;
-    st = write_patch_attrs(path, obj, g, p);
-    for (int t = 0; st == LFIO_OK && t < MAP_DS_COUNT; t++) {
-        lfio__h5_layout lay;
-        hid_t d;
+    patch_write *w = arg;
+    char name[24];
+    snprintf(name, sizeof name, "%zu", w->k);
+    w->st = lfio__h5_create_group(w->path, w->obj, w->patches, name, &w->g);
+    if (w->st == LFIO_OK)
+        w->st = write_patch_attrs(w->path, w->obj, w->g, w->p);
+    for (int t = 0; w->st == LFIO_OK && t < MAP_DS_COUNT; t++) {
         char dobj[128];
-        patch_layout((enum map_ds)t, p->nverts, p->ncells, &lay);
-        snprintf(dobj, sizeof dobj, "%.63s/%s", obj, lay.name);
-        st = lfio__h5_create_dataset(path, obj, g, &lay, &d);
-        if (st != LFIO_OK)
-            break;
-        const hsize_t zero[2] = {0, 0};
-        st = lfio__h5_write_part(path, dobj, d, memory_type((enum map_ds)t), lay.rank, zero, lay.dims,
-                                 patch_array(p, (enum map_ds)t), mine);
-        /* Closing flushes the chunk cache: the last chunks reach the file only here. */
-        if (H5Dclose(d) < 0 && st == LFIO_OK)
-            st = lfio__h5_fail(LFIO_ERR_IO, path, dobj, "cannot flush dataset");
+        snprintf(dobj, sizeof dobj, "%.63s/%s", w->obj, w->lay[t].name);
+        w->st = lfio__h5_create_dataset(w->path, w->obj, w->g, &w->lay[t], &w->d[t]);
+        if (w->st == LFIO_OK && !(w->direct && w->lay[t].deflate)) {
+            const hsize_t zero[2] = {0, 0};
+            w->st = lfio__h5_write_part(w->path, dobj, w->d[t], memory_type((enum map_ds)t), w->lay[t].rank, zero,
+                                        w->lay[t].dims, patch_array(w->p, (enum map_ds)t), w->mine);
+        }
     }
-    if (H5Gclose(g) < 0 && st == LFIO_OK)
-        st = lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot close group");
-    return st;
+}
+
+/* Lists in c (room for the total) the chunks of w's deflated datasets. @return their number. */
+static size_t patch_chunks(const patch_write *w, lfio__chunk *c)
+{
+    size_t n = 0;
+    for (int t = 0; t < MAP_DS_COUNT; t++) {
+        const lfio__h5_layout *l = &w->lay[t];
+        if (!l->deflate)
+            continue;
+        size_t row = (size_t)(l->rank == 2 ? l->dims[1] : 1) * l->size, rows = (size_t)l->dims[0];
+        const unsigned char *a = patch_array(w->p, (enum map_ds)t);
+        for (size_t r0 = 0; r0 < rows; r0 += (size_t)l->chunk[0], n++) {
+            size_t take = rows - r0 < (size_t)l->chunk[0] ? rows - r0 : (size_t)l->chunk[0];
+            c[n] = (lfio__chunk){a + r0 * row, take * row, (size_t)l->chunk[0] * row, l->size, l->deflate, NULL, 0};
+        }
+    }
+    return n;
+}
+
+/* @return how many chunks w's deflated datasets hold. */
+static size_t patch_chunk_count(const patch_write *w)
+{
+    size_t n = 0;
+    for (int t = 0; t < MAP_DS_COUNT; t++)
+        if (w->lay[t].deflate)
+            n += (size_t)((w->lay[t].dims[0] + w->lay[t].chunk[0] - 1) / w->lay[t].chunk[0]);
+    return n;
+}
+
+/* Stores the filtered chunks c (in patch_chunks()'s order) into w's datasets as they are. */
+static lfio_status store_chunks(const patch_write *w, const lfio__chunk *c)
+{
+    size_t n = 0;
+    for (int t = 0; t < MAP_DS_COUNT; t++) {
+        const lfio__h5_layout *l = &w->lay[t];
+        for (hsize_t r0 = 0; l->deflate && r0 < l->dims[0]; r0 += l->chunk[0], n++) {
+            const hsize_t offset[2] = {r0, 0};
+            /* filter mask 0: every filter of the pipeline was applied */
+            if (H5Dwrite_chunk(w->d[t], H5P_DEFAULT, 0, offset, c[n].out_bytes, c[n].out) < 0) {
+                char dobj[128];
+                snprintf(dobj, sizeof dobj, "%.63s/%s", w->obj, l->name);
+                return lfio__h5_fail(LFIO_ERR_IO, w->path, dobj, "cannot store a chunk");
+            }
+        }
+    }
+    return LFIO_OK;
+}
+
+/* The threads a serial write compresses chunks on (lfio_radmap_set_threads()). */
+static unsigned write_threads = 0;
+
+void lfio_radmap_set_threads(unsigned threads)
+{
+    write_threads = threads;
+}
+
+/* Writes patch p as group /patches/k of the file whose "patches" group is patches; its arrays only when
+ * mine (a collective write's other ranks take part with nothing). direct: the deflated datasets' chunks
+ * are filtered by lfio on several threads while HDF5 makes the patch's objects, then stored as they are
+ * (a serial write on a little-endian machine: the arrays' bytes are the stored ones). */
+static lfio_status write_patch(const char *path, hid_t patches, size_t k, const lfio_radmap_patch *p, int mine,
+                               int direct)
+{
+    patch_write w;
+    memset(&w, 0, sizeof w);
+    w.path = path, w.patches = patches, w.k = k, w.p = p, w.mine = mine, w.direct = direct, w.g = -1;
+    snprintf(w.obj, sizeof w.obj, "/patches/%zu", k);
+    for (int t = 0; t < MAP_DS_COUNT; t++) {
+        w.d[t] = -1;
+        patch_layout((enum map_ds)t, p->nverts, p->ncells, &w.lay[t]);
+    }
+    size_t n = direct ? patch_chunk_count(&w) : 0;
+    lfio__chunk *c = n ? malloc(n * sizeof *c) : NULL;
+    if (n && c == NULL)
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, w.obj);
+    if (n) {
+        patch_chunks(&w, c);
+        if (lfio__chunks_filter(c, n, ilf_thread_count(write_threads), patch_objects, &w) != 0 && w.st == LFIO_OK)
+            w.st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, w.obj);
+    } else {
+        patch_objects(&w);
+    }
+    if (w.st == LFIO_OK && n)
+        w.st = store_chunks(&w, c);
+    lfio__chunks_free(c, n);
+    free(c);
+    /* Closing flushes the chunk cache: the last chunks reach the file only here. */
+    for (int t = 0; t < MAP_DS_COUNT; t++)
+        if (w.d[t] >= 0 && H5Dclose(w.d[t]) < 0 && w.st == LFIO_OK)
+            w.st = lfio__h5_fail(LFIO_ERR_IO, path, w.obj, "cannot flush dataset");
+    if (w.g >= 0 && H5Gclose(w.g) < 0 && w.st == LFIO_OK)
+        w.st = lfio__h5_fail(LFIO_ERR_IO, path, w.obj, "cannot close group");
+    return w.st;
 }
 
 /* Writes the root attributes and every patch of the map content into the open, empty file. */
@@ -340,6 +444,9 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
     if (patches < 0)
         return lfio__h5_fail(LFIO_ERR_IO, path, "/patches", "cannot create group");
     uint64_t cells = 0;
+    /* lfio filters the chunks itself in a serial write (not through MPI-IO, where HDF5 1.10 stores no chunk
+     * as it is), when the arrays' bytes are the file's: little-endian */
+    int direct = c->ranks == 1 && ILF_LITTLE_ENDIAN;
     for (size_t k = 0; st == LFIO_OK && k < c->count; k++) {
         lfio_radmap_patch p;
         memset(&p, 0, sizeof p);
@@ -354,7 +461,7 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
             st = lfio__fail(LFIO_ERR_ARG, "%s: more than %llu cells", path,
                             (unsigned long long)LFIO_RADMAP_MAX_CELLS);
         } else {
-            st = write_patch(path, patches, k, &p, (int)(k % (size_t)c->ranks) == c->rank);
+            st = write_patch(path, patches, k, &p, (int)(k % (size_t)c->ranks) == c->rank, direct);
         }
     }
     lfio__h5_close(patches);

@@ -81,6 +81,15 @@ typedef struct lfio_radmap_patch {
 typedef struct lfio_radmap lfio_radmap;
 
 /**
+ * Sets how many threads the radiance-map writers (lfio_radmap_write(),
+ * lfio_radmap_write_each()) may use to compress a patch's chunks while HDF5
+ * makes its objects: 0 (the default) for every online core, 1 for the calling
+ * thread alone. The file reads back the same whatever the count. Not thread-safe: set
+ * it before writing, not during a write.
+ */
+void lfio_radmap_set_threads(unsigned threads);
+
+/**
  * Writes count patches (count may be 0) to path atomically, as
  * lfio_lightfield_write() does. creator names the program (NULL: "lfio
  * VERSION"), scene the scene file it relit (NULL: ""). Every patch is checked

@@ -1,0 +1,129 @@
+/*
+ * chunks.c - HDF5's shuffle, deflate and Fletcher-32 filters over whole
+ * chunks, on threads (chunks.h).
+ *
+ * Writing a large radiance-map file is mostly zlib, and HDF5 runs its filters
+ * on the one thread that calls it. Filtering here lets the chunks of a patch
+ * be compressed side by side, and beside HDF5's own work on the patch's
+ * objects. Invariants: a chunk's stored bytes are exactly what HDF5's pipeline
+ * (shuffle, deflate at the same level through compress2(), Fletcher-32 last,
+ * little-endian) makes of the same values, the part of the chunk past the
+ * dataset's end holding zeros; the result does not depend on the number of
+ * threads; a failure frees everything.
+ */
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <zlib.h>
+
+#include "chunks.h"
+#include "ilf/pool.h"
+
+uint32_t lfio__fletcher32(const unsigned char *p, size_t n)
+{
+    uint32_t a = 0, b = 0;
+    size_t words = n / 2;
+    while (words > 0) {
+        /* fold before the sums can overflow: 360 words keep b below 2^32 */
+        size_t run = words < 360 ? words : 360;
+        words -= run;
+        for (size_t k = 0; k < run; k++, p += 2) {
+            a += ((uint32_t)p[0] << 8) | p[1];
+            b += a;
+        }
+        a = (a & 0xffffu) + (a >> 16);
+        b = (b & 0xffffu) + (b >> 16);
+    }
+    if (n % 2) {
+        a += (uint32_t)p[0] << 8;
+        b += a;
+        a = (a & 0xffffu) + (a >> 16);
+        b = (b & 0xffffu) + (b >> 16);
+    }
+    a = (a & 0xffffu) + (a >> 16);
+    b = (b & 0xffffu) + (b >> 16);
+    return (b << 16) | a;
+}
+
+/* Filters one chunk into c->out, with scratch for the shuffled values (c->chunk_bytes). @return 0 or -1. */
+static int filter_one(lfio__chunk *c, unsigned char *scratch)
+{
+    /* shuffle: byte k of every value together, the values in order (the zeros past the end likewise) */
+    size_t count = c->chunk_bytes / c->elem;
+    memset(scratch, 0, c->chunk_bytes);
+    for (size_t i = 0; i < c->raw_bytes / c->elem; i++)
+        for (size_t k = 0; k < c->elem; k++)
+            scratch[k * count + i] = c->raw[i * c->elem + k];
+    uLongf packed = compressBound((uLong)c->chunk_bytes);
+    c->out = malloc(packed + 4);
+    if (c->out == NULL)
+        return -1;
+    if (compress2(c->out, &packed, scratch, (uLong)c->chunk_bytes, c->level) != Z_OK) {
+        free(c->out);
+        c->out = NULL;
+        return -1;
+    }
+    uint32_t sum = lfio__fletcher32(c->out, packed);
+    for (int k = 0; k < 4; k++)
+        c->out[packed + k] = (unsigned char)(sum >> (8 * k));
+    c->out_bytes = packed + 4;
+    return 0;
+}
+
+/* What the threads share: the chunks and the next one to take. */
+typedef struct filter_work {
+    lfio__chunk *c;
+    size_t n;
+    atomic_size_t next;
+    atomic_int failed;
+} filter_work;
+
+/* A worker: takes chunks until none is left. */
+static void filter_worker(void *arg, unsigned index)
+{
+    (void)index;
+    filter_work *w = arg;
+    unsigned char *scratch = NULL;
+    size_t cap = 0;
+    for (size_t k; (k = atomic_fetch_add(&w->next, 1)) < w->n;) {
+        lfio__chunk *c = &w->c[k];
+        if (c->chunk_bytes > cap) {
+            free(scratch);
+            cap = c->chunk_bytes;
+            if ((scratch = malloc(cap)) == NULL)
+                cap = 0;
+        }
+        if (scratch == NULL || filter_one(c, scratch) != 0)
+            atomic_store(&w->failed, 1);
+    }
+    free(scratch);
+}
+
+int lfio__chunks_filter(lfio__chunk *c, size_t n, unsigned threads, void (*call_between)(void *), void *user)
+{
+    filter_work w = {c, n, 0, 0};
+    for (size_t k = 0; k < n; k++)
+        c[k].out = NULL, c[k].out_bytes = 0;
+    ilf_team *team = NULL;
+    /* helpers only when there is more than one chunk to share; without a team the caller does it all */
+    if (threads > 1 && n > 1 && ilf_team_start(threads - 1 < n - 1 ? threads - 1 : (unsigned)(n - 1), filter_worker,
+                                               &w, &team) != 0)
+        team = NULL;
+    if (call_between)
+        call_between(user);
+    filter_worker(&w, 0);
+    ilf_team_join(team);
+    if (atomic_load(&w.failed)) {
+        lfio__chunks_free(c, n);
+        return -1;
+    }
+    return 0;
+}
+
+void lfio__chunks_free(lfio__chunk *c, size_t n)
+{
+    for (size_t k = 0; k < n; k++) {
+        free(c[k].out);
+        c[k].out = NULL;
+    }
+}
