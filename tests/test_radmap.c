@@ -496,22 +496,24 @@ int main(void)
 
     /* Patch 0: a 1 m square emitter at 0.25 m with some cells missing (12 of 16);
      * patch 1: a polygon of the same frame without cells; patch 2: 40000 cells, several chunks. */
-    struct test_patch t[3];
+    struct test_patch t[4];
     make_patch(&t[0], "polygons[0]", 0, 1.0, 2.0, 0.25, 4);
     make_patch(&t[1], "meshes[0] (room.obj) face 7", 5, 1.0, 0.0, 0.25, 1);
     make_patch(&t[2], "polygons[1] \xc3\xa9tag\xc3\xa8re", 1, 2.0, 0.0, 0.01, 0);
-    CHECK(t[0].p.ncells == 12 && t[1].p.ncells == 0 && t[2].p.ncells == 40000, "test patch sizes %u %u %u",
-          t[0].p.ncells, t[1].p.ncells, t[2].p.ncells);
-    lfio_radmap_patch patches[3] = {t[0].p, t[1].p, t[2].p};
+    /* patch 3: deflated datasets of one chunk each, the common case */
+    make_patch(&t[3], "polygons[2]", 2, 1.0, 0.5, 0.07, 0);
+    CHECK(t[0].p.ncells == 12 && t[1].p.ncells == 0 && t[2].p.ncells == 40000 && t[3].p.ncells == 196,
+          "test patch sizes %u %u %u %u", t[0].p.ncells, t[1].p.ncells, t[2].p.ncells, t[3].p.ncells);
+    lfio_radmap_patch patches[4] = {t[0].p, t[1].p, t[2].p, t[3].p};
 
     char good[512], empty[512], lonely[512];
     test_round_trip(patches, 3, tmp_path(good, sizeof good, "good.h5"));
     /* the chunks compressed by lfio on one thread and on several (three of the big patch's chunks at once):
      * HDF5 checks each chunk's checksum as it reads them back */
     lfio_radmap_set_threads(1);
-    test_round_trip(patches, 3, good);
+    test_round_trip(patches, 4, good);
     lfio_radmap_set_threads(3);
-    test_round_trip(patches, 3, good);
+    test_round_trip(patches, 4, good);
     lfio_radmap_set_threads(0);
     test_round_trip(patches, 3, good); /* replaces an existing file */
     test_round_trip(NULL, 0, tmp_path(empty, sizeof empty, "no_patches.h5"));
@@ -520,7 +522,7 @@ int main(void)
     test_writer_refusals(&t[0], good);
     test_bad_files(good);
     CHECK(sweep_tmpdir(1) == 0, "temporaries left at the end");
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < 4; k++)
         free_patch(&t[k]);
     return check_report();
 }

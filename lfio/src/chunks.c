@@ -49,9 +49,10 @@ uint32_t lfio__fletcher32(const unsigned char *p, size_t n)
 static int filter_one(lfio__chunk *c, unsigned char *scratch)
 {
     /* shuffle: byte k of every value together, the values in order (the zeros past the end likewise) */
-    size_t count = c->chunk_bytes / c->elem;
-    memset(scratch, 0, c->chunk_bytes);
-    for (size_t i = 0; i < c->raw_bytes / c->elem; i++)
+    size_t count = c->chunk_bytes / c->elem, present = c->raw_bytes / c->elem;
+    for (size_t k = 0; present < count && k < c->elem; k++) /* the zeros past the end, in each byte plane */
+        memset(scratch + k * count + present, 0, count - present);
+    for (size_t i = 0; i < present; i++)
         for (size_t k = 0; k < c->elem; k++)
             scratch[k * count + i] = c->raw[i * c->elem + k];
     uLongf packed = compressBound((uLong)c->chunk_bytes);
@@ -105,10 +106,11 @@ int lfio__chunks_filter(lfio__chunk *c, size_t n, unsigned threads, void (*call_
     for (size_t k = 0; k < n; k++)
         c[k].out = NULL, c[k].out_bytes = 0;
     ilf_team *team = NULL;
-    /* helpers only when there is more than one chunk to share; without a team the caller does it all */
-    if (threads > 1 && n > 1 && ilf_team_start(threads - 1 < n - 1 ? threads - 1 : (unsigned)(n - 1), filter_worker,
-                                               &w, &team) != 0)
-        team = NULL;
+    /* helpers only when there is more than one chunk to share; a team that cannot be allocated is out of
+     * memory, reported as such (nothing has run yet) */
+    if (threads > 1 && n > 1 &&
+        ilf_team_start(threads - 1 < n - 1 ? threads - 1 : (unsigned)(n - 1), filter_worker, &w, &team) != 0)
+        return -1;
     if (call_between)
         call_between(user);
     filter_worker(&w, 0);

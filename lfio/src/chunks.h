@@ -26,8 +26,9 @@ typedef struct lfio__chunk {
 /* @return the Fletcher-32 checksum of n bytes as HDF5 computes it (16-bit big-endian words, an odd last byte as the high half). */
 uint32_t lfio__fletcher32(const unsigned char *p, size_t n);
 
-/* Filters chunks c[0..n) on up to threads threads, the calling thread among them; then call_between(user)
- * runs on the calling thread while the others work (NULL: nothing).
+/* Filters chunks c[0..n) on up to threads threads, the calling thread among them; call_between(user)
+ * runs on the calling thread first, while the others work (NULL: nothing). When memory runs out before
+ * any work (the threads' record), call_between is not called.
  * @return 0, or -1 when memory ran out (every out is then freed and NULL). */
 int lfio__chunks_filter(lfio__chunk *c, size_t n, unsigned threads, void (*call_between)(void *), void *user);
 

@@ -14,11 +14,14 @@
  *     vertex and cell counts are bounded (per patch and, for cells, over the
  *     file) and every dataset's type and shape are checked before any array
  *     is allocated.
+ *   - HDF5 is called from the calling thread alone: the threads of a serial
+ *     write (chunks.h) only filter chunks while it makes a patch's objects.
  *   - Every public entry point silences HDF5 for its whole duration; the
  *     HDF5 plumbing (errors, attributes, layouts, atomic writes) is shared
  *     with light field files through h5util.h.
  */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -34,9 +37,9 @@
 #endif
 
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-#define ILF_LITTLE_ENDIAN 1
+#define LFIO_LITTLE_ENDIAN 1
 #else
-#define ILF_LITTLE_ENDIAN 0
+#define LFIO_LITTLE_ENDIAN 0
 #endif
 
 #define FORMAT_NAME "ilfkit-radiance-maps"
@@ -262,6 +265,7 @@ struct map_content {
     lfio_radmap_describe_fn describe;
     void *user;
     int rank, ranks; /* this writer among those of a collective write: patch k's arrays are rank k mod ranks's */
+    int serial;      /* written by lfio_radmap_write_each(), not through MPI-IO (even with one rank) */
 };
 
 /* Writes the attributes of patch group g (obj) describing p. */
@@ -306,6 +310,13 @@ typedef struct patch_write {
     lfio_status st;
 } patch_write;
 
+/* Names dataset t of w for messages, in buf. @return buf. */
+static const char *dataset_obj(const patch_write *w, int t, char *buf, size_t size)
+{
+    snprintf(buf, size, "%.63s/%.31s", w->obj, w->lay[t].name);
+    return buf;
+}
+
 /* Creates w's group, its attributes and its datasets, and writes the datasets that HDF5 filters itself
  * (all of them unless w->direct, else the ones without deflate); stops at the first failure (w->st). */
 static void patch_objects(void *arg)
@@ -318,7 +329,7 @@ static void patch_objects(void *arg)
         w->st = write_patch_attrs(w->path, w->obj, w->g, w->p);
     for (int t = 0; w->st == LFIO_OK && t < MAP_DS_COUNT; t++) {
         char dobj[128];
-        snprintf(dobj, sizeof dobj, "%.63s/%s", w->obj, w->lay[t].name);
+        dataset_obj(w, t, dobj, sizeof dobj);
         w->st = lfio__h5_create_dataset(w->path, w->obj, w->g, &w->lay[t], &w->d[t]);
         if (w->st == LFIO_OK && !(w->direct && w->lay[t].deflate)) {
             const hsize_t zero[2] = {0, 0};
@@ -328,59 +339,55 @@ static void patch_objects(void *arg)
     }
 }
 
-/* Lists in c (room for the total) the chunks of w's deflated datasets. @return their number. */
-static size_t patch_chunks(const patch_write *w, lfio__chunk *c)
+/* Where a chunk goes: its dataset and its first row. */
+typedef struct chunk_place {
+    int t;
+    hsize_t row;
+} chunk_place;
+
+/* Lists the chunks of w's deflated datasets in c and where they go in at (both NULL: counts them).
+ * @return their number. */
+static size_t patch_chunks(const patch_write *w, lfio__chunk *c, chunk_place *at)
 {
     size_t n = 0;
     for (int t = 0; t < MAP_DS_COUNT; t++) {
         const lfio__h5_layout *l = &w->lay[t];
-        if (!l->deflate)
-            continue;
-        size_t row = (size_t)(l->rank == 2 ? l->dims[1] : 1) * l->size, rows = (size_t)l->dims[0];
+        size_t row = (size_t)(l->rank == 2 ? l->dims[1] : 1) * l->size;
         const unsigned char *a = patch_array(w->p, (enum map_ds)t);
-        for (size_t r0 = 0; r0 < rows; r0 += (size_t)l->chunk[0], n++) {
-            size_t take = rows - r0 < (size_t)l->chunk[0] ? rows - r0 : (size_t)l->chunk[0];
-            c[n] = (lfio__chunk){a + r0 * row, take * row, (size_t)l->chunk[0] * row, l->size, l->deflate, NULL, 0};
+        for (hsize_t r0 = 0; l->deflate && r0 < l->dims[0]; r0 += l->chunk[0], n++) {
+            size_t take = (size_t)(l->dims[0] - r0 < l->chunk[0] ? l->dims[0] - r0 : l->chunk[0]);
+            if (c)
+                c[n] = (lfio__chunk){a + (size_t)r0 * row, take * row, (size_t)l->chunk[0] * row, l->size, l->deflate,
+                                     NULL, 0};
+            if (at)
+                at[n] = (chunk_place){t, r0};
         }
     }
     return n;
 }
 
-/* @return how many chunks w's deflated datasets hold. */
-static size_t patch_chunk_count(const patch_write *w)
+/* Stores the n filtered chunks c where at says, as they are. */
+static lfio_status store_chunks(const patch_write *w, const lfio__chunk *c, const chunk_place *at, size_t n)
 {
-    size_t n = 0;
-    for (int t = 0; t < MAP_DS_COUNT; t++)
-        if (w->lay[t].deflate)
-            n += (size_t)((w->lay[t].dims[0] + w->lay[t].chunk[0] - 1) / w->lay[t].chunk[0]);
-    return n;
-}
-
-/* Stores the filtered chunks c (in patch_chunks()'s order) into w's datasets as they are. */
-static lfio_status store_chunks(const patch_write *w, const lfio__chunk *c)
-{
-    size_t n = 0;
-    for (int t = 0; t < MAP_DS_COUNT; t++) {
-        const lfio__h5_layout *l = &w->lay[t];
-        for (hsize_t r0 = 0; l->deflate && r0 < l->dims[0]; r0 += l->chunk[0], n++) {
-            const hsize_t offset[2] = {r0, 0};
-            /* filter mask 0: every filter of the pipeline was applied */
-            if (H5Dwrite_chunk(w->d[t], H5P_DEFAULT, 0, offset, c[n].out_bytes, c[n].out) < 0) {
-                char dobj[128];
-                snprintf(dobj, sizeof dobj, "%.63s/%s", w->obj, l->name);
-                return lfio__h5_fail(LFIO_ERR_IO, w->path, dobj, "cannot store a chunk");
-            }
+    for (size_t k = 0; k < n; k++) {
+        const hsize_t offset[2] = {at[k].row, 0};
+        /* filter mask 0: every filter of the pipeline was applied */
+        if (H5Dwrite_chunk(w->d[at[k].t], H5P_DEFAULT, 0, offset, c[k].out_bytes, c[k].out) < 0) {
+            char dobj[128];
+            return lfio__h5_fail(LFIO_ERR_IO, w->path, dataset_obj(w, at[k].t, dobj, sizeof dobj),
+                                 "cannot store a chunk");
         }
     }
     return LFIO_OK;
 }
 
-/* The threads a serial write compresses chunks on (lfio_radmap_set_threads()). */
-static unsigned write_threads = 0;
+/* The threads a serial write compresses chunks on (lfio_radmap_set_threads()); atomic, so that setting it
+ * while another thread writes is no data race (that write takes either value). */
+static _Atomic unsigned write_threads = 0;
 
 void lfio_radmap_set_threads(unsigned threads)
 {
-    write_threads = threads;
+    atomic_store_explicit(&write_threads, threads, memory_order_relaxed);
 }
 
 /* Writes patch p as group /patches/k of the file whose "patches" group is patches; its arrays only when
@@ -398,25 +405,33 @@ static lfio_status write_patch(const char *path, hid_t patches, size_t k, const 
         w.d[t] = -1;
         patch_layout((enum map_ds)t, p->nverts, p->ncells, &w.lay[t]);
     }
-    size_t n = direct ? patch_chunk_count(&w) : 0;
+    size_t n = direct ? patch_chunks(&w, NULL, NULL) : 0;
     lfio__chunk *c = n ? malloc(n * sizeof *c) : NULL;
-    if (n && c == NULL)
+    chunk_place *at = n ? malloc(n * sizeof *at) : NULL;
+    if (n && (c == NULL || at == NULL)) {
+        free(c);
+        free(at);
         return lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, w.obj);
+    }
     if (n) {
-        patch_chunks(&w, c);
-        if (lfio__chunks_filter(c, n, ilf_thread_count(write_threads), patch_objects, &w) != 0 && w.st == LFIO_OK)
+        patch_chunks(&w, c, at);
+        if (lfio__chunks_filter(c, n, ilf_thread_count(atomic_load_explicit(&write_threads, memory_order_relaxed)),
+                                patch_objects, &w) != 0 && w.st == LFIO_OK)
             w.st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, w.obj);
     } else {
         patch_objects(&w);
     }
     if (w.st == LFIO_OK && n)
-        w.st = store_chunks(&w, c);
+        w.st = store_chunks(&w, c, at, n);
     lfio__chunks_free(c, n);
     free(c);
+    free(at);
     /* Closing flushes the chunk cache: the last chunks reach the file only here. */
-    for (int t = 0; t < MAP_DS_COUNT; t++)
+    for (int t = 0; t < MAP_DS_COUNT; t++) {
+        char dobj[128];
         if (w.d[t] >= 0 && H5Dclose(w.d[t]) < 0 && w.st == LFIO_OK)
-            w.st = lfio__h5_fail(LFIO_ERR_IO, path, w.obj, "cannot flush dataset");
+            w.st = lfio__h5_fail(LFIO_ERR_IO, path, dataset_obj(&w, t, dobj, sizeof dobj), "cannot flush dataset");
+    }
     if (w.g >= 0 && H5Gclose(w.g) < 0 && w.st == LFIO_OK)
         w.st = lfio__h5_fail(LFIO_ERR_IO, path, w.obj, "cannot close group");
     return w.st;
@@ -446,7 +461,7 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
     uint64_t cells = 0;
     /* lfio filters the chunks itself in a serial write (not through MPI-IO, where HDF5 1.10 stores no chunk
      * as it is), when the arrays' bytes are the file's: little-endian */
-    int direct = c->ranks == 1 && ILF_LITTLE_ENDIAN;
+    int direct = c->serial && LFIO_LITTLE_ENDIAN;
     for (size_t k = 0; st == LFIO_OK && k < c->count; k++) {
         lfio_radmap_patch p;
         memset(&p, 0, sizeof p);
@@ -487,7 +502,7 @@ lfio_status lfio_radmap_write_each(const char *path, const char *creator, const 
     if (describe == NULL && count > 0)
         return lfio__fail(LFIO_ERR_ARG, "%s: NULL describe function", path);
     const struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", count,
-                                  describe, user, 0, 1};
+                                  describe, user, 0, 1, 1};
     lfio_status st = check_write_args(path, &c);
     return st == LFIO_OK ? lfio__h5_write_atomic(path, write_contents, &c) : st;
 }
@@ -505,7 +520,7 @@ lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, co
     if (describe == NULL && count > 0)
         return lfio__fail(LFIO_ERR_ARG, "%s: NULL describe function", path);
     const struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", count,
-                                  describe, user, rank, ranks};
+                                  describe, user, rank, ranks, 0};
     lfio_status st = check_write_args(path, &c);
     return st == LFIO_OK ? lfio__h5_write_collective(path, write_contents, &c, comm) : st;
 }

@@ -81,11 +81,13 @@ typedef struct lfio_radmap_patch {
 typedef struct lfio_radmap lfio_radmap;
 
 /**
- * Sets how many threads the radiance-map writers (lfio_radmap_write(),
+ * Sets how many threads the serial radiance-map writers (lfio_radmap_write(),
  * lfio_radmap_write_each()) may use to compress a patch's chunks while HDF5
- * makes its objects: 0 (the default) for every online core, 1 for the calling
- * thread alone. The file reads back the same whatever the count. Not thread-safe: set
- * it before writing, not during a write.
+ * makes its objects: 0 (the default) for every online core, 1 for the
+ * calling thread alone (at most 1024). The chunks' bytes are the same
+ * whatever the count. MPI writes and big-endian machines compress through
+ * HDF5 on one thread and ignore it. Safe to call from any thread; a write
+ * already under way may take the old value or the new.
  */
 void lfio_radmap_set_threads(unsigned threads);
 
