@@ -220,6 +220,14 @@ int rl__lightfield_tables_make(rl_lightfield *lf)
     return 0;
 }
 
+void rl__lightfield_tables_share(rl_lightfield *lf, const rl_lightfield *from)
+{
+    lf->support = from->support;
+    lf->cone_support = from->cone_support;
+    lf->cone_bits = from->cone_bits;
+    lf->lit_words = from->lit_words;
+}
+
 void rl__lightfield_tables_free(rl_lightfield *lf)
 {
     free(lf->support);
@@ -233,11 +241,11 @@ void rl__emitter_support_rect(const rl_emitter *e, const uint32_t b[4], double r
 {
     /* bilinear interpolation between position centres reaches half a position past the last nonzero
      * centre, and the border clamps */
-    const lfio_slab_desc *d = lfio_slab_get_desc(e->lf->slab);
-    r[0] = (b[0] == 0 ? 0.0 : (b[0] - 0.5) / d->nu) * e->len_u;
-    r[1] = (b[1] + 1 >= d->nu ? 1.0 : (b[1] + 1.5) / d->nu) * e->len_u;
-    r[2] = (b[2] == 0 ? 0.0 : (b[2] - 0.5) / d->nv) * e->len_v;
-    r[3] = (b[3] + 1 >= d->nv ? 1.0 : (b[3] + 1.5) / d->nv) * e->len_v;
+    uint32_t nu = e->lf->nu, nv = e->lf->nv;
+    r[0] = (b[0] == 0 ? 0.0 : (b[0] - 0.5) / nu) * e->len_u;
+    r[1] = (b[1] + 1 >= nu ? 1.0 : (b[1] + 1.5) / nu) * e->len_u;
+    r[2] = (b[2] == 0 ? 0.0 : (b[2] - 0.5) / nv) * e->len_v;
+    r[3] = (b[3] + 1 >= nv ? 1.0 : (b[3] + 1.5) / nv) * e->len_v;
 }
 
 /* @return t / (|t| + 1): a diamond coordinate where the other one is 0, t being the direction's slope. */

@@ -80,6 +80,9 @@ static inline void rl__box_union(uint32_t b[4], const uint32_t s[4])
  * @return 0, or -1 when memory runs out (nothing left allocated). */
 int rl__lightfield_tables_make(rl_lightfield *lf);
 
+/* Gives lf the tables that from owns (an entry naming the same slab): borrowed, never freed through lf. */
+void rl__lightfield_tables_share(rl_lightfield *lf, const rl_lightfield *from);
+
 /* Frees what rl__lightfield_tables_make() built (none built: a no-op). */
 void rl__lightfield_tables_free(rl_lightfield *lf);
 

@@ -549,10 +549,7 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
     const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
     lf->nu = d->nu, lf->nv = d->nv, lf->n = d->n;
     if ((same = earlier_lightfield(b->scene, lf, NULL, lf->slab)) != NULL) {
-        lf->support = same->support;
-        lf->cone_support = same->cone_support;
-        lf->cone_bits = same->cone_bits;
-        lf->lit_words = same->lit_words;
+        rl__lightfield_tables_share(lf, same);
     } else {
         if (rl__lightfield_tables_make(lf) != 0)
             return rl__fail(RL_ERR_NOMEM, "%s: %s: out of memory", b->file, elem);
