@@ -358,7 +358,7 @@ import json, sys
 s = json.load(open(sys.argv[1]))
 assert s["scene"].endswith("cli_square.json") and s["method"] == "culled", s
 assert s["settings"]["partition_n"] == 8 and s["settings"]["rays_per_solid_angle"] == 1, s["settings"]
-assert s["settings"]["bounce_rays"] == 256 and "target_error" in s["settings"] and len(s["settings"]) == 12, s["settings"]
+assert s["settings"]["bounce_rays"] == 256 and "target_error" in s["settings"] and len(s["settings"]) == 13, s["settings"]
 assert s["settings"]["bounces"] == 1 and s["threads"] == 2, s
 assert s["maps"] == 1 and s["cells"] == 64, s
 assert s["wall_seconds"] >= 0 and s["cpu_seconds"] >= 0, s

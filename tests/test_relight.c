@@ -834,6 +834,127 @@ static void check_lightfield(void)
           (unsigned long long)samples[1], (unsigned long long)samples[0]);
 }
 
+/* Writes a slab of n lit, in a 40 degree cone about its normal, from the two
+ * columns of positions on its -x half only: a receiver's lit part of it is
+ * that half at most. */
+static void write_half_lightfield(const char *path, uint32_t n)
+{
+    lfio_slab *slab = test_slab_new(n);
+    uint64_t nd = lfio_slab_dir_count(slab);
+    for (uint64_t k = 0; k < nd; k++) {
+        double w[3];
+        lfio_part_centroid(n, k, w);
+        float v = w[2] > cos(40 * 3.14159265358979 / 180) ? 5.0f : 0.0f;
+        for (uint32_t j = 0; j < 4; j++)
+            for (uint32_t i = 0; i < 2; i++)
+                lfio_slab_write(slab, k, i, j, (const float[3]){v, v, v});
+    }
+    test_slab_write(path, slab);
+}
+
+/* @return RMSE of map 0 of a against b's, over the mean of b's (green). */
+static double cells_rmse(const rl_solution *a, const rl_solution *b, double *sum_a, double *sum_b)
+{
+    ts_cells ca = ts_cells_get(a, 0), cb = ts_cells_get(b, 0);
+    double sq = 0;
+    *sum_a = *sum_b = 0;
+    for (uint32_t q = 0; q < ca.n && q < cb.n; q++) {
+        double d = ca.e[3 * q + 1] - cb.e[3 * q + 1];
+        sq += d * d;
+        *sum_a += ca.e[3 * q + 1];
+        *sum_b += cb.e[3 * q + 1];
+    }
+    double r = ca.n == cb.n && ca.n > 0 && *sum_b > 0 ? sqrt(sq / cb.n) / (*sum_b / cb.n) : 1.0;
+    ts_cells_free(&ca);
+    ts_cells_free(&cb);
+    return r;
+}
+
+/* Relights s with anchor_stride stride and k rays. @return the solution (NULL on failure), its samples in *samples. */
+static rl_solution *relight_anchored(rl_scene *s, uint32_t stride, uint32_t k, uint64_t *samples)
+{
+    set_sampling(s, RL_METHOD_CULLED, 8, k, 16, 0);
+    rl_sampling smp = *rl_scene_sampling(s);
+    smp.anchor_stride = stride;
+    CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "anchor_stride %u: %s", stride, rl_errmsg());
+    rl_solution *sol = NULL;
+    CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "anchors %u, k %u: %s", stride, k, rl_errmsg());
+    rl_pass_stats st = {0};
+    if (sol)
+        rl_solution_pass_stats(sol, 0, &st);
+    *samples = st.samples;
+    return sol;
+}
+
+/* A light field's cells that see all of it take their light bilinearly
+ * between anchors (views.c), here 2 cells apart (1 m under the slab of
+ * partition 4, cells of 1/32 m). A constant slab is Lambertian, so each
+ * anchor is exact to float radiance and the cells must follow Lambert's
+ * means to within interpolation (about 0.2% of the local value at the peak,
+ * where a cell placed half a cell off would be off by up to 3%); a lobe
+ * that varies with direction and over the slab must be estimated as well as
+ * by sampling every cell, against a finer run, with fewer samples. */
+static void check_lightfield_anchors(void)
+{
+    char lfpath[600], path[600];
+    snprintf(lfpath, sizeof lfpath, "%s/anchor_lf.h5", tmpdir);
+    snprintf(path, sizeof path, "%s/anchors.json", tmpdir);
+    tpoly p[1] = {ts_rect_z("grey", -1, -1, 1, 1, 0.0, 1)};
+    ts_write_scene(path, MATS, p, 1,
+                   "\"radiance_maps\": {\"cell_size\": 0.03125}, \"lightfields\": [{\"file\": \"anchor_lf.h5\", "
+                   "\"slab\": \"light\", \"transform\": [[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]}]");
+    write_lightfield(lfpath, 2.0f, 180, 4, 0);
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    uint64_t n_anchored = 0, n_cells = 0;
+    rl_solution *a = relight_anchored(s, 0, 4, &n_anchored), *c = relight_anchored(s, 1, 4, &n_cells);
+    tpoly em = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
+    if (a && c) {
+        double rmse[2], mx[2];
+        errors_vs_reference(a, 0, &em, 2.0, &rmse[0], &mx[0]);
+        errors_vs_reference(c, 0, &em, 2.0, &rmse[1], &mx[1]);
+        printf("constant light field, anchors 2 cells apart: RMSE %.4f%%, max %.4f%% of peak, %llu samples; "
+               "every cell: %.4f%%, %.4f%%, %llu samples\n",
+               100 * rmse[0], 100 * mx[0], (unsigned long long)n_anchored, 100 * rmse[1], 100 * mx[1],
+               (unsigned long long)n_cells);
+        CHECK(mx[0] < 0.003, "anchors: constant light field off Lambert by %.4g of the peak", mx[0]);
+        CHECK(n_anchored < n_cells / 3, "anchors: %llu samples against %llu per cell", (unsigned long long)n_anchored,
+              (unsigned long long)n_cells);
+    }
+    rl_solution_destroy(a);
+    rl_solution_destroy(c);
+    rl_scene_destroy(s);
+
+    /* a lobe varying with direction and over the slab; a cone lit from half the slab, of which each anchor
+     * samples (and takes Lambert's formula over) only the part that can light it */
+    for (int field = 0; field < 2; field++) {
+        const char *what = field ? "half a slab" : "tilted lobe";
+        if (field)
+            write_half_lightfield(lfpath, 4);
+        else
+            write_lobe_lightfield(lfpath, 4);
+        if (!(s = ts_load(path)))
+            return;
+        rl_solution *ref = relight_anchored(s, 1, 64, &n_cells);
+        a = relight_anchored(s, 0, 4, &n_anchored);
+        c = relight_anchored(s, 1, 4, &n_cells);
+        if (ref && a && c) {
+            double sa, sc, sr;
+            double ra = cells_rmse(a, ref, &sa, &sr), rc = cells_rmse(c, ref, &sc, &sr);
+            printf("%s against every cell at 16x the rays: anchors RMSE %.3f%% of the mean (%llu samples), "
+                   "every cell %.3f%% (%llu); sums %.5g, %.5g, %.5g\n",
+                   what, 100 * ra, (unsigned long long)n_anchored, 100 * rc, (unsigned long long)n_cells, sa, sc, sr);
+            CHECK(ra <= rc, "anchors, %s: RMSE %.4g against %.4g sampling every cell", what, ra, rc);
+            CHECK(fabs(sa - sr) < 0.002 * sr, "anchors, %s: total %.6g against %.6g", what, sa, sr);
+        }
+        rl_solution_destroy(ref);
+        rl_solution_destroy(a);
+        rl_solution_destroy(c);
+        rl_scene_destroy(s);
+    }
+}
+
 /* A constant light field slab seen edge-on: the point lies just below the
  * slab's plane, facing across it, so every direction that reaches it from the
  * slab grazes the slab. A constant slab is a Lambertian emitter, so Lambert's
@@ -1313,6 +1434,7 @@ int main(int argc, char **argv)
         check_contact_bounce();
         check_narrow_wall();
         check_lightfield();
+        check_lightfield_anchors();
     }
     return check_report();
 }

@@ -341,7 +341,7 @@ static void test_settings_table(void)
     rl_sampling_default(&def);
     memset(&x, 0, sizeof x);
     size_t n = rl_sampling_setting_count();
-    CHECK(n == 12 && rl_sampling_setting(n) == NULL, "%zu settings", n);
+    CHECK(n == 13 && rl_sampling_setting(n) == NULL, "%zu settings", n);
     for (size_t k = 0; k < n; k++) {
         const rl_setting_info *s = rl_sampling_setting(k);
         double v = -1;

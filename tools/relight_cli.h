@@ -25,7 +25,7 @@
  * their option tables and fill them with relight_options_fill(), so an
  * option's index is its id. */
 enum sampling_option_id {
-    SAMPLING_OPT_SETTINGS = 12, /* rows of the settings table: relight_options_fill() checks the count */
+    SAMPLING_OPT_SETTINGS = 13, /* rows of the settings table: relight_options_fill() checks the count */
     SAMPLING_OPT_THREADS = SAMPLING_OPT_SETTINGS,
     SAMPLING_OPT_TIME_BUDGET,
     SAMPLING_OPT_COUNT

@@ -45,6 +45,8 @@ static const rl_setting_info settings[] = {
      "1: Lambert's formula times sampled light for diffuse and small emitters"},
     {"zero_culling", "zero-culling", "0|1", RL_SETTING_UINT32, FIELD(zero_culling), 0, 1, 0, 1,
      "1: cull light field directions and cells by zero radiance"},
+    {"anchor_stride", "anchor-stride", "S", RL_SETTING_UINT32, FIELD(anchor_stride), 0, 64, 0, 0,
+     "light fields' cells that see all of one: interpolate between points S cells apart; 0 = from distance, 1 = none"},
     {"seed", "seed", "S", RL_SETTING_UINT64, FIELD(seed), 0, JSON_EXACT_MAX, RL_SETTING_TEXT_BOUNDS, 1,
      "random seed"},
     {"target_error", "target-error", "E", RL_SETTING_REAL, FIELD(target_error), 0, 1, RL_SETTING_LO_OPEN, 0.05,

@@ -58,6 +58,7 @@ void rl__scratch_free(rl_scratch *s)
     free(s->occ);
     free(s->vis);
     free(s->block_occ);
+    free(s->anchor);
     free(s->beam);
     free(s->blend);
     rl__shadows_free(s->shadows);

@@ -59,6 +59,8 @@ typedef struct rl_scratch {
     size_t vis_cap;
     uint32_t *block_occ;  /* and the possible occluders of each level of its blocks */
     struct rl_beam *beam; /* one beam's room (shadow.h), for Lambert's gather and point receivers */
+    double (*anchor)[3];  /* Lambert's gather: a light field's unshadowed light at the tile's anchors (views.c) */
+    size_t anchor_cap;
     float *blend;         /* a light field leaf's mixed radiance tables (rl__leaf_blend()) */
     struct rl_shadows *shadows; /* the current leaf's shadows (leaf_shadow.c) */
     size_t blend_cap;

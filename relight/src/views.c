@@ -40,6 +40,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mesh.h"
 #include "method.h"
 
 /* @return the world point at the vertex mean of domain dom of map m: where a
@@ -185,6 +186,265 @@ static int classify_tile(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_
     return 0;
 }
 
+/* The part of a pair's emitter that a receiver samples: all of it, or where it can light the receiver from. */
+typedef struct emitter_part {
+    const v3 *q; /* world polygon, n vertices */
+    size_t n;
+    const rl_polygon_sampler *points; /* its sampler, in the emitter's frame */
+    v3 part[RL_MAX_POLY_VERTS + 6];
+    v2 lp[RL_MAX_POLY_VERTS + 6];
+    rl_polygon_sampler part_points; /* points into lp: never copy a part */
+} emitter_part;
+
+/* Makes ep the pair's emitter (frame polygon sp, sampler whole), or with
+ * bounded set its part within rectangle lit = {s0, s1, t0, t1} of its
+ * frame, which carries all the light that can reach the receiver (the
+ * estimator is the same on either). @return 1, or 0 if that part is empty. */
+static int part_make(const rl_pair *p, const v2 *sp, const rl_polygon_sampler *whole, int bounded, const double lit[4],
+                     emitter_part *ep)
+{
+    ep->q = p->sclip, ep->n = p->ns, ep->points = whole;
+    if (!bounded)
+        return 1;
+    v2 rect[4] = {{lit[0], lit[2]}, {lit[1], lit[2]}, {lit[1], lit[3]}, {lit[0], lit[3]}}, scratch[RL_MAX_POLY_VERTS + 6];
+    size_t n = rl__clip_to_polygon(sp, p->ns, rect, 4, ep->lp, scratch);
+    if (n < 3 || !(rl__polygon_area2(ep->lp, (uint32_t)n) > 0.0))
+        return 0;
+    for (size_t v = 0; v < n; v++)
+        ep->part[v] = frame_point(&p->e->frame, ep->lp[v]);
+    rl__polygon_sampler_init(&ep->part_points, ep->lp, (uint32_t)n);
+    ep->q = ep->part, ep->n = n, ep->points = &ep->part_points;
+    return 1;
+}
+
+/* One emitter point as receiver point x on map m sees it. */
+typedef struct view_sample {
+    v3 to;               /* unit, from x to the point */
+    double dist, cos_r, cos_s;
+    double w;            /* cos_r cos_s / dist^2 */
+    double l[3];         /* w times the radiance leaving the point toward x */
+} view_sample;
+
+/* Weighs world point y of emitter e seen from x on map m into vs. @return 0 if it does not count (x's own
+ * point, or either surface facing away), 1 if it counts with no light
+ * (a light field or bounce dark there, read without a ray), 2 with light. */
+static inline int view_weigh(const rl_emitter *e, const rl_map *m, v3 x, v3 y, view_sample *vs)
+{
+    v3 to = v3_sub(y, x);
+    double dist = v3_len(to);
+    if (!(dist > 0))
+        return 0;
+    to = v3_scale(to, 1.0 / dist);
+    double cos_r = v3_dot(to, m->frame.n), cos_s = -v3_dot(to, e->frame.n);
+    if (!(cos_r > 0) || !(cos_s > 0))
+        return 0;
+    double w = cos_r * cos_s / (dist * dist);
+    vs->to = to, vs->dist = dist, vs->cos_r = cos_r, vs->cos_s = cos_s, vs->w = w;
+    vs->l[0] = vs->l[1] = vs->l[2] = w;
+    if (e->kind != EM_CONST) {
+        double rad[3];
+        rl__emitter_radiance_at(e, frame_project(&e->frame, y), v3_scale(to, -1.0), rad);
+        if (!(rad[0] > 0 || rad[1] > 0 || rad[2] > 0))
+            return 1;
+        for (int c = 0; c < 3; c++)
+            vs->l[c] *= rad[c];
+    }
+    return 2;
+}
+
+/*
+ * Anchors: a light field's light on cells that see all of it (VIS_FREE).
+ * There the cell's light is the slab's unoccluded irradiance, a function
+ * of the receiving point that varies no faster than the slab's radiance
+ * varies with direction: moving a point by r / n (r its distance to the
+ * slab, n the slab's partition) moves each of its directions to the slab
+ * by about one cell of the partition, over which lfio interpolates
+ * linearly. So it is measured at anchors, grid corners `stride` cells
+ * apart, each with the samples a cell would take (Lambert's formula at the
+ * point times the weighted mean radiance over its lit part of the slab),
+ * and such cells get it bilinearly between the four anchors around their
+ * centre. Anchors lie on one lattice per map (corner (a * stride, b *
+ * stride) of the grid), keyed by their place on it, so a tile's cut does
+ * not change them. Cells that a shadow may cross are sampled on their own.
+ */
+
+/* The fewest anchors per cell of a slab's partition that the directions from a receiver to the slab sweep
+ * (anchor_stride()): lfio interpolates linearly across a cell, and bilinear anchors a third of one apart
+ * follow that to about 1 / 18 of its bend. */
+#define RL_ANCHORS_PER_SQUARE 3.0
+/* The widest stride anchor_stride() chooses. */
+#define ANCHOR_MAX_STRIDE 16u
+
+/* The anchors of one (pair, tile). */
+typedef struct anchor_grid {
+    uint32_t stride; /* cells between anchors; < 2: none, every cell is sampled */
+    uint32_t b0;     /* the tile's first anchor row on the map's lattice */
+    uint32_t na, nb; /* anchors per row, rows */
+    uint32_t per_row; /* anchors per row of the whole lattice (their keys) */
+    uint64_t key;
+    double (*value)[3]; /* NaN in [0]: not measured yet */
+} anchor_grid;
+
+/* @return the distance from world point c to tile t's polygon (its plane's frame). */
+static double tile_distance(const rl_tile *t, v3 c)
+{
+    const rl_map *m = t->m;
+    v2 q = frame_project(&m->frame, c);
+    double z = v3_dot(v3_sub(c, m->frame.origin), m->frame.n), d2 = INFINITY;
+    int left = 1, right = 1; /* q on one side of every edge: inside, whichever way the polygon turns */
+    for (size_t k = 0; k < t->npoly; k++) {
+        v2 a = t->poly[k], b = t->poly[(k + 1) % t->npoly], ab = {b.x - a.x, b.y - a.y}, aq = {q.x - a.x, q.y - a.y};
+        double len2 = ab.x * ab.x + ab.y * ab.y, s = len2 > 0 ? (ab.x * aq.x + ab.y * aq.y) / len2 : 0.0;
+        s = s < 0.0 ? 0.0 : s > 1.0 ? 1.0 : s;
+        double dx = aq.x - s * ab.x, dy = aq.y - s * ab.y;
+        d2 = dmin(d2, dx * dx + dy * dy);
+        double turn = ab.x * aq.y - ab.y * aq.x;
+        left &= turn >= 0.0, right &= turn <= 0.0;
+    }
+    return left || right ? fabs(z) : sqrt(d2 + z * z);
+}
+
+/* @return the cells between the anchors of pair p on tile t: the scene's
+ * setting, or (0) the widest that keeps them within 1 / RL_ANCHORS_PER_SQUARE
+ * of a cell of the slab's partition apart in direction, as seen from the
+ * tile's nearest point to the emitter (a lower bound on that distance: the
+ * larger of the distance to the emitter's plane and to the sphere around
+ * its part in front of the tile); 1 (none) for other emitters and where
+ * that is under 2 cells. */
+static uint32_t anchor_stride(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t)
+{
+    const rl_emitter *e = p->e;
+    if (e->kind != EM_SLAB || p->ns < 3)
+        return 1;
+    if (ctx->sampling->anchor_stride > 0)
+        return ctx->sampling->anchor_stride;
+    const rl_map *m = t->m;
+    double h = INFINITY;
+    for (size_t k = 0; k < t->npoly; k++)
+        h = dmin(h, v3_dot(v3_sub(frame_point(&m->frame, t->poly[k]), e->frame.origin), e->frame.n));
+    v3 c = {0, 0, 0};
+    for (size_t k = 0; k < p->ns; k++)
+        c = v3_madd(c, p->sclip[k], 1.0 / p->ns);
+    double radius = 0.0;
+    for (size_t k = 0; k < p->ns; k++)
+        radius = dmax(radius, v3_len(v3_sub(p->sclip[k], c)));
+    double r = dmax(h, tile_distance(t, c) - radius);
+    /* at least 4 slab cells' worth even for a coarser slab: Lambert's formula bends over r itself, and
+     * bilinear anchors r / 12 apart stay within 0.4% of it */
+    double n = e->lf->n > 4 ? (double)e->lf->n : 4.0;
+    double cells = r / (RL_ANCHORS_PER_SQUARE * n * m->cell);
+    return cells >= ANCHOR_MAX_STRIDE ? ANCHOR_MAX_STRIDE : cells >= 2.0 ? (uint32_t)cells : 1;
+}
+
+/* Sets up g for pair p (emitter ei) on tile t, with no anchor measured.
+ * @return 0, or -1 without memory. */
+static int anchors_make(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei, rl_scratch *s,
+                        anchor_grid *g)
+{
+    g->stride = anchor_stride(ctx, p, t);
+    if (g->stride < 2)
+        return 0;
+    const rl_map *m = t->m;
+    uint32_t S = g->stride;
+    g->per_row = (m->nu + S - 1) / S + 1;
+    g->b0 = t->row0 / S;
+    g->na = g->per_row;
+    g->nb = (t->row1 + S - 1) / S + 1 - g->b0;
+    size_t n = (size_t)g->na * g->nb;
+    double(*grown)[3] = rl__grow(s->anchor, &s->anchor_cap, n, sizeof *grown);
+    if (!grown)
+        return -1;
+    s->anchor = grown;
+    g->value = grown;
+    for (size_t k = 0; k < n; k++)
+        g->value[k][0] = NAN;
+    g->key = ilf_hash_mix(ilf_hash_mix(rl__pair_key(ctx, ei, t->map_index), 0x616e63686f72ull), S);
+    return 0;
+}
+
+/* Measures the anchor at lattice corner (a, b) of g: Lambert's formula at
+ * the point times the mean of radiance weighted by cos cos / r^2 over
+ * view_rays() uniform points of the part of the emitter (frame polygon sp,
+ * sampler whole) that can light it, as a cell's estimate without its
+ * origins and rays; 0 behind the slab or where it is dark toward the point. */
+static void anchor_measure(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_map *m, const anchor_grid *g,
+                           uint32_t a, uint32_t b, const v2 *sp, const rl_polygon_sampler *whole, double out[3],
+                           rl_counters *cnt)
+{
+    const rl_emitter *e = p->e;
+    out[0] = out[1] = out[2] = 0.0;
+    v2 uv = {m->u0 + (double)a * g->stride * m->cell, m->v0 + (double)b * g->stride * m->cell};
+    v3 x = frame_point(&m->frame, uv);
+    if (!(v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0))
+        return;
+    double lit[4];
+    int bounded = rl__emitter_lit_rect(e, &x, 1, sp, (uint32_t)p->ns, lit);
+    emitter_part ep;
+    if (bounded < 0 || !part_make(p, sp, whole, bounded, lit, &ep))
+        return;
+    uint32_t nr = view_rays(ctx, ep.q, ep.n, x);
+    lds_key key = rl__lds_make(ilf_hash_mix(g->key, (uint64_t)b * g->per_row + a));
+    double all = 0.0, seen[3] = {0, 0, 0};
+    cnt->samples += nr;
+    for (uint32_t r = 0; r < nr; r++) {
+        double u[4];
+        rl__lds4(&key, r, u);
+        view_sample vs;
+        int got = view_weigh(e, m, x, frame_point(&e->frame, rl__polygon_sampler_point(ep.points, u[0], u[1])), &vs);
+        if (got == 0)
+            continue;
+        all += vs.w;
+        if (got == 1)
+            continue;
+        for (int c = 0; c < 3; c++)
+            seen[c] += vs.l[c];
+        cnt->rays_free++;
+    }
+    if (!(all > 0) || !(seen[0] > 0 || seen[1] > 0 || seen[2] > 0))
+        return;
+    double f = rl__polygon_lambert(x, m->frame.n, ep.q, ep.n);
+    for (int c = 0; c < 3; c++)
+        out[c] = f > 0 ? f * (seen[c] / all) : 0.0;
+}
+
+/* Adds to cell of map m (grid square i, j) its light from g's anchors,
+ * bilinearly at its centre, measuring those not yet measured. */
+static void anchors_apply(const rl_transfer_ctx *ctx, const rl_pair *p, rl_map *m, anchor_grid *g, uint32_t cell,
+                          const v2 *sp, const rl_polygon_sampler *whole, rl_counters *cnt)
+{
+    const rl_cell *c = &m->cells[cell];
+    double gx = c->i + 0.5, gy = c->j + 0.5; /* the centre, in grid squares */
+    if (c->poly_count > 0) {
+        /* a cell cut by its polygon's edge: the vertex mean of its part */
+        rl_origin_domain dom;
+        rl__cell_domain(m, cell, &dom);
+        double cu = 0.0, cv = 0.0;
+        for (uint32_t k = 0; k < dom.n; k++)
+            cu += dom.poly[k].x / dom.n, cv += dom.poly[k].y / dom.n;
+        gx = (cu - m->u0) / m->cell, gy = (cv - m->v0) / m->cell;
+    }
+    double fa = gx / g->stride, fb = gy / g->stride;
+    double a0 = floor(fa), b0 = floor(fb);
+    /* clamped to the lattice: a centre lies within its tile's rows and the grid */
+    a0 = a0 < 0.0 ? 0.0 : a0 > g->na - 2.0 ? g->na - 2.0 : a0;
+    b0 = b0 < g->b0 ? g->b0 : b0 > g->b0 + g->nb - 2.0 ? g->b0 + g->nb - 2.0 : b0;
+    double wa = fa - a0, wb = fb - b0;
+    wa = wa < 0.0 ? 0.0 : wa > 1.0 ? 1.0 : wa;
+    wb = wb < 0.0 ? 0.0 : wb > 1.0 ? 1.0 : wb;
+    double out[3] = {0, 0, 0};
+    for (int k = 0; k < 4; k++) {
+        uint32_t a = (uint32_t)a0 + (k & 1), b = (uint32_t)b0 + (k >> 1);
+        double w = (k & 1 ? wa : 1.0 - wa) * (k >> 1 ? wb : 1.0 - wb);
+        double *v = g->value[(size_t)(b - g->b0) * g->na + a];
+        if (isnan(v[0]))
+            anchor_measure(ctx, p, m, g, a, b, sp, whole, v, cnt);
+        for (int ch = 0; ch < 3; ch++)
+            out[ch] += w * v[ch];
+    }
+    for (int ch = 0; ch < 3; ch++)
+        m->e_pass[cell][ch] += out[ch];
+}
+
 /* Transfer from emitter ei to every cell of the tile: Lambert's formula
  * averaged over lambert_origins() origins of the cell, times the mean of
  * radiance * visibility over shadow rays to uniform points of the emitter
@@ -199,7 +459,8 @@ static int classify_tile(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_
  * ratio of two estimates is consistent rather than unbiased (by O(1 / rays)
  * in a penumbra; the white-furnace test bounds it); Lambert minus the sampled loss would be unbiased, but it
  * dips below zero in shadows. The solid angles play no part: no sample is
- * wasted on directions that miss the emitter. */
+ * wasted on directions that miss the emitter. A light field's cells that
+ * see all of it take their light from anchors instead, where it is smooth. */
 int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei, rl_scratch *s,
                        rl_counters *cnt)
 {
@@ -213,6 +474,9 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
         sp[i] = frame_project(&e->frame, p->sclip[i]);
     rl_polygon_sampler emitter_points;
     rl__polygon_sampler_init(&emitter_points, sp, (uint32_t)p->ns);
+    anchor_grid anchors = {0};
+    if (anchors_make(ctx, p, t, ei, s, &anchors) != 0)
+        return -1;
     for (uint32_t j = t->row0; j < t->row1; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
             int32_t cell = m->grid[(size_t)j * m->nu + i];
@@ -220,34 +484,20 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
             rl_visibility vis = (rl_visibility)s->vis[(size_t)(j - t->row0) * m->nu + i];
             if (cell < 0 || vis == VIS_BLOCKED)
                 continue; /* in full shadow: rays would all be stopped, and the cell gets 0 */
+            if (vis == VIS_FREE && anchors.stride > 1) {
+                anchors_apply(ctx, p, m, &anchors, (uint32_t)cell, sp, &emitter_points, cnt);
+                continue;
+            }
             rl__cell_domain(m, (uint32_t)cell, &dom);
             lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, ei, t->map_index), (uint64_t)cell));
             /* a light field lights the cell from part of its slab at most: the rest reads zero, unlooked */
             double lit[4];
             int bounded = e->kind == EM_SLAB ? cell_lit_rect(m, &dom, e, sp, (uint32_t)p->ns, lit) : 0;
-            if (bounded < 0)
+            emitter_part ep;
+            if (bounded < 0 || !part_make(p, sp, &emitter_points, bounded, lit, &ep))
                 continue; /* dark toward the whole cell: it gets 0 */
-            /* the emitter this cell samples: the pair's, or its part the rectangle holds, which carries all
-             * the light that can reach the cell (the estimator is the same on either) */
-            const v3 *eq = p->sclip;
-            size_t neq = p->ns;
-            const rl_polygon_sampler *points = &emitter_points;
-            v3 part[RL_MAX_POLY_VERTS + 6];
-            v2 lp[RL_MAX_POLY_VERTS + 6]; /* part_points reads it */
-            rl_polygon_sampler part_points;
-            if (bounded) {
-                v2 rect[4] = {{lit[0], lit[2]}, {lit[1], lit[2]}, {lit[1], lit[3]}, {lit[0], lit[3]}},
-                   scratch[RL_MAX_POLY_VERTS + 6];
-                neq = rl__clip_to_polygon(sp, p->ns, rect, 4, lp, scratch);
-                if (neq < 3 || !(rl__polygon_area2(lp, (uint32_t)neq) > 0.0))
-                    continue;
-                for (size_t v = 0; v < neq; v++)
-                    part[v] = frame_point(&e->frame, lp[v]);
-                rl__polygon_sampler_init(&part_points, lp, (uint32_t)neq);
-                eq = part, points = &part_points;
-            }
             v3 centre = domain_centre(m, &dom);
-            uint32_t nr = view_rays(ctx, eq, neq, centre);
+            uint32_t nr = view_rays(ctx, ep.q, ep.n, centre);
             double all = 0.0, seen[3] = {0, 0, 0};
             if (vis == VIS_FREE && e->kind == EM_CONST) {
                 /* wholly lit by a constant emitter: the rays would measure a visible fraction of exactly 1 */
@@ -262,35 +512,23 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
                 double u[4];
                 rl__lds4(&key, r, u);
                 v3 x = rl__domain_point(m, &dom, u[0], u[1]);
-                v3 y = frame_point(&e->frame, rl__polygon_sampler_point(points, u[2], u[3]));
-                v3 to = v3_sub(y, x);
-                double dist = v3_len(to);
-                if (!(dist > 0))
+                view_sample vs;
+                int got = view_weigh(e, m, x, frame_point(&e->frame, rl__polygon_sampler_point(ep.points, u[2], u[3])),
+                                     &vs);
+                if (got == 0)
                     continue;
-                to = v3_scale(to, 1.0 / dist);
-                double cos_r = v3_dot(to, m->frame.n), cos_s = -v3_dot(to, e->frame.n);
-                if (!(cos_r > 0) || !(cos_s > 0))
+                all += vs.w;
+                if (got == 1)
                     continue;
-                double w = cos_r * cos_s / (dist * dist), l[3] = {w, w, w};
-                all += w;
-                if (e->kind != EM_CONST) {
-                    /* a light field or a bounce: its radiance there, and no ray where it is dark */
-                    double rad[3];
-                    rl__emitter_radiance_at(e, frame_project(&e->frame, y), v3_scale(to, -1.0), rad);
-                    if (!(rad[0] > 0 || rad[1] > 0 || rad[2] > 0))
-                        continue;
-                    for (int c = 0; c < 3; c++)
-                        l[c] *= rad[c];
-                }
                 if (vis == VIS_FREE) {
                     /* every ray would arrive: add it as the batch would, in order */
                     for (int c = 0; c < 3; c++)
-                        seen[c] += l[c];
+                        seen[c] += vs.l[c];
                     cnt->rays_free++;
                     continue;
                 }
-                rl__batch_push(ctx, &batch, x, to, p->eps / fmax(cos_r, 1e-3), dist - p->eps / fmax(cos_s, 1e-3), l,
-                               seen, cnt);
+                rl__batch_push(ctx, &batch, x, vs.to, p->eps / fmax(vs.cos_r, 1e-3),
+                               vs.dist - p->eps / fmax(vs.cos_s, 1e-3), vs.l, seen, cnt);
             }
             rl__batch_flush(ctx, &batch, cnt);
             /* no light arrives (shadow, or a light field dark toward the cell): the cell gets exactly 0,
@@ -305,7 +543,7 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
                 /* the emitter clipped to the tile's plane is the same for every origin on it */
                 v3 x = rl__domain_point(m, &dom, u[0], u[1]);
                 if (v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0)
-                    f += rl__polygon_lambert(x, m->frame.n, eq, neq);
+                    f += rl__polygon_lambert(x, m->frame.n, ep.q, ep.n);
             }
             if (!(f > 0))
                 continue;
