@@ -138,6 +138,9 @@ check "synth constant wrote a file" nonempty "$CONST"
 check "synth prints where it wrote" stdout_has "constant.h5"
 expect 0 "synth radial" "$ILF" synth --kind radial --grid 8x8 --n 8 --cone 30 --supersample 2 -o "$RADIAL"
 check "synth radial wrote a file" nonempty "$RADIAL"
+expect 0 "synth radial again" "$ILF" synth --kind radial --grid 8x8 --n 8 --cone 30 --supersample 2 \
+    -o "$TMP/radial-again.h5"
+check "the same synth writes the same bytes" cmp "$RADIAL" "$TMP/radial-again.h5"
 expect 0 "synth spot" "$ILF" synth --kind spot --grid 8x8 --n 8 --spot 0,0,-1:0,0,1:30:2:0.3 \
     --spot=0.2,0,-0.5:0,0,1:45:0 -o "$SPOT"
 check "synth spot wrote a file" nonempty "$SPOT"
@@ -400,6 +403,10 @@ expect 0 "relight again over the same folder" "$ILF" relight "$SQUARE" -o "$RELI
 check "rewriting leaves no temporaries" only_files "$RELIT/quiet" radiance.h5 stats.json view.exr view.png
 expect 0 "relight --no-view" "$ILF" relight "$SQUARE" -o "$RELIT/noview" "${FAST[@]}" --quiet --no-view
 check "relight --no-view writes no view" only_files "$RELIT/noview" radiance.h5 stats.json
+expect 0 "relight --no-view again elsewhere" "$ILF" relight "$SQUARE" -o "$RELIT/noview2" "${FAST[@]}" --quiet \
+    --no-view
+check "the same run writes the same radiance.h5, byte for byte" \
+    cmp "$RELIT/noview/radiance.h5" "$RELIT/noview2/radiance.h5"
 check "--bounces 0 runs the direct pass only" py '
 import json, sys
 s = json.load(open(sys.argv[1]))

@@ -395,6 +395,15 @@ static lfio_status write_slab(const char *path, hid_t slabs, size_t k, const lfi
     if ((st = lfio__h5_create_group(path, obj, slabs, name, &g)) != LFIO_OK)
         return st;
     st = write_slab_attrs(path, obj, g, s);
+    if (st == LFIO_OK && nlev > 0) {
+        /* made here rather than on the way to its levels, where HDF5 would give it default
+         * properties: it records no times, as no object lfio writes does */
+        char mobj[128];
+        hid_t mg;
+        snprintf(mobj, sizeof mobj, "%s/mask", obj);
+        if ((st = lfio__h5_create_group(path, mobj, g, "mask", &mg)) == LFIO_OK)
+            lfio__h5_close(mg);
+    }
     for (int t = 0; st == LFIO_OK && t < nspecs; t++) {
         hid_t d;
         char dobj[128];
@@ -435,9 +444,9 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
         st = lfio__h5_put_num_attr(path, "/", file, "slab_count", H5T_STD_I32LE, H5T_NATIVE_INT32, 0, &count);
     if (st != LFIO_OK)
         return st;
-    hid_t slabs = H5Gcreate2(file, "slabs", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    if (slabs < 0)
-        return lfio__h5_fail(LFIO_ERR_IO, path, "/slabs", "cannot create group");
+    hid_t slabs;
+    if ((st = lfio__h5_create_group(path, "/slabs", file, "slabs", &slabs)) != LFIO_OK)
+        return st;
     for (size_t k = 0; st == LFIO_OK && k < (size_t)count; k++)
         st = write_slab(path, slabs, k, lfio_lightfield_slab(lf, k), lfio_lightfield_coverage(lf, k));
     lfio__h5_close(slabs);

@@ -438,7 +438,7 @@ lfio_status lfio__h5_expect_link(const char *path, const char *obj, hid_t g, con
 lfio_status lfio__h5_create_group(const char *path, const char *obj, hid_t parent, const char *name, hid_t *out)
 {
     hid_t gcpl = H5Pcreate(H5P_GROUP_CREATE);
-    *out = gcpl >= 0 && H5Pset_attr_phase_change(gcpl, 64, 64) >= 0
+    *out = gcpl >= 0 && H5Pset_attr_phase_change(gcpl, 64, 64) >= 0 && H5Pset_obj_track_times(gcpl, 0) >= 0
                ? H5Gcreate2(parent, name, H5P_DEFAULT, gcpl, H5P_DEFAULT)
                : -1;
     lfio_status st = *out < 0 ? lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot create group") : LFIO_OK;
@@ -480,7 +480,7 @@ lfio_status lfio__h5_create_dataset(const char *path, const char *gobj, hid_t g,
              && (!nested || H5Pset_create_intermediate_group(lcpl, 1) >= 0)
              && H5Pset_chunk(dcpl, l->rank, l->chunk) >= 0
              && (!l->deflate || (H5Pset_shuffle(dcpl) >= 0 && H5Pset_deflate(dcpl, (unsigned)l->deflate) >= 0))
-             && H5Pset_fletcher32(dcpl) >= 0;
+             && H5Pset_fletcher32(dcpl) >= 0 && H5Pset_obj_track_times(dcpl, 0) >= 0;
     if (ok)
         *out = H5Dcreate2(g, l->name, lfio__h5_file_type(l), space, lcpl, dcpl, H5P_DEFAULT);
     if (*out < 0)
@@ -699,6 +699,18 @@ static herr_t image_udata_free(void *udata)
     return 0;
 }
 
+/* @return a file creation property list whose root group records no times (every object lfio
+ * creates records none: the same content gives the same bytes), or -1. */
+static hid_t untimed_fcpl(void)
+{
+    hid_t fcpl = H5Pcreate(H5P_FILE_CREATE);
+    if (fcpl >= 0 && H5Pset_obj_track_times(fcpl, 0) < 0) {
+        lfio__h5_close(fcpl);
+        return -1;
+    }
+    return fcpl;
+}
+
 /*
  * Builds the whole file in memory with HDF5's core driver (no backing store)
  * and writes its bytes to fd. HDF5 1.10 cannot recover from a failed write to
@@ -733,10 +745,13 @@ static lfio_status build_and_write(const char *path, const char *name, lfio__h5_
     if (st == LFIO_OK && H5Pset_evict_on_close(fapl, 1) < 0)
         H5Eclear2(H5E_DEFAULT); /* no stale entry for a later failure's message */
     /* name only identifies the in-memory file: the core driver creates nothing on disk. */
-    hid_t file = st == LFIO_OK ? H5Fcreate(name, H5F_ACC_TRUNC, H5P_DEFAULT, fapl) : -1;
+    hid_t fcpl = st == LFIO_OK ? untimed_fcpl() : -1;
+    hid_t file = fcpl >= 0 ? H5Fcreate(name, H5F_ACC_TRUNC, fcpl, fapl) : -1;
     if (st == LFIO_OK && file < 0)
         st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the file in memory");
     lfio__h5_close(fapl);
+    if (fcpl >= 0)
+        lfio__h5_close(fcpl);
     if (st == LFIO_OK)
         st = fill(path, file, content);
     ssize_t bytes = -1;
@@ -802,14 +817,16 @@ static MPI_Comm writing_comm = MPI_COMM_NULL;
 /* Opens the temporary tmp for a collective write over comm. @return the file, or -1 (message set). */
 static hid_t create_shared(const char *path, const char *tmp, MPI_Comm comm)
 {
-    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = -1;
-    if (fapl >= 0 && H5Pset_fapl_mpio(fapl, comm, MPI_INFO_NULL) >= 0
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), fcpl = untimed_fcpl(), file = -1;
+    if (fapl >= 0 && fcpl >= 0 && H5Pset_fapl_mpio(fapl, comm, MPI_INFO_NULL) >= 0
         && H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST) >= 0 && small_metadata_cache(fapl) >= 0
         && H5Pset_all_coll_metadata_ops(fapl, 1) >= 0 && H5Pset_coll_metadata_write(fapl, 1) >= 0)
-        file = H5Fcreate(tmp, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+        file = H5Fcreate(tmp, H5F_ACC_TRUNC, fcpl, fapl);
     if (file < 0)
         lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the temporary file for a collective write");
     lfio__h5_close(fapl);
+    if (fcpl >= 0)
+        lfio__h5_close(fcpl);
     return file;
 }
 

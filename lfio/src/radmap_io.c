@@ -455,9 +455,9 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
         st = lfio__h5_put_num_attr(path, "/", file, "patch_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0, &count);
     if (st != LFIO_OK)
         return st;
-    hid_t patches = H5Gcreate2(file, "patches", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    if (patches < 0)
-        return lfio__h5_fail(LFIO_ERR_IO, path, "/patches", "cannot create group");
+    hid_t patches;
+    if ((st = lfio__h5_create_group(path, "/patches", file, "patches", &patches)) != LFIO_OK)
+        return st;
     uint64_t cells = 0;
     /* lfio filters the chunks itself in a serial write (not through MPI-IO, where HDF5 1.10 stores no chunk
      * as it is), when the arrays' bytes are the file's: little-endian */
