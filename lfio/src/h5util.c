@@ -469,26 +469,21 @@ lfio_status lfio__h5_create_dataset(const char *path, const char *gobj, hid_t g,
     hsize_t maxdims[4];
     for (int k = 0; k < l->rank; k++)
         maxdims[k] = l->dims[k] == 0 ? H5S_UNLIMITED : l->dims[k];
-    /* Only a name with a path in it (a mask level) needs its groups made on the way; a property
-     * list made and closed per dataset is a measurable share of writing thousands of maps. */
-    int nested = strchr(l->name, '/') != NULL;
-    hid_t lcpl = nested ? H5Pcreate(H5P_LINK_CREATE) : H5P_DEFAULT;
+    /* A name with a path in it (a mask level) goes into a group its writer made: HDF5 would make a
+     * missing one with default properties, which record times. */
     hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
     hid_t space = H5Screate_simple(l->rank, l->dims, maxdims);
     /* Fletcher32 goes last so it covers the bytes as stored and is checked first on reading. */
-    int ok = lcpl >= 0 && dcpl >= 0 && space >= 0
-             && (!nested || H5Pset_create_intermediate_group(lcpl, 1) >= 0)
+    int ok = dcpl >= 0 && space >= 0
              && H5Pset_chunk(dcpl, l->rank, l->chunk) >= 0
              && (!l->deflate || (H5Pset_shuffle(dcpl) >= 0 && H5Pset_deflate(dcpl, (unsigned)l->deflate) >= 0))
              && H5Pset_fletcher32(dcpl) >= 0 && H5Pset_obj_track_times(dcpl, 0) >= 0;
     if (ok)
-        *out = H5Dcreate2(g, l->name, lfio__h5_file_type(l), space, lcpl, dcpl, H5P_DEFAULT);
+        *out = H5Dcreate2(g, l->name, lfio__h5_file_type(l), space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
     if (*out < 0)
         st = lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot create dataset");
     lfio__h5_close(space);
     lfio__h5_close(dcpl);
-    if (nested)
-        lfio__h5_close(lcpl);
     if (st == LFIO_OK)
         st = lfio__h5_put_str_attr(path, obj, *out, "units", l->units);
     if (st == LFIO_OK)
@@ -750,8 +745,7 @@ static lfio_status build_and_write(const char *path, const char *name, lfio__h5_
     if (st == LFIO_OK && file < 0)
         st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the file in memory");
     lfio__h5_close(fapl);
-    if (fcpl >= 0)
-        lfio__h5_close(fcpl);
+    lfio__h5_close(fcpl);
     if (st == LFIO_OK)
         st = fill(path, file, content);
     ssize_t bytes = -1;
@@ -825,8 +819,7 @@ static hid_t create_shared(const char *path, const char *tmp, MPI_Comm comm)
     if (file < 0)
         lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the temporary file for a collective write");
     lfio__h5_close(fapl);
-    if (fcpl >= 0)
-        lfio__h5_close(fcpl);
+    lfio__h5_close(fcpl);
     return file;
 }
 

@@ -188,6 +188,12 @@ void rl__tile_make(rl_map *m, uint32_t map_index, uint32_t row0, uint32_t row1, 
  * solid angle as descended. @return 0 if they cannot exchange light. */
 int rl__pair_setup(const rl_transfer_ctx *ctx, const rl_emitter *e, const rl_tile *t, rl_pair *p);
 
+/* @return the vertex mean of pair p's emitter part in front of its receiver (p->sclip). */
+v3 rl__pair_centroid(const rl_pair *p);
+
+/* @return 1 if q lies in the convex polygon poly (n vertices, either turn). */
+int rl__convex_contains(const v2 *poly, size_t n, v2 q);
+
 /* Computes the region of node (lv, id) for the emitter polygon src (ns
  * vertices, in front of the tile's plane) and its intersection with the
  * tile into q (room for RL_MAX_POLY_VERTS + 4 + RL_REGION_MAX_PLANES).

@@ -108,8 +108,7 @@ static double subtended_from(const rl_pair *p, v3 r, double *width)
     return omega;
 }
 
-/* @return 1 if q lies in the convex polygon poly (n vertices, either turn). */
-static int convex_contains(const v2 *poly, size_t n, v2 q)
+int rl__convex_contains(const v2 *poly, size_t n, v2 q)
 {
     int left = 0, right = 0;
     for (size_t i = 0; i < n; i++) {
@@ -119,6 +118,14 @@ static int convex_contains(const v2 *poly, size_t n, v2 q)
         right |= c < 0;
     }
     return !(left && right);
+}
+
+v3 rl__pair_centroid(const rl_pair *p)
+{
+    v3 c = {0, 0, 0};
+    for (size_t i = 0; i < p->ns; i++)
+        c = v3_add(c, v3_scale(p->sclip[i], 1.0 / (double)p->ns));
+    return c;
 }
 
 /* Measures the pair's emitter from the tile. @return 1 if it subtends less
@@ -138,12 +145,9 @@ static int pair_measure(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
         width = fmax(width, w);
     }
     int small = 1.6 / (m * m) > subtended || 1.26 / m > width;
-    v3 c = {0, 0, 0};
-    for (size_t i = 0; i < p->ns; i++)
-        c = v3_add(c, v3_scale(p->sclip[i], 1.0 / (double)p->ns));
-    v2 foot = frame_project(&t->m->frame, c);
+    v2 foot = frame_project(&t->m->frame, rl__pair_centroid(p));
     double peak = subtended;
-    if (t->npoly >= 3 && convex_contains(t->poly, t->npoly, foot))
+    if (t->npoly >= 3 && rl__convex_contains(t->poly, t->npoly, foot))
         peak = fmax(peak, subtended_from(p, frame_point(&t->m->frame, foot), &w));
     *leaves = peak / (2.0 * RL_PI / (4.0 * m * m));
     return small;

@@ -21,6 +21,10 @@
  * map, cell), so results are deterministic; they are exact where a cell is
  * wholly lit by a constant emitter or wholly in shadow, and consistent (a
  * ratio of two estimates) in between, which the white-furnace test bounds.
+ * A light field's cells that no shadow can cross take its light
+ * bilinearly from anchors a few cells apart, each measured as a cell would
+ * be, with a sequence per (seed, pass, emitter, map, grid corner): there
+ * the light is smooth (see Anchors below).
  *
  * Before any ray, the tile is split into blocks of cells, halving the
  * longer side, and the beam of segments from each block to the emitter is
@@ -43,14 +47,20 @@
 #include "mesh.h"
 #include "method.h"
 
-/* @return the world point at the vertex mean of domain dom of map m: where a
- * cell's view of an emitter is measured. */
-static v3 domain_centre(const rl_map *m, const rl_origin_domain *dom)
+/* @return the vertex mean of domain dom, in its map's frame: where a cell's
+ * view of an emitter is measured. */
+static v2 domain_centre_uv(const rl_origin_domain *dom)
 {
     v2 c = {0, 0};
     for (uint32_t i = 0; i < dom->n; i++)
         c = (v2){c.x + dom->poly[i].x / dom->n, c.y + dom->poly[i].y / dom->n};
-    return frame_point(&m->frame, c);
+    return c;
+}
+
+/* @return domain_centre_uv() of domain dom of map m as a world point. */
+static v3 domain_centre(const rl_map *m, const rl_origin_domain *dom)
+{
+    return frame_point(&m->frame, domain_centre_uv(dom));
 }
 
 /* Bounds where light field emitter e (frame polygon y, ny vertices) can light
@@ -225,9 +235,10 @@ typedef struct view_sample {
     double l[3];         /* w times the radiance leaving the point toward x */
 } view_sample;
 
-/* Weighs world point y of emitter e seen from x on map m into vs. @return 0 if it does not count (x's own
- * point, or either surface facing away), 1 if it counts with no light
- * (a light field or bounce dark there, read without a ray), 2 with light. */
+/* Weighs world point y of emitter e seen from x on map m into vs. @return 0
+ * if it does not count (x's own point, or either surface facing away), 1 if
+ * it counts with no light (a light field or bounce dark there, read without
+ * a ray), 2 with light. */
 static inline int view_weigh(const rl_emitter *e, const rl_map *m, v3 x, v3 y, view_sample *vs)
 {
     v3 to = v3_sub(y, x);
@@ -252,6 +263,41 @@ static inline int view_weigh(const rl_emitter *e, const rl_map *m, v3 x, v3 y, v
     return 2;
 }
 
+/* Adds to *all the weights w and to seen the weighted radiance l * V of nr
+ * samples of emitter part ep, point r of the sequence of key drawing its
+ * origin from dom (coordinates 0, 1; NULL: every origin is x0) and its
+ * emitter point from ep's sampler (coordinates 2, 3). Where vis is
+ * VIS_FREE every ray arrives and none is traced; otherwise the rays go out
+ * through batch, which adds them to seen as they arrive (the caller flushes). */
+static void view_sums(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_map *m, const rl_origin_domain *dom,
+                      v3 x0, const emitter_part *ep, const lds_key *key, uint32_t nr, rl_visibility vis,
+                      rl_ray_batch *batch, double *all, double seen[3], rl_counters *cnt)
+{
+    const rl_emitter *e = p->e;
+    cnt->samples += nr; /* counted once: a store per sample costs more than it says */
+    for (uint32_t r = 0; r < nr; r++) {
+        double u[4];
+        rl__lds4(key, r, u);
+        v3 x = dom ? rl__domain_point(m, dom, u[0], u[1]) : x0;
+        view_sample vs;
+        int got = view_weigh(e, m, x, frame_point(&e->frame, rl__polygon_sampler_point(ep->points, u[2], u[3])), &vs);
+        if (got == 0)
+            continue;
+        *all += vs.w;
+        if (got == 1)
+            continue;
+        if (vis == VIS_FREE) {
+            /* every ray would arrive: add it as the batch would, in order */
+            for (int c = 0; c < 3; c++)
+                seen[c] += vs.l[c];
+            cnt->rays_free++;
+            continue;
+        }
+        rl__batch_push(ctx, batch, x, vs.to, p->eps / fmax(vs.cos_r, 1e-3), vs.dist - p->eps / fmax(vs.cos_s, 1e-3),
+                       vs.l, seen, cnt);
+    }
+}
+
 /*
  * Anchors: a light field's light on cells that see all of it (VIS_FREE).
  * There the cell's light is the slab's unoccluded irradiance, a function
@@ -263,81 +309,77 @@ static inline int view_weigh(const rl_emitter *e, const rl_map *m, v3 x, v3 y, v
  * apart, each with the samples a cell would take (Lambert's formula at the
  * point times the weighted mean radiance over its lit part of the slab),
  * and such cells get it bilinearly between the four anchors around their
- * centre. Anchors lie on one lattice per map (corner (a * stride, b *
- * stride) of the grid), keyed by their place on it, so a tile's cut does
- * not change them. Cells that a shadow may cross are sampled on their own.
+ * centre. An anchor's sequence is keyed by its grid corner alone, so
+ * lattices of different strides (neighbouring tiles may choose different
+ * ones) agree where they meet, and nothing depends on the thread count.
+ * Cells that a shadow may cross are sampled on their own.
  */
 
 /* The fewest anchors per cell of a slab's partition that the directions from a receiver to the slab sweep
  * (anchor_stride()): lfio interpolates linearly across a cell, and bilinear anchors a third of one apart
  * follow that to about 1 / 18 of its bend. */
-#define RL_ANCHORS_PER_SQUARE 3.0
-/* The widest stride anchor_stride() chooses. */
+#define ANCHORS_PER_SQUARE 3.0
+/* The widest stride anchor_stride() chooses: past it a tile has too few anchor rows to save much. */
 #define ANCHOR_MAX_STRIDE 16u
+/* Mixed into anchors' keys: their sequences are apart from the cells' (keyed by cell index alone). */
+#define ANCHOR_KEY_TAG 0x616e63686f72ull
 
 /* The anchors of one (pair, tile). */
 typedef struct anchor_grid {
-    uint32_t stride; /* cells between anchors; < 2: none, every cell is sampled */
-    uint32_t b0;     /* the tile's first anchor row on the map's lattice */
-    uint32_t na, nb; /* anchors per row, rows */
-    uint32_t per_row; /* anchors per row of the whole lattice (their keys) */
-    uint64_t key;
+    uint32_t stride;    /* cells between anchors; < 2: none, every cell is sampled */
+    uint32_t row0;      /* the tile's first anchor row on the map's lattice */
+    uint32_t na, nb;    /* anchors per row, rows */
+    uint64_t key;       /* the pair's anchor key: each anchor's sequence mixes in its grid corner */
     double (*value)[3]; /* NaN in [0]: not measured yet */
 } anchor_grid;
 
-/* @return the distance from world point c to tile t's polygon (its plane's frame). */
+/* @return the distance from world point c to tile t's polygon. */
 static double tile_distance(const rl_tile *t, v3 c)
 {
     const rl_map *m = t->m;
     v2 q = frame_project(&m->frame, c);
     double z = v3_dot(v3_sub(c, m->frame.origin), m->frame.n), d2 = INFINITY;
-    int left = 1, right = 1; /* q on one side of every edge: inside, whichever way the polygon turns */
+    if (rl__convex_contains(t->poly, t->npoly, q))
+        return fabs(z);
     for (size_t k = 0; k < t->npoly; k++) {
         v2 a = t->poly[k], b = t->poly[(k + 1) % t->npoly], ab = {b.x - a.x, b.y - a.y}, aq = {q.x - a.x, q.y - a.y};
         double len2 = ab.x * ab.x + ab.y * ab.y, s = len2 > 0 ? (ab.x * aq.x + ab.y * aq.y) / len2 : 0.0;
         s = s < 0.0 ? 0.0 : s > 1.0 ? 1.0 : s;
         double dx = aq.x - s * ab.x, dy = aq.y - s * ab.y;
         d2 = dmin(d2, dx * dx + dy * dy);
-        double turn = ab.x * aq.y - ab.y * aq.x;
-        left &= turn >= 0.0, right &= turn <= 0.0;
     }
-    return left || right ? fabs(z) : sqrt(d2 + z * z);
+    return sqrt(d2 + z * z);
 }
 
-/* @return the cells between the anchors of pair p on tile t: the scene's
- * setting, or (0) the widest that keeps them within 1 / RL_ANCHORS_PER_SQUARE
- * of a cell of the slab's partition apart in direction, as seen from the
- * tile's nearest point to the emitter (a lower bound on that distance: the
- * larger of the distance to the emitter's plane and to the sphere around
- * its part in front of the tile); 1 (none) for other emitters and where
- * that is under 2 cells. */
+/* @return the cells between the anchors of pair p on tile t (anchor_stride; 0: chosen, 1: none). */
 static uint32_t anchor_stride(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t)
 {
     const rl_emitter *e = p->e;
-    if (e->kind != EM_SLAB || p->ns < 3)
+    const rl_map *m = t->m;
+    /* a light field seen from a polygon's cells; a point receiver is one cell of its own */
+    if (e->kind != EM_SLAB || m->polygon < 0 || t->npoly < 3 || p->ns < 3)
         return 1;
     if (ctx->sampling->anchor_stride > 0)
         return ctx->sampling->anchor_stride;
-    const rl_map *m = t->m;
+    /* A lower bound on the distance from the tile to the emitter's part in front of it: the larger of
+     * the distance to its plane and to the sphere around that part. Anchors lie up to sqrt 2 strides
+     * beyond the tile, so a stride s needs s (ANCHORS_PER_SQUARE n + 1.5) cells within that distance.
+     * Lambert's formula bends over the distance itself: n is taken as at least 4, which keeps bilinear
+     * anchors within 0.4% of it. */
     double h = INFINITY;
     for (size_t k = 0; k < t->npoly; k++)
         h = dmin(h, v3_dot(v3_sub(frame_point(&m->frame, t->poly[k]), e->frame.origin), e->frame.n));
-    v3 c = {0, 0, 0};
-    for (size_t k = 0; k < p->ns; k++)
-        c = v3_madd(c, p->sclip[k], 1.0 / p->ns);
+    v3 c = rl__pair_centroid(p);
     double radius = 0.0;
     for (size_t k = 0; k < p->ns; k++)
         radius = dmax(radius, v3_len(v3_sub(p->sclip[k], c)));
     double r = dmax(h, tile_distance(t, c) - radius);
-    /* at least 4 slab cells' worth even for a coarser slab: Lambert's formula bends over r itself, and
-     * bilinear anchors r / 12 apart stay within 0.4% of it */
     double n = e->lf->n > 4 ? (double)e->lf->n : 4.0;
-    double cells = r / (RL_ANCHORS_PER_SQUARE * n * m->cell);
+    double cells = r / ((ANCHORS_PER_SQUARE * n + 1.5) * m->cell);
     return cells >= ANCHOR_MAX_STRIDE ? ANCHOR_MAX_STRIDE : cells >= 2.0 ? (uint32_t)cells : 1;
 }
 
-/* Sets up g for pair p (emitter ei) on tile t, with no anchor measured.
- * @return 0, or -1 without memory. */
+/* Sets up g for pair p (emitter ei) on tile t, with no anchor measured. @return 0, or -1 without memory. */
 static int anchors_make(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei, rl_scratch *s,
                         anchor_grid *g)
 {
@@ -345,11 +387,10 @@ static int anchors_make(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
     if (g->stride < 2)
         return 0;
     const rl_map *m = t->m;
-    uint32_t S = g->stride;
-    g->per_row = (m->nu + S - 1) / S + 1;
-    g->b0 = t->row0 / S;
-    g->na = g->per_row;
-    g->nb = (t->row1 + S - 1) / S + 1 - g->b0;
+    uint32_t stride = g->stride;
+    g->na = (m->nu + stride - 1) / stride + 1;
+    g->row0 = t->row0 / stride;
+    g->nb = (t->row1 + stride - 1) / stride + 1 - g->row0;
     size_t n = (size_t)g->na * g->nb;
     double(*grown)[3] = rl__grow(s->anchor, &s->anchor_cap, n, sizeof *grown);
     if (!grown)
@@ -358,23 +399,22 @@ static int anchors_make(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
     g->value = grown;
     for (size_t k = 0; k < n; k++)
         g->value[k][0] = NAN;
-    g->key = ilf_hash_mix(ilf_hash_mix(rl__pair_key(ctx, ei, t->map_index), 0x616e63686f72ull), S);
+    g->key = ilf_hash_mix(rl__pair_key(ctx, ei, t->map_index), ANCHOR_KEY_TAG);
     return 0;
 }
 
-/* Measures the anchor at lattice corner (a, b) of g: Lambert's formula at
- * the point times the mean of radiance weighted by cos cos / r^2 over
+/* Measures into out the anchor at grid corner (i, j) of map m: Lambert's
+ * formula there times the mean of radiance weighted by cos cos / r^2 over
  * view_rays() uniform points of the part of the emitter (frame polygon sp,
- * sampler whole) that can light it, as a cell's estimate without its
- * origins and rays; 0 behind the slab or where it is dark toward the point. */
+ * sampler whole) that can light it, as a free cell's estimate with every
+ * origin at the corner; 0 behind the slab or where it is dark toward the point. */
 static void anchor_measure(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_map *m, const anchor_grid *g,
-                           uint32_t a, uint32_t b, const v2 *sp, const rl_polygon_sampler *whole, double out[3],
+                           uint32_t i, uint32_t j, const v2 *sp, const rl_polygon_sampler *whole, double out[3],
                            rl_counters *cnt)
 {
     const rl_emitter *e = p->e;
     out[0] = out[1] = out[2] = 0.0;
-    v2 uv = {m->u0 + (double)a * g->stride * m->cell, m->v0 + (double)b * g->stride * m->cell};
-    v3 x = frame_point(&m->frame, uv);
+    v3 x = frame_point(&m->frame, (v2){m->u0 + (double)i * m->cell, m->v0 + (double)j * m->cell});
     if (!(v3_dot(v3_sub(x, e->frame.origin), e->frame.n) > 0))
         return;
     double lit[4];
@@ -382,24 +422,9 @@ static void anchor_measure(const rl_transfer_ctx *ctx, const rl_pair *p, const r
     emitter_part ep;
     if (bounded < 0 || !part_make(p, sp, whole, bounded, lit, &ep))
         return;
-    uint32_t nr = view_rays(ctx, ep.q, ep.n, x);
-    lds_key key = rl__lds_make(ilf_hash_mix(g->key, (uint64_t)b * g->per_row + a));
+    lds_key key = rl__lds_make(ilf_hash_mix(g->key, (uint64_t)j * (m->nu + 1) + i));
     double all = 0.0, seen[3] = {0, 0, 0};
-    cnt->samples += nr;
-    for (uint32_t r = 0; r < nr; r++) {
-        double u[4];
-        rl__lds4(&key, r, u);
-        view_sample vs;
-        int got = view_weigh(e, m, x, frame_point(&e->frame, rl__polygon_sampler_point(ep.points, u[0], u[1])), &vs);
-        if (got == 0)
-            continue;
-        all += vs.w;
-        if (got == 1)
-            continue;
-        for (int c = 0; c < 3; c++)
-            seen[c] += vs.l[c];
-        cnt->rays_free++;
-    }
+    view_sums(ctx, p, m, NULL, x, &ep, &key, view_rays(ctx, ep.q, ep.n, x), VIS_FREE, NULL, &all, seen, cnt);
     if (!(all > 0) || !(seen[0] > 0 || seen[1] > 0 || seen[2] > 0))
         return;
     double f = rl__polygon_lambert(x, m->frame.n, ep.q, ep.n);
@@ -407,37 +432,35 @@ static void anchor_measure(const rl_transfer_ctx *ctx, const rl_pair *p, const r
         out[c] = f > 0 ? f * (seen[c] / all) : 0.0;
 }
 
-/* Adds to cell of map m (grid square i, j) its light from g's anchors,
- * bilinearly at its centre, measuring those not yet measured. */
+/* Adds to cell of map m its light from g's anchors, bilinearly at the
+ * cell's centre (its part's vertex mean where its polygon cuts it),
+ * measuring those not measured yet. */
 static void anchors_apply(const rl_transfer_ctx *ctx, const rl_pair *p, rl_map *m, anchor_grid *g, uint32_t cell,
                           const v2 *sp, const rl_polygon_sampler *whole, rl_counters *cnt)
 {
     const rl_cell *c = &m->cells[cell];
-    double gx = c->i + 0.5, gy = c->j + 0.5; /* the centre, in grid squares */
+    double gx = c->i + 0.5, gy = c->j + 0.5; /* in grid squares */
     if (c->poly_count > 0) {
-        /* a cell cut by its polygon's edge: the vertex mean of its part */
         rl_origin_domain dom;
         rl__cell_domain(m, cell, &dom);
-        double cu = 0.0, cv = 0.0;
-        for (uint32_t k = 0; k < dom.n; k++)
-            cu += dom.poly[k].x / dom.n, cv += dom.poly[k].y / dom.n;
-        gx = (cu - m->u0) / m->cell, gy = (cv - m->v0) / m->cell;
+        v2 centre = domain_centre_uv(&dom);
+        gx = (centre.x - m->u0) / m->cell, gy = (centre.y - m->v0) / m->cell;
     }
     double fa = gx / g->stride, fb = gy / g->stride;
-    double a0 = floor(fa), b0 = floor(fb);
-    /* clamped to the lattice: a centre lies within its tile's rows and the grid */
-    a0 = a0 < 0.0 ? 0.0 : a0 > g->na - 2.0 ? g->na - 2.0 : a0;
-    b0 = b0 < g->b0 ? g->b0 : b0 > g->b0 + g->nb - 2.0 ? g->b0 + g->nb - 2.0 : b0;
-    double wa = fa - a0, wb = fb - b0;
-    wa = wa < 0.0 ? 0.0 : wa > 1.0 ? 1.0 : wa;
-    wb = wb < 0.0 ? 0.0 : wb > 1.0 ? 1.0 : wb;
+    double col = floor(fa), row = floor(fb);
+    /* clamped to the lattice (a centre lies within its square, so only rounding can go past) */
+    col = !(col >= 0.0) ? 0.0 : col > g->na - 2.0 ? g->na - 2.0 : col;
+    row = !(row >= g->row0) ? g->row0 : row > g->row0 + g->nb - 2.0 ? g->row0 + g->nb - 2.0 : row;
+    double wa = fa - col, wb = fb - row;
+    wa = !(wa >= 0.0) ? 0.0 : wa > 1.0 ? 1.0 : wa;
+    wb = !(wb >= 0.0) ? 0.0 : wb > 1.0 ? 1.0 : wb;
     double out[3] = {0, 0, 0};
     for (int k = 0; k < 4; k++) {
-        uint32_t a = (uint32_t)a0 + (k & 1), b = (uint32_t)b0 + (k >> 1);
+        uint32_t a = (uint32_t)col + (k & 1), b = (uint32_t)row + (k >> 1);
         double w = (k & 1 ? wa : 1.0 - wa) * (k >> 1 ? wb : 1.0 - wb);
-        double *v = g->value[(size_t)(b - g->b0) * g->na + a];
+        double *v = g->value[(size_t)(b - g->row0) * g->na + a];
         if (isnan(v[0]))
-            anchor_measure(ctx, p, m, g, a, b, sp, whole, v, cnt);
+            anchor_measure(ctx, p, m, g, a * g->stride, b * g->stride, sp, whole, v, cnt);
         for (int ch = 0; ch < 3; ch++)
             out[ch] += w * v[ch];
     }
@@ -507,29 +530,7 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
             }
             rl_ray_batch batch;
             batch.n = 0;
-            cnt->samples += nr; /* counted once: a store per sample costs more than it says */
-            for (uint32_t r = 0; r < nr; r++) {
-                double u[4];
-                rl__lds4(&key, r, u);
-                v3 x = rl__domain_point(m, &dom, u[0], u[1]);
-                view_sample vs;
-                int got = view_weigh(e, m, x, frame_point(&e->frame, rl__polygon_sampler_point(ep.points, u[2], u[3])),
-                                     &vs);
-                if (got == 0)
-                    continue;
-                all += vs.w;
-                if (got == 1)
-                    continue;
-                if (vis == VIS_FREE) {
-                    /* every ray would arrive: add it as the batch would, in order */
-                    for (int c = 0; c < 3; c++)
-                        seen[c] += vs.l[c];
-                    cnt->rays_free++;
-                    continue;
-                }
-                rl__batch_push(ctx, &batch, x, vs.to, p->eps / fmax(vs.cos_r, 1e-3),
-                               vs.dist - p->eps / fmax(vs.cos_s, 1e-3), vs.l, seen, cnt);
-            }
+            view_sums(ctx, p, m, &dom, centre, &ep, &key, nr, vis, &batch, &all, seen, cnt);
             rl__batch_flush(ctx, &batch, cnt);
             /* no light arrives (shadow, or a light field dark toward the cell): the cell gets exactly 0,
              * and Lambert's mean, the costlier half, is not needed */

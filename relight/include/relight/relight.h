@@ -93,14 +93,14 @@ typedef struct rl_sampling {
     uint32_t zero_culling;         /**< 1 (default): culled and adaptive skip light field solid angles that the
                                         zero-radiance mask rules out, and cells that only the slab's dark
                                         positions could light; 0: no culling by radiance, only by geometry */
-    uint32_t anchor_stride;        /**< Lambert's gather from a light field (descend): a cell that sees all of
-                                        it gets the light interpolated bilinearly between anchor points this
-                                        many cells apart, each sampled as a cell would be (that light varies
+    uint32_t anchor_stride;        /**< Lambert's gather from a light field (descend): a polygon's cell that sees
+                                        all of it gets the light interpolated bilinearly between anchor points
+                                        this many cells apart, each sampled as a cell would be (that light varies
                                         smoothly: by one cell of the slab's partition n in direction over a
-                                        move of about r / n, r the distance to the slab); 0 (default): at
-                                        most a quarter of that apart (and r / 16), or 1 when that is under 2
-                                        cells; 1: every cell sampled on its own. Cells that a shadow may
-                                        cross are always sampled on their own */
+                                        move of about r / n, r the distance to the slab); 0 (default): chosen
+                                        per receiver tile, at most a third of that apart (and r / 12), or 1
+                                        when that is under 2 cells; 1: every cell sampled on its own. Cells
+                                        that a shadow may cross, and point receivers, are always sampled */
     double target_error;           /**< adaptive: refine a (cell, solid angle) while its estimated standard
                                         error exceeds this fraction of its estimate; default 0.05 */
 } rl_sampling;
