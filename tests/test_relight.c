@@ -955,10 +955,11 @@ static void check_lightfield_anchors(void)
         rl_scene_destroy(s);
     }
 
-    /* the lobe on a receiver whose edges cut cells, anchors 3 cells apart: its two tiles (32 rows each) end
-     * between anchor rows, and the last column's cells reach past the last full stride */
+    /* the lobe on a receiver whose edges cut cells, anchors 3 cells apart: its two tiles (of 128 and 64
+     * rows: 8192 cells a tile) meet between anchor rows, and the last column's cells reach past the last
+     * full stride */
     snprintf(path, sizeof path, "%s/anchors_cut.json", tmpdir);
-    tpoly cut[1] = {ts_rect_z("grey", -0.97, -0.99, 1.01, 1.005, 0.0, 1)};
+    tpoly cut[1] = {ts_rect_z("grey", -0.97, -0.99, 1.01, 4.985, 0.0, 1)};
     ts_write_scene(path, MATS, cut, 1,
                    "\"radiance_maps\": {\"cell_size\": 0.03125}, \"lightfields\": [{\"file\": \"anchor_lf.h5\", "
                    "\"slab\": \"light\", \"transform\": [[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]}]");

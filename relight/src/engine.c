@@ -29,7 +29,12 @@
 #include "ilf/pool.h"
 #include "sampling.h"
 
-#define TILE_CELLS 2048u
+/* Grid squares a work item holds (whole rows). Larger tiles set up fewer (emitter, tile) pairs and share
+ * more of what a pair builds (shadows, tables, anchors); 8192 rather than 2048 took the light-field
+ * classroom's direct pass at 1.3 M cells from 9.7 to 9.0 s (anchors on its 3-row tiles were measured
+ * twice) and the paper's 'beams' from 1.24 to 1.04 s, errors unchanged (BENCHMARKS.md, section 2m),
+ * and still leaves hundreds of items to share out between threads. */
+#define TILE_CELLS 8192u
 
 /* How often the calling thread reports progress while a team works, seconds. */
 #define PROGRESS_PERIOD 0.02
