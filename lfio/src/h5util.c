@@ -812,11 +812,14 @@ static MPI_Comm writing_comm = MPI_COMM_NULL;
 static hid_t create_shared(const char *path, const char *tmp, MPI_Comm comm)
 {
     hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), fcpl = untimed_fcpl(), file = -1;
-    if (fapl >= 0 && fcpl >= 0 && H5Pset_fapl_mpio(fapl, comm, MPI_INFO_NULL) >= 0
-        && H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST) >= 0 && small_metadata_cache(fapl) >= 0
-        && H5Pset_all_coll_metadata_ops(fapl, 1) >= 0 && H5Pset_coll_metadata_write(fapl, 1) >= 0)
-        file = H5Fcreate(tmp, H5F_ACC_TRUNC, fcpl, fapl);
-    if (file < 0)
+    int ready = fapl >= 0 && fcpl >= 0 && H5Pset_fapl_mpio(fapl, comm, MPI_INFO_NULL) >= 0
+                && H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST) >= 0
+                && small_metadata_cache(fapl) >= 0 && H5Pset_all_coll_metadata_ops(fapl, 1) >= 0
+                && H5Pset_coll_metadata_write(fapl, 1) >= 0;
+    /* H5Fcreate is collective: every rank enters it or none does, or those that did would wait forever */
+    lfio_status st = ready ? LFIO_OK
+                           : lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot set up a collective write's properties");
+    if (agree(path, st, comm) == LFIO_OK && (file = H5Fcreate(tmp, H5F_ACC_TRUNC, fcpl, fapl)) < 0)
         lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the temporary file for a collective write");
     lfio__h5_close(fapl);
     lfio__h5_close(fcpl);
