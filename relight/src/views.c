@@ -265,11 +265,10 @@ static inline int view_weigh(const rl_emitter *e, const rl_map *m, v3 x, v3 y, v
 
 /* Adds to *all the weights w and to seen the weighted radiance l * V of nr
  * samples of emitter part ep, point r of the sequence of key drawing its
- * origin from dom (coordinates 0, 1) and its emitter point from ep's
- * sampler (coordinates 2, 3); with dom NULL every origin is x0, and the
- * emitter point takes coordinates 0, 1, the sequence's most even pair
- * (bases 2 and 3: at a few dozen points, bases 5 and 7 still fall on
- * lines, which cost anchors about 0.4% of RMSE). Where vis is
+ * emitter point from ep's sampler (coordinates 0 and 1, the sequence's
+ * most even pair: at a few dozen points bases 5 and 7 still fall on lines,
+ * and the light varies more over the emitter than over a cell) and its
+ * origin from dom (coordinates 2 and 3; NULL: every origin is x0). Where vis is
  * VIS_FREE every ray arrives and none is traced; otherwise the rays go out
  * through batch, which adds them to seen as they arrive (the caller flushes). */
 static void view_sums(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_map *m, const rl_origin_domain *dom,
@@ -281,9 +280,8 @@ static void view_sums(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_map
     for (uint32_t r = 0; r < nr; r++) {
         double u[4];
         rl__lds4(key, r, u);
-        v3 x = dom ? rl__domain_point(m, dom, u[0], u[1]) : x0;
-        double ya = dom ? u[2] : u[0], yb = dom ? u[3] : u[1];
-        v2 y = rl__polygon_sampler_point(ep->points, ya, yb);
+        v3 x = dom ? rl__domain_point(m, dom, u[2], u[3]) : x0;
+        v2 y = rl__polygon_sampler_point(ep->points, u[0], u[1]);
         view_sample vs;
         int got = view_weigh(e, m, x, frame_point(&e->frame, y), &vs);
         if (got == 0)
