@@ -604,23 +604,35 @@ static uint64_t check_culled_naive(rl_scene *s, const char *what)
     return samples;
 }
 
-/* Writes a slab of n whose radiance is a lobe tilted off its normal, varying
- * across its 4 x 4 positions: every interpolation weight shows. */
-static void write_lobe_lightfield(const char *path, uint32_t n)
+/* Writes a slab of n (test_slab_new()) whose grey radiance along direction
+ * centroid w at position (i, j) is radiance(w, i, j). */
+static void write_slab_by(const char *path, uint32_t n, float (*radiance)(const double w[3], uint32_t i, uint32_t j))
 {
     lfio_slab *slab = test_slab_new(n);
     uint64_t nd = lfio_slab_dir_count(slab);
     for (uint64_t k = 0; k < nd; k++) {
         double w[3];
         lfio_part_centroid(n, k, w);
-        double lobe = fmax(0.0, 0.6 * w[0] + 0.8 * w[2]);
         for (uint32_t j = 0; j < 4; j++)
             for (uint32_t i = 0; i < 4; i++) {
-                float v = (float)((1.0 + 0.5 * i - 0.2 * j) * pow(lobe, 8.0));
+                float v = radiance(w, i, j);
                 lfio_slab_write(slab, k, i, j, (const float[3]){v, v, v});
             }
     }
     test_slab_write(path, slab);
+}
+
+/* A lobe tilted off the slab's normal, varying across its 4 x 4 positions: every interpolation weight shows. */
+static float lobe_radiance(const double w[3], uint32_t i, uint32_t j)
+{
+    double lobe = fmax(0.0, 0.6 * w[0] + 0.8 * w[2]);
+    return (float)((1.0 + 0.5 * i - 0.2 * j) * pow(lobe, 8.0));
+}
+
+/* Writes a slab of n whose radiance is lobe_radiance(). */
+static void write_lobe_lightfield(const char *path, uint32_t n)
+{
+    write_slab_by(path, n, lobe_radiance);
 }
 
 /* Culled's solid angles below the slab's level draw their directions once for
@@ -834,22 +846,12 @@ static void check_lightfield(void)
           (unsigned long long)samples[1], (unsigned long long)samples[0]);
 }
 
-/* Writes a slab of n lit, in a 40 degree cone about its normal, from the two
- * columns of positions on its -x half only: a receiver's lit part of it is
- * that half at most. */
-static void write_half_lightfield(const char *path, uint32_t n)
+/* Lit in a 40 degree cone about the slab's normal from the two columns of
+ * positions on its -x half only: a receiver's lit part of it is that half at most. */
+static float half_radiance(const double w[3], uint32_t i, uint32_t j)
 {
-    lfio_slab *slab = test_slab_new(n);
-    uint64_t nd = lfio_slab_dir_count(slab);
-    for (uint64_t k = 0; k < nd; k++) {
-        double w[3];
-        lfio_part_centroid(n, k, w);
-        float v = w[2] > cos(40 * 3.14159265358979 / 180) ? 5.0f : 0.0f;
-        for (uint32_t j = 0; j < 4; j++)
-            for (uint32_t i = 0; i < 2; i++)
-                lfio_slab_write(slab, k, i, j, (const float[3]){v, v, v});
-    }
-    test_slab_write(path, slab);
+    (void)j;
+    return i < 2 && w[2] > cos(40 * 3.14159265358979 / 180) ? 5.0f : 0.0f;
 }
 
 /* @return RMSE of map 0 of a against b's, over the mean of b's (green). */
@@ -932,7 +934,7 @@ static void check_lightfield_anchors(void)
     for (int field = 0; field < 2; field++) {
         const char *what = field ? "half a slab" : "tilted lobe";
         if (field)
-            write_half_lightfield(lfpath, 4);
+            write_slab_by(lfpath, 4, half_radiance);
         else
             write_lobe_lightfield(lfpath, 4);
         if (!(s = ts_load(path)))

@@ -47,20 +47,14 @@
 #include "mesh.h"
 #include "method.h"
 
-/* @return the vertex mean of domain dom, in its map's frame: where a cell's
- * view of an emitter is measured. */
-static v2 domain_centre_uv(const rl_origin_domain *dom)
+/* @return the world point at the vertex mean of domain dom of map m: where a
+ * cell's view of an emitter is measured. */
+static v3 domain_centre(const rl_map *m, const rl_origin_domain *dom)
 {
     v2 c = {0, 0};
     for (uint32_t i = 0; i < dom->n; i++)
         c = (v2){c.x + dom->poly[i].x / dom->n, c.y + dom->poly[i].y / dom->n};
-    return c;
-}
-
-/* @return domain_centre_uv() of domain dom of map m as a world point. */
-static v3 domain_centre(const rl_map *m, const rl_origin_domain *dom)
-{
-    return frame_point(&m->frame, domain_centre_uv(dom));
+    return frame_point(&m->frame, c);
 }
 
 /* Bounds where light field emitter e (frame polygon y, ny vertices) can light
@@ -436,7 +430,7 @@ static void anchor_measure(const rl_transfer_ctx *ctx, const rl_pair *p, const r
 }
 
 /* Adds to cell of map m its light from g's anchors, bilinearly at the
- * cell's centre (its part's vertex mean where its polygon cuts it),
+ * cell's centroid (as bounces interpolate, rl__map_interpolate()),
  * measuring those not measured yet. */
 static void anchors_apply(const rl_transfer_ctx *ctx, const rl_pair *p, rl_map *m, anchor_grid *g, uint32_t cell,
                           const v2 *sp, const rl_polygon_sampler *whole, rl_counters *cnt)
@@ -444,9 +438,8 @@ static void anchors_apply(const rl_transfer_ctx *ctx, const rl_pair *p, rl_map *
     const rl_cell *c = &m->cells[cell];
     double gx = c->i + 0.5, gy = c->j + 0.5; /* in grid squares */
     if (c->poly_count > 0) {
-        rl_origin_domain dom;
-        rl__cell_domain(m, cell, &dom);
-        v2 centre = domain_centre_uv(&dom);
+        v2 poly[RL_MAX_POLY_VERTS + 4];
+        v2 centre = rl__polygon_centroid(poly, rl__map_cell_polygon(m, c, poly));
         gx = (centre.x - m->u0) / m->cell, gy = (centre.y - m->v0) / m->cell;
     }
     double fa = gx / g->stride, fb = gy / g->stride;
