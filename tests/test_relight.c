@@ -889,6 +889,50 @@ static rl_solution *relight_anchored(rl_scene *s, uint32_t stride, uint32_t k, u
     return sol;
 }
 
+/* The tilted lobe (written to lfpath) over a floor that a tilted blocker
+ * shades: cells a shadow may cross take the anchors' unoccluded light times
+ * the visible share of their samples' radiance, their rays in two stages
+ * (views.c). Against every cell sampled at 16x the rays, that must beat
+ * every cell sampled on its own at the same k, keep the total, and trace
+ * fewer rays (most such cells are wholly lit or wholly shaded). */
+static void check_anchored_shadow(const char *lfpath)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/anchors_shadow.json", tmpdir);
+    tpoly p[2] = {ts_rect_z("grey", -1, -1, 1, 1, 0.0, 1), ts_rect_z("black", -0.3, -0.35, 0.25, 0.2, 0.1, 1)};
+    p[1].v[1][2] = p[1].v[2][2] = 0.15; /* tilted, low: an umbra, a penumbra and light all round */
+    char rest[512];
+    snprintf(rest, sizeof rest,
+             "\"radiance_maps\": {\"cell_size\": 0.03125}, \"lightfields\": [{\"file\": \"%s\", \"slab\": "
+             "\"light\", \"transform\": [[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]}]",
+             strrchr(lfpath, '/') + 1);
+    ts_write_scene(path, MATS, p, 2, rest);
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    uint64_t n_ref, n_a, n_c;
+    rl_solution *ref = relight_anchored(s, 1, 64, 0, &n_ref), *a = relight_anchored(s, 0, 4, 0, &n_a),
+                *c = relight_anchored(s, 1, 4, 0, &n_c);
+    if (ref && a && c) {
+        rl_pass_stats sta = {0}, stc = {0};
+        rl_solution_pass_stats(a, 0, &sta);
+        rl_solution_pass_stats(c, 0, &stc);
+        double sa, sc, sr;
+        double ra = cells_rmse(a, ref, &sa, &sr), rc = cells_rmse(c, ref, &sc, &sr);
+        printf("tilted lobe over a shaded floor: anchors RMSE %.3f%% (%llu rays), every cell %.3f%% (%llu rays); "
+               "sums %.5g, %.5g, %.5g\n",
+               100 * ra, (unsigned long long)sta.rays_cast, 100 * rc, (unsigned long long)stc.rays_cast, sa, sc, sr);
+        CHECK(ra <= rc, "anchors in shadow: RMSE %.4g against %.4g sampling every cell", ra, rc);
+        CHECK(fabs(sa - sr) < 0.003 * sr, "anchors in shadow: total %.6g against %.6g", sa, sr);
+        CHECK(sta.rays_cast < 0.8 * stc.rays_cast, "anchors in shadow: %llu rays against %llu",
+              (unsigned long long)sta.rays_cast, (unsigned long long)stc.rays_cast);
+    }
+    rl_solution_destroy(ref);
+    rl_solution_destroy(a);
+    rl_solution_destroy(c);
+    rl_scene_destroy(s);
+}
+
 /* A light field's cells that see all of it take their light bilinearly
  * between anchors (views.c), here 2 cells apart (1 m under the slab of
  * partition 4, cells of 1/32 m). A constant slab is Lambertian, so each
@@ -989,6 +1033,7 @@ static void check_lightfield_anchors(void)
     rl_solution_destroy(one);
     rl_solution_destroy(c);
     rl_scene_destroy(s);
+    check_anchored_shadow(lfpath);
 }
 
 /* A constant light field slab seen edge-on: the point lies just below the
