@@ -473,8 +473,9 @@ static void anchors_blend(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
  * first (at least CELL_STAGE_MIN), and the rest only if those disagree:
  * where all arrive or all are stopped, the cell is taken to be wholly lit
  * or wholly in shadow. On the light-field classroom at 1.3 M cells, 57% of
- * such cells were one or the other; stopping them early costs 0.04% of the
- * light in penumbrae that the first rays missed, and a third of the rays. */
+ * such cells were one or the other; stopping them early costs about 0.03%
+ * of the light in penumbrae that the first rays missed, and a third of the
+ * rays. */
 #define CELL_STAGE_DIVISOR 3u
 #define CELL_STAGE_MIN 6u
 
