@@ -1,7 +1,7 @@
 /*
  * h5util.c - the HDF5 plumbing shared by lfio's file formats (see h5util.h):
  * error silencing and translation, bounded typed attributes, dataset layouts,
- * hyperslab transfers, the in-memory atomic writer and the checked opener.
+ * hyperslab transfers, the atomic writer and the checked opener.
  *
  * Invariants:
  *   - Every HDF5 failure is recorded with lfio__h5_fail() before any other
@@ -12,8 +12,9 @@
  *   - A write either renames a complete, fsynced file over its target or
  *     leaves the target untouched and removes its temporary (the project's
  *     one writer, ilf/atomic_file.h, and its one rule for temporary names).
- *     HDF5 builds the file in memory and never writes to disk itself (see
- *     build_and_write()); a collective write lets MPI-IO write the temporary.
+ *     HDF5 writes the temporary through lfio's streaming driver, which never
+ *     reports a failed write to it (h5stream.c, build_and_write()); a
+ *     collective write lets MPI-IO write the temporary.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -30,8 +31,6 @@
 #include "ilf/atomic_file.h"
 #include "internal.h"
 
-/* Growth step of the in-memory file image while writing. */
-#define CORE_INCREMENT ((size_t)8 << 20)
 /* Most bytes HDF5's metadata cache holds per open file, as the cache counts
  * them (serialised sizes: objects' decoded headers come on top, which is why
  * writers also evict objects on close). Its default (32 MiB, grown on
@@ -556,76 +555,6 @@ lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, 
 
 /* ------------------------------------------------------------------- files */
 
-/* @return x rotated left by k bits (0 < k < 32). */
-static uint32_t rotl32(uint32_t x, int k)
-{
-    return (x << k) | (x >> (32 - k));
-}
-
-/* @return the 4 bytes at p as a little-endian number. */
-static uint32_t le32(const unsigned char *p)
-{
-    return p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
-/* @return Jenkins' lookup3 hash (hashlittle, seed 0) of len bytes: HDF5's metadata checksum. */
-static uint32_t metadata_checksum(const unsigned char *k, size_t len)
-{
-    uint32_t a, b, c;
-    a = b = c = 0xdeadbeefu + (uint32_t)len;
-    for (; len > 12; len -= 12, k += 12) {
-        a += le32(k), b += le32(k + 4), c += le32(k + 8);
-        a -= c, a ^= rotl32(c, 4), c += b;
-        b -= a, b ^= rotl32(a, 6), a += c;
-        c -= b, c ^= rotl32(b, 8), b += a;
-        a -= c, a ^= rotl32(c, 16), c += b;
-        b -= a, b ^= rotl32(a, 19), a += c;
-        c -= b, c ^= rotl32(b, 4), b += a;
-    }
-    if (len == 0)
-        return c;
-    uint32_t w[3] = {0, 0, 0}; /* the last 1..12 bytes, zero-padded */
-    for (size_t i = 0; i < len; i++)
-        w[i / 4] += (uint32_t)k[i] << (8 * (i % 4));
-    a += w[0], b += w[1], c += w[2];
-    c ^= b, c -= rotl32(b, 14);
-    a ^= c, a -= rotl32(c, 11);
-    b ^= a, b -= rotl32(a, 25);
-    c ^= b, c -= rotl32(b, 16);
-    a ^= c, a -= rotl32(c, 4);
-    b ^= a, b -= rotl32(a, 14);
-    c ^= b, c -= rotl32(b, 24);
-    return c;
-}
-
-/*
- * Makes the superblock of an open file's image say what a closed file's
- * says: the "open for writing" status flags cleared and the checksum
- * recomputed, the bytes a normal H5Fclose would have written (checked by
- * comparing whole files; H5Fget_file_image's copy clears the flags but
- * leaves the old checksum). Superblocks before version 2 have neither.
- * @return LFIO_OK; LFIO_ERR_IO if the image does not start with a superblock.
- */
-static lfio_status finish_superblock(const char *path, unsigned char *image, size_t size)
-{
-    static const unsigned char signature[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
-    if (size < 12 || memcmp(image, signature, sizeof signature) != 0)
-        return lfio__fail(LFIO_ERR_IO, "%s: /: file image lacks a superblock", path);
-    /* Versions 2 and 3: signature, version, offset size O, length size, flags,
-     * four addresses of O bytes, then the checksum of everything before it. */
-    unsigned version = image[8], offset_size = image[9];
-    size_t covered = 12 + 4 * (size_t)offset_size;
-    if (version < 2)
-        return LFIO_OK;
-    if (version > 3 || (offset_size != 4 && offset_size != 8) || size < covered + 4)
-        return lfio__fail(LFIO_ERR_IO, "%s: /: unexpected superblock version %u", path, version);
-    image[11] = 0; /* file consistency flags */
-    uint32_t sum = metadata_checksum(image, covered);
-    for (int k = 0; k < 4; k++)
-        image[covered + k] = (unsigned char)(sum >> (8 * k));
-    return LFIO_OK;
-}
-
 /* Bounds fapl's metadata cache to METADATA_CACHE_MAX. @return 0, or -1 if HDF5 refuses. */
 static int small_metadata_cache(hid_t fapl)
 {
@@ -640,60 +569,6 @@ static int small_metadata_cache(hid_t fapl)
     return H5Pset_mdc_config(fapl, &cfg) < 0 ? -1 : 0;
 }
 
-/* The core driver's file buffer, allocated through these callbacks so that its bytes can be written
- * out without a copy. The driver holds one buffer per file; udata is shared, not copied. */
-typedef struct core_image {
-    unsigned char *buf;
-} core_image;
-
-static void *image_malloc(size_t size, H5FD_file_image_op_t op, void *udata)
-{
-    (void)op;
-    core_image *ci = udata;
-    void *p = malloc(size ? size : 1);
-    if (p != NULL)
-        ci->buf = p;
-    return p;
-}
-
-static void *image_memcpy(void *dest, const void *src, size_t size, H5FD_file_image_op_t op, void *udata)
-{
-    (void)op;
-    (void)udata;
-    return memcpy(dest, src, size);
-}
-
-static void *image_realloc(void *ptr, size_t size, H5FD_file_image_op_t op, void *udata)
-{
-    (void)op;
-    core_image *ci = udata;
-    void *p = realloc(ptr, size ? size : 1);
-    if (p != NULL)
-        ci->buf = p;
-    return p;
-}
-
-static herr_t image_free(void *ptr, H5FD_file_image_op_t op, void *udata)
-{
-    (void)op;
-    core_image *ci = udata;
-    if (ptr == ci->buf)
-        ci->buf = NULL;
-    free(ptr);
-    return 0;
-}
-
-static void *image_udata_copy(void *udata)
-{
-    return udata;
-}
-
-static herr_t image_udata_free(void *udata)
-{
-    (void)udata;
-    return 0;
-}
-
 /* @return a file creation property list whose root group records no times (every object lfio
  * creates records none: the same content gives the same bytes), or -1. */
 static hid_t untimed_fcpl(void)
@@ -706,29 +581,31 @@ static hid_t untimed_fcpl(void)
     return fcpl;
 }
 
+/* Records the failure of step for path. @return LFIO_ERR_NOMEM for ENOMEM, else LFIO_ERR_IO. */
+static lfio_status atomic_fail(const char *path, int err, const char *step)
+{
+    if (err == ENOMEM)
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
+    return lfio__fail(LFIO_ERR_IO, "%s: %s: %s", path, step, strerror(err));
+}
+
 /*
- * Builds the whole file in memory with HDF5's core driver (no backing store)
- * and writes its bytes to fd. HDF5 1.10 cannot recover from a failed write to
- * a real file: a flush failing inside H5Dclose/H5Fclose leaves a freed file
- * registered, and the process crashes at exit (HDFFV-11052, fixed in 1.14.1).
- * In memory nothing can fail that way; the bytes then go to disk through
- * ilf_write_all(), whose errors are ordinary. The driver's buffer is allocated
- * through core_image, so the bytes are written from it directly: memory about
- * the size of the file, once.
+ * Builds the file on fd, the temporary, through lfio's streaming driver
+ * (h5stream.c): HDF5 writes as it goes, so memory holds its caches rather
+ * than the file. HDF5 1.10 cannot recover from a write failing inside
+ * H5Dclose/H5Fclose (HDFFV-11052); the driver never lets one fail, keeps its
+ * error for here and finishes the file in memory, which is then discarded.
  * @return LFIO_OK; an error (LFIO_ERR_IO naming the temporary's failure).
  */
 static lfio_status build_and_write(const char *path, const char *name, lfio__h5_fill_fn fill, const void *content,
                                    int fd)
 {
     lfio_status st = LFIO_OK;
-    core_image ci = {NULL};
-    H5FD_file_image_callbacks_t callbacks = {image_malloc, image_memcpy, image_realloc, image_free,
-                                             image_udata_copy, image_udata_free, &ci};
+    int err = 0;
     hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
     /* Version 1.8+ structures carry metadata checksums; strong close releases every
      * object with the file, so no forgotten id outlives it. */
-    if (fapl < 0 || H5Pset_fapl_core(fapl, CORE_INCREMENT, 0) < 0
-        || H5Pset_file_image_callbacks(fapl, &callbacks) < 0
+    if (fapl < 0 || lfio__h5_stream_fapl(fapl, fd, &err) != 0
         || H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST) < 0
         || H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0 || small_metadata_cache(fapl) < 0)
         st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot set file access properties");
@@ -739,42 +616,25 @@ static lfio_status build_and_write(const char *path, const char *name, lfio__h5_
      * the file is the same without it. */
     if (st == LFIO_OK && H5Pset_evict_on_close(fapl, 1) < 0)
         H5Eclear2(H5E_DEFAULT); /* no stale entry for a later failure's message */
-    /* name only identifies the in-memory file: the core driver creates nothing on disk. */
     hid_t fcpl = st == LFIO_OK ? untimed_fcpl() : -1;
+    /* name (the temporary's) is only HDF5's: the driver writes to fd */
     hid_t file = fcpl >= 0 ? H5Fcreate(name, H5F_ACC_TRUNC, fcpl, fapl) : -1;
     if (st == LFIO_OK && file < 0)
-        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the file in memory");
+        st = err != 0 ? atomic_fail(path, err, "cannot write the temporary file")
+                      : lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the file");
     lfio__h5_close(fapl);
     lfio__h5_close(fcpl);
     if (st == LFIO_OK)
         st = fill(path, file, content);
-    ssize_t bytes = -1;
-    /* Everything must have reached the driver's buffer: flush the metadata cache first. */
-    if (st == LFIO_OK && H5Fflush(file, H5F_SCOPE_GLOBAL) < 0)
-        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot flush the file in memory");
-    if (st == LFIO_OK && ((bytes = H5Fget_file_image(file, NULL, 0)) <= 0 || ci.buf == NULL))
-        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot finish the file image");
-    /* The open file's superblock says it is open for writing: the bytes on disk must say what
-     * a closed file's say (finish_superblock). */
-    if (st == LFIO_OK)
-        st = finish_superblock(path, ci.buf, (size_t)bytes);
-    int err = 0;
-    if (st == LFIO_OK && (err = ilf_write_all(fd, ci.buf, (size_t)bytes)) != 0)
-        st = lfio__fail(LFIO_ERR_IO, "%s: cannot write the temporary file: %s", path, strerror(err));
+    /* closing writes what HDF5 still caches; no write fails inside it (see above) */
     if (file >= 0 && H5Fclose(file) < 0 && st == LFIO_OK)
-        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot close the file in memory");
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot close the file");
+    if (err != 0 && (st == LFIO_OK || st == LFIO_ERR_IO))
+        st = atomic_fail(path, err, "cannot write the temporary file");
     return st;
 }
 
-/* Records the failure of step for path. @return LFIO_ERR_NOMEM for ENOMEM, else LFIO_ERR_IO. */
-static lfio_status atomic_fail(const char *path, int err, const char *step)
-{
-    if (err == ENOMEM)
-        return lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
-    return lfio__fail(LFIO_ERR_IO, "%s: %s: %s", path, step, strerror(err));
-}
-
-/* Builds the file in memory, writes it to a temporary beside path and puts it in place (ilf/atomic_file.h). */
+/* Builds the file in a temporary beside path and puts it in place (ilf/atomic_file.h). */
 lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const void *content)
 {
     lfio__h5_quiet q;

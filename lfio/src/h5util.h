@@ -170,13 +170,22 @@ lfio_status lfio__h5_write_part(const char *path, const char *obj, hid_t dset, h
 typedef lfio_status (*lfio__h5_fill_fn)(const char *path, hid_t file, const void *content);
 
 /*
- * Writes a file atomically: fill() builds it in memory (HDF5's core driver,
- * 1.10 object formats, strong close), the bytes go to a temporary beside
- * path, which is fsynced and renamed over path, then the folder is fsynced.
+ * Writes a file atomically: fill() builds it in a temporary beside path
+ * (lfio__h5_stream_fapl(), 1.10 object formats, strong close), which is
+ * fsynced and renamed over path, then the folder is fsynced.
  * On failure path is untouched and the temporary removed. Silences HDF5.
  * @return LFIO_OK; the status of fill(); LFIO_ERR_IO; LFIO_ERR_NOMEM.
  */
 lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const void *content);
+
+/*
+ * Makes fapl write a new file straight to descriptor fd, which stays the
+ * caller's (h5stream.c). HDF5 never sees a write fail: the first failure's
+ * errno is stored in *err (which must be 0 at the start and outlive the
+ * file), the file is finished in memory, and the caller must discard it.
+ * @return 0, or -1 if HDF5 refused the driver.
+ */
+int lfio__h5_stream_fapl(hid_t fapl, int fd, int *err);
 
 /*
  * Inside the fill() of lfio__h5_write_collective(), where one rank can fail

@@ -172,6 +172,12 @@ static rl_status map_cells(rl_map *m)
             }
             m->grid[(size_t)j * m->nu + i] = (int32_t)m->ncells++;
         }
+    /* the cells were allocated for every square of the bounding grid: a triangle needs about half */
+    if (m->ncells < squares) {
+        rl_cell *fit = realloc(m->cells, (m->ncells ? m->ncells : 1) * sizeof *fit);
+        if (fit)
+            m->cells = fit;
+    }
     return RL_OK;
 }
 
