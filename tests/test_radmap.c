@@ -16,6 +16,8 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include <dirent.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -211,6 +213,41 @@ static void test_write_each(const lfio_radmap_patch *patches, size_t count)
     CHECK(lfio_radmap_write_each(path, NULL, NULL, 1, NULL, NULL) == LFIO_ERR_ARG, "NULL describe");
     free(a);
     free(c);
+}
+
+/* A write that the disk stops part-way (a file size limit of limit bytes: EFBIG, the signal ignored)
+ * fails with LFIO_ERR_IO naming the file and the reason, leaves existing as it was and no temporary,
+ * and the next write succeeds: lfio's driver kept the error from HDF5 (h5util.c, h5stream.c). */
+static void test_write_fails_midway(const lfio_radmap_patch *patches, size_t count, const char *existing,
+                                    rlim_t limit)
+{
+    size_t before_size = 0;
+    unsigned char *before = read_whole(existing, &before_size);
+    struct rlimit old, small;
+    void (*old_handler)(int) = signal(SIGXFSZ, SIG_IGN);
+    getrlimit(RLIMIT_FSIZE, &old);
+    small = old;
+    small.rlim_cur = limit;
+    CHECK(setrlimit(RLIMIT_FSIZE, &small) == 0, "setrlimit");
+    quiet_start();
+    lfio_status st = lfio_radmap_write(existing, "test_radmap", NULL, patches, count);
+    long printed = quiet_stop();
+    char msg[512];
+    snprintf(msg, sizeof msg, "%s", lfio_errmsg());
+    setrlimit(RLIMIT_FSIZE, &old);
+    signal(SIGXFSZ, old_handler);
+    const char *name = strrchr(existing, '/');
+    CHECK(st == LFIO_ERR_IO && strstr(msg, name ? name + 1 : existing) && strstr(msg, "too large"),
+          "a write stopped at %llu bytes: %s: %s", (unsigned long long)limit, lfio_status_name(st), msg);
+    CHECK(printed == 0, "a write stopped part-way printed %ld bytes", printed);
+    size_t after_size = 0;
+    unsigned char *after = read_whole(existing, &after_size);
+    CHECK(before && after && before_size == after_size && memcmp(before, after, before_size) == 0,
+          "a write stopped at %llu bytes changed the existing file", (unsigned long long)limit);
+    CHECK(sweep_tmpdir(1) == 0, "temporaries left after a write stopped part-way");
+    free(before);
+    free(after);
+    write_ok(existing, patches, count);
 }
 
 /* Expects writing p (one patch) to be refused with LFIO_ERR_ARG, a message containing needle, and no file. */
@@ -519,6 +556,11 @@ int main(void)
     test_round_trip(NULL, 0, tmp_path(empty, sizeof empty, "no_patches.h5"));
     test_round_trip(&patches[1], 1, tmp_path(lonely, sizeof lonely, "empty_patch.h5"));
     test_write_each(patches, 3);
+    char stopped[512];
+    copy_to(stopped, sizeof stopped, good, "stopped.h5");
+    /* stopped before the first patch, and among the big patch's chunks (the whole file is about 240 kB) */
+    test_write_fails_midway(patches, 4, stopped, 2048);
+    test_write_fails_midway(patches, 4, stopped, 96 * 1024);
     test_writer_refusals(&t[0], good);
     test_bad_files(good);
     CHECK(sweep_tmpdir(1) == 0, "temporaries left at the end");
