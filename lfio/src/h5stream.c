@@ -9,18 +9,23 @@
  * keeps the first error for the caller (lfio__h5_stream_error()) and from
  * then on keeps the file's bytes in memory instead: HDF5 reads back what it
  * wrote and finishes normally, and the caller, seeing the error, discards the
- * temporary. Invariants:
+ * temporary. Should memory run out for that copy too, later writes are
+ * dropped and reads give zeros ("dead"): still no failure for HDF5 to meet,
+ * and the file is discarded all the same. Invariants:
  *   - eof is the file's size as written so far; reads past it are zeros (a
  *     chunk of a new file is read only after it was written).
  *   - Before a failure every byte is on the descriptor; after it, image holds
  *     the whole file (what could be read back of the descriptor, then every
  *     later write), and the descriptor is no longer written.
- *   - The driver closes nothing it did not open: the descriptor stays the
- *     caller's.
+ *   - The driver writes through its own duplicate of the caller's
+ *     descriptor, and its error cell (stream_info.err) is the caller's to
+ *     free only once HDF5 has closed the file: a file HDF5 failed to close
+ *     may still be flushed at exit, and must then touch nothing freed.
  */
 #define _XOPEN_SOURCE 700
 
 #include <errno.h>
+#include <sys/stat.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -40,6 +45,7 @@ typedef struct stream_file {
     haddr_t eoa, eof;
     unsigned char *image; /* after a failed write: the whole file, image_size bytes */
     size_t image_size;
+    int dead; /* no memory for image either: writes dropped, reads zeros */
 } stream_file;
 
 /* Records err as the first failure of f's writes. */
@@ -97,14 +103,15 @@ static int image_reserve(stream_file *f, size_t end)
 }
 
 /* Moves f to memory after a failed write: the image takes what the descriptor holds (zeros where it
- * cannot be read). @return 0, or -1 without memory. */
-static int switch_to_image(stream_file *f)
+ * cannot be read); without memory for it, f is dead. */
+static void switch_to_image(stream_file *f)
 {
-    if (image_reserve(f, (size_t)f->eof) != 0)
-        return -1;
+    if (image_reserve(f, f->eof > 0 ? (size_t)f->eof : 1) != 0) {
+        f->dead = 1;
+        return;
+    }
     if (f->eof > 0 && read_fd(f->info.fd, f->image, (size_t)f->eof, 0) != 0)
         memset(f->image, 0, (size_t)f->eof);
-    return 0;
 }
 
 static H5FD_t *stream_open(const char *name, unsigned flags, hid_t fapl, haddr_t maxaddr)
@@ -114,20 +121,25 @@ static H5FD_t *stream_open(const char *name, unsigned flags, hid_t fapl, haddr_t
     if (info == NULL || info->fd < 0 || info->err == NULL)
         return NULL;
     stream_file *f = calloc(1, sizeof *f);
-    if (f == NULL) {
+    struct stat st;
+    /* the caller's file is new and empty (flags' H5F_ACC_TRUNC holds): its size is the end of file */
+    int fd = f != NULL && fstat(info->fd, &st) == 0 ? dup(info->fd) : -1;
+    if (fd < 0) {
         if (*info->err == 0)
-            *info->err = ENOMEM; /* HDF5 would say only that opening failed */
+            *info->err = f == NULL ? ENOMEM : errno; /* HDF5 would say only that opening failed */
+        free(f);
         return NULL;
     }
     f->info = *info;
-    off_t end = lseek(info->fd, 0, SEEK_END);
-    f->eof = end > 0 ? (haddr_t)end : 0;
+    f->info.fd = fd;
+    f->eof = st.st_size > 0 ? (haddr_t)st.st_size : 0;
     return &f->pub;
 }
 
 static herr_t stream_close(H5FD_t *file)
 {
     stream_file *f = (stream_file *)file;
+    close(f->info.fd); /* its duplicate: the caller's descriptor stays open */
     free(f->image);
     free(f);
     return 0;
@@ -167,8 +179,16 @@ static herr_t stream_read(H5FD_t *file, H5FD_mem_t type, hid_t dxpl, haddr_t add
     stream_file *f = (stream_file *)file;
     if (addr > (haddr_t)INT64_MAX - size)
         return -1;
-    if (f->image == NULL)
-        return read_fd(f->info.fd, buf, size, (off_t)addr) == 0 ? 0 : -1;
+    if (f->dead) {
+        memset(buf, 0, size);
+        return 0;
+    }
+    if (f->image == NULL) {
+        int err = read_fd(f->info.fd, buf, size, (off_t)addr);
+        if (err != 0)
+            stream_fail(f, err); /* HDF5 reports its own failure; the caller learns why */
+        return err == 0 ? 0 : -1;
+    }
     size_t have = addr < f->image_size ? f->image_size - (size_t)addr : 0, take = have < size ? have : size;
     if (take)
         memcpy(buf, f->image + addr, take);
@@ -182,7 +202,7 @@ static herr_t stream_write(H5FD_t *file, H5FD_mem_t type, hid_t dxpl, haddr_t ad
     stream_file *f = (stream_file *)file;
     if (addr > (haddr_t)INT64_MAX - size)
         return -1;
-    if (f->image == NULL) {
+    if (f->image == NULL && !f->dead) {
         int err = write_fd(f->info.fd, buf, size, (off_t)addr);
         if (err == 0) {
             f->eof = addr + size > f->eof ? addr + size : f->eof;
@@ -190,12 +210,12 @@ static herr_t stream_write(H5FD_t *file, H5FD_mem_t type, hid_t dxpl, haddr_t ad
         }
         /* never a failure HDF5 sees (see the top): keep the error, and the file in memory from now on */
         stream_fail(f, err);
-        if (switch_to_image(f) != 0)
-            return -1;
+        switch_to_image(f);
     }
-    if (image_reserve(f, (size_t)(addr + size)) != 0)
-        return -1;
-    memcpy(f->image + addr, buf, size);
+    if (!f->dead && image_reserve(f, (size_t)(addr + size)) != 0)
+        f->dead = 1;
+    if (!f->dead)
+        memcpy(f->image + addr, buf, size);
     f->eof = addr + size > f->eof ? addr + size : f->eof;
     return 0;
 }
@@ -206,8 +226,10 @@ static herr_t stream_truncate(H5FD_t *file, hid_t dxpl, hbool_t closing)
     stream_file *f = (stream_file *)file;
     if (f->eoa == f->eof)
         return 0;
-    if (f->image == NULL && ftruncate(f->info.fd, (off_t)f->eoa) != 0)
+    if (f->image == NULL && !f->dead && ftruncate(f->info.fd, (off_t)f->eoa) != 0)
         stream_fail(f, errno);
+    if (f->image != NULL && f->eoa < f->image_size) /* what lies past the end reads as zeros again */
+        memset(f->image + f->eoa, 0, f->image_size - (size_t)f->eoa);
     f->eof = f->eoa;
     return 0;
 }
@@ -233,12 +255,13 @@ static const H5FD_class_t stream_class = {
     .fl_map = H5FD_FLMAP_DICHOTOMY,
 };
 
-int lfio__h5_stream_fapl(hid_t fapl, int fd, int *err)
+hid_t lfio__h5_stream_register(void)
 {
-    /* registered again after H5close() has invalidated the previous id */
-    static hid_t driver = -1;
-    if (driver < 0 || H5Iis_valid(driver) <= 0)
-        driver = H5FDregister(&stream_class);
+    return H5FDregister(&stream_class);
+}
+
+int lfio__h5_stream_fapl(hid_t fapl, hid_t driver, int fd, int *err)
+{
     stream_info info = {fd, err};
-    return driver >= 0 && H5Pset_driver(fapl, driver, &info) >= 0 ? 0 : -1;
+    return H5Pset_driver(fapl, driver, &info) >= 0 ? 0 : -1;
 }

@@ -601,11 +601,14 @@ static lfio_status build_and_write(const char *path, const char *name, lfio__h5_
                                    int fd)
 {
     lfio_status st = LFIO_OK;
-    int err = 0;
-    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    /* the driver's error cell: freed once HDF5 has closed the file (see lfio__h5_stream_fapl()) */
+    int *err = calloc(1, sizeof *err);
+    if (err == NULL)
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
+    hid_t driver = lfio__h5_stream_register(), fapl = driver >= 0 ? H5Pcreate(H5P_FILE_ACCESS) : -1;
     /* Version 1.8+ structures carry metadata checksums; strong close releases every
      * object with the file, so no forgotten id outlives it. */
-    if (fapl < 0 || lfio__h5_stream_fapl(fapl, fd, &err) != 0
+    if (fapl < 0 || lfio__h5_stream_fapl(fapl, driver, fd, err) != 0
         || H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST) < 0
         || H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0 || small_metadata_cache(fapl) < 0)
         st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot set file access properties");
@@ -620,17 +623,25 @@ static lfio_status build_and_write(const char *path, const char *name, lfio__h5_
     /* name (the temporary's) is only HDF5's: the driver writes to fd */
     hid_t file = fcpl >= 0 ? H5Fcreate(name, H5F_ACC_TRUNC, fcpl, fapl) : -1;
     if (st == LFIO_OK && file < 0)
-        st = err != 0 ? atomic_fail(path, err, "cannot write the temporary file")
-                      : lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the file");
+        st = *err != 0 ? atomic_fail(path, *err, "cannot write the temporary file")
+                       : lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the file");
     lfio__h5_close(fapl);
     lfio__h5_close(fcpl);
     if (st == LFIO_OK)
         st = fill(path, file, content);
     /* closing writes what HDF5 still caches; no write fails inside it (see above) */
-    if (file >= 0 && H5Fclose(file) < 0 && st == LFIO_OK)
+    int closed = file < 0 || H5Fclose(file) >= 0;
+    if (!closed && st == LFIO_OK)
         st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot close the file");
-    if (err != 0 && (st == LFIO_OK || st == LFIO_ERR_IO))
-        st = atomic_fail(path, err, "cannot write the temporary file");
+    if (*err != 0 && (st == LFIO_OK || st == LFIO_ERR_IO))
+        st = atomic_fail(path, *err, "cannot write the temporary file");
+    /* a file HDF5 could not close keeps the driver and its error cell, which it may still use at exit */
+    if (closed) {
+        free(err);
+        if (driver >= 0)
+            H5FDunregister(driver);
+    }
+    H5Eclear2(H5E_DEFAULT);
     return st;
 }
 

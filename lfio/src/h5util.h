@@ -3,7 +3,7 @@
  * in h5io.c, radiance-map files in radmap_io.c): silencing HDF5 and turning
  * its error stack into lfio messages, typed and bounded attributes, dataset
  * layouts created and checked from one description, hyperslab transfers,
- * and the atomic in-memory file writer.
+ * and the atomic file writer (through h5stream.c's driver).
  *
  * Only lfio's I/O sources include this header (it includes hdf5.h).
  * Conventions of every function here:
@@ -179,13 +179,23 @@ typedef lfio_status (*lfio__h5_fill_fn)(const char *path, hid_t file, const void
 lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const void *content);
 
 /*
- * Makes fapl write a new file straight to descriptor fd, which stays the
- * caller's (h5stream.c). HDF5 never sees a write fail: the first failure's
- * errno is stored in *err (which must be 0 at the start and outlive the
- * file), the file is finished in memory, and the caller must discard it.
+ * Registers lfio's streaming driver (h5stream.c) with HDF5, for one write:
+ * the caller unregisters it (H5FDunregister) once the file is closed, so no
+ * id outlives the write or is shared between threads.
+ * @return the driver's id, or -1.
+ */
+hid_t lfio__h5_stream_register(void);
+
+/*
+ * Makes fapl write a new, empty file straight to descriptor fd (through a
+ * duplicate: fd stays the caller's) with driver, lfio__h5_stream_register()'s
+ * id. HDF5 never sees a write fail: the first failure's errno is stored in
+ * *err (0 at the start), the file is finished in memory, and the caller must
+ * discard it. *err must outlive the file: if HDF5 fails to close it, HDF5
+ * may still flush it at exit.
  * @return 0, or -1 if HDF5 refused the driver.
  */
-int lfio__h5_stream_fapl(hid_t fapl, int fd, int *err);
+int lfio__h5_stream_fapl(hid_t fapl, hid_t driver, int fd, int *err);
 
 /*
  * Inside the fill() of lfio__h5_write_collective(), where one rank can fail

@@ -315,7 +315,8 @@ static void view_sums(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_map
  * centre. An anchor's sequence is keyed by its grid corner alone, so
  * lattices of different strides (neighbouring tiles may choose different
  * ones) agree where they meet, and nothing depends on the thread count.
- * Cells that a shadow may cross are sampled on their own.
+ * Cells that a shadow may cross take the same blend times the visible share
+ * that their own rays measure (rl__gather_lambert()).
  */
 
 /* The fewest anchors per cell of a slab's partition that the directions from a receiver to the slab sweep
@@ -494,7 +495,8 @@ static void cell_rays(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_map
     uint32_t n1 = nr;
     if (unocc && vis != VIS_FREE) {
         n1 = (nr + CELL_STAGE_DIVISOR - 1) / CELL_STAGE_DIVISOR;
-        n1 = n1 < CELL_STAGE_MIN ? CELL_STAGE_MIN : n1 > nr ? nr : n1;
+        n1 = n1 < CELL_STAGE_MIN ? CELL_STAGE_MIN : n1;
+        n1 = n1 > nr ? nr : n1; /* never more than the cell's own rays */
     }
     uint64_t cast0 = cnt->rays_cast, kept0 = cnt->rays_kept;
     view_sums(ctx, p, m, dom, x0, ep, key, 0, n1, vis, &batch, all, seen, unocc, cnt);
