@@ -7,7 +7,7 @@
 #
 # The runs: writing a light field (synth), reading one (info, verify),
 # loading a scene with a mesh and a light field and relighting it with one
-# bounce and a view, a capture of a 2x2 probe grid, a depth correction, and
+# bounce and a view, and with direct light alone, a capture of a 2x2 probe grid, a depth correction, and
 # point queries. Each is first run untouched to count its allocations M (by
 # ilfkit's own code: libraries' are not counted). Then for N in 1..M, every N
 # when ILFKIT_FAULT_WALK=full, else every N up to W and W more spread evenly
@@ -144,6 +144,8 @@ walk "read a light field (verify)" - "$ILF" verify slab.h5
 walk "capture a probe grid" cap.h5 "$ILF" capture probes/manifest.json -o cap.h5 --threads 1 -q
 walk "depth correction" lamp.h5 "$ILF" reproject captured.h5 --proxy proxy.json -o lamp.h5 --threads 1 -q
 walk "relight with a bounce and a view" out "$ILF" relight room.json -o out --threads 1 -q
+# direct light alone: radiance.h5 is then written beside the engine, which may fail while the writer waits
+walk "relight, direct light written beside the engine" out "$ILF" relight room.json -o out --bounces 0 --no-view --threads 1 -q
 walk "point queries with a bounce" - "$ILF" irradiance room.json --points points.txt --threads 1
 
 echo "$passed passed, $failed failed"

@@ -933,6 +933,73 @@ static void check_anchored_shadow(const char *lfpath)
     rl_scene_destroy(s);
 }
 
+/* What rl_run_options.maps_ready told: the maps, in order, whose values it copied when told. */
+typedef struct told_maps {
+    const rl_solution *solution;
+    size_t calls, ready, backwards;
+    float *e[16]; /* map k's irradiance when told */
+} told_maps;
+
+static void on_maps_ready(void *user, const rl_solution *solution, size_t ready)
+{
+    told_maps *t = user;
+    t->backwards += ready < t->ready;
+    t->solution = solution;
+    t->calls++;
+    for (size_t k = t->ready; k < ready && k < 16; k++) {
+        ts_cells c = ts_cells_get(solution, k);
+        t->e[k] = c.e; /* kept: freed by the caller */
+        c.e = NULL;
+        ts_cells_free(&c);
+    }
+    t->ready = ready > t->ready ? ready : t->ready;
+}
+
+/* maps_ready: ten floor strips under a lamp. A direct run tells the maps as they are finished, more than
+ * once, in order, each with its final values; a run with a bounce tells them all at its end. */
+static void check_maps_ready(void)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/maps_ready.json", tmpdir);
+    tpoly p[11];
+    for (int k = 0; k < 10; k++)
+        p[k] = ts_rect_z("grey", -1 + 0.2 * k, -1, -0.8 + 0.2 * k, 1, 0.0, 1);
+    p[10] = ts_rect_z("light", -0.5, -0.5, 0.5, 0.5, 1.0, 0);
+    ts_write_scene(path, MATS, p, 11, "\"radiance_maps\": {\"cell_size\": 0.01}");
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    for (uint32_t bounces = 0; bounces < 2; bounces++) {
+        set_sampling(s, RL_METHOD_CULLED, 8, 2, 16, 2);
+        rl_sampling smp = *rl_scene_sampling(s);
+        smp.bounces = bounces;
+        CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "maps_ready: %s", rl_errmsg());
+        told_maps t;
+        memset(&t, 0, sizeof t);
+        run_opts.maps_ready = on_maps_ready;
+        run_opts.maps_ready_user = &t;
+        rl_solution *sol = NULL;
+        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "maps_ready: %s", rl_errmsg());
+        run_opts.maps_ready = NULL;
+        size_t n = sol ? rl_solution_map_count(sol) : 0, same = 0;
+        for (size_t k = 0; k < n && k < 16; k++) {
+            ts_cells c = ts_cells_get(sol, k);
+            same += t.e[k] != NULL && memcmp(t.e[k], c.e, 3 * c.n * sizeof *c.e) == 0;
+            ts_cells_free(&c);
+        }
+        printf("maps_ready, %u bounce%s: told %zu times, %zu of %zu maps, %zu with their final values\n", bounces,
+               bounces == 1 ? "" : "s", t.calls, t.ready, n, same);
+        CHECK(sol && n == 10 && t.solution == sol && t.ready == n && t.backwards == 0 && same == n,
+              "maps_ready, %u bounces: told %zu of %zu maps, %zu final, %zu backwards", bounces, t.ready, n, same,
+              t.backwards);
+        CHECK(bounces ? t.calls == 1 : t.calls >= 2, "maps_ready, %u bounces: told %zu times", bounces, t.calls);
+        for (size_t k = 0; k < 16; k++)
+            free(t.e[k]);
+        rl_solution_destroy(sol);
+    }
+    rl_scene_destroy(s);
+}
+
 /* A light field's cells that see all of it take their light bilinearly
  * between anchors (views.c), here 2 cells apart (1 m under the slab of
  * partition 4, cells of 1/32 m). A constant slab is Lambertian, so each
@@ -1516,6 +1583,7 @@ int main(int argc, char **argv)
         check_narrow_wall();
         check_lightfield();
         check_lightfield_anchors();
+        check_maps_ready();
     }
     return check_report();
 }

@@ -58,8 +58,13 @@ const char *cli_one_line(const char *text, char *buf, size_t size)
 
 int cli_lfio_failure(const char *sub, lfio_status status, cli_role role, const char *path)
 {
+    return cli_lfio_failure_msg(sub, status, role, path, lfio_errmsg());
+}
+
+int cli_lfio_failure_msg(const char *sub, lfio_status status, cli_role role, const char *path, const char *text)
+{
     char line[1024];
-    const char *msg = cli_one_line(lfio_errmsg(), line, sizeof line);
+    const char *msg = cli_one_line(text, line, sizeof line);
     if (msg[0] == '\0')
         msg = lfio_status_name(status);
     /* lfio's messages usually name the file already; add it only when they do not. */

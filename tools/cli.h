@@ -59,6 +59,9 @@ typedef enum cli_role { CLI_INPUT, CLI_OUTPUT } cli_role;
  */
 int cli_lfio_failure(const char *sub, lfio_status status, cli_role role, const char *path);
 
+/** As cli_lfio_failure(), with message msg: lfio_errmsg() as another thread saw it. */
+int cli_lfio_failure_msg(const char *sub, lfio_status status, cli_role role, const char *path, const char *msg);
+
 /* ------------------------------------------------------------- options */
 
 /** One accepted option; a table of these drives parsing and --help. */

@@ -101,7 +101,7 @@ typedef struct relight_run {
     rl_solution *solution;
     rl_run_options run_options;       /* threads and time budget of the engine's calls (no progress) */
     double wall_seconds, cpu_seconds; /* of the engine, on this rank */
-    double write_seconds;              /* of radiance.h5 */
+    double write_seconds;              /* writing radiance.h5, after the engine when written beside it */
     size_t maps;
     uint64_t cells;
     size_t created_from;         /* length of the first folder of DIR this run created; 0: none */
@@ -368,9 +368,82 @@ static int relight(relight_run *run)
 
 /* ------------------------------------------------------------ radiance.h5 */
 
+/*
+ * radiance.h5 beside the engine (one process, one pass): the engine tells
+ * which maps are final as it goes (rl_maps_ready_fn), and a thread of its
+ * own writes them in order meanwhile, so that HDF5's serial work on the
+ * maps' objects overlaps the engine's rather than following it. That
+ * thread prints nothing: the main thread reports the write once both end.
+ */
+typedef struct map_writer {
+    pthread_mutex_t lock;
+    pthread_cond_t moved;
+    const rl_solution *solution; /* NULL until the first maps are ready */
+    size_t ready;                /* maps [0, ready) are final */
+    int over;                    /* the engine has returned, or withdrawn the solution: no more maps will come */
+    int reading;                 /* the writer thread is reading the solution (writer_wait() to writer_done()) */
+    relight_run *run;
+    pthread_t thread;
+    lfio_status st;              /* the write's, once the thread is joined */
+    char msg[1024];              /* lfio's message for it (lfio's messages are per thread) */
+    int reported;                /* its failure was reported on that thread */
+    uint64_t cells;              /* written */
+    double end;                  /* when the write ended (CLOCK_MONOTONIC) */
+} map_writer;
+
+/* rl_maps_ready_fn: the engine's news, for the writer thread; solution NULL withdraws it (the run failed),
+ * returning once the writer thread no longer reads it. */
+static void writer_told(void *user, const rl_solution *solution, size_t ready)
+{
+    map_writer *w = user;
+    pthread_mutex_lock(&w->lock);
+    w->solution = solution;
+    w->ready = ready;
+    w->over |= solution == NULL;
+    pthread_cond_broadcast(&w->moved);
+    while (solution == NULL && w->reading)
+        pthread_cond_wait(&w->moved, &w->lock);
+    pthread_mutex_unlock(&w->lock);
+}
+
+/* Waits until map k is final, or the engine has returned. @return 1, the solution then being read until
+ * writer_done(); or 0 if the engine returned without map k (it failed, or there is no such map).
+ * *solution (if not NULL): the solution told of, or NULL. */
+static int writer_wait(map_writer *w, size_t k, const rl_solution **solution)
+{
+    pthread_mutex_lock(&w->lock);
+    while (!(w->solution != NULL && k < w->ready) && !w->over)
+        pthread_cond_wait(&w->moved, &w->lock);
+    int ok = w->solution != NULL && k < w->ready;
+    w->reading = ok;
+    if (solution)
+        *solution = w->solution;
+    pthread_mutex_unlock(&w->lock);
+    return ok;
+}
+
+/* Ends the reading that writer_wait() began: the engine may now free the solution if it fails. */
+static void writer_done(map_writer *w)
+{
+    pthread_mutex_lock(&w->lock);
+    w->reading = 0;
+    pthread_cond_broadcast(&w->moved);
+    pthread_mutex_unlock(&w->lock);
+}
+
+/* Tells the writer thread that the engine has returned. */
+static void writer_over(map_writer *w)
+{
+    pthread_mutex_lock(&w->lock);
+    w->over = 1;
+    pthread_cond_broadcast(&w->moved);
+    pthread_mutex_unlock(&w->lock);
+}
+
 /* The arrays of the one patch lfio_radmap_write_each() is writing, grown to the largest map so far. */
 typedef struct patch_arrays {
     const rl_solution *solution;
+    struct map_writer *beside; /* the write goes beside the engine: wait for each map (NULL: all are done) */
     size_t capacity; /* cells */
     uint32_t *ij;
     double *area, *centre;
@@ -404,11 +477,9 @@ static int patch_reserve(patch_arrays *a, size_t n)
     return 1;
 }
 
-/* lfio_radmap_write_each()'s describe: map k of the solution, in the arrays of user (a patch_arrays).
- * Reports its own failures (cli.h). @return LFIO_OK, or LFIO_ERR_NOMEM / LFIO_ERR_ARG after reporting. */
-static lfio_status describe_map(void *user, size_t k, lfio_radmap_patch *p)
+/* describe_map()'s reading of map k of a's solution. */
+static lfio_status describe_solution_map(patch_arrays *a, size_t k, lfio_radmap_patch *p)
 {
-    patch_arrays *a = user;
     rl_map_info m;
     rl_status st = rl_solution_map_info(a->solution, k, &m);
     if (st == RL_OK && !patch_reserve(a, m.ncells ? m.ncells : 1)) {
@@ -448,35 +519,131 @@ static lfio_status describe_map(void *user, size_t k, lfio_radmap_patch *p)
     return LFIO_OK;
 }
 
-/* Writes every map of the solution to the staged radiance.h5, one map's cells in memory at a time.
- * @return an exit code. */
-static int write_radiance(relight_run *run)
+/* lfio_radmap_write_each()'s describe: map k of the solution, in the arrays of user (a patch_arrays).
+ * Reports its own failures (cli.h). @return LFIO_OK, or LFIO_ERR_NOMEM / LFIO_ERR_ARG after reporting. */
+static lfio_status describe_map(void *user, size_t k, lfio_radmap_patch *p)
 {
-    const size_t n = run->maps;
-    const char *path = run->staged[OUT_RADIANCE];
-    patch_arrays arrays = {run->solution, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
-    double t0 = cli_clock_seconds(CLOCK_MONOTONIC);
-    /* the chunks are compressed on the threads the engine used */
-    lfio_radmap_set_threads(relight_threads_used(&run->run_options));
-    lfio_status st = job_radmap_write(path, RELIGHT_CREATOR, run->o->scene, n, describe_map, &arrays);
-    int code = ILF_EXIT_OK;
-    /* describe_map reported its own failures; lfio's are reported here */
-    if (st != LFIO_OK)
-        code = arrays.reported ? ILF_EXIT_FAILED : cli_lfio_failure("relight", st, CLI_OUTPUT, path);
-    run->cells = arrays.cells;
-    run->write_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - t0;
-    if (code == ILF_EXIT_OK) {
-        char what[128], size[32];
-        snprintf(what, sizeof what, "%zu map%s, %" PRIu64 " cells, %s", n, n == 1 ? "" : "s", run->cells,
-                 cli_format_bytes(cli_file_size(path), size, sizeof size));
-        stage_done(run, OUT_RADIANCE, what);
+    patch_arrays *a = user;
+    if (a->beside != NULL && !writer_wait(a->beside, k, NULL)) {
+        a->reported = 1; /* the engine failed, and says so itself */
+        return LFIO_ERR_ARG;
     }
+    lfio_status st = describe_solution_map(a, k, p);
+    if (a->beside != NULL)
+        writer_done(a->beside);
+    return st;
+}
+
+/* Writes the n maps of solution to the staged radiance.h5, one map's cells in memory at a time, each once
+ * it is final when beside is given (the engine still running). Prints nothing but describe_map's own
+ * failures. @return lfio's status; *cells the cells written, *reported whether a failure was reported. */
+static lfio_status radiance_write(relight_run *run, const rl_solution *solution, size_t n, map_writer *beside,
+                                  uint64_t *cells, int *reported)
+{
+    patch_arrays arrays = {solution, beside, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
+    /* the chunks are compressed on the threads the engine uses */
+    lfio_radmap_set_threads(relight_threads_used(&run->run_options));
+    lfio_status st = job_radmap_write(run->staged[OUT_RADIANCE], RELIGHT_CREATOR, run->o->scene, n, describe_map,
+                                      &arrays);
+    *cells = arrays.cells;
+    *reported = arrays.reported;
     free(arrays.ij);
     free(arrays.area);
     free(arrays.centre);
     free(arrays.irradiance);
     free(arrays.radiosity);
+    return st;
+}
+
+/* Reports the write of radiance.h5 (status st and lfio's message msg, cells, reported as radiance_write()
+ * says) and records its time from t0 on. @return an exit code. */
+static int radiance_written(relight_run *run, lfio_status st, const char *msg, uint64_t cells, int reported,
+                            double t0)
+{
+    const char *path = run->staged[OUT_RADIANCE];
+    int code = ILF_EXIT_OK;
+    /* describe_map reported its own failures; lfio's are reported here */
+    if (st != LFIO_OK)
+        code = reported ? ILF_EXIT_FAILED : cli_lfio_failure_msg("relight", st, CLI_OUTPUT, path, msg);
+    run->cells = cells;
+    run->write_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - t0;
+    if (code == ILF_EXIT_OK) {
+        char what[128], size[32];
+        size_t n = run->maps;
+        snprintf(what, sizeof what, "%zu map%s, %" PRIu64 " cells, %s", n, n == 1 ? "" : "s", run->cells,
+                 cli_format_bytes(cli_file_size(path), size, sizeof size));
+        stage_done(run, OUT_RADIANCE, what);
+    }
     return code;
+}
+
+/* Writes every map of the solution to the staged radiance.h5 after the engine. @return an exit code. */
+static int write_radiance(relight_run *run)
+{
+    double t0 = cli_clock_seconds(CLOCK_MONOTONIC);
+    uint64_t cells = 0;
+    int reported = 0;
+    lfio_status st = radiance_write(run, run->solution, run->maps, NULL, &cells, &reported);
+    return radiance_written(run, st, lfio_errmsg(), cells, reported, t0);
+}
+
+/* The writer thread: radiance.h5 from the first maps the engine tells on (none if it fails first). */
+static void *writer_main(void *arg)
+{
+    map_writer *w = arg;
+    const rl_solution *solution = NULL;
+    size_t n = 0;
+    w->st = LFIO_ERR_ARG;
+    /* a scene without maps is told of with none ready: the engine returns with it (not withdrawn) */
+    if (writer_wait(w, 0, &solution)) {
+        n = rl_solution_map_count(solution);
+        writer_done(w);
+    }
+    if (solution != NULL)
+        w->st = radiance_write(w->run, solution, n, w, &w->cells, &w->reported);
+    snprintf(w->msg, sizeof w->msg, "%s", w->st != LFIO_OK ? lfio_errmsg() : "");
+    w->end = cli_clock_seconds(CLOCK_MONOTONIC);
+    return NULL;
+}
+
+/* Starts writing radiance.h5 beside the engine, whose options then tell w. @return 1, or 0 if no thread
+ * could be started (the write then follows the engine). */
+static int writer_start(map_writer *w, relight_run *run)
+{
+    memset(w, 0, sizeof *w);
+    w->run = run;
+    if (pthread_mutex_init(&w->lock, NULL) != 0)
+        return 0;
+    if (pthread_cond_init(&w->moved, NULL) != 0) {
+        pthread_mutex_destroy(&w->lock);
+        return 0;
+    }
+    if (pthread_create(&w->thread, NULL, writer_main, w) != 0) {
+        pthread_cond_destroy(&w->moved);
+        pthread_mutex_destroy(&w->lock);
+        return 0;
+    }
+    run->run_options.maps_ready = writer_told;
+    run->run_options.maps_ready_user = w;
+    return 1;
+}
+
+/* Waits for the writer thread, the engine having returned with code, and reports its write (only if the
+ * engine succeeded). @return an exit code. */
+static int writer_finish(map_writer *w, int code, double engine_end)
+{
+    writer_over(w);
+    pthread_join(w->thread, NULL);
+    pthread_cond_destroy(&w->moved);
+    pthread_mutex_destroy(&w->lock);
+    relight_run *run = w->run;
+    run->run_options.maps_ready = NULL;
+    if (code != ILF_EXIT_OK)
+        return code;
+    /* the time the write added to the run: from the engine's end to its own */
+    int out = radiance_written(run, w->st, w->msg, w->cells, w->reported, engine_end);
+    run->write_seconds = w->end > engine_end ? w->end - engine_end : 0.0;
+    return out;
 }
 
 /* ------------------------------------------------------------ view.exr, view.png */
@@ -702,8 +869,11 @@ int ilf_cmd_relight(int argc, char **argv)
         relight_run_options(&o.sampling, run.scene, &run.run_options);
     if (code == ILF_EXIT_OK)
         code = stage_open_job(&run);
+    map_writer writer;
+    int beside = code == ILF_EXIT_OK && job_write_beside() && writer_start(&writer, &run);
     if (code == ILF_EXIT_OK)
         code = relight(&run);
+    double engine_end = cli_clock_seconds(CLOCK_MONOTONIC);
     int rank0 = job_rank() == 0, view = rank0 && rl_scene_has_camera(run.scene) && !o.no_view;
     /* the view's image library takes about 0.4 s to load: on a core of its own
      * while radiance.h5 is written (not beside the engine, whose threads use every core) */
@@ -711,7 +881,9 @@ int ilf_cmd_relight(int argc, char **argv)
     int loading = code == ILF_EXIT_OK && view && pthread_create(&loader, NULL, load_images, NULL) == 0;
     if (code == ILF_EXIT_OK)
         print_run(&run);
-    if (code == ILF_EXIT_OK)
+    if (beside)
+        code = writer_finish(&writer, code, engine_end);
+    else if (code == ILF_EXIT_OK)
         code = write_radiance(&run);
     if (loading)
         pthread_join(loader, NULL);

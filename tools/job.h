@@ -50,6 +50,10 @@ int job_fail(int code);
 lfio_status job_radmap_write(const char *path, const char *creator, const char *scene, size_t count,
                              lfio_radmap_describe_fn describe, void *user);
 
+/** @return 1 if radiance.h5 may be written on a thread of its own while the engine runs (one process: no
+ * MPI call leaves the main thread), else 0. */
+int job_write_beside(void);
+
 /** @return the worker threads a rank uses when neither the scene nor --threads sets them: every core,
  * shared evenly by the ranks on this machine. */
 unsigned job_threads_per_rank(void);

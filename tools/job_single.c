@@ -43,6 +43,11 @@ lfio_status job_radmap_write(const char *path, const char *creator, const char *
     return lfio_radmap_write_each(path, creator, scene, count, describe, user);
 }
 
+int job_write_beside(void)
+{
+    return 1;
+}
+
 unsigned job_threads_per_rank(void)
 {
     long cores = sysconf(_SC_NPROCESSORS_ONLN);

@@ -20,6 +20,7 @@
  */
 #include <assert.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,7 +45,7 @@
 void rl_run_options_default(rl_run_options *o)
 {
     if (o)
-        *o = (rl_run_options){0, NULL, NULL, 0.0};
+        *o = (rl_run_options){0, NULL, NULL, 0.0, NULL, NULL};
 }
 
 rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__run *run)
@@ -58,7 +59,8 @@ rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__r
                         o.threads);
     if (!(o.time_budget >= 0) || !isfinite(o.time_budget))
         return rl__fail(RL_ERR_ARG, "%s: time_budget must be finite and >= 0, got %g", call, o.time_budget);
-    *run = (rl__run){ilf_thread_count(o.threads), o.progress, o.progress_user, o.time_budget};
+    *run = (rl__run){ilf_thread_count(o.threads), o.progress, o.progress_user, o.time_budget, o.maps_ready,
+                     o.maps_ready_user, NULL};
     return RL_OK;
 }
 
@@ -78,7 +80,27 @@ typedef struct pass_job {
     atomic_int failed;
     rl_counters *counters; /* one per worker */
     double *seconds;       /* [nitems]: each tile's CPU time, or NULL */
+    /* maps told ready as their last tile finishes (rl__run.reporting), or left NULL */
+    const rl__run *run;
+    atomic_uint *left;     /* [nmaps]: tiles of each map not finished yet */
+    size_t nmaps, ready;   /* maps [0, ready) told ready */
+    pthread_mutex_t lock;  /* over ready and the calls of maps_ready, which come in order */
 } pass_job;
+
+/* Tells the run's maps_ready of the maps from job->ready on whose tiles have all finished, up to the
+ * first that has some left: maps are told in order, as their tiles are dealt. */
+static void tell_ready(pass_job *job)
+{
+    pthread_mutex_lock(&job->lock);
+    size_t r = job->ready;
+    while (r < job->nmaps && atomic_load(&job->left[r]) == 0)
+        r++;
+    if (r > job->ready) {
+        job->ready = r;
+        job->run->maps_ready(job->run->maps_ready_user, job->run->reporting, r);
+    }
+    pthread_mutex_unlock(&job->lock);
+}
 
 /* Worker `index` of a pass: takes tiles until none are left. */
 static void worker(void *p, unsigned index)
@@ -97,6 +119,9 @@ static void worker(void *p, unsigned index)
             atomic_store(&job->failed, 1);
         if (job->seconds)
             job->seconds[k] = ilf_clock_thread_cpu() - t0;
+        /* the tile's cells are written: its map may be final (its values happen before this) */
+        if (job->left && !atomic_load(&job->failed) && atomic_fetch_sub(&job->left[w->map], 1) == 1)
+            tell_ready(job);
         atomic_fetch_add(&job->done, 1);
     }
     rl__scratch_free(&scratch);
@@ -502,7 +527,28 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
     job.items = cl ? sh.mine : all;
     job.nitems = cl ? sh.nmine : nall;
     job.seconds = cl ? sh.seconds : NULL;
+    /* one process's pass whose maps are final as they finish: tell the caller map by map */
+    int telling = run->maps_ready && run->reporting && !cl;
+    if (telling && (job.left = calloc(nmaps ? nmaps : 1, sizeof *job.left)) == NULL) {
+        free(all);
+        rl__glow_free(glow, scene->npolygons);
+        return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
+    }
+    if (telling) {
+        job.run = run, job.nmaps = nmaps, job.ready = 0;
+        pthread_mutex_init(&job.lock, NULL);
+        for (size_t k = 0; ne > 0 && k < job.nitems; k++)
+            atomic_fetch_add(&job.left[job.items[k].map], 1);
+    }
     int rc = ne > 0 ? run_job(&job, run->threads, run, base, span) : 0;
+    if (telling) {
+        if (rc == 0) /* maps without tiles, or every map when there was no emitter */
+            tell_ready(&job);
+        if (rc == 0 && job.ready == 0) /* no map at all: told all the same, once */
+            run->maps_ready(run->maps_ready_user, run->reporting, 0);
+        pthread_mutex_destroy(&job.lock);
+        free(job.left);
+    }
     if (job.counters)
         sum_counters(job.counters, run->threads, st);
     free(job.counters);
@@ -691,6 +737,10 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
         st = rl__fail(RL_ERR_NOMEM, "out of memory for the bounce cells");
     /* per-tile CPU times of the last pass: bounce passes after the first repeat its tiles and emitters */
     double *measured = NULL;
+    /* one pass of maps that hold their pass's light (no bounce follows, e_total is e_pass): each map is
+     * final once its tiles are, and the caller is told so as the pass goes (rl__run_pass) */
+    rl__run pass_run = *run;
+    pass_run.reporting = passes == 1 && scene->sampling.bounces == 0 && !cl ? s : NULL;
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
         int gather_coarse = p > 0 && coarse;
         double base = span * p / passes, part = span / passes;
@@ -702,7 +752,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
         }
         if (gather_coarse && rf.near)
             part *= 0.75; /* the rest for the cells gathered themselves */
-        st = rl__run_pass(scene, s->tracer, cl, run, p, p, gather_coarse ? coarse : s->maps,
+        st = rl__run_pass(scene, s->tracer, cl, &pass_run, p, p, gather_coarse ? coarse : s->maps,
                           gather_coarse ? ncoarse : s->nmaps, e, ne, base, part, &measured, &s->passes[p]);
         if (st == RL_OK && gather_coarse && rf.near)
             st = refine_pass(scene, s, cl, run, p, e, ne, base + part, part / 3, &rf);
@@ -716,9 +766,13 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     free(measured);
     free(e);
     if (st != RL_OK) {
+        if (run->maps_ready && pass_run.reporting) /* maps may have been told: withdrawn before they are freed */
+            run->maps_ready(run->maps_ready_user, NULL, 0);
         rl_solution_destroy(s);
         return st;
     }
+    if (run->maps_ready && !pass_run.reporting)
+        run->maps_ready(run->maps_ready_user, s, s->nmaps);
     *out = s;
     return RL_OK;
 }

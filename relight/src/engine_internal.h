@@ -30,6 +30,9 @@ typedef struct rl__run {
     rl_progress_fn progress; /* or NULL */
     void *user;
     double time_budget;      /* seconds, 0 = none */
+    rl_maps_ready_fn maps_ready; /* or NULL */
+    void *maps_ready_user;
+    const rl_solution *reporting; /* set by rl__solve() for a pass whose maps are final as its tiles finish */
 } rl__run;
 
 /* Checks options (NULL: the defaults) and resolves them into *run; `call` names the caller in messages.

@@ -65,6 +65,7 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
      * map re-emit the irradiance summed over them. */
     uint32_t bounces = scene->sampling.bounces;
     double share = SOLVE_SHARE(bounces);
+    run.maps_ready = NULL; /* these maps are the query's own */
     st = rl__solve(scene, cl, &run, bounces, share, &sol);
     size_t ne = 0;
     rl_emitter *e = st == RL_OK ? rl__primary_emitters(scene, bounces > 0 ? sol->nmaps : 0, &ne) : NULL;

@@ -50,6 +50,25 @@ typedef void (*rl_progress_fn)(void *user, double done);
 /** Most worker threads a run may ask for (the cap of ilfkit's one thread pool). */
 #define RL_MAX_THREADS ILF_MAX_THREADS
 
+/** A solved scene: radiance maps of every receiving polygon. Opaque. */
+typedef struct rl_solution rl_solution;
+
+/**
+ * Told that maps [0, ready) of the solution being computed hold their final
+ * values: from then on they may be read with rl_solution_map_info() and
+ * rl_solution_map_cells(), from any thread, while the run goes on (no other
+ * call on solution is allowed before rl_relight() returns it). Called from
+ * one of the engine's threads, with ready increasing, the last time with
+ * the map count, and only if the run succeeds that far. A run of one pass
+ * on one process reports maps as their cells are finished (in order: its
+ * work goes map by map); others report them all at the end. It must return
+ * quickly and call nothing of the engine's but those two accessors. If the
+ * run then fails, it is called once more with solution NULL and ready 0
+ * before the solution is freed: that call must return only once nothing
+ * reads the solution any more.
+ */
+typedef void (*rl_maps_ready_fn)(void *user, const rl_solution *solution, size_t ready);
+
 /**
  * How to run one call, apart from what to compute: the scene's sampling
  * settings decide the result; these decide only how it is reached. Passed
@@ -66,6 +85,8 @@ typedef struct rl_run_options {
     double time_budget;      /**< adaptive method: seconds after which no solid angle is refined further
                                   (the result then depends on timing); 0 (default) = none; finite, >= 0.
                                   A scene file may suggest one: rl_scene_time_budget() */
+    rl_maps_ready_fn maps_ready; /**< rl_relight() only: told as maps are finished; NULL (default): not */
+    void *maps_ready_user;       /**< passed to maps_ready */
 } rl_run_options;
 
 /** Fills *o with the defaults: every core, no progress, no time budget. NULL is a no-op. */
@@ -94,9 +115,6 @@ typedef struct rl_cluster {
     int (*sum)(void *user, double *values, size_t n);
     void *user;     /**< passed to both */
 } rl_cluster;
-
-/** A solved scene: radiance maps of every receiving polygon. Opaque. */
-typedef struct rl_solution rl_solution;
 
 /**
  * Relights a scene with its sampling settings, run as options say (NULL:
