@@ -373,8 +373,12 @@ static int relight(relight_run *run)
  * which maps are final as it goes (rl_maps_ready_fn), and a thread of its
  * own writes them in order meanwhile, so that HDF5's serial work on the
  * maps' objects overlaps the engine's rather than following it. That
- * thread prints nothing: the main thread reports the write once both end.
+ * thread prints nothing: it keeps its messages, and the main thread reports
+ * the write once both end.
  */
+/* Longest message the writer thread keeps for the main thread. */
+#define WRITER_MSG 1024
+
 typedef struct map_writer {
     pthread_mutex_t lock;
     pthread_cond_t moved;
@@ -385,7 +389,8 @@ typedef struct map_writer {
     relight_run *run;
     pthread_t thread;
     lfio_status st;              /* the write's, once the thread is joined */
-    char msg[1024];              /* lfio's message for it (lfio's messages are per thread) */
+    char msg[WRITER_MSG];        /* lfio's message for it (lfio's messages are per thread) */
+    char held[WRITER_MSG];       /* a failure describing a map, to print (describe_failed()) */
     int reported;                /* its failure was reported on that thread */
     uint64_t cells;              /* written */
     double end;                  /* when the write ended (CLOCK_MONOTONIC) */
@@ -444,6 +449,7 @@ static void writer_over(map_writer *w)
 typedef struct patch_arrays {
     const rl_solution *solution;
     struct map_writer *beside; /* the write goes beside the engine: wait for each map (NULL: all are done) */
+    char *held;                /* beside the engine: a failure's message, kept for the main thread to print */
     size_t capacity; /* cells */
     uint32_t *ij;
     double *area, *centre;
@@ -477,21 +483,32 @@ static int patch_reserve(patch_arrays *a, size_t n)
     return 1;
 }
 
+/* Reports a failure of describe_map(): printed, or held for the main thread when a->held is set (the
+ * engine's progress bar may be drawing). */
+static void describe_failed(patch_arrays *a, const char *msg)
+{
+    if (a->held != NULL)
+        snprintf(a->held, WRITER_MSG, "%s", msg);
+    else
+        cli_error("relight", "%s", msg);
+    a->reported = 1;
+}
+
 /* describe_map()'s reading of map k of a's solution. */
 static lfio_status describe_solution_map(patch_arrays *a, size_t k, lfio_radmap_patch *p)
 {
     rl_map_info m;
+    char msg[WRITER_MSG];
     rl_status st = rl_solution_map_info(a->solution, k, &m);
     if (st == RL_OK && !patch_reserve(a, m.ncells ? m.ncells : 1)) {
-        cli_error("relight", "out of memory for the %u cells of map %zu", m.ncells, k);
-        a->reported = 1;
+        snprintf(msg, sizeof msg, "out of memory for the %u cells of map %zu", m.ncells, k);
+        describe_failed(a, msg);
         return LFIO_ERR_NOMEM;
     }
     if (st == RL_OK)
         st = rl_solution_map_cells(a->solution, k, a->ij, a->area, a->centre, a->irradiance, a->radiosity);
     if (st != RL_OK) {
-        relight_failure("relight", st);
-        a->reported = 1;
+        describe_failed(a, rl_errmsg()[0] != '\0' ? cli_one_line(rl_errmsg(), msg, sizeof msg) : "relighting failed");
         return st == RL_ERR_NOMEM ? LFIO_ERR_NOMEM : LFIO_ERR_ARG;
     }
     a->cells += m.ncells;
@@ -540,7 +557,7 @@ static lfio_status describe_map(void *user, size_t k, lfio_radmap_patch *p)
 static lfio_status radiance_write(relight_run *run, const rl_solution *solution, size_t n, map_writer *beside,
                                   uint64_t *cells, int *reported)
 {
-    patch_arrays arrays = {solution, beside, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
+    patch_arrays arrays = {solution, beside, beside ? beside->held : NULL, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
     /* the chunks are compressed on the threads the engine uses */
     lfio_radmap_set_threads(relight_threads_used(&run->run_options));
     lfio_status st = job_radmap_write(run->staged[OUT_RADIANCE], RELIGHT_CREATOR, run->o->scene, n, describe_map,
@@ -618,13 +635,14 @@ static int writer_start(map_writer *w, relight_run *run)
         pthread_mutex_destroy(&w->lock);
         return 0;
     }
+    run->run_options.maps_ready = writer_told;
+    run->run_options.maps_ready_user = w;
     if (pthread_create(&w->thread, NULL, writer_main, w) != 0) {
+        run->run_options.maps_ready = NULL;
         pthread_cond_destroy(&w->moved);
         pthread_mutex_destroy(&w->lock);
         return 0;
     }
-    run->run_options.maps_ready = writer_told;
-    run->run_options.maps_ready_user = w;
     return 1;
 }
 
@@ -640,6 +658,8 @@ static int writer_finish(map_writer *w, int code, double engine_end)
     run->run_options.maps_ready = NULL;
     if (code != ILF_EXIT_OK)
         return code;
+    if (w->held[0] != '\0')
+        cli_error("relight", "%s", w->held);
     /* the time the write added to the run: from the engine's end to its own */
     int out = radiance_written(run, w->st, w->msg, w->cells, w->reported, engine_end);
     run->write_seconds = w->end > engine_end ? w->end - engine_end : 0.0;

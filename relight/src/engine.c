@@ -536,9 +536,16 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
     }
     if (telling) {
         job.run = run, job.nmaps = nmaps, job.ready = 0;
-        pthread_mutex_init(&job.lock, NULL);
+        for (size_t m = 0; m < nmaps; m++)
+            atomic_init(&job.left[m], 0);
         for (size_t k = 0; ne > 0 && k < job.nitems; k++)
             atomic_fetch_add(&job.left[job.items[k].map], 1);
+    }
+    if (telling && pthread_mutex_init(&job.lock, NULL) != 0) {
+        free(job.left);
+        free(all);
+        rl__glow_free(glow, scene->npolygons);
+        return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
     }
     int rc = ne > 0 ? run_job(&job, run->threads, run, base, span) : 0;
     if (telling) {
