@@ -558,8 +558,9 @@ static lfio_status radiance_write(relight_run *run, const rl_solution *solution,
                                   uint64_t *cells, int *reported)
 {
     patch_arrays arrays = {solution, beside, beside ? beside->held : NULL, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
-    /* the chunks are compressed on the threads the engine uses */
-    lfio_radmap_set_threads(relight_threads_used(&run->run_options));
+    /* the chunks are compressed on the threads the engine uses, once it has returned (writer_finish()) */
+    if (beside == NULL)
+        lfio_radmap_set_threads(relight_threads_used(&run->run_options));
     lfio_status st = job_radmap_write(run->staged[OUT_RADIANCE], RELIGHT_CREATOR, run->o->scene, n, describe_map,
                                       &arrays);
     *cells = arrays.cells;
@@ -637,6 +638,7 @@ static int writer_start(map_writer *w, relight_run *run)
     }
     run->run_options.maps_ready = writer_told;
     run->run_options.maps_ready_user = w;
+    lfio_radmap_set_threads(1); /* while the engine's threads take every core */
     if (pthread_create(&w->thread, NULL, writer_main, w) != 0) {
         run->run_options.maps_ready = NULL;
         pthread_cond_destroy(&w->moved);
@@ -650,6 +652,8 @@ static int writer_start(map_writer *w, relight_run *run)
  * engine succeeded). @return an exit code. */
 static int writer_finish(map_writer *w, int code, double engine_end)
 {
+    /* the engine's threads are free: the rest of the write may compress on them (read per map) */
+    lfio_radmap_set_threads(relight_threads_used(&w->run->run_options));
     writer_over(w);
     pthread_join(w->thread, NULL);
     pthread_cond_destroy(&w->moved);
