@@ -508,7 +508,7 @@ static lfio_status describe_solution_map(patch_arrays *a, size_t k, lfio_radmap_
     if (st == RL_OK)
         st = rl_solution_map_cells(a->solution, k, a->ij, a->area, a->centre, a->irradiance, a->radiosity);
     if (st != RL_OK) {
-        describe_failed(a, rl_errmsg()[0] != '\0' ? cli_one_line(rl_errmsg(), msg, sizeof msg) : "relighting failed");
+        describe_failed(a, relight_failure_text(msg, sizeof msg));
         return st == RL_ERR_NOMEM ? LFIO_ERR_NOMEM : LFIO_ERR_ARG;
     }
     a->cells += m.ncells;
@@ -574,9 +574,9 @@ static lfio_status radiance_write(relight_run *run, const rl_solution *solution,
 }
 
 /* Reports the write of radiance.h5 (status st and lfio's message msg, cells, reported as radiance_write()
- * says) and records its time from t0 on. @return an exit code. */
+ * says) and records the seconds it took. @return an exit code. */
 static int radiance_written(relight_run *run, lfio_status st, const char *msg, uint64_t cells, int reported,
-                            double t0)
+                            double seconds)
 {
     const char *path = run->staged[OUT_RADIANCE];
     int code = ILF_EXIT_OK;
@@ -584,7 +584,7 @@ static int radiance_written(relight_run *run, lfio_status st, const char *msg, u
     if (st != LFIO_OK)
         code = reported ? ILF_EXIT_FAILED : cli_lfio_failure_msg("relight", st, CLI_OUTPUT, path, msg);
     run->cells = cells;
-    run->write_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - t0;
+    run->write_seconds = seconds;
     if (code == ILF_EXIT_OK) {
         char what[128], size[32];
         size_t n = run->maps;
@@ -602,7 +602,7 @@ static int write_radiance(relight_run *run)
     uint64_t cells = 0;
     int reported = 0;
     lfio_status st = radiance_write(run, run->solution, run->maps, NULL, &cells, &reported);
-    return radiance_written(run, st, lfio_errmsg(), cells, reported, t0);
+    return radiance_written(run, st, lfio_errmsg(), cells, reported, cli_clock_seconds(CLOCK_MONOTONIC) - t0);
 }
 
 /* The writer thread: radiance.h5 from the first maps the engine tells on (none if it fails first). */
@@ -665,9 +665,8 @@ static int writer_finish(map_writer *w, int code, double engine_end)
     if (w->held[0] != '\0')
         cli_error("relight", "%s", w->held);
     /* the time the write added to the run: from the engine's end to its own */
-    int out = radiance_written(run, w->st, w->msg, w->cells, w->reported, engine_end);
-    run->write_seconds = w->end > engine_end ? w->end - engine_end : 0.0;
-    return out;
+    double added = w->end > engine_end ? w->end - engine_end : 0.0;
+    return radiance_written(run, w->st, w->msg, w->cells, w->reported, added);
 }
 
 /* ------------------------------------------------------------ view.exr, view.png */

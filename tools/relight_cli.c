@@ -124,11 +124,16 @@ static rl_sampling merged_sampling(const rl_sampling *scene, const sampling_over
     return s;
 }
 
+const char *relight_failure_text(char *buf, size_t size)
+{
+    const char *msg = cli_one_line(rl_errmsg(), buf, size);
+    return msg[0] != '\0' ? msg : "relighting failed";
+}
+
 int relight_failure(const char *sub, rl_status st)
 {
     char line[1024];
-    const char *msg = cli_one_line(rl_errmsg(), line, sizeof line);
-    cli_error(sub, "%s", msg[0] != '\0' ? msg : "relighting failed");
+    cli_error(sub, "%s", relight_failure_text(line, sizeof line));
     return st == RL_ERR_ARG || st == RL_ERR_IO || st == RL_ERR_INPUT ? ILF_EXIT_USAGE : ILF_EXIT_FAILED;
 }
 

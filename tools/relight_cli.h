@@ -78,6 +78,9 @@ unsigned relight_threads_used(const rl_run_options *ro);
  */
 int relight_failure(const char *sub, rl_status st);
 
+/** @return the calling thread's engine message (rl_errmsg()) on one line in buf, or a generic one if empty. */
+const char *relight_failure_text(char *buf, size_t size);
+
 /** Prints one line per pass statistic group for pass k ("pass 0 (direct): ..."). */
 void relight_print_pass(FILE *out, uint32_t k, const rl_pass_stats *s);
 

@@ -623,8 +623,7 @@ static lfio_status build_and_write(const char *path, const char *name, lfio__h5_
     /* name (the temporary's) is only HDF5's: the driver writes to fd */
     hid_t file = fcpl >= 0 ? H5Fcreate(name, H5F_ACC_TRUNC, fcpl, fapl) : -1;
     if (st == LFIO_OK && file < 0)
-        st = *err != 0 ? atomic_fail(path, *err, "cannot write the temporary file")
-                       : lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the file");
+        st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the file");
     lfio__h5_close(fapl);
     lfio__h5_close(fcpl);
     if (st == LFIO_OK)
@@ -633,6 +632,7 @@ static lfio_status build_and_write(const char *path, const char *name, lfio__h5_
     int closed = file < 0 || H5Fclose(file) >= 0;
     if (!closed && st == LFIO_OK)
         st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot close the file");
+    /* the driver's own error says more than HDF5's (out of memory opening it, or the disk's reason) */
     if (*err != 0 && (st == LFIO_OK || st == LFIO_ERR_IO))
         st = atomic_fail(path, *err, "cannot write the temporary file");
     /* a file HDF5 could not close keeps the driver and its error cell, which it may still use at exit */

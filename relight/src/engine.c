@@ -102,6 +102,37 @@ static void tell_ready(pass_job *job)
     pthread_mutex_unlock(&job->lock);
 }
 
+/* Readies job to tell run's maps_ready of its nmaps maps as their tiles finish (job->items set; ne: the
+ * pass's emitters, none meaning no tile runs). @return 0, or -1 without memory (nothing left allocated). */
+static int tell_begin(pass_job *job, const rl__run *run, size_t nmaps, size_t ne)
+{
+    job->left = calloc(nmaps ? nmaps : 1, sizeof *job->left);
+    if (job->left == NULL || pthread_mutex_init(&job->lock, NULL) != 0) {
+        free(job->left);
+        job->left = NULL;
+        return -1;
+    }
+    job->run = run, job->nmaps = nmaps, job->ready = 0;
+    for (size_t m = 0; m < nmaps; m++)
+        atomic_init(&job->left[m], 0);
+    for (size_t k = 0; ne > 0 && k < job->nitems; k++)
+        atomic_fetch_add(&job->left[job->items[k].map], 1);
+    return 0;
+}
+
+/* After the pass (rc its result): tells what its tiles did not (maps without any; at least once, even of
+ * no map, when it succeeded), and frees what tell_begin() made. */
+static void tell_end(pass_job *job, int rc)
+{
+    if (rc == 0)
+        tell_ready(job);
+    if (rc == 0 && job->ready == 0)
+        job->run->maps_ready(job->run->maps_ready_user, job->run->reporting, 0);
+    pthread_mutex_destroy(&job->lock);
+    free(job->left);
+    job->left = NULL;
+}
+
 /* Worker `index` of a pass: takes tiles until none are left. */
 static void worker(void *p, unsigned index)
 {
@@ -529,33 +560,14 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
     job.seconds = cl ? sh.seconds : NULL;
     /* one process's pass whose maps are final as they finish: tell the caller map by map */
     int telling = run->maps_ready && run->reporting && !cl;
-    if (telling && (job.left = calloc(nmaps ? nmaps : 1, sizeof *job.left)) == NULL) {
-        free(all);
-        rl__glow_free(glow, scene->npolygons);
-        return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
-    }
-    if (telling) {
-        job.run = run, job.nmaps = nmaps, job.ready = 0;
-        for (size_t m = 0; m < nmaps; m++)
-            atomic_init(&job.left[m], 0);
-        for (size_t k = 0; ne > 0 && k < job.nitems; k++)
-            atomic_fetch_add(&job.left[job.items[k].map], 1);
-    }
-    if (telling && pthread_mutex_init(&job.lock, NULL) != 0) {
-        free(job.left);
+    if (telling && tell_begin(&job, run, nmaps, ne) != 0) {
         free(all);
         rl__glow_free(glow, scene->npolygons);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
     }
     int rc = ne > 0 ? run_job(&job, run->threads, run, base, span) : 0;
-    if (telling) {
-        if (rc == 0) /* maps without tiles, or every map when there was no emitter */
-            tell_ready(&job);
-        if (rc == 0 && job.ready == 0) /* no map at all: told all the same, once */
-            run->maps_ready(run->maps_ready_user, run->reporting, 0);
-        pthread_mutex_destroy(&job.lock);
-        free(job.left);
-    }
+    if (telling)
+        tell_end(&job, rc);
     if (job.counters)
         sum_counters(job.counters, run->threads, st);
     free(job.counters);

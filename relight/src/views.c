@@ -260,8 +260,9 @@ static inline int view_weigh(const rl_emitter *e, const rl_map *m, v3 x, v3 y, v
     return 2;
 }
 
-/* Adds to *all the weights w and to seen the weighted radiance l * V of nr
- * samples of emitter part ep, point r of the sequence of key drawing its
+/* Adds to *all the weights w, to seen the weighted radiance l * V and (unless
+ * NULL) to unocc the weighted radiance l of samples r0 .. nr - 1 of emitter
+ * part ep, point r of the sequence of key drawing its
  * emitter point from ep's sampler (coordinates 0 and 1, the sequence's
  * most even pair: at a few dozen points bases 5 and 7 still fall on lines,
  * and the light varies more over the emitter than over a cell) and its
@@ -270,7 +271,7 @@ static inline int view_weigh(const rl_emitter *e, const rl_map *m, v3 x, v3 y, v
  * through batch, which adds them to seen as they arrive (the caller flushes). */
 static void view_sums(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_map *m, const rl_origin_domain *dom,
                       v3 x0, const emitter_part *ep, const lds_key *key, uint32_t r0, uint32_t nr, rl_visibility vis,
-                      rl_ray_batch *batch, double *all, double seen[3], double lit[3], rl_counters *cnt)
+                      rl_ray_batch *batch, double *all, double seen[3], double unocc[3], rl_counters *cnt)
 {
     const rl_emitter *e = p->e;
     cnt->samples += nr - r0; /* counted once: a store per sample costs more than it says */
@@ -286,9 +287,9 @@ static void view_sums(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_map
         *all += vs.w;
         if (got == 1)
             continue;
-        if (lit)
+        if (unocc)
             for (int c = 0; c < 3; c++)
-                lit[c] += vs.l[c];
+                unocc[c] += vs.l[c];
         if (vis == VIS_FREE) {
             /* every ray would arrive: add it as the batch would, in order */
             for (int c = 0; c < 3; c++)
