@@ -4,10 +4,10 @@
  * Each receiving polygon gets a frame (origin at its first vertex, e1 along
  * its first edge, e2 = n x e1) and a grid of square cells of the scene's
  * cell size over its bounding rectangle. Only cells whose intersection with
- * the polygon has area survive; a cell cut by the polygon's border keeps its
- * clipped polygon, so cell values are means over the part that is really
- * surface. Memory is proportional to the cells that exist plus one index
- * per grid square.
+ * the polygon has area survive; a cell cut by the polygon's border is marked,
+ * and its clipped polygon is clipped again whenever it is asked for, so cell
+ * values are means over the part that is really surface. Memory is 8 bytes
+ * per cell that exists plus one index per grid square.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -135,15 +135,12 @@ static rl_status map_cells(rl_map *m)
     size_t squares = (size_t)m->nu * m->nv;
     m->grid = malloc(squares * sizeof *m->grid);
     m->cells = malloc(squares * sizeof *m->cells);
-    size_t pool_cap = 64;
-    m->pool = malloc(pool_cap * sizeof *m->pool);
-    if (!m->grid || !m->cells || !m->pool)
+    if (!m->grid || !m->cells)
         return RL_ERR_NOMEM;
     /* Cells below tiny are clipping slivers along the border. Relative to the
      * polygon too: a polygon much smaller than a cell is one small cell, not none. */
     const double full = m->cell * m->cell, tiny = 1e-12 * fmin(full, rl__polygon_area2(m->poly, m->npoly));
     v2 poly[RL_MAX_POLY_VERTS + 8];
-    size_t npool = 0;
     m->ncells = 0;
     for (uint32_t j = 0; j < m->nv; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
@@ -155,21 +152,7 @@ static rl_status map_cells(rl_map *m)
             rl_cell *c = &m->cells[m->ncells];
             c->i = i;
             c->j = j;
-            c->area = area;
-            c->poly_first = (uint32_t)npool;
-            c->poly_count = 0;
-            if (area < full * (1 - 1e-9)) {
-                if (npool + count > pool_cap) {
-                    pool_cap = 2 * (npool + count);
-                    v2 *grown = realloc(m->pool, pool_cap * sizeof *grown);
-                    if (!grown)
-                        return RL_ERR_NOMEM;
-                    m->pool = grown;
-                }
-                memcpy(m->pool + npool, poly, count * sizeof *poly);
-                npool += count;
-                c->poly_count = count;
-            }
+            c->clipped = area < full * (1 - 1e-9);
             m->grid[(size_t)j * m->nu + i] = (int32_t)m->ncells++;
         }
     /* the cells were allocated for every square of the bounding grid: a triangle needs about half */
@@ -296,14 +279,12 @@ rl_status rl__map_point(v3 p, v3 n, rl_map *out)
     out->nu = out->nv = 1;
     out->grid = malloc(sizeof *out->grid);
     out->cells = calloc(1, sizeof *out->cells);
-    out->pool = malloc(sizeof *out->pool);
-    if (!out->grid || !out->cells || !out->pool)
+    if (!out->grid || !out->cells)
         return RL_ERR_NOMEM;
     out->u0 = out->v0 = -0.5;
     out->grid[0] = 0;
     out->ncells = 1;
-    out->pool[0] = (v2){0, 0};
-    out->cells[0].poly_count = 1;
+    out->cells[0].clipped = 1;
     return map_accumulators(out, 0);
 }
 
@@ -312,7 +293,6 @@ void rl__maps_free(rl_map *maps, size_t count)
     for (size_t k = 0; maps && k < count; k++) {
         free(maps[k].grid);
         free(maps[k].cells);
-        free(maps[k].pool);
         if (maps[k].e_total != maps[k].e_pass)
             free(maps[k].e_total);
         free(maps[k].e_pass);
@@ -323,16 +303,25 @@ void rl__maps_free(rl_map *maps, size_t count)
 
 uint32_t rl__map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out)
 {
-    if (c->poly_count) {
-        memcpy(out, m->pool + c->poly_first, c->poly_count * sizeof *out);
-        return c->poly_count;
+    if (m->polygon < 0) {
+        out[0] = m->poly[0];
+        return 1;
     }
+    if (c->clipped)
+        return clip_square(m, c->i, c->j, out);
     double x0 = m->u0 + c->i * m->cell, y0 = m->v0 + c->j * m->cell;
     out[0] = (v2){x0, y0};
     out[1] = (v2){x0 + m->cell, y0};
     out[2] = (v2){x0 + m->cell, y0 + m->cell};
     out[3] = (v2){x0, y0 + m->cell};
     return 4;
+}
+
+double rl__map_cell_area(const rl_map *m, const rl_cell *c)
+{
+    v2 poly[RL_MAX_POLY_VERTS + 8];
+    uint32_t n = rl__map_cell_polygon(m, c, poly);
+    return n >= 3 ? rl__polygon_area2(poly, n) : 0.0;
 }
 
 int64_t rl__map_cell_at(const rl_map *m, v2 q)

@@ -11,12 +11,12 @@
 #include "region.h"
 #include "scene_internal.h"
 
-/* One cell: grid position, area, and its clipped polygon when it is not a full square. */
+/* One cell: its grid square, and whether the polygon's border cuts it. Its shape (rl__map_cell_polygon())
+ * and area (rl__map_cell_area()) follow from these and the map, so a cell costs 8 bytes. */
 typedef struct rl_cell {
-    uint32_t i, j;
-    uint32_t poly_first; /* into rl_map.pool */
-    uint32_t poly_count; /* 0: the full square */
-    double area;         /* m^2; 0 for a point receiver */
+    uint32_t i;           /* grid column */
+    uint32_t j : 31;      /* grid row */
+    uint32_t clipped : 1; /* 1: the square clipped to the polygon (a point receiver's point), 0: the full square */
 } rl_cell;
 
 /* A receiver: a polygon's grid of cells, or a single point (npoly = 1, one cell). */
@@ -31,7 +31,6 @@ typedef struct rl_map {
     int32_t *grid;         /* nu*nv cell indices, -1 where the polygon has no area */
     rl_cell *cells;
     uint32_t ncells;
-    v2 *pool;              /* clipped cell polygons */
     double (*e_total)[3];  /* irradiance summed over passes; the same array as e_pass in a map without
                               e_prev (one pass: nothing to sum) */
     double (*e_pass)[3];   /* irradiance of the current pass */
@@ -86,8 +85,12 @@ rl_status rl__map_point(v3 p, v3 n, rl_map *out);
 void rl__maps_free(rl_map *maps, size_t count);
 
 /* @return the clipped polygon of cell c in frame coordinates, in out (room for
- * RL_MAX_POLY_VERTS + 4); the vertex count. A point receiver gives its point. */
+ * RL_MAX_POLY_VERTS + 4); the vertex count. A point receiver gives its point. A cut cell's polygon is
+ * clipped anew on each call (its vertices are not stored). */
 uint32_t rl__map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out);
+
+/* @return the area of cell c of m, m^2: its polygon's; 0 for a point receiver. */
+double rl__map_cell_area(const rl_map *m, const rl_cell *c);
 
 /* @return the index (j * nu + i) of the grid square of m holding frame point q, clamped to the grid
  * (rounding may put a point on the polygon just outside it); m has at least one square. */

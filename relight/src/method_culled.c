@@ -170,7 +170,7 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
          * behind or beside the emitter, as the draw would have. A whole
          * square cell needs no domain: its corner comes from its indices. */
         const rl_cell *c = &m->cells[cell];
-        int square = c->poly_count == 0;
+        int square = !c->clipped;
         v2 corner = {m->u0 + c->i * m->cell, m->v0 + c->j * m->cell};
         if (!square)
             rl__cell_domain(m, cell, &dom);

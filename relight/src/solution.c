@@ -88,7 +88,7 @@ rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, do
             ij[2 * c + 1] = cell->j;
         }
         if (area)
-            area[c] = cell->area;
+            area[c] = rl__map_cell_area(m, cell);
         if (centre) {
             v2 poly[RL_MAX_POLY_VERTS + 8];
             uint32_t n = rl__map_cell_polygon(m, cell, poly);

@@ -446,7 +446,7 @@ static void anchors_blend(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
 {
     const rl_cell *c = &m->cells[cell];
     double gx = c->i + 0.5, gy = c->j + 0.5; /* in grid squares */
-    if (c->poly_count > 0) {
+    if (c->clipped) {
         v2 poly[RL_MAX_POLY_VERTS + 4];
         v2 centre = rl__polygon_centroid(poly, rl__map_cell_polygon(m, c, poly));
         gx = (centre.x - m->u0) / m->cell, gy = (centre.y - m->v0) / m->cell;
