@@ -90,8 +90,8 @@ v2 rl__sample_polygon(const v2 *p, uint32_t count, double a, double b)
     return rl__polygon_sampler_point(&s, a, b);
 }
 
-/* Sets up m's frame and 2D polygon from scene polygon k. */
-static void map_frame(const rl_scene *scene, uint32_t k, rl_map *m)
+/* Sets up m's frame and 2D polygon from scene polygon k. @return RL_OK or RL_ERR_NOMEM. */
+static rl_status map_frame(const rl_scene *scene, uint32_t k, rl_map *m)
 {
     const rl_polygon *pg = &scene->polygons[k];
     const double (*v)[3] = scene->vertices + pg->first;
@@ -101,8 +101,11 @@ static void map_frame(const rl_scene *scene, uint32_t k, rl_map *m)
     m->frame.e1 = v3_norm(v3_sub(v3_load(v[1]), v3_load(v[0])));
     m->frame.e2 = v3_cross(m->frame.n, m->frame.e1);
     m->npoly = pg->count;
+    if ((m->poly = malloc(pg->count * sizeof *m->poly)) == NULL)
+        return RL_ERR_NOMEM;
     for (uint32_t i = 0; i < pg->count; i++)
         m->poly[i] = frame_project(&m->frame, v3_load(v[i]));
+    return RL_OK;
 }
 
 /* Clips the square of cell (i, j) to m's polygon. @return the clipped vertex count. */
@@ -210,11 +213,12 @@ static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map *
         if (!(mat->albedo[0] > 0 || mat->albedo[1] > 0 || mat->albedo[2] > 0))
             continue;
         rl_map *mp = &out[m++];
-        map_frame(scene, (uint32_t)k, mp);
         mp->cell = cell;
         memcpy(mp->albedo, mat->albedo, sizeof mp->albedo);
         memcpy(mp->emission, mat->emission, sizeof mp->emission);
-        rl_status st = map_cells(mp);
+        rl_status st = map_frame(scene, (uint32_t)k, mp);
+        if (st == RL_OK)
+            st = map_cells(mp);
         if (st == RL_OK)
             st = map_accumulators(mp, re_emit);
         total += mp->ncells;
@@ -274,7 +278,8 @@ rl_status rl__map_point(v3 p, v3 n, rl_map *out)
     out->frame.e1 = v3_norm(v3_cross(helper, n));
     out->frame.e2 = v3_cross(n, out->frame.e1);
     out->npoly = 1;
-    out->poly[0] = (v2){0, 0};
+    if ((out->poly = calloc(1, sizeof *out->poly)) == NULL)
+        return RL_ERR_NOMEM;
     out->cell = 1.0;
     out->nu = out->nv = 1;
     out->grid = malloc(sizeof *out->grid);
@@ -291,6 +296,7 @@ rl_status rl__map_point(v3 p, v3 n, rl_map *out)
 void rl__maps_free(rl_map *maps, size_t count)
 {
     for (size_t k = 0; maps && k < count; k++) {
+        free(maps[k].poly);
         free(maps[k].grid);
         free(maps[k].cells);
         if (maps[k].e_total != maps[k].e_pass)

@@ -23,7 +23,7 @@ typedef struct rl_cell {
 typedef struct rl_map {
     int32_t polygon;       /* scene polygon, or -1 for a point receiver */
     rl_frame frame;        /* origin at the first vertex, e1 along the first edge, n = front normal */
-    v2 poly[RL_MAX_POLY_VERTS];
+    v2 *poly;              /* npoly vertices (at most RL_MAX_POLY_VERTS), counter-clockwise about n; owned */
     uint32_t npoly;
     double cell;           /* cell side, m */
     double u0, v0;         /* grid origin in frame coordinates */
