@@ -702,7 +702,7 @@ static void test_interpolation(void)
                                                          j0 + 1 < (int)c->nv;
             for (int dj = 0; all && dj <= 1; dj++)
                 for (int di = 0; all && di <= 1; di++)
-                    all = c->grid[(size_t)(j0 + dj) * c->nu + (size_t)(i0 + di)] >= 0;
+                    all = rl__map_grid_cell(c, (size_t)(i0 + di), (size_t)(j0 + dj)) >= 0;
             outside += !(f->e_pass[k][0] >= lo - 1e-12 && f->e_pass[k][0] <= hi + 1e-12);
             if (!all)
                 continue;
@@ -758,7 +758,7 @@ static void test_mark_direct(void)
         for (int flagged = 0; flagged < 2; flagged++) {
             /* an inside cell, then the corner cell */
             uint32_t ci = flagged ? 0 : 4, cj = flagged ? 0 : 3;
-            int32_t cell = c->grid[(size_t)cj * c->nu + ci];
+            int32_t cell = rl__map_grid_cell(c, ci, (size_t)cj);
             memset(near, 0, c->ncells);
             near[cell] = 1;
             uint32_t marked = rl__map_mark_direct(c, f, gathered, subset), want = 0, agree = 0;

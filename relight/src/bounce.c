@@ -150,7 +150,7 @@ void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, 
     const rl_frame *f = &m->frame;
     for (uint32_t j = row0; j < row1; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
-            int32_t cell = m->grid[(size_t)j * m->nu + i];
+            int32_t cell = rl__map_grid_cell(m, i, j);
             if (cell < 0 || (m->subset && !m->subset[cell]))
                 continue;
             rl_origin_domain dom;

@@ -158,6 +158,11 @@ static rl_status map_cells(rl_map *m)
             c->clipped = area < full * (1 - 1e-9);
             m->grid[(size_t)j * m->nu + i] = (int32_t)m->ncells++;
         }
+    /* a grid whose every square is a cell is the identity: a rectangle needs none */
+    if (m->ncells == squares) {
+        free(m->grid);
+        m->grid = NULL;
+    }
     /* the cells were allocated for every square of the bounding grid: a triangle needs about half */
     if (m->ncells < squares) {
         rl_cell *fit = realloc(m->cells, (m->ncells ? m->ncells : 1) * sizeof *fit);
@@ -246,7 +251,7 @@ static int near_around(const rl_map *coarse, const rl_cell *c)
             int64_t i = (int64_t)c->i + di, j = (int64_t)c->j + dj;
             if (i < 0 || j < 0 || i >= coarse->nu || j >= coarse->nv)
                 continue;
-            int32_t n = coarse->grid[(size_t)j * coarse->nu + (size_t)i];
+            int32_t n = rl__map_grid_cell(coarse, i, j);
             if (n >= 0 && coarse->near[n])
                 return 1;
         }
@@ -282,12 +287,10 @@ rl_status rl__map_point(v3 p, v3 n, rl_map *out)
         return RL_ERR_NOMEM;
     out->cell = 1.0;
     out->nu = out->nv = 1;
-    out->grid = malloc(sizeof *out->grid);
-    out->cells = calloc(1, sizeof *out->cells);
-    if (!out->grid || !out->cells)
+    out->cells = calloc(1, sizeof *out->cells); /* its one square is its one cell: no grid */
+    if (!out->cells)
         return RL_ERR_NOMEM;
     out->u0 = out->v0 = -0.5;
-    out->grid[0] = 0;
     out->ncells = 1;
     out->cells[0].clipped = 1;
     return map_accumulators(out, 0);
@@ -335,7 +338,7 @@ int64_t rl__map_cell_at(const rl_map *m, v2 q)
     double fi = floor((q.x - m->u0) / m->cell), fj = floor((q.y - m->v0) / m->cell);
     if (!(fi >= 0 && fj >= 0 && fi < m->nu && fj < m->nv))
         return -1;
-    return m->grid[(size_t)fj * m->nu + (size_t)fi];
+    return rl__map_grid_cell(m, (size_t)fi, (size_t)fj);
 }
 
 void rl__map_radiance(const rl_map *m, int64_t cell, double out[3])
@@ -354,8 +357,8 @@ int64_t rl__map_cell_near(const rl_map *m, v2 q)
     static const int8_t around[9][2] = {{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
     for (int r = 0; r < 9; r++) {
         int64_t ii = i + around[r][0], jj = j + around[r][1];
-        if (ii >= 0 && jj >= 0 && ii < m->nu && jj < m->nv && m->grid[jj * m->nu + ii] >= 0)
-            return m->grid[jj * m->nu + ii];
+        if (ii >= 0 && jj >= 0 && ii < m->nu && jj < m->nv && rl__map_grid_cell(m, (size_t)ii, (size_t)jj) >= 0)
+            return rl__map_grid_cell(m, (size_t)ii, (size_t)jj);
     }
     return -1;
 }
@@ -372,7 +375,7 @@ static void map_sample_skipping(const rl_map *m, const uint8_t *skip, v2 q, cons
             double ci = fa + di, cj = fb + dj, w = (di ? t : 1 - t) * (dj ? s : 1 - s);
             if (ci < 0 || cj < 0 || ci >= m->nu || cj >= m->nv || !(w > 0))
                 continue;
-            int32_t c = m->grid[(size_t)cj * m->nu + (size_t)ci];
+            int32_t c = rl__map_grid_cell(m, ci, cj);
             if (c < 0 || (skip && skip[c]))
                 continue; /* outside the polygon: the others carry the value to the edge */
             for (int ch = 0; ch < 3; ch++)

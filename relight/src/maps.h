@@ -28,7 +28,8 @@ typedef struct rl_map {
     double cell;           /* cell side, m */
     double u0, v0;         /* grid origin in frame coordinates */
     uint32_t nu, nv;
-    int32_t *grid;         /* nu*nv cell indices, -1 where the polygon has no area */
+    int32_t *grid;         /* nu*nv cell indices, -1 where the polygon has no area; NULL when every square is a
+                              cell, cell j * nu + i (read through rl__map_grid_cell()) */
     rl_cell *cells;
     uint32_t ncells;
     double (*e_total)[3];  /* irradiance summed over passes; the same array as e_pass in a map without
@@ -91,6 +92,13 @@ uint32_t rl__map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out);
 
 /* @return the area of cell c of m, m^2: its polygon's; 0 for a point receiver. */
 double rl__map_cell_area(const rl_map *m, const rl_cell *c);
+
+/* @return the cell on grid square (i, j) of m (i < nu, j < nv), or -1 where the polygon has no area. */
+static inline int32_t rl__map_grid_cell(const rl_map *m, size_t i, size_t j)
+{
+    size_t square = j * m->nu + i;
+    return m->grid ? m->grid[square] : (int32_t)square;
+}
 
 /* @return the index (j * nu + i) of the grid square of m holding frame point q, clamped to the grid
  * (rounding may put a point on the polygon just outside it); m has at least one square. */

@@ -159,7 +159,7 @@ static int adaptive_row(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
     rl_map *m = t->m;
     uint32_t max_level = p->level >= (1u << 18) ? (1u << 20) : 4 * p->level;
     for (uint32_t i = i0; i <= i1; i++) {
-        int32_t cell = m->grid[(size_t)j * m->nu + i];
+        int32_t cell = rl__map_grid_cell(m, i, j);
         rl_origin_domain dom;
         if (cell < 0)
             continue;
@@ -191,7 +191,7 @@ static int adaptive_reserve(rl_scratch *s, const rl_tile *t)
     uint32_t c0 = UINT32_MAX, c1 = 0; /* a tile's cells are numbered consecutively, row by row */
     for (uint32_t j = t->row0; j < t->row1; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
-            int32_t c = m->grid[(size_t)j * m->nu + i];
+            int32_t c = rl__map_grid_cell(m, i, j);
             if (c >= 0) {
                 c0 = (uint32_t)c < c0 ? (uint32_t)c : c0;
                 c1 = (uint32_t)c + 1 > c1 ? (uint32_t)c + 1 : c1;

@@ -80,7 +80,7 @@ static int baseline_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_
     uint32_t n = ctx->sampling->samples_per_cell;
     for (uint32_t j = t->row0; j < t->row1; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
-            int32_t cell = m->grid[(size_t)j * m->nu + i];
+            int32_t cell = rl__map_grid_cell(m, i, j);
             if (cell < 0)
                 continue;
             v2 cp[RL_MAX_POLY_VERTS + 8];

@@ -282,14 +282,14 @@ static int culled_row(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_til
                         va + m->cell + pad);
     }
     for (uint32_t i = i0; i <= i1; i++) {
-        int32_t cell = m->grid[(size_t)j * m->nu + i];
+        int32_t cell = rl__map_grid_cell(m, i, j);
         double *acc = s->row_acc[i - i0];
         acc[0] = acc[1] = acc[2] = 0.0;
         s->row_scale[i - i0] = cell < 0 ? 0.0 : gather_cell(ctx, p, t, (uint32_t)cell, L, sh, acc, &batch, cnt);
     }
     rl__batch_flush(ctx, &batch, cnt);
     for (uint32_t i = i0; i <= i1; i++) {
-        int32_t cell = m->grid[(size_t)j * m->nu + i];
+        int32_t cell = rl__map_grid_cell(m, i, j);
         for (int c = 0; cell >= 0 && c < 3; c++)
             m->e_pass[cell][c] += s->row_acc[i - i0][c] * s->row_scale[i - i0];
     }

@@ -548,7 +548,7 @@ int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_ti
         return -1;
     for (uint32_t j = t->row0; j < t->row1; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
-            int32_t cell = m->grid[(size_t)j * m->nu + i];
+            int32_t cell = rl__map_grid_cell(m, i, j);
             rl_origin_domain dom;
             rl_visibility vis = (rl_visibility)s->vis[(size_t)(j - t->row0) * m->nu + i];
             if (cell < 0 || vis == VIS_BLOCKED)
