@@ -1,7 +1,7 @@
 /*
  * test_radmap.c - radiance-map files (lfio/radmap.h, lfio/src/radmap_io.c):
  * round trips (with an empty patch, an empty file and a patch spanning
- * several chunks), the writer's refusals, atomic writes, and every way a
+ * several chunks), writes a slice of cells at a time, the writer's refusals, atomic writes, and every way a
  * file can be bad.
  *
  * Bad files are made by writing a good file with lfio and changing one
@@ -31,6 +31,9 @@
 #include "check.h"
 #include "radmap_patches.h"
 #include "lfio/radmap.h"
+
+/* lfio's rows per cell chunk (radmap_io.c's CELL_CHUNK): a slice's second part spans more than one. */
+#define CELL_CHUNK_ROWS 16384u
 
 static char tmpdir[400];
 
@@ -213,6 +216,134 @@ static void test_write_each(const lfio_radmap_patch *patches, size_t count)
     CHECK(lfio_radmap_write_each(path, NULL, NULL, 1, NULL, NULL) == LFIO_ERR_ARG, "NULL describe");
     free(a);
     free(c);
+}
+
+/* Describes patches without their cells, and gives the cells a slice at a time from buffers of its own (as
+ * a caller of lfio_radmap_write_rows() would), checking that lfio asks for each cell once, in order, at
+ * most LFIO_RADMAP_ROWS_MAX at once; it fails (fail_first) or gives a bad irradiance (bad_cell) when told. */
+struct slicer {
+    const lfio_radmap_patch *patches;
+    size_t described, calls;
+    uint32_t next, max_count;
+    size_t bad_patch, fail_patch; /* SIZE_MAX: never */
+    uint32_t bad_cell, fail_first;
+    uint32_t *ij;
+    double *area, *centre;
+    float *irradiance, *radiosity;
+};
+
+static lfio_status describe_bare(void *user, size_t k, lfio_radmap_patch *out)
+{
+    struct slicer *s = user;
+    CHECK(k == 0 || s->next == s->patches[s->described].ncells, "patch %zu left at cell %u of %u", s->described,
+          s->next, s->patches[s->described].ncells);
+    *out = s->patches[k];
+    out->cell_ij = NULL, out->cell_area = NULL, out->cell_centre = NULL;
+    out->irradiance = NULL, out->radiosity = NULL;
+    s->described = k;
+    s->next = 0;
+    return LFIO_OK;
+}
+
+static lfio_status rows_copied(void *user, size_t k, uint32_t first, uint32_t count, lfio_radmap_rows *out)
+{
+    struct slicer *s = user;
+    const lfio_radmap_patch *p = &s->patches[k];
+    CHECK(k == s->described && first == s->next && count <= LFIO_RADMAP_ROWS_MAX &&
+              (uint64_t)first + count <= p->ncells,
+          "rows asked for patch %zu cells %u + %u (described %zu, next %u, %u cells)", k, first, count, s->described,
+          s->next, p->ncells);
+    if (!(count <= LFIO_RADMAP_ROWS_MAX && (uint64_t)first + count <= p->ncells))
+        return LFIO_ERR_ARG;
+    s->next = first + count;
+    s->calls++;
+    s->max_count = count > s->max_count ? count : s->max_count;
+    if (k == s->fail_patch && first == s->fail_first)
+        return LFIO_ERR_NOMEM;
+    memcpy(s->ij, p->cell_ij + 2 * (size_t)first, 2 * (size_t)count * sizeof *s->ij);
+    memcpy(s->area, p->cell_area + first, (size_t)count * sizeof *s->area);
+    memcpy(s->centre, p->cell_centre + 3 * (size_t)first, 3 * (size_t)count * sizeof *s->centre);
+    memcpy(s->irradiance, p->irradiance + 3 * (size_t)first, 3 * (size_t)count * sizeof *s->irradiance);
+    memcpy(s->radiosity, p->radiosity + 3 * (size_t)first, 3 * (size_t)count * sizeof *s->radiosity);
+    if (k == s->bad_patch && s->bad_cell >= first && s->bad_cell - first < count)
+        s->irradiance[3 * (size_t)(s->bad_cell - first) + 1] = NAN;
+    *out = (lfio_radmap_rows){s->ij, s->area, s->centre, s->irradiance, s->radiosity};
+    return LFIO_OK;
+}
+
+/* Writes patches through lfio_radmap_write_rows() into path. @return its status; *s its record. */
+static lfio_status write_sliced(const char *path, const lfio_radmap_patch *patches, size_t count, struct slicer *s)
+{
+    const size_t n = LFIO_RADMAP_ROWS_MAX;
+    s->patches = patches;
+    s->ij = malloc(2 * n * sizeof *s->ij);
+    s->area = malloc(n * sizeof *s->area);
+    s->centre = malloc(3 * n * sizeof *s->centre);
+    s->irradiance = malloc(3 * n * sizeof *s->irradiance);
+    s->radiosity = malloc(3 * n * sizeof *s->radiosity);
+    quiet_start();
+    lfio_status st = lfio_radmap_write_rows(path, "test_radmap", "scenes/test.json", count, describe_bare,
+                                            rows_copied, s);
+    long printed = quiet_stop();
+    CHECK(printed == 0, "write_rows printed %ld bytes", printed);
+    free(s->ij);
+    free(s->area);
+    free(s->centre);
+    free(s->irradiance);
+    free(s->radiosity);
+    return st;
+}
+
+/* lfio_radmap_write_rows(): a patch of more cells than one slice is asked for in several, in order, and
+ * reads back as written; a bad value in a later slice is refused naming the cell by its place in the
+ * patch, and a failing rows abandons the write with its status; both leave an existing file as it was. */
+static void test_write_rows(const lfio_radmap_patch *patches, size_t count, const lfio_radmap_patch *big)
+{
+    CHECK(big->ncells > LFIO_RADMAP_ROWS_MAX + CELL_CHUNK_ROWS, "the big patch has %u cells", big->ncells);
+    lfio_radmap_patch all[8];
+    for (size_t k = 0; k < count; k++)
+        all[k] = patches[k];
+    all[count] = *big;
+    char path[512];
+    tmp_path(path, sizeof path, "rows.h5");
+    for (unsigned threads = 1; threads <= 3; threads += 2) {
+        lfio_radmap_set_threads(threads);
+        struct slicer s = {.bad_patch = SIZE_MAX, .fail_patch = SIZE_MAX};
+        lfio_status st = write_sliced(path, all, count + 1, &s);
+        CHECK(st == LFIO_OK, "write_rows on %u threads: %s", threads, lfio_errmsg());
+        CHECK(s.next == big->ncells && s.max_count == LFIO_RADMAP_ROWS_MAX && s.calls == count + 2,
+              "write_rows asked %zu times, at most %u cells, ending at %u", s.calls, s.max_count, s.next);
+        lfio_radmap *map = NULL;
+        CHECK(lfio_radmap_read(path, &map) == LFIO_OK && lfio_radmap_count(map) == count + 1, "read back: %s",
+              lfio_errmsg());
+        for (size_t k = 0; map != NULL && k < lfio_radmap_count(map); k++) {
+            lfio_radmap_patch back;
+            CHECK(lfio_radmap_get(map, k, &back) == LFIO_OK, "get %zu", k);
+            check_patch_equal(&all[k], &back, all[k].label);
+        }
+        lfio_radmap_destroy(map);
+    }
+    lfio_radmap_set_threads(0);
+    size_t a_size = 0;
+    unsigned char *a = read_whole(path, &a_size);
+    const uint32_t bad = LFIO_RADMAP_ROWS_MAX + 1234;
+    struct slicer s = {.bad_patch = count, .bad_cell = bad, .fail_patch = SIZE_MAX};
+    lfio_status st = write_sliced(path, all, count + 1, &s);
+    char want[64];
+    snprintf(want, sizeof want, "irradiance of cell %u is nan", bad);
+    CHECK(st == LFIO_ERR_ARG && strstr(lfio_errmsg(), want) && strstr(lfio_errmsg(), big->label),
+          "a bad value in a later slice: %s: %s", lfio_status_name(st), lfio_errmsg());
+    struct slicer f = {.bad_patch = SIZE_MAX, .fail_patch = count, .fail_first = LFIO_RADMAP_ROWS_MAX};
+    st = write_sliced(path, all, count + 1, &f);
+    CHECK(st == LFIO_ERR_NOMEM && f.next == big->ncells, "a failing rows: %s after cell %u", lfio_status_name(st),
+          f.next);
+    size_t b_size = 0;
+    unsigned char *b = read_whole(path, &b_size);
+    CHECK(a && b && a_size == b_size && memcmp(a, b, a_size) == 0, "a failed write_rows changed the file");
+    CHECK(sweep_tmpdir(1) == 0, "temporaries left after a failed write_rows");
+    CHECK(lfio_radmap_write_rows(path, NULL, NULL, 1, NULL, rows_copied, NULL) == LFIO_ERR_ARG, "NULL describe");
+    free(a);
+    free(b);
 }
 
 /* A write that the disk stops part-way (a file size limit of limit bytes: EFBIG, the signal ignored)
@@ -556,6 +687,10 @@ int main(void)
     test_round_trip(NULL, 0, tmp_path(empty, sizeof empty, "no_patches.h5"));
     test_round_trip(&patches[1], 1, tmp_path(lonely, sizeof lonely, "empty_patch.h5"));
     test_write_each(patches, 3);
+    struct test_patch big;
+    make_patch(&big, "polygons[9] big", 9, 2.0, 0.5, 0.0065, 0);
+    test_write_rows(patches, 3, &big.p);
+    free_patch(&big);
     char stopped[512];
     copy_to(stopped, sizeof stopped, good, "stopped.h5");
     /* stopped before the first patch, and among the big patch's chunks (the whole file is about 240 kB) */

@@ -957,6 +957,37 @@ static void on_maps_ready(void *user, const rl_solution *solution, size_t ready)
 
 /* maps_ready: ten floor strips under a lamp. A direct run tells the maps as they are finished, more than
  * once, in order, each with its final values; a run with a bounce tells them all at its end. */
+/* rl_solution_map_rows(): a slice of map 0 is the same slice of rl_solution_map_cells()'s copy, every
+ * output; a range past the map's cells is refused. */
+static void check_map_rows(const rl_solution *sol)
+{
+    rl_map_info m;
+    if (rl_solution_map_info(sol, 0, &m) != RL_OK || m.ncells < 40) {
+        CHECK(0, "map_rows: map 0 has %u cells", m.ncells);
+        return;
+    }
+    const uint32_t n = m.ncells, first = 17, count = 21;
+    uint32_t *ij = malloc(2 * n * sizeof *ij), rij[2 * 21];
+    double *area = malloc(n * sizeof *area), *centre = malloc(3 * n * sizeof *centre), rarea[21], rcentre[3 * 21];
+    float *e = malloc(3 * n * sizeof *e), *b = malloc(3 * n * sizeof *b), re[3 * 21], rb[3 * 21];
+    CHECK(rl_solution_map_cells(sol, 0, ij, area, centre, e, b) == RL_OK, "map_rows: %s", rl_errmsg());
+    CHECK(rl_solution_map_rows(sol, 0, first, count, rij, rarea, rcentre, re, rb) == RL_OK, "map_rows: %s",
+          rl_errmsg());
+    CHECK(memcmp(rij, ij + 2 * first, sizeof rij) == 0 && memcmp(rarea, area + first, sizeof rarea) == 0 &&
+              memcmp(rcentre, centre + 3 * first, sizeof rcentre) == 0 && memcmp(re, e + 3 * first, sizeof re) == 0 &&
+              memcmp(rb, b + 3 * first, sizeof rb) == 0,
+          "map_rows: cells %u to %u differ from map_cells' copy", first, first + count);
+    CHECK(rl_solution_map_rows(sol, 0, n - 1, 2, rij, NULL, NULL, NULL, NULL) == RL_ERR_ARG &&
+              rl_solution_map_rows(sol, 0, UINT32_MAX, 2, rij, NULL, NULL, NULL, NULL) == RL_ERR_ARG &&
+              rl_solution_map_rows(sol, 0, n, 0, NULL, NULL, NULL, NULL, NULL) == RL_OK,
+          "map_rows: a range past the map's %u cells", n);
+    free(ij);
+    free(area);
+    free(centre);
+    free(e);
+    free(b);
+}
+
 static void check_maps_ready(void)
 {
     char path[600];
@@ -981,6 +1012,8 @@ static void check_maps_ready(void)
         rl_solution *sol = NULL;
         CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "maps_ready: %s", rl_errmsg());
         run_opts.maps_ready = NULL;
+        if (sol && bounces == 0)
+            check_map_rows(sol);
         size_t n = sol ? rl_solution_map_count(sol) : 0, same = 0;
         for (size_t k = 0; k < n && k < 16; k++) {
             ts_cells c = ts_cells_get(sol, k);

@@ -445,7 +445,8 @@ static void writer_over(map_writer *w)
     pthread_mutex_unlock(&w->lock);
 }
 
-/* The arrays of the one patch lfio_radmap_write_each() is writing, grown to the largest map so far. */
+/* The arrays of the slice of cells lfio_radmap_write_rows() is writing, grown to the largest slice so far
+ * (at most LFIO_RADMAP_ROWS_MAX cells; a whole map through MPI). */
 typedef struct patch_arrays {
     const rl_solution *solution;
     struct map_writer *beside; /* the write goes beside the engine: wait for each map (NULL: all are done) */
@@ -494,24 +495,15 @@ static void describe_failed(patch_arrays *a, const char *msg)
     a->reported = 1;
 }
 
-/* describe_map()'s reading of map k of a's solution. */
+/* describe_map()'s reading of map k of a's solution: all but its cells. */
 static lfio_status describe_solution_map(patch_arrays *a, size_t k, lfio_radmap_patch *p)
 {
     rl_map_info m;
     char msg[WRITER_MSG];
-    rl_status st = rl_solution_map_info(a->solution, k, &m);
-    if (st == RL_OK && !patch_reserve(a, m.ncells ? m.ncells : 1)) {
-        snprintf(msg, sizeof msg, "out of memory for the %u cells of map %zu", m.ncells, k);
-        describe_failed(a, msg);
-        return LFIO_ERR_NOMEM;
-    }
-    if (st == RL_OK)
-        st = rl_solution_map_cells(a->solution, k, a->ij, a->area, a->centre, a->irradiance, a->radiosity);
-    if (st != RL_OK) {
+    if (rl_solution_map_info(a->solution, k, &m) != RL_OK) {
         describe_failed(a, relight_failure_text(msg, sizeof msg));
-        return st == RL_ERR_NOMEM ? LFIO_ERR_NOMEM : LFIO_ERR_ARG;
+        return LFIO_ERR_ARG;
     }
-    a->cells += m.ncells;
     p->label = m.label;
     p->polygon = m.polygon;
     p->nverts = m.nvertices;
@@ -526,11 +518,6 @@ static lfio_status describe_solution_map(patch_arrays *a, size_t k, lfio_radmap_
     p->nu = m.nu;
     p->nv = m.nv;
     p->ncells = m.ncells;
-    p->cell_ij = a->ij;
-    p->cell_area = a->area;
-    p->cell_centre = a->centre;
-    p->irradiance = a->irradiance;
-    p->radiosity = a->radiosity;
     memcpy(p->albedo, m.albedo, sizeof p->albedo);
     memcpy(p->emission, m.emission, sizeof p->emission);
     return LFIO_OK;
@@ -551,7 +538,43 @@ static lfio_status describe_map(void *user, size_t k, lfio_radmap_patch *p)
     return st;
 }
 
-/* Writes the n maps of solution to the staged radiance.h5, one map's cells in memory at a time, each once
+/* map_rows()'s reading of cells [first, first + count) of map k of a's solution. */
+static lfio_status solution_map_rows(patch_arrays *a, size_t k, uint32_t first, uint32_t count,
+                                     lfio_radmap_rows *out)
+{
+    char msg[WRITER_MSG];
+    if (!patch_reserve(a, count ? count : 1)) {
+        snprintf(msg, sizeof msg, "out of memory for %u cells of map %zu", count, k);
+        describe_failed(a, msg);
+        return LFIO_ERR_NOMEM;
+    }
+    rl_status st = rl_solution_map_rows(a->solution, k, first, count, a->ij, a->area, a->centre, a->irradiance,
+                                        a->radiosity);
+    if (st != RL_OK) {
+        describe_failed(a, relight_failure_text(msg, sizeof msg));
+        return st == RL_ERR_NOMEM ? LFIO_ERR_NOMEM : LFIO_ERR_ARG;
+    }
+    a->cells += count;
+    *out = (lfio_radmap_rows){a->ij, a->area, a->centre, a->irradiance, a->radiosity};
+    return LFIO_OK;
+}
+
+/* lfio_radmap_write_rows()'s rows: cells [first, first + count) of map k (describe_map() having waited for
+ * it to be final), in the arrays of user (a patch_arrays). Reports its own failures, as describe_map(). */
+static lfio_status map_rows(void *user, size_t k, uint32_t first, uint32_t count, lfio_radmap_rows *out)
+{
+    patch_arrays *a = user;
+    if (a->beside != NULL && !writer_wait(a->beside, k, NULL)) {
+        a->reported = 1; /* the engine failed after telling of map k, and says so itself */
+        return LFIO_ERR_ARG;
+    }
+    lfio_status st = solution_map_rows(a, k, first, count, out);
+    if (a->beside != NULL)
+        writer_done(a->beside);
+    return st;
+}
+
+/* Writes the n maps of solution to the staged radiance.h5, a slice of one map's cells in memory at a time, each once
  * it is final when beside is given (the engine still running). Prints nothing but describe_map's own
  * failures. @return lfio's status; *cells the cells written, *reported whether a failure was reported. */
 static lfio_status radiance_write(relight_run *run, const rl_solution *solution, size_t n, map_writer *beside,
@@ -562,7 +585,7 @@ static lfio_status radiance_write(relight_run *run, const rl_solution *solution,
     if (beside == NULL)
         lfio_radmap_set_threads(relight_threads_used(&run->run_options));
     lfio_status st = job_radmap_write(run->staged[OUT_RADIANCE], RELIGHT_CREATOR, run->o->scene, n, describe_map,
-                                      &arrays);
+                                      map_rows, &arrays);
     *cells = arrays.cells;
     *reported = arrays.reported;
     free(arrays.ij);

@@ -158,10 +158,32 @@ int job_fail(int code)
     return code; /* not reached */
 }
 
-lfio_status job_radmap_write(const char *path, const char *creator, const char *scene, size_t count,
-                             lfio_radmap_describe_fn describe, void *user)
+/* The caller's describe and rows, joined into the one describe of lfio_radmap_write_each_mpi(). */
+typedef struct whole_patches {
+    lfio_radmap_describe_fn describe;
+    lfio_radmap_rows_fn rows;
+    void *user;
+} whole_patches;
+
+/* lfio_radmap_describe_fn: patch k described, then its cells asked whole. */
+static lfio_status describe_whole(void *user, size_t k, lfio_radmap_patch *out)
 {
-    return lfio_radmap_write_each_mpi(path, creator, scene, count, describe, user, job_comm);
+    const whole_patches *w = user;
+    lfio_radmap_rows r;
+    memset(&r, 0, sizeof r);
+    lfio_status st = w->describe(w->user, k, out);
+    if (st == LFIO_OK)
+        st = w->rows(w->user, k, 0, out->ncells, &r);
+    out->cell_ij = r.cell_ij, out->cell_area = r.cell_area, out->cell_centre = r.cell_centre;
+    out->irradiance = r.irradiance, out->radiosity = r.radiosity;
+    return st;
+}
+
+lfio_status job_radmap_write(const char *path, const char *creator, const char *scene, size_t count,
+                             lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user)
+{
+    whole_patches w = {describe, rows, user};
+    return lfio_radmap_write_each_mpi(path, creator, scene, count, describe_whole, &w, job_comm);
 }
 
 /* --------------------------------------------------------------- job_mpi.h */

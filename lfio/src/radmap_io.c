@@ -6,9 +6,14 @@
  *   - The layout of every dataset of a patch (name, type, shape, chunks,
  *     units, axes, compression) comes from one table, map_datasets[], through
  *     patch_layout(): the writer creates what the reader checks.
- *   - One function, check_patch(), judges a patch's values. The writer
- *     refuses (LFIO_ERR_ARG) exactly what the reader refuses
- *     (LFIO_ERR_FORMAT), so every file written reads back.
+ *   - One function, check_patch(), judges a patch's values (through
+ *     check_patch_scalars() and check_patch_arrays(), which the writer
+ *     applies to a patch's description and then to each slice of its
+ *     cells). The writer refuses (LFIO_ERR_ARG) exactly what the reader
+ *     refuses (LFIO_ERR_FORMAT), so every file written reads back.
+ *   - A serial write holds one slice of a patch's cells at a time
+ *     (LFIO_RADMAP_ROWS_MAX, a whole number of chunks) and their compressed
+ *     chunks; a write through MPI-IO, which HDF5 filters, one whole patch.
  *   - The reader allocates nothing from a number found in a file before
  *     checking it: patch storage grows one validated group at a time, the
  *     vertex and cell counts are bounded (per patch and, for cells, over the
@@ -210,8 +215,9 @@ static int check_patch_scalars(const lfio_radmap_patch *p, char *why, size_t why
     return 0;
 }
 
-/* Checks the arrays of p (present, finite, in range). @return 1, or 0 with a reason in why. */
-static int check_patch_arrays(const lfio_radmap_patch *p, char *why, size_t why_size)
+/* Checks the arrays of p (present, finite, in range), whose cells are cells [first, first + p->ncells) of
+ * its patch (numbered so in messages). @return 1, or 0 with a reason in why. */
+static int check_patch_arrays(const lfio_radmap_patch *p, uint32_t first, char *why, size_t why_size)
 {
     for (int k = 0; k < MAP_DS_COUNT; k++)
         if (value_count((enum map_ds)k, p) > 0 && patch_array(p, (enum map_ds)k) == NULL) {
@@ -225,12 +231,14 @@ static int check_patch_arrays(const lfio_radmap_patch *p, char *why, size_t why_
     for (uint32_t c = 0; c < p->ncells; c++) {
         const uint32_t i = p->cell_ij[2 * c], j = p->cell_ij[2 * c + 1];
         const double area = p->cell_area[c];
+        const unsigned long long cell = (unsigned long long)first + c;
         if (i >= p->nu || j >= p->nv)
-            snprintf(why, why_size, "cell %u: (i, j) = (%u, %u) outside the %u x %u grid", c, i, j, p->nu, p->nv);
+            snprintf(why, why_size, "cell %llu: (i, j) = (%u, %u) outside the %u x %u grid", cell, i, j, p->nu,
+                     p->nv);
         else if (!(isfinite(area) && area > 0))
-            snprintf(why, why_size, "cell %u: area %g is not finite and > 0", c, area);
+            snprintf(why, why_size, "cell %llu: area %g is not finite and > 0", cell, area);
         else if (!all_finite(p->cell_centre + 3 * (size_t)c, 3))
-            snprintf(why, why_size, "cell %u: centre is not finite", c);
+            snprintf(why, why_size, "cell %llu: centre is not finite", cell);
         else
             continue;
         return 0;
@@ -245,14 +253,15 @@ static int check_patch_arrays(const lfio_radmap_patch *p, char *why, size_t why_
     if (bad == n)
         return 1;
     const float value = name[0] == 'i' ? p->irradiance[bad] : p->radiosity[bad];
-    snprintf(why, why_size, "%s of cell %zu is %g, expected finite and >= 0", name, bad / 3, (double)value);
+    snprintf(why, why_size, "%s of cell %llu is %g, expected finite and >= 0", name,
+             (unsigned long long)first + bad / 3, (double)value);
     return 0;
 }
 
 /* Checks everything about patch p. @return 1, or 0 with a reason in why. */
 static int check_patch(const lfio_radmap_patch *p, char *why, size_t why_size)
 {
-    return check_patch_scalars(p, why, why_size) && check_patch_arrays(p, why, why_size);
+    return check_patch_scalars(p, why, why_size) && check_patch_arrays(p, 0, why, why_size);
 }
 
 /* ----------------------------------------------------------------- writing */
@@ -263,6 +272,7 @@ struct map_content {
     const char *scene;
     size_t count;
     lfio_radmap_describe_fn describe;
+    lfio_radmap_rows_fn rows; /* NULL: the cells are the described patch's own arrays */
     void *user;
     int rank, ranks; /* this writer among those of a collective write: patch k's arrays are rank k mod ranks's */
     int serial;      /* written by lfio_radmap_write_each(), not through MPI-IO (even with one rank) */
@@ -345,20 +355,22 @@ typedef struct chunk_place {
     hsize_t row;
 } chunk_place;
 
-/* Lists the chunks of w's deflated datasets in c and where they go in at (both NULL: counts them).
- * @return their number. */
-static size_t patch_chunks(const patch_write *w, lfio__chunk *c, chunk_place *at)
+/* Lists the chunks of w's deflated datasets that begin in cells [first, first + w->p->ncells), w->p holding
+ * those cells, in c and where they go in at (both NULL: counts them). @return their number. */
+static size_t patch_chunks(const patch_write *w, uint32_t first, lfio__chunk *c, chunk_place *at)
 {
     size_t n = 0;
+    const hsize_t end = (hsize_t)first + w->p->ncells;
     for (int t = 0; t < MAP_DS_COUNT; t++) {
         const lfio__h5_layout *l = &w->lay[t];
         size_t row = (size_t)(l->rank == 2 ? l->dims[1] : 1) * l->size;
         const unsigned char *a = patch_array(w->p, (enum map_ds)t);
-        for (hsize_t r0 = 0; l->deflate && r0 < l->dims[0]; r0 += l->chunk[0], n++) {
+        /* only cell datasets are deflated, and a slice starts on a chunk's first row */
+        for (hsize_t r0 = first; l->deflate && r0 < end; r0 += l->chunk[0], n++) {
             size_t take = (size_t)(l->dims[0] - r0 < l->chunk[0] ? l->dims[0] - r0 : l->chunk[0]);
             if (c)
-                c[n] = (lfio__chunk){a + (size_t)r0 * row, take * row, (size_t)l->chunk[0] * row, l->size, l->deflate,
-                                     NULL, 0};
+                c[n] = (lfio__chunk){a + (size_t)(r0 - first) * row, take * row, (size_t)l->chunk[0] * row, l->size,
+                                     l->deflate, NULL, 0};
             if (at)
                 at[n] = (chunk_place){t, r0};
         }
@@ -390,40 +402,79 @@ void lfio_radmap_set_threads(unsigned threads)
     atomic_store_explicit(&write_threads, threads, memory_order_relaxed);
 }
 
-/* Writes patch p as group /patches/k of the file whose "patches" group is patches; its arrays only when
- * mine (a collective write's other ranks take part with nothing). direct: the deflated datasets' chunks
- * are filtered by lfio on several threads while HDF5 makes the patch's objects, then stored as they are
- * (a serial write on a little-endian machine: the arrays' bytes are the stored ones). */
-static lfio_status write_patch(const char *path, hid_t patches, size_t k, const lfio_radmap_patch *p, int mine,
-                               int direct)
+/* Points q at cells [first, first + count) of patch k, described as p: from the caller's rows function
+ * (lfio_radmap_write_rows()), else within p's own arrays; and checks them. @return LFIO_OK, rows's
+ * status, or LFIO_ERR_ARG naming the patch and the problem. */
+static lfio_status patch_slice(const struct map_content *mc, const char *path, size_t k, const lfio_radmap_patch *p,
+                               uint32_t first, uint32_t count, lfio_radmap_patch *q)
 {
+    *q = *p;
+    q->ncells = count;
+    if (mc->rows != NULL) {
+        lfio_radmap_rows r;
+        memset(&r, 0, sizeof r);
+        lfio_status st = mc->rows(mc->user, k, first, count, &r);
+        if (st != LFIO_OK)
+            return st;
+        q->cell_ij = r.cell_ij, q->cell_area = r.cell_area, q->cell_centre = r.cell_centre;
+        q->irradiance = r.irradiance, q->radiosity = r.radiosity;
+    } else {
+        q->cell_ij = p->cell_ij ? p->cell_ij + 2 * (size_t)first : NULL;
+        q->cell_area = p->cell_area ? p->cell_area + first : NULL;
+        q->cell_centre = p->cell_centre ? p->cell_centre + 3 * (size_t)first : NULL;
+        q->irradiance = p->irradiance ? p->irradiance + 3 * (size_t)first : NULL;
+        q->radiosity = p->radiosity ? p->radiosity + 3 * (size_t)first : NULL;
+    }
+    char why[256];
+    if (!check_patch_arrays(q, first, why, sizeof why))
+        return lfio__fail(LFIO_ERR_ARG, "%s: patch %zu (%s): %s", path, k, p->label, why);
+    return LFIO_OK;
+}
+
+/* Every slice but a patch's last is a whole number of chunks, and a patch of more than one slice has every
+ * cell dataset deflated (patch_objects() writes the others whole, from the first slice). */
+_Static_assert(LFIO_RADMAP_ROWS_MAX % CELL_CHUNK == 0, "a slice is a whole number of chunks");
+_Static_assert(LFIO_RADMAP_ROWS_MAX * 4 >= DEFLATE_MIN_BYTES, "a patch of several slices is all deflated");
+
+/* Writes patch p (as described, k of the content mc) as group /patches/k of the file whose "patches" group
+ * is patches; its arrays only when mine (a collective write's other ranks take part with nothing).
+ * direct: the deflated datasets' chunks are filtered by lfio on several threads, then stored as they are
+ * (a serial write on a little-endian machine: the arrays' bytes are the stored ones), a slice of cells at a
+ * time, the first slice's while HDF5 makes the patch's objects; else HDF5 filters the whole patch. */
+static lfio_status write_patch(const struct map_content *mc, const char *path, hid_t patches, size_t k,
+                               const lfio_radmap_patch *p, int mine, int direct)
+{
+    lfio_radmap_patch q = *p;
     patch_write w;
     memset(&w, 0, sizeof w);
-    w.path = path, w.patches = patches, w.k = k, w.p = p, w.mine = mine, w.direct = direct, w.g = -1;
+    w.path = path, w.patches = patches, w.k = k, w.p = &q, w.mine = mine, w.direct = direct, w.g = -1;
     snprintf(w.obj, sizeof w.obj, "/patches/%zu", k);
     for (int t = 0; t < MAP_DS_COUNT; t++) {
         w.d[t] = -1;
         patch_layout((enum map_ds)t, p->nverts, p->ncells, &w.lay[t]);
     }
-    size_t n = direct ? patch_chunks(&w, NULL, NULL) : 0;
-    lfio__chunk *c = n ? malloc(n * sizeof *c) : NULL;
-    chunk_place *at = n ? malloc(n * sizeof *at) : NULL;
-    if (n && (c == NULL || at == NULL)) {
-        free(c);
-        free(at);
-        return lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, w.obj);
-    }
-    if (n) {
-        patch_chunks(&w, c, at);
-        if (lfio__chunks_filter(c, n, ilf_thread_count(atomic_load_explicit(&write_threads, memory_order_relaxed)),
-                                patch_objects, &w) != 0 && w.st == LFIO_OK)
+    const uint32_t step = direct ? LFIO_RADMAP_ROWS_MAX : p->ncells;
+    q.ncells = p->ncells < step ? p->ncells : step;
+    size_t cap = direct ? patch_chunks(&w, 0, NULL, NULL) : 0;
+    lfio__chunk *c = cap ? malloc(cap * sizeof *c) : NULL;
+    chunk_place *at = cap ? malloc(cap * sizeof *at) : NULL;
+    if (cap && (c == NULL || at == NULL))
+        w.st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, w.obj);
+    const unsigned threads = ilf_thread_count(atomic_load_explicit(&write_threads, memory_order_relaxed));
+    uint32_t first = 0;
+    while (w.st == LFIO_OK) {
+        const uint32_t count = p->ncells - first < step ? p->ncells - first : step;
+        if ((w.st = patch_slice(mc, path, k, p, first, count, &q)) != LFIO_OK)
+            break;
+        size_t n = direct ? patch_chunks(&w, first, c, at) : 0;
+        if (lfio__chunks_filter(c, n, threads, first == 0 ? patch_objects : NULL, &w) != 0 && w.st == LFIO_OK)
             w.st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, w.obj);
-    } else {
-        patch_objects(&w);
+        if (w.st == LFIO_OK)
+            w.st = store_chunks(&w, c, at, n);
+        lfio__chunks_free(c, n);
+        if ((first += count) >= p->ncells)
+            break;
     }
-    if (w.st == LFIO_OK && n)
-        w.st = store_chunks(&w, c, at, n);
-    lfio__chunks_free(c, n);
     free(c);
     free(at);
     /* Closing flushes the chunk cache: the last chunks reach the file only here. */
@@ -470,13 +521,13 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
         /* describing can fail on one rank of a collective write alone (out of memory) */
         if ((st = lfio__h5_agree(path, st)) != LFIO_OK)
             break;
-        if (!check_patch(&p, why, sizeof why)) {
+        if (!check_patch_scalars(&p, why, sizeof why)) {
             st = lfio__fail(LFIO_ERR_ARG, "%s: patch %zu (%s): %s", path, k, p.label ? p.label : "no label", why);
         } else if ((cells += p.ncells) > LFIO_RADMAP_MAX_CELLS) {
             st = lfio__fail(LFIO_ERR_ARG, "%s: more than %llu cells", path,
                             (unsigned long long)LFIO_RADMAP_MAX_CELLS);
         } else {
-            st = write_patch(path, patches, k, &p, (int)(k % (size_t)c->ranks) == c->rank, direct);
+            st = write_patch(c, path, patches, k, &p, (int)(k % (size_t)c->ranks) == c->rank, direct);
         }
     }
     lfio__h5_close(patches);
@@ -494,17 +545,23 @@ static lfio_status check_write_args(const char *path, const struct map_content *
     return LFIO_OK;
 }
 
-lfio_status lfio_radmap_write_each(const char *path, const char *creator, const char *scene, size_t count,
-                                   lfio_radmap_describe_fn describe, void *user)
+lfio_status lfio_radmap_write_rows(const char *path, const char *creator, const char *scene, size_t count,
+                                   lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user)
 {
     if (path == NULL || path[0] == '\0')
         return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_write: NULL or empty path");
     if (describe == NULL && count > 0)
         return lfio__fail(LFIO_ERR_ARG, "%s: NULL describe function", path);
     const struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", count,
-                                  describe, user, 0, 1, 1};
+                                  describe, rows, user, 0, 1, 1};
     lfio_status st = check_write_args(path, &c);
     return st == LFIO_OK ? lfio__h5_write_atomic(path, write_contents, &c) : st;
+}
+
+lfio_status lfio_radmap_write_each(const char *path, const char *creator, const char *scene, size_t count,
+                                   lfio_radmap_describe_fn describe, void *user)
+{
+    return lfio_radmap_write_rows(path, creator, scene, count, describe, NULL, user);
 }
 
 #ifdef LFIO_MPI
@@ -520,7 +577,7 @@ lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, co
     if (describe == NULL && count > 0)
         return lfio__fail(LFIO_ERR_ARG, "%s: NULL describe function", path);
     const struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", count,
-                                  describe, user, rank, ranks, 0};
+                                  describe, NULL, user, rank, ranks, 0};
     lfio_status st = check_write_args(path, &c);
     return st == LFIO_OK ? lfio__h5_write_collective(path, write_contents, &c, comm) : st;
 }

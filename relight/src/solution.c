@@ -78,27 +78,38 @@ static float saturate_float(double x)
 rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, double *area, double *centre,
                                 float *irradiance, float *radiosity)
 {
+    uint32_t n = k < s->nmaps ? s->maps[k].ncells : 0;
+    return rl_solution_map_rows(s, k, 0, n, ij, area, centre, irradiance, radiosity);
+}
+
+rl_status rl_solution_map_rows(const rl_solution *s, size_t k, uint32_t first, uint32_t count, uint32_t *ij,
+                               double *area, double *centre, float *irradiance, float *radiosity)
+{
     if (k >= s->nmaps)
         return rl__fail(RL_ERR_ARG, "map %zu of %zu", k, s->nmaps);
     const rl_map *m = &s->maps[k];
-    for (uint32_t c = 0; c < m->ncells; c++) {
+    if (first > m->ncells || count > m->ncells - first)
+        return rl__fail(RL_ERR_ARG, "cells %u to %llu of map %zu, which has %u", first,
+                        (unsigned long long)first + count, k, m->ncells);
+    for (uint32_t r = 0; r < count; r++) {
+        const uint32_t c = first + r;
         const rl_cell *cell = &m->cells[c];
         if (ij) {
-            ij[2 * c] = cell->i;
-            ij[2 * c + 1] = cell->j;
+            ij[2 * r] = cell->i;
+            ij[2 * r + 1] = cell->j;
         }
         if (area)
-            area[c] = rl__map_cell_area(m, cell);
+            area[r] = rl__map_cell_area(m, cell);
         if (centre) {
             v2 poly[RL_MAX_POLY_VERTS + 8];
             uint32_t n = rl__map_cell_polygon(m, cell, poly);
-            v3_store(frame_point(&m->frame, rl__polygon_centroid(poly, n)), centre + 3 * c);
+            v3_store(frame_point(&m->frame, rl__polygon_centroid(poly, n)), centre + 3 * r);
         }
         for (int ch = 0; ch < 3; ch++) {
             if (irradiance)
-                irradiance[3 * c + ch] = saturate_float(m->e_total[c][ch]);
+                irradiance[3 * r + ch] = saturate_float(m->e_total[c][ch]);
             if (radiosity)
-                radiosity[3 * c + ch] = saturate_float(RL_PI * m->emission[ch] + m->albedo[ch] * m->e_total[c][ch]);
+                radiosity[3 * r + ch] = saturate_float(RL_PI * m->emission[ch] + m->albedo[ch] * m->e_total[c][ch]);
         }
     }
     return RL_OK;

@@ -120,6 +120,40 @@ typedef lfio_status (*lfio_radmap_describe_fn)(void *user, size_t k, lfio_radmap
 lfio_status lfio_radmap_write_each(const char *path, const char *creator, const char *scene, size_t count,
                                    lfio_radmap_describe_fn describe, void *user);
 
+/** Most cells lfio_radmap_write_rows() asks for at once. */
+#define LFIO_RADMAP_ROWS_MAX 65536u
+
+/** Cells [first, first + count) of a patch: each array holds count rows, as in lfio_radmap_patch. */
+typedef struct lfio_radmap_rows {
+    const uint32_t *cell_ij;  /**< [count][2] */
+    const double *cell_area;  /**< [count] */
+    const double *cell_centre;/**< [count][3] */
+    const float *irradiance;  /**< [count][3] */
+    const float *radiosity;   /**< [count][3] */
+} lfio_radmap_rows;
+
+/**
+ * Gives cells [first, first + count) of patch k, the patch last described,
+ * for lfio_radmap_write_rows(): fills *out, whose arrays must stay valid
+ * until the next call or the write's end. Asked in order of first, each
+ * cell once, count at most LFIO_RADMAP_ROWS_MAX (0 for a patch of no cells).
+ * @return LFIO_OK, or another status to abandon the write.
+ */
+typedef lfio_status (*lfio_radmap_rows_fn)(void *user, size_t k, uint32_t first, uint32_t count,
+                                           lfio_radmap_rows *out);
+
+/**
+ * Writes a file as lfio_radmap_write_each() does, but describe gives each
+ * patch without its cells (its five cell arrays are ignored) and rows gives
+ * them a slice at a time, so that a caller need hold at most
+ * LFIO_RADMAP_ROWS_MAX cells' arrays, and lfio their compressed chunks. The
+ * file is the same. Each slice is checked as it arrives. rows NULL: the
+ * cells are the described patch's arrays, as in lfio_radmap_write_each().
+ * @return as lfio_radmap_write_each(), or rows's status.
+ */
+lfio_status lfio_radmap_write_rows(const char *path, const char *creator, const char *scene, size_t count,
+                                   lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user);
+
 /**
  * Reads a whole file, checking format, attributes, shapes and limits before
  * allocating, then every checksum and value.

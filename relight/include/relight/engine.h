@@ -55,14 +55,14 @@ typedef struct rl_solution rl_solution;
 
 /**
  * Told that maps [0, ready) of the solution being computed hold their final
- * values: from then on they may be read with rl_solution_map_info() and
- * rl_solution_map_cells(), from any thread, while the run goes on (no other
+ * values: from then on they may be read with rl_solution_map_info(),
+ * rl_solution_map_cells() and rl_solution_map_rows(), from any thread, while the run goes on (no other
  * call on solution is allowed before rl_relight() returns it). Called from
  * one of the engine's threads, with ready increasing, the last time with
  * the map count, and only if the run succeeds that far. A run of one pass
  * on one process reports maps as their cells are finished (in order: its
  * work goes map by map); others report them all at the end. It must return
- * quickly and call nothing of the engine's but those two accessors. If the
+ * quickly and call nothing of the engine's but those accessors. If the
  * run then fails, it is called once more with solution NULL and ready 0
  * before the solution is freed: that call must return only once nothing
  * reads the solution any more.
@@ -172,6 +172,14 @@ rl_status rl_solution_map_info(const rl_solution *s, size_t k, rl_map_info *out)
  */
 rl_status rl_solution_map_cells(const rl_solution *s, size_t k, uint32_t *ij, double *area, double *centre,
                                 float *irradiance, float *radiosity);
+
+/**
+ * Copies cells [first, first + count) of map k as rl_solution_map_cells()
+ * copies them all, into arrays of count rows, so that a map is read a slice
+ * at a time. @return RL_OK; RL_ERR_ARG for no map k or a range past its cells.
+ */
+rl_status rl_solution_map_rows(const rl_solution *s, size_t k, uint32_t first, uint32_t count, uint32_t *ij,
+                               double *area, double *centre, float *irradiance, float *radiosity);
 
 /**
  * Chooses how rl_solution_trace() and rl_solution_render() read a map:
