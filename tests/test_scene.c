@@ -686,7 +686,7 @@ static void test_interpolation(void)
         rl_map *c = &coarse[m], *f = &fine[m];
         double lo = INFINITY, hi = -INFINITY;
         for (uint32_t k = 0; k < c->ncells; k++) {
-            double u = c->u0 + (c->cells[k].i + 0.5) * c->cell, v = c->v0 + (c->cells[k].j + 0.5) * c->cell;
+            double u = c->u0 + (rl__map_cell(c, k).i + 0.5) * c->cell, v = c->v0 + (rl__map_cell(c, k).j + 0.5) * c->cell;
             for (int ch = 0; ch < 3; ch++)
                 c->e_pass[k][ch] = 1.0 + 2.0 * u - 3.0 * v + ch;
             lo = fmin(lo, c->e_pass[k][0]);
@@ -696,7 +696,7 @@ static void test_interpolation(void)
         long exact = 0, interior = 0, outside = 0;
         for (uint32_t k = 0; k < f->ncells; k++) {
             v2 poly[RL_MAX_POLY_VERTS + 4];
-            v2 q = rl__polygon_centroid(poly, rl__map_cell_polygon(f, &f->cells[k], poly));
+            v2 q = rl__polygon_centroid(poly, rl__map_cell_polygon(f, k, poly));
             double a = (q.x - c->u0) / c->cell - 0.5, b = (q.y - c->v0) / c->cell - 0.5;
             int i0 = (int)floor(a), j0 = (int)floor(b), all = i0 >= 0 && j0 >= 0 && i0 + 1 < (int)c->nu &&
                                                          j0 + 1 < (int)c->nv;
@@ -764,7 +764,7 @@ static void test_mark_direct(void)
             uint32_t marked = rl__map_mark_direct(c, f, gathered, subset), want = 0, agree = 0;
             for (uint32_t k = 0; k < f->ncells; k++) {
                 /* the fine grid nests in the coarse one: 4 x 4 fine cells to a coarse cell */
-                long di = (long)(f->cells[k].i / 4) - (long)ci, dj = (long)(f->cells[k].j / 4) - (long)cj;
+                long di = (long)(rl__map_cell(f, k).i / 4) - (long)ci, dj = (long)(rl__map_cell(f, k).j / 4) - (long)cj;
                 int w = labs(di) <= 1 && labs(dj) <= 1;
                 want += (uint32_t)w;
                 agree += (uint32_t)(w == subset[k]);

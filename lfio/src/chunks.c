@@ -68,6 +68,10 @@ static int filter_one(lfio__chunk *c, unsigned char *scratch)
     for (int k = 0; k < 4; k++)
         c->out[packed + k] = (unsigned char)(sum >> (8 * k));
     c->out_bytes = packed + 4;
+    /* the bound is the raw size: give back what compression saved while the chunk waits to be stored */
+    unsigned char *fit = realloc(c->out, c->out_bytes);
+    if (fit != NULL)
+        c->out = fit;
     return 0;
 }
 

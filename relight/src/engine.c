@@ -209,7 +209,7 @@ static uint32_t first_cell_of_row(const rl_map *m, uint32_t j)
     uint32_t lo = 0, hi = m->ncells;
     while (lo < hi) {
         uint32_t mid = lo + (hi - lo) / 2;
-        if (m->cells[mid].j < j)
+        if (rl__map_cell(m, mid).j < j)
             lo = mid + 1;
         else
             hi = mid;

@@ -158,10 +158,17 @@ static rl_status map_cells(rl_map *m)
             c->clipped = area < full * (1 - 1e-9);
             m->grid[(size_t)j * m->nu + i] = (int32_t)m->ncells++;
         }
-    /* a grid whose every square is a cell is the identity: a rectangle needs none */
+    /* a grid whose every square is a cell is the identity, and its cells follow from their index but
+     * for being cut: a rectangle needs a bit a cell */
     if (m->ncells == squares) {
+        if ((m->cut = calloc(squares / 8 + 1, 1)) == NULL)
+            return RL_ERR_NOMEM;
+        for (size_t c = 0; c < squares; c++)
+            m->cut[c >> 3] |= (uint8_t)(m->cells[c].clipped << (c & 7));
         free(m->grid);
+        free(m->cells);
         m->grid = NULL;
+        m->cells = NULL;
     }
     /* the cells were allocated for every square of the bounding grid: a triangle needs about half */
     if (m->ncells < squares) {
@@ -244,11 +251,12 @@ static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map *
 }
 
 /* @return 1 if coarse cell c or one of the eight around it is flagged near. */
-static int near_around(const rl_map *coarse, const rl_cell *c)
+static int near_around(const rl_map *coarse, uint32_t cell)
 {
+    const rl_cell c = rl__map_cell(coarse, cell);
     for (int dj = -1; dj <= 1; dj++)
         for (int di = -1; di <= 1; di++) {
-            int64_t i = (int64_t)c->i + di, j = (int64_t)c->j + dj;
+            int64_t i = (int64_t)c.i + di, j = (int64_t)c.j + dj;
             if (i < 0 || j < 0 || i >= coarse->nu || j >= coarse->nv)
                 continue;
             int32_t n = rl__map_grid_cell(coarse, i, j);
@@ -261,11 +269,11 @@ static int near_around(const rl_map *coarse, const rl_cell *c)
 uint32_t rl__map_mark_direct(const rl_map *coarse, const rl_map *fine, uint8_t *gathered, uint8_t *subset)
 {
     for (uint32_t c = 0; c < coarse->ncells; c++)
-        gathered[c] = coarse->near && near_around(coarse, &coarse->cells[c]);
+        gathered[c] = coarse->near && near_around(coarse, c);
     uint32_t marked = 0;
     for (uint32_t k = 0; k < fine->ncells; k++) {
         v2 poly[RL_MAX_POLY_VERTS + 4];
-        v2 q = rl__polygon_centroid(poly, rl__map_cell_polygon(fine, &fine->cells[k], poly));
+        v2 q = rl__polygon_centroid(poly, rl__map_cell_polygon(fine, k, poly));
         int64_t home = rl__map_cell_at(coarse, q);
         subset[k] = (uint8_t)(home < 0 ? coarse->near != NULL : gathered[home]);
         marked += subset[k];
@@ -287,12 +295,12 @@ rl_status rl__map_point(v3 p, v3 n, rl_map *out)
         return RL_ERR_NOMEM;
     out->cell = 1.0;
     out->nu = out->nv = 1;
-    out->cells = calloc(1, sizeof *out->cells); /* its one square is its one cell: no grid */
-    if (!out->cells)
+    out->cut = calloc(1, 1); /* its one square is its one cell: no grid */
+    if (!out->cut)
         return RL_ERR_NOMEM;
     out->u0 = out->v0 = -0.5;
     out->ncells = 1;
-    out->cells[0].clipped = 1;
+    out->cut[0] = 1;
     return map_accumulators(out, 0);
 }
 
@@ -302,6 +310,7 @@ void rl__maps_free(rl_map *maps, size_t count)
         free(maps[k].poly);
         free(maps[k].grid);
         free(maps[k].cells);
+        free(maps[k].cut);
         if (maps[k].e_total != maps[k].e_pass)
             free(maps[k].e_total);
         free(maps[k].e_pass);
@@ -310,15 +319,16 @@ void rl__maps_free(rl_map *maps, size_t count)
     free(maps);
 }
 
-uint32_t rl__map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out)
+uint32_t rl__map_cell_polygon(const rl_map *m, uint32_t cell, v2 *out)
 {
     if (m->polygon < 0) {
         out[0] = m->poly[0];
         return 1;
     }
-    if (c->clipped)
-        return clip_square(m, c->i, c->j, out);
-    double x0 = m->u0 + c->i * m->cell, y0 = m->v0 + c->j * m->cell;
+    const rl_cell c = rl__map_cell(m, cell);
+    if (c.clipped)
+        return clip_square(m, c.i, c.j, out);
+    double x0 = m->u0 + c.i * m->cell, y0 = m->v0 + c.j * m->cell;
     out[0] = (v2){x0, y0};
     out[1] = (v2){x0 + m->cell, y0};
     out[2] = (v2){x0 + m->cell, y0 + m->cell};
@@ -326,7 +336,7 @@ uint32_t rl__map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out)
     return 4;
 }
 
-double rl__map_cell_area(const rl_map *m, const rl_cell *c)
+double rl__map_cell_area(const rl_map *m, uint32_t c)
 {
     v2 poly[RL_MAX_POLY_VERTS + 8];
     uint32_t n = rl__map_cell_polygon(m, c, poly);
@@ -404,7 +414,7 @@ void rl__map_interpolate(const rl_map *coarse, const uint8_t *gathered, rl_map *
             continue; /* gathered itself */
         v2 poly[RL_MAX_POLY_VERTS + 4];
         map_sample_skipping(coarse, gathered,
-                            rl__polygon_centroid(poly, rl__map_cell_polygon(fine, &fine->cells[k], poly)),
+                            rl__polygon_centroid(poly, rl__map_cell_polygon(fine, k, poly)),
                             (const double(*)[3])coarse->e_pass, fine->e_pass[k]);
     }
 }

@@ -11,8 +11,9 @@
 #include "region.h"
 #include "scene_internal.h"
 
-/* One cell: its grid square, and whether the polygon's border cuts it. Its shape (rl__map_cell_polygon())
- * and area (rl__map_cell_area()) follow from these and the map, so a cell costs 8 bytes. */
+/* One cell (rl__map_cell()): its grid square, and whether the polygon's border cuts it. Its shape
+ * (rl__map_cell_polygon()) and area (rl__map_cell_area()) follow from these and the map, so a cell costs
+ * 8 bytes, or one bit in a map whose every grid square is a cell. */
 typedef struct rl_cell {
     uint32_t i;           /* grid column */
     uint32_t j : 31;      /* grid row */
@@ -30,7 +31,8 @@ typedef struct rl_map {
     uint32_t nu, nv;
     int32_t *grid;         /* nu*nv cell indices, -1 where the polygon has no area; NULL when every square is a
                               cell, cell j * nu + i (read through rl__map_grid_cell()) */
-    rl_cell *cells;
+    rl_cell *cells;        /* ncells cells, row by row; NULL with grid (read through rl__map_cell()) */
+    uint8_t *cut;          /* with grid NULL: bit c % 8 of cut[c / 8] set when cell c is cut */
     uint32_t ncells;
     double (*e_total)[3];  /* irradiance summed over passes; the same array as e_pass in a map without
                               e_prev (one pass: nothing to sum) */
@@ -85,13 +87,25 @@ rl_status rl__map_point(v3 p, v3 n, rl_map *out);
 /* Frees every map's arrays and the array itself. */
 void rl__maps_free(rl_map *maps, size_t count);
 
-/* @return the clipped polygon of cell c in frame coordinates, in out (room for
+/* @return cell c (< m->ncells) of m. */
+static inline rl_cell rl__map_cell(const rl_map *m, uint32_t c)
+{
+    if (m->cells != NULL)
+        return m->cells[c];
+    rl_cell r;
+    r.i = c % m->nu;
+    r.j = c / m->nu;
+    r.clipped = (m->cut[c >> 3] >> (c & 7)) & 1u;
+    return r;
+}
+
+/* @return the clipped polygon of cell c of m in frame coordinates, in out (room for
  * RL_MAX_POLY_VERTS + 4); the vertex count. A point receiver gives its point. A cut cell's polygon is
  * clipped anew on each call (its vertices are not stored). */
-uint32_t rl__map_cell_polygon(const rl_map *m, const rl_cell *c, v2 *out);
+uint32_t rl__map_cell_polygon(const rl_map *m, uint32_t c, v2 *out);
 
 /* @return the area of cell c of m, m^2: its polygon's; 0 for a point receiver. */
-double rl__map_cell_area(const rl_map *m, const rl_cell *c);
+double rl__map_cell_area(const rl_map *m, uint32_t c);
 
 /* @return the cell on grid square (i, j) of m (i < nu, j < nv), or -1 where the polygon has no area. */
 static inline int32_t rl__map_grid_cell(const rl_map *m, size_t i, size_t j)

@@ -84,7 +84,7 @@ static int baseline_gather(const rl_transfer_ctx *ctx, const rl_tile *t, uint32_
             if (cell < 0)
                 continue;
             v2 cp[RL_MAX_POLY_VERTS + 8];
-            uint32_t ncp = rl__map_cell_polygon(m, &m->cells[cell], cp);
+            uint32_t ncp = rl__map_cell_polygon(m, (uint32_t)cell, cp);
             lds_key key = rl__lds_make(ilf_hash_mix(rl__pair_key(ctx, ei, t->map_index), (uint64_t)cell));
             double acc[3] = {0, 0, 0};
             rl_ray_batch batch;

@@ -169,9 +169,9 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
          * its directions; shoot_shared() counts and drops what lands
          * behind or beside the emitter, as the draw would have. A whole
          * square cell needs no domain: its corner comes from its indices. */
-        const rl_cell *c = &m->cells[cell];
-        int square = !c->clipped;
-        v2 corner = {m->u0 + c->i * m->cell, m->v0 + c->j * m->cell};
+        const rl_cell c = rl__map_cell(m, cell);
+        int square = !c.clipped;
+        v2 corner = {m->u0 + c.i * m->cell, m->v0 + c.j * m->cell};
         if (!square)
             rl__cell_domain(m, cell, &dom);
         lds_key key = rl__lds_make_last2(ilf_hash_mix(L->key, cell));

@@ -205,8 +205,8 @@ size_t rl__node_region(const rl_transfer_ctx *ctx, const rl_pair *p, const v3 *s
 
 void rl__cell_domain(const rl_map *m, uint32_t cell, rl_origin_domain *d)
 {
-    d->n = rl__map_cell_polygon(m, &m->cells[cell], d->poly);
-    d->square = !m->cells[cell].clipped;
+    d->n = rl__map_cell_polygon(m, cell, d->poly);
+    d->square = !rl__map_cell(m, cell).clipped;
     if (!d->square)
         rl__polygon_sampler_init(&d->ps, d->poly, d->n);
 }

@@ -93,16 +93,16 @@ rl_status rl_solution_map_rows(const rl_solution *s, size_t k, uint32_t first, u
                         (unsigned long long)first + count, k, m->ncells);
     for (uint32_t r = 0; r < count; r++) {
         const uint32_t c = first + r;
-        const rl_cell *cell = &m->cells[c];
+        const rl_cell cell = rl__map_cell(m, c);
         if (ij) {
-            ij[2 * r] = cell->i;
-            ij[2 * r + 1] = cell->j;
+            ij[2 * r] = cell.i;
+            ij[2 * r + 1] = cell.j;
         }
         if (area)
-            area[r] = rl__map_cell_area(m, cell);
+            area[r] = rl__map_cell_area(m, c);
         if (centre) {
             v2 poly[RL_MAX_POLY_VERTS + 8];
-            uint32_t n = rl__map_cell_polygon(m, cell, poly);
+            uint32_t n = rl__map_cell_polygon(m, c, poly);
             v3_store(frame_point(&m->frame, rl__polygon_centroid(poly, n)), centre + 3 * r);
         }
         for (int ch = 0; ch < 3; ch++) {

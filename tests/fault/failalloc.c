@@ -8,7 +8,9 @@
  * into it, or into a test program) or liblfio. Calls from libraries (libc,
  * HDF5, Embree, assimp, the C++ runtime) pass through uncounted: their own
  * out-of-memory behaviour is theirs, and ours is what a test can hold to a
- * contract. Every call is forwarded to the next definition (glibc's, or
+ * contract. A realloc that does not grow its block (a trim, whose failure
+ * the caller answers by keeping the block) passes through uncounted too: it
+ * has no out-of-memory path to test. Every call is forwarded to the next definition (glibc's, or
  * AddressSanitizer's when the program is built with it), so free() needs no
  * stand-in.
  *
@@ -28,6 +30,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <link.h>
+#include <malloc.h>
 #include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -195,6 +198,8 @@ void *calloc(size_t count, size_t size)
 void *realloc(void *old, size_t size)
 {
     resolve();
+    if (old != NULL && size > 0 && size <= malloc_usable_size(old))
+        return next_realloc(old, size);
     if (should_fail(CALLER)) {
         errno = ENOMEM;
         return NULL;
