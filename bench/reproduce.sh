@@ -105,6 +105,33 @@ relight_pair classroom_lf data/classroom_lightfield.json --bounces 0 -- --bounce
 [ "$QUICK" = 1 ] || { REPEATS=1 relight_pair classroom_lf_paper data/.bench_classroom_lightfield_paper.json --bounces 0 -- --bounces 0 --zero-culling 0; }
 
 say ""
+say "## 3c. One core against two (whole processes): one thread pinned to one processor, against two threads"
+say "   (a direct run writes radiance.h5 on a thread of its own: --threads 1 alone would lend it the second core)"
+# cores_pair NAME SCENE OPTS...: REPEATS alternating runs of 'taskset -c 0 ilf ... --threads 1' and
+# 'ilf ... --threads 2'; prints the median wall seconds of each and their ratio
+cores_pair() {
+    name=$1 scene=$2
+    shift 2
+    one="" two=""
+    i=0
+    while [ $i -lt $REPEATS ]; do
+        /usr/bin/time -f %e -o "$OUT/relight/$name-1core.t" taskset -c 0 "$ILF" relight "$scene" \
+            -o "$OUT/relight/$name-1core" --quiet --no-view --threads 1 "$@"
+        /usr/bin/time -f %e -o "$OUT/relight/$name-2cores.t" "$ILF" relight "$scene" \
+            -o "$OUT/relight/$name-2cores" --quiet --no-view --threads 2 "$@"
+        one="$one $(cat "$OUT/relight/$name-1core.t")" two="$two $(cat "$OUT/relight/$name-2cores.t")"
+        i=$((i + 1))
+    done
+    m1=$(median $one) m2=$(median $two)
+    say "$name: one core $m1 s, two $m2 s: $($py -c "print('%.2fx' % ($m1 / $m2))")"
+}
+if [ "$QUICK" != 1 ] && command -v taskset > /dev/null; then
+    cores_pair classroom_lf_paper data/.bench_classroom_lightfield_paper.json --bounces 0
+    cores_pair beams_bounces data/.bench_beams_paper.json --bounces 2
+fi
+say "the program image, no scene (ilf --help): peak RSS $( /usr/bin/time -f %M "$ILF" --help 2>&1 >/dev/null | tail -1) KiB"
+
+say ""
 say "## 4. The ray ceiling"
 for s in beams classroom; do
     "$ILF" bench --rays "data/$s.json" -o "$OUT/rays_$s" --rays-count 10000000 | tee -a "$RES"
