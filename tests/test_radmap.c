@@ -232,6 +232,7 @@ struct slicer {
     float *irradiance, *radiosity;
 };
 
+/* lfio_radmap_describe_fn: patch k without its cells, checking the last one's were all asked for. @return LFIO_OK. */
 static lfio_status describe_bare(void *user, size_t k, lfio_radmap_patch *out)
 {
     struct slicer *s = user;
@@ -245,6 +246,8 @@ static lfio_status describe_bare(void *user, size_t k, lfio_radmap_patch *out)
     return LFIO_OK;
 }
 
+/* lfio_radmap_rows_fn: the cells asked for, copied into the slicer's buffers.
+ * @return LFIO_OK; LFIO_ERR_NOMEM where told to fail; LFIO_ERR_ARG for a range lfio must not ask. */
 static lfio_status rows_copied(void *user, size_t k, uint32_t first, uint32_t count, lfio_radmap_rows *out)
 {
     struct slicer *s = user;

@@ -955,14 +955,16 @@ static void on_maps_ready(void *user, const rl_solution *solution, size_t ready)
     t->ready = ready > t->ready ? ready : t->ready;
 }
 
-/* maps_ready: ten floor strips under a lamp. A direct run tells the maps as they are finished, more than
- * once, in order, each with its final values; a run with a bounce tells them all at its end. */
 /* rl_solution_map_rows(): a slice of map 0 is the same slice of rl_solution_map_cells()'s copy, every
  * output; a range past the map's cells is refused. */
 static void check_map_rows(const rl_solution *sol)
 {
     rl_map_info m;
-    if (rl_solution_map_info(sol, 0, &m) != RL_OK || m.ncells < 40) {
+    if (rl_solution_map_info(sol, 0, &m) != RL_OK) {
+        CHECK(0, "map_rows: %s", rl_errmsg());
+        return;
+    }
+    if (m.ncells < 40) {
         CHECK(0, "map_rows: map 0 has %u cells", m.ncells);
         return;
     }
@@ -970,6 +972,11 @@ static void check_map_rows(const rl_solution *sol)
     uint32_t *ij = malloc(2 * n * sizeof *ij), rij[2 * 21];
     double *area = malloc(n * sizeof *area), *centre = malloc(3 * n * sizeof *centre), rarea[21], rcentre[3 * 21];
     float *e = malloc(3 * n * sizeof *e), *b = malloc(3 * n * sizeof *b), re[3 * 21], rb[3 * 21];
+    if (!ij || !area || !centre || !e || !b) {
+        CHECK(0, "map_rows: out of memory");
+        free(ij), free(area), free(centre), free(e), free(b);
+        return;
+    }
     CHECK(rl_solution_map_cells(sol, 0, ij, area, centre, e, b) == RL_OK, "map_rows: %s", rl_errmsg());
     CHECK(rl_solution_map_rows(sol, 0, first, count, rij, rarea, rcentre, re, rb) == RL_OK, "map_rows: %s",
           rl_errmsg());
@@ -988,6 +995,8 @@ static void check_map_rows(const rl_solution *sol)
     free(b);
 }
 
+/* maps_ready: ten floor strips under a lamp. A direct run tells the maps as they are finished, more than
+ * once, in order, each with its final values; a run with a bounce tells them all at its end. */
 static void check_maps_ready(void)
 {
     char path[600];

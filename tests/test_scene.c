@@ -686,7 +686,8 @@ static void test_interpolation(void)
         rl_map *c = &coarse[m], *f = &fine[m];
         double lo = INFINITY, hi = -INFINITY;
         for (uint32_t k = 0; k < c->ncells; k++) {
-            double u = c->u0 + (rl__map_cell(c, k).i + 0.5) * c->cell, v = c->v0 + (rl__map_cell(c, k).j + 0.5) * c->cell;
+            const rl_cell ck = rl__map_cell(c, k);
+            double u = c->u0 + (ck.i + 0.5) * c->cell, v = c->v0 + (ck.j + 0.5) * c->cell;
             for (int ch = 0; ch < 3; ch++)
                 c->e_pass[k][ch] = 1.0 + 2.0 * u - 3.0 * v + ch;
             lo = fmin(lo, c->e_pass[k][0]);

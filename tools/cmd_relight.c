@@ -523,8 +523,9 @@ static lfio_status describe_solution_map(patch_arrays *a, size_t k, lfio_radmap_
     return LFIO_OK;
 }
 
-/* lfio_radmap_write_each()'s describe: map k of the solution, in the arrays of user (a patch_arrays).
- * Reports its own failures (cli.h). @return LFIO_OK, or LFIO_ERR_NOMEM / LFIO_ERR_ARG after reporting. */
+/* lfio_radmap_write_rows()'s describe: map k of the solution but its cells (map_rows() gives those), waiting
+ * beside the engine until it is final. Reports its own failures (cli.h). @return LFIO_OK, or LFIO_ERR_ARG
+ * after reporting. */
 static lfio_status describe_map(void *user, size_t k, lfio_radmap_patch *p)
 {
     patch_arrays *a = user;
@@ -538,7 +539,8 @@ static lfio_status describe_map(void *user, size_t k, lfio_radmap_patch *p)
     return st;
 }
 
-/* map_rows()'s reading of cells [first, first + count) of map k of a's solution. */
+/* map_rows()'s reading of cells [first, first + count) of map k of a's solution into a's arrays.
+ * @return LFIO_OK, or LFIO_ERR_NOMEM / LFIO_ERR_ARG after reporting. */
 static lfio_status solution_map_rows(patch_arrays *a, size_t k, uint32_t first, uint32_t count,
                                      lfio_radmap_rows *out)
 {
@@ -560,7 +562,8 @@ static lfio_status solution_map_rows(patch_arrays *a, size_t k, uint32_t first, 
 }
 
 /* lfio_radmap_write_rows()'s rows: cells [first, first + count) of map k (describe_map() having waited for
- * it to be final), in the arrays of user (a patch_arrays). Reports its own failures, as describe_map(). */
+ * it to be final), in the arrays of user (a patch_arrays). Reports its own failures, as describe_map().
+ * @return LFIO_OK, or LFIO_ERR_NOMEM / LFIO_ERR_ARG after reporting (or after the engine's failure). */
 static lfio_status map_rows(void *user, size_t k, uint32_t first, uint32_t count, lfio_radmap_rows *out)
 {
     patch_arrays *a = user;
@@ -575,8 +578,8 @@ static lfio_status map_rows(void *user, size_t k, uint32_t first, uint32_t count
 }
 
 /* Writes the n maps of solution to the staged radiance.h5, a slice of one map's cells in memory at a time, each once
- * it is final when beside is given (the engine still running). Prints nothing but describe_map's own
- * failures. @return lfio's status; *cells the cells written, *reported whether a failure was reported. */
+ * it is final when beside is given (the engine still running). Prints nothing but describe_map()'s and
+ * map_rows()'s own failures. @return lfio's status; *cells the cells written, *reported whether a failure was reported. */
 static lfio_status radiance_write(relight_run *run, const rl_solution *solution, size_t n, map_writer *beside,
                                   uint64_t *cells, int *reported)
 {

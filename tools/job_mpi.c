@@ -165,15 +165,17 @@ typedef struct whole_patches {
     void *user;
 } whole_patches;
 
-/* lfio_radmap_describe_fn: patch k described, then its cells asked whole. */
+/* lfio_radmap_describe_fn: patch k described, then its cells asked whole (rows NULL: as described).
+ * @return describe's or rows's status. */
 static lfio_status describe_whole(void *user, size_t k, lfio_radmap_patch *out)
 {
     const whole_patches *w = user;
+    lfio_status st = w->describe(w->user, k, out);
+    if (st != LFIO_OK || w->rows == NULL)
+        return st;
     lfio_radmap_rows r;
     memset(&r, 0, sizeof r);
-    lfio_status st = w->describe(w->user, k, out);
-    if (st == LFIO_OK)
-        st = w->rows(w->user, k, 0, out->ncells, &r);
+    st = w->rows(w->user, k, 0, out->ncells, &r);
     out->cell_ij = r.cell_ij, out->cell_area = r.cell_area, out->cell_centre = r.cell_centre;
     out->irradiance = r.irradiance, out->radiosity = r.radiosity;
     return st;

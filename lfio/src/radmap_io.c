@@ -275,7 +275,7 @@ struct map_content {
     lfio_radmap_rows_fn rows; /* NULL: the cells are the described patch's own arrays */
     void *user;
     int rank, ranks; /* this writer among those of a collective write: patch k's arrays are rank k mod ranks's */
-    int serial;      /* written by lfio_radmap_write_each(), not through MPI-IO (even with one rank) */
+    int serial;      /* written by lfio_radmap_write_rows() (or _each()), not through MPI-IO (even with one rank) */
 };
 
 /* Writes the attributes of patch group g (obj) describing p. */
@@ -327,8 +327,8 @@ static const char *dataset_obj(const patch_write *w, int t, char *buf, size_t si
     return buf;
 }
 
-/* Creates w's group, its attributes and its datasets, and writes the datasets that HDF5 filters itself
- * (all of them unless w->direct, else the ones without deflate); stops at the first failure (w->st). */
+/* Creates w's group, its attributes and its datasets, and writes its vertices (the cells come a slice at a
+ * time: write_patch()); stops at the first failure (w->st). */
 static void patch_objects(void *arg)
 {
     patch_write *w = arg;
@@ -341,7 +341,7 @@ static void patch_objects(void *arg)
         char dobj[128];
         dataset_obj(w, t, dobj, sizeof dobj);
         w->st = lfio__h5_create_dataset(w->path, w->obj, w->g, &w->lay[t], &w->d[t]);
-        if (w->st == LFIO_OK && !(w->direct && w->lay[t].deflate)) {
+        if (w->st == LFIO_OK && map_datasets[t].per_vertex) {
             const hsize_t zero[2] = {0, 0};
             w->st = lfio__h5_write_part(w->path, dobj, w->d[t], memory_type((enum map_ds)t), w->lay[t].rank, zero,
                                         w->lay[t].dims, patch_array(w->p, (enum map_ds)t), w->mine);
@@ -378,7 +378,26 @@ static size_t patch_chunks(const patch_write *w, uint32_t first, lfio__chunk *c,
     return n;
 }
 
-/* Stores the n filtered chunks c where at says, as they are. */
+/* Writes cells [first, first + w->p->ncells) of w's cell datasets that lfio does not filter itself (all of
+ * them unless w->direct, else those without deflate) from w->p, through HDF5.
+ * @return LFIO_OK, or LFIO_ERR_IO with the message set. */
+static lfio_status write_cell_rows(const patch_write *w, uint32_t first)
+{
+    for (int t = 0; t < MAP_DS_COUNT; t++) {
+        if (map_datasets[t].per_vertex || (w->direct && w->lay[t].deflate))
+            continue;
+        char dobj[128];
+        const hsize_t offset[2] = {first, 0}, count[2] = {w->p->ncells, w->lay[t].dims[1]};
+        lfio_status st = lfio__h5_write_part(w->path, dataset_obj(w, t, dobj, sizeof dobj), w->d[t],
+                                             memory_type((enum map_ds)t), w->lay[t].rank, offset, count,
+                                             patch_array(w->p, (enum map_ds)t), w->mine);
+        if (st != LFIO_OK)
+            return st;
+    }
+    return LFIO_OK;
+}
+
+/* Stores the n filtered chunks c where at says, as they are. @return LFIO_OK, or LFIO_ERR_IO. */
 static lfio_status store_chunks(const patch_write *w, const lfio__chunk *c, const chunk_place *at, size_t n)
 {
     for (size_t k = 0; k < n; k++) {
@@ -432,15 +451,17 @@ static lfio_status patch_slice(const struct map_content *mc, const char *path, s
 }
 
 /* Every slice but a patch's last is a whole number of chunks, and a patch of more than one slice has every
- * cell dataset deflated (patch_objects() writes the others whole, from the first slice). */
+ * cell dataset deflated, so that lfio's own filtering only ever sees whole chunks of one slice. */
 _Static_assert(LFIO_RADMAP_ROWS_MAX % CELL_CHUNK == 0, "a slice is a whole number of chunks");
 _Static_assert(LFIO_RADMAP_ROWS_MAX * 4 >= DEFLATE_MIN_BYTES, "a patch of several slices is all deflated");
 
 /* Writes patch p (as described, k of the content mc) as group /patches/k of the file whose "patches" group
  * is patches; its arrays only when mine (a collective write's other ranks take part with nothing).
+ * A serial write takes the cells a slice at a time (LFIO_RADMAP_ROWS_MAX), a collective one the whole patch.
  * direct: the deflated datasets' chunks are filtered by lfio on several threads, then stored as they are
- * (a serial write on a little-endian machine: the arrays' bytes are the stored ones), a slice of cells at a
- * time, the first slice's while HDF5 makes the patch's objects; else HDF5 filters the whole patch. */
+ * (a serial write on a little-endian machine: the arrays' bytes are the stored ones), the first slice's
+ * while HDF5 makes the patch's objects; HDF5 filters the others. @return LFIO_OK, or the first failure's
+ * status (rows's, LFIO_ERR_ARG, LFIO_ERR_NOMEM, LFIO_ERR_IO) with its message. */
 static lfio_status write_patch(const struct map_content *mc, const char *path, hid_t patches, size_t k,
                                const lfio_radmap_patch *p, int mine, int direct)
 {
@@ -453,7 +474,7 @@ static lfio_status write_patch(const struct map_content *mc, const char *path, h
         w.d[t] = -1;
         patch_layout((enum map_ds)t, p->nverts, p->ncells, &w.lay[t]);
     }
-    const uint32_t step = direct ? LFIO_RADMAP_ROWS_MAX : p->ncells;
+    const uint32_t step = mc->serial ? LFIO_RADMAP_ROWS_MAX : p->ncells;
     q.ncells = p->ncells < step ? p->ncells : step;
     size_t cap = direct ? patch_chunks(&w, 0, NULL, NULL) : 0;
     lfio__chunk *c = cap ? malloc(cap * sizeof *c) : NULL;
@@ -472,6 +493,8 @@ static lfio_status write_patch(const struct map_content *mc, const char *path, h
         if (w.st == LFIO_OK)
             w.st = store_chunks(&w, c, at, n);
         lfio__chunks_free(c, n);
+        if (w.st == LFIO_OK)
+            w.st = write_cell_rows(&w, first);
         if ((first += count) >= p->ncells)
             break;
     }

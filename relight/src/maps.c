@@ -7,7 +7,8 @@
  * the polygon has area survive; a cell cut by the polygon's border is marked,
  * and its clipped polygon is clipped again whenever it is asked for, so cell
  * values are means over the part that is really surface. Memory is 8 bytes
- * per cell that exists plus one index per grid square.
+ * per cell that exists plus one index per grid square, or, where every
+ * square of the grid is a cell, one bit per cell (which are cut).
  */
 #include <stdlib.h>
 #include <string.h>
