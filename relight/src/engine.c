@@ -790,6 +790,8 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
         rl_solution_destroy(s);
         return st;
     }
+    for (size_t m = 0; m < s->nmaps; m++)
+        rl__map_settle(&s->maps[m]);
     if (run->maps_ready && !pass_run.reporting)
         run->maps_ready(run->maps_ready_user, s, s->nmaps);
     *out = s;

@@ -305,6 +305,17 @@ rl_status rl__map_point(v3 p, v3 n, rl_map *out)
     return map_accumulators(out, 0);
 }
 
+void rl__map_settle(rl_map *m)
+{
+    const int re_emits = m->e_prev != NULL;
+    if (m->e_pass != m->e_total)
+        free(m->e_pass);
+    if (re_emits && m->e_prev != m->e_total)
+        free(m->e_prev);
+    m->e_pass = m->e_total;
+    m->e_prev = re_emits ? m->e_total : NULL;
+}
+
 void rl__maps_free(rl_map *maps, size_t count)
 {
     for (size_t k = 0; maps && k < count; k++) {
@@ -312,10 +323,12 @@ void rl__maps_free(rl_map *maps, size_t count)
         free(maps[k].grid);
         free(maps[k].cells);
         free(maps[k].cut);
+        /* a settled map's arrays are one (rl__map_settle()) */
         if (maps[k].e_total != maps[k].e_pass)
             free(maps[k].e_total);
+        if (maps[k].e_prev != maps[k].e_total && maps[k].e_prev != maps[k].e_pass)
+            free(maps[k].e_prev);
         free(maps[k].e_pass);
-        free(maps[k].e_prev);
     }
     free(maps);
 }

@@ -84,6 +84,10 @@ uint32_t rl__map_mark_direct(const rl_map *coarse, const rl_map *fine, uint8_t *
 /* Builds one point receiver at p facing n (unit). @return RL_OK or RL_ERR_NOMEM. */
 rl_status rl__map_point(v3 p, v3 n, rl_map *out);
 
+/* After a solve's last pass: frees m's pass and previous-pass arrays, which then both name e_total (the light
+ * the map re-emits, should a later pass ask), so that a finished solution holds 24 bytes a cell. */
+void rl__map_settle(rl_map *m);
+
 /* Frees every map's arrays and the array itself. */
 void rl__maps_free(rl_map *maps, size_t count);
 

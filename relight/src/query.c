@@ -11,7 +11,6 @@
  */
 #include <math.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "engine_internal.h"
 
@@ -71,11 +70,9 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
     rl_emitter *e = st == RL_OK ? rl__primary_emitters(scene, bounces > 0 ? sol->nmaps : 0, &ne) : NULL;
     if (st == RL_OK && !e)
         st = rl__fail(RL_ERR_NOMEM, "out of memory for emitters");
-    if (st == RL_OK && bounces > 0) {
-        for (size_t m = 0; m < sol->nmaps; m++)
-            memcpy(sol->maps[m].e_prev, sol->maps[m].e_total, sol->maps[m].ncells * sizeof *sol->maps[m].e_prev);
+    /* the solved maps re-emit their total: rl__solve() settled them, e_prev naming e_total */
+    if (st == RL_OK && bounces > 0)
         ne = rl__append_bounce_emitters(scene, sol->maps, sol->nmaps, e, ne);
-    }
     rl_pass_stats local;
     double *measured = NULL;
     if (st == RL_OK)
