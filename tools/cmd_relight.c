@@ -369,8 +369,8 @@ static int relight(relight_run *run)
 /* ------------------------------------------------------------ radiance.h5 */
 
 /*
- * radiance.h5 beside the engine (one process, one pass): the engine tells
- * which maps are final as it goes (rl_maps_ready_fn), and a thread of its
+ * radiance.h5 beside the engine (one process): the engine tells which maps
+ * are final as its last pass goes (rl_maps_ready_fn), and a thread of its
  * own writes them in order meanwhile, so that HDF5's serial work on the
  * maps' objects overlaps the engine's rather than following it. That
  * thread prints nothing: it keeps its messages, and the main thread reports

@@ -60,7 +60,7 @@ rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__r
     if (!(o.time_budget >= 0) || !isfinite(o.time_budget))
         return rl__fail(RL_ERR_ARG, "%s: time_budget must be finite and >= 0, got %g", call, o.time_budget);
     *run = (rl__run){ilf_thread_count(o.threads), o.progress, o.progress_user, o.time_budget, o.maps_ready,
-                     o.maps_ready_user, NULL};
+                     o.maps_ready_user, NULL, NULL, NULL};
     return RL_OK;
 }
 
@@ -117,6 +117,10 @@ static int tell_begin(pass_job *job, const rl__run *run, size_t nmaps, size_t ne
         atomic_init(&job->left[m], 0);
     for (size_t k = 0; ne > 0 && k < job->nitems; k++)
         atomic_fetch_add(&job->left[job->items[k].map], 1);
+    /* a map no tile gathers is complete already */
+    for (size_t m = 0; run->finish && m < nmaps; m++)
+        if (atomic_load(&job->left[m]) == 0)
+            run->finish(run->finish_user, m);
     return 0;
 }
 
@@ -151,8 +155,11 @@ static void worker(void *p, unsigned index)
         if (job->seconds)
             job->seconds[k] = ilf_clock_thread_cpu() - t0;
         /* the tile's cells are written: its map may be final (its values happen before this) */
-        if (job->left && !atomic_load(&job->failed) && atomic_fetch_sub(&job->left[w->map], 1) == 1)
+        if (job->left && !atomic_load(&job->failed) && atomic_fetch_sub(&job->left[w->map], 1) == 1) {
+            if (job->run->finish)
+                job->run->finish(job->run->finish_user, w->map);
             tell_ready(job);
+        }
         atomic_fetch_add(&job->done, 1);
     }
     rl__scratch_free(&scratch);
@@ -593,20 +600,35 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
     return RL_OK;
 }
 
-/* Adds each map's pass irradiance to its total and keeps it for the next bounce (a map whose total is
- * its pass array already holds it). */
-static void close_pass(rl_map *maps, size_t nmaps)
+/* What completing a pass's maps takes (complete_map()). */
+typedef struct pass_end {
+    rl_map *maps;            /* the scene's */
+    const rl_map *coarse;    /* the larger cells the pass gathered on, one map per scene map, or NULL */
+    const uint8_t *gathered; /* with coarse: the larger cells whose area is gathered on its own, or NULL */
+    const size_t *at;        /* with coarse: map m's first larger cell among all the maps' */
+    int last;                /* the solve's last pass: the total is all that is kept */
+    uint8_t *done;           /* [nmaps]: map m completed */
+} pass_end;
+
+/* Completes map m after a pass has gathered its cells: sets the cells the pass left to the larger cells
+ * from those (rl__map_interpolate()), adds the pass's irradiance to the total and, but after the last pass,
+ * keeps it for the next bounce (a map whose total is its pass array already holds it). It writes map m
+ * alone and reads its larger map, so maps may be completed by any thread while the pass still gathers
+ * others; what other maps' gathers read of it, e_prev, it changes only between passes. */
+static void complete_map(void *user, size_t m)
 {
-    for (size_t m = 0; m < nmaps; m++) {
-        if (maps[m].e_total == maps[m].e_pass)
-            continue;
-        for (uint32_t c = 0; c < maps[m].ncells; c++)
+    pass_end *pe = user;
+    rl_map *f = &pe->maps[m];
+    if (pe->coarse)
+        rl__map_interpolate(&pe->coarse[m], pe->gathered ? pe->gathered + pe->at[m] : NULL, f);
+    if (f->e_total != f->e_pass)
+        for (uint32_t c = 0; c < f->ncells; c++)
             for (int k = 0; k < 3; k++) {
-                maps[m].e_total[c][k] += maps[m].e_pass[c][k];
-                if (maps[m].e_prev != NULL)
-                    maps[m].e_prev[c][k] = maps[m].e_pass[c][k];
+                f->e_total[c][k] += f->e_pass[c][k];
+                if (f->e_prev != NULL && !pe->last)
+                    f->e_prev[c][k] = f->e_pass[c][k];
             }
-    }
+    pe->done[m] = 1;
 }
 
 /* Cells that bounce passes on larger cells gather themselves. The first pass's gather on the larger
@@ -756,12 +778,17 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
         st = rl__fail(RL_ERR_NOMEM, "out of memory for the bounce cells");
     /* per-tile CPU times of the last pass: bounce passes after the first repeat its tiles and emitters */
     double *measured = NULL;
-    /* one pass of maps that hold their pass's light (no bounce follows, e_total is e_pass): each map is
-     * final once its tiles are, and the caller is told so as the pass goes (rl__run_pass) */
-    rl__run pass_run = *run;
-    pass_run.reporting = passes == 1 && scene->sampling.bounces == 0 && !cl ? s : NULL;
+    uint8_t *done = st == RL_OK ? malloc(s->nmaps ? s->nmaps : 1) : NULL;
+    size_t *coarse_at = st == RL_OK && coarse ? malloc((ncoarse ? ncoarse : 1) * sizeof *coarse_at) : NULL;
+    if (st == RL_OK && (!done || (coarse && !coarse_at)))
+        st = rl__fail(RL_ERR_NOMEM, "out of memory for the maps' passes");
+    for (size_t m = 0, at = 0; coarse_at && m < ncoarse; at += coarse[m++].ncells)
+        coarse_at[m] = at;
+    int told = 0, telling = 0; /* the caller was told of every map; of some, maybe */
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
-        int gather_coarse = p > 0 && coarse;
+        /* cells near occluders are gathered on their own after the larger cells, once marked (in the first
+         * bounce pass), unless the marking found none */
+        int gather_coarse = p > 0 && coarse, refining = gather_coarse && rf.near && !(rf.ready && rf.marked == 0);
         double base = span * p / passes, part = span / passes;
         if (p > 0)
             ne = rl__append_bounce_emitters(scene, s->maps, s->nmaps, e, 0);
@@ -769,30 +796,49 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
             free(measured);
             measured = NULL;
         }
-        if (gather_coarse && rf.near)
+        if (refining)
             part *= 0.75; /* the rest for the cells gathered themselves */
-        st = rl__run_pass(scene, s->tracer, cl, &pass_run, p, p, gather_coarse ? coarse : s->maps,
+        pass_end pe = {s->maps, gather_coarse ? coarse : NULL, gather_coarse && rf.near ? rf.gathered : NULL,
+                       coarse_at, p + 1 == passes, done};
+        memset(done, 0, s->nmaps);
+        /* The last pass of one process completes each map once the last of its own gathers has finished
+         * (the refined cells' when there are, else the pass's only), and tells the caller of it then, so
+         * that the caller may write it while the engine goes on; the other passes complete every map at
+         * their end. */
+        rl__run gather_run = *run, refine_run = *run;
+        rl__run *last_run = refining ? &refine_run : &gather_run;
+        if (pe.last && run->maps_ready && !cl) {
+            last_run->reporting = s;
+            last_run->finish = complete_map;
+            last_run->finish_user = &pe;
+            telling = 1;
+        }
+        st = rl__run_pass(scene, s->tracer, cl, &gather_run, p, p, gather_coarse ? coarse : s->maps,
                           gather_coarse ? ncoarse : s->nmaps, e, ne, base, part, &measured, &s->passes[p]);
-        if (st == RL_OK && gather_coarse && rf.near)
-            st = refine_pass(scene, s, cl, run, p, e, ne, base + part, part / 3, &rf);
-        for (size_t m = 0, cat = 0; gather_coarse && m < s->nmaps; cat += coarse[m++].ncells)
-            rl__map_interpolate(&coarse[m], rf.ready ? rf.gathered + cat : NULL, &s->maps[m]);
-        close_pass(s->maps, s->nmaps);
+        if (st == RL_OK && refining)
+            st = refine_pass(scene, s, cl, &refine_run, p, e, ne, base + part, part / 3, &rf);
+        /* the last run told of every map if it ran (a refinement with no cell to gather runs none) */
+        told = st == RL_OK && last_run->reporting != NULL && (!refining || rf.marked > 0);
+        for (size_t m = 0; st == RL_OK && m < s->nmaps; m++)
+            if (!done[m])
+                complete_map(&pe, m);
         s->npasses = p + 1;
     }
     refine_free(&rf, s->maps, s->nmaps);
     rl__maps_free(coarse, ncoarse);
     free(measured);
     free(e);
+    free(done);
+    free(coarse_at);
     if (st != RL_OK) {
-        if (run->maps_ready && pass_run.reporting) /* maps may have been told: withdrawn before they are freed */
+        if (telling) /* maps may have been told: withdrawn before they are freed */
             run->maps_ready(run->maps_ready_user, NULL, 0);
         rl_solution_destroy(s);
         return st;
     }
     for (size_t m = 0; m < s->nmaps; m++)
         rl__map_settle(&s->maps[m]);
-    if (run->maps_ready && !pass_run.reporting)
+    if (run->maps_ready && !told)
         run->maps_ready(run->maps_ready_user, s, s->nmaps);
     *out = s;
     return RL_OK;

@@ -33,6 +33,11 @@ typedef struct rl__run {
     rl_maps_ready_fn maps_ready; /* or NULL */
     void *maps_ready_user;
     const rl_solution *reporting; /* set by rl__solve() for a pass whose maps are final as its tiles finish */
+    /* with reporting: called with each map index once its tiles have finished, from the worker that
+     * finished the last one (or from the calling thread for a map with none), before the map is told of;
+     * it completes the map (NULL: nothing to complete) */
+    void (*finish)(void *user, size_t map);
+    void *finish_user;
 } rl__run;
 
 /* Checks options (NULL: the defaults) and resolves them into *run; `call` names the caller in messages.

@@ -59,9 +59,11 @@ typedef struct rl_solution rl_solution;
  * rl_solution_map_cells() and rl_solution_map_rows(), from any thread, while the run goes on (no other
  * call on solution is allowed before rl_relight() returns it). Called from
  * one of the engine's threads, with ready increasing, the last time with
- * the map count, and only if the run succeeds that far. A run of one pass
- * on one process reports maps as their cells are finished (in order: its
- * work goes map by map); others report them all at the end. It must return
+ * the map count, and only if the run succeeds that far. A run on one
+ * process reports maps as its last pass finishes them (in order: its work
+ * goes map by map; a map with bounces is finished once the last of its
+ * cells gathered in that pass are); a run across processes reports them
+ * all at its end. It must return
  * quickly and call nothing of the engine's but those accessors. If the
  * run then fails, it is called once more with solution NULL and ready 0
  * before the solution is freed: that call must return only once nothing
