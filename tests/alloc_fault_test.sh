@@ -143,8 +143,9 @@ walk "read a light field (info)" - "$ILF" info captured.h5
 walk "read a light field (verify)" - "$ILF" verify slab.h5
 walk "capture a probe grid" cap.h5 "$ILF" capture probes/manifest.json -o cap.h5 --threads 1 -q
 walk "depth correction" lamp.h5 "$ILF" reproject captured.h5 --proxy proxy.json -o lamp.h5 --threads 1 -q
+# radiance.h5 is written beside the engine, which may fail while the writer waits: with a bounce (its maps
+# told in its last pass) and with direct light alone (told as the one pass goes)
 walk "relight with a bounce and a view" out "$ILF" relight room.json -o out --threads 1 -q
-# direct light alone: radiance.h5 is then written beside the engine, which may fail while the writer waits
 walk "relight, direct light written beside the engine" out "$ILF" relight room.json -o out --bounces 0 --no-view --threads 1 -q
 walk "point queries with a bounce" - "$ILF" irradiance room.json --points points.txt --threads 1
 

@@ -82,13 +82,23 @@ typedef struct pass_job {
     double *seconds;       /* [nitems]: each tile's CPU time, or NULL */
     /* maps told ready as their last tile finishes (rl__run.reporting), or left NULL */
     const rl__run *run;
-    atomic_uint *left;     /* [nmaps]: tiles of each map not finished yet */
+    atomic_uint *left;     /* [nmaps]: tiles of each map not finished yet, plus 1 until the map is completed
+                              (rl__run.finish): 0 once it may be told of */
     size_t nmaps, ready;   /* maps [0, ready) told ready */
     pthread_mutex_t lock;  /* over ready and the calls of maps_ready, which come in order */
 } pass_job;
 
-/* Tells the run's maps_ready of the maps from job->ready on whose tiles have all finished, up to the
- * first that has some left: maps are told in order, as their tiles are dealt. */
+/* Completes map m, whose tiles have all finished (rl__run.finish), and only then lets tell_ready() tell of
+ * it: the completion's writes happen before the count reaches 0, which tell_ready() reads. */
+static void map_complete(pass_job *job, size_t m)
+{
+    if (job->run->finish)
+        job->run->finish(job->run->finish_user, m);
+    atomic_fetch_sub(&job->left[m], 1);
+}
+
+/* Tells the run's maps_ready of the maps from job->ready on that are complete, up to the first that is
+ * not: maps are told in order, as their tiles are dealt. */
 static void tell_ready(pass_job *job)
 {
     pthread_mutex_lock(&job->lock);
@@ -114,13 +124,13 @@ static int tell_begin(pass_job *job, const rl__run *run, size_t nmaps, size_t ne
     }
     job->run = run, job->nmaps = nmaps, job->ready = 0;
     for (size_t m = 0; m < nmaps; m++)
-        atomic_init(&job->left[m], 0);
+        atomic_init(&job->left[m], 1);
     for (size_t k = 0; ne > 0 && k < job->nitems; k++)
         atomic_fetch_add(&job->left[job->items[k].map], 1);
     /* a map no tile gathers is complete already */
-    for (size_t m = 0; run->finish && m < nmaps; m++)
-        if (atomic_load(&job->left[m]) == 0)
-            run->finish(run->finish_user, m);
+    for (size_t m = 0; m < nmaps; m++)
+        if (atomic_load(&job->left[m]) == 1)
+            map_complete(job, m);
     return 0;
 }
 
@@ -155,9 +165,8 @@ static void worker(void *p, unsigned index)
         if (job->seconds)
             job->seconds[k] = ilf_clock_thread_cpu() - t0;
         /* the tile's cells are written: its map may be final (its values happen before this) */
-        if (job->left && !atomic_load(&job->failed) && atomic_fetch_sub(&job->left[w->map], 1) == 1) {
-            if (job->run->finish)
-                job->run->finish(job->run->finish_user, w->map);
+        if (job->left && !atomic_load(&job->failed) && atomic_fetch_sub(&job->left[w->map], 1) == 2) {
+            map_complete(job, w->map);
             tell_ready(job);
         }
         atomic_fetch_add(&job->done, 1);

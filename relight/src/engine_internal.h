@@ -32,7 +32,8 @@ typedef struct rl__run {
     double time_budget;      /* seconds, 0 = none */
     rl_maps_ready_fn maps_ready; /* or NULL */
     void *maps_ready_user;
-    const rl_solution *reporting; /* set by rl__solve() for a pass whose maps are final as its tiles finish */
+    const rl_solution *reporting; /* set by rl__solve() for a run whose maps are final once finish() has run on
+                                     them (told to maps_ready as they are) */
     /* with reporting: called with each map index once its tiles have finished, from the worker that
      * finished the last one (or from the calling thread for a map with none), before the map is told of;
      * it completes the map (NULL: nothing to complete) */

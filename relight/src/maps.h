@@ -37,7 +37,8 @@ typedef struct rl_map {
     double (*e_total)[3];  /* irradiance summed over passes; the same array as e_pass in a map without
                               e_prev (one pass: nothing to sum) */
     double (*e_pass)[3];   /* irradiance of the current pass */
-    double (*e_prev)[3];   /* irradiance of the previous pass: what bounces re-emit; NULL without bounces */
+    double (*e_prev)[3];   /* irradiance of the previous pass: what bounces re-emit; NULL without bounces.
+                              After rl__map_settle(), e_pass and e_prev (unless NULL) both name e_total */
     float albedo[3];
     float emission[3];
     /* Borrowed, NULL unless rl__solve() (which owns the arrays) points them for a bounce pass by first
