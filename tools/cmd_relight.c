@@ -523,19 +523,32 @@ static lfio_status describe_solution_map(patch_arrays *a, size_t k, lfio_radmap_
     return LFIO_OK;
 }
 
-/* lfio_radmap_write_rows()'s describe: map k of the solution but its cells (map_rows() gives those), waiting
- * beside the engine until it is final. Reports its own failures (cli.h). @return LFIO_OK, or LFIO_ERR_ARG
- * after reporting. */
+/* Begins a reading of map k of a's solution: beside the engine, waits until the map is final.
+ * @return 1, to be ended by read_end(); 0 if the engine failed first (it says so itself: a->reported). */
+static int read_begin(patch_arrays *a, size_t k)
+{
+    if (a->beside == NULL || writer_wait(a->beside, k, NULL))
+        return 1;
+    a->reported = 1;
+    return 0;
+}
+
+/* Ends the reading read_begin() began. */
+static void read_end(patch_arrays *a)
+{
+    if (a->beside != NULL)
+        writer_done(a->beside);
+}
+
+/* lfio_radmap_write_rows()'s describe: map k of the solution but its cells (map_rows() gives those), once it
+ * is final. Reports its own failures (cli.h). @return LFIO_OK, or LFIO_ERR_ARG after reporting. */
 static lfio_status describe_map(void *user, size_t k, lfio_radmap_patch *p)
 {
     patch_arrays *a = user;
-    if (a->beside != NULL && !writer_wait(a->beside, k, NULL)) {
-        a->reported = 1; /* the engine failed, and says so itself */
+    if (!read_begin(a, k))
         return LFIO_ERR_ARG;
-    }
     lfio_status st = describe_solution_map(a, k, p);
-    if (a->beside != NULL)
-        writer_done(a->beside);
+    read_end(a);
     return st;
 }
 
@@ -567,13 +580,10 @@ static lfio_status solution_map_rows(patch_arrays *a, size_t k, uint32_t first, 
 static lfio_status map_rows(void *user, size_t k, uint32_t first, uint32_t count, lfio_radmap_rows *out)
 {
     patch_arrays *a = user;
-    if (a->beside != NULL && !writer_wait(a->beside, k, NULL)) {
-        a->reported = 1; /* the engine failed after telling of map k, and says so itself */
+    if (!read_begin(a, k))
         return LFIO_ERR_ARG;
-    }
     lfio_status st = solution_map_rows(a, k, first, count, out);
-    if (a->beside != NULL)
-        writer_done(a->beside);
+    read_end(a);
     return st;
 }
 
