@@ -36,6 +36,10 @@
  * twice) and the paper's 'beams' from 1.24 to 1.04 s, errors unchanged (BENCHMARKS.md, section 2m),
  * and still leaves hundreds of items to share out between threads. */
 #define TILE_CELLS 8192u
+/* Cells a pass gathering by first hits (bounce_rays) gathers in a work item: each cell casts its own rays,
+ * with nothing shared within a tile, so smaller items cost nothing and leave less for the last thread
+ * to finish alone. */
+#define TILE_FIRST_HIT 1024u
 
 /* How often the calling thread reports progress while a team works, seconds. */
 #define PROGRESS_PERIOD 0.02
@@ -112,8 +116,9 @@ static void tell_ready(pass_job *job)
     pthread_mutex_unlock(&job->lock);
 }
 
-/* Readies job to tell run's maps_ready of its nmaps maps as their tiles finish (job->items set; ne: the
- * pass's emitters, none meaning no tile runs). @return 0, or -1 without memory (nothing left allocated). */
+/* Readies job to tell run's maps_ready of its nmaps maps as their tiles finish (job->items set, every map
+ * with one at least, empty if need be; ne: the pass's emitters, none meaning no tile runs, when the maps
+ * are completed here). @return 0, or -1 without memory (nothing left allocated). */
 static int tell_begin(pass_job *job, const rl__run *run, size_t nmaps, size_t ne)
 {
     job->left = calloc(nmaps ? nmaps : 1, sizeof *job->left);
@@ -127,7 +132,7 @@ static int tell_begin(pass_job *job, const rl__run *run, size_t nmaps, size_t ne
         atomic_init(&job->left[m], 1);
     for (size_t k = 0; ne > 0 && k < job->nitems; k++)
         atomic_fetch_add(&job->left[job->items[k].map], 1);
-    /* a map no tile gathers is complete already */
+    /* a map no item runs for is completed now */
     for (size_t m = 0; m < nmaps; m++)
         if (atomic_load(&job->left[m]) == 1)
             map_complete(job, m);
@@ -159,7 +164,7 @@ static void worker(void *p, unsigned index)
             break;
         const work_item *w = &job->items[k];
         double t0 = job->seconds ? ilf_clock_thread_cpu() : 0.0;
-        if (rl__transfer_tile(&job->ctx, w->map, &job->maps[w->map], w->row0, w->row1, &scratch,
+        if (w->row0 < w->row1 && rl__transfer_tile(&job->ctx, w->map, &job->maps[w->map], w->row0, w->row1, &scratch,
                           &job->counters[index]) != 0)
             atomic_store(&job->failed, 1);
         if (job->seconds)
@@ -199,6 +204,31 @@ static int run_job(pass_job *job, unsigned n, const rl__run *run, double base, d
     }
     ilf_team_join(team);
     return atomic_load(&job->failed) ? -1 : 0;
+}
+
+/* A loop over maps shared by a team (each_map()). */
+typedef struct map_loop {
+    void (*fn)(void *user, size_t m);
+    void *user;
+    size_t n;
+    atomic_size_t next;
+} map_loop;
+
+static void map_loop_worker(void *p, unsigned index)
+{
+    (void)index;
+    map_loop *l = p;
+    for (size_t m; (m = atomic_fetch_add(&l->next, 1)) < l->n;)
+        l->fn(l->user, m);
+}
+
+/* Runs fn(user, m) for every m in [0, n), on up to threads threads; fn must write nothing another
+ * call reads or writes. */
+static void each_map(unsigned threads, size_t n, void (*fn)(void *user, size_t m), void *user)
+{
+    map_loop l = {fn, user, n, 0};
+    atomic_init(&l.next, 0);
+    ilf_parallel(n < threads ? (unsigned)(n ? n : 1) : threads, map_loop_worker, &l);
 }
 
 /* Sums the per-thread counters into stats. */
@@ -252,26 +282,63 @@ static uint32_t tile_work(const rl_map *maps, const work_item *w)
     return n;
 }
 
-/* Splits every map into tiles of about TILE_CELLS grid squares, leaving out those with no cell to gather.
- * @return the items (count in *n) or NULL. */
-static work_item *make_tiles(const rl_map *maps, size_t nmaps, size_t *n)
+/* @return what row j of map m adds to a tile: its grid squares, or with by_work the cells of it a pass
+ * gathers (rl_map.subset's when set). */
+static uint32_t row_units(const rl_map *m, uint32_t j, int by_work)
 {
-    size_t count = 0, k = 0;
+    if (!by_work)
+        return m->nu;
+    uint32_t c0 = first_cell_of_row(m, j), c1 = first_cell_of_row(m, j + 1), n = 0;
+    if (!m->subset)
+        return c1 - c0;
+    for (uint32_t c = c0; c < c1; c++)
+        n += m->subset[c] != 0;
+    return n;
+}
+
+/* Splits every map into tiles of whole rows, each row added while the tile stays within per_tile units
+ * (row_units()) or is empty, leaving out those with no cell to gather; with empty, a map left without
+ * any has one empty item (rows 0 to 0), in its place. items NULL counts them only. @return the number
+ * of items. */
+static size_t split_tiles(const rl_map *maps, size_t nmaps, uint32_t per_tile, int by_work, int empty,
+                          work_item *items)
+{
+    size_t k = 0;
     for (size_t m = 0; m < nmaps; m++) {
-        uint32_t rows = maps[m].nu >= TILE_CELLS ? 1 : TILE_CELLS / maps[m].nu;
-        count += (maps[m].nv + rows - 1) / rows;
-    }
-    work_item *items = malloc((count ? count : 1) * sizeof *items);
-    if (!items)
-        return NULL;
-    for (size_t m = 0; m < nmaps; m++) {
-        uint32_t rows = maps[m].nu >= TILE_CELLS ? 1 : TILE_CELLS / maps[m].nu;
-        for (uint32_t r = 0; r < maps[m].nv; r += rows) {
-            items[k] = (work_item){(uint32_t)m, r, r + rows < maps[m].nv ? r + rows : maps[m].nv};
-            k += tile_work(maps, &items[k]) > 0;
+        size_t first = k;
+        for (uint32_t r0 = 0, r1; r0 < maps[m].nv; r0 = r1) {
+            uint64_t units = 0, work = 0;
+            for (r1 = r0; r1 < maps[m].nv; r1++) {
+                uint32_t u = row_units(&maps[m], r1, by_work);
+                if (r1 > r0 && units + u > per_tile)
+                    break;
+                units += u;
+                work += by_work ? u : 0;
+            }
+            work_item w = {(uint32_t)m, r0, r1};
+            if (by_work ? work == 0 : tile_work(maps, &w) == 0)
+                continue;
+            if (items)
+                items[k] = w;
+            k++;
+        }
+        if (empty && k == first) {
+            if (items)
+                items[k] = (work_item){(uint32_t)m, 0, 0};
+            k++;
         }
     }
-    *n = k;
+    return k;
+}
+
+/* Splits every map into items (split_tiles()). @return the items (count in *n) or NULL. */
+static work_item *make_tiles(const rl_map *maps, size_t nmaps, uint32_t per_tile, int by_work, int empty,
+                             size_t *n)
+{
+    size_t count = split_tiles(maps, nmaps, per_tile, by_work, empty, NULL);
+    work_item *items = malloc((count ? count : 1) * sizeof *items);
+    if (items)
+        *n = split_tiles(maps, nmaps, per_tile, by_work, empty, items);
     return items;
 }
 
@@ -564,7 +631,13 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
         job.ctx.glow = glow;
     }
     size_t nall = 0;
-    work_item *all = make_tiles(maps, nmaps, &nall);
+    /* a first-hit gather costs its cells alone: small tiles share its cells out evenly between threads, and
+     * let a last pass tell of its maps as they finish */
+    int first_hit = glow != NULL;
+    /* one process's pass whose maps are final as they finish: tell the caller map by map, a map with
+     * nothing to gather being completed by a worker, in its place, as one with an empty item */
+    int telling = run->maps_ready && run->reporting && !cl;
+    work_item *all = make_tiles(maps, nmaps, first_hit ? TILE_FIRST_HIT : TILE_CELLS, first_hit, telling, &nall);
     share sh = {0};
     if (!all || (cl && share_deal(cl, maps, all, nall, *measured, &sh) != 0)) {
         free(all);
@@ -574,8 +647,6 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
     job.items = cl ? sh.mine : all;
     job.nitems = cl ? sh.nmine : nall;
     job.seconds = cl ? sh.seconds : NULL;
-    /* one process's pass whose maps are final as they finish: tell the caller map by map */
-    int telling = run->maps_ready && run->reporting && !cl;
     if (telling && tell_begin(&job, run, nmaps, ne) != 0) {
         free(all);
         rl__glow_free(glow, scene->npolygons);
@@ -640,6 +711,14 @@ static void complete_map(void *user, size_t m)
     pe->done[m] = 1;
 }
 
+/* Completes map m unless the pass did (each_map()'s fn over a pass_end). */
+static void complete_rest(void *user, size_t m)
+{
+    pass_end *pe = user;
+    if (!pe->done[m])
+        complete_map(pe, m);
+}
+
 /* Cells that bounce passes on larger cells gather themselves. The first pass's gather on the larger
  * cells flags those near an occluder (rl_map.near); the cells of the scene's maps that lie in a
  * flagged larger cell or in one of its eight neighbours are then gathered on their own
@@ -689,9 +768,26 @@ static void refine_free(refine *rf, rl_map *maps, size_t nmaps)
     free(rf->measured);
 }
 
+/* The marking of one map's cells (each_map()'s fn): map m's cells lie from at[m] among all the maps', its
+ * larger cells from cat[m]; it marks marked[m] of them. */
+typedef struct mark_job {
+    rl_map *maps;
+    refine *rf;
+    size_t *at, *cat;
+    uint32_t *marked;
+} mark_job;
+
+static void mark_map(void *user, size_t m)
+{
+    mark_job *j = user;
+    j->marked[m] = rl__map_mark_direct(&j->rf->coarse[m], &j->maps[m], j->rf->gathered + j->cat[m],
+                                       j->rf->subset + j->at[m]);
+}
+
 /* Marks the cells that gather themselves from the larger maps' flags (summed over ranks first: each rank
- * gathered its own tiles). @return 0, -1 (out of memory) or -2 (the exchange failed). */
-static int refine_mark(const rl_cluster *cl, rl_map *maps, size_t nmaps, refine *rf)
+ * gathered its own tiles), a map at a time on up to threads threads. @return 0, -1 (out of memory) or
+ * -2 (the exchange failed). */
+static int refine_mark(const rl_cluster *cl, unsigned threads, rl_map *maps, size_t nmaps, refine *rf)
 {
     if (cl) {
         double *v = malloc((rf->nnear ? rf->nnear : 1) * sizeof *v);
@@ -706,13 +802,27 @@ static int refine_mark(const rl_cluster *cl, rl_map *maps, size_t nmaps, refine 
         if (rc != 0)
             return -2;
     }
-    for (size_t m = 0, at = 0, cat = 0; m < nmaps; at += maps[m].ncells, cat += rf->coarse[m++].ncells) {
-        rf->marked += rl__map_mark_direct(&rf->coarse[m], &maps[m], rf->gathered + cat, rf->subset + at);
-        maps[m].subset = rf->subset + at;
+    size_t n = nmaps ? nmaps : 1;
+    mark_job j = {maps, rf, malloc(n * sizeof *j.at), malloc(n * sizeof *j.cat), malloc(n * sizeof *j.marked)};
+    if (!j.at || !j.cat || !j.marked) {
+        free(j.at);
+        free(j.cat);
+        free(j.marked);
+        return -1;
+    }
+    for (size_t m = 0, at = 0, cat = 0; m < nmaps; at += maps[m].ncells, cat += rf->coarse[m++].ncells)
+        j.at[m] = at, j.cat[m] = cat;
+    each_map(threads, nmaps, mark_map, &j);
+    for (size_t m = 0; m < nmaps; m++) {
+        rf->marked += j.marked[m];
+        maps[m].subset = rf->subset + j.at[m];
     }
     for (size_t m = 0; m < rf->ncoarse; m++)
         rf->coarse[m].near = NULL; /* flagged once: later passes only read the marks */
     rf->ready = 1;
+    free(j.at);
+    free(j.cat);
+    free(j.marked);
     return 0;
 }
 
@@ -721,7 +831,7 @@ static int refine_mark(const rl_cluster *cl, rl_map *maps, size_t nmaps, refine 
 static rl_status refine_pass(const rl_scene *scene, rl_solution *s, const rl_cluster *cl, const rl__run *run,
                              uint32_t p, const rl_emitter *e, size_t ne, double base, double span, refine *rf)
 {
-    int rc = rf->ready ? 0 : refine_mark(cl, s->maps, s->nmaps, rf);
+    int rc = rf->ready ? 0 : refine_mark(cl, run->threads, s->maps, s->nmaps, rf);
     if (rc == -1)
         return rl__fail(RL_ERR_NOMEM, "pass %u: out of memory marking the bounce cells", p);
     if (rc == -2)
@@ -828,9 +938,8 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
             st = refine_pass(scene, s, cl, &refine_run, p, e, ne, base + part, part / 3, &rf);
         /* the last run told of every map if it ran (a refinement with no cell to gather runs none) */
         told = st == RL_OK && last_run->reporting != NULL && (!refining || rf.marked > 0);
-        for (size_t m = 0; st == RL_OK && m < s->nmaps; m++)
-            if (!done[m])
-                complete_map(&pe, m);
+        if (st == RL_OK)
+            each_map(run->threads, s->nmaps, complete_rest, &pe);
         s->npasses = p + 1;
     }
     refine_free(&rf, s->maps, s->nmaps);
