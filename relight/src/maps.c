@@ -273,8 +273,7 @@ uint32_t rl__map_mark_direct(const rl_map *coarse, const rl_map *fine, uint8_t *
         gathered[c] = coarse->near && near_around(coarse, c);
     uint32_t marked = 0;
     for (uint32_t k = 0; k < fine->ncells; k++) {
-        v2 poly[RL_MAX_POLY_VERTS + 4];
-        v2 q = rl__polygon_centroid(poly, rl__map_cell_polygon(fine, k, poly));
+        v2 q = rl__map_cell_centroid(fine, k, NULL);
         int64_t home = rl__map_cell_at(coarse, q);
         subset[k] = (uint8_t)(home < 0 ? coarse->near != NULL : gathered[home]);
         marked += subset[k];
@@ -350,11 +349,19 @@ uint32_t rl__map_cell_polygon(const rl_map *m, uint32_t cell, v2 *out)
     return 4;
 }
 
-double rl__map_cell_area(const rl_map *m, uint32_t c)
+v2 rl__map_cell_centroid(const rl_map *m, uint32_t c, double *area)
 {
+    const rl_cell cell = m->polygon < 0 ? (rl_cell){0, 0, 1} : rl__map_cell(m, c);
+    if (!cell.clipped) { /* a whole square: its centre, no clipping */
+        if (area)
+            *area = m->cell * m->cell;
+        return (v2){m->u0 + (cell.i + 0.5) * m->cell, m->v0 + (cell.j + 0.5) * m->cell};
+    }
     v2 poly[RL_MAX_POLY_VERTS + 8];
     uint32_t n = rl__map_cell_polygon(m, c, poly);
-    return n >= 3 ? rl__polygon_area2(poly, n) : 0.0;
+    if (area)
+        *area = n >= 3 ? rl__polygon_area2(poly, n) : 0.0;
+    return rl__polygon_centroid(poly, n);
 }
 
 int64_t rl__map_cell_at(const rl_map *m, v2 q)
@@ -426,9 +433,7 @@ void rl__map_interpolate(const rl_map *coarse, const uint8_t *gathered, rl_map *
     for (uint32_t k = 0; k < fine->ncells; k++) {
         if (fine->subset && fine->subset[k])
             continue; /* gathered itself */
-        v2 poly[RL_MAX_POLY_VERTS + 4];
-        map_sample_skipping(coarse, gathered,
-                            rl__polygon_centroid(poly, rl__map_cell_polygon(fine, k, poly)),
+        map_sample_skipping(coarse, gathered, rl__map_cell_centroid(fine, k, NULL),
                             (const double(*)[3])coarse->e_pass, fine->e_pass[k]);
     }
 }

@@ -109,8 +109,9 @@ static inline rl_cell rl__map_cell(const rl_map *m, uint32_t c)
  * clipped anew on each call (its vertices are not stored). */
 uint32_t rl__map_cell_polygon(const rl_map *m, uint32_t c, v2 *out);
 
-/* @return the area of cell c of m, m^2: its polygon's; 0 for a point receiver. */
-double rl__map_cell_area(const rl_map *m, uint32_t c);
+/* @return the centroid of cell c of m in frame coordinates (a whole square's centre, computed without
+ * clipping); *area (if not NULL): its area, m^2, 0 for a point receiver. */
+v2 rl__map_cell_centroid(const rl_map *m, uint32_t c, double *area);
 
 /* @return the cell on grid square (i, j) of m (i < nu, j < nv), or -1 where the polygon has no area. */
 static inline int32_t rl__map_grid_cell(const rl_map *m, size_t i, size_t j)

@@ -98,12 +98,13 @@ rl_status rl_solution_map_rows(const rl_solution *s, size_t k, uint32_t first, u
             ij[2 * r] = cell.i;
             ij[2 * r + 1] = cell.j;
         }
-        if (area)
-            area[r] = rl__map_cell_area(m, c);
-        if (centre) {
-            v2 poly[RL_MAX_POLY_VERTS + 8];
-            uint32_t n = rl__map_cell_polygon(m, c, poly);
-            v3_store(frame_point(&m->frame, rl__polygon_centroid(poly, n)), centre + 3 * r);
+        if (area || centre) {
+            double a;
+            v2 q = rl__map_cell_centroid(m, c, &a);
+            if (area)
+                area[r] = a;
+            if (centre)
+                v3_store(frame_point(&m->frame, q), centre + 3 * r);
         }
         for (int ch = 0; ch < 3; ch++) {
             if (irradiance)

@@ -447,8 +447,7 @@ static void anchors_blend(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
     const rl_cell c = rl__map_cell(m, cell);
     double gx = c.i + 0.5, gy = c.j + 0.5; /* in grid squares */
     if (c.clipped) {
-        v2 poly[RL_MAX_POLY_VERTS + 4];
-        v2 centre = rl__polygon_centroid(poly, rl__map_cell_polygon(m, cell, poly));
+        v2 centre = rl__map_cell_centroid(m, cell, NULL);
         gx = (centre.x - m->u0) / m->cell, gy = (centre.y - m->v0) / m->cell;
     }
     double fa = gx / g->stride, fb = gy / g->stride;
