@@ -44,6 +44,13 @@ static void count_run(void *arg, unsigned k)
         atomic_fetch_add(&c->done[i], 1);
 }
 
+/* ilf_parallel_for()'s body: counts index k. */
+static void count_index(void *arg, size_t k)
+{
+    counted *c = arg;
+    atomic_fetch_add(&c->done[k], 1);
+}
+
 static void check_once(counted *c, unsigned n, const char *what)
 {
     for (unsigned k = 0; k < ILF_MAX_THREADS; k++)
@@ -86,6 +93,17 @@ static void test_pool(void)
     CHECK(ilf_thread_count(ILF_MAX_THREADS * 2) == ILF_MAX_THREADS);
     ilf_team_join(NULL);
     CHECK(ilf_team_threads(NULL) == 0);
+    /* a parallel loop runs each index once, on any number of threads (more than indices, none at all) */
+    const size_t sizes[] = {0, 1, 5, ITEMS};
+    for (size_t t = 0; t < sizeof counts / sizeof counts[0]; t++)
+        for (size_t z = 0; z < sizeof sizes / sizeof sizes[0]; z++) {
+            memset(&c, 0, sizeof c);
+            ilf_parallel_for(counts[t], sizes[z], count_index, &c);
+            size_t wrong = 0;
+            for (size_t i = 0; i < ITEMS; i++)
+                wrong += atomic_load(&c.done[i]) != (i < sizes[z] ? 1u : 0u);
+            CHECK(wrong == 0);
+        }
 }
 
 /* ----------------------------------------------------------- atomic file */

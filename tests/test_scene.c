@@ -675,13 +675,26 @@ static void test_interpolation(void)
     rl_scene *s = load(tmpdir, "interp.json");
     rl_map *fine = NULL, *coarse = NULL;
     size_t nf = 0, nc = 0;
-    if (!s || rl__maps_build(s, &fine, &nf) != RL_OK || rl__maps_build_sized(s, 0.2, &coarse, &nc) != RL_OK) {
+    if (!s || rl__maps_build(s, 3, &fine, &nf) != RL_OK || rl__maps_build_sized(s, 0.2, 1, &coarse, &nc) != RL_OK) {
         CHECK(0, "maps: %s", rl_errmsg());
         rl__maps_free(fine, nf);
         rl_scene_destroy(s);
         return;
     }
     CHECK(nf == 2 && nc == 2, "%zu fine and %zu coarse maps", nf, nc);
+    /* cells clipped on three threads are those of one */
+    rl_map *one = NULL;
+    size_t none = 0;
+    CHECK(rl__maps_build(s, 1, &one, &none) == RL_OK && none == nf, "maps on one thread: %s", rl_errmsg());
+    for (size_t m = 0; one && m < none && m < nf; m++) {
+        int same = one[m].ncells == fine[m].ncells && one[m].nu == fine[m].nu && one[m].nv == fine[m].nv;
+        for (uint32_t k = 0; same && k < one[m].ncells; k++) {
+            rl_cell a = rl__map_cell(&one[m], k), b = rl__map_cell(&fine[m], k);
+            same = a.i == b.i && a.j == b.j && a.clipped == b.clipped;
+        }
+        CHECK(same, "map %zu: cells on three threads differ from one's", m);
+    }
+    rl__maps_free(one, none);
     for (size_t m = 0; m < nf && m < nc; m++) {
         rl_map *c = &coarse[m], *f = &fine[m];
         double lo = INFINITY, hi = -INFINITY;
@@ -742,7 +755,7 @@ static void test_mark_direct(void)
     rl_scene *s = load(tmpdir, "mark.json");
     rl_map *fine = NULL, *coarse = NULL;
     size_t nf = 0, nc = 0;
-    if (!s || rl__maps_build(s, &fine, &nf) != RL_OK || rl__maps_build_sized(s, 0.2, &coarse, &nc) != RL_OK ||
+    if (!s || rl__maps_build(s, 1, &fine, &nf) != RL_OK || rl__maps_build_sized(s, 0.2, 2, &coarse, &nc) != RL_OK ||
         nf != 1 || nc != 1) {
         CHECK(0, "maps: %s", rl_errmsg());
         rl__maps_free(fine, nf);
@@ -804,6 +817,29 @@ static void test_mark_direct(void)
     rl_scene_destroy(s);
 }
 
+/* The cell budget: a map whose grid alone exceeds it fails the build, named, on one thread or several
+ * (the several-thread build places every grid first), and nothing is kept. */
+static void test_cell_budget(void)
+{
+    write_text("budget.json", "{\"materials\": {\"g\": {}}, \"polygons\": ["
+                              "{\"material\": \"g\", \"vertices\": [[0,0,0],[1,0,0],[1,1,0],[0,1,0]]},"
+                              "{\"material\": \"g\", \"vertices\": [[0,0,1],[0,1000,1],[1000,1000,1],[1000,0,1]]}],"
+                              "\"radiance_maps\": {\"cell_size\": 0.05}}");
+    rl_scene *s = load(tmpdir, "budget.json");
+    CHECK(s != NULL, "budget: %s", rl_errmsg());
+    for (unsigned threads = 1; s && threads <= 2; threads++) {
+        rl_map *maps = NULL;
+        size_t n = 7;
+        rl_status st = rl__maps_build(s, threads, &maps, &n);
+        CHECK(st == RL_ERR_INPUT && maps == NULL && n == 0, "budget, %u threads: status %d, %zu maps", threads,
+              (int)st, n);
+        CHECK(strstr(rl_errmsg(), "polygons[1]: more than 67108864 radiance cells") != NULL,
+              "budget, %u threads: message '%s'", threads, rl_errmsg());
+        rl__maps_free(maps, n);
+    }
+    rl_scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 3) {
@@ -829,5 +865,6 @@ int main(int argc, char **argv)
     test_data();
     test_interpolation();
     test_mark_direct();
+    test_cell_budget();
     return check_report();
 }

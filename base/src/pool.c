@@ -10,6 +10,7 @@
 #include "ilf/pool.h"
 
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <unistd.h>
@@ -105,4 +106,27 @@ void ilf_parallel(unsigned n, ilf_worker_fn fn, void *arg)
     fn(arg, 0);
     if (t != NULL)
         join_members(t);
+}
+
+/* What the workers of ilf_parallel_for() share: the body and the next index to take. */
+typedef struct loop {
+    ilf_index_fn fn;
+    void *arg;
+    size_t n;
+    atomic_size_t next;
+} loop;
+
+static void loop_worker(void *p, unsigned index)
+{
+    (void)index;
+    loop *l = p;
+    for (size_t k; (k = atomic_fetch_add(&l->next, 1)) < l->n;)
+        l->fn(l->arg, k);
+}
+
+void ilf_parallel_for(unsigned threads, size_t n, ilf_index_fn fn, void *arg)
+{
+    loop l = {fn, arg, n, 0};
+    atomic_init(&l.next, 0);
+    ilf_parallel(n < threads ? (unsigned)(n ? n : 1) : threads, loop_worker, &l);
 }

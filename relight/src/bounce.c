@@ -27,6 +27,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "ilf/pool.h"
 #include "method.h"
 
 /* Maps (a, b) in [0, 1)^2 to the unit disc, area-preserving, squares to rings (Shirley and Chiu 1997). */
@@ -48,7 +49,32 @@ static void concentric_disc(double a, double b, double *x, double *y)
     *y = r * sin(phi);
 }
 
-rl_status rl__glow_new(const rl_scene *scene, const rl_emitter *e, size_t ne, rl_glow **out)
+/* The fill of each map emitter's glow table (ilf_parallel_for()'s fn over the emitters). */
+typedef struct glow_fill {
+    const rl_emitter *e;
+    rl_glow *glow;
+    size_t npolygons;
+} glow_fill;
+
+static void fill_glow(void *arg, size_t k)
+{
+    const glow_fill *f = arg;
+    const rl_map *m = f->e[k].map;
+    if (f->e[k].kind != EM_MAP || f->e[k].polygon < 0 || (size_t)f->e[k].polygon >= f->npolygons ||
+        f->glow[f->e[k].polygon].map != m)
+        return;
+    float (*rad)[3] = f->glow[f->e[k].polygon].rad;
+    for (uint32_t j = 0; j < m->nv; j++)
+        for (uint32_t i = 0; i < m->nu; i++) {
+            v2 centre = {m->u0 + (i + 0.5) * m->cell, m->v0 + (j + 0.5) * m->cell};
+            double l[3];
+            rl__map_radiance(m, rl__map_cell_near(m, centre), l);
+            for (int c = 0; c < 3; c++)
+                rad[(size_t)j * m->nu + i][c] = (float)l[c];
+        }
+}
+
+rl_status rl__glow_new(const rl_scene *scene, const rl_emitter *e, size_t ne, unsigned threads, rl_glow **out)
 {
     rl_glow *glow = calloc(scene->npolygons ? scene->npolygons : 1, sizeof *glow);
     *out = NULL;
@@ -66,15 +92,10 @@ rl_status rl__glow_new(const rl_scene *scene, const rl_emitter *e, size_t ne, rl
             return RL_ERR_NOMEM;
         }
         g->map = m;
-        for (uint32_t j = 0; j < m->nv; j++)
-            for (uint32_t i = 0; i < m->nu; i++) {
-                v2 centre = {m->u0 + (i + 0.5) * m->cell, m->v0 + (j + 0.5) * m->cell};
-                double l[3];
-                rl__map_radiance(m, rl__map_cell_near(m, centre), l);
-                for (int c = 0; c < 3; c++)
-                    g->rad[(size_t)j * m->nu + i][c] = (float)l[c];
-            }
     }
+    /* the tables are filled side by side: each emitter writes its own polygon's */
+    glow_fill f = {e, glow, scene->npolygons};
+    ilf_parallel_for(threads, ne, fill_glow, &f);
     *out = glow;
     return RL_OK;
 }

@@ -206,31 +206,6 @@ static int run_job(pass_job *job, unsigned n, const rl__run *run, double base, d
     return atomic_load(&job->failed) ? -1 : 0;
 }
 
-/* A loop over maps shared by a team (each_map()). */
-typedef struct map_loop {
-    void (*fn)(void *user, size_t m);
-    void *user;
-    size_t n;
-    atomic_size_t next;
-} map_loop;
-
-static void map_loop_worker(void *p, unsigned index)
-{
-    (void)index;
-    map_loop *l = p;
-    for (size_t m; (m = atomic_fetch_add(&l->next, 1)) < l->n;)
-        l->fn(l->user, m);
-}
-
-/* Runs fn(user, m) for every m in [0, n), on up to threads threads; fn must write nothing another
- * call reads or writes. */
-static void each_map(unsigned threads, size_t n, void (*fn)(void *user, size_t m), void *user)
-{
-    map_loop l = {fn, user, n, 0};
-    atomic_init(&l.next, 0);
-    ilf_parallel(n < threads ? (unsigned)(n ? n : 1) : threads, map_loop_worker, &l);
-}
-
 /* Sums the per-thread counters into stats. */
 static void sum_counters(const rl_counters *c, unsigned n, rl_pass_stats *st)
 {
@@ -626,7 +601,7 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
     /* a bounce pass of rl__solve() with bounce_rays gathers by first hits, which read each polygon's glow */
     rl_glow *glow = NULL;
     if (gather_level_pass > 0 && sampling.bounce_rays > 0) {
-        if (rl__glow_new(scene, e, ne, &glow) != RL_OK)
+        if (rl__glow_new(scene, e, ne, run->threads, &glow) != RL_OK)
             return rl__fail(RL_ERR_NOMEM, "out of memory for the bounce pass");
         job.ctx.glow = glow;
     }
@@ -711,7 +686,7 @@ static void complete_map(void *user, size_t m)
     pe->done[m] = 1;
 }
 
-/* Completes map m unless the pass did (each_map()'s fn over a pass_end). */
+/* Completes map m unless the pass did (ilf_parallel_for()'s fn over a pass_end). */
 static void complete_rest(void *user, size_t m)
 {
     pass_end *pe = user;
@@ -768,7 +743,7 @@ static void refine_free(refine *rf, rl_map *maps, size_t nmaps)
     free(rf->measured);
 }
 
-/* The marking of one map's cells (each_map()'s fn): map m's cells lie from at[m] among all the maps', its
+/* The marking of one map's cells (ilf_parallel_for()'s fn): map m's cells lie from at[m] among all the maps', its
  * larger cells from cat[m]; it marks marked[m] of them. */
 typedef struct mark_job {
     rl_map *maps;
@@ -812,7 +787,7 @@ static int refine_mark(const rl_cluster *cl, unsigned threads, rl_map *maps, siz
     }
     for (size_t m = 0, at = 0, cat = 0; m < nmaps; at += maps[m].ncells, cat += rf->coarse[m++].ncells)
         j.at[m] = at, j.cat[m] = cat;
-    each_map(threads, nmaps, mark_map, &j);
+    ilf_parallel_for(threads, nmaps, mark_map, &j);
     for (size_t m = 0; m < nmaps; m++) {
         rf->marked += j.marked[m];
         maps[m].subset = rf->subset + j.at[m];
@@ -859,7 +834,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     if (!s)
         return rl__fail(RL_ERR_NOMEM, "out of memory");
     s->scene = scene;
-    rl_status st = rl__maps_build(scene, &s->maps, &s->nmaps);
+    rl_status st = rl__maps_build(scene, run->threads, &s->maps, &s->nmaps);
     if (st == RL_OK)
         st = rl__tracer_new(scene, run->threads, &s->tracer);
     s->polygon_map = malloc((scene->npolygons + 1) * sizeof *s->polygon_map);
@@ -890,7 +865,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     uint32_t factor = scene->sampling.bounce_cell_factor ? scene->sampling.bounce_cell_factor
                       : scene->sampling.bounce_rays > 0 ? 4 : 2;
     if (passes > 1 && factor > 1)
-        st = rl__maps_build_sized(scene, scene->cell_size * factor, &coarse, &ncoarse);
+        st = rl__maps_build_sized(scene, scene->cell_size * factor, run->threads, &coarse, &ncoarse);
     assert(!coarse || ncoarse == s->nmaps); /* one map per receiving polygon, in order, at any cell size */
     refine rf = {0};
     if (st == RL_OK && coarse && scene->sampling.bounce_rays > 0 && refine_new(coarse, ncoarse, s->maps, &rf) != 0)
@@ -939,7 +914,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
         /* the last run told of every map if it ran (a refinement with no cell to gather runs none) */
         told = st == RL_OK && last_run->reporting != NULL && (!refining || rf.marked > 0);
         if (st == RL_OK)
-            each_map(run->threads, s->nmaps, complete_rest, &pe);
+            ilf_parallel_for(run->threads, s->nmaps, complete_rest, &pe);
         s->npasses = p + 1;
     }
     refine_free(&rf, s->maps, s->nmaps);

@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "ilf/limits.h"
+#include "ilf/pool.h"
 #include "lfio/radmap.h"
 #include "maps.h"
 
@@ -118,9 +119,9 @@ static uint32_t clip_square(const rl_map *m, uint32_t i, uint32_t j, v2 *out)
     return (uint32_t)rl__clip_to_polygon(square, 4, m->poly, m->npoly, out, scratch);
 }
 
-/* Fills the grid and cells of m. @return RL_OK, RL_ERR_NOMEM, or RL_ERR_INPUT
- * when the grid would exceed the scene's cell budget (checked before allocating). */
-static rl_status map_cells(rl_map *m)
+/* Places the grid of m over its polygon (u0, v0, nu, nv). @return RL_OK, or RL_ERR_INPUT when the grid
+ * would exceed the scene's cell budget. */
+static rl_status map_grid(rl_map *m)
 {
     double u1 = -INFINITY, v1 = -INFINITY;
     m->u0 = m->v0 = INFINITY;
@@ -136,6 +137,12 @@ static rl_status map_cells(rl_map *m)
         return RL_ERR_INPUT;
     m->nu = (uint32_t)gu;
     m->nv = (uint32_t)gv;
+    return RL_OK;
+}
+
+/* Fills the cells of m, whose grid is placed (map_grid()). @return RL_OK or RL_ERR_NOMEM. */
+static rl_status map_cells(rl_map *m)
+{
     size_t squares = (size_t)m->nu * m->nv;
     m->grid = malloc(squares * sizeof *m->grid);
     m->cells = malloc(squares * sizeof *m->cells);
@@ -194,23 +201,52 @@ static rl_status map_accumulators(rl_map *m, int re_emits)
     return m->e_total && m->e_pass && (m->e_prev || !re_emits) ? RL_OK : RL_ERR_NOMEM;
 }
 
-static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map **maps, size_t *count);
+static rl_status build(const rl_scene *scene, double cell, int re_emit, unsigned threads, rl_map **maps,
+                       size_t *count);
 
-rl_status rl__maps_build(const rl_scene *scene, rl_map **maps, size_t *count)
+rl_status rl__maps_build(const rl_scene *scene, unsigned threads, rl_map **maps, size_t *count)
 {
-    return build(scene, scene->cell_size, scene->sampling.bounces > 0, maps, count);
+    return build(scene, scene->cell_size, scene->sampling.bounces > 0, threads, maps, count);
 }
 
-rl_status rl__maps_build_sized(const rl_scene *scene, double cell, rl_map **maps, size_t *count)
+rl_status rl__maps_build_sized(const rl_scene *scene, double cell, unsigned threads, rl_map **maps, size_t *count)
 {
-    return build(scene, cell, 0, maps, count);
+    return build(scene, cell, 0, threads, maps, count);
 }
 
-/* Builds the maps with cells of side cell; re_emit: they will light bounce passes (e_prev). */
-static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map **maps, size_t *count)
+/* The cells of the maps whose grids are placed (ilf_parallel_for()'s fn over them): each map's own. */
+typedef struct cells_job {
+    rl_map *maps;
+    int re_emit;
+    rl_status *status; /* [map] */
+} cells_job;
+
+static void build_cells(void *arg, size_t m)
 {
-    size_t n = 0;
-    uint64_t total = 0;
+    cells_job *j = arg;
+    rl_status st = map_cells(&j->maps[m]);
+    j->status[m] = st == RL_OK ? map_accumulators(&j->maps[m], j->re_emit) : st;
+}
+
+/* Reports st, the failure of the map of polygon k. @return st. */
+static rl_status map_failed(const rl_scene *scene, uint32_t k, rl_status st)
+{
+    if (st == RL_ERR_INPUT)
+        return rl__fail(st, "%s: %s: more than %llu radiance cells in the scene; raise radiance_maps.cell_size",
+                        scene->path, scene->polygons[k].label, (unsigned long long)MAX_TOTAL_CELLS);
+    return rl__fail(st, "%s: %s: out of memory for its radiance map", scene->path, scene->polygons[k].label);
+}
+
+/* Builds the maps with cells of side cell; re_emit: they will light bounce passes (e_prev). The frames
+ * and grids are placed first, in order; the cells (every square clipped to the polygon) are then made
+ * on up to threads threads when the grids together stay within the cell budget, so that all of them
+ * may be allocated at once, else a map at a time, the budget checked as they come. Failures name the
+ * first map, in order, that fails. */
+static rl_status build(const rl_scene *scene, double cell, int re_emit, unsigned threads, rl_map **maps,
+                       size_t *count)
+{
+    size_t n = 0, m = 0;
+    uint64_t total = 0, squares = 0;
     *maps = NULL;
     *count = 0;
     for (size_t k = 0; k < scene->npolygons; k++) {
@@ -218,10 +254,14 @@ static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map *
         n += al[0] > 0 || al[1] > 0 || al[2] > 0;
     }
     rl_map *out = calloc(n ? n : 1, sizeof *out);
-    if (!out)
+    rl_status *status = malloc((n ? n : 1) * sizeof *status);
+    if (!out || !status) {
+        free(out);
+        free(status);
         return rl__fail(RL_ERR_NOMEM, "out of memory for %zu radiance maps", n);
-    size_t m = 0;
-    for (size_t k = 0; k < scene->npolygons; k++) {
+    }
+    rl_status st = RL_OK;
+    for (size_t k = 0; k < scene->npolygons && st == RL_OK; k++) {
         const rl_material *mat = &scene->materials[scene->polygons[k].material];
         if (!(mat->albedo[0] > 0 || mat->albedo[1] > 0 || mat->albedo[2] > 0))
             continue;
@@ -229,22 +269,31 @@ static rl_status build(const rl_scene *scene, double cell, int re_emit, rl_map *
         mp->cell = cell;
         memcpy(mp->albedo, mat->albedo, sizeof mp->albedo);
         memcpy(mp->emission, mat->emission, sizeof mp->emission);
-        rl_status st = map_frame(scene, (uint32_t)k, mp);
+        st = map_frame(scene, (uint32_t)k, mp);
         if (st == RL_OK)
-            st = map_cells(mp);
-        if (st == RL_OK)
-            st = map_accumulators(mp, re_emit);
-        total += mp->ncells;
-        if (st == RL_ERR_INPUT || (st == RL_OK && total > MAX_TOTAL_CELLS))
-            st = rl__fail(RL_ERR_INPUT, "%s: %s: more than %llu radiance cells in the scene; raise "
-                          "radiance_maps.cell_size", scene->path, scene->polygons[k].label,
-                          (unsigned long long)MAX_TOTAL_CELLS);
-        else if (st == RL_ERR_NOMEM)
-            rl__fail(st, "%s: %s: out of memory for its radiance map", scene->path, scene->polygons[k].label);
-        if (st != RL_OK) {
-            rl__maps_free(out, m);
-            return st;
-        }
+            st = map_grid(mp);
+        if (st != RL_OK)
+            map_failed(scene, (uint32_t)k, st);
+        squares += (uint64_t)mp->nu * mp->nv;
+    }
+    int parallel = st == RL_OK && threads > 1 && squares <= MAX_TOTAL_CELLS;
+    if (parallel)
+        ilf_parallel_for(threads, m, build_cells, &(cells_job){out, re_emit, status});
+    for (size_t q = 0; q < m && st == RL_OK; q++) {
+        if (parallel)
+            st = status[q];
+        else if ((st = map_cells(&out[q])) == RL_OK)
+            st = map_accumulators(&out[q], re_emit);
+        total += out[q].ncells;
+        if (st == RL_OK && total > MAX_TOTAL_CELLS)
+            st = RL_ERR_INPUT;
+        if (st != RL_OK)
+            map_failed(scene, (uint32_t)out[q].polygon, st);
+    }
+    free(status);
+    if (st != RL_OK) {
+        rl__maps_free(out, m);
+        return st;
     }
     *maps = out;
     *count = m;

@@ -106,8 +106,9 @@ typedef struct rl_glow {
 } rl_glow;
 
 /* Builds the glow of every scene polygon from the bounce emitters e[0 .. ne) (EM_MAP), one per
- * polygon, in *out ([scene->npolygons]). @return RL_OK, or RL_ERR_NOMEM (nothing to free). */
-rl_status rl__glow_new(const rl_scene *scene, const rl_emitter *e, size_t ne, rl_glow **out);
+ * polygon, in *out ([scene->npolygons]), on up to threads threads. @return RL_OK, or RL_ERR_NOMEM
+ * (nothing to free). */
+rl_status rl__glow_new(const rl_scene *scene, const rl_emitter *e, size_t ne, unsigned threads, rl_glow **out);
 
 /* Frees glow (npolygons entries, as built). NULL is a no-op. */
 void rl__glow_free(rl_glow *glow, size_t npolygons);

@@ -14,6 +14,8 @@
 #ifndef ILF_POOL_H
 #define ILF_POOL_H
 
+#include <stddef.h>
+
 /* @return the number of workers for a requested count: 0 means every online core; capped at ILF_MAX_THREADS. */
 unsigned ilf_thread_count(unsigned requested);
 
@@ -33,5 +35,11 @@ unsigned ilf_team_threads(const ilf_team *team);
 
 /* Runs fn(arg, k) for k = 0..n-1: k = 0 on the calling thread, the rest on new threads; returns when all are done. */
 void ilf_parallel(unsigned n, ilf_worker_fn fn, void *arg);
+
+typedef void (*ilf_index_fn)(void *arg, size_t k);
+
+/* Runs fn(arg, k) for every k in [0, n), each once, the indices shared in order between up to threads
+ * workers (ilf_parallel(), so it cannot fail); fn must write nothing another call reads or writes. */
+void ilf_parallel_for(unsigned threads, size_t n, ilf_index_fn fn, void *arg);
 
 #endif /* ILF_POOL_H */
