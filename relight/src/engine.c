@@ -804,26 +804,30 @@ static int refine_mark(const rl_cluster *cl, unsigned threads, rl_map *maps, siz
 /* Gathers pass p on the marked cells of the scene's maps and adds its statistics to the pass's.
  * @return RL_OK or the failure. */
 static rl_status refine_pass(const rl_scene *scene, rl_solution *s, const rl_cluster *cl, const rl__run *run,
-                             uint32_t p, const rl_emitter *e, size_t ne, double base, double span, refine *rf)
+                             uint32_t p, const rl_emitter *e, size_t ne, double base, double span, refine *rf,
+                             rl_pass_stats *more)
 {
+    memset(more, 0, sizeof *more);
     int rc = rf->ready ? 0 : refine_mark(cl, run->threads, s->maps, s->nmaps, rf);
     if (rc == -1)
         return rl__fail(RL_ERR_NOMEM, "pass %u: out of memory marking the bounce cells", p);
     if (rc == -2)
         return rl__fail(RL_ERR_IO, "pass %u: the exchange of bounce cell flags between ranks failed", p);
-    rl_pass_stats more;
     if (rf->marked == 0)
         return RL_OK;
-    rl_status st = rl__run_pass(scene, s->tracer, cl, run, p, p, s->maps, s->nmaps, e, ne, base, span,
-                                &rf->measured, &more);
-    rl_pass_stats *to = &s->passes[p];
-    to->wall_seconds += more.wall_seconds;
-    to->cpu_seconds += more.cpu_seconds;
-    to->samples += more.samples;
-    to->rays_cast += more.rays_cast;
-    to->rays_kept += more.rays_kept;
-    to->cells_direct = rf->marked;
-    return st;
+    return rl__run_pass(scene, s->tracer, cl, run, p, p, s->maps, s->nmaps, e, ne, base, span, &rf->measured, more);
+}
+
+/* Adds the statistics of a pass's refinement (refine_pass()) to the pass's, to. */
+static void add_refined(rl_pass_stats *to, const rl_pass_stats *more, const refine *rf)
+{
+    to->wall_seconds += more->wall_seconds;
+    to->cpu_seconds += more->cpu_seconds;
+    to->samples += more->samples;
+    to->rays_cast += more->rays_cast;
+    to->rays_kept += more->rays_kept;
+    if (rf->marked > 0)
+        to->cells_direct = rf->marked;
 }
 
 rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *run, uint32_t passes, double span,
@@ -895,24 +899,33 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
         pass_end pe = {s->maps, gather_coarse ? coarse : NULL, gather_coarse && rf.near ? rf.gathered : NULL,
                        coarse_at, p + 1 == passes, done};
         memset(done, 0, s->nmaps);
-        /* The last pass of one process completes each map once the last of its own gathers has finished
-         * (the refined cells' when there are, else the pass's only), and tells the caller of it then, so
-         * that the caller may write it while the engine goes on; the other passes complete every map at
-         * their end. */
+        /* Once the cells are marked (after the first bounce pass's larger gather), the refinement comes
+         * first: it reads nothing the larger gather writes, and the larger gather, in map order, then
+         * finishes the maps one after another all through its run rather than all in its last part.
+         * The last pass of one process completes each map once the last of its own gathers has finished,
+         * and tells the caller of it then, so that the caller may write it while the engine goes on; the
+         * other passes complete every map at their end. */
+        int refine_first = refining && rf.ready;
         rl__run gather_run = *run, refine_run = *run;
-        rl__run *last_run = refining ? &refine_run : &gather_run;
+        rl__run *last_run = refining && !refine_first ? &refine_run : &gather_run;
         if (pe.last && run->maps_ready && !cl) {
             last_run->reporting = s;
             last_run->finish = complete_map;
             last_run->finish_user = &pe;
             telling = 1;
         }
-        st = rl__run_pass(scene, s->tracer, cl, &gather_run, p, p, gather_coarse ? coarse : s->maps,
-                          gather_coarse ? ncoarse : s->nmaps, e, ne, base, part, &measured, &s->passes[p]);
-        if (st == RL_OK && refining)
-            st = refine_pass(scene, s, cl, &refine_run, p, e, ne, base + part, part / 3, &rf);
+        rl_pass_stats refined = {0};
+        if (refine_first)
+            st = refine_pass(scene, s, cl, &refine_run, p, e, ne, base, part / 3, &rf, &refined);
+        if (st == RL_OK)
+            st = rl__run_pass(scene, s->tracer, cl, &gather_run, p, p, gather_coarse ? coarse : s->maps,
+                              gather_coarse ? ncoarse : s->nmaps, e, ne, base + (refine_first ? part / 3 : 0), part,
+                              &measured, &s->passes[p]);
+        if (st == RL_OK && refining && !refine_first)
+            st = refine_pass(scene, s, cl, &refine_run, p, e, ne, base + part, part / 3, &rf, &refined);
+        add_refined(&s->passes[p], &refined, &rf);
         /* the last run told of every map if it ran (a refinement with no cell to gather runs none) */
-        told = st == RL_OK && last_run->reporting != NULL && (!refining || rf.marked > 0);
+        told = st == RL_OK && last_run->reporting != NULL && (last_run == &gather_run || rf.marked > 0);
         if (st == RL_OK)
             ilf_parallel_for(run->threads, s->nmaps, complete_rest, &pe);
         s->npasses = p + 1;
