@@ -93,12 +93,14 @@ static void test_pool(void)
     CHECK(ilf_thread_count(ILF_MAX_THREADS * 2) == ILF_MAX_THREADS);
     ilf_team_join(NULL);
     CHECK(ilf_team_threads(NULL) == 0);
-    /* a parallel loop runs each index once, on any number of threads (more than indices, none at all) */
+    /* a parallel loop runs each index once, on any number of threads (0 taken as 1, more than indices),
+     * over any number of indices (none at all) */
+    const unsigned loop_threads[] = {0, 1, 2, 3, 7, 64};
     const size_t sizes[] = {0, 1, 5, ITEMS};
-    for (size_t t = 0; t < sizeof counts / sizeof counts[0]; t++)
+    for (size_t t = 0; t < sizeof loop_threads / sizeof loop_threads[0]; t++)
         for (size_t z = 0; z < sizeof sizes / sizeof sizes[0]; z++) {
             memset(&c, 0, sizeof c);
-            ilf_parallel_for(counts[t], sizes[z], count_index, &c);
+            ilf_parallel_for(loop_threads[t], sizes[z], count_index, &c);
             size_t wrong = 0;
             for (size_t i = 0; i < ITEMS; i++)
                 wrong += atomic_load(&c.done[i]) != (i < sizes[z] ? 1u : 0u);

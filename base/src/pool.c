@@ -116,6 +116,7 @@ typedef struct loop {
     atomic_size_t next;
 } loop;
 
+/* A worker of ilf_parallel_for(): takes indices until none is left. */
 static void loop_worker(void *p, unsigned index)
 {
     (void)index;

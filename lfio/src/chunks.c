@@ -12,6 +12,8 @@
  * stream differs and inflates to the same bytes; the result does not depend on
  * the number of threads; a failure frees everything.
  */
+#include <assert.h>
+#include <limits.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -53,6 +55,7 @@ static int deflate_chunk(const lfio__chunk *c, const unsigned char *in, uLongf *
 {
     if (!c->rle)
         return compress2(c->out, packed, in, (uLong)c->chunk_bytes, c->level);
+    assert(c->chunk_bytes <= UINT_MAX); /* zlib counts in uInt; HDF5's chunks stay under 4 GiB */
     z_stream z;
     memset(&z, 0, sizeof z);
     int rc = deflateInit2(&z, c->level, Z_DEFLATED, 15, 8, Z_RLE);

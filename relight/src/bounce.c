@@ -56,6 +56,7 @@ typedef struct glow_fill {
     size_t npolygons;
 } glow_fill;
 
+/* Fills the glow table of emitter k's polygon, if k re-emits a map (ilf_parallel_for()'s fn). */
 static void fill_glow(void *arg, size_t k)
 {
     const glow_fill *f = arg;

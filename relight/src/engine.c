@@ -752,6 +752,7 @@ typedef struct mark_job {
     uint32_t *marked;
 } mark_job;
 
+/* Marks the cells of map m that gather themselves, their count in marked[m] (ilf_parallel_for()'s fn). */
 static void mark_map(void *user, size_t m)
 {
     mark_job *j = user;
@@ -801,8 +802,8 @@ static int refine_mark(const rl_cluster *cl, unsigned threads, rl_map *maps, siz
     return 0;
 }
 
-/* Gathers pass p on the marked cells of the scene's maps and adds its statistics to the pass's.
- * @return RL_OK or the failure. */
+/* Gathers pass p on the marked cells of the scene's maps (marking them first if need be), its statistics in
+ * *more (zero when no cell is marked; add_refined() adds them to the pass's). @return RL_OK or the failure. */
 static rl_status refine_pass(const rl_scene *scene, rl_solution *s, const rl_cluster *cl, const rl__run *run,
                              uint32_t p, const rl_emitter *e, size_t ne, double base, double span, refine *rf,
                              rl_pass_stats *more)
@@ -884,8 +885,9 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
         coarse_at[m] = at;
     int told = 0, telling = 0; /* the caller was told of every map; of some, maybe */
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
-        /* cells near occluders are gathered on their own after the larger cells, once marked (in the first
-         * bounce pass), unless the marking found none */
+        /* cells near occluders are gathered on their own besides the larger cells once marked (after the
+         * larger cells in the first bounce pass, which marks them; before them later), unless the marking
+         * found none */
         int gather_coarse = p > 0 && coarse, refining = gather_coarse && rf.near && !(rf.ready && rf.marked == 0);
         double base = span * p / passes, part = span / passes;
         if (p > 0)

@@ -35,8 +35,9 @@ typedef struct rl__run {
     const rl_solution *reporting; /* set by rl__solve() for a run whose maps are final once finish() has run on
                                      them (told to maps_ready as they are) */
     /* with reporting: called with each map index once its tiles have finished, from the worker that
-     * finished the last one (or from the calling thread for a map with none), before the map is told of;
-     * it completes the map (NULL: nothing to complete) */
+     * finished the last one (a map with nothing to gather has an empty tile; only a pass without emitters
+     * calls it from the calling thread), before the map is told of; it completes the map (NULL: nothing to
+     * complete) */
     void (*finish)(void *user, size_t map);
     void *finish_user;
 } rl__run;

@@ -221,6 +221,7 @@ typedef struct cells_job {
     rl_status *status; /* [map] */
 } cells_job;
 
+/* Makes the cells and accumulators of map m, its status in status[m] (ilf_parallel_for()'s fn). */
 static void build_cells(void *arg, size_t m)
 {
     cells_job *j = arg;
@@ -240,8 +241,9 @@ static rl_status map_failed(const rl_scene *scene, uint32_t k, rl_status st)
 /* Builds the maps with cells of side cell; re_emit: they will light bounce passes (e_prev). The frames
  * and grids are placed first, in order; the cells (every square clipped to the polygon) are then made
  * on up to threads threads when the grids together stay within the cell budget, so that all of them
- * may be allocated at once, else a map at a time, the budget checked as they come. Failures name the
- * first map, in order, that fails. */
+ * may be allocated at once, else a map at a time, the budget checked as they come. A failure names its
+ * map: the first whose grid alone passes the budget, else the first at which the cells so far pass it or
+ * memory runs out. */
 static rl_status build(const rl_scene *scene, double cell, int re_emit, unsigned threads, rl_map **maps,
                        size_t *count)
 {

@@ -12,7 +12,7 @@
 #include "scene_internal.h"
 
 /* One cell (rl__map_cell()): its grid square, and whether the polygon's border cuts it. Its shape
- * (rl__map_cell_polygon()) and area (rl__map_cell_area()) follow from these and the map, so a cell costs
+ * (rl__map_cell_polygon()), centroid and area (rl__map_cell_centroid()) follow from these and the map, so a cell costs
  * 8 bytes, or one bit in a map whose every grid square is a cell. */
 typedef struct rl_cell {
     uint32_t i;           /* grid column */
