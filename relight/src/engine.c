@@ -73,11 +73,12 @@ rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__r
 typedef struct work_item {
     uint32_t map;
     uint32_t row0, row1;
+    uint32_t set; /* which of the job's map arrays (pass_job.sets) */
 } work_item;
 
 typedef struct pass_job {
     rl_transfer_ctx ctx;
-    rl_map *maps;
+    rl_map *sets[2]; /* the maps the items gather on: the pass's, and those gathered with them (or NULL) */
     const work_item *items;
     size_t nitems;
     atomic_size_t next, done;
@@ -164,7 +165,7 @@ static void worker(void *p, unsigned index)
             break;
         const work_item *w = &job->items[k];
         double t0 = job->seconds ? ilf_clock_thread_cpu() : 0.0;
-        if (w->row0 < w->row1 && rl__transfer_tile(&job->ctx, w->map, &job->maps[w->map], w->row0, w->row1, &scratch,
+        if (w->row0 < w->row1 && rl__transfer_tile(&job->ctx, w->map, &job->sets[w->set][w->map], w->row0, w->row1, &scratch,
                           &job->counters[index]) != 0)
             atomic_store(&job->failed, 1);
         if (job->seconds)
@@ -271,49 +272,53 @@ static uint32_t row_units(const rl_map *m, uint32_t j, int by_work)
     return n;
 }
 
-/* Splits every map into tiles of whole rows, each row added while the tile stays within per_tile units
- * (row_units()) or is empty, leaving out those with no cell to gather; with empty, a map left without
- * any has one empty item (rows 0 to 0), in its place. items NULL counts them only. @return the number
- * of items. */
-static size_t split_tiles(const rl_map *maps, size_t nmaps, uint32_t per_tile, int by_work, int empty,
+/* Splits every map of each of the nsets arrays of nmaps maps into tiles of whole rows, each row added
+ * while the tile stays within per_tile units (row_units()) or is empty, leaving out those with no cell
+ * to gather; map m's tiles of every set lie together, the sets in order, then map m + 1's. With empty,
+ * a map left without any has one empty item (rows 0 to 0), in its place. items NULL counts them only.
+ * @return the number of items. */
+static size_t split_tiles(rl_map *const *sets, size_t nsets, size_t nmaps, uint32_t per_tile, int by_work, int empty,
                           work_item *items)
 {
     size_t k = 0;
     for (size_t m = 0; m < nmaps; m++) {
         size_t first = k;
-        for (uint32_t r0 = 0, r1; r0 < maps[m].nv; r0 = r1) {
-            uint64_t units = 0, work = 0;
-            for (r1 = r0; r1 < maps[m].nv; r1++) {
-                uint32_t u = row_units(&maps[m], r1, by_work);
-                if (r1 > r0 && units + u > per_tile)
-                    break;
-                units += u;
-                work += by_work ? u : 0;
+        for (uint32_t set = 0; set < nsets; set++) {
+            const rl_map *maps = sets[set], *mp = &maps[m];
+            for (uint32_t r0 = 0, r1; r0 < mp->nv; r0 = r1) {
+                uint64_t units = 0, work = 0;
+                for (r1 = r0; r1 < mp->nv; r1++) {
+                    uint32_t u = row_units(mp, r1, by_work);
+                    if (r1 > r0 && units + u > per_tile)
+                        break;
+                    units += u;
+                    work += by_work ? u : 0;
+                }
+                work_item w = {(uint32_t)m, r0, r1, set};
+                if (by_work ? work == 0 : tile_work(maps, &w) == 0)
+                    continue;
+                if (items)
+                    items[k] = w;
+                k++;
             }
-            work_item w = {(uint32_t)m, r0, r1};
-            if (by_work ? work == 0 : tile_work(maps, &w) == 0)
-                continue;
-            if (items)
-                items[k] = w;
-            k++;
         }
         if (empty && k == first) {
             if (items)
-                items[k] = (work_item){(uint32_t)m, 0, 0};
+                items[k] = (work_item){(uint32_t)m, 0, 0, 0};
             k++;
         }
     }
     return k;
 }
 
-/* Splits every map into items (split_tiles()). @return the items (count in *n) or NULL. */
-static work_item *make_tiles(const rl_map *maps, size_t nmaps, uint32_t per_tile, int by_work, int empty,
-                             size_t *n)
+/* Splits every map of the sets into items (split_tiles()). @return the items (count in *n) or NULL. */
+static work_item *make_tiles(rl_map *const *sets, size_t nsets, size_t nmaps, uint32_t per_tile, int by_work,
+                             int empty, size_t *n)
 {
-    size_t count = split_tiles(maps, nmaps, per_tile, by_work, empty, NULL);
+    size_t count = split_tiles(sets, nsets, nmaps, per_tile, by_work, empty, NULL);
     work_item *items = malloc((count ? count : 1) * sizeof *items);
     if (items)
-        *n = split_tiles(maps, nmaps, per_tile, by_work, empty, items);
+        *n = split_tiles(sets, nsets, nmaps, per_tile, by_work, empty, items);
     return items;
 }
 
@@ -585,19 +590,23 @@ static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, const rl__r
 }
 
 rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_cluster *cl, const rl__run *run,
-                       uint32_t pass, uint32_t gather_level_pass, rl_map *maps, size_t nmaps, const rl_emitter *e,
-                       size_t ne, double base, double span, double **measured, rl_pass_stats *st)
+                       uint32_t pass, uint32_t gather_level_pass, rl_map *maps, size_t nmaps, rl_map *with,
+                       const rl_emitter *e, size_t ne, double base, double span, double **measured, rl_pass_stats *st)
 {
+    assert(!(with && cl)); /* the ranks exchange the tiles of one set of maps */
     double w0 = ilf_clock_wall(), c0 = ilf_clock_process_cpu();
     memset(st, 0, sizeof *st);
     st->emitters = (uint32_t)ne;
-    for (size_t m = 0; m < nmaps; m++)
-        memset(maps[m].e_pass, 0, (maps[m].ncells ? maps[m].ncells : 1) * sizeof *maps[m].e_pass);
     pass_job job;
     memset(&job, 0, sizeof job);
+    job.sets[0] = maps, job.sets[1] = with;
+    size_t nsets = with ? 2 : 1;
+    for (size_t set = 0; set < nsets; set++)
+        for (size_t m = 0; m < nmaps; m++)
+            memset(job.sets[set][m].e_pass, 0,
+                   (job.sets[set][m].ncells ? job.sets[set][m].ncells : 1) * sizeof *job.sets[set][m].e_pass);
     rl_sampling sampling = pass_sampling(&scene->sampling, gather_level_pass);
     make_ctx(scene, tracer, run, pass, &sampling, e, ne, &job.ctx);
-    job.maps = maps;
     /* a bounce pass of rl__solve() with bounce_rays gathers by first hits, which read each polygon's glow */
     rl_glow *glow = NULL;
     if (gather_level_pass > 0 && sampling.bounce_rays > 0) {
@@ -612,7 +621,8 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
     /* one process's pass whose maps are final as they finish: tell the caller map by map, a map with
      * nothing to gather being completed by a worker, in its place, as one with an empty item */
     int telling = run->maps_ready && run->reporting && !cl;
-    work_item *all = make_tiles(maps, nmaps, first_hit ? TILE_FIRST_HIT : TILE_CELLS, first_hit, telling, &nall);
+    work_item *all = make_tiles(job.sets, nsets, nmaps, first_hit ? TILE_FIRST_HIT : TILE_CELLS, first_hit, telling,
+                                &nall);
     share sh = {0};
     if (!all || (cl && share_deal(cl, maps, all, nall, *measured, &sh) != 0)) {
         free(all);
@@ -816,7 +826,8 @@ static rl_status refine_pass(const rl_scene *scene, rl_solution *s, const rl_clu
         return rl__fail(RL_ERR_IO, "pass %u: the exchange of bounce cell flags between ranks failed", p);
     if (rf->marked == 0)
         return RL_OK;
-    return rl__run_pass(scene, s->tracer, cl, run, p, p, s->maps, s->nmaps, e, ne, base, span, &rf->measured, more);
+    return rl__run_pass(scene, s->tracer, cl, run, p, p, s->maps, s->nmaps, NULL, e, ne, base, span, &rf->measured,
+                        more);
 }
 
 /* Adds the statistics of a pass's refinement (refine_pass()) to the pass's, to. */
@@ -885,10 +896,13 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
         coarse_at[m] = at;
     int told = 0, telling = 0; /* the caller was told of every map; of some, maybe */
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
-        /* cells near occluders are gathered on their own besides the larger cells once marked (after the
-         * larger cells in the first bounce pass, which marks them; before them later), unless the marking
-         * found none */
+        /* Cells near occluders are gathered on their own besides the larger cells once marked, unless the
+         * marking found none: in the first bounce pass, which marks them, after the larger cells; later,
+         * for one process, in the same job, each map's larger cells and its own together, so that the maps
+         * finish one after another through the whole job (several ranks run the two jobs one after the
+         * other, as they exchange the tiles of one set of maps at a time). */
         int gather_coarse = p > 0 && coarse, refining = gather_coarse && rf.near && !(rf.ready && rf.marked == 0);
+        int together = refining && rf.ready && !cl, apart = refining && !together;
         double base = span * p / passes, part = span / passes;
         if (p > 0)
             ne = rl__append_bounce_emitters(scene, s->maps, s->nmaps, e, 0);
@@ -896,36 +910,32 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
             free(measured);
             measured = NULL;
         }
-        if (refining)
+        if (apart)
             part *= 0.75; /* the rest for the cells gathered themselves */
         pass_end pe = {s->maps, gather_coarse ? coarse : NULL, gather_coarse && rf.near ? rf.gathered : NULL,
                        coarse_at, p + 1 == passes, done};
         memset(done, 0, s->nmaps);
-        /* Once the cells are marked (after the first bounce pass's larger gather), the refinement comes
-         * first: it reads nothing the larger gather writes, and the larger gather, in map order, then
-         * finishes the maps one after another all through its run rather than all in its last part.
-         * The last pass of one process completes each map once the last of its own gathers has finished,
+        /* The last pass of one process completes each map once the last of its own gathers has finished,
          * and tells the caller of it then, so that the caller may write it while the engine goes on; the
          * other passes complete every map at their end. */
-        int refine_first = refining && rf.ready;
         rl__run gather_run = *run, refine_run = *run;
-        rl__run *last_run = refining && !refine_first ? &refine_run : &gather_run;
+        rl__run *last_run = apart ? &refine_run : &gather_run;
         if (pe.last && run->maps_ready && !cl) {
             last_run->reporting = s;
             last_run->finish = complete_map;
             last_run->finish_user = &pe;
             telling = 1;
         }
-        rl_pass_stats refined = {0};
-        if (refine_first)
-            st = refine_pass(scene, s, cl, &refine_run, p, e, ne, base, part / 3, &rf, &refined);
-        if (st == RL_OK)
-            st = rl__run_pass(scene, s->tracer, cl, &gather_run, p, p, gather_coarse ? coarse : s->maps,
-                              gather_coarse ? ncoarse : s->nmaps, e, ne, base + (refine_first ? part / 3 : 0), part,
-                              &measured, &s->passes[p]);
-        if (st == RL_OK && refining && !refine_first)
+        st = rl__run_pass(scene, s->tracer, cl, &gather_run, p, p, gather_coarse ? coarse : s->maps,
+                          gather_coarse ? ncoarse : s->nmaps, together ? s->maps : NULL, e, ne, base, part, &measured,
+                          &s->passes[p]);
+        if (st == RL_OK && together)
+            s->passes[p].cells_direct = rf.marked;
+        if (st == RL_OK && apart) {
+            rl_pass_stats refined;
             st = refine_pass(scene, s, cl, &refine_run, p, e, ne, base + part, part / 3, &rf, &refined);
-        add_refined(&s->passes[p], &refined, &rf);
+            add_refined(&s->passes[p], &refined, &rf);
+        }
         /* the last run told of every map if it ran (a refinement with no cell to gather runs none) */
         told = st == RL_OK && last_run->reporting != NULL && (last_run == &gather_run || rf.marked > 0);
         if (st == RL_OK)

@@ -63,11 +63,13 @@ size_t rl__append_bounce_emitters(const rl_scene *scene, const rl_map *maps, siz
 
 /* Runs one pass over maps with emitters e; gather_level_pass chooses the partition level (0: partition_n,
  * else the bounce level) and, > 0 with sampling.bounce_rays > 0, the first-hit gather from the maps the
- * emitters re-emit (bounce.c) for every polygon's map. base and span place it within the run's progress. With several ranks,
+ * emitters re-emit (bounce.c) for every polygon's map. with: NULL, or nmaps more maps gathered in the
+ * same job (one process only, cl NULL), map m's tiles of both lying together, so that a reporting run
+ * finishes map m once both have. base and span place it within the run's progress. With several ranks,
  * *measured holds the previous pass's per-tile CPU times (NULL: none) and receives this pass's.
  * @return RL_OK or an error. */
 rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_cluster *cl, const rl__run *run,
-                       uint32_t pass, uint32_t gather_level_pass, rl_map *maps, size_t nmaps, const rl_emitter *e,
-                       size_t ne, double base, double span, double **measured, rl_pass_stats *st);
+                       uint32_t pass, uint32_t gather_level_pass, rl_map *maps, size_t nmaps, rl_map *with,
+                       const rl_emitter *e, size_t ne, double base, double span, double **measured, rl_pass_stats *st);
 
 #endif /* RELIGHT_ENGINE_INTERNAL_H */

@@ -76,7 +76,7 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
     rl_pass_stats local;
     double *measured = NULL;
     if (st == RL_OK)
-        st = rl__run_pass(scene, sol->tracer, cl, &run, bounces, 0, pts, count, e, ne, share, 1.0 - share,
+        st = rl__run_pass(scene, sol->tracer, cl, &run, bounces, 0, pts, count, NULL, e, ne, share, 1.0 - share,
                           &measured, stats ? stats : &local);
     free(measured);
     for (size_t k = 0; st == RL_OK && k < count; k++)
