@@ -998,8 +998,8 @@ static void check_map_rows(const rl_solution *sol)
 /* maps_ready: ten floor strips under a lamp, a wall beside the last facing them, and a small panel 1 cm over
  * the sixth, facing down. A direct run tells the maps as they are finished, more than once, in order, each
  * with its final values; so do runs of one and two bounces in their last pass, whose last gather is of the
- * cells near the panel with one bounce (which marks them), of the larger cells with two (the cells near the
- * panel gathered before them). */
+ * cells near the panel with one bounce (which marks them), with two of the larger cells and those near the
+ * panel together, map by map. */
 static void check_maps_ready(void)
 {
     char path[600];
