@@ -6,14 +6,11 @@
  * on the one thread that calls it. Filtering here lets the chunks of a patch
  * be compressed side by side, and beside HDF5's own work on the patch's
  * objects. Invariants: a chunk's stored bytes are exactly what HDF5's pipeline
- * (shuffle, deflate at the same level, Fletcher-32 last, little-endian) makes
- * of the same values, the part of the chunk past the dataset's end holding
- * zeros, but that a chunk may ask for zlib's run-length strategy, whose
- * stream differs and inflates to the same bytes; the result does not depend on
- * the number of threads; a failure frees everything.
+ * (shuffle, deflate at the same level through compress2(), Fletcher-32 last,
+ * little-endian) makes of the same values, the part of the chunk past the
+ * dataset's end holding zeros; the result does not depend on the number of
+ * threads; a failure frees everything.
  */
-#include <assert.h>
-#include <limits.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -48,29 +45,6 @@ uint32_t lfio__fletcher32(const unsigned char *p, size_t n)
     return (b << 16) | a;
 }
 
-/* Deflates c's shuffled chunk_bytes in `in` into c->out (room for *packed bytes, set to those written),
- * at c->level and with c->rle's strategy: compress2()'s stream (a zlib header, window 15, memory level 8)
- * but for the strategy. @return zlib's Z_OK or its error. */
-static int deflate_chunk(const lfio__chunk *c, const unsigned char *in, uLongf *packed)
-{
-    if (!c->rle)
-        return compress2(c->out, packed, in, (uLong)c->chunk_bytes, c->level);
-    assert(c->chunk_bytes <= UINT_MAX); /* zlib counts in uInt; HDF5's chunks stay under 4 GiB */
-    z_stream z;
-    memset(&z, 0, sizeof z);
-    int rc = deflateInit2(&z, c->level, Z_DEFLATED, 15, 8, Z_RLE);
-    if (rc != Z_OK)
-        return rc;
-    z.next_in = (unsigned char *)in; /* zlib's input pointer is not const; it only reads */
-    z.avail_in = (uInt)c->chunk_bytes;
-    z.next_out = c->out;
-    z.avail_out = (uInt)*packed;
-    rc = deflate(&z, Z_FINISH);
-    *packed = z.total_out;
-    deflateEnd(&z);
-    return rc == Z_STREAM_END ? Z_OK : (rc == Z_OK ? Z_BUF_ERROR : rc);
-}
-
 /* Filters one chunk into c->out, with scratch for the shuffled values (c->chunk_bytes). @return 0 or -1. */
 static int filter_one(lfio__chunk *c, unsigned char *scratch)
 {
@@ -85,7 +59,7 @@ static int filter_one(lfio__chunk *c, unsigned char *scratch)
     c->out = malloc(packed + 4);
     if (c->out == NULL)
         return -1;
-    if (deflate_chunk(c, scratch, &packed) != Z_OK) {
+    if (compress2(c->out, &packed, scratch, (uLong)c->chunk_bytes, c->level) != Z_OK) {
         free(c->out);
         c->out = NULL;
         return -1;

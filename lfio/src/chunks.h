@@ -2,10 +2,8 @@
  * chunks.h - HDF5's filter pipeline for stored chunks (shuffle, then deflate,
  * then a Fletcher-32 checksum appended), run by lfio itself so that chunks can
  * be filtered on several threads before HDF5 stores them as they are
- * (H5Dwrite_chunk). The bytes are the ones HDF5's own filters produce, but for
- * a chunk deflated with zlib's run-length strategy (rle), whose stream any
- * inflate reads alike: a file written either way reads the same values, and
- * HDF5 checks the checksum on reading.
+ * (H5Dwrite_chunk). The bytes are the ones HDF5's own filters produce: a file
+ * written either way reads the same, and HDF5 checks the checksum on reading.
  * Internal to lfio; no HDF5 here.
  */
 #ifndef LFIO_CHUNKS_H
@@ -21,7 +19,6 @@ typedef struct lfio__chunk {
     size_t chunk_bytes;       /* the whole chunk: past raw_bytes it holds zeros (the fill value) */
     size_t elem;              /* bytes per value, for the shuffle */
     int level;                /* zlib level, 1 .. 9 */
-    int rle;                  /* 1: zlib's run-length strategy (Z_RLE), 0: its default */
     unsigned char *out;       /* filtered bytes (malloc'd, the caller frees), or NULL */
     size_t out_bytes;
 } lfio__chunk;

@@ -62,12 +62,6 @@
  * where level 4 took 0.22 s for the paper's 'beams' (110,750 cells) and level
  * 1 takes 0.14 s for a file 3.4% larger. */
 #define MAP_DEFLATE_LEVEL 1
-/* Cell datasets of 4-byte values (indices, and the irradiance and radiosity,
- * whose low mantissa bytes are noise) are deflated with zlib's run-length
- * strategy where lfio filters them: 'beams' wrote in 0.048 s instead of
- * 0.065 s for a file 5.6% larger (HDF5's own filter, on other machines and
- * in MPI jobs, writes its default stream; both read the same). */
-#define MAP_RLE_SIZE 4
 /* Tolerance on the map frame's unit, orthogonal, right-handed axes. */
 #define FRAME_TOL 1e-6
 
@@ -376,7 +370,7 @@ static size_t patch_chunks(const patch_write *w, uint32_t first, lfio__chunk *c,
             size_t take = (size_t)(l->dims[0] - r0 < l->chunk[0] ? l->dims[0] - r0 : l->chunk[0]);
             if (c)
                 c[n] = (lfio__chunk){a + (size_t)(r0 - first) * row, take * row, (size_t)l->chunk[0] * row, l->size,
-                                     l->deflate, l->size == MAP_RLE_SIZE, NULL, 0};
+                                     l->deflate, NULL, 0};
             if (at)
                 at[n] = (chunk_place){t, r0};
         }
