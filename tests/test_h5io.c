@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include <hdf5.h>
+#include <zlib.h>
 
 #include "check.h"
 #include "lfio/lightfield.h"
@@ -577,6 +578,141 @@ static char *fresh_copy(char *buf, size_t size, const char *src, const char *nam
     return buf;
 }
 
+/* HDF5's Fletcher-32 of n bytes (16-bit big-endian words, an odd last byte as the high half), computed
+ * here on its own to forge a stored chunk: the test's oracle, not lfio's. */
+static uint32_t forge_fletcher32(const unsigned char *p, size_t n)
+{
+    uint64_t a = 0, b = 0;
+    for (size_t i = 0; i + 1 < n; i += 2) {
+        a = (a + ((uint32_t)p[i] << 8 | p[i + 1])) % 65535;
+        b = (b + a) % 65535;
+    }
+    if (n % 2) {
+        a = (a + ((uint32_t)p[n - 1] << 8)) % 65535;
+        b = (b + a) % 65535;
+    }
+    return (uint32_t)(b << 16 | a);
+}
+
+/* Stores values (dims, [dir][v][u][3]) again as dataset dset of path, of file type ftype and creation
+ * property list dcpl, writing directions [0, written) only, with lfio's units and axes. */
+static void restore_radiance(const char *path, const char *dset, hid_t ftype, hid_t dcpl, const hsize_t *dims,
+                             const float *values, hsize_t written, const char *units)
+{
+    hid_t f = edit_open(path);
+    CHECK(H5Ldelete(f, dset, H5P_DEFAULT) >= 0, "delete %s", dset);
+    hid_t space = H5Screate_simple(4, dims, NULL);
+    hid_t d = H5Dcreate2(f, dset, ftype, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    CHECK(d >= 0, "create %s", dset);
+    hsize_t start[4] = {0, 0, 0, 0}, count[4] = {written, dims[1], dims[2], dims[3]};
+    hid_t ms = H5Screate_simple(4, count, NULL);
+    H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL);
+    CHECK(written == 0 || H5Dwrite(d, H5T_NATIVE_FLOAT, ms, space, H5P_DEFAULT, values) >= 0, "write %s", dset);
+    H5Sclose(ms);
+    H5Sclose(space);
+    H5Dclose(d);
+    H5Fclose(f);
+    edit_attr_str(path, dset, "units", units);
+    edit_attr_str(path, dset, "axes", "dir:v:u:rgb");
+}
+
+/* @return a creation property list: chunks of chunk (NULL: contiguous), then the filters named in
+ * pipeline ('s' shuffle, 'd' deflate, 'f' Fletcher-32) in that order. */
+static hid_t storage(const hsize_t *chunk, const char *pipeline)
+{
+    hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    if (chunk)
+        H5Pset_chunk(dcpl, 4, chunk);
+    for (const char *c = pipeline; *c; c++)
+        if (*c == 's')
+            H5Pset_shuffle(dcpl);
+        else if (*c == 'd')
+            H5Pset_deflate(dcpl, 4);
+        else if (*c == 'f')
+            H5Pset_fletcher32(dcpl);
+    return dcpl;
+}
+
+/* Radiance stored otherwise than lfio writes it reads the same values, on one thread and on three: lfio
+ * inflates chunks itself where the storage is its own (other chunk shapes too, partial in every
+ * dimension), HDF5 elsewhere (no shuffle, big-endian, contiguous, chunks never written, which read as
+ * zeros). A stored chunk whose checksum holds but whose stream does not inflate is refused, named. */
+static void test_other_storage(const char *good)
+{
+    lfio_lightfield *ref = NULL;
+    CHECK(lfio_lightfield_read(good, &ref) == LFIO_OK, "read %s: %s", good, lfio_errmsg());
+    if (!ref)
+        return;
+    const lfio_slab *slab = lfio_lightfield_slab(ref, 1);
+    const lfio_slab_desc *desc = lfio_slab_get_desc(slab);
+    const hsize_t dims[4] = {4 * (hsize_t)desc->n * desc->n, desc->nv, desc->nu, 3};
+    const size_t count = (size_t)(dims[0] * dims[1] * dims[2] * dims[3]), half = count / dims[0] * (dims[0] / 2);
+    const float *values = lfio_slab_radiance(slab);
+    const char *units = desc->units == LFIO_UNITS_RADIANCE ? "W sr^-1 m^-2" : "relative";
+    const hsize_t odd[4] = {5, 3, 7, 3}, lfio_shape[4] = {32, 16, 16, 3};
+    const struct {
+        const char *name;
+        const hsize_t *chunk;
+        const char *pipeline;
+        int big_endian;
+        hsize_t written;
+    } cases[] = {
+        {"odd chunks, lfio's filters", odd, "sdf", 0, dims[0]},
+        {"deflate without shuffle", lfio_shape, "df", 0, dims[0]},
+        {"big-endian", lfio_shape, "sdf", 1, dims[0]},
+        {"contiguous", NULL, "", 0, dims[0]},
+        {"half the chunks unwritten", odd, "sdf", 0, dims[0] / 2},
+    };
+    char p[512], name[64];
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        snprintf(name, sizeof name, "storage%zu.h5", c);
+        hid_t dcpl = storage(cases[c].chunk, cases[c].pipeline);
+        restore_radiance(fresh_copy(p, sizeof p, good, name), "/slabs/1/radiance",
+                         cases[c].big_endian ? H5T_IEEE_F32BE : H5T_IEEE_F32LE, dcpl, dims, values, cases[c].written,
+                         units);
+        H5Pclose(dcpl);
+        for (unsigned threads = 1; threads <= 3; threads += 2) {
+            lfio_lightfield_set_read_threads(threads);
+            lfio_lightfield *back = NULL;
+            lfio_status st = lfio_lightfield_read(p, &back);
+            CHECK(st == LFIO_OK, "%s, %u threads: %s", cases[c].name, threads, lfio_errmsg());
+            const float *got = back ? lfio_slab_radiance(lfio_lightfield_slab(back, 1)) : NULL;
+            size_t wrong = 0, kept = cases[c].written == dims[0] ? count : half;
+            for (size_t k = 0; got && k < count; k++)
+                wrong += got[k] != (k < kept ? values[k] : 0.0f);
+            CHECK(got && wrong == 0, "%s, %u threads: %zu values differ", cases[c].name, threads, wrong);
+            lfio_lightfield_destroy(back);
+        }
+    }
+    /* chunk 0 forged: a stream of 16 bytes that inflates to less than a chunk, under a right checksum */
+    hid_t dcpl = storage(lfio_shape, "sdf");
+    restore_radiance(fresh_copy(p, sizeof p, good, "short_chunk.h5"), "/slabs/1/radiance", H5T_IEEE_F32LE, dcpl, dims,
+                     values, dims[0], units);
+    H5Pclose(dcpl);
+    unsigned char raw[16] = {0}, forged[256];
+    uLongf packed = sizeof forged - 4;
+    CHECK(compress2(forged, &packed, raw, sizeof raw, 4) == Z_OK, "forge a short stream");
+    uint32_t sum = forge_fletcher32(forged, packed);
+    for (int k = 0; k < 4; k++)
+        forged[packed + k] = (unsigned char)(sum >> (8 * k));
+    hid_t f = edit_open(p), d = H5Dopen2(f, "/slabs/1/radiance", H5P_DEFAULT);
+    const hsize_t origin[4] = {0, 0, 0, 0};
+    CHECK(H5Dwrite_chunk(d, H5P_DEFAULT, 0, origin, packed + 4, forged) >= 0, "store the forged chunk");
+    H5Dclose(d);
+    H5Fclose(f);
+    for (unsigned threads = 1; threads <= 3; threads += 2) {
+        lfio_lightfield_set_read_threads(threads);
+        lfio_lightfield *back = NULL;
+        lfio_status st = lfio_lightfield_read(p, &back);
+        CHECK(st == LFIO_ERR_IO && back == NULL && strstr(lfio_errmsg(), "/slabs/1/radiance") &&
+                  strstr(lfio_errmsg(), "chunk 0 does not inflate"),
+              "forged chunk, %u threads: %s, '%s'", threads, lfio_status_name(st), lfio_errmsg());
+        lfio_lightfield_destroy(back);
+    }
+    lfio_lightfield_set_read_threads(0);
+    lfio_lightfield_destroy(ref);
+}
+
 /* Every documented way a file can be bad. small: a one-slab file (n = 1, 3 x 1 positions). */
 static void test_bad_files(const char *good, const char *small)
 {
@@ -876,6 +1012,7 @@ int main(void)
     lfio_lightfield_destroy(one);
 
     test_bad_files(mid, small);
+    test_other_storage(mid);
     char cov[512];
     test_coverage(tmp_path(cov, sizeof cov, "coverage.h5"));
     test_verify_tampered(mid);

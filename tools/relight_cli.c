@@ -137,10 +137,21 @@ int relight_failure(const char *sub, rl_status st)
     return st == RL_ERR_ARG || st == RL_ERR_IO || st == RL_ERR_INPUT ? ILF_EXIT_USAGE : ILF_EXIT_FAILED;
 }
 
+/* @return the threads a run asks for with options o: --threads, else 0 (every processor), but a share of
+ * the machine's processors for each of several ranks. */
+static unsigned threads_asked(const sampling_overrides *o)
+{
+    unsigned threads = o != NULL && (o->given & (1u << SAMPLING_OPT_THREADS)) ? o->threads : 0u;
+    /* Several ranks on one machine share its cores instead of each taking them all. */
+    return threads == 0 && job_ranks() > 1 ? job_threads_per_rank() : threads;
+}
+
 int relight_scene_open(const char *sub, const char *path, const sampling_overrides *o, rl_scene **out)
 {
     *out = NULL;
     rl_scene *scene = NULL;
+    /* the scene's light fields inflate on the threads the run will use */
+    lfio_lightfield_set_read_threads(threads_asked(o));
     rl_status st = rl_scene_load(path, &scene);
     if (st != RL_OK) {
         /* The loader names the file in its messages; a bare errno text gets the path added. */
@@ -167,11 +178,7 @@ void relight_run_options(const sampling_overrides *o, const rl_scene *scene, rl_
 {
     rl_run_options_default(out);
     unsigned given = o != NULL ? o->given : 0u;
-    if (given & (1u << SAMPLING_OPT_THREADS))
-        out->threads = o->threads;
-    /* Several ranks on one machine share its cores instead of each taking them all. */
-    if (out->threads == 0 && job_ranks() > 1)
-        out->threads = job_threads_per_rank();
+    out->threads = threads_asked(o);
     out->time_budget = (given & (1u << SAMPLING_OPT_TIME_BUDGET)) ? o->time_budget : rl_scene_time_budget(scene);
 }
 

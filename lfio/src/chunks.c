@@ -12,6 +12,7 @@
  * threads; a failure frees everything.
  */
 #include <stdatomic.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <zlib.h>
@@ -124,6 +125,89 @@ int lfio__chunks_filter(lfio__chunk *c, size_t n, unsigned threads, void (*call_
         return -1;
     }
     return 0;
+}
+
+size_t lfio__chunks_stored_most(size_t chunk_bytes)
+{
+    return (size_t)compressBound((uLong)chunk_bytes) + 4;
+}
+
+/* What the threads of lfio__chunks_unfilter() share. */
+typedef struct unfilter_work {
+    const lfio__stored *c;
+    size_t n;
+    void (*place)(void *user, size_t k, const unsigned char *values);
+    void *user;
+    unsigned char *scratch; /* 2 * most bytes per worker, made before they start: the allocations made do not
+                               depend on how the chunks fall to the workers */
+    size_t most;            /* the largest chunk_bytes */
+    atomic_size_t next;
+    int *status; /* [n] */
+    atomic_int failed;
+} unfilter_work;
+
+/* Undoes one chunk's pipeline into values, with scratch for the shuffled bytes (both chunk_bytes).
+ * @return an LFIO__STORED_ value. */
+static int unfilter_one(const lfio__stored *c, unsigned char *scratch, unsigned char *values)
+{
+    if (c->in_bytes < 4)
+        return LFIO__STORED_BROKEN;
+    size_t packed = c->in_bytes - 4;
+    uint32_t sum = 0;
+    for (int k = 0; k < 4; k++)
+        sum |= (uint32_t)c->in[packed + k] << (8 * k);
+    if (lfio__fletcher32(c->in, packed) != sum)
+        return LFIO__STORED_CHECKSUM;
+    uLongf got = (uLongf)c->chunk_bytes;
+    if (uncompress(scratch, &got, c->in, (uLong)packed) != Z_OK || got != c->chunk_bytes)
+        return LFIO__STORED_BROKEN;
+    size_t count = c->chunk_bytes / c->elem;
+    for (size_t i = 0; i < count; i++)
+        for (size_t k = 0; k < c->elem; k++)
+            values[i * c->elem + k] = scratch[k * count + i];
+    return LFIO__STORED_OK;
+}
+
+/* Worker `index` of lfio__chunks_unfilter(): takes chunks until none is left or one has failed. */
+static void unfilter_worker(void *arg, unsigned index)
+{
+    unfilter_work *w = arg;
+    unsigned char *scratch = w->scratch + (size_t)index * 2 * w->most, *values = scratch + w->most;
+    for (size_t k; !atomic_load(&w->failed) && (k = atomic_fetch_add(&w->next, 1)) < w->n;) {
+        w->status[k] = unfilter_one(&w->c[k], scratch, values);
+        if (w->status[k] == LFIO__STORED_OK)
+            w->place(w->user, k, values);
+        else
+            atomic_store(&w->failed, 1);
+    }
+}
+
+int lfio__chunks_unfilter(const lfio__stored *c, size_t n, unsigned threads,
+                          void (*place)(void *user, size_t k, const unsigned char *values), void *user, size_t *bad)
+{
+    unsigned workers = n < threads ? (unsigned)(n ? n : 1) : (threads ? threads : 1);
+    size_t most = 1;
+    for (size_t k = 0; k < n; k++)
+        most = c[k].chunk_bytes > most ? c[k].chunk_bytes : most;
+    int *status = calloc(n ? n : 1, sizeof *status);
+    unsigned char *scratch = most <= SIZE_MAX / 2 / workers ? malloc((size_t)workers * 2 * most) : NULL;
+    *bad = 0;
+    if (status == NULL || scratch == NULL) {
+        free(status);
+        free(scratch);
+        return LFIO__STORED_NOMEM;
+    }
+    unfilter_work w = {c, n, place, user, scratch, most, 0, status, 0};
+    atomic_init(&w.next, 0);
+    atomic_init(&w.failed, 0);
+    ilf_parallel(workers, unfilter_worker, &w);
+    int rc = LFIO__STORED_OK;
+    for (size_t k = 0; k < n && rc == LFIO__STORED_OK; k++)
+        if (status[k] != LFIO__STORED_OK)
+            rc = status[k], *bad = k;
+    free(status);
+    free(scratch);
+    return rc;
 }
 
 void lfio__chunks_free(lfio__chunk *c, size_t n)

@@ -12,6 +12,14 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* 1 where values in memory have the byte order HDF5's little-endian types store (lfio's own filtering then
+ * applies), else 0. */
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define LFIO_LITTLE_ENDIAN 1
+#else
+#define LFIO_LITTLE_ENDIAN 0
+#endif
+
 /* One chunk to filter: in, its values; out, what to store. */
 typedef struct lfio__chunk {
     const unsigned char *raw; /* the chunk's values present (raw_bytes), little-endian as stored */
@@ -34,5 +42,27 @@ int lfio__chunks_filter(lfio__chunk *c, size_t n, unsigned threads, void (*call_
 
 /* Frees the out buffers of c[0..n). */
 void lfio__chunks_free(lfio__chunk *c, size_t n);
+
+/* One stored chunk to undo the pipeline of: what HDF5 stores for it (shuffled, deflated, Fletcher-32
+ * appended), to become chunk_bytes of values of elem bytes each. */
+typedef struct lfio__stored {
+    const unsigned char *in;
+    size_t in_bytes;
+    size_t chunk_bytes;
+    size_t elem;
+} lfio__stored;
+
+/* @return the most bytes the pipeline stores for a chunk of chunk_bytes: zlib's bound and the checksum. */
+size_t lfio__chunks_stored_most(size_t chunk_bytes);
+
+/* What lfio__chunks_unfilter() found wrong with a chunk. */
+enum { LFIO__STORED_OK, LFIO__STORED_CHECKSUM, LFIO__STORED_BROKEN, LFIO__STORED_NOMEM };
+
+/* Undoes the pipeline of c[0..n) on up to threads threads, the calling thread among them: checks each
+ * chunk's checksum, inflates and unshuffles it, and hands its values to place(user, k, values) (from any of
+ * the threads, values valid during the call only; chunks in any order). Stops early after a failure.
+ * @return LFIO__STORED_OK, or the failure of the first failing chunk in index order (*bad its index). */
+int lfio__chunks_unfilter(const lfio__stored *c, size_t n, unsigned threads,
+                          void (*place)(void *user, size_t k, const unsigned char *values), void *user, size_t *bad);
 
 #endif /* LFIO_CHUNKS_H */

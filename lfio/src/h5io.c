@@ -31,11 +31,14 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "chunks.h"
 #include "h5util.h"
+#include "ilf/pool.h"
 #include "internal.h"
 
 #define FORMAT_NAME "ilfkit-lightfield"
@@ -766,6 +769,136 @@ static lfio_status check_slab_arg(const lfio_reader *r, size_t k, const void *bu
     return LFIO_OK;
 }
 
+/* The threads a whole read decompresses a slab's chunks on (lfio_lightfield_set_read_threads()); atomic, so
+ * that setting it while another thread reads is no data race (that read takes either value). */
+static _Atomic unsigned read_threads = 0;
+
+void lfio_lightfield_set_read_threads(unsigned threads)
+{
+    atomic_store_explicit(&read_threads, threads, memory_order_relaxed);
+}
+
+/* Where decoded radiance chunks go (place_chunk()): the dataset's values, its shape and chunk shape, and
+ * each chunk's first element. */
+typedef struct chunk_places {
+    float *values;
+    hsize_t dims[4], chunk[4];
+    const hsize_t *offset; /* [n][4] */
+} chunk_places;
+
+/* Copies decoded chunk k's part inside the dataset to its place (lfio__chunks_unfilter()'s place). */
+static void place_chunk(void *user, size_t k, const unsigned char *values)
+{
+    const chunk_places *p = user;
+    const hsize_t *o = p->offset + 4 * k, *d = p->dims, *c = p->chunk;
+    hsize_t n[4];
+    for (int a = 0; a < 4; a++)
+        n[a] = d[a] - o[a] < c[a] ? d[a] - o[a] : c[a];
+    for (hsize_t a = 0; a < n[0]; a++)
+        for (hsize_t b = 0; b < n[1]; b++)
+            for (hsize_t e = 0; e < n[2]; e++)
+                memcpy(p->values + (((o[0] + a) * d[1] + o[1] + b) * d[2] + o[2] + e) * d[3] + o[3],
+                       values + (((a * c[1] + b) * c[2] + e) * c[3]) * sizeof(float), (size_t)n[3] * sizeof(float));
+}
+
+/* @return 1 if dataset d, of shape dims, is stored as lfio writes radiance (little-endian float32 in chunks
+ * within its shape, shuffle, deflate and Fletcher-32 in that order) with every chunk there, each filtered
+ * and of a plausible size; their shape in chunk, their count in *n; else 0. */
+static int stored_as_lfio(hid_t d, const hsize_t *dims, hsize_t *chunk, hsize_t *n)
+{
+    hid_t t = H5Dget_type(d), dcpl = H5Dget_create_plist(d);
+    int ok = LFIO_LITTLE_ENDIAN && t >= 0 && dcpl >= 0 && H5Tequal(t, H5T_IEEE_F32LE) > 0 &&
+             H5Pget_layout(dcpl) == H5D_CHUNKED && H5Pget_chunk(dcpl, 4, chunk) == 4 && H5Pget_nfilters(dcpl) == 3;
+    static const H5Z_filter_t pipeline[3] = {H5Z_FILTER_SHUFFLE, H5Z_FILTER_DEFLATE, H5Z_FILTER_FLETCHER32};
+    for (unsigned f = 0; ok && f < 3; f++) {
+        unsigned flags = 0, config = 0, cd[8];
+        size_t ncd = 8;
+        ok = H5Pget_filter2(dcpl, f, &flags, &ncd, cd, 0, NULL, &config) == pipeline[f];
+    }
+    hsize_t expected = 1;
+    for (int a = 0; ok && a < 4; a++) {
+        ok = chunk[a] >= 1 && chunk[a] <= (dims[a] ? dims[a] : 1);
+        expected *= (dims[a] + chunk[a] - 1) / chunk[a];
+    }
+    /* HDF5 1.10 takes the dataset's own dataspace here, not H5S_ALL */
+    hid_t space = ok ? H5Dget_space(d) : -1;
+    ok = ok && space >= 0 && H5Dget_num_chunks(d, space, n) >= 0 && *n == expected;
+    lfio__h5_close(space);
+    lfio__h5_close(dcpl);
+    lfio__h5_close(t);
+    return ok;
+}
+
+/* Reads the radiance dataset d of a slab (object obj of path, shape dims) into values by undoing its
+ * pipeline on lfio's own threads, when it is stored as lfio writes it (stored_as_lfio()): HDF5 only hands
+ * over the stored chunks (H5Dread_chunk), whose inflating is most of a read. @return 1 with *st the read's
+ * status (reported); 0 when it is stored otherwise, nothing read or reported (HDF5 then reads it). */
+static int read_radiance_direct(const char *path, const char *obj, hid_t d, const hsize_t *dims, float *values,
+                                lfio_status *st)
+{
+    chunk_places places = {values, {dims[0], dims[1], dims[2], dims[3]}, {0}, NULL};
+    hsize_t n = 0;
+    if (!stored_as_lfio(d, dims, places.chunk, &n) || n == 0)
+        return 0;
+    size_t chunk_bytes = sizeof(float);
+    for (int a = 0; a < 4; a++)
+        chunk_bytes *= (size_t)places.chunk[a];
+    /* a stored chunk is at most its deflated bound and the checksum: larger sizes are HDF5's to refuse */
+    size_t most = lfio__chunks_stored_most(chunk_bytes), total = 0;
+    hsize_t *offset = malloc((size_t)n * 4 * sizeof *offset);
+    lfio__stored *c = calloc((size_t)n, sizeof *c);
+    if (offset == NULL || c == NULL) { /* out of memory is reported, never absorbed by HDF5's reading */
+        free(offset);
+        free(c);
+        *st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory for %llu chunks", path, obj, (unsigned long long)n);
+        return 1;
+    }
+    hid_t space = H5Dget_space(d);
+    int direct = space >= 0;
+    for (hsize_t k = 0; direct && k < n; k++) {
+        unsigned mask = 0;
+        haddr_t addr = 0;
+        hsize_t size = 0;
+        direct = H5Dget_chunk_info(d, space, k, offset + 4 * k, &mask, &addr, &size) >= 0 && mask == 0 &&
+                 size >= 4 && size <= most;
+        c[k] = (lfio__stored){NULL, (size_t)size, chunk_bytes, sizeof(float)};
+        total += (size_t)size;
+    }
+    lfio__h5_close(space);
+    unsigned char *stored = direct ? malloc(total ? total : 1) : NULL;
+    if (!direct || stored == NULL) {
+        free(offset);
+        free(c);
+        if (direct) /* out of memory: as HDF5 would be */
+            *st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory for %zu bytes of stored chunks", path, obj, total);
+        return direct;
+    }
+    *st = LFIO_OK;
+    size_t at = 0;
+    for (hsize_t k = 0; *st == LFIO_OK && k < n; at += c[k++].in_bytes) {
+        uint32_t mask = 0;
+        c[k].in = stored + at;
+        if (H5Dread_chunk(d, H5P_DEFAULT, offset + 4 * k, &mask, stored + at) < 0)
+            *st = lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot read");
+    }
+    places.offset = offset;
+    size_t bad = 0;
+    int rc = *st == LFIO_OK ? lfio__chunks_unfilter(c, (size_t)n, ilf_thread_count(atomic_load(&read_threads)),
+                                                    place_chunk, &places, &bad)
+                            : LFIO__STORED_OK;
+    if (rc == LFIO__STORED_CHECKSUM)
+        *st = lfio__fail(LFIO_ERR_CHECKSUM, "%s: %s: checksum mismatch (cannot read)", path, obj);
+    else if (rc == LFIO__STORED_BROKEN)
+        *st = lfio__fail(LFIO_ERR_IO, "%s: %s: cannot read (stored chunk %zu does not inflate to its %zu bytes)",
+                         path, obj, bad, chunk_bytes);
+    else if (rc == LFIO__STORED_NOMEM)
+        *st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, obj);
+    free(stored);
+    free(offset);
+    free(c);
+    return 1;
+}
+
 /* Reads slab k whole into a new slab, checking values and rebuilding its mask (HDF5 not silenced). */
 static lfio_status read_slab_impl(lfio_reader *r, size_t k, lfio_slab **out)
 {
@@ -782,7 +915,8 @@ static lfio_status read_slab_impl(lfio_reader *r, size_t k, lfio_slab **out)
     struct ds_spec sp;
     ds_spec_make(&r->desc[k], DS_RADIANCE, 0, &sp);
     const hsize_t zero[4] = {0, 0, 0, 0};
-    st = lfio__h5_xfer(r->path, obj, r->radiance[k], 0, H5T_NATIVE_FLOAT, 4, zero, sp.lay.dims, s->radiance);
+    if (!read_radiance_direct(r->path, obj, r->radiance[k], sp.lay.dims, s->radiance, &st))
+        st = lfio__h5_xfer(r->path, obj, r->radiance[k], 0, H5T_NATIVE_FLOAT, 4, zero, sp.lay.dims, s->radiance);
     if (st == LFIO_OK)
         st = check_radiance(LFIO_ERR_FORMAT, r->path, k, s);
     if (st != LFIO_OK) {

@@ -41,11 +41,6 @@
 #include "lfio/radmap_mpi.h"
 #endif
 
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-#define LFIO_LITTLE_ENDIAN 1
-#else
-#define LFIO_LITTLE_ENDIAN 0
-#endif
 
 #define FORMAT_NAME "ilfkit-radiance-maps"
 #define FORMAT_VERSION 1

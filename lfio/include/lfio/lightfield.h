@@ -368,6 +368,18 @@ lfio_status lfio_lightfield_write(const lfio_lightfield *lf, const char *path);
  */
 lfio_status lfio_lightfield_read(const char *path, lfio_lightfield **out);
 
+/**
+ * Sets how many threads whole reads of radiance (lfio_lightfield_read(),
+ * lfio_reader_read_slab()) may decompress its chunks on: 0 (the default) for
+ * every online core, 1 for the calling thread alone (at most 1024). Files
+ * stored as lfio writes them are inflated by lfio itself, on those threads;
+ * others, and big-endian machines, through HDF5 on one. The values are the
+ * same whatever the count. Safe to call from any thread; a read already
+ * under way may take the old value or the new.
+ * @return nothing.
+ */
+void lfio_lightfield_set_read_threads(unsigned threads);
+
 /* --------------------------------------------------------------- coverage */
 
 /*
