@@ -861,6 +861,9 @@ static int read_radiance_direct(const char *path, const char *obj, hid_t d, cons
         hsize_t size = 0;
         direct = H5Dget_chunk_info(d, space, k, offset + 4 * k, &mask, &addr, &size) >= 0 && mask == 0 &&
                  size >= 4 && size <= most;
+        /* a chunk starts on the chunk grid inside the dataset (place_chunk() relies on it) */
+        for (int a = 0; direct && a < 4; a++)
+            direct = offset[4 * k + a] < dims[a] && offset[4 * k + a] % places.chunk[a] == 0;
         c[k] = (lfio__stored){NULL, (size_t)size, chunk_bytes, sizeof(float)};
         total += (size_t)size;
     }
