@@ -76,50 +76,56 @@ static int filter_one(lfio__chunk *c, unsigned char *scratch)
     return 0;
 }
 
-/* What the threads share: the chunks and the next one to take. */
+/* What the threads share: the chunks, the next one to take, and each worker's scratch. */
 typedef struct filter_work {
     lfio__chunk *c;
     size_t n;
+    unsigned char *scratch; /* most bytes per worker, made before they start: the allocations made do not
+                               depend on how the chunks fall to the workers */
+    size_t most;            /* the largest chunk_bytes */
     atomic_size_t next;
     atomic_int failed;
 } filter_work;
 
-/* A worker: takes chunks until none is left. */
-static void filter_worker(void *arg, unsigned index)
+/* Worker `index` (0, the calling thread, first): takes chunks until none is left. */
+static void filter_worker(filter_work *w, unsigned index)
 {
-    (void)index;
-    filter_work *w = arg;
-    unsigned char *scratch = NULL;
-    size_t cap = 0;
-    for (size_t k; (k = atomic_fetch_add(&w->next, 1)) < w->n;) {
-        lfio__chunk *c = &w->c[k];
-        if (c->chunk_bytes > cap) {
-            free(scratch);
-            cap = c->chunk_bytes;
-            if ((scratch = malloc(cap)) == NULL)
-                cap = 0;
-        }
-        if (scratch == NULL || filter_one(c, scratch) != 0)
+    unsigned char *scratch = w->scratch + (size_t)index * w->most;
+    for (size_t k; (k = atomic_fetch_add(&w->next, 1)) < w->n;)
+        if (filter_one(&w->c[k], scratch) != 0)
             atomic_store(&w->failed, 1);
-    }
-    free(scratch);
+}
+
+/* A helper thread of lfio__chunks_filter(): worker index + 1. */
+static void filter_helper(void *arg, unsigned index)
+{
+    filter_worker(arg, index + 1);
 }
 
 int lfio__chunks_filter(lfio__chunk *c, size_t n, unsigned threads, void (*call_between)(void *), void *user)
 {
-    filter_work w = {c, n, 0, 0};
     for (size_t k = 0; k < n; k++)
         c[k].out = NULL, c[k].out_bytes = 0;
+    /* helpers only when there is more than one chunk to share */
+    unsigned helpers = threads > 1 && n > 1 ? (threads - 1 < n - 1 ? threads - 1 : (unsigned)(n - 1)) : 0;
+    size_t most = 1;
+    for (size_t k = 0; k < n; k++)
+        most = c[k].chunk_bytes > most ? c[k].chunk_bytes : most;
+    unsigned char *scratch = most <= SIZE_MAX / (helpers + 1u) ? malloc((size_t)(helpers + 1u) * most) : NULL;
+    filter_work w = {c, n, scratch, most, 0, 0};
+    atomic_init(&w.next, 0);
+    atomic_init(&w.failed, 0);
     ilf_team *team = NULL;
-    /* helpers only when there is more than one chunk to share; a team that cannot be allocated is out of
-     * memory, reported as such (nothing has run yet) */
-    if (threads > 1 && n > 1 &&
-        ilf_team_start(threads - 1 < n - 1 ? threads - 1 : (unsigned)(n - 1), filter_worker, &w, &team) != 0)
+    /* a scratch or a team that cannot be allocated is out of memory, reported as such (nothing has run yet) */
+    if (scratch == NULL || (helpers > 0 && ilf_team_start(helpers, filter_helper, &w, &team) != 0)) {
+        free(scratch);
         return -1;
+    }
     if (call_between)
         call_between(user);
     filter_worker(&w, 0);
     ilf_team_join(team);
+    free(scratch);
     if (atomic_load(&w.failed)) {
         lfio__chunks_free(c, n);
         return -1;

@@ -36,7 +36,7 @@ uint32_t lfio__fletcher32(const unsigned char *p, size_t n);
 
 /* Filters chunks c[0..n) on up to threads threads, the calling thread among them; call_between(user)
  * runs on the calling thread first, while the others work (NULL: nothing). When memory runs out before
- * any work (the threads' record), call_between is not called.
+ * any work (the workers' scratch or the threads' record), call_between is not called.
  * @return 0, or -1 when memory ran out (every out is then freed and NULL). */
 int lfio__chunks_filter(lfio__chunk *c, size_t n, unsigned threads, void (*call_between)(void *), void *user);
 
