@@ -246,30 +246,29 @@ static uint32_t tile_cells(const rl_map *maps, const work_item *w)
     return first_cell_of_row(m, w->row1) - first_cell_of_row(m, w->row0);
 }
 
-/* @return the number of cells of tile w that a pass gathers: those of rl_map.subset when it is set. */
-static uint32_t tile_work(const rl_map *maps, const work_item *w)
+/* @return the number of cells of map m in grid rows [row0, row1) that a pass gathers: those of
+ * rl_map.subset when it is set. */
+static uint32_t rows_work(const rl_map *m, uint32_t row0, uint32_t row1)
 {
-    const rl_map *m = &maps[w->map];
-    if (!m->subset)
-        return tile_cells(maps, w);
-    uint32_t n = 0;
-    for (uint32_t c = first_cell_of_row(m, w->row0), c1 = first_cell_of_row(m, w->row1); c < c1; c++)
-        n += m->subset[c] != 0;
-    return n;
-}
-
-/* @return what row j of map m adds to a tile: its grid squares, or with by_work the cells of it a pass
- * gathers (rl_map.subset's when set). */
-static uint32_t row_units(const rl_map *m, uint32_t j, int by_work)
-{
-    if (!by_work)
-        return m->nu;
-    uint32_t c0 = first_cell_of_row(m, j), c1 = first_cell_of_row(m, j + 1), n = 0;
+    uint32_t c0 = first_cell_of_row(m, row0), c1 = first_cell_of_row(m, row1), n = 0;
     if (!m->subset)
         return c1 - c0;
     for (uint32_t c = c0; c < c1; c++)
         n += m->subset[c] != 0;
     return n;
+}
+
+/* @return the number of cells of tile w that a pass gathers (rows_work()). */
+static uint32_t tile_work(const rl_map *maps, const work_item *w)
+{
+    return rows_work(&maps[w->map], w->row0, w->row1);
+}
+
+/* @return what row j of map m adds to a tile: its grid squares, or with by_work the cells of it a pass
+ * gathers (rows_work()). */
+static uint32_t row_units(const rl_map *m, uint32_t j, int by_work)
+{
+    return by_work ? rows_work(m, j, j + 1) : m->nu;
 }
 
 /* Splits every map of each of the nsets arrays of nmaps maps into tiles of whole rows, each row added
@@ -286,16 +285,16 @@ static size_t split_tiles(rl_map *const *sets, size_t nsets, size_t nmaps, uint3
         for (uint32_t set = 0; set < nsets; set++) {
             const rl_map *maps = sets[set], *mp = &maps[m];
             for (uint32_t r0 = 0, r1; r0 < mp->nv; r0 = r1) {
-                uint64_t units = 0, work = 0;
+                uint64_t units = 0;
                 for (r1 = r0; r1 < mp->nv; r1++) {
                     uint32_t u = row_units(mp, r1, by_work);
                     if (r1 > r0 && units + u > per_tile)
                         break;
                     units += u;
-                    work += by_work ? u : 0;
                 }
                 work_item w = {(uint32_t)m, r0, r1, set};
-                if (by_work ? work == 0 : tile_work(maps, &w) == 0)
+                /* by work, the units counted are the cells the tile gathers */
+                if (by_work ? units == 0 : tile_work(maps, &w) == 0)
                     continue;
                 if (items)
                     items[k] = w;

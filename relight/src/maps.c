@@ -279,13 +279,13 @@ static rl_status build(const rl_scene *scene, double cell, int re_emit, unsigned
         squares += (uint64_t)mp->nu * mp->nv;
     }
     int parallel = st == RL_OK && threads > 1 && squares <= MAX_TOTAL_CELLS;
+    cells_job job = {out, re_emit, status};
     if (parallel)
-        ilf_parallel_for(threads, m, build_cells, &(cells_job){out, re_emit, status});
+        ilf_parallel_for(threads, m, build_cells, &job);
     for (size_t q = 0; q < m && st == RL_OK; q++) {
-        if (parallel)
-            st = status[q];
-        else if ((st = map_cells(&out[q])) == RL_OK)
-            st = map_accumulators(&out[q], re_emit);
+        if (!parallel)
+            build_cells(&job, q);
+        st = status[q];
         total += out[q].ncells;
         if (st == RL_OK && total > MAX_TOTAL_CELLS)
             st = RL_ERR_INPUT;
