@@ -56,8 +56,9 @@ static int filter_one(lfio__chunk *c, unsigned char *scratch)
     for (size_t i = 0; i < present; i++)
         for (size_t k = 0; k < c->elem; k++)
             scratch[k * count + i] = c->raw[i * c->elem + k];
-    uLongf packed = compressBound((uLong)c->chunk_bytes);
-    c->out = malloc(packed + 4);
+    size_t most = lfio__chunks_stored_most(c->chunk_bytes); /* zlib's bound and the checksum */
+    uLongf packed = (uLongf)(most - 4);
+    c->out = malloc(most);
     if (c->out == NULL)
         return -1;
     if (compress2(c->out, &packed, scratch, (uLong)c->chunk_bytes, c->level) != Z_OK) {
