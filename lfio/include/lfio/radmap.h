@@ -121,7 +121,7 @@ lfio_status lfio_radmap_write_each(const char *path, const char *creator, const 
                                    lfio_radmap_describe_fn describe, void *user);
 
 /** Most cells lfio_radmap_write_rows() asks for at once. */
-#define LFIO_RADMAP_ROWS_MAX 65536u
+#define LFIO_RADMAP_ROWS_MAX 16384u
 
 /** Cells [first, first + count) of a patch: each array holds count rows, as in lfio_radmap_patch. */
 typedef struct lfio_radmap_rows {
