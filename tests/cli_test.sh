@@ -376,6 +376,12 @@ assert d["rays_cast"] == 0 and d["rays_kept"] == 0 and d["rays_free"] > 0 and d[
 b = s["passes"][1]
 assert b["rays_cast"] > 0 and b["rays_kept"] <= b["rays_cast"] and b["rays_free"] == 0, b  # first hits are all traced
 assert d["solid_angles_culled"] <= d["solid_angles_considered"], d
+m = s["memory"]
+assert set(m) == {"accumulator_bytes", "lightfield_bytes", "peak_resident_bytes"}, m
+# with a bounce: pass, previous pass and total (72 bytes a cell), and the coarser cells (24 bytes each, fewer)
+c = s["cells"]
+assert 72 * c < m["accumulator_bytes"] < 96 * c and m["accumulator_bytes"] % 24 == 0, m
+assert m["lightfield_bytes"] == 0 and m["peak_resident_bytes"] > m["accumulator_bytes"], m
 ' "$RELIT/square/stats.json"
 if [ -n "$H5PY" ]; then
     # The floor receives part of the lamp's power pi * 1 m^2 * 10 W sr^-1 m^-2.
@@ -411,6 +417,7 @@ check "--bounces 0 runs the direct pass only" py '
 import json, sys
 s = json.load(open(sys.argv[1]))
 assert s["settings"]["bounces"] == 0 and len(s["passes"]) == 1, s
+assert s["memory"]["accumulator_bytes"] == 24 * s["cells"], s["memory"]  # one RGB double array a cell
 ' "$RELIT/quiet/stats.json"
 expect 0 "relight the minimal scene (no light, no camera)" "$ILF" relight "$SRC/tests/scenes/good_minimal.json" \
     -o "$RELIT/minimal/a/b" --quiet

@@ -112,7 +112,7 @@ static void test_minimal(void)
     rl_sampling_default(&def);
     const rl_sampling *got = rl_scene_sampling(s);
     CHECK(rl_scene_polygon_count(s) == 1, "polygons %zu", rl_scene_polygon_count(s));
-    CHECK(rl_scene_lightfield_count(s) == 0, "light fields");
+    CHECK(rl_scene_lightfield_count(s) == 0 && rl_scene_lightfield_bytes(s) == 0, "light fields");
     CHECK(rl_scene_cell_size(s) == 0.05, "default cell size %g", rl_scene_cell_size(s));
     CHECK(!rl_scene_has_camera(s), "no camera");
     CHECK(got->method == RL_METHOD_CULLED && got->partition_n == 32 && got->rays_per_solid_angle == 4 &&
@@ -477,9 +477,17 @@ static void test_lightfields(void)
     write_text("lf_late.json", "{\"lightfields\": [{\"file\": \"lf.h5\"}, {\"file\": \"lf.h5\", \"slab\": \"x\"}]}\n");
 
     rl_scene *s = load(tmpdir, "lf_default.json");
+    uint64_t file_bytes = 0; /* the radiance of both of lf.h5's slabs, held whichever one the scene uses */
     if (s) {
         const rl_lightfield *lf = &s->lightfields[0];
         CHECK(rl_scene_lightfield_count(s) == 1 && lf->lf && lf->slab, "one light field");
+        CHECK(lfio_lightfield_slab_count(lf->lf) == 2, "lf.h5 has two slabs");
+        for (size_t k = 0; k < lfio_lightfield_slab_count(lf->lf); k++) {
+            const lfio_slab_desc *d = lfio_slab_get_desc(lfio_lightfield_slab(lf->lf, k));
+            file_bytes += (uint64_t)d->nu * d->nv * 4 * d->n * d->n * 3 * sizeof(float); /* 4n^2 directions */
+        }
+        CHECK(rl_scene_lightfield_bytes(s) == file_bytes, "light field bytes %llu, the file's radiance %llu",
+              (unsigned long long)rl_scene_lightfield_bytes(s), (unsigned long long)file_bytes);
         CHECK(strcmp(lfio_slab_get_desc(lf->slab)->name, "a") == 0, "slab 0 by default");
         CHECK(lf->scale == 1 && lf->rot[0][0] == 1 && lf->rot[1][1] == 1 && lf->rot[2][2] == 1 && lf->rot[0][1] == 0,
               "identity by default");
@@ -523,6 +531,8 @@ static void test_lightfields(void)
         CHECK(l[0].owns_support && !l[1].owns_support && l[1].support == l[0].support && l[2].owns_support &&
                   l[2].support != l[0].support,
               "a slab's support table is shared, another slab's is its own");
+        CHECK(rl_scene_lightfield_bytes(s) == file_bytes, "three emitters of one file hold its radiance once: %llu",
+              (unsigned long long)rl_scene_lightfield_bytes(s));
         rl_scene_destroy(s);
     }
     static const bad_case bad[] = {

@@ -33,6 +33,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -819,6 +820,26 @@ static int add_passes(cJSON *passes, const rl_solution *sol)
     return 1;
 }
 
+/* @return this process's peak resident memory so far in bytes (the kernel's count, which Linux gives in KiB),
+ * or 0 if it cannot be read. */
+static uint64_t peak_resident_bytes(void)
+{
+    struct rusage u;
+    return getrusage(RUSAGE_SELF, &u) == 0 && u.ru_maxrss > 0 ? (uint64_t)u.ru_maxrss * 1024u : 0;
+}
+
+/* @return stats.json's "memory": what the light held against the whole process, or NULL when memory runs out. */
+static cJSON *memory_json(const relight_run *run)
+{
+    cJSON *m = cJSON_CreateObject();
+    if (m != NULL) {
+        add_count(m, "accumulator_bytes", rl_solution_accumulator_bytes(run->solution));
+        add_count(m, "lightfield_bytes", rl_scene_lightfield_bytes(run->scene));
+        add_count(m, "peak_resident_bytes", peak_resident_bytes());
+    }
+    return m;
+}
+
 /* @return the whole stats.json document (schema in docs/cli.md), or NULL when memory runs out. */
 static cJSON *stats_json(const relight_run *run)
 {
@@ -840,6 +861,12 @@ static cJSON *stats_json(const relight_run *run)
     add_count(root, "cells", run->cells);
     add_count(root, "ranks", (uint64_t)job_ranks());
     cJSON_AddNumberToObject(root, "radiance_write_seconds", run->write_seconds);
+    cJSON *memory = memory_json(run);
+    if (memory == NULL || !cJSON_AddItemToObject(root, "memory", memory)) {
+        cJSON_Delete(memory);
+        cJSON_Delete(root);
+        return NULL;
+    }
     const job_exchange *log = NULL;
     size_t nlog = job_exchange_log(&log);
     cJSON *exchanges = nlog > 0 ? cJSON_AddArrayToObject(root, "exchanges") : NULL;

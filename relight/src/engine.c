@@ -841,6 +841,16 @@ static void add_refined(rl_pass_stats *to, const rl_pass_stats *more, const refi
         to->cells_direct = rf->marked;
 }
 
+/* @return the bytes of the irradiance arrays of n maps not yet settled: one array a map, or three for a map
+ * that re-emits (rl__map_settle() makes them one). */
+static uint64_t accumulator_bytes(const rl_map *maps, size_t n)
+{
+    uint64_t bytes = 0;
+    for (size_t m = 0; m < n; m++)
+        bytes += (uint64_t)maps[m].ncells * sizeof *maps[m].e_pass * (maps[m].e_prev ? 3u : 1u);
+    return bytes;
+}
+
 rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *run, uint32_t passes, double span,
                     rl_solution **out)
 {
@@ -882,6 +892,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     if (passes > 1 && factor > 1)
         st = rl__maps_build_sized(scene, scene->cell_size * factor, run->threads, &coarse, &ncoarse);
     assert(!coarse || ncoarse == s->nmaps); /* one map per receiving polygon, in order, at any cell size */
+    s->accumulator_bytes = accumulator_bytes(s->maps, s->nmaps) + accumulator_bytes(coarse, ncoarse);
     refine rf = {0};
     if (st == RL_OK && coarse && scene->sampling.bounce_rays > 0 && refine_new(coarse, ncoarse, s->maps, &rf) != 0)
         st = rl__fail(RL_ERR_NOMEM, "out of memory for the bounce cells");

@@ -22,6 +22,7 @@ struct rl_solution {
     rl_pass_stats *passes;
     uint32_t npasses;
     int flat; /* shade each cell's own value instead of interpolating between cells */
+    uint64_t accumulator_bytes; /* the maps' irradiance arrays at their most (before rl__map_settle()) */
 };
 
 /* A call's run options, checked, with the thread count resolved. */

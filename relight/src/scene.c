@@ -853,6 +853,17 @@ size_t rl_scene_lightfield_count(const rl_scene *s)
     return s ? s->nlightfields : 0;
 }
 
+uint64_t rl_scene_lightfield_bytes(const rl_scene *s)
+{
+    uint64_t bytes = 0;
+    for (size_t k = 0; s && k < s->nlightfields; k++) {
+        const lfio_lightfield *lf = s->lightfields[k].lf;
+        for (size_t j = 0; s->lightfields[k].owns_lf && j < lfio_lightfield_slab_count(lf); j++)
+            bytes += lfio_slab_desc_bytes(lfio_slab_get_desc(lfio_lightfield_slab(lf, j)));
+    }
+    return bytes;
+}
+
 double rl_scene_cell_size(const rl_scene *s)
 {
     return s ? s->cell_size : 0;

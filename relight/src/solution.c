@@ -37,6 +37,11 @@ rl_status rl_solution_pass_stats(const rl_solution *s, uint32_t k, rl_pass_stats
     return RL_OK;
 }
 
+uint64_t rl_solution_accumulator_bytes(const rl_solution *s)
+{
+    return s->accumulator_bytes;
+}
+
 size_t rl_solution_map_count(const rl_solution *s)
 {
     return s->nmaps;

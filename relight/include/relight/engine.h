@@ -144,6 +144,10 @@ uint32_t rl_solution_pass_count(const rl_solution *s);
 /** Copies the statistics of pass k. @return RL_OK or RL_ERR_ARG. */
 rl_status rl_solution_pass_stats(const rl_solution *s, uint32_t k, rl_pass_stats *out);
 
+/** @return the bytes of irradiance accumulators the run held at their most: each map's pass, previous-pass
+ * and total arrays (one array without bounces), and the coarser maps of bounce passes. */
+uint64_t rl_solution_accumulator_bytes(const rl_solution *s);
+
 /** @return the number of radiance maps (one per receiving polygon). */
 size_t rl_solution_map_count(const rl_solution *s);
 

@@ -49,6 +49,10 @@ size_t rl_scene_polygon_count(const rl_scene *s);
 /** @return the number of light field emitters. */
 size_t rl_scene_lightfield_count(const rl_scene *s);
 
+/** @return the bytes of radiance the light fields hold in memory, every slab of each file counted once
+ * (lfio_slab_desc_bytes()); 0 without light fields. */
+uint64_t rl_scene_lightfield_bytes(const rl_scene *s);
+
 /** @return the radiance-map cell size in metres. */
 double rl_scene_cell_size(const rl_scene *s);
 
