@@ -902,7 +902,16 @@ static int write_stats(relight_run *run)
         cli_error("relight", "%s", err);
         code = ILF_EXIT_FAILED;
     } else {
-        stage_done(run, OUT_STATS, "settings, times and pass statistics");
+        /* the figures as written: the peak is the process's when stats.json was built */
+        const cJSON *m = cJSON_GetObjectItemCaseSensitive(root, "memory");
+        double peak = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(m, "peak_resident_bytes"));
+        double light = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(m, "accumulator_bytes")) +
+                       cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(m, "lightfield_bytes"));
+        char what[sizeof run->report[OUT_STATS]];
+        snprintf(what, sizeof what,
+                 "settings, times, pass statistics; peak memory %.1f MiB (accumulators and light fields %.1f MiB)",
+                 peak / 1048576.0, light / 1048576.0);
+        stage_done(run, OUT_STATS, what);
     }
     cJSON_Delete(root);
     return code;
