@@ -24,10 +24,25 @@ RES="$OUT/results.txt"
 say() { echo "$*" | tee -a "$RES"; }
 # want SECTION: whether SECTIONS (default: every section) names it
 want() { [ -z "${SECTIONS:-}" ] || case " $SECTIONS " in *" $1 "*) true ;; *) false ;; esac; }
+for s in ${SECTIONS:-}; do
+    case " 1 2 3 3b 3c 3d 4 5 6 7 " in
+    *" $s "*) ;;
+    *) echo "bench/reproduce.sh: SECTIONS: no section '$s' (sections: 1 2 3 3b 3c 3d 4 5 6 7, separated by spaces)" >&2
+       exit 2 ;;
+    esac
+done
 py=/usr/bin/python3
 
 say "# ilfkit benchmarks, $(date -u +%Y-%m-%dT%H:%MZ), commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
 say "machine: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores, $(free -g | awk '/Mem:/ {print $2}') GiB"
+[ -z "${SECTIONS:-}" ] || say "sections: $SECTIONS only"
+
+# classroom_lightfield.h5 is generated, not kept: written (with the scenes, into OUT) by gen_scenes.py if missing;
+# sections 3b, 3c, 3d and 5 read it
+[ -e data/classroom_lightfield.h5 ] || {
+    $py data/gen_scenes.py --out "$OUT/scenes" --ilf "$ILF" > /dev/null
+    cp "$OUT/scenes/classroom_lightfield.h5" data/
+}
 
 # scene variants at the paper's cell counts: a copy with another cell size, beside the original
 # so that relative file names still resolve
@@ -105,11 +120,6 @@ fi
 if want 3b; then
     say ""
     say "## 3b. classroom lit by four light fields, direct, with and without zero-radiance culling (the paper's 51.83 -> 10.01 min)"
-    # classroom_lightfield.h5 is generated, not kept: written (with the scenes, into OUT) by gen_scenes.py if missing
-    [ -e data/classroom_lightfield.h5 ] || {
-        $py data/gen_scenes.py --out "$OUT/scenes" --ilf "$ILF" > /dev/null
-        cp "$OUT/scenes/classroom_lightfield.h5" data/
-    }
     relight_pair classroom_lf data/classroom_lightfield.json --bounces 0 -- --bounces 0 --zero-culling 0
     [ "$QUICK" = 1 ] || { REPEATS=1 relight_pair classroom_lf_paper data/.bench_classroom_lightfield_paper.json --bounces 0 -- --bounces 0 --zero-culling 0; }
 fi
@@ -151,8 +161,10 @@ if want 3d; then
         name=$1 scene=$2
         shift 2
         dir="$OUT/relight/$name-memory"
-        $py bench/memory_split.py --stats "$dir/stats.json" --name "$name" \
-            "$ILF" relight "$scene" -o "$dir" --quiet --no-view "$@" | tee -a "$RES"
+        # an assignment, so that a failing run stops the script (set -e)
+        line=$($py bench/memory_split.py --stats "$dir/stats.json" --name "$name" \
+            "$ILF" relight "$scene" -o "$dir" --quiet --no-view "$@")
+        say "$line"
     }
     if [ "$QUICK" != 1 ]; then
         memory_line classroom_lf_paper data/.bench_classroom_lightfield_paper.json --bounces 0

@@ -378,9 +378,10 @@ assert b["rays_cast"] > 0 and b["rays_kept"] <= b["rays_cast"] and b["rays_free"
 assert d["solid_angles_culled"] <= d["solid_angles_considered"], d
 m = s["memory"]
 assert set(m) == {"accumulator_bytes", "lightfield_bytes", "peak_resident_bytes"}, m
-# with a bounce: pass, previous pass and total (72 bytes a cell), and the coarser cells (24 bytes each, fewer)
+# with a bounce: pass, previous pass and total (72 bytes a cell), and the 2 x 2 coarser cells of the 8 x 8
+# (bounce cells 4 times the side) at 24 bytes each
 c = s["cells"]
-assert 72 * c < m["accumulator_bytes"] < 96 * c and m["accumulator_bytes"] % 24 == 0, m
+assert m["accumulator_bytes"] == 72 * c + 24 * (c // 16), m
 assert m["lightfield_bytes"] == 0 and m["peak_resident_bytes"] > m["accumulator_bytes"], m
 ' "$RELIT/square/stats.json"
 if [ -n "$H5PY" ]; then

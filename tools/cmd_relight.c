@@ -3,7 +3,7 @@
  * engine of relight/engine.h and writes what it found to DIR:
  *
  *   radiance.h5  every receiving polygon's radiance map (lfio/radmap.h)
- *   stats.json   settings, times and per-pass counters (docs/cli.md)
+ *   stats.json   settings, times, per-pass counters and memory (docs/cli.md)
  *   view.exr     the scene camera's view, raw radiance   } only when the
  *   view.png     the same, tone mapped and sRGB-encoded  } scene has a camera
  *

@@ -1,6 +1,6 @@
 /*
- * solution.c - the rl_solution accessors: pass statistics, the maps'
- * geometry and their cells' values.
+ * solution.c - the rl_solution accessors: pass statistics, the memory the
+ * accumulators held, the maps' geometry and their cells' values.
  *
  * A solution is immutable once rl_relight() returns it (engine.c), so
  * every accessor here only reads and may run on several threads at once.
