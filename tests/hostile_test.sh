@@ -160,7 +160,8 @@ fi
 # ------------------------------------------------------------------ the baseline
 
 # The commands' own peak memory on small valid inputs: the largest is what a bad file's run
-# is measured against (relight and capture load Embree, HDF5 and, for images, OpenImageIO).
+# is measured against (relight and capture load Embree, HDF5 and, to read images, OpenImageIO:
+# the capture of the repository's studio probe is the baseline of a run that reads one).
 printf '{"materials": {"lamp": {"emission": [1, 1, 1]}, "grey": {}}, "polygons": [
   {"material": "lamp", "vertices": [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]]},
   {"material": "grey", "vertices": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]}],
@@ -182,7 +183,11 @@ if [ -e "$WORK/gen/base.h5" ]; then
     baseline "$ILF" verify "$WORK/gen/base.h5"
     baseline "$ILF" slice "$WORK/gen/base.h5" --position 0,0 -o "$TMP/valid-slice.png"
 fi
-rm -rf "$TMP/valid-out" "$TMP/valid-slice.png"
+STUDIO=$CORPUS/../../data/capture/studio.json
+if [ "$CAPTURE" -eq 1 ] && [ -e "$STUDIO" ]; then
+    baseline "$ILF" capture "$STUDIO" -o "$TMP/valid-capture.h5" --quiet
+fi
+rm -rf "$TMP/valid-out" "$TMP/valid-slice.png" "$TMP/valid-capture.h5"
 
 # ------------------------------------------------------------------ the corpus
 

@@ -3,8 +3,8 @@
  * without capture: what test_capture does not already cover of it.
  *
  * What is checked:
- *   - nothing of the module is mapped before the first read or write, and
- *     the calls that never load it (status names, formats, sRGB) do not;
+ *   - nothing of the module is mapped before the first read, and the calls
+ *     that never load it (status names, formats, sRGB, writes) do not;
  *   - the sRGB curve: fixed points, both segments, clamping, and decode
  *     undoing encode;
  *   - writes: a PNG read back as 8-bit integers quantised as given (opaque:
@@ -12,6 +12,12 @@
  *     replacing an existing file atomically, keeping its mode and leaving no
  *     temporary (base's naming rule) behind; a missing folder, bad sizes and
  *     channel counts refused with their status and a message naming the file;
+ *   - the writers (writers.c, no OpenImageIO): EXR of 1 to 4 channels over
+ *     several chunks read back bit for bit through OpenImageIO, NaN, infinities
+ *     and negative values included, in the channel order given; PNG of 1 to 3
+ *     channels quantised, clamped, NaN as 0; a file
+ *     that cannot be opened or filled (a missing folder, a file size limit)
+ *     refused as IMG_ERR_OUTPUT with a message naming the image;
  *   - reads: missing files, folders and non-images refused as bad input with
  *     the image zeroed; NULL err and a short err buffer are safe.
  * Scratch files go to $ILF_TEST_TMP/image. The last line is "N passed, M failed".
@@ -21,11 +27,15 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "check.h"
 #include "ilf/atomic_file.h"
 #include "image/image.h"
+#include "writers.h"
 
 #define PATH_BYTES 1024
 
@@ -119,9 +129,10 @@ static void test_writes(void)
     const char *png = tmp_path("two.png");
     remove(png);
     CHECK(img_write(png, 2, 1, 4, rgba, err, sizeof err) == IMG_OK, "%s", err);
-    CHECK(mapped("libilfkit_oiio") == 1, "the module is mapped after the first write");
+    CHECK(mapped("libilfkit_oiio") == 0, "a write needs no module");
     img_image img;
     CHECK(img_read(png, &img, err, sizeof err) == IMG_OK, "%s", err);
+    CHECK(mapped("libilfkit_oiio") == 1, "the module is mapped after the first read");
     if (img.pixels != NULL) {
         CHECK(img.width == 2 && img.height == 1 && img.channels == 4 && img.integer == 1 && img.bits == 8,
               "PNG: 2x1x4, 8-bit integers (%dx%dx%d, %d bits)", img.width, img.height, img.channels, img.bits);
@@ -157,6 +168,87 @@ static void test_writes(void)
     CHECK(img_write(nowhere, 1, 1, 3, a, NULL, 0) == IMG_ERR_OUTPUT, "NULL err is safe");
 }
 
+/* @return a test value for sample k: varied, signed, with a NaN, infinities and a denormal among them. */
+static float sample_value(size_t k)
+{
+    static const float odd[5] = {NAN, INFINITY, -INFINITY, 1e-42f, -0.0f};
+    return k % 97 < 5 ? odd[k % 97] : (float)((double)k * 0.37 - 40.0) * (k % 3 ? 1.0f : 1e6f);
+}
+
+/* @return whether a and b hold the same n floats bit for bit (NaN equal to itself). */
+static int same_bits(const float *a, const float *b, size_t n)
+{
+    return memcmp(a, b, n * sizeof *a) == 0;
+}
+
+static void test_writers(void)
+{
+    char err[512] = "";
+    /* 37 x 53 spans four ZIP chunks of 16 lines, the last partial */
+    enum { W = 37, H = 53 };
+    static float px[W * H * 4];
+    for (int channels = 1; channels <= 4; channels++) {
+        size_t n = (size_t)W * H * channels;
+        for (size_t k = 0; k < n; k++)
+            px[k] = sample_value(k);
+        char name[32];
+        snprintf(name, sizeof name, "writer%d.exr", channels);
+        const char *path = tmp_path(name);
+        CHECK(img_write(path, W, H, channels, px, err, sizeof err) == IMG_OK, "%s", err);
+        img_image img;
+        CHECK(img_read(path, &img, err, sizeof err) == IMG_OK, "%s", err);
+        CHECK(img.pixels != NULL && img.width == W && img.height == H && img.channels == channels && !img.integer &&
+                  img.bits == 32 && same_bits(img.pixels, px, n),
+              "EXR of %d channel(s) read back bit for bit (%dx%dx%d, %d bits)", channels, img.width, img.height,
+              img.channels, img.bits);
+        img_free(&img);
+    }
+    /* PNG: gray, gray + alpha (opaque: OpenImageIO's reader multiplies colours by alpha), RGB;
+     * [0, 1] in 255 steps, halves up, clamped, NaN as 0 */
+    const float gray[6] = {0.5f / 255, 1.5f / 255, -3.0f, 7.0f, NAN, 0.6f};
+    const float gray_alpha[6] = {0.5f / 255, 1.0f, 7.0f, 1.0f, 0.6f, 1.0f};
+    const float want[6] = {1.0f / 255, 2.0f / 255, 0.0f, 1.0f, 0.0f, 153.0f / 255};
+    const float want_alpha[6] = {1.0f / 255, 1.0f, 1.0f, 1.0f, 153.0f / 255, 1.0f};
+    for (int channels = 1; channels <= 3; channels++) {
+        const float *in = channels == 2 ? gray_alpha : gray, *expect = channels == 2 ? want_alpha : want;
+        char name[32];
+        snprintf(name, sizeof name, "writer%d.png", channels);
+        const char *path = tmp_path(name);
+        CHECK(img_write(path, 6 / channels, 1, channels, in, err, sizeof err) == IMG_OK, "%s", err);
+        img_image img;
+        CHECK(img_read(path, &img, err, sizeof err) == IMG_OK && img.pixels != NULL && img.integer && img.bits == 8 &&
+                  img.channels == channels && img.width == 6 / channels,
+              "PNG of %d channel(s): %s", channels, err);
+        float worst = 0.0f;
+        for (int k = 0; img.pixels != NULL && k < 6 / channels * channels; k++)
+            worst = fmaxf(worst, fabsf(img.pixels[k] - expect[k]));
+        CHECK(worst < 1e-6f, "PNG of %d channel(s) quantised as documented (worst %g)", channels, (double)worst);
+        img_free(&img);
+    }
+    /* The encoders' own failures: a file that cannot be opened, or that cannot take the bytes (a file
+     * size limit of 64 bytes, SIGXFSZ ignored so that writes fail with EFBIG). Not /dev/full: OpenEXR
+     * removes the file it failed to write. */
+    struct rlimit was;
+    int limited = getrlimit(RLIMIT_FSIZE, &was) == 0;
+    void (*was_handler)(int) = signal(SIGXFSZ, SIG_IGN);
+    for (int f = IMG_FORMAT_EXR; f <= IMG_FORMAT_PNG; f++) {
+        const char *kind = f == IMG_FORMAT_EXR ? "EXR" : "PNG";
+        CHECK(img__write_pixels(tmp_path("no-such-folder/y"), "final.img", (img_format)f, W, H, 3, px, err,
+                                sizeof err) == IMG_ERR_OUTPUT &&
+                  strstr(err, "final.img: cannot write image") == err && strchr(err, '\n') == NULL,
+              "%s into a missing folder: %s", kind, err);
+        struct rlimit small = {64, limited ? was.rlim_max : 64};
+        if (limited && setrlimit(RLIMIT_FSIZE, &small) == 0) {
+            img_status st = img__write_pixels(tmp_path("too-big"), "big.img", (img_format)f, W, H, 3, px, err,
+                                              sizeof err);
+            CHECK(setrlimit(RLIMIT_FSIZE, &was) == 0, "the file size limit restored");
+            CHECK(st == IMG_ERR_OUTPUT && strstr(err, "big.img: cannot write image") == err,
+                  "%s past a file size limit: %s", kind, err);
+        }
+    }
+    signal(SIGXFSZ, was_handler);
+}
+
 static void test_reads(void)
 {
     char err[512] = "";
@@ -188,6 +280,7 @@ int main(void)
     test_nothing_loaded();
     test_srgb();
     test_writes();
+    test_writers();
     test_reads();
     return check_report();
 }

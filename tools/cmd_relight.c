@@ -919,15 +919,6 @@ static int write_stats(relight_run *run)
 
 /* ------------------------------------------------------------ main */
 
-/* Thread body: loads the image module (img_load()) while the main thread writes radiance.h5.
- * A failure is not reported here: the view's own write then reports it. */
-static void *load_images(void *arg)
-{
-    (void)arg;
-    (void)img_load(NULL, 0);
-    return NULL;
-}
-
 /* Prints the run's summary and every pass's statistics (not with --quiet). */
 static void print_run(const relight_run *run)
 {
@@ -970,18 +961,12 @@ int ilf_cmd_relight(int argc, char **argv)
         code = relight(&run);
     double engine_end = cli_clock_seconds(CLOCK_MONOTONIC);
     int rank0 = job_rank() == 0, view = rank0 && rl_scene_has_camera(run.scene) && !o.no_view;
-    /* the view's image library takes about 0.4 s to load: on a core of its own
-     * while radiance.h5 is written (not beside the engine, whose threads use every core) */
-    pthread_t loader;
-    int loading = code == ILF_EXIT_OK && view && pthread_create(&loader, NULL, load_images, NULL) == 0;
     if (code == ILF_EXIT_OK)
         print_run(&run);
     if (beside)
         code = writer_finish(&writer, code, engine_end);
     else if (code == ILF_EXIT_OK)
         code = write_radiance(&run);
-    if (loading)
-        pthread_join(loader, NULL);
     if (code == ILF_EXIT_OK && view)
         code = write_view(&run);
     if (code == ILF_EXIT_OK && rank0)

@@ -1,9 +1,10 @@
 /*
  * image.c - image/image.h: argument checks, formats by extension, atomic
- * writes (base's ilf/atomic_file.h) and input checks in plain C, with the
- * pixels encoded and decoded by the image module libilfkit_oiio.so
- * (oiio_module.cpp, the table of module.h), loaded on the first read or
- * write. Programs that never touch an image therefore never map OpenImageIO.
+ * writes (base's ilf/atomic_file.h) and input checks in plain C. Writes are
+ * encoded by writers.c (OpenEXR's core library and libpng); reads are decoded
+ * by the image module libilfkit_oiio.so (oiio_module.cpp, the table of
+ * module.h), loaded on the first read. Programs that never read an image
+ * therefore never map OpenImageIO.
  *
  * Where the module is looked for, once per process (pthread_once), loaded
  * with dlopen(RTLD_NOW | RTLD_LOCAL) and never unloaded:
@@ -16,8 +17,8 @@
  * Both paths come from CMake (ILFKIT_IMAGE_MODULE_RELATIVE and _INSTALLED).
  *
  * Invariants:
- *   - guess_format and free never load the module; argument errors are
- *     reported without loading it; a write that cannot load it creates no file.
+ *   - guess_format, free and write never load the module; argument errors
+ *     are reported without loading it.
  *   - After the once-only load, the module pointer and the load failure text
  *     are read-only, so concurrent calls need no lock.
  *   - A module whose table version differs from IMG__MODULE_VERSION is
@@ -48,6 +49,7 @@
 #include "ilf/atomic_file.h"
 #include "ilf/limits.h"
 #include "module.h"
+#include "writers.h"
 
 #ifndef ILFKIT_IMAGE_MODULE_RELATIVE
 #error "ILFKIT_IMAGE_MODULE_RELATIVE (LIBDIR/ilfkit/<file>, relative to a prefix) must be defined"
@@ -205,14 +207,6 @@ static const img__module *need_module(const char *path, const char *doing, img_s
     return module;
 }
 
-img_status img_load(char *err, size_t errlen)
-{
-    pthread_once(&module_once, load_module);
-    if (module == NULL)
-        return fail(IMG_ERR_OUTPUT, err, errlen, "image support is not available (%s)", load_failure);
-    return IMG_OK;
-}
-
 /* ------------------------------------------------------------ names and formats */
 
 /* @return the extension of path's last component without its dot, "" if none. */
@@ -262,12 +256,12 @@ static img_status check_write_args(const char *path, int width, int height, int 
 }
 
 /* Encodes into a's temporary and commits it over path. @return a status, with a message on failure. */
-static img_status encode_and_commit(const img__module *m, ilf_atomic *a, const char *path, int width, int height,
-                                    int channels, const float *pixels, char *err, size_t errlen)
+static img_status encode_and_commit(ilf_atomic *a, const char *path, int width, int height, int channels,
+                                    const float *pixels, char *err, size_t errlen)
 {
     char msg[MESSAGE_BYTES] = "";
-    img_status status = m->write(ilf_atomic_temp_path(a), path, img_guess_format(path), width, height, channels,
-                                 pixels, msg, sizeof msg);
+    img_status status = img__write_pixels(ilf_atomic_temp_path(a), path, img_guess_format(path), width, height,
+                                          channels, pixels, msg, sizeof msg);
     if (status != IMG_OK)
         return fail(status, err, errlen, "%s", msg);
     const char *step = NULL;
@@ -283,16 +277,13 @@ img_status img_write(const char *path, int width, int height, int channels, cons
     img_status status = check_write_args(path, width, height, channels, pixels, err, errlen);
     if (status != IMG_OK)
         return status;
-    const img__module *m = need_module(path, "write", IMG_ERR_OUTPUT, err, errlen);
-    if (m == NULL)
-        return IMG_ERR_OUTPUT;
     ilf_atomic *a = NULL;
     const char *step = NULL;
     int code = ilf_atomic_new(path, &a, &step);
     if (code != 0)
         return fail(code == ENOMEM ? IMG_ERR_NOMEM : IMG_ERR_OUTPUT, err, errlen, "%s: cannot create a file there: %s",
                     path, strerror(code));
-    status = encode_and_commit(m, a, path, width, height, channels, pixels, err, errlen);
+    status = encode_and_commit(a, path, width, height, channels, pixels, err, errlen);
     ilf_atomic_release(a); /* removes the temporary unless it was committed */
     return status;
 }

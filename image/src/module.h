@@ -2,17 +2,16 @@
  * module.h - the entry table between image/src/image.c, which implements
  * image/image.h, and the image module libilfkit_oiio.so
  * (image/src/oiio_module.cpp), which image.c loads with dlopen() on the
- * first image read or write so that programs that never touch an image do
- * not map OpenImageIO and its few hundred dependencies.
+ * first image read so that programs that never read an image do not map
+ * OpenImageIO and its few hundred dependencies (writes go through writers.c).
  *
  * The module exports one C function, IMG__MODULE_ENTRY, returning a static
  * table whose first field is IMG__MODULE_VERSION. Any change to this header
  * that changes the table or the functions' meaning must raise the version,
  * so that a module from another build is refused, not called.
  *
- * Division of work: image.c checks arguments, chooses the format by
- * extension, stats inputs and makes writes atomic (base's atomic writer);
- * the module only encodes and decodes pixels. The module is self-contained:
+ * Division of work: image.c checks arguments, stats inputs and makes
+ * writes atomic (base's atomic writer); the module only decodes pixels. The module is self-contained:
  * it calls nothing of ilfkit (its messages go to the caller's buffer) and
  * never lets an exception out.
  *
@@ -29,9 +28,9 @@
 extern "C" {
 #endif
 
-/** The table layout and meaning this build expects; raise on any change. (Moving the module from
- * capture/ to image/ changed names only: the layout and the status values are those of version 1.) */
-#define IMG__MODULE_VERSION 1u
+/** The table layout and meaning this build expects; raise on any change. (Version 2: the module no longer
+ * writes; writers.c encodes without OpenImageIO.) */
+#define IMG__MODULE_VERSION 2u
 
 /** Name of the exported entry function (an img__module_entry_fn). */
 #define IMG__MODULE_ENTRY "ilfkit_image_module"
@@ -39,15 +38,6 @@ extern "C" {
 /** What the module offers. msg (msglen > 0 bytes, never NULL) receives one line on failure. */
 typedef struct img__module {
     unsigned version; /**< IMG__MODULE_VERSION of the module's build; first, in every version */
-
-    /**
-     * Writes width x height x channels float pixels ([y][x][channel], sizes
-     * already checked) to the existing file file, replacing its content, in
-     * format (EXR or PNG); path is the final name, for messages only.
-     * @return IMG_OK; IMG_ERR_OUTPUT or IMG_ERR_NOMEM with a message naming path.
-     */
-    img_status (*write)(const char *file, const char *path, img_format format, int width, int height, int channels,
-                        const float *pixels, char *msg, size_t msglen);
 
     /**
      * Reads the first subimage of path (an existing file, not a folder) as

@@ -1,7 +1,8 @@
 /*
- * oiio_module.cpp - the image module libilfkit_oiio.so: encoding and decoding
- * pixels with OpenImageIO behind the entry table of module.h, which
- * image/src/image.c loads on the first image read or write. This is the
+ * oiio_module.cpp - the image module libilfkit_oiio.so: decoding pixels
+ * with OpenImageIO behind the entry table of module.h, which
+ * image/src/image.c loads on the first image read (writes go through
+ * writers.c, which needs no OpenImageIO). This is the
  * only file in ilfkit that includes OpenImageIO headers, and the only C++
  * source of the image library.
  *
@@ -12,8 +13,6 @@
  *     block and turns exceptions into a status and message.
  *   - Nothing here calls ilfkit's libraries: messages go to the caller's
  *     buffer, one line, naming the image's final path.
- *   - EXR is written as 32-bit float, PNG as 8-bit, as the caller's format
- *     says (image.c chose it from the extension); content is never guessed.
  */
 #include "module.h"
 
@@ -49,39 +48,6 @@ std::string first_line(std::string text)
     if (nl != std::string::npos)
         text.erase(nl);
     return text.empty() ? std::string("unknown OpenImageIO error") : text;
-}
-
-/* @return the spec for the format: 32-bit float linear EXR or 8-bit sRGB PNG. */
-OIIO::ImageSpec make_spec(img_format format, int width, int height, int channels)
-{
-    bool exr = format == IMG_FORMAT_EXR;
-    OIIO::ImageSpec spec(width, height, channels, exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-    if (exr) {
-        spec.attribute("compression", "zip");
-        spec.attribute("oiio:ColorSpace", "Linear");
-    } else {
-        spec.attribute("oiio:ColorSpace", "sRGB");
-        /* Our alpha only marks pixels as in or out; do not let the writer
-         * divide colours by it as if they were premultiplied. */
-        spec.attribute("oiio:UnassociatedAlpha", 1);
-    }
-    return spec;
-}
-
-img_status write_pixels(const char *file, const char *path, img_format format, int width, int height,
-                        int channels, const float *pixels, char *msg, size_t msglen)
-{
-    auto out = OIIO::ImageOutput::create(format == IMG_FORMAT_EXR ? "openexr" : "png");
-    if (!out)
-        return fail(IMG_ERR_OUTPUT, msg, msglen, "%s: no OpenImageIO writer: %s", path,
-                    first_line(OIIO::geterror()).c_str());
-    OIIO::ImageSpec spec = make_spec(format, width, height, channels);
-    bool ok = out->open(file, spec) && out->write_image(OIIO::TypeDesc::FLOAT, pixels);
-    ok = out->close() && ok;
-    if (!ok)
-        return fail(IMG_ERR_OUTPUT, msg, msglen, "%s: cannot write image: %s", path,
-                    first_line(out->geterror()).c_str());
-    return IMG_OK;
 }
 
 /* @return whether t is an integer sample type, which OpenImageIO normalises to [0, 1] when converting to float. */
@@ -120,21 +86,6 @@ img_status read_pixels(const char *path, img_image *img, char *msg, size_t msgle
     return IMG_OK;
 }
 
-/* Table entry: write_pixels with every exception turned into a status. */
-img_status module_write(const char *file, const char *path, img_format format, int width, int height,
-                        int channels, const float *pixels, char *msg, size_t msglen)
-{
-    try {
-        return write_pixels(file, path, format, width, height, channels, pixels, msg, msglen);
-    } catch (const std::bad_alloc &) {
-        return fail(IMG_ERR_NOMEM, msg, msglen, "%s: out of memory while writing", path);
-    } catch (const std::exception &e) {
-        return fail(IMG_ERR_OUTPUT, msg, msglen, "%s: %s", path, e.what());
-    } catch (...) {
-        return fail(IMG_ERR_OUTPUT, msg, msglen, "%s: unexpected error while writing", path);
-    }
-}
-
 /* Table entry: read_pixels with every exception turned into a status. */
 img_status module_read(const char *path, img_image *img, char *msg, size_t msglen)
 {
@@ -149,7 +100,7 @@ img_status module_read(const char *path, img_image *img, char *msg, size_t msgle
     }
 }
 
-const img__module table = {IMG__MODULE_VERSION, module_write, module_read};
+const img__module table = {IMG__MODULE_VERSION, module_read};
 
 } // namespace
 

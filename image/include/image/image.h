@@ -1,23 +1,25 @@
 /*
- * image/image.h - the image library: reading and writing image files, a C
- * interface over OpenImageIO, and the sRGB transfer function. The capture
- * library reads light probes with it; the `ilf` command writes its images
- * (relight's view, slices, rendered probes) with it. It depends on base/ only.
+ * image/image.h - the image library: reading image files through
+ * OpenImageIO, writing EXR and PNG through OpenEXR's C core library and
+ * libpng, and the sRGB transfer function. The capture library reads light
+ * probes with it; the `ilf` command writes its images (relight's view,
+ * slices, rendered probes) with it. It depends on base/ only.
  *
  * OpenImageIO is loaded lazily: image/src/image.c implements these functions
- * and, on the first img_write(), img_read() or img_load() of the process, loads the image
+ * and, on the first img_read() of the process, loads the image
  * module libilfkit_oiio.so (image/src/oiio_module.cpp, the only file of ilfkit
  * that includes OpenImageIO headers) with dlopen(), once, thread-safely;
- * programs that never read or write an image never map OpenImageIO. The module
+ * programs that never read an image never map OpenImageIO. Writing needs no
+ * module (image/src/writers.c). The module
  * is taken from $ILFKIT_IMAGE_MODULE (a full path) if that is set and not
  * empty, and then from there only; otherwise from
  * <folder of the program>/../LIBDIR/ilfkit/ (the build tree and a relocated
  * install), then from the configured install's LIBDIR/ilfkit/. A module of
  * another build (a different entry table version) is refused. If no module
- * loads, every read and write fails with its usual status (IMG_ERR_INPUT,
- * IMG_ERR_OUTPUT) and a message naming the image, each module path tried and
- * why it failed; the process does not try again. img_guess_format(),
- * img_free(), img_status_name() and the sRGB functions never load anything.
+ * loads, every read fails with IMG_ERR_INPUT and a message naming the image,
+ * each module path tried and why it failed; the process does not try again.
+ * img_write(), img_guess_format(), img_free(), img_status_name() and the sRGB
+ * functions never load anything.
  *
  * Conventions:
  *   - Pixels are float, interleaved, rows top to bottom: [y][x][channel].
@@ -28,8 +30,11 @@
  *     are returned unchanged, including negative, NaN and infinite values
  *     (repairs are the caller's).
  *   - Writing chooses the format from the file name's extension, any case:
- *     .exr is written as 32-bit float (never half), .png as 8 bits with
- *     values in [0, 1] quantised as given (callers apply img_srgb_encode()).
+ *     .exr is written as 32-bit float (never half), ZIP-compressed scanlines,
+ *     values as given; .png as 8 bits with values clamped to [0, 1] and
+ *     rounded to the nearest of 255 steps, NaN as 0 (callers apply
+ *     img_srgb_encode()). Channels: 1 is gray (EXR "Y"), 2 gray and alpha in
+ *     PNG ("R", "G" in EXR), 3 RGB, 4 RGBA.
  *   - Writes are atomic (base's ilf/atomic_file.h): the image is written to
  *     FOLDER/.NAME.tmp-<12 hex>.EXT beside the path, flushed and renamed over
  *     it; on failure the temporary is removed and an existing file at the
@@ -95,7 +100,7 @@ img_format img_guess_format(const char *path);
 /**
  * Writes a width x height image with 1 to 4 channels (3 = RGB, 4 = RGBA),
  * pixels [y][x][channel] (read only, borrowed for the call), atomically.
- * @return IMG_OK; IMG_ERR_ARG (bad size, channel count, NULL or unknown extension; nothing loaded or created); IMG_ERR_OUTPUT (also: no image module); IMG_ERR_NOMEM.
+ * @return IMG_OK; IMG_ERR_ARG (bad size, channel count, NULL or unknown extension; nothing created); IMG_ERR_OUTPUT; IMG_ERR_NOMEM.
  */
 img_status img_write(const char *path, int width, int height, int channels, const float *pixels, char *err,
                      size_t errlen);
@@ -106,15 +111,6 @@ img_status img_write(const char *path, int width, int height, int channels, cons
  * @return IMG_OK and *img filled; IMG_ERR_INPUT (missing, a folder, unreadable, not an image, too large, no image module) or IMG_ERR_NOMEM with *img zeroed; IMG_ERR_ARG if path or img is NULL.
  */
 img_status img_read(const char *path, img_image *img, char *err, size_t errlen);
-
-/**
- * Loads the image module now, as the first img_write() or img_read() would,
- * so that a program can have it loaded on one thread while another works
- * (loading OpenImageIO's libraries takes about 0.4 s). Thread-safe; a read or
- * write that starts meanwhile waits for it; later calls return at once.
- * @return IMG_OK; IMG_ERR_OUTPUT with a message naming each module path tried when none loads.
- */
-img_status img_load(char *err, size_t errlen);
 
 /** Releases img's pixels and zeroes it. NULL is a no-op. */
 void img_free(img_image *img);

@@ -1,0 +1,242 @@
+/*
+ * writers.c - the encoders of image/image.h's two output formats, without
+ * OpenImageIO: OpenEXR through OpenEXR's C core library (OpenEXRCore, which
+ * needs only zlib), PNG through libpng. The only files of ilfkit that include
+ * openexr.h and png.h (test_image_writers_contained).
+ *
+ * Why not the image module: Debian's OpenImageIO maps a reader for every
+ * format it knows (OpenVDB, GDAL, DICOM, FFmpeg, ...), about 115 MiB of
+ * resident libraries and 0.4 s of loading, which a relight that writes its
+ * view paid for two small images. Reading stays with the module.
+ *
+ * Conventions kept from the module they replace, so that files read back
+ * the same through OpenImageIO: channels are named as OpenImageIO names
+ * them (1: Y; 2 to 4: R, G, B, A in order); EXR is scanline, ZIP-compressed,
+ * 32-bit float, values as given (NaN and infinities included); PNG is 8 bits,
+ * gray, gray + alpha, RGB or RGBA, each value clamped to [0, 1] and rounded
+ * to the nearest of 255 steps (NaN as 0), with an sRGB chunk.
+ *
+ * Invariants: nothing here prints, exits or keeps state between calls (every
+ * call has its own context), so calls may run on several threads at once; a
+ * failure returns a status and one line naming the image's final path; the
+ * file given is the caller's temporary, which the caller removes on failure.
+ */
+#include "writers.h"
+
+#include <errno.h>
+#include <openexr.h>
+#include <png.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Formats a message into msg (msglen > 0). @return status. */
+static img_status fail(img_status status, char *msg, size_t msglen, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+static img_status fail(img_status status, char *msg, size_t msglen, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, msglen, fmt, ap);
+    va_end(ap);
+    return status;
+}
+
+/* @return OpenImageIO's name for channel c of n (1: Y; else R, G, B, A). */
+static const char *channel_name(int c, int n)
+{
+    static const char *const rgba[4] = {"R", "G", "B", "A"};
+    return n == 1 ? "Y" : rgba[c];
+}
+
+/* ------------------------------------------------------------ OpenEXR */
+
+/* OpenEXR's last message during a write_exr() call on this thread. The handler cannot ask the context
+ * for its user data: OpenEXR may report with the context's lock held, and exr_get_user_data() would wait
+ * for it forever. OpenEXR's core reports on the calling thread, so a per-thread slot serves. */
+static _Thread_local char *exr_message;
+enum { EXR_MESSAGE_BYTES = 256 };
+
+/* exr_error_handler_cb_t: keeps the library's message instead of printing it. */
+static void exr_note(exr_const_context_t ctxt, exr_result_t code, const char *text)
+{
+    (void)ctxt;
+    if (exr_message != NULL)
+        snprintf(exr_message, EXR_MESSAGE_BYTES, "%s", text != NULL ? text : exr_get_default_error_message(code));
+}
+
+/* Defines the one scanline part of ctxt: its size, ZIP compression and float channels. @return OpenEXR's result. */
+static exr_result_t exr_define(exr_context_t ctxt, int width, int height, int channels, int *part)
+{
+    exr_result_t rv = exr_add_part(ctxt, "", EXR_STORAGE_SCANLINE, part);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_initialize_required_attr_simple(ctxt, *part, width, height, EXR_COMPRESSION_ZIP);
+    for (int c = 0; c < channels && rv == EXR_ERR_SUCCESS; c++)
+        rv = exr_add_channel(ctxt, *part, channel_name(c, channels), EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LINEAR, 1, 1);
+    return rv == EXR_ERR_SUCCESS ? exr_write_header(ctxt) : rv;
+}
+
+/* Encodes every chunk of ctxt's part from pixels [y][x][channel]. @return OpenEXR's result. */
+static exr_result_t exr_encode_all(exr_context_t ctxt, int part, int width, int height, int channels,
+                                   const float *pixels)
+{
+    int32_t lines = 1;
+    exr_result_t rv = exr_get_scanlines_per_chunk(ctxt, part, &lines);
+    exr_encode_pipeline_t encoder = EXR_ENCODE_PIPELINE_INITIALIZER;
+    int started = 0;
+    for (int y = 0; rv == EXR_ERR_SUCCESS && y < height; y += lines) {
+        exr_chunk_info_t chunk;
+        rv = exr_write_scanline_chunk_info(ctxt, part, y, &chunk);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = started ? exr_encoding_update(ctxt, part, &chunk, &encoder)
+                         : exr_encoding_initialize(ctxt, part, &chunk, &encoder);
+        started |= rv == EXR_ERR_SUCCESS;
+        /* the file's channels are sorted by name: find each one's place in the caller's pixels */
+        for (int k = 0; rv == EXR_ERR_SUCCESS && k < encoder.channel_count; k++) {
+            exr_coding_channel_info_t *ch = &encoder.channels[k];
+            int c = 0;
+            while (c < channels && strcmp(ch->channel_name, channel_name(c, channels)) != 0)
+                c++;
+            if (c == channels) {
+                rv = EXR_ERR_INVALID_ARGUMENT;
+                break;
+            }
+            ch->user_bytes_per_element = sizeof(float);
+            ch->user_data_type = EXR_PIXEL_FLOAT;
+            ch->user_pixel_stride = (int32_t)(channels * sizeof(float));
+            ch->user_line_stride = (int32_t)((size_t)width * channels * sizeof(float));
+            ch->encode_from_ptr = (const uint8_t *)(pixels + ((size_t)chunk.start_y * width * channels + c));
+        }
+        if (rv == EXR_ERR_SUCCESS && y == 0)
+            rv = exr_encoding_choose_default_routines(ctxt, part, &encoder);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_encoding_run(ctxt, part, &encoder);
+    }
+    if (started)
+        exr_encoding_destroy(ctxt, &encoder);
+    return rv;
+}
+
+/* Writes an EXR into file. @return IMG_OK, or IMG_ERR_OUTPUT / IMG_ERR_NOMEM with a message naming path. */
+static img_status write_exr(const char *file, const char *path, int width, int height, int channels,
+                            const float *pixels, char *msg, size_t msglen)
+{
+    char report[EXR_MESSAGE_BYTES] = "";
+    exr_message = report;
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = exr_note;
+    exr_context_t ctxt = NULL;
+    int part = 0;
+    exr_result_t rv = exr_start_write(&ctxt, file, EXR_WRITE_FILE_DIRECTLY, &init);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_define(ctxt, width, height, channels, &part);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_encode_all(ctxt, part, width, height, channels, pixels);
+    /* finishing writes the chunk offsets: its result counts too */
+    exr_result_t finished = ctxt != NULL ? exr_finish(&ctxt) : EXR_ERR_SUCCESS;
+    exr_message = NULL;
+    if (rv == EXR_ERR_SUCCESS)
+        rv = finished;
+    if (rv == EXR_ERR_SUCCESS)
+        return IMG_OK;
+    return fail(rv == EXR_ERR_OUT_OF_MEMORY ? IMG_ERR_NOMEM : IMG_ERR_OUTPUT, msg, msglen,
+                "%s: cannot write image: %s", path, report[0] != '\0' ? report : exr_get_default_error_message(rv));
+}
+
+/* ------------------------------------------------------------ PNG */
+
+/* What libpng's handlers share with write_png(): where to put the message, and where to jump. */
+typedef struct png_report {
+    jmp_buf jump;
+    char text[256];
+    int nomem;
+} png_report;
+
+/* png_error_ptr: keeps the message and returns to write_png()'s setjmp (libpng's contract: never return). */
+static void png_failed(png_structp png, png_const_charp text)
+{
+    png_report *r = png_get_error_ptr(png);
+    snprintf(r->text, sizeof r->text, "%s", text);
+    longjmp(r->jump, 1);
+}
+
+/* png_error_ptr for warnings: ignored (nothing prints). */
+static void png_warned(png_structp png, png_const_charp text)
+{
+    (void)png;
+    (void)text;
+}
+
+/* @return v clamped to [0, 1] and rounded to 8 bits, halves up (NaN as 0). */
+static png_byte quantise(float v)
+{
+    if (!(v > 0.0f))
+        return 0;
+    return v >= 1.0f ? 255 : (png_byte)(v * 255.0f + 0.5f);
+}
+
+/* Encodes into out (opened) with png and info made. The caller's setjmp catches libpng's errors. */
+static void png_encode(png_structp png, png_infop info, FILE *out, int width, int height, int channels,
+                       const float *pixels, png_bytep row)
+{
+    static const int types[4] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA, PNG_COLOR_TYPE_RGB,
+                                 PNG_COLOR_TYPE_RGB_ALPHA};
+    png_init_io(png, out);
+    png_set_IHDR(png, info, (png_uint_32)width, (png_uint_32)height, 8, types[channels - 1], PNG_INTERLACE_NONE,
+                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    png_write_info(png, info);
+    const size_t n = (size_t)width * channels;
+    for (int y = 0; y < height; y++) {
+        const float *src = pixels + (size_t)y * n;
+        for (size_t k = 0; k < n; k++)
+            row[k] = quantise(src[k]);
+        png_write_row(png, row);
+    }
+    png_write_end(png, info);
+}
+
+/* Writes a PNG into file. @return IMG_OK, or IMG_ERR_OUTPUT / IMG_ERR_NOMEM with a message naming path. */
+static img_status write_png(const char *file, const char *path, int width, int height, int channels,
+                            const float *pixels, char *msg, size_t msglen)
+{
+    /* volatile: changed between setjmp and a longjmp back to it */
+    png_report report = {.text = "", .nomem = 0};
+    FILE *volatile out = NULL;
+    png_bytep volatile row = NULL;
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &report, png_failed, png_warned);
+    png_infop info = png != NULL ? png_create_info_struct(png) : NULL;
+    img_status status = IMG_OK;
+    if (png == NULL || info == NULL) {
+        status = fail(IMG_ERR_NOMEM, msg, msglen, "%s: out of memory for the PNG writer", path);
+    } else if (setjmp(report.jump) != 0) {
+        status = fail(IMG_ERR_OUTPUT, msg, msglen, "%s: cannot write image: %s", path, report.text);
+    } else if ((row = malloc((size_t)width * channels)) == NULL) {
+        status = fail(IMG_ERR_NOMEM, msg, msglen, "%s: out of memory for a row of %d pixels", path, width);
+    } else if ((out = fopen(file, "wb")) == NULL) {
+        status = fail(IMG_ERR_OUTPUT, msg, msglen, "%s: cannot write image: %s", path, strerror(errno));
+    } else {
+        png_encode(png, info, out, width, height, channels, pixels, row);
+    }
+    png_destroy_write_struct(png != NULL ? &png : NULL, info != NULL ? &info : NULL);
+    free(row);
+    if (out != NULL && (fclose(out) != 0) && status == IMG_OK)
+        status = fail(IMG_ERR_OUTPUT, msg, msglen, "%s: cannot write image: %s", path, strerror(errno));
+    return status;
+}
+
+/* ------------------------------------------------------------ both */
+
+img_status img__write_pixels(const char *file, const char *path, img_format format, int width, int height,
+                             int channels, const float *pixels, char *msg, size_t msglen)
+{
+    if (format == IMG_FORMAT_EXR)
+        return write_exr(file, path, width, height, channels, pixels, msg, msglen);
+    return write_png(file, path, width, height, channels, pixels, msg, msglen);
+}
