@@ -99,7 +99,7 @@ if want 1; then
     say ""
     say "## 1. Paper settings, direct light (culled, n = 32, 4 rays), with and without zero-radiance culling"
     relight_pair beams_direct data/.bench_beams_paper.json --bounces 0 -- --bounces 0 --zero-culling 0
-    # the same run as a user makes it, writing the camera's view (which loads OpenImageIO): peak memory
+    # the same run as a user makes it, writing the camera's view (without OpenImageIO since f05a584): peak memory
     /usr/bin/time -f %M -o "$OUT/relight/beams_view.rss" "$ILF" relight data/.bench_beams_paper.json \
         -o "$OUT/relight/beams_view" --quiet --bounces 0
     say "beams_direct with view.exr/png: peak RSS $(cat "$OUT/relight/beams_view.rss") KiB"

@@ -2,8 +2,9 @@
 # install_test.sh BUILD_DIR CONSUMER_SRC WORK_DIR
 # Installs the build into a fresh prefix, then builds and runs a consumer of
 # liblfio twice: through find_package(lfio) and through pkg-config. The
-# installed ilf does not link OpenImageIO and finds the installed image module
-# (LIBDIR/ilfkit/libilfkit_oiio.so) to write a PNG and an EXR.
+# installed ilf does not link OpenImageIO, writes a PNG and an EXR without it,
+# and finds the installed image module (LIBDIR/ilfkit/libilfkit_oiio.so) to
+# read the EXR back as a probe.
 set -eu
 build=$1 src=$2 work=$3
 rm -rf "$work"
@@ -34,5 +35,9 @@ check ilf synth --kind constant --grid 2x2 --n 2 -o "$work/c.h5"
 check ilf slice "$work/c.h5" --toward 0,0,1 -o "$work/c.png"
 check ilf slice "$work/c.h5" --position 0,0 --layout latlong -o "$work/c.exr"
 check test -s "$work/c.png" -a -s "$work/c.exr"
+printf '{"plane": {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0]}, "grid": {"nu": 1, "nv": 1}, "n": 2,
+  "pattern": "c.exr"}\n' > "$work/probe.json"
+check ilf capture "$work/probe.json" -o "$work/probe.h5" --quiet
+check test -s "$work/probe.h5"
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

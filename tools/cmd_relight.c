@@ -61,7 +61,7 @@ typedef struct relight_options {
     const char *output;
     sampling_overrides sampling;
     int quiet;
-    int no_view; /* skip view.exr/png: no image is written, so OpenImageIO is never loaded */
+    int no_view; /* skip view.exr/png */
     int flat_view; /* each cell's own value in the view, no interpolation */
 } relight_options;
 

@@ -26,8 +26,8 @@
  *   - A write either leaves a complete image at the path (renamed from a
  *     flushed temporary in the same folder, so the rename is atomic) or leaves
  *     the path as it was and no temporary behind. The temporary keeps the
- *     path's extension (base's rule), so the module's writer, which is told
- *     the format anyway, and any reader of a leftover see the right type.
+ *     path's extension (base's rule), so any reader of a leftover sees the
+ *     right type (writers.c is told the format anyway).
  *   - The library holds no message state: every report goes to the caller's
  *     err buffer, so it needs no per-thread storage.
  *   - Every failure message is one line naming the image file; a load

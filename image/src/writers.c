@@ -12,14 +12,17 @@
  * Conventions kept from the module they replace, so that files read back
  * the same through OpenImageIO: channels are named as OpenImageIO names
  * them (1: Y; 2 to 4: R, G, B, A in order); EXR is scanline, ZIP-compressed,
- * 32-bit float, values as given (NaN and infinities included); PNG is 8 bits,
- * gray, gray + alpha, RGB or RGBA, each value clamped to [0, 1] and rounded
- * to the nearest of 255 steps (NaN as 0), with an sRGB chunk.
+ * 32-bit float, values as given (NaN and infinities included), channels not
+ * flagged perceptually linear (pLinear 0, OpenEXR's advice for colour); PNG is
+ * 8 bits, gray, gray + alpha, RGB or RGBA, each value clamped to [0, 1] and
+ * rounded to the nearest of 255 steps (NaN as 0), with sRGB, gAMA and cHRM
+ * chunks.
  *
  * Invariants: nothing here prints, exits or keeps state between calls (every
  * call has its own context), so calls may run on several threads at once; a
  * failure returns a status and one line naming the image's final path; the
- * file given is the caller's temporary, which the caller removes on failure.
+ * file given is the caller's temporary, which the caller removes on failure
+ * (OpenEXR removes a file it failed to write itself: never pass a device).
  */
 #include "writers.h"
 
@@ -78,7 +81,7 @@ static exr_result_t exr_define(exr_context_t ctxt, int width, int height, int ch
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_initialize_required_attr_simple(ctxt, *part, width, height, EXR_COMPRESSION_ZIP);
     for (int c = 0; c < channels && rv == EXR_ERR_SUCCESS; c++)
-        rv = exr_add_channel(ctxt, *part, channel_name(c, channels), EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LINEAR, 1, 1);
+        rv = exr_add_channel(ctxt, *part, channel_name(c, channels), EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
     return rv == EXR_ERR_SUCCESS ? exr_write_header(ctxt) : rv;
 }
 
@@ -138,7 +141,7 @@ static img_status write_exr(const char *file, const char *path, int width, int h
         rv = exr_define(ctxt, width, height, channels, &part);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_encode_all(ctxt, part, width, height, channels, pixels);
-    /* finishing writes the chunk offsets: its result counts too */
+    /* finishing closes the file (and removes it after a failure); its result counts too */
     exr_result_t finished = ctxt != NULL ? exr_finish(&ctxt) : EXR_ERR_SUCCESS;
     exr_message = NULL;
     if (rv == EXR_ERR_SUCCESS)
@@ -155,14 +158,16 @@ static img_status write_exr(const char *file, const char *path, int width, int h
 typedef struct png_report {
     jmp_buf jump;
     char text[256];
-    int nomem;
 } png_report;
 
-/* png_error_ptr: keeps the message and returns to write_png()'s setjmp (libpng's contract: never return). */
+/* png_error_ptr: keeps the message, with the system's reason when a write set errno (libpng's own text is
+ * only "Write Error"), and returns to write_png()'s setjmp (libpng's contract: never return). */
 static void png_failed(png_structp png, png_const_charp text)
 {
     png_report *r = png_get_error_ptr(png);
-    snprintf(r->text, sizeof r->text, "%s", text);
+    int code = errno;
+    snprintf(r->text, sizeof r->text, "%s%s%s", text != NULL ? text : "libpng error", code != 0 ? ": " : "",
+             code != 0 ? strerror(code) : "");
     longjmp(r->jump, 1);
 }
 
@@ -190,7 +195,7 @@ static void png_encode(png_structp png, png_infop info, FILE *out, int width, in
     png_init_io(png, out);
     png_set_IHDR(png, info, (png_uint_32)width, (png_uint_32)height, 8, types[channels - 1], PNG_INTERLACE_NONE,
                  PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-    png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
     png_write_info(png, info);
     const size_t n = (size_t)width * channels;
     for (int y = 0; y < height; y++) {
@@ -206,8 +211,9 @@ static void png_encode(png_structp png, png_infop info, FILE *out, int width, in
 static img_status write_png(const char *file, const char *path, int width, int height, int channels,
                             const float *pixels, char *msg, size_t msglen)
 {
-    /* volatile: changed between setjmp and a longjmp back to it */
-    png_report report = {.text = "", .nomem = 0};
+    /* volatile: changed between setjmp and a longjmp back to it (report is changed only through the
+     * pointer libpng holds) */
+    png_report report = {.text = ""};
     FILE *volatile out = NULL;
     png_bytep volatile row = NULL;
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &report, png_failed, png_warned);
@@ -219,9 +225,10 @@ static img_status write_png(const char *file, const char *path, int width, int h
         status = fail(IMG_ERR_OUTPUT, msg, msglen, "%s: cannot write image: %s", path, report.text);
     } else if ((row = malloc((size_t)width * channels)) == NULL) {
         status = fail(IMG_ERR_NOMEM, msg, msglen, "%s: out of memory for a row of %d pixels", path, width);
-    } else if ((out = fopen(file, "wb")) == NULL) {
+    } else if ((out = fopen(file, "wbe")) == NULL) {
         status = fail(IMG_ERR_OUTPUT, msg, msglen, "%s: cannot write image: %s", path, strerror(errno));
     } else {
+        errno = 0; /* so that png_failed() gives a write's own reason, not an older one */
         png_encode(png, info, out, width, height, channels, pixels, row);
     }
     png_destroy_write_struct(png != NULL ? &png : NULL, info != NULL ? &info : NULL);
