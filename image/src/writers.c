@@ -81,7 +81,8 @@ static exr_result_t exr_define(exr_context_t ctxt, int width, int height, int ch
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_initialize_required_attr_simple(ctxt, *part, width, height, EXR_COMPRESSION_ZIP);
     for (int c = 0; c < channels && rv == EXR_ERR_SUCCESS; c++)
-        rv = exr_add_channel(ctxt, *part, channel_name(c, channels), EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+        rv = exr_add_channel(ctxt, *part, channel_name(c, channels), EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC,
+                             1, 1);
     return rv == EXR_ERR_SUCCESS ? exr_write_header(ctxt) : rv;
 }
 
