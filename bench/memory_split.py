@@ -3,8 +3,8 @@
 
     bench/memory_split.py [--stats STATS_JSON] [--name NAME] COMMAND [ARG ...]
 
-Runs COMMAND (its standard output thrown away, its errors shown) and reads /proc/PID/status every 5 ms while it runs, keeping the peak
-of RssAnon (pages the process allocated: heap, stacks, relocated data) and of RssFile (pages of the program
+Runs COMMAND (its standard output thrown away, its errors shown) and reads /proc/PID/status every 5 ms
+while it runs, keeping the peak of RssAnon (pages the process allocated: heap, stacks, relocated data) and of RssFile (pages of the program
 and its shared libraries, shared with every process that maps them). Sampling can miss a peak shorter than
 the interval; a relight run holds its peak for most of its run. Linux only.
 
