@@ -4,9 +4,10 @@
     bench/memory_split.py [--stats STATS_JSON] [--name NAME] COMMAND [ARG ...]
 
 Runs COMMAND (its standard output thrown away, its errors shown) and reads /proc/PID/status every 5 ms
-while it runs, keeping the peak of RssAnon (pages the process allocated: heap, stacks, relocated data) and of RssFile (pages of the program
-and its shared libraries, shared with every process that maps them). Sampling can miss a peak shorter than
-the interval; a relight run holds its peak for most of its run. Linux only.
+while it runs, keeping the peak of RssAnon (pages the process allocated: heap, stacks, relocated data)
+and of RssFile (pages of the program and its shared libraries, shared with every process that maps
+them). Sampling can miss a peak shorter than the interval; a relight run holds its peak for most of
+its run. Linux only.
 
 Prints "anon_peak_kib A file_peak_kib F exit C". With --stats, the stats.json an `ilf relight` COMMAND
 writes, it prints instead one line for BENCHMARKS.md: the light the run held (memory.accumulator_bytes +
