@@ -197,13 +197,12 @@ static void load_module(void)
         module = open_module(ILFKIT_IMAGE_MODULE_INSTALLED);
 }
 
-/* @return the loaded module, or NULL (and a message naming path and what it was for) if it cannot be loaded. */
-static const img__module *need_module(const char *path, const char *doing, img_status status, char *err,
-                                            size_t errlen)
+/* @return the loaded module, or NULL (and a message naming path, to be read) if it cannot be loaded. */
+static const img__module *need_module(const char *path, char *err, size_t errlen)
 {
     pthread_once(&module_once, load_module);
     if (module == NULL)
-        fail(status, err, errlen, "%s: cannot %s: image support is not available (%s)", path, doing, load_failure);
+        fail(IMG_ERR_INPUT, err, errlen, "%s: cannot read: image support is not available (%s)", path, load_failure);
     return module;
 }
 
@@ -310,7 +309,7 @@ img_status img_read(const char *path, img_image *img, char *err, size_t errlen)
     img_status status = check_readable(path, err, errlen);
     if (status != IMG_OK)
         return status;
-    const img__module *m = need_module(path, "read", IMG_ERR_INPUT, err, errlen);
+    const img__module *m = need_module(path, err, errlen);
     if (m == NULL)
         return IMG_ERR_INPUT;
     char msg[MESSAGE_BYTES] = "";

@@ -41,7 +41,6 @@
 #include "lfio/radmap_mpi.h"
 #endif
 
-
 #define FORMAT_NAME "ilfkit-radiance-maps"
 #define FORMAT_VERSION 1
 /* Rows per chunk: a few hundred KiB of cells, a whole polygon of vertices. */

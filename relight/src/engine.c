@@ -165,8 +165,8 @@ static void worker(void *p, unsigned index)
             break;
         const work_item *w = &job->items[k];
         double t0 = job->seconds ? ilf_clock_thread_cpu() : 0.0;
-        if (w->row0 < w->row1 && rl__transfer_tile(&job->ctx, w->map, &job->sets[w->set][w->map], w->row0, w->row1, &scratch,
-                          &job->counters[index]) != 0)
+        if (w->row0 < w->row1 && rl__transfer_tile(&job->ctx, w->map, &job->sets[w->set][w->map], w->row0,
+                                                   w->row1, &scratch, &job->counters[index]) != 0)
             atomic_store(&job->failed, 1);
         if (job->seconds)
             job->seconds[k] = ilf_clock_thread_cpu() - t0;
