@@ -828,20 +828,34 @@ static uint64_t peak_resident_bytes(void)
     return getrusage(RUSAGE_SELF, &u) == 0 && u.ru_maxrss > 0 ? (uint64_t)u.ru_maxrss * 1024u : 0;
 }
 
-/* @return stats.json's "memory": what the light held against the whole process, or NULL when memory runs out. */
-static cJSON *memory_json(const relight_run *run)
+/* What the run's light held against the whole process, in bytes: stats.json's "memory". */
+typedef struct run_memory {
+    uint64_t accumulators, lightfields;
+    uint64_t peak; /* the process's peak when it was taken */
+} run_memory;
+
+/* @return run's memory figures now. */
+static run_memory run_memory_now(const relight_run *run)
+{
+    return (run_memory){rl_solution_accumulator_bytes(run->solution), rl_scene_lightfield_bytes(run->scene),
+                        peak_resident_bytes()};
+}
+
+/* @return stats.json's "memory" of mem, or NULL when memory runs out. */
+static cJSON *memory_json(const run_memory *mem)
 {
     cJSON *m = cJSON_CreateObject();
     if (m != NULL) {
-        add_count(m, "accumulator_bytes", rl_solution_accumulator_bytes(run->solution));
-        add_count(m, "lightfield_bytes", rl_scene_lightfield_bytes(run->scene));
-        add_count(m, "peak_resident_bytes", peak_resident_bytes());
+        add_count(m, "accumulator_bytes", mem->accumulators);
+        add_count(m, "lightfield_bytes", mem->lightfields);
+        add_count(m, "peak_resident_bytes", mem->peak);
     }
     return m;
 }
 
-/* @return the whole stats.json document (schema in docs/cli.md), or NULL when memory runs out. */
-static cJSON *stats_json(const relight_run *run)
+/* @return the whole stats.json document (schema in docs/cli.md) with the memory figures mem, or NULL when
+ * memory runs out. */
+static cJSON *stats_json(const relight_run *run, const run_memory *mem)
 {
     const rl_sampling *s = rl_scene_sampling(run->scene);
     cJSON *root = cJSON_CreateObject();
@@ -861,7 +875,7 @@ static cJSON *stats_json(const relight_run *run)
     add_count(root, "cells", run->cells);
     add_count(root, "ranks", (uint64_t)job_ranks());
     cJSON_AddNumberToObject(root, "radiance_write_seconds", run->write_seconds);
-    cJSON *memory = memory_json(run);
+    cJSON *memory = memory_json(mem);
     if (memory == NULL || !cJSON_AddItemToObject(root, "memory", memory)) {
         cJSON_Delete(memory);
         cJSON_Delete(root);
@@ -892,7 +906,8 @@ static cJSON *stats_json(const relight_run *run)
 static int write_stats(relight_run *run)
 {
     char err[1024];
-    cJSON *root = stats_json(run);
+    const run_memory mem = run_memory_now(run);
+    cJSON *root = stats_json(run, &mem);
     const char *path = run->staged[OUT_STATS];
     int code = ILF_EXIT_OK;
     if (root == NULL) {
@@ -902,15 +917,10 @@ static int write_stats(relight_run *run)
         cli_error("relight", "%s", err);
         code = ILF_EXIT_FAILED;
     } else {
-        /* the figures as written: the peak is the process's when stats.json was built */
-        const cJSON *m = cJSON_GetObjectItemCaseSensitive(root, "memory");
-        double peak = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(m, "peak_resident_bytes"));
-        double light = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(m, "accumulator_bytes")) +
-                       cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(m, "lightfield_bytes"));
         char what[sizeof run->report[OUT_STATS]];
         snprintf(what, sizeof what,
                  "settings, times, pass statistics; peak memory %.1f MiB (accumulators and light fields %.1f MiB)",
-                 peak / 1048576.0, light / 1048576.0);
+                 (double)mem.peak / 1048576.0, (double)(mem.accumulators + mem.lightfields) / 1048576.0);
         stage_done(run, OUT_STATS, what);
     }
     cJSON_Delete(root);
