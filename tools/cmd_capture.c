@@ -1,7 +1,7 @@
 /*
  * cmd_capture.c - `ilf capture MANIFEST -o OUT.h5`: turns the light probe
  * images a manifest lists (docs/capture.md) into a light field file with
- * one slab, using the capture library (capture/capture.h).
+ * one slab per capture plane, using the capture library (capture/capture.h).
  *
  * It also holds the two helpers the capture commands share (commands.h):
  * mapping a capture failure to a message and exit code, and feeding the
@@ -46,7 +46,8 @@ static const cli_usage capture_usage = {
     "MANIFEST -o OUT.h5 [--threads N] [--quiet]",
     "Reads the light probe images a manifest lists (equirectangular, mirror ball or\n"
     "angular map; EXR, HDR, TIFF, PNG, JPEG; single images or exposure brackets) and\n"
-    "box-filters each position's images onto the slab's solid angles (docs/capture.md).\n"
+    "box-filters each position's images onto the slab's solid angles (docs/capture.md);\n"
+    "a manifest naming several planes gives one slab per plane.\n"
     "Negative, NaN and infinite pixel values are repaired and reported, one warning\n"
     "per image. Prints the largest difference between the irradiance computed from the\n"
     "light field and from the images at any position (budget 0.5%).",
@@ -122,9 +123,21 @@ static void warn_repair(const cap_repair *r)
     fprintf(stderr, "ilf capture: warning: %s: %s\n", r->file, text);
 }
 
-/* Warnings: repaired images, unmerged bracket pixels, energy over budget. */
-static void print_warnings(const cap_report *r)
+/* Writes where the worst energy difference is into out: "position I,J", after the slab's name when there are several. */
+static const char *energy_place(const cap_manifest *m, const cap_report *r, char *out, size_t size)
 {
+    if (cap_manifest_plane_count(m) > 1)
+        snprintf(out, size, "slab '%s' position %" PRIu32 ",%" PRIu32, cap_manifest_get_desc(m, r->energy_plane)->name,
+                 r->energy_i, r->energy_j);
+    else
+        snprintf(out, size, "position %" PRIu32 ",%" PRIu32, r->energy_i, r->energy_j);
+    return out;
+}
+
+/* Warnings: repaired images, unmerged bracket pixels, energy over budget. */
+static void print_warnings(const cap_manifest *m, const cap_report *r)
+{
+    char place[128];
     for (size_t k = 0; k < r->repair_count; k++)
         warn_repair(&r->repairs[k]);
     if (r->unmerged > 0)
@@ -133,26 +146,48 @@ static void print_warnings(const cap_report *r)
                 "from the exposure nearest mid-grey)\n", r->unmerged, r->unmerged == 1 ? " was" : "s were");
     if (r->energy_error > ENERGY_BUDGET)
         fprintf(stderr,
-                "ilf capture: warning: energy differs by %.3f%% at position %" PRIu32 ",%" PRIu32
-                " (budget %.1f%%): the partition level n may be too coarse for the images\n",
-                100.0 * r->energy_error, r->energy_i, r->energy_j, 100.0 * ENERGY_BUDGET);
+                "ilf capture: warning: energy differs by %.3f%% at %s (budget %.1f%%): the partition level n may be "
+                "too coarse for the images\n",
+                100.0 * r->energy_error, energy_place(m, r, place, sizeof place), 100.0 * ENERGY_BUDGET);
 }
 
-static void print_summary(const capture_options *o, const lfio_slab_desc *d, const cap_report *r)
+/* What was captured: "2x2 positions, 4 images, n 16 (1024 directions)", or for several planes
+ * "3 planes, 12 positions, 12 images" (their grids and levels may differ). */
+static void print_captured(const capture_options *o, const cap_manifest *m, const cap_report *r)
 {
-    char size[32];
-    printf("captured %s: %" PRIu32 "x%" PRIu32 " position%s, %" PRIu64 " image%s, n %" PRIu32 " (%" PRIu64
-           " directions), sub-pixels %" PRIu32 "..%" PRIu32 " per side\n",
-           o->manifest, d->nu, d->nv, r->positions == 1 ? "" : "s", r->images, r->images == 1 ? "" : "s", d->n,
-           (uint64_t)4 * d->n * d->n, r->subdivision_min, r->subdivision_max);
+    const lfio_slab_desc *d = cap_manifest_get_desc(m, 0);
+    size_t planes = cap_manifest_plane_count(m);
+    printf("captured %s: ", o->manifest);
+    if (planes == 1)
+        printf("%" PRIu32 "x%" PRIu32 " position%s, ", d->nu, d->nv, r->positions == 1 ? "" : "s");
+    else
+        printf("%zu planes, %" PRIu64 " positions, ", planes, r->positions);
+    printf("%" PRIu64 " image%s", r->images, r->images == 1 ? "" : "s");
+    if (planes == 1)
+        printf(", n %" PRIu32 " (%" PRIu64 " directions)", d->n, (uint64_t)4 * d->n * d->n);
+    printf(", sub-pixels %" PRIu32 "..%" PRIu32 " per side\n", r->subdivision_min, r->subdivision_max);
+}
+
+static void print_summary(const capture_options *o, const cap_manifest *m, const cap_report *r)
+{
+    char size[32], place[128];
+    print_captured(o, m, r);
     printf("energy: irradiance from the light field vs from the images differs by at most %.4f%% "
-           "(position %" PRIu32 ",%" PRIu32 ": %.6g vs %.6g in green)\n",
-           100.0 * r->energy_error, r->energy_i, r->energy_j, r->energy_field[1], r->energy_image[1]);
+           "(%s: %.6g vs %.6g in green)\n",
+           100.0 * r->energy_error, energy_place(m, r, place, sizeof place), r->energy_field[1], r->energy_image[1]);
     printf("repairs: %" PRIu64 " negative, %" PRIu64 " NaN, %" PRIu64 " infinite values; %" PRIu64
            " solid angle%s interpolated (image too coarse)\n",
            r->negative, r->nan, r->infinite, r->interpolated, r->interpolated == 1 ? "" : "s");
-    printf("wrote %s: slab '%s', %s\n", o->output, d->name,
-           cli_format_bytes(cli_file_size(o->output), size, sizeof size));
+    size_t planes = cap_manifest_plane_count(m);
+    printf("wrote %s: slab%s", o->output, planes == 1 ? "" : "s");
+    for (size_t k = 0; k < planes; k++) {
+        const lfio_slab_desc *d = cap_manifest_get_desc(m, k);
+        if (planes == 1)
+            printf(" '%s'", d->name);
+        else
+            printf("%s '%s' (%" PRIu32 "x%" PRIu32 ", n %" PRIu32 ")", k == 0 ? "" : ",", d->name, d->nu, d->nv, d->n);
+    }
+    printf(", %s\n", cli_format_bytes(cli_file_size(o->output), size, sizeof size));
 }
 
 /* ------------------------------------------------------------ main */
@@ -160,11 +195,13 @@ static void print_summary(const capture_options *o, const lfio_slab_desc *d, con
 /* Runs the capture with a progress bar unless quiet. @return an exit code. */
 static int run_capture(const capture_options *o, const cap_manifest *m, lfio_lightfield **lf, cap_report *r)
 {
-    const lfio_slab_desc *d = cap_manifest_get_desc(m);
+    uint64_t positions = 0;
+    for (size_t k = 0; k < cap_manifest_plane_count(m); k++)
+        positions += (uint64_t)cap_manifest_get_desc(m, k)->nu * cap_manifest_get_desc(m, k)->nv;
     cli_progress bar;
     cap_capture_options co = {o->threads, NULL, NULL};
     if (!o->quiet) {
-        cli_progress_start(&bar, "capture", (uint64_t)d->nu * d->nv);
+        cli_progress_start(&bar, "capture", positions);
         co.progress = ilf_capture_progress;
         co.progress_user = &bar;
     }
@@ -191,14 +228,14 @@ int ilf_cmd_capture(int argc, char **argv)
     cap_report report;
     code = run_capture(&o, m, &lf, &report);
     if (code == ILF_EXIT_OK) {
-        print_warnings(&report);
+        print_warnings(m, &report);
         lfio_status ls = lfio_lightfield_set_creator(lf, CAPTURE_CREATOR);
         if (ls == LFIO_OK)
             ls = lfio_lightfield_write(lf, o.output);
         code = ls == LFIO_OK ? ILF_EXIT_OK : cli_lfio_failure("capture", ls, CLI_OUTPUT, o.output);
     }
     if (code == ILF_EXIT_OK && !o.quiet)
-        print_summary(&o, cap_manifest_get_desc(m), &report);
+        print_summary(&o, m, &report);
     cap_report_free(&report);
     lfio_lightfield_destroy(lf);
     cap_manifest_destroy(m);

@@ -2,10 +2,11 @@
  * cmd_render_probes.c - `ilf render-probes SCENE --plane O:U:V --grid NUxNV
  * --size WxH -o DIR`: a synthetic capture. The scene is relit with the
  * engine (relight/engine.h, its own settings unless overridden), then at
- * every grid position of the plane the equirectangular probe image of the
- * radiance arriving there is rendered (cap_probe_render with
- * rl_solution_trace) and written as DIR/probe_I_J.exr, and DIR/manifest.json
- * describes them for `ilf capture`.
+ * every grid position of every plane (--plane may be given several times)
+ * the equirectangular probe image of the radiance arriving there is rendered
+ * (cap_probe_render with rl_solution_trace) and written as
+ * DIR/probe_I_J.exr (one plane) or DIR/probe_K_I_J.exr (plane K of several),
+ * and DIR/manifest.json describes them for `ilf capture`: one slab per plane.
  *
  * Invariants: every option is checked before the scene is relit; DIR is
  * created (its parent must exist) before any work; images and the manifest
@@ -34,13 +35,18 @@
 #define PATH_BYTES 4096
 #define MAX_GRID ILF_PROBE_MAX_GRID
 #define MAX_SIDE ILF_PROBE_MAX_SIDE
+#define MAX_PLANES ILF_CAPTURE_MAX_PLANES
 
 typedef struct probes_options {
     const char *scene;
     const char *output;
     sampling_overrides sampling;
-    lfio_slab_desc desc; /* plane, grid, n and name for the manifest */
-    int plane_given;
+    lfio_slab_desc planes[MAX_PLANES]; /* plane, grid, n and name of each slab for the manifest */
+    int own_grid[MAX_PLANES];          /* 1 where --plane gave the plane's grid */
+    size_t nplanes;
+    uint32_t grid[2];                  /* --grid: of the planes without their own */
+    uint32_t n;
+    char name[LFIO_NAME_MAX + 1];
     uint32_t size[2];
     uint32_t strata;
     int quiet;
@@ -52,34 +58,57 @@ enum probes_option_id { OPT_PLANE = SAMPLING_OPT_COUNT, OPT_GRID, OPT_SIZE, OPT_
 
 /* The sampling options' entries are filled by relight_options_fill() before parsing. */
 static cli_option probes_options_table[] = {
-    [OPT_PLANE] = {"plane", 0, "O:U:V", "capture plane origin:u:v, each X,Y,Z in metres, u and v orthogonal (required)"},
-    [OPT_GRID] = {"grid", 0, "NUxNV", "probe positions along u and v, at cell centres (default 1x1, up to 1024 each)"},
+    [OPT_PLANE] = {"plane", 0, "O:U:V[:NUxNV]", "capture plane origin:u:v, each X,Y,Z in metres, u and v orthogonal, "
+                   "optionally its own grid; repeat for several planes, one slab each (required)"},
+    [OPT_GRID] = {"grid", 0, "NUxNV", "probe positions along u and v, at cell centres, of the planes without their own "
+                  "(default 1x1, up to 1024 each)"},
     [OPT_SIZE] = {"size", 0, "WxH", "equirectangular probe image size (default 256x128)"},
     [OPT_STRATA] = {"strata", 0, "S", "S*S jittered directions per pixel, 1 .. 64 (default 2)"},
     [OPT_N] = {"n", 0, "N", "partition level written in the manifest for `ilf capture` (default 16)"},
-    [OPT_NAME] = {"name", 0, "NAME", "slab name written in the manifest (default probes)"},
-    [OPT_OUTPUT] = {"output", 'o', "DIR", "folder for probe_I_J.exr and manifest.json (required; created)"},
+    [OPT_NAME] = {"name", 0, "NAME", "slab name written in the manifest (default probes; NAME0, NAME1, ... for "
+                  "several planes)"},
+    [OPT_OUTPUT] = {"output", 'o', "DIR", "folder for probe_I_J.exr (probe_K_I_J.exr for plane K of several) and "
+                    "manifest.json (required; created)"},
     [OPT_QUIET] = {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
 };
 
 static const cli_usage probes_usage = {
     "render-probes",
-    "SCENE --plane O:U:V -o DIR [--grid NUxNV] [--size WxH] [--strata S] [--n N]\n"
-    "                         [--name NAME] [relight options] [--quiet]",
+    "SCENE --plane O:U:V[:NUxNV] [--plane ...] -o DIR [--grid NUxNV] [--size WxH]\n"
+    "                         [--strata S] [--n N] [--name NAME] [relight options] [--quiet]",
     "Relights the scene (docs/scene.md), then renders the equirectangular light probe\n"
-    "each grid position of the plane would see (radiance of the first surface along\n"
+    "each grid position of each plane would see (radiance of the first surface along\n"
     "each direction; light field emitters are not surfaces and are not seen), writes\n"
-    "them to DIR/probe_I_J.exr and a manifest for `ilf capture` to DIR/manifest.json\n"
-    "(docs/capture.md). The light field captured from it stores the light crossing the\n"
-    "plane towards its front e3 = u x v.",
+    "them to DIR/probe_I_J.exr (DIR/probe_K_I_J.exr for plane K of several) and a\n"
+    "manifest for `ilf capture` to DIR/manifest.json (docs/capture.md), one slab per\n"
+    "plane. The light field captured from a plane stores the light crossing it\n"
+    "towards its front e3 = u x v.",
     "ilf render-probes data/capture/scene.json --plane -0.5,0.5,1.5:1,0,0:0,-1,0 --grid 2x2 -o probes\n"
     "ilf capture probes/manifest.json -o probes.h5",
 };
 
 /* ------------------------------------------------------------ options */
 
-/* Parses "ox,oy,oz:ux,uy,uz:vx,vy,vz" into d. @return NULL, or why the text is not a plane. */
-static const char *plane_problem(const char *text, lfio_slab_desc *d, char why[128])
+/* Parses a grid "NUxNV", each 1 .. MAX_GRID, into grid. @return 1, or 0 if the text is not one. */
+static int parse_grid_text(const char *text, uint32_t grid[2])
+{
+    char *end = NULL;
+    for (int k = 0; k < 2; k++) {
+        if (*text < '0' || *text > '9')
+            return 0;
+        errno = 0;
+        unsigned long v = strtoul(text, &end, 10);
+        if (errno != 0 || v < 1 || v > MAX_GRID || *end != (k == 0 ? 'x' : '\0'))
+            return 0;
+        grid[k] = (uint32_t)v;
+        text = end + 1;
+    }
+    return 1;
+}
+
+/* Parses "ox,oy,oz:ux,uy,uz:vx,vy,vz[:NUxNV]" into d (and its grid, *own_grid = 1, when given).
+ * @return NULL, or why the text is not a plane. */
+static const char *plane_problem(const char *text, lfio_slab_desc *d, int *own_grid, char why[128])
 {
     char buf[256];
     double *dest[3] = {d->origin, d->u, d->v};
@@ -89,27 +118,43 @@ static const char *plane_problem(const char *text, lfio_slab_desc *d, char why[1
     char *part = buf;
     for (int k = 0; k < 3; k++) {
         char *colon = strchr(part, ':');
-        if ((colon == NULL) != (k == 2))
-            return "expected origin:u:v, three X,Y,Z separated by ':'";
+        if (colon == NULL && k < 2)
+            return "expected origin:u:v, three X,Y,Z separated by ':', and optionally :NUxNV";
         if (colon != NULL)
             *colon = '\0';
         if (!cli_parse_doubles(part, dest[k], 3, why, 128))
             return why;
-        part = colon + 1;
+        part = colon != NULL ? colon + 1 : NULL;
     }
+    uint32_t grid[2];
+    if (part != NULL && !parse_grid_text(part, grid))
+        return "the fourth part must be a grid NUxNV, 1 .. 1024 each";
     if (lfio_slab_edges_check(d->u, d->v) != LFIO_EDGES_OK)
         return "u and v must be nonzero and orthogonal";
+    *own_grid = part != NULL;
+    if (part != NULL) {
+        d->nu = grid[0];
+        d->nv = grid[1];
+    }
     return NULL;
 }
 
-static int parse_plane(const cli_parser *p, const char *text, lfio_slab_desc *d)
+/* Adds the plane --plane text gives. @return 1, or 0 after reporting. */
+static int parse_plane(const cli_parser *p, const char *text, probes_options *o)
 {
     char why[128];
-    const char *problem = plane_problem(text, d, why);
+    if (o->nplanes == MAX_PLANES) {
+        cli_bad_value(p, text, "too many planes (at most 64)");
+        return 0;
+    }
+    lfio_slab_desc *d = &o->planes[o->nplanes];
+    lfio_slab_desc_init(d);
+    const char *problem = plane_problem(text, d, &o->own_grid[o->nplanes], why);
     if (problem != NULL) {
         cli_bad_value(p, text, problem);
         return 0;
     }
+    o->nplanes++;
     return 1;
 }
 
@@ -128,25 +173,19 @@ static int parse_name(const cli_parser *p, const char *text, char name[LFIO_NAME
 static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
 {
     probes_options *o = ctx;
-    uint32_t pair[2];
     switch (opt) {
     case OPT_PLANE:
-        o->plane_given = 1;
-        return parse_plane(p, value, &o->desc);
+        return parse_plane(p, value, o);
     case OPT_GRID:
-        if (!cli_value_u32_pair(p, value, 'x', 1, MAX_GRID, pair))
-            return 0;
-        o->desc.nu = pair[0];
-        o->desc.nv = pair[1];
-        return 1;
+        return cli_value_u32_pair(p, value, 'x', 1, MAX_GRID, o->grid);
     case OPT_SIZE:
         return cli_value_u32_pair(p, value, 'x', 1, MAX_SIDE, o->size);
     case OPT_STRATA:
         return cli_value_u32(p, value, 1, 64, &o->strata);
     case OPT_N:
-        return cli_value_u32(p, value, 1, LFIO_SLAB_MAX_N, &o->desc.n);
+        return cli_value_u32(p, value, 1, LFIO_SLAB_MAX_N, &o->n);
     case OPT_NAME:
-        return parse_name(p, value, o->desc.name);
+        return parse_name(p, value, o->name);
     case OPT_OUTPUT:
         o->output = value;
         return 1;
@@ -161,12 +200,29 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
 static void set_defaults(probes_options *o)
 {
     memset(o, 0, sizeof *o);
-    lfio_slab_desc_init(&o->desc);
-    snprintf(o->desc.name, sizeof o->desc.name, "probes");
-    o->desc.n = 16;
+    snprintf(o->name, sizeof o->name, "probes");
+    o->n = 16;
+    o->grid[0] = o->grid[1] = 1;
     o->size[0] = 256;
     o->size[1] = 128;
     o->strata = 2;
+}
+
+/* Gives every plane n, its name (NAME, or NAME0, NAME1, ... for several) and --grid unless it has its own. */
+static void finish_planes(probes_options *o)
+{
+    for (size_t k = 0; k < o->nplanes; k++) {
+        lfio_slab_desc *d = &o->planes[k];
+        d->n = o->n;
+        if (o->nplanes == 1)
+            snprintf(d->name, sizeof d->name, "%s", o->name);
+        else
+            snprintf(d->name, sizeof d->name, "%.61s%zu", o->name, k);
+        if (!o->own_grid[k]) {
+            d->nu = o->grid[0];
+            d->nv = o->grid[1];
+        }
+    }
 }
 
 /* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
@@ -182,14 +238,17 @@ static int parse_arguments(probes_options *o, int argc, char **argv)
     const char *problem = NULL;
     if (o->scene == NULL)
         problem = "no scene given (see 'ilf render-probes --help')";
-    else if (!o->plane_given)
+    else if (o->nplanes == 0)
         problem = "--plane O:U:V is required";
     else if (o->output == NULL || o->output[0] == '\0')
         problem = "-o DIR is required";
+    if (problem == NULL && o->nplanes > 1 && strlen(o->name) + 2 > LFIO_NAME_MAX)
+        problem = "--name: with several planes the name takes a number after it: use at most 61 characters";
     if (problem != NULL) {
         cli_error("render-probes", "%s", problem);
         return ILF_EXIT_USAGE;
     }
+    finish_planes(o);
     return -1;
 }
 
@@ -222,20 +281,48 @@ static int output_path(const char *dir, const char *name, char out[PATH_BYTES])
     return 1;
 }
 
-/* The manifest `ilf capture` reads back (docs/capture.md). @return it, or NULL when memory runs out. */
-static cJSON *manifest_json(const lfio_slab_desc *d)
+/* The file name pattern of plane k's probes: probe_{i}_{j}.exr for one plane, probe_K_{i}_{j}.exr for several. */
+static void probe_pattern(const probes_options *o, size_t k, char out[64])
+{
+    if (o->nplanes == 1)
+        snprintf(out, 64, "probe_{i}_{j}.exr");
+    else
+        snprintf(out, 64, "probe_%zu_{i}_{j}.exr", k);
+}
+
+/* Adds plane k's keys (plane, grid, slab, pattern) to obj. @return 1, or 0 when memory runs out. */
+static int add_plane_keys(const probes_options *o, size_t k, cJSON *obj)
+{
+    const lfio_slab_desc *d = &o->planes[k];
+    char pattern[64];
+    probe_pattern(o, k, pattern);
+    cJSON *plane = cJSON_AddObjectToObject(obj, "plane");
+    cJSON *grid = cJSON_AddObjectToObject(obj, "grid");
+    return plane != NULL && grid != NULL && json_add_doubles(plane, "origin", d->origin, 3) &&
+           json_add_doubles(plane, "u", d->u, 3) && json_add_doubles(plane, "v", d->v, 3) &&
+           cJSON_AddNumberToObject(grid, "nu", d->nu) && cJSON_AddNumberToObject(grid, "nv", d->nv) &&
+           cJSON_AddStringToObject(obj, "slab", d->name) && cJSON_AddStringToObject(obj, "pattern", pattern);
+}
+
+/* The manifest `ilf capture` reads back (docs/capture.md): the one-plane form, or "planes" for several.
+ * @return it, or NULL when memory runs out. */
+static cJSON *manifest_json(const probes_options *o)
 {
     cJSON *root = cJSON_CreateObject();
-    cJSON *plane = root != NULL ? cJSON_AddObjectToObject(root, "plane") : NULL;
-    cJSON *grid = root != NULL ? cJSON_AddObjectToObject(root, "grid") : NULL;
-    int ok = plane != NULL && grid != NULL && json_add_doubles(plane, "origin", d->origin, 3) &&
-             json_add_doubles(plane, "u", d->u, 3) && json_add_doubles(plane, "v", d->v, 3) &&
-             cJSON_AddNumberToObject(grid, "nu", d->nu) && cJSON_AddNumberToObject(grid, "nv", d->nv) &&
-             cJSON_AddNumberToObject(root, "n", d->n) && cJSON_AddStringToObject(root, "slab", d->name) &&
+    int ok = root != NULL && cJSON_AddNumberToObject(root, "n", o->n) &&
              cJSON_AddStringToObject(root, "units", "radiance") &&
              cJSON_AddStringToObject(root, "projection", "equirectangular") &&
-             cJSON_AddStringToObject(root, "colour_space", "linear") &&
-             cJSON_AddStringToObject(root, "pattern", "probe_{i}_{j}.exr");
+             cJSON_AddStringToObject(root, "colour_space", "linear");
+    if (ok && o->nplanes == 1) {
+        ok = add_plane_keys(o, 0, root);
+    } else if (ok) {
+        cJSON *list = cJSON_AddArrayToObject(root, "planes");
+        ok = list != NULL;
+        for (size_t k = 0; ok && k < o->nplanes; k++) {
+            cJSON *item = cJSON_CreateObject();
+            ok = item != NULL && cJSON_AddItemToArray(list, item) && add_plane_keys(o, k, item);
+        }
+    }
     if (!ok) {
         cJSON_Delete(root);
         return NULL;
@@ -249,7 +336,7 @@ static int write_manifest(const probes_options *o)
     if (!output_path(o->output, "manifest.json", path))
         return ILF_EXIT_FAILED;
     cli_output_watch(path);
-    cJSON *root = manifest_json(&o->desc);
+    cJSON *root = manifest_json(o);
     int code = ILF_EXIT_OK;
     if (root == NULL) {
         cli_error("render-probes", "out of memory while building the manifest");
@@ -258,8 +345,9 @@ static int write_manifest(const probes_options *o)
         cli_error("render-probes", "%s", err);
         code = ILF_EXIT_FAILED;
     } else if (!o->quiet) {
-        printf("wrote %s: %" PRIu32 "x%" PRIu32 " positions, n %" PRIu32 ", slab '%s'\n", path, o->desc.nu,
-               o->desc.nv, o->desc.n, o->desc.name);
+        for (size_t k = 0; k < o->nplanes; k++)
+            printf("%s%s: %" PRIu32 "x%" PRIu32 " positions, n %" PRIu32 ", slab '%s'\n", k == 0 ? "wrote " : "      ",
+                   k == 0 ? path : "", o->planes[k].nu, o->planes[k].nv, o->n, o->planes[k].name);
     }
     cJSON_Delete(root);
     return code;
@@ -288,11 +376,11 @@ static int relight(const probes_options *o, const rl_scene *scene, rl_solution *
     return st == RL_OK ? ILF_EXIT_OK : relight_failure("render-probes", st);
 }
 
-/* Renders the probe of position (i, j) into pixels and writes it. @return an exit code. */
-static int render_probe(const probes_options *o, const rl_solution *sol, const cap_probe_settings *s, uint32_t i,
-                        uint32_t j, float *pixels)
+/* Renders the probe of position (i, j) of plane k into pixels and writes it. @return an exit code. */
+static int render_probe(const probes_options *o, const rl_solution *sol, const cap_probe_settings *s, size_t k,
+                        uint32_t i, uint32_t j, float *pixels)
 {
-    const lfio_slab_desc *d = &o->desc;
+    const lfio_slab_desc *d = &o->planes[k];
     double x[3];
     for (int a = 0; a < 3; a++)
         x[a] = d->origin[a] + (i + 0.5) / d->nu * d->u[a] + (j + 0.5) / d->nv * d->v[a];
@@ -300,7 +388,10 @@ static int render_probe(const probes_options *o, const rl_solution *sol, const c
     if (st != CAP_OK)
         return ilf_capture_failure("render-probes", st);
     char name[64], path[PATH_BYTES], err[1024];
-    snprintf(name, sizeof name, "probe_%" PRIu32 "_%" PRIu32 ".exr", i, j);
+    if (o->nplanes == 1)
+        snprintf(name, sizeof name, "probe_%" PRIu32 "_%" PRIu32 ".exr", i, j);
+    else
+        snprintf(name, sizeof name, "probe_%zu_%" PRIu32 "_%" PRIu32 ".exr", k, i, j);
     if (!output_path(o->output, name, path))
         return ILF_EXIT_FAILED;
     cli_output_watch(path);
@@ -309,6 +400,15 @@ static int render_probe(const probes_options *o, const rl_solution *sol, const c
         return ILF_EXIT_FAILED;
     }
     return ILF_EXIT_OK;
+}
+
+/* @return the probes over every plane. */
+static uint64_t probe_count(const probes_options *o)
+{
+    uint64_t total = 0;
+    for (size_t k = 0; k < o->nplanes; k++)
+        total += (uint64_t)o->planes[k].nu * o->planes[k].nv;
+    return total;
 }
 
 static int render_all(const probes_options *o, const rl_scene *scene, const rl_solution *sol)
@@ -324,14 +424,15 @@ static int render_all(const probes_options *o, const rl_scene *scene, const rl_s
     }
     cli_progress bar;
     if (!o->quiet)
-        cli_progress_start(&bar, "probes", (uint64_t)o->desc.nu * o->desc.nv);
+        cli_progress_start(&bar, "probes", probe_count(o));
     int code = ILF_EXIT_OK;
-    for (uint32_t j = 0; code == ILF_EXIT_OK && j < o->desc.nv; j++)
-        for (uint32_t i = 0; code == ILF_EXIT_OK && i < o->desc.nu; i++) {
-            code = render_probe(o, sol, &s, i, j, pixels);
-            if (!o->quiet)
-                cli_progress_add(&bar, 1);
-        }
+    for (size_t k = 0; k < o->nplanes; k++)
+        for (uint32_t j = 0; code == ILF_EXIT_OK && j < o->planes[k].nv; j++)
+            for (uint32_t i = 0; code == ILF_EXIT_OK && i < o->planes[k].nu; i++) {
+                code = render_probe(o, sol, &s, k, i, j, pixels);
+                if (!o->quiet)
+                    cli_progress_add(&bar, 1);
+            }
     if (!o->quiet)
         cli_progress_finish(&bar);
     free(pixels);
@@ -357,10 +458,10 @@ int ilf_cmd_render_probes(int argc, char **argv)
     if (code == ILF_EXIT_OK)
         code = write_manifest(&o);
     if (code == ILF_EXIT_OK && !o.quiet)
-        printf("rendered %" PRIu32 " probe%s of %" PRIu32 "x%" PRIu32 " pixels, %" PRIu32
+        printf("rendered %" PRIu64 " probe%s of %" PRIu32 "x%" PRIu32 " pixels, %" PRIu32
                " directions per pixel, from %s into %s\n",
-               o.desc.nu * o.desc.nv, o.desc.nu * o.desc.nv == 1 ? "" : "s", o.size[0], o.size[1],
-               o.strata * o.strata, o.scene, o.output);
+               probe_count(&o), probe_count(&o) == 1 ? "" : "s", o.size[0], o.size[1], o.strata * o.strata, o.scene,
+               o.output);
     rl_solution_destroy(sol);
     rl_scene_destroy(scene);
     return code;

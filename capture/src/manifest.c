@@ -10,6 +10,7 @@
  * grid is bounded by CAP__MAX_POSITIONS and lfio's slab size limit first).
  */
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -25,14 +26,23 @@
 #define DEFAULT_N 16u
 #define DEFAULT_SLAB "capture"
 
-/* What is being parsed: the file, its folder (for relative paths), the manifest being built
- * and the settings given at the top level, which positions inherit. */
+/* What is being parsed: the file, its folder (for relative paths), the manifest being built,
+ * the plane being read and the settings given above its positions, which they inherit. */
 typedef struct parser {
     const char *path;
     char dir[PATH_MAX_BYTES + 1];
     cap_manifest *m;
+    cap__plane *pl;
     cap__entry shared;
+    uint64_t positions; /* over the planes read so far */
 } parser;
+
+/* Writes the name of member key of the plane being read ("key", or "planes[k].key") into out. @return out. */
+static const char *at(const parser *p, const char *key, char out[ILF_JSON_ELEM_MAX])
+{
+    ilf_json_member_name(out, p->pl->element, key);
+    return out;
+}
 
 static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
 
@@ -204,7 +214,7 @@ static cap_status read_bracket_item(const parser *p, const ilf_json *j, const ch
     static const char *const keys[] = {"file", "exposure", NULL};
     const ilf_json *fj, *xj;
     const char *file;
-    double exposure;
+    double exposure = 0.0;
     char fe[ILF_JSON_ELEM_MAX], xe[ILF_JSON_ELEM_MAX];
     ilf_json_member_name(fe, elem, "file");
     ilf_json_member_name(xe, elem, "exposure");
@@ -270,8 +280,8 @@ static cap_status read_images(const parser *p, const ilf_json *j, const char *el
 /* Claims the entry of position (i, j) for element elem. */
 static cap_status claim_entry(const parser *p, const char *elem, uint32_t i, uint32_t j, cap__entry **out)
 {
-    const lfio_slab_desc *d = &p->m->desc;
-    cap__entry *e = &p->m->entries[(size_t)j * d->nu + i];
+    const lfio_slab_desc *d = &p->pl->desc;
+    cap__entry *e = &p->pl->entries[(size_t)j * d->nu + i];
     if (e->given)
         return cap__json_bad(p->path, elem, "position (%u, %u) is already given by %s", i, j, e->element);
     *e = p->shared;
@@ -288,7 +298,7 @@ static cap_status read_position(const parser *p, const ilf_json *j, const char *
 {
     static const char *const keys[] = {"i", "j", "image", "exposure", "bracket", "projection",
                                        "orientation", "colour_space", "scale", NULL};
-    const lfio_slab_desc *d = &p->m->desc;
+    const lfio_slab_desc *d = &p->pl->desc;
     const ilf_json *ij, *jj;
     uint32_t i = 0, jv = 0;
     char ie[ILF_JSON_ELEM_MAX], je[ILF_JSON_ELEM_MAX];
@@ -315,12 +325,14 @@ static cap_status read_position(const parser *p, const ilf_json *j, const char *
 
 static cap_status read_positions(const parser *p, const ilf_json *j)
 {
+    char base[ILF_JSON_ELEM_MAX];
     if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
-        return cap__json_bad(p->path, "positions", "expected an array, got %s", ilf_json_kind(j));
+        return cap__json_bad(p->path, at(p, "positions", base), "expected an array, got %s", ilf_json_kind(j));
+    at(p, "positions", base);
     char elem[ILF_JSON_ELEM_MAX];
     size_t k = 0;
     for (const ilf_json *c = ilf_json_first(j); c != NULL; c = ilf_json_next(c), k++) {
-        ilf_json_item_name(elem, "positions", k);
+        ilf_json_item_name(elem, base, k);
         cap_status st = read_position(p, c, elem);
         if (st != CAP_OK)
             return st;
@@ -334,13 +346,15 @@ static cap_status expand_pattern(const parser *p, const char *pattern, uint32_t 
                                  int brackets, char out[PATH_MAX_BYTES + 1])
 {
     size_t len = 0;
+    char elem[ILF_JSON_ELEM_MAX];
+    at(p, "pattern", elem);
     for (const char *c = pattern; *c != '\0';) {
         char piece[16];
         if (strncmp(c, "{i}", 3) == 0 || strncmp(c, "{j}", 3) == 0 || (brackets && strncmp(c, "{k}", 3) == 0)) {
             snprintf(piece, sizeof piece, "%u", c[1] == 'i' ? i : c[1] == 'j' ? j : k);
             c += 3;
         } else if (*c == '{' || *c == '}') {
-            return cap__json_bad(p->path, "pattern", "unknown placeholder near '%.8s' (%s)", c,
+            return cap__json_bad(p->path, elem, "unknown placeholder near '%.8s' (%s)", c,
                                  brackets ? "only {i}, {j} and {k} are replaced"
                                           : "only {i} and {j} are replaced; {k} needs 'exposures'");
         } else {
@@ -349,7 +363,7 @@ static cap_status expand_pattern(const parser *p, const char *pattern, uint32_t 
         }
         size_t add = strlen(piece);
         if (len + add > PATH_MAX_BYTES)
-            return cap__json_bad(p->path, "pattern", "expands to more than %d bytes", PATH_MAX_BYTES);
+            return cap__json_bad(p->path, elem, "expands to more than %d bytes", PATH_MAX_BYTES);
         memcpy(out + len, piece, add);
         len += add;
     }
@@ -361,13 +375,15 @@ static cap_status expand_pattern(const parser *p, const char *pattern, uint32_t 
 static cap_status read_exposures(const parser *p, const ilf_json *j, double ex[CAP_BRACKET_MAX], uint32_t *count)
 {
     int n = (ilf_json_type_of(j) == ILF_JSON_ARRAY) ? (int)ilf_json_count(j) : -1;
+    char base[ILF_JSON_ELEM_MAX];
+    at(p, "exposures", base);
     if (n < 1 || n > (int)CAP_BRACKET_MAX)
-        return n < 0 ? cap__json_bad(p->path, "exposures", "expected an array of numbers, got %s", ilf_json_kind(j))
-                     : cap__json_bad(p->path, "exposures", "%d exposures; a bracket holds 1 to %u", n, CAP_BRACKET_MAX);
+        return n < 0 ? cap__json_bad(p->path, base, "expected an array of numbers, got %s", ilf_json_kind(j))
+                     : cap__json_bad(p->path, base, "%d exposures; a bracket holds 1 to %u", n, CAP_BRACKET_MAX);
     char elem[ILF_JSON_ELEM_MAX];
     cap_status st = CAP_OK;
     for (int k = 0; st == CAP_OK && k < n; k++) {
-        ilf_json_item_name(elem, "exposures", (size_t)k);
+        ilf_json_item_name(elem, base, (size_t)k);
         st = cap__json_positive(p->path, ilf_json_at(j, (size_t)(k)), elem, &ex[k]);
     }
     *count = (uint32_t)n;
@@ -378,26 +394,28 @@ static cap_status read_exposures(const parser *p, const ilf_json *j, double ex[C
  * bracket is the pattern with {k} replaced by k, at exposure k. */
 static cap_status read_pattern(const parser *p, const ilf_json *j, const ilf_json *jx)
 {
-    const lfio_slab_desc *d = &p->m->desc;
+    const lfio_slab_desc *d = &p->pl->desc;
     const char *pattern;
     double exposures[CAP_BRACKET_MAX] = {1.0};
     uint32_t count = 1;
-    cap_status st = cap__json_string(p->path, j, "pattern", &pattern);
+    char elem[ILF_JSON_ELEM_MAX];
+    at(p, "pattern", elem);
+    cap_status st = cap__json_string(p->path, j, elem, &pattern);
     if (st == CAP_OK && jx != NULL)
         st = read_exposures(p, jx, exposures, &count);
     if (st != CAP_OK)
         return st;
     if (jx != NULL && strstr(pattern, "{k}") == NULL)
-        return cap__json_bad(p->path, "pattern", "must contain {k}: 'exposures' gives a bracket of %u images", count);
+        return cap__json_bad(p->path, elem, "must contain {k}: 'exposures' gives a bracket of %u images", count);
     if (d->nu > 1 && strstr(pattern, "{i}") == NULL)
-        return cap__json_bad(p->path, "pattern", "must contain {i}: the grid has %u positions along u", d->nu);
+        return cap__json_bad(p->path, elem, "must contain {i}: the grid has %u positions along u", d->nu);
     if (d->nv > 1 && strstr(pattern, "{j}") == NULL)
-        return cap__json_bad(p->path, "pattern", "must contain {j}: the grid has %u positions along v", d->nv);
+        return cap__json_bad(p->path, elem, "must contain {j}: the grid has %u positions along v", d->nv);
     char file[PATH_MAX_BYTES + 1];
     for (uint32_t jj = 0; st == CAP_OK && jj < d->nv; jj++)
         for (uint32_t i = 0; st == CAP_OK && i < d->nu; i++) {
             cap__entry *e = NULL;
-            st = claim_entry(p, "pattern", i, jj, &e);
+            st = claim_entry(p, elem, i, jj, &e);
             if (st == CAP_OK)
                 st = entry_reserve(e, count);
             if (st == CAP_OK)
@@ -405,7 +423,7 @@ static cap_status read_pattern(const parser *p, const ilf_json *j, const ilf_jso
             for (uint32_t k = 0; st == CAP_OK && k < count; k++) {
                 st = expand_pattern(p, pattern, i, jj, k, jx != NULL, file);
                 if (st == CAP_OK)
-                    st = entry_set_image(p, e, k, "pattern", file, exposures[k]);
+                    st = entry_set_image(p, e, k, elem, file, exposures[k]);
             }
         }
     return st;
@@ -413,10 +431,10 @@ static cap_status read_pattern(const parser *p, const ilf_json *j, const ilf_jso
 
 /* ------------------------------------------------------------ the slab */
 
-static cap_status read_units(const parser *p, const ilf_json *j, lfio_slab_desc *d)
+static cap_status read_units(const parser *p, const ilf_json *j, const char *elem, lfio_slab_desc *d)
 {
     const char *name;
-    cap_status st = cap__json_string(p->path, j, "units", &name);
+    cap_status st = cap__json_string(p->path, j, elem, &name);
     if (st != CAP_OK)
         return st;
     if (strcmp(name, "radiance") == 0)
@@ -424,83 +442,192 @@ static cap_status read_units(const parser *p, const ilf_json *j, lfio_slab_desc 
     else if (strcmp(name, "relative") == 0)
         d->units = LFIO_UNITS_RELATIVE;
     else
-        return cap__json_bad(p->path, "units", "unknown units '%s' (expected radiance or relative)", name);
+        return cap__json_bad(p->path, elem, "unknown units '%s' (expected radiance or relative)", name);
     return CAP_OK;
 }
 
-/* The slab: plane, grid, n, name, units, within lfio's size limit. */
-static cap_status read_slab(const parser *p, const ilf_json *root, lfio_slab_desc *d)
+/* "mask_threshold": a finite number >= 0 that a float holds (lfio's mask threshold). */
+static cap_status read_mask_threshold(const parser *p, const ilf_json *j, const char *elem, lfio_slab_desc *d)
+{
+    ilf_json_ctx c = {.file = p->path};
+    double v = 0.0;
+    ilf_json_status js = ilf_json_number(&c, j, elem, &v);
+    if (js != ILF_JSON_OK)
+        return cap__fail_text(CAP_ERR_INPUT, c.message);
+    /* a float must hold it: FLT_MAX rounds to itself, anything larger would become infinity */
+    if (!(v >= 0.0 && v <= FLT_MAX))
+        return cap__json_bad(p->path, elem, "must be >= 0 and at most %g, got %g", (double)FLT_MAX, v);
+    d->mask_threshold = (float)v;
+    return CAP_OK;
+}
+
+/* The keys a plane may give beside its positions to override what it inherits: n, units, mask_threshold. */
+static cap_status read_slab_settings(const parser *p, const ilf_json *obj, lfio_slab_desc *d)
+{
+    const ilf_json *j;
+    char elem[ILF_JSON_ELEM_MAX];
+    cap_status st = CAP_OK;
+    if ((j = ilf_json_get(obj, "n")) != NULL)
+        st = cap__json_uint(p->path, j, at(p, "n", elem), 1, LFIO_SLAB_MAX_N, &d->n);
+    if (st == CAP_OK && (j = ilf_json_get(obj, "units")) != NULL)
+        st = read_units(p, j, at(p, "units", elem), d);
+    if (st == CAP_OK && (j = ilf_json_get(obj, "mask_threshold")) != NULL)
+        st = read_mask_threshold(p, j, at(p, "mask_threshold", elem), d);
+    return st;
+}
+
+/* The plane's slab: plane, grid, name and settings over the inherited ones in d, within the limits. */
+static cap_status read_slab(parser *p, const ilf_json *obj, lfio_slab_desc *d)
 {
     static const char *const plane_keys[] = {"origin", "u", "v", NULL};
     const ilf_json *j;
-    lfio_slab_desc_init(d);
-    snprintf(d->name, sizeof d->name, "%s", DEFAULT_SLAB);
-    d->n = DEFAULT_N;
-    cap_status st = cap__json_member(p->path, root, "", "plane", 1, &j);
+    const char *here = p->pl->element;
+    char elem[ILF_JSON_ELEM_MAX];
+    cap_status st = cap__json_member(p->path, obj, here, "plane", 1, &j);
     if (st == CAP_OK)
-        st = cap__json_keys(p->path, j, "plane", plane_keys);
+        st = cap__json_keys(p->path, j, at(p, "plane", elem), plane_keys);
     if (st == CAP_OK)
-        st = cap__json_rectangle(p->path, j, "plane", d);
+        st = cap__json_rectangle(p->path, j, elem, d);
     if (st == CAP_OK)
-        st = cap__json_member(p->path, root, "", "grid", 1, &j);
+        st = cap__json_member(p->path, obj, here, "grid", 1, &j);
     if (st == CAP_OK)
-        st = cap__json_grid(p->path, j, "grid", d);
-    if (st == CAP_OK && (uint64_t)d->nu * d->nv > CAP__MAX_POSITIONS)
-        return cap__json_bad(p->path, "grid", "%u x %u positions; at most %llu are supported", d->nu, d->nv,
-                   (unsigned long long)CAP__MAX_POSITIONS);
-    if (st == CAP_OK && (j = ilf_json_get(root, "n")) != NULL)
-        st = cap__json_uint(p->path, j, "n", 1, LFIO_SLAB_MAX_N, &d->n);
-    if (st == CAP_OK && (j = ilf_json_get(root, "slab")) != NULL)
-        st = cap__json_slab_name(p->path, j, "slab", d->name);
-    if (st == CAP_OK && (j = ilf_json_get(root, "units")) != NULL)
-        st = read_units(p, j, d);
+        st = cap__json_grid(p->path, j, at(p, "grid", elem), d);
+    if (st == CAP_OK && (uint64_t)d->nu * d->nv > CAP__MAX_POSITIONS - p->positions)
+        return cap__json_bad(p->path, elem, "%u x %u positions; at most %llu are supported%s", d->nu, d->nv,
+                             (unsigned long long)CAP__MAX_POSITIONS, p->positions > 0 ? " over all planes" : "");
+    if (st == CAP_OK && (j = ilf_json_get(obj, "slab")) != NULL)
+        st = cap__json_slab_name(p->path, j, at(p, "slab", elem), d->name);
+    if (st == CAP_OK)
+        st = read_slab_settings(p, obj, d);
     if (st != CAP_OK)
         return st;
     uint64_t bytes = lfio_slab_desc_bytes(d);
     if (bytes > LFIO_SLAB_MAX_BYTES)
-        return cap__json_bad(p->path, "", "the slab would hold %.3g bytes of radiance, over lfio's limit of %.3g",
+        return cap__json_bad(p->path, here, "the slab would hold %.3g bytes of radiance, over lfio's limit of %.3g",
                              (double)bytes, (double)LFIO_SLAB_MAX_BYTES);
+    p->positions += (uint64_t)d->nu * d->nv;
     return CAP_OK;
 }
 
-/* ------------------------------------------------------------ the file */
+/* ------------------------------------------------------------ planes and the file */
 
-static cap_status read_root(parser *p, const ilf_json *root)
+/* Keys of a plane: of a one-plane manifest's top level, or of an item of "planes". */
+static const char *const plane_keys[] = {"plane", "grid", "n", "slab", "units", "mask_threshold", "projection",
+                                         "orientation", "colour_space", "scale", "pattern", "exposures",
+                                         "positions", NULL};
+
+/* Reads plane p->pl from obj: its slab over the inherited description *base, its settings over the
+ * inherited *shared, and every position. */
+static cap_status read_plane(parser *p, const ilf_json *obj, const lfio_slab_desc *base, const cap__entry *shared)
 {
-    static const char *const keys[] = {"plane", "grid", "n", "slab", "units", "projection", "orientation",
-                                       "colour_space", "scale", "pattern", "exposures", "positions", NULL};
-    cap_manifest *m = p->m;
-    cap_status st = cap__json_keys(p->path, root, "", keys);
+    cap__plane *pl = p->pl;
+    const char *here = pl->element;
+    char elem[ILF_JSON_ELEM_MAX];
+    pl->desc = *base;
+    cap_status st = cap__json_keys(p->path, obj, here, plane_keys);
     if (st == CAP_OK)
-        st = read_slab(p, root, &m->desc);
-    memset(&p->shared, 0, sizeof p->shared);
-    p->shared.projection = CAP_PROJECTION_EQUIRECTANGULAR;
-    memcpy(p->shared.R, identity, sizeof identity);
-    p->shared.colour = CAP_COLOUR_AUTO;
-    p->shared.scale = 1.0;
+        st = read_slab(p, obj, &pl->desc);
+    p->shared = *shared;
     if (st == CAP_OK)
-        st = get_settings(p, root, "", &p->shared);
+        st = get_settings(p, obj, here, &p->shared);
     if (st != CAP_OK)
         return st;
-    const ilf_json *pattern = ilf_json_get(root, "pattern");
-    const ilf_json *positions = ilf_json_get(root, "positions");
-    const ilf_json *exposures = ilf_json_get(root, "exposures");
+    const ilf_json *pattern = ilf_json_get(obj, "pattern");
+    const ilf_json *positions = ilf_json_get(obj, "positions");
+    const ilf_json *exposures = ilf_json_get(obj, "exposures");
     if ((pattern == NULL) == (positions == NULL))
-        return cap__json_bad(p->path, "", "give exactly one of 'pattern' and 'positions'");
+        return cap__json_bad(p->path, here, "give exactly one of 'pattern' and 'positions'");
     if (exposures != NULL && pattern == NULL)
-        return cap__json_bad(p->path, "exposures", "goes with 'pattern'; a position's bracket lists its own exposures");
-    size_t count = (size_t)m->desc.nu * m->desc.nv;
-    m->entries = calloc(count, sizeof *m->entries);
-    if (m->entries == NULL)
+        return cap__json_bad(p->path, at(p, "exposures", elem),
+                             "goes with 'pattern'; a position's bracket lists its own exposures");
+    size_t count = (size_t)pl->desc.nu * pl->desc.nv;
+    pl->entries = calloc(count, sizeof *pl->entries);
+    if (pl->entries == NULL)
         return cap__fail(CAP_ERR_NOMEM, "%s: out of memory for %zu positions", p->path, count);
     st = pattern != NULL ? read_pattern(p, pattern, exposures) : read_positions(p, positions);
     for (size_t k = 0; st == CAP_OK && k < count; k++) {
-        if (!m->entries[k].given)
-            return cap__json_bad(p->path, "positions", "no image for position (%zu, %zu)", k % m->desc.nu,
-                                 k / m->desc.nu);
-        m->images += m->entries[k].count;
+        if (!pl->entries[k].given)
+            return cap__json_bad(p->path, at(p, "positions", elem), "no image for position (%zu, %zu)",
+                                 k % pl->desc.nu, k / pl->desc.nu);
+        pl->images += pl->entries[k].count;
+    }
+    p->m->images += pl->images;
+    return st;
+}
+
+/* The defaults every plane starts from: slab "capture", n 16, radiance, threshold 0; identity, auto, 1. */
+static void defaults(lfio_slab_desc *d, cap__entry *e)
+{
+    lfio_slab_desc_init(d);
+    snprintf(d->name, sizeof d->name, "%s", DEFAULT_SLAB);
+    d->n = DEFAULT_N;
+    memset(e, 0, sizeof *e);
+    e->projection = CAP_PROJECTION_EQUIRECTANGULAR;
+    memcpy(e->R, identity, sizeof identity);
+    e->colour = CAP_COLOUR_AUTO;
+    e->scale = 1.0;
+}
+
+/* Allocates m's count planes. */
+static cap_status alloc_planes(const parser *p, size_t count)
+{
+    p->m->planes = calloc(count, sizeof *p->m->planes);
+    if (p->m->planes == NULL)
+        return cap__fail(CAP_ERR_NOMEM, "%s: out of memory", p->path);
+    p->m->nplanes = count;
+    return CAP_OK;
+}
+
+/* {"planes": [...], shared keys}: each item a plane as a one-plane manifest's top level, inheriting
+ * n, units, mask_threshold and the image settings from the top level; slab names default to capture<k>. */
+static cap_status read_planes(parser *p, const ilf_json *root, const ilf_json *list)
+{
+    static const char *const keys[] = {"planes", "n", "units", "mask_threshold", "projection", "orientation",
+                                       "colour_space", "scale", NULL};
+    lfio_slab_desc base;
+    cap__entry shared;
+    defaults(&base, &shared);
+    cap__plane top = {.element = ""};
+    p->pl = &top;
+    cap_status st = cap__json_keys(p->path, root, "", keys);
+    if (st == CAP_OK)
+        st = read_slab_settings(p, root, &base);
+    if (st == CAP_OK)
+        st = get_settings(p, root, "", &shared);
+    if (st != CAP_OK)
+        return st;
+    int count = ilf_json_type_of(list) == ILF_JSON_ARRAY ? (int)ilf_json_count(list) : -1;
+    if (count < 1 || count > (int)CAP_PLANES_MAX)
+        return count < 0 ? cap__json_bad(p->path, "planes", "expected an array of planes, got %s", ilf_json_kind(list))
+                         : cap__json_bad(p->path, "planes", "%d planes; a manifest names 1 to %u", count,
+                                         CAP_PLANES_MAX);
+    st = alloc_planes(p, (size_t)count);
+    for (size_t k = 0; st == CAP_OK && k < (size_t)count; k++) {
+        p->pl = &p->m->planes[k];
+        snprintf(p->pl->element, sizeof p->pl->element, "planes[%zu]", k);
+        snprintf(base.name, sizeof base.name, "%s%zu", DEFAULT_SLAB, k);
+        st = read_plane(p, ilf_json_at(list, k), &base, &shared);
+        for (size_t q = 0; st == CAP_OK && q < k; q++)
+            if (strcmp(p->m->planes[q].desc.name, p->pl->desc.name) == 0)
+                st = cap__json_bad(p->path, p->pl->element, "slab name '%s' is already that of %s",
+                                   p->pl->desc.name, p->m->planes[q].element);
     }
     return st;
+}
+
+static cap_status read_root(parser *p, const ilf_json *root)
+{
+    if (ilf_json_type_of(root) == ILF_JSON_OBJECT) {
+        const ilf_json *list = ilf_json_get(root, "planes");
+        if (list != NULL)
+            return read_planes(p, root, list);
+    }
+    lfio_slab_desc base;
+    cap__entry shared;
+    defaults(&base, &shared);
+    cap_status st = alloc_planes(p, 1);
+    p->pl = &p->m->planes[0];
+    return st == CAP_OK ? read_plane(p, root, &base, &shared) : st;
 }
 
 /* Sets p->dir to path's folder with a trailing '/', or "" for a bare file name. */
@@ -549,17 +676,26 @@ void cap_manifest_destroy(cap_manifest *m)
 {
     if (m == NULL)
         return;
-    size_t count = (size_t)m->desc.nu * m->desc.nv;
-    for (size_t k = 0; m->entries != NULL && k < count; k++)
-        entry_free(&m->entries[k]);
-    free(m->entries);
+    for (size_t q = 0; m->planes != NULL && q < m->nplanes; q++) {
+        cap__plane *pl = &m->planes[q];
+        size_t count = (size_t)pl->desc.nu * pl->desc.nv;
+        for (size_t k = 0; pl->entries != NULL && k < count; k++)
+            entry_free(&pl->entries[k]);
+        free(pl->entries);
+    }
+    free(m->planes);
     free(m->path);
     free(m);
 }
 
-const lfio_slab_desc *cap_manifest_get_desc(const cap_manifest *m)
+size_t cap_manifest_plane_count(const cap_manifest *m)
 {
-    return m != NULL ? &m->desc : NULL;
+    return m != NULL ? m->nplanes : 0;
+}
+
+const lfio_slab_desc *cap_manifest_get_desc(const cap_manifest *m, size_t plane)
+{
+    return m != NULL && plane < m->nplanes ? &m->planes[plane].desc : NULL;
 }
 
 uint64_t cap_manifest_image_count(const cap_manifest *m)
@@ -567,11 +703,13 @@ uint64_t cap_manifest_image_count(const cap_manifest *m)
     return m != NULL ? m->images : 0;
 }
 
-cap_status cap_manifest_get_position(const cap_manifest *m, uint32_t i, uint32_t j, cap_position_info *out)
+cap_status cap_manifest_get_position(const cap_manifest *m, size_t plane, uint32_t i, uint32_t j,
+                                     cap_position_info *out)
 {
-    if (m == NULL || out == NULL || i >= m->desc.nu || j >= m->desc.nv)
-        return cap__fail(CAP_ERR_ARG, "cap_manifest_get_position: no position (%u, %u)", i, j);
-    const cap__entry *e = &m->entries[(size_t)j * m->desc.nu + i];
+    const cap__plane *pl = m != NULL && plane < m->nplanes ? &m->planes[plane] : NULL;
+    if (pl == NULL || out == NULL || i >= pl->desc.nu || j >= pl->desc.nv)
+        return cap__fail(CAP_ERR_ARG, "cap_manifest_get_position: no position (%u, %u) on plane %zu", i, j, plane);
+    const cap__entry *e = &pl->entries[(size_t)j * pl->desc.nu + i];
     out->i = i;
     out->j = j;
     out->element = e->element;

@@ -2,7 +2,9 @@
  * manifest.h - the loaded manifest's layout, shared by manifest.c (which
  * builds it) and capture.c (which reads it). Not installed, not public.
  *
- * Invariants of a loaded manifest: every grid position has exactly one
+ * Invariants of a loaded manifest: 1 .. CAP_PLANES_MAX planes with distinct
+ * slab names and at most CAP__MAX_POSITIONS positions in all; on each plane
+ * every grid position has exactly one
  * entry with 1 .. CAP_BRACKET_MAX existing files, positive finite
  * exposures and scale, a rotation, a known projection and colour space;
  * desc passes lfio_slab_new()'s checks.
@@ -30,11 +32,19 @@ typedef struct cap__entry {
     double *exposures; /* [count], owned */
 } cap__entry;
 
-struct cap_manifest {
-    char *path;          /* as given, for messages */
+/* One capture plane: the slab it becomes and its positions. */
+typedef struct cap__plane {
+    char element[32];    /* where it is given: "" (the whole file) or "planes[k]" */
     lfio_slab_desc desc;
     uint64_t images;
     cap__entry *entries; /* [nv][nu]: entry k = j*nu + i */
+} cap__plane;
+
+struct cap_manifest {
+    char *path;          /* as given, for messages */
+    size_t nplanes;      /* 1 .. CAP_PLANES_MAX, slab names distinct */
+    cap__plane *planes;  /* [nplanes] */
+    uint64_t images;     /* over every plane */
 };
 
 /* ------------------------------------------------------------ JSON values

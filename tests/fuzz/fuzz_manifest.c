@@ -20,12 +20,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cap_manifest *m = NULL;
     if (cap_manifest_load(fuzz_file_write("manifest.json", data, size), &m) != CAP_OK)
         return 0;
-    const lfio_slab_desc *d = cap_manifest_get_desc(m);
-    for (uint32_t j = 0; j < d->nv && j < 64; j++)
-        for (uint32_t i = 0; i < d->nu && i < 64; i++) {
-            cap_position_info info;
-            cap_manifest_get_position(m, i, j, &info);
-        }
+    for (size_t q = 0; q < cap_manifest_plane_count(m); q++) {
+        const lfio_slab_desc *d = cap_manifest_get_desc(m, q);
+        for (uint32_t j = 0; j < d->nv && j < 64; j++)
+            for (uint32_t i = 0; i < d->nu && i < 64; i++) {
+                cap_position_info info;
+                cap_manifest_get_position(m, q, i, j, &info);
+            }
+    }
     cap_manifest_destroy(m);
     return 0;
 }

@@ -86,6 +86,10 @@
  * bracket is held in memory while the bracket is merged. */
 #define ILF_CAPTURE_MAX_BRACKET 16u
 
+/* Capture planes one manifest may name (each becomes a slab): a box around a fixture needs 5 or 6; every
+ * reprojected ray is traced back to every plane, so the work grows with their number. */
+#define ILF_CAPTURE_MAX_PLANES 64u
+
 /* Bytes of a file path a manifest may build (a directory joined with a file name or an expanded
  * pattern): PATH_MAX on Linux less its terminator. */
 #define ILF_PATH_MAX_BYTES 4095

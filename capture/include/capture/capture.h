@@ -4,10 +4,13 @@
  * capture itself.
  *
  * What a capture computes, stated once:
- *   - The manifest gives the capture plane origin + s*u + t*v, an nu x nv
- *     grid of positions at cell centres (as lfio/lightfield.h), and for each
- *     position one image or an exposure bracket, with its projection and
- *     orientation (capture/projection.h), colour space and scale.
+ *   - The manifest gives one or several capture planes (1 .. CAP_PLANES_MAX,
+ *     each becoming one slab of the output, in order): for each, the plane
+ *     origin + s*u + t*v, an nu x nv grid of positions at cell centres (as
+ *     lfio/lightfield.h), and for each position one image or an exposure
+ *     bracket, with its projection and orientation (capture/projection.h),
+ *     colour space and scale. Each slab's mask threshold is the manifest's
+ *     mask_threshold (default 0).
  *   - A probe pixel looking in world direction d records light travelling
  *     along w = -d. The slab stores the front hemisphere w.e3 >= 0, e3 =
  *     u x v / |u x v|: the light that comes from behind the plane (the
@@ -64,6 +67,9 @@ extern "C" {
 /** Most images in one exposure bracket. */
 #define CAP_BRACKET_MAX ILF_CAPTURE_MAX_BRACKET
 
+/** Most capture planes (slabs) in one manifest. */
+#define CAP_PLANES_MAX ILF_CAPTURE_MAX_PLANES
+
 /** Largest manifest file accepted, bytes. */
 #define CAP_MANIFEST_MAX_BYTES ILF_MANIFEST_MAX_BYTES
 
@@ -95,16 +101,22 @@ cap_status cap_manifest_load(const char *path, cap_manifest **out);
 /** Releases a manifest. NULL is a no-op. */
 void cap_manifest_destroy(cap_manifest *m);
 
-/** @return the output slab's description: name, plane, grid, n, units (borrowed, valid for m's life); NULL for NULL. */
-const lfio_slab_desc *cap_manifest_get_desc(const cap_manifest *m);
+/** @return the number of capture planes, each an output slab (1 .. CAP_PLANES_MAX); 0 for NULL. */
+size_t cap_manifest_plane_count(const cap_manifest *m);
 
-/** @return the number of image files over all positions (bracket images counted singly); 0 for NULL. */
+/**
+ * @return the description of plane's output slab: name, plane, grid, n, units, mask threshold (borrowed,
+ * valid for m's life); NULL for NULL or a plane out of range.
+ */
+const lfio_slab_desc *cap_manifest_get_desc(const cap_manifest *m, size_t plane);
+
+/** @return the number of image files over all planes and positions (bracket images counted singly); 0 for NULL. */
 uint64_t cap_manifest_image_count(const cap_manifest *m);
 
 /** What one position of a manifest uses; every pointer is borrowed from the manifest. */
 typedef struct cap_position_info {
     uint32_t i, j;                 /**< grid position, i along u, j along v */
-    const char *element;           /**< where it comes from: "positions[3]" or "pattern" */
+    const char *element;           /**< where it comes from: "positions[3]", "pattern", "planes[1].pattern" */
     cap_projection projection;
     double orientation[9];         /**< camera frame to world, row-major */
     cap_colour_space colour_space;
@@ -115,8 +127,12 @@ typedef struct cap_position_info {
     const double *exposures;       /**< [image_count] relative exposures, > 0 */
 } cap_position_info;
 
-/** Describes position (i, j). @return CAP_OK; CAP_ERR_ARG if m or out is NULL or (i, j) is outside the grid. */
-cap_status cap_manifest_get_position(const cap_manifest *m, uint32_t i, uint32_t j, cap_position_info *out);
+/**
+ * Describes position (i, j) of a plane.
+ * @return CAP_OK; CAP_ERR_ARG if m or out is NULL, or the plane or (i, j) is out of range.
+ */
+cap_status cap_manifest_get_position(const cap_manifest *m, size_t plane, uint32_t i, uint32_t j,
+                                     cap_position_info *out);
 
 /** Options of a capture; all zero means: one thread per processor, no progress. */
 typedef struct cap_capture_options {
@@ -128,6 +144,7 @@ typedef struct cap_capture_options {
 /** One image whose values needed repair. */
 typedef struct cap_repair {
     const char *file;  /**< resolved path (a copy owned by the report) */
+    uint32_t plane;    /**< its plane (slab index) */
     uint32_t i, j;     /**< its position */
     uint64_t negative; /**< channel values < 0, set to 0 */
     uint64_t nan;      /**< NaN channel values, replaced by their neighbours' mean */
@@ -137,16 +154,16 @@ typedef struct cap_repair {
 
 /** What a capture did. Release with cap_report_free(). */
 typedef struct cap_report {
-    uint64_t positions;    /**< positions captured */
+    uint64_t positions;    /**< positions captured, over all planes */
     uint64_t images;       /**< image files read */
     uint64_t negative, nan, infinite; /**< repairs over all images */
-    cap_repair *repairs;   /**< images that needed repair, by position (k = j*nu + i) then bracket order; owned */
+    cap_repair *repairs;   /**< images that needed repair, by plane, position (k = j*nu + i), bracket order; owned */
     size_t repair_count;
-    uint64_t interpolated; /**< solid angles, over all positions, filled by interpolation (image too coarse) */
+    uint64_t interpolated; /**< solid angles, over all planes and positions, filled by interpolation (image too coarse) */
     uint64_t unmerged;     /**< bracket pixels where every exposure was clipped or noisy */
     uint32_t subdivision_min, subdivision_max; /**< the sub-pixel factors S used */
     double energy_error;   /**< largest |E_field - E_image| / E_image over positions (brightest channel of E_image) */
-    uint32_t energy_i, energy_j;          /**< the position where it occurs */
+    uint32_t energy_plane, energy_i, energy_j; /**< the plane and position where it occurs */
     double energy_image[3], energy_field[3]; /**< E_image and E_field there, W m^-2 (or relative) */
 } cap_report;
 
@@ -154,9 +171,10 @@ typedef struct cap_report {
 void cap_report_free(cap_report *report);
 
 /**
- * Captures every position of m into a new light field holding one slab
- * (cap_manifest_get_desc(m)), computed on worker threads. o may be NULL
- * (all defaults).
+ * Captures every position of m into a new light field holding one slab per
+ * plane (cap_manifest_get_desc(m, k) for slab k), computed on worker
+ * threads, plane after plane; the report covers them all and progress counts
+ * positions over all planes. o may be NULL (all defaults).
  * @return CAP_OK with *out (owned by the caller) and *report filled (report
  * may be NULL); CAP_ERR_INPUT (an image is unreadable, has a size its
  * projection does not accept, or differs in size from the rest of its
