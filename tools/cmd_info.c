@@ -10,6 +10,7 @@
  * they cannot disagree; the JSON schema is the one documented in docs/cli.md.
  */
 #include <cjson/cJSON.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -41,6 +42,7 @@ typedef struct slab_report {
     uint64_t mask_set[INFO_MAX_MASK_LEVELS];
     int has_irradiance;
     double irradiance[3];
+    double stored_fraction;   /* the coverage_fraction attribute (the share of rays), NaN if none */
     int has_coverage;
     double covered_fraction;  /* etendue-weighted share of covered samples, positions equally */
     uint64_t covered, samples;
@@ -150,6 +152,7 @@ static int gather_slab(lfio_reader *r, size_t k, const info_options *o, slab_rep
     rep->directions = lfio_slab_dir_count(slab);
     gather_radiance_stats(slab, rep);
     gather_mask(slab, rep);
+    rep->stored_fraction = lfio_reader_coverage_fraction(r, k);
     int code = gather_coverage(r, k, o, rep);
     if (code == ILF_EXIT_OK && o->want_irradiance) {
         uint32_t i = o->position[0], j = o->position[1];
@@ -209,6 +212,9 @@ static void print_slab_text(size_t k, const slab_report *rep, const info_options
     for (uint32_t l = 0; l < rep->mask_levels; l++)
         printf("  %-16s n=%u: %llu/%llu set\n", l == 0 ? "mask:" : "", (unsigned)rep->mask_n[l],
                (unsigned long long)rep->mask_set[l], (unsigned long long)lfio_part_hemi_count(rep->mask_n[l]));
+    if (!isnan(rep->stored_fraction))
+        printf("  %-16s %.2f%% of the etendue covered, %.2f%% not (attribute coverage_fraction)\n", "covered rays:",
+               100.0 * rep->stored_fraction, 100.0 * (1.0 - rep->stored_fraction));
     if (rep->has_coverage)
         printf("  %-16s %.2f%% of the etendue (%llu of %llu samples)\n", "coverage:", 100.0 * rep->covered_fraction,
                (unsigned long long)rep->covered, (unsigned long long)rep->samples);
@@ -259,6 +265,8 @@ static cJSON *slab_json(const slab_report *rep, const info_options *o)
     cJSON_AddNumberToObject(s, "zero_fraction", rep->zero_fraction);
     cJSON *mask = mask_json(rep);
     ok = ok && mask != NULL && cJSON_AddItemToObject(s, "mask", mask);
+    if (!isnan(rep->stored_fraction))
+        ok = ok && cJSON_AddNumberToObject(s, "coverage_fraction", rep->stored_fraction);
     if (rep->has_coverage) {
         cJSON *c = cJSON_AddObjectToObject(s, "coverage");
         ok = ok && c != NULL && cJSON_AddNumberToObject(c, "fraction", rep->covered_fraction) &&

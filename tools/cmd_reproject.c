@@ -1,11 +1,13 @@
 /*
  * cmd_reproject.c - `ilf reproject IN.h5 --proxy PROXY -o OUT.h5`: depth
- * correction. One slab of IN (a captured light field) is moved onto proxy
- * geometry (a JSON list of rectangles, or a mesh read with assimp whose
- * faces are rectangular quads or triangles paired into rectangles), one
- * output slab per rectangle (capture/reproject.h). The share of each proxy
- * slab's rays that the capture covers is printed, and which samples it
- * covers is stored in OUT.h5 as each slab's coverage dataset.
+ * correction. Every slab of IN (a captured light field, one slab per capture
+ * plane; or the one --slab names) is merged onto proxy geometry (a JSON list
+ * of rectangles, or a mesh read with assimp whose faces are rectangular
+ * quads or triangles paired into rectangles), one output slab per rectangle
+ * (capture/reproject.h). The share of each proxy slab's etendue that the
+ * capture covers, and of the whole proxy's, is printed; each slab's share is
+ * stored in OUT.h5 as its coverage_fraction attribute, and which samples the
+ * capture covers as its coverage dataset.
  *
  * Invariants: the output folder is checked and the input read before any
  * work; OUT.h5, coverage included, is written atomically by lfio, so a
@@ -13,6 +15,7 @@
  * --quiet), stderr errors and the progress bar.
  */
 #include <inttypes.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,8 +45,8 @@ enum reproject_option_id { OPT_PROXY, OPT_OUTPUT, OPT_SLAB, OPT_N, OPT_GRID, OPT
 static const cli_option reproject_options_table[] = {
     {"proxy", 0, "PROXY", "rectangles: a .json list, or a mesh of rectangles (quads, or triangle pairs) (required)"},
     {"output", 'o', "OUT.h5", "light field file to write, one slab per rectangle (required)"},
-    {"slab", 0, "NAME|INDEX", "the captured slab of IN.h5 (default 0)"},
-    {"n", 0, "N", "partition level of rectangles that do not give one (default: the captured slab's)"},
+    {"slab", 0, "NAME|INDEX", "use this captured slab of IN.h5 alone (default: every slab, merged)"},
+    {"n", 0, "N", "partition level of rectangles that do not give one (default: the captured slabs' finest)"},
     {"grid", 0, "NUxNV", "positions of rectangles that do not give them (default 16x16)"},
     {"strata", 0, "S", "S*S rays per solid angle, 1 .. 16 (default 2)"},
     {"plain", 0, NULL, "look every probe up along the ray's direction (no depth correction), to compare"},
@@ -56,11 +59,12 @@ static const cli_usage reproject_usage = {
     "IN.h5 --proxy PROXY -o OUT.h5 [--slab S] [--n N] [--grid NUxNV] [--strata S]\n"
     "                     [--plain] [--threads N] [--quiet]",
     "Depth correction: each ray leaving a proxy rectangle's front is traced back, as a\n"
-    "line, to the captured slab's plane; the probes around the crossing are asked for\n"
-    "the light they saw coming from the ray's point on the proxy (docs/capture.md).\n"
-    "Rays the capture does not cover carry no light; the covered share of each proxy\n"
-    "slab is printed, and which samples the capture covers is stored in OUT.h5\n"
-    "(dataset /slabs/K/coverage; 'ilf info' shows it).",
+    "line, to each captured slab's plane; the probes around the crossing are asked for\n"
+    "the light they saw coming from the ray's point on the proxy, and the captures that\n"
+    "cover the ray are blended by how finely each resolves it (docs/capture.md).\n"
+    "Rays no capture covers carry no light; the covered share of each proxy slab's\n"
+    "etendue and of the whole proxy's is printed and stored in OUT.h5 (attribute\n"
+    "/slabs/K/coverage_fraction, dataset /slabs/K/coverage; 'ilf info' shows both).",
     "ilf reproject probes.h5 --proxy data/capture/proxy.json -o lamp.h5\n"
     "ilf reproject probes.h5 --proxy quads.obj --grid 32x32 --n 16 -o proxy.h5",
 };
@@ -121,18 +125,61 @@ static int parse_arguments(reproject_options *o, int argc, char **argv)
 
 /* ------------------------------------------------------------ work */
 
-/* Reads the selected slab of the input. @return an exit code, and *slab on success. */
-static int read_captured(const reproject_options *o, lfio_slab **slab)
+/* The captured slabs: every slab of the input, or the one --slab names. */
+typedef struct captured_set {
+    lfio_slab **slabs;
+    size_t count;
+} captured_set;
+
+static void captured_free(captured_set *c)
+{
+    for (size_t k = 0; k < c->count; k++)
+        lfio_slab_destroy(c->slabs[k]);
+    free(c->slabs);
+    memset(c, 0, sizeof *c);
+}
+
+/* Reads the captured slabs of the input. @return an exit code, and *c on success. */
+static int read_captured(const reproject_options *o, captured_set *c)
 {
     lfio_reader *r = NULL;
     size_t index = 0;
     lfio_status st = lfio_reader_open(o->input, &r);
     if (st != LFIO_OK)
         return cli_lfio_failure("reproject", st, CLI_INPUT, o->input);
-    int code = cli_select_slab("reproject", o->input, r, o->slab, &index) ? ILF_EXIT_OK : ILF_EXIT_USAGE;
-    if (code == ILF_EXIT_OK && (st = lfio_reader_read_slab(r, index, slab)) != LFIO_OK)
-        code = cli_lfio_failure("reproject", st, CLI_INPUT, o->input);
+    int code = ILF_EXIT_OK;
+    size_t count = lfio_reader_slab_count(r);
+    if (o->slab != NULL)
+        code = cli_select_slab("reproject", o->input, r, o->slab, &index) ? ILF_EXIT_OK : ILF_EXIT_USAGE;
+    else if (count > CAP_CAPTURED_MAX) {
+        cli_error("reproject", "%s: %zu slabs; at most %u are merged (choose one with --slab)", o->input, count,
+                  CAP_CAPTURED_MAX);
+        code = ILF_EXIT_USAGE;
+    }
+    count = o->slab != NULL ? 1 : count;
+    if (code == ILF_EXIT_OK && (c->slabs = calloc(count, sizeof *c->slabs)) == NULL) {
+        cli_error("reproject", "out of memory");
+        code = ILF_EXIT_FAILED;
+    }
+    for (size_t k = 0; code == ILF_EXIT_OK && k < count; k++) {
+        if ((st = lfio_reader_read_slab(r, o->slab != NULL ? index : k, &c->slabs[k])) != LFIO_OK)
+            code = cli_lfio_failure("reproject", st, CLI_INPUT, o->input);
+        else
+            c->count++;
+    }
+    if (code == ILF_EXIT_OK && count > 1) {
+        lfio_units units = lfio_slab_get_desc(c->slabs[0])->units;
+        for (size_t k = 1; code == ILF_EXIT_OK && k < count; k++)
+            if (lfio_slab_get_desc(c->slabs[k])->units != units) {
+                cli_error("reproject", "%s: slabs '%s' and '%s' have different radiance units; merge slabs of one "
+                          "unit (or choose one with --slab)", o->input, lfio_slab_get_desc(c->slabs[0])->name,
+                          lfio_slab_get_desc(c->slabs[k])->name);
+                code = ILF_EXIT_USAGE;
+            }
+    }
     lfio_reader_close(r);
+    if (code != ILF_EXIT_OK)
+        captured_free(c);
     return code;
 }
 
@@ -159,7 +206,7 @@ static void on_slab_progress(void *user, uint64_t done, uint64_t total)
 }
 
 /* Makes one output slab per rectangle into lf, coverage in cov[k]. @return an exit code. */
-static int reproject_all(const reproject_options *o, const lfio_slab *captured, const cap_proxy *proxy,
+static int reproject_all(const reproject_options *o, const captured_set *captured, const cap_proxy *proxy,
                          lfio_lightfield *lf, cap_coverage *cov)
 {
     cli_progress bar;
@@ -179,13 +226,16 @@ static int reproject_all(const reproject_options *o, const lfio_slab *captured, 
             code = ILF_EXIT_FAILED;
             break;
         }
-        cap_status st = cap_reproject_slab(captured, d, &ro, &slab, &cov[k]);
+        cap_status st = cap_reproject_field((const lfio_slab *const *)captured->slabs, captured->count, d, &ro, &slab,
+                                            &cov[k]);
         if (st != CAP_OK)
             code = ilf_capture_failure("reproject", st);
         sp.offset += (uint64_t)d->nu * d->nv;
         lfio_status ls = code == ILF_EXIT_OK ? lfio_lightfield_take_slab(lf, slab) : LFIO_OK;
         if (ls == LFIO_OK && code == ILF_EXIT_OK)
             ls = lfio_lightfield_set_coverage(lf, k, ro.covered);
+        if (ls == LFIO_OK && code == ILF_EXIT_OK)
+            ls = lfio_lightfield_set_coverage_fraction(lf, k, cov[k].fraction);
         if (ls != LFIO_OK)
             code = cli_lfio_failure("reproject", ls, CLI_OUTPUT, o->output);
         free(ro.covered);
@@ -194,6 +244,22 @@ static int reproject_all(const reproject_options *o, const lfio_slab *captured, 
     if (!o->quiet)
         cli_progress_finish(&bar);
     return code;
+}
+
+/* @return the covered share of the etendue of every slab of lf together: each slab's share weighted by its
+ * etendue, its area times pi. */
+static double proxy_coverage(const lfio_lightfield *lf, const cap_coverage *cov)
+{
+    double covered = 0.0, total = 0.0;
+    for (size_t k = 0; k < lfio_lightfield_slab_count(lf); k++) {
+        const lfio_slab_desc *d = lfio_slab_get_desc(lfio_lightfield_slab(lf, k));
+        double uu = d->u[0] * d->u[0] + d->u[1] * d->u[1] + d->u[2] * d->u[2];
+        double vv = d->v[0] * d->v[0] + d->v[1] * d->v[1] + d->v[2] * d->v[2];
+        double area = sqrt(uu * vv);
+        covered += area * cov[k].fraction;
+        total += area;
+    }
+    return total > 0.0 ? covered / total : 0.0;
 }
 
 /* Writes OUT.h5 (radiance and coverage) and prints what was written. @return an exit code. */
@@ -213,9 +279,21 @@ static int write_outputs(const reproject_options *o, lfio_lightfield *lf, const 
                " rays)\n", d->name, d->nu, d->nv, d->n, 100.0 * cov[k].fraction, cov[k].covered, cov[k].rays);
     }
     size_t count = lfio_lightfield_slab_count(lf);
+    if (count > 1)
+        printf("coverage of the whole proxy: %.2f%% of its etendue\n", 100.0 * proxy_coverage(lf, cov));
     printf("wrote %s: %zu slab%s with coverage, %s (%s)\n", o->output, count, count == 1 ? "" : "s",
            cli_format_bytes(cli_file_size(o->output), size, sizeof size), o->plain ? "plain lookup" : "depth-corrected");
     return ILF_EXIT_OK;
+}
+
+/* @return the finest partition level of the captured slabs: the default level of the proxy's slabs. */
+static uint32_t max_level(const captured_set *c)
+{
+    uint32_t n = 1;
+    for (size_t k = 0; k < c->count; k++)
+        if (lfio_slab_get_desc(c->slabs[k])->n > n)
+            n = lfio_slab_get_desc(c->slabs[k])->n;
+    return n;
 }
 
 int ilf_cmd_reproject(int argc, char **argv)
@@ -228,13 +306,13 @@ int ilf_cmd_reproject(int argc, char **argv)
     if (!cli_output_folder_exists("reproject", o.output))
         return ILF_EXIT_FAILED;
     cli_output_watch(o.output);
-    lfio_slab *captured = NULL;
+    captured_set captured = {NULL, 0};
     cap_proxy *proxy = NULL;
     lfio_lightfield *lf = NULL;
     cap_coverage *cov = NULL;
     code = read_captured(&o, &captured);
     if (code == ILF_EXIT_OK) {
-        cap_proxy_defaults def = {o.grid[0], o.grid[1], o.n ? o.n : lfio_slab_get_desc(captured)->n};
+        cap_proxy_defaults def = {o.grid[0], o.grid[1], o.n ? o.n : max_level(&captured)};
         cap_status st = cap_proxy_load(o.proxy, &def, &proxy);
         code = st == CAP_OK ? ILF_EXIT_OK : ilf_capture_failure("reproject", st);
     }
@@ -244,12 +322,12 @@ int ilf_cmd_reproject(int argc, char **argv)
         code = ILF_EXIT_FAILED;
     }
     if (code == ILF_EXIT_OK)
-        code = reproject_all(&o, captured, proxy, lf, cov);
+        code = reproject_all(&o, &captured, proxy, lf, cov);
     if (code == ILF_EXIT_OK)
         code = write_outputs(&o, lf, cov);
     free(cov);
     lfio_lightfield_destroy(lf);
     cap_proxy_destroy(proxy);
-    lfio_slab_destroy(captured);
+    captured_free(&captured);
     return code;
 }

@@ -17,7 +17,8 @@
  *     reader's checks and lfio_verify() all use, so they cannot disagree.
  *   - A slab's coverage dataset is optional: written when the light field
  *     has coverage for the slab, checked (type, shape, values 0 or 1) when a
- *     file has one, never required, so files without it stay valid.
+ *     file has one, never required, so files without it stay valid. So is
+ *     its coverage_fraction attribute (a finite number in [0, 1]).
  *   - The derived datasets (direction, solid angles, position, mask) are
  *     produced and checked by one block-streaming function, so writing and
  *     verifying use the same recomputation and bounded memory.
@@ -371,8 +372,10 @@ static lfio_status check_radiance(lfio_status st, const char *path, size_t k, co
     return bad_value_fail(st, path, k, dir, ij % s->desc.nu, ij / s->desc.nu, s->radiance[p]);
 }
 
-/* Writes slab s, with its coverage unless that is NULL, as group /slabs/k of the file whose "slabs" group is slabs. */
-static lfio_status write_slab(const char *path, hid_t slabs, size_t k, const lfio_slab *s, const uint8_t *coverage)
+/* Writes slab s, with its coverage unless that is NULL and its covered share unless that is NaN, as group
+ * /slabs/k of the file whose "slabs" group is slabs. */
+static lfio_status write_slab(const char *path, hid_t slabs, size_t k, const lfio_slab *s, const uint8_t *coverage,
+                              double fraction)
 {
     char obj[64], name[24];
     snprintf(name, sizeof name, "%zu", k);
@@ -398,6 +401,8 @@ static lfio_status write_slab(const char *path, hid_t slabs, size_t k, const lfi
     if ((st = lfio__h5_create_group(path, obj, slabs, name, &g)) != LFIO_OK)
         return st;
     st = write_slab_attrs(path, obj, g, s);
+    if (st == LFIO_OK && !isnan(fraction))
+        st = lfio__h5_put_num_attr(path, obj, g, "coverage_fraction", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 0, &fraction);
     if (st == LFIO_OK && nlev > 0) {
         /* made here rather than on the way to its levels, where HDF5 would give it default
          * properties: it records no times, as no object lfio writes does */
@@ -451,7 +456,8 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
     if ((st = lfio__h5_create_group(path, "/slabs", file, "slabs", &slabs)) != LFIO_OK)
         return st;
     for (size_t k = 0; st == LFIO_OK && k < (size_t)count; k++)
-        st = write_slab(path, slabs, k, lfio_lightfield_slab(lf, k), lfio_lightfield_coverage(lf, k));
+        st = write_slab(path, slabs, k, lfio_lightfield_slab(lf, k), lfio_lightfield_coverage(lf, k),
+                        lfio_lightfield_coverage_fraction(lf, k));
     lfio__h5_close(slabs);
     return st;
 }
@@ -482,6 +488,7 @@ struct lfio_reader {
     lfio_slab_desc *desc;     /* nslabs, each passed lfio__check_desc() */
     hid_t *radiance;          /* nslabs open radiance datasets, shapes checked */
     hid_t *coverage;          /* nslabs open coverage datasets, shapes checked; -1 where a slab has none */
+    double *fraction;         /* nslabs coverage_fraction attributes, in [0, 1]; NaN where a slab has none */
 };
 
 /* Reads and checks the root attributes into r (version, creator, slab count). */
@@ -632,6 +639,24 @@ static lfio_status check_dataset(const char *path, const char *gobj, hid_t g, co
     return st;
 }
 
+/* Reads the optional coverage_fraction attribute of slab group g (obj) into *out: NaN when absent. */
+static lfio_status read_fraction(const char *path, const char *obj, hid_t g, double *out)
+{
+    *out = NAN;
+    htri_t has = H5Aexists(g, "coverage_fraction");
+    if (has < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot look for a coverage_fraction attribute");
+    if (has == 0)
+        return LFIO_OK;
+    double value = NAN;
+    lfio_status st = lfio__h5_get_f64_attr(path, obj, g, "coverage_fraction", 1, &value);
+    if (st == LFIO_OK && !(value >= 0.0 && value <= 1.0))
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: coverage_fraction %g is not in [0, 1]", path, obj, value);
+    if (st == LFIO_OK)
+        *out = value;
+    return st;
+}
+
 /* Opens group /slabs/k, reads and checks its description into r->desc[k], checks every dataset and keeps radiance open. */
 static lfio_status open_slab(lfio_reader *r, hid_t slabs, size_t k)
 {
@@ -657,6 +682,8 @@ static lfio_status open_slab(lfio_reader *r, hid_t slabs, size_t k)
         st = check_dataset(r->path, obj, g, &specs[t], dapl, keep ? &r->radiance[k] : NULL);
         lfio__h5_close(dapl);
     }
+    if (st == LFIO_OK)
+        st = read_fraction(r->path, obj, g, &r->fraction[k]);
     /* Coverage is optional: absent is fine, present must have the layout the slab's attributes imply. */
     htri_t has = st == LFIO_OK ? H5Lexists(g, "coverage", H5P_DEFAULT) : 0;
     if (has < 0)
@@ -709,6 +736,7 @@ static void reader_free(lfio_reader *r)
     lfio__h5_close(r->file);
     free(r->radiance);
     free(r->coverage);
+    free(r->fraction);
     free(r->desc);
     free(r->creator);
     free(r->path);
@@ -735,7 +763,8 @@ static lfio_status reader_open_impl(const char *path, lfio_reader **out)
     /* nslabs <= MAX_SLABS here, so these allocations are bounded. */
     if (st == LFIO_OK && ((r->desc = calloc(r->nslabs, sizeof *r->desc)) == NULL
                           || (r->radiance = malloc(r->nslabs * sizeof *r->radiance)) == NULL
-                          || (r->coverage = malloc(r->nslabs * sizeof *r->coverage)) == NULL))
+                          || (r->coverage = malloc(r->nslabs * sizeof *r->coverage)) == NULL
+                          || (r->fraction = malloc(r->nslabs * sizeof *r->fraction)) == NULL))
         st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
     for (size_t k = 0; r->radiance && k < r->nslabs; k++)
         r->radiance[k] = -1;
@@ -1066,6 +1095,11 @@ lfio_status lfio_reader_read_slab(lfio_reader *r, size_t k, lfio_slab **out)
     return st;
 }
 
+double lfio_reader_coverage_fraction(const lfio_reader *r, size_t k)
+{
+    return r != NULL && k < r->nslabs ? r->fraction[k] : NAN;
+}
+
 /* @return 1 if slab k has a coverage dataset; 0 otherwise or for bad arguments. */
 int lfio_reader_has_coverage(const lfio_reader *r, size_t k)
 {
@@ -1121,6 +1155,9 @@ static lfio_status lightfield_read_impl(const char *path, lfio_lightfield **out)
             st = lfio__fail(LFIO_ERR_NOMEM, "%s: /slabs/%zu: out of memory", path, k);
         if (st == LFIO_OK)
             st = read_coverage_into(r, k, lf);
+        /* checked in [0, 1] on opening */
+        if (st == LFIO_OK)
+            lfio_lightfield_set_coverage_fraction(lf, k, r->fraction[k]);
     }
     reader_free(r);
     if (st != LFIO_OK)

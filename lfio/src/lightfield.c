@@ -1,14 +1,16 @@
 /*
  * lightfield.c - an ordered collection of slabs with unique names, their
- * optional coverage, and a creator string: the in-memory content of one
- * light field file.
+ * optional coverage and covered share, and a creator string: the in-memory
+ * content of one light field file.
  *
  * Invariants: every slab has a valid, unique name; the collection owns its
  * slabs and frees them with itself. coverage[k] is NULL or holds
  * dir_count*nu*nv bytes, each 0 or 1, for slab k. Coverage lives here rather
  * than in the slab because it belongs to a slab's place in a file (what the
  * data behind it covers), not to the radiance queries a slab answers.
+ * fraction[k] is NaN (none) or the covered share of slab k's etendue, in [0, 1].
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,6 +20,7 @@
 struct lfio_lightfield {
     lfio_slab **slabs;
     uint8_t **coverage; /* [capacity], NULL where a slab has none */
+    double *fraction;   /* [capacity], NaN where a slab has none */
     size_t count, capacity;
     char creator[256];
 };
@@ -43,6 +46,7 @@ void lfio_lightfield_destroy(lfio_lightfield *lf)
     }
     free(lf->slabs);
     free(lf->coverage);
+    free(lf->fraction);
     free(lf);
 }
 
@@ -69,14 +73,18 @@ lfio_status lfio_lightfield_take_slab(lfio_lightfield *lf, lfio_slab *s)
         if (grown)
             lf->slabs = grown;
         uint8_t **cgrown = grown ? realloc(lf->coverage, cap * sizeof *cgrown) : NULL;
-        if (!cgrown) {
+        if (cgrown)
+            lf->coverage = cgrown;
+        double *fgrown = cgrown ? realloc(lf->fraction, cap * sizeof *fgrown) : NULL;
+        if (!fgrown) {
             lfio_slab_destroy(s);
             return lfio__fail(LFIO_ERR_NOMEM, "lfio_lightfield_take_slab: out of memory");
         }
-        lf->coverage = cgrown;
+        lf->fraction = fgrown;
         lf->capacity = cap;
     }
     lf->coverage[lf->count] = NULL;
+    lf->fraction[lf->count] = NAN;
     lf->slabs[lf->count++] = s;
     return LFIO_OK;
 }
@@ -142,4 +150,22 @@ lfio_status lfio_lightfield_set_coverage(lfio_lightfield *lf, size_t k, const ui
 const uint8_t *lfio_lightfield_coverage(const lfio_lightfield *lf, size_t k)
 {
     return lf && k < lf->count ? lf->coverage[k] : NULL;
+}
+
+
+lfio_status lfio_lightfield_set_coverage_fraction(lfio_lightfield *lf, size_t k, double fraction)
+{
+    if (!lf || k >= lf->count)
+        return lfio__fail(LFIO_ERR_ARG, "lfio_lightfield_set_coverage_fraction: slab %zu out of range (%zu slabs)", k,
+                          lf ? lf->count : 0);
+    if (!isnan(fraction) && !(fraction >= 0.0 && fraction <= 1.0))
+        return lfio__fail(LFIO_ERR_ARG, "slab '%s': coverage fraction %g is not in [0, 1]", lf->slabs[k]->desc.name,
+                          fraction);
+    lf->fraction[k] = fraction;
+    return LFIO_OK;
+}
+
+double lfio_lightfield_coverage_fraction(const lfio_lightfield *lf, size_t k)
+{
+    return lf && k < lf->count ? lf->fraction[k] : NAN;
 }

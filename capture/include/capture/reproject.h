@@ -9,12 +9,19 @@
  *     centres, 4n^2 front directions). The light stored on a proxy slab is
  *     the light leaving its front.
  *   - For a proxy position y and direction w (front hemisphere of the proxy
- *     slab), the line y + t*w meets the captured slab's plane at p (line-plane
+ *     slab), the line y + t*w meets a captured slab's plane at p (line-plane
  *     intersection; no occlusion is considered: light travels in free space
- *     between the proxy and the capture plane). The ray is covered when
- *     w.e3_captured > 0 (the captured slab stores that direction) and p
- *     lies on the captured rectangle (s, t in [0, 1]); an uncovered ray
- *     carries zero radiance.
+ *     between the proxy and the capture plane). The ray is covered by that
+ *     slab when w.e3_captured > 0 (the captured slab stores that direction)
+ *     and p lies on the captured rectangle (s, t in [0, 1]). A capture of
+ *     several slabs (planes) covers a ray when one of them does: the ray's
+ *     radiance is the mean of the covering slabs' answers weighted by how
+ *     finely each resolves it, (w.e3_captured) / (|t| * a)^2 with a =
+ *     sqrt(2 pi / 4n^2) the side of the slab's mean solid angle: |t| * a is
+ *     the size of the patch of the proxy that one of its solid angles spans
+ *     along the ray, so the nearest, least grazing capture dominates and
+ *     captures of similar resolution are blended. An uncovered ray carries
+ *     zero radiance.
  *   - CAP_REPROJECT_DEPTH (the default): the captured probes around p (the
  *     bilinear cell of position centres, clamped at the border) are each
  *     asked for the radiance they saw in the direction from y to
@@ -33,7 +40,7 @@
  *     together (a box filter in position and direction), which keeps the
  *     slab's power where a sample at the cell centre alone would not.
  *   - Coverage of a proxy slab: the share of its etendue whose rays are
- *     covered, weighting each sampled ray by its share of the projected
+ *     covered (by any captured slab), weighting each sampled ray by its share of the projected
  *     solid angle (about e3) of its solid angle, and positions equally.
  *     Coverage of a sample (one solid angle at one position): 1 when at
  *     least one of its rays is covered, 0 when none is (its radiance is then
@@ -57,6 +64,9 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/** Most captured slabs one reprojection may merge. */
+#define CAP_CAPTURED_MAX ILF_CAPTURE_MAX_PLANES
 
 /** Most proxy rectangles one proxy may hold. */
 #define CAP_PROXY_MAX ILF_PROXY_MAX_RECTANGLES
@@ -128,13 +138,20 @@ typedef struct cap_coverage {
 } cap_coverage;
 
 /**
- * Makes the slab target (its units and mask threshold replaced by the
- * captured slab's) from the captured slab, on worker threads, and each
- * sample's coverage into o->covered when that is not NULL. o may be NULL
- * (all defaults).
+ * Makes the slab target (its units replaced by the captured slabs', which
+ * must agree, and its mask threshold by the smallest of theirs) from the
+ * count captured slabs merged as above (1 .. CAP_CAPTURED_MAX), on worker
+ * threads, and each sample's coverage into o->covered when that is not
+ * NULL. o may be NULL (all defaults). The result does not depend on the
+ * thread count.
  * @return CAP_OK, *out (owned by the caller) and *coverage (may be NULL);
- * CAP_ERR_ARG (NULL, invalid target or options); CAP_ERR_NOMEM. *out is NULL on failure.
+ * CAP_ERR_ARG (NULL, a count out of range, units that differ, invalid
+ * target or options); CAP_ERR_NOMEM. *out is NULL on failure.
  */
+cap_status cap_reproject_field(const lfio_slab *const *captured, size_t count, const lfio_slab_desc *target,
+                               const cap_reproject_options *o, lfio_slab **out, cap_coverage *coverage);
+
+/** cap_reproject_field() with one captured slab. */
 cap_status cap_reproject_slab(const lfio_slab *captured, const lfio_slab_desc *target,
                               const cap_reproject_options *o, lfio_slab **out, cap_coverage *coverage);
 

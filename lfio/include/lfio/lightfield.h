@@ -405,6 +405,24 @@ lfio_status lfio_lightfield_set_coverage(lfio_lightfield *lf, size_t k, const ui
  */
 const uint8_t *lfio_lightfield_coverage(const lfio_lightfield *lf, size_t k);
 
+/*
+ * The covered share of a slab's etendue (optional, per slab, like coverage
+ * and independent of it): the fraction, 0 .. 1, of the slab's etendue
+ * (area times projected solid angle, pi per unit area) whose light the data
+ * behind it holds; 1 - fraction of it carries no data (radiance 0 there
+ * means "unknown", not "dark"). Files store it as the slab group's float64
+ * attribute coverage_fraction (docs/format.md); files without it say nothing.
+ */
+
+/**
+ * Sets slab k's covered share of the etendue; NaN removes it.
+ * @return LFIO_OK; LFIO_ERR_ARG (lf unchanged) if k is out of range or fraction is not NaN and not in [0, 1].
+ */
+lfio_status lfio_lightfield_set_coverage_fraction(lfio_lightfield *lf, size_t k, double fraction);
+
+/** @return slab k's covered share of the etendue, 0 .. 1; NaN if it has none or k is out of range. */
+double lfio_lightfield_coverage_fraction(const lfio_lightfield *lf, size_t k);
+
 /** An open file whose slabs can be read in part. Opaque. */
 typedef struct lfio_reader lfio_reader;
 
@@ -449,6 +467,9 @@ lfio_status lfio_reader_read_slab(lfio_reader *r, size_t k, lfio_slab **out);
 
 /** @return 1 if slab k of the file has a coverage dataset (its type and shape were checked on opening), else 0. */
 int lfio_reader_has_coverage(const lfio_reader *r, size_t k);
+
+/** @return slab k's coverage_fraction attribute, 0 .. 1 (checked on opening); NaN if it has none or k is out of range. */
+double lfio_reader_coverage_fraction(const lfio_reader *r, size_t k);
 
 /**
  * Reads the coverage of slab k into coverage ([dir][j][i], 4n^2*nu*nv bytes)
