@@ -852,17 +852,19 @@ static double emitter_seen(const double x[3], const double d[3])
     return t > 0.0 && fabs(qx) <= EMITTER_HALF && fabs(qy) <= EMITTER_HALF ? EMITTER_L : 0.0;
 }
 
-/* The capture of the emitter made directly: each solid angle's box mean over 5x5 directions. */
-static lfio_slab *emitter_capture(void)
+/* The capture of the emitter made directly on the plane origin + s u + t v (nu x nv positions, n = 16): each
+ * solid angle's box mean over 5x5 directions. */
+static lfio_slab *emitter_capture_on(const double origin[3], const double u[3], const double v[3], uint32_t nu,
+                                     uint32_t nv)
 {
     lfio_slab_desc d;
     lfio_slab_desc_init(&d);
     snprintf(d.name, sizeof d.name, "capture");
-    const double origin[3] = {-1, 1, 0.6}, u[3] = {2, 0, 0}, v[3] = {0, -2, 0};
-    memcpy(d.origin, origin, sizeof origin);
-    memcpy(d.u, u, sizeof u);
-    memcpy(d.v, v, sizeof v);
-    d.nu = d.nv = 16;
+    memcpy(d.origin, origin, sizeof d.origin);
+    memcpy(d.u, u, sizeof d.u);
+    memcpy(d.v, v, sizeof d.v);
+    d.nu = nu;
+    d.nv = nv;
     d.n = 16;
     lfio_slab *s = NULL;
     CHECK(lfio_slab_new(&d, &s) == LFIO_OK, "%s", lfio_errmsg());
@@ -887,6 +889,13 @@ static lfio_slab *emitter_capture(void)
         }
     free(rgb);
     return s;
+}
+
+/* The capture plane of the depth-correction test: 2 m square at z = 0.6, 16 x 16 positions, facing down. */
+static lfio_slab *emitter_capture(void)
+{
+    const double origin[3] = {-1, 1, 0.6}, u[3] = {2, 0, 0}, v[3] = {0, -2, 0};
+    return emitter_capture_on(origin, u, v, 16, 16);
 }
 
 /* Writes slab s (ownership taken) alone to tmp/name. */
@@ -933,8 +942,9 @@ static double footprint_share(const lfio_slab *s, double cos_min, double *total)
     return in / all;
 }
 
-/* Reprojects the capture onto the emitter's plane (0.6 m square, 24x24, n = 8) in mode. */
-static lfio_slab *reproject_onto_emitter(const lfio_slab *captured, cap_reproject_mode mode, cap_coverage *cov)
+/* Reprojects the count captured slabs onto the emitter's plane (0.6 m square, 24x24, n = 8) in mode. */
+static lfio_slab *reproject_onto_emitter(const lfio_slab *const *captured, size_t count, cap_reproject_mode mode,
+                                         cap_coverage *cov)
 {
     lfio_slab_desc d;
     lfio_slab_desc_init(&d);
@@ -947,7 +957,7 @@ static lfio_slab *reproject_onto_emitter(const lfio_slab *captured, cap_reprojec
     d.n = 8;
     cap_reproject_options o = {mode, 2, 0, NULL, NULL, NULL};
     lfio_slab *out = NULL;
-    CHECK(cap_reproject_slab(captured, &d, &o, &out, cov) == CAP_OK, "%s", cap_error_message());
+    CHECK(cap_reproject_field(captured, count, &d, &o, &out, cov) == CAP_OK, "%s", cap_error_message());
     return out;
 }
 
@@ -1081,12 +1091,44 @@ static void test_triangulated_proxy(const lfio_slab *captured)
     }
 }
 
+/*
+ * The depth-correction test with several planes: the capture plane under the emitter plus four sides of the box
+ * it closes (x, y = +-1, from z = 0.6 up to the emitter's plane, facing out, 16 x 4 positions each), merged onto
+ * the proxy. The sides cover the grazing rays the plane under it misses: coverage rises to about 1, and with it
+ * the power the field carries in all directions (true: L pi A). below: the power from the plane under it alone.
+ */
+static void test_depth_planes(lfio_slab *under, double below)
+{
+    const double z = 0.6, h = EMITTER_Z - z;
+    const double sides[4][3][3] = {{{1, -1, z}, {0, 2, 0}, {0, 0, h}}, {{-1, 1, z}, {0, -2, 0}, {0, 0, h}},
+                                   {{1, 1, z}, {-2, 0, 0}, {0, 0, h}}, {{-1, -1, z}, {2, 0, 0}, {0, 0, h}}};
+    lfio_slab *slabs[5] = {under, NULL, NULL, NULL, NULL};
+    for (int k = 0; k < 4; k++)
+        slabs[k + 1] = emitter_capture_on(sides[k][0], sides[k][1], sides[k][2], 16, 4);
+    cap_coverage cov;
+    lfio_slab *box = reproject_onto_emitter((const lfio_slab *const *)slabs, 5, CAP_REPROJECT_DEPTH, &cov);
+    double power = 0.0, near_power = 0.0, truth = EMITTER_L * PI * 0.04;
+    if (box != NULL) {
+        double share = footprint_share(box, 0.0, &power), near = footprint_share(box, cos(PI / 4), &near_power);
+        printf("depth correction from 5 planes: coverage %.2f%%, power %.4f W (true %.4f; plane under it alone "
+               "%.4f), within 45 degrees %.4f W, share from the footprint %.1f%% (within 45 degrees %.1f%%)\n",
+               100 * cov.fraction, power, truth, below, near_power, 100 * share, 100 * near);
+        CHECK(cov.fraction > 0.99, "coverage from 5 planes %g", cov.fraction);
+        CHECK(fabs(power / truth - 1) < fabs(below / truth - 1) && fabs(power / truth - 1) < 0.05,
+              "power from 5 planes %g W, from one %g W, true %g W", power, below, truth);
+        CHECK(fabs(near_power / (EMITTER_L * PI * 0.5 * 0.04) - 1) < 0.03, "within 45 degrees %g W", near_power);
+    }
+    lfio_slab_destroy(box);
+    for (int k = 1; k < 5; k++)
+        lfio_slab_destroy(slabs[k]);
+}
+
 static void test_depth_correction(void)
 {
     lfio_slab *captured = emitter_capture();
     cap_coverage cov_depth, cov_plain;
-    lfio_slab *depth = reproject_onto_emitter(captured, CAP_REPROJECT_DEPTH, &cov_depth);
-    lfio_slab *plain = reproject_onto_emitter(captured, CAP_REPROJECT_PLAIN, &cov_plain);
+    lfio_slab *depth = reproject_onto_emitter((const lfio_slab *const *)&captured, 1, CAP_REPROJECT_DEPTH, &cov_depth);
+    lfio_slab *plain = reproject_onto_emitter((const lfio_slab *const *)&captured, 1, CAP_REPROJECT_PLAIN, &cov_plain);
     if (depth == NULL || plain == NULL)
         return;
     double all_depth, all_plain, near_power, unused;
@@ -1106,6 +1148,7 @@ static void test_depth_correction(void)
     CHECK(cov_depth.fraction > 0.5 && cov_depth.fraction < 1.0 && cov_depth.covered < cov_depth.rays,
           "coverage %g", cov_depth.fraction);
     test_triangulated_proxy(captured);
+    test_depth_planes(captured, all_depth);
     write_slab(captured, "depth_capture.h5");
     write_slab(depth, "depth_depth.h5");
     write_slab(plain, "depth_plain.h5");
