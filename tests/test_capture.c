@@ -506,6 +506,35 @@ static void expect_manifest_error(const char *text, const char *want1, const cha
 
 #define GRID1 "\"grid\": {\"nu\": 1, \"nv\": 1}"
 
+/* A manifest naming two planes: what each inherits from the top level and what it overrides. */
+static void test_planes_manifest(void)
+{
+    const char *path = tmp_path("planes.json");
+    write_text(path, "{\"n\": 8, \"mask_threshold\": 0.25, \"scale\": 2, \"planes\": [{" DOWN_PLANE ", " GRID1
+                     ", \"pattern\": \"constant.exr\"}, {\"plane\": {\"origin\": [0, 0, 1], \"u\": [1, 0, 0], "
+                     "\"v\": [0, 0, 1]}, \"grid\": {\"nu\": 2, \"nv\": 1}, \"n\": 4, \"slab\": \"side\", "
+                     "\"scale\": 3, \"positions\": [{\"i\": 0, \"j\": 0, \"image\": \"constant.exr\"}, "
+                     "{\"i\": 1, \"j\": 0, \"image\": \"constant.exr\", \"scale\": 5}]}]}");
+    cap_manifest *m = NULL;
+    CHECK(cap_manifest_load(path, &m) == CAP_OK, "%s", cap_error_message());
+    if (m == NULL)
+        return;
+    const lfio_slab_desc *a = cap_manifest_get_desc(m, 0), *b = cap_manifest_get_desc(m, 1);
+    cap_position_info pa, pb0, pb1;
+    CHECK(cap_manifest_plane_count(m) == 2 && cap_manifest_get_desc(m, 2) == NULL && cap_manifest_image_count(m) == 3,
+          "two planes, three images");
+    CHECK(strcmp(a->name, "capture0") == 0 && a->n == 8 && a->mask_threshold == 0.25f && a->nu == 1,
+          "plane 0 inherits n and mask_threshold: '%s' n %u threshold %g", a->name, a->n, (double)a->mask_threshold);
+    CHECK(strcmp(b->name, "side") == 0 && b->n == 4 && b->mask_threshold == 0.25f && b->nu == 2,
+          "plane 1 overrides n and the name: '%s' n %u", b->name, b->n);
+    CHECK(cap_manifest_get_position(m, 0, 0, 0, &pa) == CAP_OK && cap_manifest_get_position(m, 1, 0, 0, &pb0) == CAP_OK
+              && cap_manifest_get_position(m, 1, 1, 0, &pb1) == CAP_OK && pa.scale == 2 && pb0.scale == 3 &&
+              pb1.scale == 5 && strcmp(pb1.element, "planes[1].positions[1]") == 0,
+          "scales inherited and overridden: %g %g %g, element '%s'", pa.scale, pb0.scale, pb1.scale, pb1.element);
+    CHECK(cap_manifest_get_position(m, 2, 0, 0, &pa) == CAP_ERR_ARG, "no plane 2");
+    cap_manifest_destroy(m);
+}
+
 static void test_manifest_errors(void)
 {
     expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"bracket_{k}.png\"}", "pattern",
@@ -546,6 +575,23 @@ static void test_manifest_errors(void)
                           "pattern", "{i}");
     expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"projection\": \"fisheye\", \"pattern\": \"constant.exr\"}",
                           "projection", "fisheye");
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"mask_threshold\": -0.5, \"pattern\": \"constant.exr\"}",
+                          "mask_threshold", "must be >= 0");
+    expect_manifest_error("{" DOWN_PLANE ", " GRID1 ", \"mask_threshold\": \"low\", \"pattern\": \"constant.exr\"}",
+                          "mask_threshold", NULL);
+    expect_manifest_error("{\"planes\": []}", "planes", "0 planes");
+    expect_manifest_error("{\"planes\": [{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"constant.exr\"}], "
+                          "\"pattern\": \"constant.exr\"}", "unknown key 'pattern'", NULL);
+    expect_manifest_error("{\"planes\": [{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"constant.exr\"}, {" DOWN_PLANE
+                          ", \"grid\": {\"nu\": 2, \"nv\": 1}, \"pattern\": \"constant.exr\"}]}",
+                          "planes[1].pattern", "{i}");
+    expect_manifest_error("{\"planes\": [{" DOWN_PLANE ", " GRID1 ", \"slab\": \"a\", \"pattern\": \"constant.exr\"}, {"
+                          DOWN_PLANE ", " GRID1 ", \"slab\": \"a\", \"pattern\": \"constant.exr\"}]}",
+                          "planes[1]", "already that of planes[0]");
+    expect_manifest_error("{\"planes\": [{" DOWN_PLANE ", " GRID1 ", \"pattern\": \"constant.exr\"}, {"
+                          "\"plane\": {\"origin\": [0, 0, 0], \"u\": [1, 0, 0], \"v\": [1, 1, 0]}, " GRID1
+                          ", \"pattern\": \"constant.exr\"}]}", "planes[1].plane", "orthogonal");
+    test_planes_manifest();
 }
 
 /* Captures a manifest (text) whose images must fail at run time, with a message containing want1 and want2. */
