@@ -1416,6 +1416,89 @@ static void test_lamp_planes(void)
     CHECK(walls_one > 0.3, "one plane misses the walls' light: %g", walls_one);
 }
 
+
+/* ------------------------------------------------------------ the mask threshold on a real probe */
+
+/* Thresholds measured on studio.exr (relative units; its field's mean radiance is about 3.7 in green). */
+static const double mask_thresholds[] = {0.0, 0.01, 0.1, 1.0};
+#define MASK_RUNS (sizeof mask_thresholds / sizeof mask_thresholds[0])
+
+/* Captures studio.exr with mask threshold t into tmp/name. @return the slab's directions whose mask bit is 0 at
+ * its level, and in *share the part of the field's irradiance (green) they carry; UINT64_MAX on failure. */
+static uint64_t capture_studio_masked(double t, const char *name, double *share)
+{
+    char text[3 * PATH_BYTES], data[2 * PATH_BYTES + 2], cwd[PATH_BYTES] = "";
+    /* the manifest lives in tmp: the image's path must not be relative to another folder */
+    if (data_dir[0] != '/' && getcwd(cwd, sizeof cwd) == NULL)
+        cwd[0] = '\0';
+    snprintf(data, sizeof data, "%s%s%s", cwd, cwd[0] ? "/" : "", data_dir);
+    snprintf(text, sizeof text, "{\"plane\": {\"origin\": [-0.5, 0.5, 0.0], \"u\": [1, 0, 0], \"v\": [0, -1, 0]},"
+             " \"grid\": {\"nu\": 1, \"nv\": 1}, \"n\": 32, \"slab\": \"studio\", \"units\": \"relative\","
+             " \"colour_space\": \"linear\", \"mask_threshold\": %.17g, \"pattern\": \"%s/capture/probes/studio.exr\"}",
+             t, data);
+    write_text(tmp_path("studio_masked.json"), text);
+    lfio_lightfield *lf = capture_file(tmp_path("studio_masked.json"), 0, NULL);
+    if (lf == NULL)
+        return UINT64_MAX;
+    const lfio_slab *s = lfio_lightfield_slab(lf, 0);
+    const uint32_t n = lfio_slab_get_desc(s)->n;
+    const float *rad = lfio_slab_radiance(s);
+    const double pole[3] = {0, 0, 1};
+    double dark = 0.0, all = 0.0;
+    uint64_t zeroed = 0, wrong = 0;
+    for (uint64_t id = 0; id < lfio_slab_dir_count(s); id++) {
+        double e = rad[3 * id + 1] * lfio_part_projected_solid_angle(n, id, pole);
+        float top = fmaxf(rad[3 * id], fmaxf(rad[3 * id + 1], rad[3 * id + 2]));
+        int off = !lfio_slab_mask_test(s, n, id);
+        zeroed += off;
+        dark += off ? e : 0.0;
+        all += e;
+        wrong += off != (top <= (float)t);
+    }
+    CHECK(lfio_slab_get_desc(s)->mask_threshold == (float)t && wrong == 0,
+          "threshold %g: the mask rules out exactly the directions at or below it (%llu differ)", t,
+          (unsigned long long)wrong);
+    CHECK(lfio_lightfield_write(lf, tmp_path(name)) == LFIO_OK, "%s", lfio_errmsg());
+    lfio_lightfield_destroy(lf);
+    *share = dark / all;
+    return zeroed;
+}
+
+/*
+ * mask_threshold on the real probe: how many of its directions each threshold rules out, the share of its
+ * irradiance they carry, and what relighting a floor under it (4 m square, 1 m below, bounces 0, culled
+ * with zero culling, the defaults) loses against threshold 0.
+ */
+static void test_mask_threshold(void)
+{
+    static double e[MASK_RUNS][400], areas[400];
+    uint32_t cells[MASK_RUNS] = {0};
+    for (size_t r = 0; r < MASK_RUNS; r++) {
+        char name[32], text[1024];
+        double share = 0.0;
+        snprintf(name, sizeof name, "studio_mask%zu.h5", r);
+        uint64_t zeroed = capture_studio_masked(mask_thresholds[r], name, &share);
+        if (zeroed == UINT64_MAX)
+            return;
+        snprintf(text, sizeof text, "{\"materials\": {\"floor\": {\"albedo\": [0.5, 0.5, 0.5]}}, \"polygons\": ["
+                 "{\"material\": \"floor\", \"vertices\": [[-2, -2, -1], [2, -2, -1], [2, 2, -1], [-2, 2, -1]]}],"
+                 " \"lightfields\": [{\"file\": \"%s\"}], \"radiance_maps\": {\"cell_size\": 0.2},"
+                 " \"sampling\": {\"partition_n\": 32, \"rays_per_solid_angle\": 2, \"bounces\": 0}}", name);
+        cells[r] = map_irradiance("studio_mask.json", text, 1u, e[r], NULL, areas);
+        double rms = rms_error(e[0], e[r], cells[r]), power = power_error(e[0], e[r], areas, cells[r]);
+        printf("mask_threshold %g on studio.exr (n = 32): %llu of 4096 directions ruled out (%.1f%%) carrying %.4f%% "
+               "of its irradiance; floor relit vs threshold 0: %.4f%% RMS, power %+.4f%%\n",
+               mask_thresholds[r], (unsigned long long)zeroed, 100.0 * zeroed / 4096, 100 * share, 100 * rms,
+               100 * power);
+        CHECK(cells[r] == 400 && cells[r] == cells[0], "floor cells %u", cells[r]);
+        CHECK((r == 0) == (zeroed == 0), "threshold %g rules out %llu directions", mask_thresholds[r],
+              (unsigned long long)zeroed);
+        /* what the relit floor loses is light from those directions: at most about their share */
+        CHECK(rms <= fmax(2 * share, 1e-6), "threshold %g: relit error %g for a share of %g", mask_thresholds[r], rms,
+              share);
+    }
+}
+
 /* ------------------------------------------------------------ proxies and rendering */
 
 static void expect_proxy_error(const char *name, const char *text, const char *want1, const char *want2)
@@ -1583,5 +1666,6 @@ int main(int argc, char **argv)
     test_closed_loop();
     test_depth_correction();
     test_lamp_planes();
+    test_mask_threshold();
     return check_report();
 }
