@@ -625,6 +625,42 @@ for ext in ply stl; do
         diff <("$ILF" info "$CAP/mesh.h5" | grep -v '^file') <("$ILF" info "$CAP/mesh_$ext.h5" | grep -v '^file')
 done
 
+# Several capture planes: render-probes writes a manifest naming each, capture a slab per plane,
+# reproject merges them (coverage the union: at least the one plane's) and stores each proxy
+# slab's covered share as its coverage_fraction attribute, which info shows.
+expect 0 "render-probes on two planes" "$ILF" render-probes "$SRC/data/capture/scene.json" --plane "$PLANE" \
+    --plane 0.5,-0.5,1.5:0,1,0:0,0,0.5:2x1 --grid 2x2 --size 32x16 --n 8 --partition-n 8 --rays 1 -o "$CAP/box"
+check "render-probes writes each plane's probes and one manifest" only_files "$CAP/box" manifest.json \
+    probe_0_0_0.exr probe_0_0_1.exr probe_0_1_0.exr probe_0_1_1.exr probe_1_0_0.exr probe_1_1_0.exr
+expect 0 "capture the two planes" "$ILF" capture "$CAP/box/manifest.json" -o "$CAP/box.h5"
+check "capture writes a slab per plane" stdout_has "^wrote .*box.h5: slabs 'probes0' (2x2, n 8), 'probes1' (2x1, n 8)"
+expect 0 "the two-plane capture verifies" "$ILF" verify "$CAP/box.h5"
+expect 0 "reproject the first plane alone" "$ILF" reproject "$CAP/box.h5" --slab 0 \
+    --proxy "$SRC/data/capture/proxy.json" -o "$CAP/box0.h5" --n 8
+cp "$OUT" "$CAP/box0.stdout"
+check "the first plane alone covers what the one-plane capture covers" \
+    diff <(grep -o 'coverage .*' "$CAP/box0.stdout") <(grep -o 'coverage .*' "$CAP/lamp.stdout")
+printf '[{"name": "lamp", "origin": [-0.3, 0.3, 2.0], "u": [0.6, 0, 0], "v": [0, -0.6, 0], "grid": {"nu": 6, "nv": 6}},
+ {"name": "rim", "origin": [0.3, -0.3, 2.0], "u": [0, 0.6, 0], "v": [0.2, 0, 0], "grid": {"nu": 6, "nv": 2}}]\n' \
+    >"$CAP/box_proxy.json"
+expect 0 "reproject merges both planes" "$ILF" reproject "$CAP/box.h5" --proxy "$CAP/box_proxy.json" \
+    -o "$CAP/boxlamp.h5" --n 8
+cp "$OUT" "$CAP/boxlamp.stdout"
+check "reproject prints the whole proxy's coverage" stdout_has "^coverage of the whole proxy: [0-9.]*% of its etendue"
+expect 0 "the merged file verifies" "$ILF" verify "$CAP/boxlamp.h5"
+expect 0 "info on the merged file" "$ILF" info "$CAP/boxlamp.h5" --json
+check "each slab's coverage_fraction is the printed coverage, and two planes cover more than one" py '
+import json, re, sys
+info = json.load(open(sys.argv[1]))
+printed = [float(x) / 100 for x in re.findall(r"coverage ([0-9.]+)% \(", open(sys.argv[2]).read())]
+one = float(re.search(r"coverage ([0-9.]+)%", open(sys.argv[3]).read()).group(1)) / 100
+stored = [s["coverage_fraction"] for s in info["slabs"]]
+assert len(stored) == 2 and all(abs(a - b) < 5e-5 for a, b in zip(stored, printed)), (stored, printed)
+assert stored[0] > one + 0.05, (stored[0], one)
+' "$OUT" "$CAP/boxlamp.stdout" "$CAP/lamp.stdout"
+expect 0 "info text on the merged file" "$ILF" info "$CAP/boxlamp.h5"
+check "info text shows the stored share" stdout_has "^  covered rays: .*% of the etendue covered, .*% not (attribute coverage_fraction)"
+
 # capture and reproject: bad inputs are named and leave no output.
 printf '{"plane": {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0]}, "grid": {"nu": 1, "nv": 1},\n' >"$CAP/m_key.json"
 printf ' "pattern": "probes/probe_0_0.exr", "colour": "srgb"}\n' >>"$CAP/m_key.json"
@@ -669,6 +705,9 @@ cp "$SRC/tests/hostile/mesh/count_absurd.dae" "$CAP/absurd.dae"
 expect 2 "a Collada proxy (its reader trusts a header's counts)" "$ILF" reproject "$CAP/probes.h5" \
     --proxy "$CAP/absurd.dae" -o "$CAP/never.h5"
 check "the proxy format is refused by name" stderr_has "absurd.dae': mesh format not supported"
+expect 2 "render-probes with a bad plane grid" "$ILF" render-probes "$SRC/data/capture/scene.json" \
+    --plane "$PLANE:2y2" -o "$CAP/never"
+check "the plane grid is explained" stderr_has "grid NUxNV"
 expect 2 "render-probes without --plane" "$ILF" render-probes "$SRC/data/capture/scene.json" -o "$CAP/never"
 expect 2 "render-probes with a skew plane" "$ILF" render-probes "$SRC/data/capture/scene.json" \
     --plane 0,0,1:1,0,0:1,1,0 -o "$CAP/never"
