@@ -28,7 +28,13 @@
  *   - depth correction: a small emitter captured on a plane in front of it,
  *     reprojected onto its true plane: the energy concentrates on its
  *     footprint, and relighting with the reprojected field is closer to
- *     relighting with the true emitter than relighting with the raw capture.
+ *     relighting with the true emitter than relighting with the raw capture;
+ *     from a box of planes, the coverage and power the one plane misses;
+ *   - several planes: manifests naming them; the quick start's lamp captured
+ *     from a box of planes and merged onto its proxy covers it and relights
+ *     walls and floor close to the true lamp, one plane alone does not;
+ *   - mask_threshold on the real probe: the directions it rules out and the
+ *     relit light it costs.
  * Measured errors are printed; the last line is "N passed, M failed".
  */
 #include <math.h>

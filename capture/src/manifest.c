@@ -1,13 +1,16 @@
 /*
  * manifest.c - reading and validating capture manifests (capture/capture.h,
  * docs/capture.md): JSON through base's strict reader (ilf/json.h), every key checked, every value
- * range-checked, every image file checked to exist.
+ * range-checked, every image file checked to exist. A manifest names one plane at its top level, or
+ * several under "planes", each read by the same code with its element path as a prefix and the top
+ * level's settings as its defaults.
  *
  * Invariants: loading either returns a manifest meeting manifest.h's
  * invariants or fails with one message "FILE: ELEMENT: problem" and frees
  * everything; unknown and repeated keys are errors at every level; nothing
  * is allocated from a count in the file before the count is checked (the
- * grid is bounded by CAP__MAX_POSITIONS and lfio's slab size limit first).
+ * planes by CAP_PLANES_MAX, every grid by CAP__MAX_POSITIONS over all planes
+ * and lfio's slab size limit first).
  */
 #include <errno.h>
 #include <float.h>
