@@ -19,6 +19,7 @@ any failure.
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -315,7 +316,8 @@ def check_reprojected(ilf, tmp):
     room, lamp = os.path.join(tmp, "room.h5"), os.path.join(tmp, "lamp.h5")
     status, _ = run([ilf, "capture", os.path.join(data, "synthetic", "manifest.json"), "-o", room, "--quiet"])
     check(status == 0, "capture the synthetic probes")
-    status, out = run([ilf, "reproject", room, "--proxy", os.path.join(data, "proxy.json"), "-o", lamp, "--n", "8"])
+    status, out_reproject = run([ilf, "reproject", room, "--proxy", os.path.join(data, "proxy.json"), "-o", lamp,
+                                 "--n", "8"])
     check(status == 0, "reproject onto the proxy")
     if status != 0:
         return
@@ -338,6 +340,18 @@ def check_reprojected(ilf, tmp):
     got = json.loads(out)["slabs"][0].get("coverage", {}) if status == 0 else {}
     check(close(share, got.get("fraction", -1), rel=1e-9) and got.get("covered") == int(cov.sum()),
           f"lamp.h5: covered share {share} vs ilf info {got}")
+    # The coverage_fraction attribute: a float64 scalar in [0, 1], the share reproject printed, at most the
+    # samples' share (a partly covered sample counts whole there).
+    printed = re.search(r"coverage ([0-9.]+)%", out_reproject)
+    with h5py.File(lamp, "r") as f:
+        attrs = f["slabs"]["0"].attrs
+        frac = attrs.get("coverage_fraction")
+        check(frac is not None and np.asarray(frac).dtype == np.float64 and np.asarray(frac).shape == (),
+              f"lamp.h5:/slabs/0@coverage_fraction: float64 scalar ({frac!r})")
+    if frac is not None and printed is not None:
+        frac = float(frac)
+        check(0 <= frac <= share + 1e-12 and abs(100 * frac - float(printed.group(1))) < 0.005,
+              f"lamp.h5: coverage_fraction {frac} vs printed {printed.group(1)}% and samples' share {share}")
 
 
 if __name__ == "__main__":
