@@ -1134,6 +1134,8 @@ static void test_triangulated_proxy(const lfio_slab *captured)
         CHECK(back != NULL && lfio_lightfield_coverage(back, 0) != NULL &&
                   memcmp(lfio_lightfield_coverage(back, 0), covered[0], samples) == 0,
               "coverage read back");
+        CHECK(back != NULL && isnan(lfio_lightfield_coverage_fraction(back, 0)),
+              "a file written without a covered share reads back without one");
         lfio_lightfield_destroy(back);
         lfio_lightfield_destroy(lf);
     }
@@ -1333,6 +1335,11 @@ static double reproject_lamp(const lfio_lightfield *lf, size_t count, const char
     lfio_lightfield *field = NULL, *back = NULL;
     lfio_lightfield_new(&field);
     lfio_lightfield_take_slab(field, out);
+    CHECK(lfio_lightfield_set_coverage_fraction(field, 0, 1.5) == LFIO_ERR_ARG &&
+              lfio_lightfield_set_coverage_fraction(field, 0, -0.25) == LFIO_ERR_ARG &&
+              lfio_lightfield_set_coverage_fraction(field, 1, 0.5) == LFIO_ERR_ARG &&
+              isnan(lfio_lightfield_coverage_fraction(field, 0)),
+          "a share outside [0, 1] or of no slab is refused; none is NaN");
     CHECK(lfio_lightfield_set_coverage_fraction(field, 0, cov.fraction) == LFIO_OK, "%s", lfio_errmsg());
     CHECK(lfio_lightfield_write(field, tmp_path(name)) == LFIO_OK, "%s", lfio_errmsg());
     lfio_lightfield_destroy(field);
