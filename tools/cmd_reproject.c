@@ -63,8 +63,8 @@ static const cli_usage reproject_usage = {
     "the light they saw coming from the ray's point on the proxy, and the captures that\n"
     "cover the ray are blended by how finely each resolves it (docs/capture.md).\n"
     "Rays no capture covers carry no light; the covered share of each proxy slab's\n"
-    "etendue and of the whole proxy's is printed and stored in OUT.h5 (attribute\n"
-    "/slabs/K/coverage_fraction, dataset /slabs/K/coverage; 'ilf info' shows both).",
+    "etendue is printed and stored in OUT.h5 (attribute /slabs/K/coverage_fraction,\n"
+    "dataset /slabs/K/coverage; 'ilf info' shows both), and the whole proxy's printed.",
     "ilf reproject probes.h5 --proxy data/capture/proxy.json -o lamp.h5\n"
     "ilf reproject probes.h5 --proxy quads.obj --grid 32x32 --n 16 -o proxy.h5",
 };
