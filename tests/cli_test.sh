@@ -659,7 +659,8 @@ assert len(stored) == 2 and all(abs(a - b) < 5e-5 for a, b in zip(stored, printe
 assert stored[0] > one + 0.05, (stored[0], one)
 ' "$OUT" "$CAP/boxlamp.stdout" "$CAP/lamp.stdout"
 expect 0 "info text on the merged file" "$ILF" info "$CAP/boxlamp.h5"
-check "info text shows the stored share" stdout_has "^  covered rays: .*% of the etendue covered, .*% not (attribute coverage_fraction)"
+check "info text shows the stored share" \
+    stdout_has "^  covered rays: .*% of the etendue covered, .*% not (attribute coverage_fraction)"
 
 # capture and reproject: bad inputs are named and leave no output.
 printf '{"plane": {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0]}, "grid": {"nu": 1, "nv": 1},\n' >"$CAP/m_key.json"

@@ -123,7 +123,8 @@ static void warn_repair(const cap_repair *r)
     fprintf(stderr, "ilf capture: warning: %s: %s\n", r->file, text);
 }
 
-/* Writes where the worst energy difference is into out: "position I,J", after the slab's name when there are several. */
+/* Writes where the worst energy difference is into out: "position I,J", after the slab's name when there are
+ * several. */
 static const char *energy_place(const cap_manifest *m, const cap_report *r, char *out, size_t size)
 {
     if (cap_manifest_plane_count(m) > 1)

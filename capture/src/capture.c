@@ -264,7 +264,8 @@ cap_status cap_capture_run(const cap_manifest *m, const cap_capture_options *o, 
     for (size_t q = 0; q < m->nplanes; q++)
         pp.total += (uint64_t)m->planes[q].desc.nu * m->planes[q].desc.nv;
     lfio_lightfield *lf = NULL;
-    cap_status st = lfio_lightfield_new(&lf) == LFIO_OK ? CAP_OK : cap__fail(CAP_ERR_NOMEM, "%s: out of memory", m->path);
+    cap_status st = lfio_lightfield_new(&lf) == LFIO_OK ? CAP_OK
+                                                        : cap__fail(CAP_ERR_NOMEM, "%s: out of memory", m->path);
     for (uint32_t q = 0; st == CAP_OK && q < m->nplanes; q++) {
         lfio_slab *slab = NULL;
         st = capture_plane(m, q, o, &pp, &slab, r);

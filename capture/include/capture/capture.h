@@ -159,7 +159,7 @@ typedef struct cap_report {
     uint64_t negative, nan, infinite; /**< repairs over all images */
     cap_repair *repairs;   /**< images that needed repair, by plane, position (k = j*nu + i), bracket order; owned */
     size_t repair_count;
-    uint64_t interpolated; /**< solid angles, over all planes and positions, filled by interpolation (image too coarse) */
+    uint64_t interpolated; /**< solid angles, over all planes and positions, interpolated (image too coarse) */
     uint64_t unmerged;     /**< bracket pixels where every exposure was clipped or noisy */
     uint32_t subdivision_min, subdivision_max; /**< the sub-pixel factors S used */
     double energy_error;   /**< largest |E_field - E_image| / E_image over positions (brightest channel of E_image) */

@@ -468,7 +468,10 @@ lfio_status lfio_reader_read_slab(lfio_reader *r, size_t k, lfio_slab **out);
 /** @return 1 if slab k of the file has a coverage dataset (its type and shape were checked on opening), else 0. */
 int lfio_reader_has_coverage(const lfio_reader *r, size_t k);
 
-/** @return slab k's coverage_fraction attribute, 0 .. 1 (checked on opening); NaN if it has none or k is out of range. */
+/**
+ * @return slab k's coverage_fraction attribute, 0 .. 1 (checked on opening); NaN if it has none or k is out of
+ * range.
+ */
 double lfio_reader_coverage_fraction(const lfio_reader *r, size_t k);
 
 /**
