@@ -894,7 +894,10 @@ static cJSON *stats_json(const relight_run *run, const run_memory *mem)
         cJSON_AddNumberToObject(x, "wait_seconds", log[k].wait_seconds);
         cJSON_AddNumberToObject(x, "move_seconds", log[k].move_seconds);
     }
-    cJSON *passes = ok ? cJSON_AddArrayToObject(root, "passes") : NULL;
+    cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");
+    for (size_t k = 0; warnings != NULL && k < cli_warning_count(); k++)
+        ok = ok && cJSON_AddItemToArray(warnings, cJSON_CreateString(cli_warning(k)));
+    cJSON *passes = ok && warnings != NULL ? cJSON_AddArrayToObject(root, "passes") : NULL;
     if (passes == NULL || !add_passes(passes, run->solution)) {
         cJSON_Delete(root);
         return NULL;
@@ -934,13 +937,11 @@ static void print_run(const relight_run *run)
 {
     if (run->o->quiet)
         return;
-    const rl_sampling *s = rl_scene_sampling(run->scene);
+    char what[256];
     unsigned threads = relight_threads_used(&run->run_options);
-    printf("relit %s: method %s, partition n %" PRIu32 ", %" PRIu32 " ray%s per solid angle, %" PRIu32
-           " bounce%s, %u thread%s: %.3f s wall, %.3f s cpu\n",
-           run->o->scene, rl_method_name(s->method), s->partition_n, s->rays_per_solid_angle,
-           s->rays_per_solid_angle == 1 ? "" : "s", s->bounces, s->bounces == 1 ? "" : "s", threads,
-           threads == 1 ? "" : "s", run->wall_seconds, run->cpu_seconds);
+    printf("relit %s: %s, %u thread%s: %.3f s wall, %.3f s cpu\n", run->o->scene,
+           relight_describe(rl_scene_sampling(run->scene), what, sizeof what), threads, threads == 1 ? "" : "s",
+           run->wall_seconds, run->cpu_seconds);
     if (job_ranks() > 1)
         printf("job of %d ranks, each with the threads above; times are rank 0's, pass counts and cpu summed\n",
                job_ranks());
@@ -960,9 +961,14 @@ int ilf_cmd_relight(int argc, char **argv)
     relight_run run = {.o = &o};
     /* ranks other than 0 only compute and write their part of radiance.h5 */
     o.quiet |= job_rank() != 0;
+    cli_set_quiet(o.quiet);
     code = job_agree(relight_scene_open("relight", o.scene, &o.sampling, &run.scene));
     if (code == ILF_EXIT_OK)
         relight_run_options(&o.sampling, run.scene, &run.run_options);
+    if (code == ILF_EXIT_OK && job_rank() == 0) {
+        relight_print_settings("relight", run.scene, &run.run_options);
+        relight_warn_scene(run.scene, !o.no_view);
+    }
     if (code == ILF_EXIT_OK)
         code = stage_open_job(&run);
     map_writer writer;
@@ -971,6 +977,8 @@ int ilf_cmd_relight(int argc, char **argv)
         code = relight(&run);
     double engine_end = cli_clock_seconds(CLOCK_MONOTONIC);
     int rank0 = job_rank() == 0, view = rank0 && rl_scene_has_camera(run.scene) && !o.no_view;
+    if (code == ILF_EXIT_OK && rank0)
+        relight_warn_solution(run.solution);
     if (code == ILF_EXIT_OK)
         print_run(&run);
     if (beside)

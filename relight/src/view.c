@@ -1,7 +1,8 @@
 /*
  * view.c - what the camera sees of a solution: the first surface along a
  * ray (pick), its shading from the radiance maps (shade, rl_solution_trace)
- * and the camera's image (rl_solution_render, rl_solution_render_cells).
+ * and the camera's image (rl_solution_render, rl_solution_render_cells), and
+ * how much of what the camera sees is the back of a surface (rl__view_faces).
  *
  * Invariants: rendering only reads the solution; each image row is written
  * by the one worker that took it from an atomic counter, and a pixel's value
@@ -82,6 +83,43 @@ rl_status rl_solution_trace(const rl_solution *s, const double org[3], const dou
     return RL_OK;
 }
 
+/* Sets job's camera frame from the scene's camera. */
+static void camera_frame(const rl_camera *cam, render_job *job)
+{
+    job->forward = v3_norm(v3_sub(v3_load(cam->look_at), v3_load(cam->position)));
+    job->right = v3_norm(v3_cross(job->forward, v3_load(cam->up)));
+    job->up = v3_cross(job->right, job->forward);
+    job->tan_half = tan(cam->fov_deg * RL_PI / 360.0);
+    job->aspect = (double)cam->width / cam->height;
+}
+
+/* @return the unit direction of the camera ray through the point (fx, fy) of the image, [0, 1] from the left
+ * and from the top. */
+static v3 camera_ray(const render_job *job, double fx, double fy)
+{
+    double sx = (2.0 * fx - 1.0) * job->tan_half * job->aspect, sy = (1.0 - 2.0 * fy) * job->tan_half;
+    return v3_norm(v3_add(job->forward, v3_add(v3_scale(job->right, sx), v3_scale(job->up, sy))));
+}
+
+void rl__view_faces(const rl_solution *s, uint32_t nx, uint32_t ny, uint64_t *hits, uint64_t *back)
+{
+    render_job job;
+    const rl_camera *cam = &s->scene->camera;
+    camera_frame(cam, &job);
+    *hits = *back = 0;
+    rl__tracer_thread_init();
+    for (uint32_t y = 0; y < ny; y++)
+        for (uint32_t x = 0; x < nx; x++) {
+            v3 d = camera_ray(&job, (x + 0.5) / nx, (y + 0.5) / ny);
+            uint32_t poly;
+            double t;
+            if (!rl__tracer_hit(s->tracer, v3_load(cam->position), d, 0.0, INFINITY, &poly, &t))
+                continue;
+            ++*hits;
+            *back += v3_dot(d, v3_load(s->scene->polygons[poly].normal)) >= 0;
+        }
+}
+
 /* Worker of a render: renders rows until none are left. */
 static void render_worker(void *p, unsigned index)
 {
@@ -94,9 +132,7 @@ static void render_worker(void *p, unsigned index)
         if (y >= cam->height)
             break;
         for (unsigned x = 0; x < cam->width; x++) {
-            double sx = (2.0 * (x + 0.5) / cam->width - 1.0) * job->tan_half * job->aspect;
-            double sy = (1.0 - 2.0 * (y + 0.5) / cam->height) * job->tan_half;
-            v3 d = v3_norm(v3_add(job->forward, v3_add(v3_scale(job->right, sx), v3_scale(job->up, sy))));
+            v3 d = camera_ray(job, (x + 0.5) / cam->width, (y + 0.5) / cam->height);
             size_t px = (size_t)y * cam->width + x;
             if (job->rgb)
                 shade(job->s, v3_load(cam->position), d, job->rgb + 3 * px);
@@ -131,11 +167,7 @@ static rl_status render(const char *call, const rl_solution *s, const rl_run_opt
     job.rgb = rgb;
     job.map_ids = map_ids;
     job.cell_ids = cell_ids;
-    job.forward = v3_norm(v3_sub(v3_load(cam->look_at), v3_load(cam->position)));
-    job.right = v3_norm(v3_cross(job.forward, v3_load(cam->up)));
-    job.up = v3_cross(job.right, job.forward);
-    job.tan_half = tan(cam->fov_deg * RL_PI / 360.0);
-    job.aspect = (double)cam->width / cam->height;
+    camera_frame(cam, &job);
     atomic_init(&job.next_row, 0);
     ilf_parallel(run.threads, render_worker, &job);
     return RL_OK;
