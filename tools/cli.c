@@ -614,6 +614,15 @@ void cli_progress_fraction(void *bar, double done)
                                           : (uint64_t)(done * CLI_PROGRESS_STEPS));
 }
 
+void cli_progress_clear(cli_progress *p)
+{
+    if (!p->enabled)
+        return;
+    fputs("\r\033[K", stderr);
+    fflush(stderr);
+    atomic_store(&p->last_draw_ms, 0); /* redraw at the next step */
+}
+
 void cli_progress_finish(cli_progress *p)
 {
     if (!p->enabled)

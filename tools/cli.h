@@ -294,6 +294,9 @@ void cli_progress_add(cli_progress *p, uint64_t count);
 void cli_progress_reach(cli_progress *p, uint64_t done);
 /** An rl_progress_fn: moves bar (a cli_progress started with CLI_PROGRESS_STEPS) to fraction done of [0, 1]. */
 void cli_progress_fraction(void *bar, double done);
+/** Erases the bar's line so that a result line can be printed; the next redraw brings it back. Call from the
+ * thread that prints, with no other thread adding. */
+void cli_progress_clear(cli_progress *p);
 /** Draws the final state and ends the line (or does nothing when disabled). */
 void cli_progress_finish(cli_progress *p);
 

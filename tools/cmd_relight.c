@@ -978,7 +978,7 @@ int ilf_cmd_relight(int argc, char **argv)
     double engine_end = cli_clock_seconds(CLOCK_MONOTONIC);
     int rank0 = job_rank() == 0, view = rank0 && rl_scene_has_camera(run.scene) && !o.no_view;
     if (code == ILF_EXIT_OK && rank0)
-        relight_warn_solution(run.solution);
+        relight_warn_solution(run.solution, !o.no_view);
     if (code == ILF_EXIT_OK)
         print_run(&run);
     if (beside)

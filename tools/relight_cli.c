@@ -250,9 +250,9 @@ void relight_warn_scene(const rl_scene *scene, int want_view)
     warn_findings(d, n, MAX_FINDINGS, want_view ? -1 : (int)RL_DIAG_NO_CAMERA);
 }
 
-void relight_warn_solution(const rl_solution *solution)
+void relight_warn_solution(const rl_solution *solution, int want_view)
 {
     rl_diagnostic d[MAX_FINDINGS];
     size_t n = rl_solution_diagnose(solution, d, MAX_FINDINGS);
-    warn_findings(d, n, MAX_FINDINGS, -1);
+    warn_findings(d, n, MAX_FINDINGS, want_view ? -1 : (int)RL_DIAG_BACK_FACES);
 }

@@ -97,8 +97,9 @@ void relight_print_settings(const char *sub, const rl_scene *scene, const rl_run
  * want_view. */
 void relight_warn_scene(const rl_scene *scene, int want_view);
 
-/** Warns (cli_warn()) of every finding of rl_solution_diagnose(solution). */
-void relight_warn_solution(const rl_solution *solution);
+/** Warns (cli_warn()) of every finding of rl_solution_diagnose(solution), leaving out what the camera sees
+ * unless want_view. */
+void relight_warn_solution(const rl_solution *solution, int want_view);
 
 /** Prints one line per pass statistic group for pass k ("pass 0 (direct): ..."). */
 void relight_print_pass(FILE *out, uint32_t k, const rl_pass_stats *s);

@@ -82,6 +82,8 @@ typedef struct pass_job {
     const work_item *items;
     size_t nitems;
     atomic_size_t next, done;
+    atomic_uint_fast64_t done_cells; /* cells of the items done: the pass's progress (tiles differ in size) */
+    uint64_t total_cells;            /* cells of all the items */
     atomic_int failed;
     rl_counters *counters; /* one per worker */
     double *seconds;       /* [nitems]: each tile's CPU time, or NULL */
@@ -153,6 +155,8 @@ static void tell_end(pass_job *job, int rc)
     job->left = NULL;
 }
 
+static uint32_t tile_work(const rl_map *maps, const work_item *w);
+
 /* Worker `index` of a pass: takes tiles until none are left. */
 static void worker(void *p, unsigned index)
 {
@@ -164,6 +168,7 @@ static void worker(void *p, unsigned index)
         if (k >= job->nitems || atomic_load(&job->failed))
             break;
         const work_item *w = &job->items[k];
+        uint32_t cells = tile_work(job->sets[w->set], w);
         double t0 = job->seconds ? ilf_clock_thread_cpu() : 0.0;
         if (w->row0 < w->row1 && rl__transfer_tile(&job->ctx, w->map, &job->sets[w->set][w->map], w->row0,
                                                    w->row1, &scratch, &job->counters[index]) != 0)
@@ -175,6 +180,7 @@ static void worker(void *p, unsigned index)
             map_complete(job, w->map);
             tell_ready(job);
         }
+        atomic_fetch_add(&job->done_cells, cells);
         atomic_fetch_add(&job->done, 1);
     }
     rl__scratch_free(&scratch);
@@ -189,7 +195,11 @@ static int run_job(pass_job *job, unsigned n, const rl__run *run, double base, d
         return -1;
     atomic_init(&job->next, 0);
     atomic_init(&job->done, 0);
+    atomic_init(&job->done_cells, 0);
     atomic_init(&job->failed, 0);
+    job->total_cells = 0;
+    for (size_t k = 0; k < job->nitems; k++)
+        job->total_cells += tile_work(job->sets[job->items[k].set], &job->items[k]);
     ilf_team *team;
     if (ilf_team_start(n, worker, job, &team) != 0) {
         free(job->counters);
@@ -199,8 +209,8 @@ static int run_job(pass_job *job, unsigned n, const rl__run *run, double base, d
     /* Without a started thread the work runs at join: nothing to wait for here. */
     while (run->progress && ilf_team_threads(team) > 0 && atomic_load(&job->done) < job->nitems &&
            !atomic_load(&job->failed)) {
-        run->progress(run->user,
-                      base + span * (double)atomic_load(&job->done) / (double)(job->nitems ? job->nitems : 1));
+        run->progress(run->user, base + span * (double)atomic_load(&job->done_cells) /
+                                            (double)(job->total_cells ? job->total_cells : 1));
         ilf_clock_sleep(PROGRESS_PERIOD);
     }
     ilf_team_join(team);
