@@ -11,6 +11,7 @@
  */
 #include "cli.h"
 #include "ilf/atomic_file.h"
+#include "tonemap.h"
 
 #include <ctype.h>
 #include <dirent.h>
@@ -434,6 +435,22 @@ int cli_value_u32_pair(const cli_parser *p, const char *text, char sep, uint32_t
 {
     char why[160];
     return cli_parse_u32_pair(text, sep, lo, hi, out, why, sizeof why) || (cli_bad_value(p, text, why), 0);
+}
+
+int cli_value_tone(const cli_parser *p, const char *text, int exposure, tone_fixed *f)
+{
+    double v = 0.0;
+    if (!cli_value_double(p, text, &v))
+        return 0;
+    if (f->kind != TONE_AUTO && (f->kind == TONE_EXPOSURE) != (exposure != 0))
+        return cli_bad_value(p, text, "give only one of --exposure and --scale"), 0;
+    if (exposure && !(fabs(v) <= 100.0))
+        return cli_bad_value(p, text, "must be from -100 to 100"), 0;
+    if (!exposure && !(v > 0.0))
+        return cli_bad_value(p, text, "must be a radiance > 0 (the value shown as white)"), 0;
+    f->kind = exposure ? TONE_EXPOSURE : TONE_WHITE;
+    f->value = v;
+    return 1;
 }
 
 /* ---------------------------------------------------------------- slabs */

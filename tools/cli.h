@@ -206,6 +206,12 @@ int cli_value_u32(const cli_parser *p, const char *text, uint32_t lo, uint32_t h
 int cli_value_u32_pair(const cli_parser *p, const char *text, char sep, uint32_t lo, uint32_t hi,
                        uint32_t out[2]);
 
+struct tone_fixed; /* tonemap.h */
+
+/** Parses a display option's value into *f: --exposure EV (exposure nonzero), -100 .. 100, or --scale W, a
+ * finite W > 0. Reports giving both. @return 1, or 0 after reporting. */
+int cli_value_tone(const cli_parser *p, const char *text, int exposure, struct tone_fixed *f);
+
 /* --------------------------------------------------------------- slabs */
 
 /**

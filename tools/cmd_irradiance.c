@@ -24,10 +24,7 @@
 #include "points_file.h"
 #include "relight/engine.h"
 #include "relight_cli.h"
-
-/* Luminous efficacy of ilfkit's white, lm/W: Radiance's convention (its WHTEFFICACY), so that `--lux` agrees
- * with `rtrace -I` turned into lux the way Radiance's users do; docs/cli.md says why. */
-#define LUMENS_PER_WATT 179.0
+#include "tonemap.h"
 
 typedef struct irradiance_options {
     const char *scene;
@@ -137,7 +134,7 @@ static void warn_unlit(const char *scene, const double *rgb, size_t count)
 static void print_point(const double *rgb, int lux)
 {
     if (lux)
-        printf("%.6g\n", LUMENS_PER_WATT * (0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]));
+        printf("%.6g\n", tone_lux(rgb));
     else
         printf("%.6g %.6g %.6g\n", rgb[0], rgb[1], rgb[2]);
 }

@@ -219,6 +219,14 @@ rl_status rl_solution_trace(const rl_solution *s, const double org[3], const dou
 rl_status rl_solution_render(const rl_solution *s, const rl_run_options *options, float *rgb);
 
 /**
+ * Renders the irradiance (W m^-2, r g b, as rl_solution_render() would read it: smooth or flat) on the
+ * receiving surface each pixel of the camera sees, into rgb ([height][width][3], row 0 at the top): what a
+ * false-colour image of illuminance shows. Pixels that see no receiving front face get -1 in every channel.
+ * @return as rl_solution_render().
+ */
+rl_status rl_solution_render_irradiance(const rl_solution *s, const rl_run_options *options, float *rgb);
+
+/**
  * Renders which cell each camera pixel sees: map_ids and cell_ids get
  * width*height entries, rows top to bottom; -1 where the pixel sees no
  * map (background, back face, a surface that does not receive). Options as
