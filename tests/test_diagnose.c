@@ -1,7 +1,8 @@
 /*
  * test_diagnose.c - the engine's findings about scenes that run but are not
  * what was meant (rl_scene_diagnose, rl_solution_diagnose, relight/engine.h),
- * and the covered share of a slab's etendue (lfio_coverage_share).
+ * the covered share of a slab's etendue (lfio_coverage_share), and the
+ * progress a run reports: shared between passes by their expected work.
  *
  * Usage: test_diagnose SCENES_DIR (tests/scenes: the warn_room*.json rooms);
  * light fields and their scenes are written into $ILF_TEST_TMP.
@@ -19,6 +20,7 @@
 #include <relight/engine.h>
 
 #include "check.h"
+#include "engine_internal.h" /* rl__solve_work(): the progress weights */
 #include "relight_scenes.h"
 
 static char tmpdir[512];
@@ -185,6 +187,56 @@ static void check_lightfields(void)
     free(cov);
 }
 
+/* Records the progress a run reports. */
+typedef struct progress_log {
+    double last;
+    int calls, backwards;
+} progress_log;
+
+static void log_progress(void *user, double done)
+{
+    progress_log *l = user;
+    l->backwards += done < l->last;
+    l->last = done;
+    l->calls++;
+}
+
+/* A direct pass of 256 shadow rays per cell against a bounce of 16 rays on cells 4 times larger (16 times
+ * fewer): the direct pass's share of the bar is its share of the rays, not half. The bar never goes back and
+ * ends at 1. */
+static void check_progress(const char *dir)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/warn_room.json", dir);
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    rl_sampling smp = *rl_scene_sampling(s);
+    smp.method = RL_METHOD_AREA;
+    smp.samples_per_cell = 256;
+    smp.bounces = 1;
+    smp.bounce_rays = 16;
+    smp.bounce_cell_factor = 4;
+    CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "sampling: %s", rl_errmsg());
+    double per_pass[2] = {0, 0};
+    double total = rl__solve_work(s, 2, per_pass);
+    /* room: 6 walls, 1 emitter; per cell 256 rays against 16 rays per larger cell of 16 cells */
+    CHECK(total > 0 && fabs(per_pass[0] / total - 256.0 / (256.0 + 1.0)) < 0.01,
+          "the direct pass's share %g, expected about %g", per_pass[0] / total, 256.0 / 257.0);
+    progress_log log = {0, 0, 0};
+    rl_run_options ro;
+    rl_run_options_default(&ro);
+    ro.threads = 2;
+    ro.progress = log_progress;
+    ro.progress_user = &log;
+    rl_solution *sol = NULL;
+    CHECK(rl_relight(s, &ro, &sol) == RL_OK, "relight: %s", rl_errmsg());
+    CHECK(log.calls > 0 && log.last == 1.0 && log.backwards == 0, "progress: %d calls, last %g, %d backwards",
+          log.calls, log.last, log.backwards);
+    rl_solution_destroy(sol);
+    rl_scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 2) {
@@ -195,5 +247,6 @@ int main(int argc, char **argv)
     snprintf(tmpdir, sizeof tmpdir, "%s", t ? t : "/tmp");
     check_rooms(argv[1]);
     check_lightfields();
+    check_progress(argv[1]);
     return check_report();
 }
