@@ -115,17 +115,19 @@ static void write_slab(const char *path, uint32_t n, const uint8_t *cov)
     lfio_lightfield_destroy(lf);
 }
 
+#define FLIPPED "{\"file\": \"diag_lf.h5\", \"transform\": [[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]}"
+#define UNFLIPPED "{\"file\": \"diag_lf.h5\", \"transform\": [[1,0,0,0],[0,1,0,0],[0,0,1,1],[0,0,0,1]]}"
+
 /* Writes a scene of a 2 m floor at z = 0 facing up and the slab of lf.h5 at z = 1, turned to face the floor
- * (flip) or left facing up, away from it; diagnoses it into d. @return the number of findings. */
+ * (flip 1) or left facing up, away from it (flip 0), or both (flip 2: the turned one first); diagnoses it
+ * into d. @return the number of findings. */
 static size_t diagnose_slab_scene(int flip, rl_diagnostic *d)
 {
     char path[600], rest[512];
     snprintf(path, sizeof path, "%s/diag_lf.json", tmpdir);
     tpoly p[1] = {ts_rect_z("grey", -1, -1, 1, 1, 0.0, 1)};
-    snprintf(rest, sizeof rest,
-             "\"radiance_maps\": {\"cell_size\": 0.25}, \"lightfields\": [{\"file\": \"diag_lf.h5\", \"transform\": "
-             "%s}]",
-             flip ? "[[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]" : "[[1,0,0,0],[0,1,0,0],[0,0,1,1],[0,0,0,1]]");
+    snprintf(rest, sizeof rest, "\"radiance_maps\": {\"cell_size\": 0.25}, \"lightfields\": [%s]",
+             flip == 2 ? FLIPPED ", " UNFLIPPED : flip ? FLIPPED : UNFLIPPED);
     ts_write_scene(path, "{\"grey\": {\"albedo\": [0.5, 0.5, 0.5]}}", p, 1, rest);
     rl_scene *s = ts_load(path);
     size_t n = s ? rl_scene_diagnose(s, d, MAX) : 0;
@@ -150,6 +152,13 @@ static void check_lightfields(void)
           "a fully covered slab facing the floor: %zu findings (%s)", found, found ? d[0].text : "");
     found = diagnose_slab_scene(0, d);
     CHECK(find(d, found, RL_DIAG_NOT_FACING) >= 0, "a slab facing away from the floor is not reported");
+    /* two lamps, one turned the wrong way: the room is lit, the lamp that lights nothing is named */
+    found = diagnose_slab_scene(2, d);
+    int at = find(d, found, RL_DIAG_EMITTER_UNSEEN);
+    /* (the scene has no camera: that is the other finding) */
+    CHECK(found == 2 && find(d, found, RL_DIAG_NO_CAMERA) >= 0 && at >= 0 && fabs(d[at].quantity - 0.5) < 1e-12 &&
+              strstr(d[at].text, "lightfields[1]") != NULL,
+          "one of two lamps facing away: %zu findings, first %s", found, found ? d[0].text : "none");
 
     /* half the positions captured in every direction: half the etendue, exactly (positions weigh alike) */
     for (uint64_t dir = 0; dir < nd; dir++)
@@ -157,7 +166,7 @@ static void check_lightfields(void)
             cov[dir * npos + p] = p % 4 < 2;
     write_slab(lfpath, n, cov);
     found = diagnose_slab_scene(1, d);
-    int at = find(d, found, RL_DIAG_COVERAGE);
+    at = find(d, found, RL_DIAG_COVERAGE);
     CHECK(at >= 0 && fabs(d[at].quantity - 0.5) < 1e-12, "half covered: missing %g, expected 0.5",
           at >= 0 ? d[at].quantity : -1.0);
     CHECK(at >= 0 && strstr(d[at].text, "50.00%") != NULL, "half covered: the finding does not give 50.00%%: %s",

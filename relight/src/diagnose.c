@@ -1,8 +1,9 @@
 /*
  * diagnose.c - findings about a scene or a solution that is legal but almost
  * surely not what its author meant (rl_scene_diagnose, rl_solution_diagnose):
- * no emitter, no receiver facing an emitter, a light field whose coverage is
- * below 100%, no camera, most cells dark, a camera looking at back faces.
+ * no emitter, no receiver facing an emitter (or one emitter facing no
+ * receiver), a light field whose coverage is below 100%, no camera, most
+ * cells dark, a camera looking at back faces.
  *
  * Invariants: only reads the scene and the solution; each finding carries the
  * quantity it measured and a line naming it; findings come in the order of
@@ -118,10 +119,11 @@ static int reaches_a_receiver(const rl_scene *s, const face *e, size_t self, dou
     return 0;
 }
 
-/* Checks that there are emitters and that one of them faces a receiver. */
+/* Checks that there are emitters and that they face receivers: none that does is one finding (the whole
+ * scene is dark); otherwise each emitter that faces none is one (a lamp turned the wrong way). */
 static void check_emitters(const rl_scene *s, findings *f)
 {
-    size_t emitters = s->nlightfields, receivers = 0;
+    size_t emitters = s->nlightfields, receivers = 0, facing_none = 0;
     for (size_t k = 0; k < s->npolygons; k++) {
         emitters += positive(s->materials[s->polygons[k].material].emission);
         receivers += positive(s->materials[s->polygons[k].material].albedo);
@@ -134,22 +136,33 @@ static void check_emitters(const rl_scene *s, findings *f)
     if (receivers == 0)
         return; /* nothing to light: a scene of lamps alone is odd, but its view is right */
     double eps = scene_eps(s);
+    /* the labels of the first emitters that face nothing, reported once it is known that some do face */
+    enum { KEEP = 4 };
+    const char *none[KEEP];
     for (size_t k = 0; k < s->npolygons; k++) {
         if (!positive(s->materials[s->polygons[k].material].emission))
             continue;
         face e = polygon_face(s, k);
-        if (reaches_a_receiver(s, &e, k, eps))
-            return;
+        if (!reaches_a_receiver(s, &e, k, eps) && facing_none++ < KEEP)
+            none[facing_none - 1] = s->polygons[k].label;
     }
     for (size_t k = 0; k < s->nlightfields; k++) {
         face e = slab_face(&s->lightfields[k]);
-        if (reaches_a_receiver(s, &e, SIZE_MAX, eps))
-            return;
+        if (!reaches_a_receiver(s, &e, SIZE_MAX, eps) && facing_none++ < KEEP)
+            none[facing_none - 1] = s->lightfields[k].label;
     }
-    add(f, RL_DIAG_NOT_FACING, 0.0,
-        "%s: none of the %zu receiving polygons faces any of the %zu emitter%s from its front: no direct light "
-        "arrives (normals pointing out of the room, or reversed walls or lamps?)",
-        s->path, receivers, emitters, emitters == 1 ? "" : "s");
+    if (facing_none == emitters) {
+        add(f, RL_DIAG_NOT_FACING, 1.0,
+            "%s: none of the %zu receiving polygons faces any of the %zu emitter%s from its front: no direct light "
+            "arrives (normals pointing out of the room, or reversed walls or lamps?)",
+            s->path, receivers, emitters, emitters == 1 ? "" : "s");
+        return;
+    }
+    for (size_t k = 0; k < facing_none && k < KEEP; k++)
+        add(f, RL_DIAG_EMITTER_UNSEEN, (double)facing_none / (double)emitters,
+            "%s: emitter %s faces no receiving polygon from its front, so its light reaches nothing (placed "
+            "without its flip, or its normal reversed?)%s",
+            s->path, none[k], k + 1 == KEEP && facing_none > KEEP ? "; and more such emitters" : "");
 }
 
 /* Reports every light field placement whose slab has coverage below 100%. */

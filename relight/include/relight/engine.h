@@ -285,13 +285,17 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
 typedef enum rl_diagnostic_kind {
     RL_DIAG_NO_EMITTER = 0,  /**< no emissive polygon and no light field: everything stays black */
     RL_DIAG_NOT_FACING = 1,  /**< emitters and receivers exist, but no receiver faces any emitter from its
-                                  front (normals outward, reversed walls): no direct light can arrive */
+                                  front (normals outward, reversed walls): no direct light can arrive;
+                                  quantity 1 */
     RL_DIAG_COVERAGE = 2,    /**< a light field slab's coverage is below 100%: quantity is the share of its
                                   etendue that emits nothing because nothing was captured there */
     RL_DIAG_NO_CAMERA = 3,   /**< the scene has no camera: there is no view to render */
     RL_DIAG_DARK_CELLS = 4,  /**< most cells received nothing: quantity is their share of the cells */
-    RL_DIAG_BACK_FACES = 5   /**< most of what the camera sees is the back of a surface (drawn black):
+    RL_DIAG_BACK_FACES = 5,  /**< most of what the camera sees is the back of a surface (drawn black):
                                   quantity is that share of the camera's rays that hit anything */
+    RL_DIAG_EMITTER_UNSEEN = 6 /**< an emitter faces no receiver from its front while others do (a light
+                                  field placed without its flip, a lamp's normal reversed): quantity is the
+                                  share of the emitters that face none; one finding for each of the first four */
 } rl_diagnostic_kind;
 
 /** One finding of rl_scene_diagnose() or rl_solution_diagnose(). */
@@ -303,9 +307,11 @@ typedef struct rl_diagnostic {
 
 /**
  * Checks a loaded scene for what leaves a run dark or without output: no
- * emitter, no receiver facing an emitter, light field slabs whose coverage
- * is below 100%, no camera. Writes up to max findings to out (out may be
- * NULL with max 0), in the order of the kinds.
+ * emitter, no receiver facing an emitter or an emitter facing no receiver
+ * (a receiver faces an emitter when part of each lies in front of the
+ * other's plane), light field slabs whose coverage is below 100%, no
+ * camera. Writes up to max findings to out (out may be NULL with max 0), in
+ * that order.
  * @return the number of findings, which may exceed max.
  */
 size_t rl_scene_diagnose(const rl_scene *scene, rl_diagnostic *out, size_t max);
