@@ -57,35 +57,41 @@ static int positive(const float v[3])
 }
 
 /* A flat emitter or receiver: a plane (point, unit normal of the side it emits to or receives from) and
- * the corners of its convex outline. */
+ * the corners of its convex outline (a polygon's own vertices, or a slab's corners kept in own). */
 typedef struct face {
     v3 point, normal;
-    v3 corners[RL_SCENE_MAX_POLY_VERTS];
+    const double (*corners)[3];
     uint32_t count;
+    double own[4][3];
 } face;
 
-static face polygon_face(const rl_scene *s, size_t k)
+static void polygon_face(const rl_scene *s, size_t k, face *f)
 {
     const rl_polygon *p = &s->polygons[k];
-    face f = {v3_load(s->vertices[p->first]), v3_load(p->normal), {{0, 0, 0}}, p->count};
-    for (uint32_t i = 0; i < p->count; i++)
-        f.corners[i] = v3_load(s->vertices[p->first + i]);
-    return f;
+    f->point = v3_load(s->vertices[p->first]);
+    f->normal = v3_load(p->normal);
+    f->corners = (const double(*)[3])s->vertices + p->first;
+    f->count = p->count;
 }
 
 /* A light field slab emits towards its front, e3 = u x v. */
-static face slab_face(const rl_lightfield *lf)
+static void slab_face(const rl_lightfield *lf, face *f)
 {
     v3 o = v3_load(lf->origin), u = v3_load(lf->u), v = v3_load(lf->v);
-    face f = {o, v3_norm(v3_cross(u, v)), {o, v3_add(o, u), v3_add(v3_add(o, u), v), v3_add(o, v)}, 4};
-    return f;
+    const v3 c[4] = {o, v3_add(o, u), v3_add(v3_add(o, u), v), v3_add(o, v)};
+    for (int k = 0; k < 4; k++)
+        f->own[k][0] = c[k].x, f->own[k][1] = c[k].y, f->own[k][2] = c[k].z;
+    f->point = o;
+    f->normal = v3_norm(v3_cross(u, v));
+    f->corners = (const double(*)[3])f->own;
+    f->count = 4;
 }
 
 /* @return whether some corner of b lies in front of a's plane, by more than eps. */
 static int in_front(const face *a, const face *b, double eps)
 {
     for (uint32_t i = 0; i < b->count; i++)
-        if (v3_dot(v3_sub(b->corners[i], a->point), a->normal) > eps)
+        if (v3_dot(v3_sub(v3_load(b->corners[i]), a->point), a->normal) > eps)
             return 1;
     return 0;
 }
@@ -112,7 +118,8 @@ static int reaches_a_receiver(const rl_scene *s, const face *e, size_t self, dou
     for (size_t k = 0; k < s->npolygons; k++) {
         if (k == self || !positive(s->materials[s->polygons[k].material].albedo))
             continue;
-        face r = polygon_face(s, k);
+        face r;
+        polygon_face(s, k, &r);
         if (facing(&r, e, eps))
             return 1;
     }
@@ -142,12 +149,14 @@ static void check_emitters(const rl_scene *s, findings *f)
     for (size_t k = 0; k < s->npolygons; k++) {
         if (!positive(s->materials[s->polygons[k].material].emission))
             continue;
-        face e = polygon_face(s, k);
+        face e;
+        polygon_face(s, k, &e);
         if (!reaches_a_receiver(s, &e, k, eps) && facing_none++ < KEEP)
             none[facing_none - 1] = s->polygons[k].label;
     }
     for (size_t k = 0; k < s->nlightfields; k++) {
-        face e = slab_face(&s->lightfields[k]);
+        face e;
+        slab_face(&s->lightfields[k], &e);
         if (!reaches_a_receiver(s, &e, SIZE_MAX, eps) && facing_none++ < KEEP)
             none[facing_none - 1] = s->lightfields[k].label;
     }
