@@ -99,8 +99,11 @@ static const cli_usage relight_usage = {
     "and radiosity of every receiving polygon's cells (docs/format.md); stats.json, the\n"
     "settings, times and per-pass counters (docs/cli.md); and, when the scene has a\n"
     "camera, view.exr (radiance) and view.png (exposed so that the 90th percentile of\n"
-    "the lit pixels' luminance shows as 0.8, sRGB). Sampling options replace the\n"
-    "scene's own settings.",
+    "the lit pixels' luminance shows as 0.8, unless --exposure or --scale fixes it;\n"
+    "sRGB), and with --falsecolor falsecolor.png (illuminance in lux, with a legend).\n"
+    "Sampling options replace the scene's own settings. stderr gets the settings\n"
+    "used, a progress bar and warnings (no emitter, walls facing away, dark cells,\n"
+    "back faces, partial light field coverage, no camera), also kept in stats.json.",
     "ilf relight data/beams_diffuse.json -o out/beams\n"
     "ilf relight data/classroom.json -o out/classroom --partition-n 16 --rays 2 --bounces 1\n"
     "ilf relight scene.json -o out/naive --method naive --threads 4 --quiet\n"
