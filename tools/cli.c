@@ -52,7 +52,8 @@ void cli_error(const char *sub, const char *fmt, ...)
 
 /* Warnings kept for stats.json; a fixed store, so warning never fails. */
 #define MAX_WARNINGS 32
-static char warnings[MAX_WARNINGS][256];
+#define WARNING_BYTES 640 /* a diagnostic's line (rl_diagnostic.text) and a prefix */
+static char warnings[MAX_WARNINGS][WARNING_BYTES];
 static size_t warning_count;
 static int quiet_mode;
 
@@ -61,14 +62,9 @@ void cli_set_quiet(int quiet)
     quiet_mode = quiet != 0;
 }
 
-int cli_quiet(void)
-{
-    return quiet_mode;
-}
-
 void cli_warn(const char *fmt, ...)
 {
-    char text[256];
+    char text[WARNING_BYTES];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);

@@ -52,12 +52,9 @@ void cli_error(const char *sub, const char *fmt, ...)
  * progress bar; warnings are still kept for stats.json. Call from the main thread before any work. */
 void cli_set_quiet(int quiet);
 
-/** @return whether cli_set_quiet() silenced the command. */
-int cli_quiet(void);
-
 /**
  * Prints "ilf: warning: <message>" to stderr unless quiet, and keeps the
- * message (up to 32 of them, 255 bytes each) for cli_warning(). Main thread only.
+ * message (up to 32 of them, 639 bytes each) for cli_warning(). Main thread only.
  */
 void cli_warn(const char *fmt, ...)
 #if defined(__GNUC__)

@@ -42,13 +42,13 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "falsecolor.h"
 #include "image/image.h"
 #include "job.h"
 #include "jsonout.h"
 #include "lfio/radmap.h"
 #include "relight/engine.h"
 #include "relight_cli.h"
-#include "falsecolor.h"
 #include "tonemap.h"
 
 /* The PNG maps the 90th percentile of the lit pixels' luminance to this value: low enough that
@@ -80,7 +80,7 @@ enum relight_option_id {
 /* The sampling options' entries are filled by relight_options_fill() before parsing. */
 static cli_option relight_options_table[] = {
     [OPT_OUTPUT] = {"output", 'o', "DIR", "folder for radiance.h5, stats.json and view.exr/png (required; created)"},
-    [OPT_QUIET] = {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
+    [OPT_QUIET] = {"quiet", 'q', NULL, "nothing on stdout; no settings line, progress bar or warnings (still in stats.json)"},
     [OPT_NO_VIEW] = {"no-view", 0, NULL, "write no view.exr/png even when the scene has a camera"},
     [OPT_FLAT_VIEW] = {"flat-view", 0, NULL, "show each cell's own value in the view (default: interpolated between cells)"},
     [OPT_EXPOSURE] = {"exposure", 0, "EV", "view.png: radiance times 2^EV (default: 90th percentile of luminance -> 0.8)"},

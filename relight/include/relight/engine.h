@@ -302,7 +302,7 @@ typedef enum rl_diagnostic_kind {
 typedef struct rl_diagnostic {
     rl_diagnostic_kind kind;
     double quantity; /**< the share measured, in [0, 1]; 0 for kinds that measure nothing */
-    char text[256];  /**< one line for people, naming what it is about and the quantity, no trailing newline */
+    char text[512];  /**< one line for people, naming what it is about and the quantity, no trailing newline */
 } rl_diagnostic;
 
 /**
