@@ -11,6 +11,7 @@
  */
 #include "cli.h"
 #include "ilf/atomic_file.h"
+#include "tonemap.h"
 
 #include <ctype.h>
 #include <dirent.h>
@@ -39,6 +40,55 @@ void cli_set_identity(const char *program, const char *suffix)
 
 void cli_error(const char *sub, const char *fmt, ...)
 {
+    va_list ap;
+    fprintf(stderr, "%s %s%s: ", message_program, sub, message_suffix);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+}
+
+/* -------------------------------------------------------------- warnings */
+
+/* Warnings kept for stats.json; a fixed store, so warning never fails. */
+#define MAX_WARNINGS 32
+#define WARNING_BYTES 640 /* a diagnostic's line (rl_diagnostic.text) and a prefix */
+static char warnings[MAX_WARNINGS][WARNING_BYTES];
+static size_t warning_count;
+static int quiet_mode;
+
+void cli_set_quiet(int quiet)
+{
+    quiet_mode = quiet != 0;
+}
+
+void cli_warn(const char *fmt, ...)
+{
+    char text[WARNING_BYTES];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    if (warning_count < MAX_WARNINGS)
+        memcpy(warnings[warning_count++], text, sizeof text);
+    if (!quiet_mode)
+        fprintf(stderr, "%s%s: warning: %s\n", message_program, message_suffix, text);
+}
+
+size_t cli_warning_count(void)
+{
+    return warning_count;
+}
+
+const char *cli_warning(size_t k)
+{
+    return k < warning_count ? warnings[k] : "";
+}
+
+void cli_settings(const char *sub, const char *fmt, ...)
+{
+    if (quiet_mode)
+        return;
     va_list ap;
     fprintf(stderr, "%s %s%s: ", message_program, sub, message_suffix);
     va_start(ap, fmt);
@@ -383,6 +433,22 @@ int cli_value_u32_pair(const cli_parser *p, const char *text, char sep, uint32_t
     return cli_parse_u32_pair(text, sep, lo, hi, out, why, sizeof why) || (cli_bad_value(p, text, why), 0);
 }
 
+int cli_value_tone(const cli_parser *p, const char *text, int exposure, tone_fixed *f)
+{
+    double v = 0.0;
+    if (!cli_value_double(p, text, &v))
+        return 0;
+    if (f->kind != TONE_AUTO && (f->kind == TONE_EXPOSURE) != (exposure != 0))
+        return cli_bad_value(p, text, "give only one of --exposure and --scale"), 0;
+    if (exposure && !(fabs(v) <= 100.0))
+        return cli_bad_value(p, text, "must be from -100 to 100"), 0;
+    if (!exposure && !(v > 0.0))
+        return cli_bad_value(p, text, "must be a radiance > 0 (the value shown as white)"), 0;
+    f->kind = exposure ? TONE_EXPOSURE : TONE_WHITE;
+    f->value = v;
+    return 1;
+}
+
 /* ---------------------------------------------------------------- slabs */
 
 int cli_select_slab(const char *sub, const char *path, const lfio_reader *r, const char *which,
@@ -476,19 +542,45 @@ static int64_t monotonic_ms(void)
     return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
 }
 
-static void progress_draw(const cli_progress *p, uint64_t done)
+const char *cli_format_duration(double seconds, char *buf, size_t size)
 {
-    enum { WIDTH = 40 };
+    if (!(seconds >= 0.0))
+        seconds = 0.0;
+    if (seconds < 60.0)
+        snprintf(buf, size, "%.1f s", seconds);
+    else if (seconds < 3600.0)
+        snprintf(buf, size, "%d min %02d s", (int)(seconds / 60.0), (int)fmod(seconds, 60.0));
+    else if (seconds < 1e7)
+        snprintf(buf, size, "%d h %02d min", (int)(seconds / 3600.0), (int)fmod(seconds / 60.0, 60.0));
+    else
+        snprintf(buf, size, "%.3g s", seconds);
+    return buf;
+}
+
+/* The share of the work done before the time left is shown: the first steps often set up, not work. */
+#define ETA_AFTER_FRACTION 0.02
+#define ETA_AFTER_SECONDS 1.0
+
+static void progress_draw(const cli_progress *p, uint64_t done, int final)
+{
+    enum { WIDTH = 30 };
     double fraction = p->total > 0 ? (double)done / (double)p->total : 1.0;
     if (fraction > 1.0)
         fraction = 1.0;
     int filled = (int)(fraction * WIDTH);
-    char bar[WIDTH + 1];
+    char bar[WIDTH + 1], taken[32], left[32] = "";
     memset(bar, '#', (size_t)filled);
     memset(bar + filled, '.', (size_t)(WIDTH - filled));
     bar[WIDTH] = '\0';
+    double elapsed = (double)(monotonic_ms() - p->start_ms) / 1000.0;
+    cli_format_duration(elapsed, taken, sizeof taken);
+    if (!final && fraction >= ETA_AFTER_FRACTION && elapsed >= ETA_AFTER_SECONDS && fraction < 1.0) {
+        char eta[24];
+        snprintf(left, sizeof left, ", ETA %s", cli_format_duration(elapsed * (1.0 - fraction) / fraction, eta,
+                                                                      sizeof eta));
+    }
     /* \r redraws in place; \033[K clears what a longer earlier line left behind. */
-    fprintf(stderr, "\r%s [%s] %5.1f%%\033[K", p->label, bar, 100.0 * fraction);
+    fprintf(stderr, "\r%s [%s] %5.1f%% %s%s\033[K", p->label, bar, 100.0 * fraction, taken, left);
     fflush(stderr);
 }
 
@@ -499,9 +591,10 @@ void cli_progress_start(cli_progress *p, const char *label, uint64_t total)
     atomic_init(&p->done, 0);
     atomic_flag_clear(&p->drawing);
     atomic_init(&p->last_draw_ms, 0);
-    p->enabled = isatty(STDERR_FILENO);
+    p->start_ms = monotonic_ms();
+    p->enabled = !quiet_mode && isatty(STDERR_FILENO);
     if (p->enabled)
-        progress_draw(p, 0);
+        progress_draw(p, 0, 0);
 }
 
 void cli_progress_add(cli_progress *p, uint64_t count)
@@ -516,7 +609,7 @@ void cli_progress_add(cli_progress *p, uint64_t count)
     if (atomic_flag_test_and_set(&p->drawing))
         return;
     atomic_store(&p->last_draw_ms, now);
-    progress_draw(p, done);
+    progress_draw(p, done, 0);
     atomic_flag_clear(&p->drawing);
 }
 
@@ -534,11 +627,20 @@ void cli_progress_fraction(void *bar, double done)
                                           : (uint64_t)(done * CLI_PROGRESS_STEPS));
 }
 
+void cli_progress_clear(cli_progress *p)
+{
+    if (!p->enabled)
+        return;
+    fputs("\r\033[K", stderr);
+    fflush(stderr);
+    atomic_store(&p->last_draw_ms, 0); /* redraw at the next step */
+}
+
 void cli_progress_finish(cli_progress *p)
 {
     if (!p->enabled)
         return;
-    progress_draw(p, atomic_load(&p->done));
+    progress_draw(p, atomic_load(&p->done), 1);
     fputc('\n', stderr);
 }
 

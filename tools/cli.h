@@ -46,6 +46,39 @@ void cli_error(const char *sub, const char *fmt, ...)
 #endif
     ;
 
+/* ------------------------------------------------------------- warnings */
+
+/** Silences (quiet nonzero) or restores the settings line (cli_settings()), warnings (cli_warn()) and the
+ * progress bar; warnings are still kept for stats.json. Call from the main thread before any work. */
+void cli_set_quiet(int quiet);
+
+/**
+ * Prints "ilf: warning: <message>" to stderr unless quiet, and keeps the
+ * message (up to 32 of them, 639 bytes each) for cli_warning(). Main thread only.
+ */
+void cli_warn(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+
+/** @return the number of warnings kept so far. */
+size_t cli_warning_count(void);
+
+/** @return warning k (< cli_warning_count()), without the "ilf: warning: " prefix. */
+const char *cli_warning(size_t k);
+
+/**
+ * Prints what a long command is about to do, "ilf SUB: <settings>", to stderr
+ * unless quiet: method, samples, bounces, threads, so that no setting taken
+ * silently from a file decides how long a run takes.
+ */
+void cli_settings(const char *sub, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
 /** Copies text into buf (size bytes) as one line, newlines turned to spaces. @return buf. */
 const char *cli_one_line(const char *text, char *buf, size_t size);
 
@@ -170,6 +203,12 @@ int cli_value_u32(const cli_parser *p, const char *text, uint32_t lo, uint32_t h
 int cli_value_u32_pair(const cli_parser *p, const char *text, char sep, uint32_t lo, uint32_t hi,
                        uint32_t out[2]);
 
+struct tone_fixed; /* tonemap.h */
+
+/** Parses a display option's value into *f: --exposure EV (exposure nonzero), -100 .. 100, or --scale W, a
+ * finite W > 0. Reports giving both. @return 1, or 0 after reporting. */
+int cli_value_tone(const cli_parser *p, const char *text, int exposure, struct tone_fixed *f);
+
 /* --------------------------------------------------------------- slabs */
 
 /**
@@ -225,8 +264,13 @@ void cli_staging_forget(const char *path);
 /* ------------------------------------------------------------ progress */
 
 /**
- * A one-line progress bar on stderr. cli_progress_add() may be called from
- * any thread; it redraws at most about ten times a second.
+ * A one-line progress bar on stderr: the share done, the time taken and, once
+ * a little of the work is done, the time left, estimated as if the rest went
+ * at the pace so far (so the steps must be proportional to the work: callers
+ * count work units, such as the engine's work-weighted fraction, not calls).
+ * cli_progress_add() may be called from any thread; it redraws at most about
+ * ten times a second. Nothing is drawn when stderr is not a terminal or the
+ * command is quiet (cli_set_quiet()).
  */
 typedef struct cli_progress {
     const char *label;
@@ -234,8 +278,12 @@ typedef struct cli_progress {
     atomic_uint_fast64_t done;
     atomic_flag drawing;       /* held by the thread that is redrawing */
     atomic_int_fast64_t last_draw_ms;
-    int enabled;               /* stderr is a terminal */
+    int64_t start_ms;          /* when the bar started */
+    int enabled;               /* stderr is a terminal and the command is not quiet */
 } cli_progress;
+
+/** Formats a time left or taken for people ("4.2 s", "3 min 05 s", "1 h 02 min") into buf. @return buf. */
+const char *cli_format_duration(double seconds, char *buf, size_t size);
 
 /** @return the time of clock clock_id (CLOCK_MONOTONIC, CLOCK_PROCESS_CPUTIME_ID, ...) in seconds. */
 double cli_clock_seconds(int clock_id);
@@ -249,6 +297,9 @@ void cli_progress_add(cli_progress *p, uint64_t count);
 void cli_progress_reach(cli_progress *p, uint64_t done);
 /** An rl_progress_fn: moves bar (a cli_progress started with CLI_PROGRESS_STEPS) to fraction done of [0, 1]. */
 void cli_progress_fraction(void *bar, double done);
+/** Erases the bar's line so that a result line can be printed; the next redraw brings it back. Call from the
+ * thread that prints, with no other thread adding. */
+void cli_progress_clear(cli_progress *p);
 /** Draws the final state and ends the line (or does nothing when disabled). */
 void cli_progress_finish(cli_progress *p);
 

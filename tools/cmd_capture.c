@@ -20,6 +20,7 @@
 
 #include "capture/capture.h"
 #include "cli.h"
+#include "ilf/pool.h"
 #include "commands.h"
 
 #define CAPTURE_CREATOR "ilf capture (ilfkit " ILFKIT_VERSION ")"
@@ -201,6 +202,13 @@ static int run_capture(const capture_options *o, const cap_manifest *m, lfio_lig
         positions += (uint64_t)cap_manifest_get_desc(m, k)->nu * cap_manifest_get_desc(m, k)->nv;
     cli_progress bar;
     cap_capture_options co = {o->threads, NULL, NULL};
+    unsigned threads = ilf_thread_count(o->threads);
+    uint64_t images = cap_manifest_image_count(m);
+    /* the bar counts positions, each one probe image or one bracket of them */
+    cli_set_quiet(o->quiet);
+    cli_settings("capture", "%" PRIu32 "x%" PRIu32 " positions, n %" PRIu32 " (%" PRIu64 " directions), %" PRIu64
+                 " image%s, %u thread%s", d->nu, d->nv, d->n, 4 * (uint64_t)d->n * d->n, images,
+                 images == 1 ? "" : "s", threads, threads == 1 ? "" : "s");
     if (!o->quiet) {
         cli_progress_start(&bar, "capture", positions);
         co.progress = ilf_capture_progress;

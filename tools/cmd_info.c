@@ -123,20 +123,9 @@ static int gather_coverage(lfio_reader *r, size_t k, const info_options *o, slab
         free(cov);
         return cli_lfio_failure("info", st, CLI_INPUT, o->path);
     }
-    const double pole[3] = {0.0, 0.0, 1.0};
-    double share = 0.0, total = 0.0;
-    for (uint64_t dir = 0; dir < rep->directions; dir++) {
-        uint64_t count = 0;
-        for (uint64_t p = 0; p < npos; p++)
-            count += cov[dir * npos + p];
-        double etendue = lfio_part_projected_solid_angle(rep->desc.n, dir, pole);
-        share += etendue * (double)count;
-        total += etendue * (double)npos;
-        rep->covered += count;
-    }
+    rep->covered_fraction = lfio_coverage_share(&rep->desc, cov, &rep->covered);
     free(cov);
     rep->has_coverage = 1;
-    rep->covered_fraction = total > 0.0 ? share / total : 0.0;
     return ILF_EXIT_OK;
 }
 

@@ -4,7 +4,9 @@
  * standard input) has one point per line, "x y z nx ny nz" (position, then
  * the normal the receiver faces); blank lines and lines whose first
  * non-blank character is '#' are skipped. stdout gets "r g b" in W m^-2 for
- * each point, in order, printed with %.6g.
+ * each point, in order, printed with %.6g (with --lux, one illuminance in lux).
+ * stderr gets the settings line, the progress bar and warnings (cli.h), none
+ * with --quiet.
  *
  * Invariants: the whole file is read and checked before the engine runs
  * (every malformed line is bad input, reported as FILE:LINE); all points go
@@ -22,32 +24,41 @@
 #include "points_file.h"
 #include "relight/engine.h"
 #include "relight_cli.h"
+#include "tonemap.h"
 
 typedef struct irradiance_options {
     const char *scene;
     const char *points;
     sampling_overrides sampling;
+    int quiet;
+    int lux; /* print illuminance in lux instead of irradiance */
 } irradiance_options;
 
 /* Options after the shared sampling ones, whose ids come first (relight_cli.h). */
-enum irradiance_option_id { OPT_POINTS = SAMPLING_OPT_COUNT };
+enum irradiance_option_id { OPT_POINTS = SAMPLING_OPT_COUNT, OPT_QUIET, OPT_LUX };
 
 /* The sampling options' entries are filled by relight_options_fill() before parsing. */
 static cli_option irradiance_options_table[] = {
     [OPT_POINTS] = {"points", 'p', "FILE", "points, one 'x y z nx ny nz' per line; '-' reads standard input (required)"},
+    [OPT_QUIET] = {"quiet", 'q', NULL, "no settings line, progress bar or warnings on stderr"},
+    [OPT_LUX] = {"lux", 0, NULL,
+                 "print the illuminance in lux, 179 lm/W times the Rec.709 luminance of r g b, one number a point"},
 };
 
 static const cli_usage irradiance_usage = {
     "irradiance",
-    "SCENE --points FILE [--method M] [--threads N] [--seed S] [--partition-n N]\n"
-    "                      [--rays K] [--samples N] [--bounces B]",
+    "SCENE --points FILE [--lux] [--quiet] [--method M] [--threads N] [--seed S]\n"
+    "                      [--partition-n N] [--rays K] [--samples N] [--bounces B]",
     "Prints the irradiance (W m^-2, r g b) at each point of FILE, like Radiance's\n"
     "rtrace -I: a point 'x y z nx ny nz' is a receiver of zero area at (x, y, z)\n"
     "facing the normal (nx, ny, nz), which need not be unit length. Blank lines and\n"
     "lines starting with # are skipped. With bounces > 0 the light reflected by the\n"
-    "scene is included. Sampling options replace the scene's own settings.",
+    "scene is included. Sampling options replace the scene's own settings. stderr\n"
+    "gets the settings used (method, samples, bounces, threads), a progress bar and\n"
+    "warnings (a scene without emitters, most points unlit) unless --quiet.",
     "ilf irradiance data/beams_diffuse.json --points sensors.txt\n"
-    "printf '2.5 2.5 0 0 0 1\\n' | ilf irradiance data/beams_diffuse.json --points - --bounces 1",
+    "printf '2.5 2.5 0 0 0 1\\n' | ilf irradiance data/beams_diffuse.json --points - --bounces 1\n"
+    "printf '2.5 2.5 0 0 0 1\\n' | ilf irradiance data/beams_diffuse.json --points - --lux --quiet",
 };
 
 /* ------------------------------------------------------------ options */
@@ -56,9 +67,14 @@ static const cli_usage irradiance_usage = {
 static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
 {
     irradiance_options *o = ctx;
-    if (opt != OPT_POINTS)
+    if (opt == OPT_POINTS)
+        o->points = value;
+    else if (opt == OPT_QUIET)
+        o->quiet = 1;
+    else if (opt == OPT_LUX)
+        o->lux = 1;
+    else
         return sampling_option_apply(p, &o->sampling, opt, value);
-    o->points = value;
     return 1;
 }
 
@@ -103,8 +119,28 @@ static int share_points(point_list *points)
     return ILF_EXIT_OK;
 }
 
+/* Warns when most of the count points (rgb, [count][3]) received nothing. */
+static void warn_unlit(const char *scene, const double *rgb, size_t count)
+{
+    size_t dark = 0;
+    for (size_t k = 0; k < count; k++)
+        dark += !(rgb[3 * k] > 0 || rgb[3 * k + 1] > 0 || rgb[3 * k + 2] > 0);
+    if (2 * dark > count)
+        cli_warn("%s: %zu of the %zu points (%.1f%%) received no light (normals facing away from the light?)",
+                 scene, dark, count, 100.0 * (double)dark / (double)count);
+}
+
+/* Prints point k's result: r g b in W m^-2, or with lux the illuminance in lux. */
+static void print_point(const double *rgb, int lux)
+{
+    if (lux)
+        printf("%.6g\n", tone_lux(rgb));
+    else
+        printf("%.6g %.6g %.6g\n", rgb[0], rgb[1], rgb[2]);
+}
+
 /* Computes and prints the irradiance of every point. @return an exit code. */
-static int print_irradiance(const rl_scene *scene, const sampling_overrides *o, const point_list *points)
+static int print_irradiance(const rl_scene *scene, const irradiance_options *o, const point_list *points)
 {
     if (points->count == 0)
         return ILF_EXIT_OK;
@@ -114,12 +150,20 @@ static int print_irradiance(const rl_scene *scene, const sampling_overrides *o, 
         return ILF_EXIT_FAILED;
     }
     rl_run_options ro;
-    relight_run_options(o, scene, &ro);
+    relight_run_options(&o->sampling, scene, &ro);
+    relight_print_settings("irradiance", scene, &ro);
+    cli_progress bar;
+    cli_progress_start(&bar, "irradiance", CLI_PROGRESS_STEPS);
+    ro.progress = bar.enabled ? cli_progress_fraction : NULL;
+    ro.progress_user = &bar;
     rl_status st = rl_irradiance_cluster(scene, job_cluster(), &ro, points->values, points->count, rgb, NULL);
+    cli_progress_finish(&bar);
     /* the other ranks may be waiting in an exchange this rank will not reach: end the job */
     int code = st == RL_OK ? ILF_EXIT_OK : job_fail(relight_failure("irradiance", st));
+    if (code == ILF_EXIT_OK && job_rank() == 0)
+        warn_unlit(o->scene, rgb, points->count);
     for (size_t k = 0; code == ILF_EXIT_OK && job_rank() == 0 && k < points->count; k++)
-        printf("%.6g %.6g %.6g\n", rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2]);
+        print_point(rgb + 3 * k, o->lux);
     free(rgb);
     if (code == ILF_EXIT_OK && fflush(stdout) != 0) {
         cli_error("irradiance", "cannot write the results: %s", strerror(errno));
@@ -136,7 +180,10 @@ int ilf_cmd_irradiance(int argc, char **argv)
         return code;
     point_list points = {NULL, 0, 0};
     rl_scene *scene = NULL;
+    cli_set_quiet(o.quiet || job_rank() != 0);
     code = job_agree(relight_scene_open("irradiance", o.scene, &o.sampling, &scene));
+    if (code == ILF_EXIT_OK && job_rank() == 0)
+        relight_warn_scene(scene, 0);
     /* rank 0 alone reads the points (standard input reaches it only) and shares them */
     if (code == ILF_EXIT_OK && job_rank() == 0)
         code = points_read(o.points, &points);
@@ -144,7 +191,7 @@ int ilf_cmd_irradiance(int argc, char **argv)
     if (code == ILF_EXIT_OK && job_ranks() > 1)
         code = job_agree(share_points(&points));
     if (code == ILF_EXIT_OK)
-        code = print_irradiance(scene, &o.sampling, &points);
+        code = print_irradiance(scene, &o, &points);
     points_free(&points);
     rl_scene_destroy(scene);
     return code;

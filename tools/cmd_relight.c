@@ -6,6 +6,8 @@
  *   stats.json   settings, times, per-pass counters and memory (docs/cli.md)
  *   view.exr     the scene camera's view, raw radiance   } only when the
  *   view.png     the same, tone mapped and sRGB-encoded  } scene has a camera
+ *   falsecolor.png  with --falsecolor: the view's illuminance in false colour,
+ *                with a legend (falsecolor.h)
  *
  * Invariants: DIR exists (it is created) before the engine runs, so a long
  * run never ends in an output that cannot be placed. Outputs are written into
@@ -40,6 +42,7 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "falsecolor.h"
 #include "image/image.h"
 #include "job.h"
 #include "jsonout.h"
@@ -63,37 +66,54 @@ typedef struct relight_options {
     int quiet;
     int no_view; /* skip view.exr/png */
     int flat_view; /* each cell's own value in the view, no interpolation */
+    tone_fixed tone; /* view.png's scale: --exposure or --scale, else automatic */
+    int falsecolor;  /* write falsecolor.png */
+    double falsecolor_max; /* its top, lux; 0: automatic */
 } relight_options;
 
 /* Options after the shared sampling ones, whose ids come first (relight_cli.h). */
-enum relight_option_id { OPT_OUTPUT = SAMPLING_OPT_COUNT, OPT_QUIET, OPT_NO_VIEW, OPT_FLAT_VIEW };
+enum relight_option_id {
+    OPT_OUTPUT = SAMPLING_OPT_COUNT, OPT_QUIET, OPT_NO_VIEW, OPT_FLAT_VIEW, OPT_EXPOSURE, OPT_SCALE, OPT_FALSECOLOR,
+    OPT_FALSECOLOR_MAX
+};
 
 /* The sampling options' entries are filled by relight_options_fill() before parsing. */
 static cli_option relight_options_table[] = {
     [OPT_OUTPUT] = {"output", 'o', "DIR", "folder for radiance.h5, stats.json and view.exr/png (required; created)"},
-    [OPT_QUIET] = {"quiet", 'q', NULL, "no progress bar and no summary on stdout"},
+    [OPT_QUIET] = {"quiet", 'q', NULL, "nothing on stdout; no settings line, progress bar or warnings (still in stats.json)"},
     [OPT_NO_VIEW] = {"no-view", 0, NULL, "write no view.exr/png even when the scene has a camera"},
     [OPT_FLAT_VIEW] = {"flat-view", 0, NULL, "show each cell's own value in the view (default: interpolated between cells)"},
+    [OPT_EXPOSURE] = {"exposure", 0, "EV", "view.png: radiance times 2^EV (default: 90th percentile of luminance -> 0.8)"},
+    [OPT_SCALE] = {"scale", 0, "W", "view.png: radiance W (W sr^-1 m^-2) shows as white, the same in every run"},
+    [OPT_FALSECOLOR] = {"falsecolor", 0, NULL, "also write falsecolor.png: the view's illuminance in lux, with a legend"},
+    [OPT_FALSECOLOR_MAX] = {"falsecolor-max", 0, "LUX",
+                            "top of falsecolor.png's scale (default: 99th percentile rounded up to 1, 2 or 5 x 10^k)"},
 };
 
 static const cli_usage relight_usage = {
     "relight",
     "SCENE -o DIR [--method M] [--threads N] [--seed S] [--partition-n N] [--rays K]\n"
-    "                   [--samples N] [--bounces B] [--no-view] [--flat-view] [--quiet]",
+    "                   [--samples N] [--bounces B] [--no-view] [--flat-view] [--quiet]\n"
+    "                   [--exposure EV | --scale W] [--falsecolor [--falsecolor-max LUX]]",
     "Relights the scene (docs/scene.md) and writes to DIR: radiance.h5, the irradiance\n"
     "and radiosity of every receiving polygon's cells (docs/format.md); stats.json, the\n"
     "settings, times and per-pass counters (docs/cli.md); and, when the scene has a\n"
     "camera, view.exr (radiance) and view.png (exposed so that the 90th percentile of\n"
-    "the lit pixels' luminance shows as 0.8, sRGB). Sampling options replace the\n"
-    "scene's own settings.",
+    "the lit pixels' luminance shows as 0.8, unless --exposure or --scale fixes it;\n"
+    "sRGB), and with --falsecolor falsecolor.png (illuminance in lux, with a legend).\n"
+    "Sampling options replace the scene's own settings. stderr gets the settings\n"
+    "used, a progress bar and warnings (no emitter, walls facing away, dark cells,\n"
+    "back faces, partial light field coverage, no camera), also kept in stats.json.",
     "ilf relight data/beams_diffuse.json -o out/beams\n"
     "ilf relight data/classroom.json -o out/classroom --partition-n 16 --rays 2 --bounces 1\n"
-    "ilf relight scene.json -o out/naive --method naive --threads 4 --quiet",
+    "ilf relight scene.json -o out/naive --method naive --threads 4 --quiet\n"
+    "ilf relight data/beams_diffuse.json -o out/beams --scale 5 --falsecolor --falsecolor-max 2000",
 };
 
 /* The outputs, in the order they are written and renamed into place. */
-enum relight_output { OUT_RADIANCE, OUT_STATS, OUT_VIEW_EXR, OUT_VIEW_PNG, OUT_COUNT };
-static const char *const output_names[OUT_COUNT] = {"radiance.h5", "stats.json", "view.exr", "view.png"};
+enum relight_output { OUT_RADIANCE, OUT_STATS, OUT_VIEW_EXR, OUT_VIEW_PNG, OUT_FALSECOLOR, OUT_COUNT };
+static const char *const output_names[OUT_COUNT] = {"radiance.h5", "stats.json", "view.exr", "view.png",
+                                                    "falsecolor.png"};
 
 /* Everything one run produced, for the outputs and the summary. */
 typedef struct relight_run {
@@ -127,6 +147,17 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
         o->no_view = 1;
     else if (opt == OPT_FLAT_VIEW)
         o->flat_view = 1;
+    else if (opt == OPT_EXPOSURE || opt == OPT_SCALE)
+        return cli_value_tone(p, value, opt == OPT_EXPOSURE, &o->tone);
+    else if (opt == OPT_FALSECOLOR)
+        o->falsecolor = 1;
+    else if (opt == OPT_FALSECOLOR_MAX) {
+        o->falsecolor = 1;
+        if (!cli_value_double(p, value, &o->falsecolor_max))
+            return 0;
+        if (!(o->falsecolor_max > 0))
+            return cli_bad_value(p, value, "must be an illuminance > 0 lux"), 0;
+    }
     else
         return sampling_option_apply(p, &o->sampling, opt, value);
     return 1;
@@ -147,6 +178,8 @@ static int parse_arguments(relight_options *o, int argc, char **argv)
         problem = "no scene given (see 'ilf relight --help')";
     else if (o->output == NULL || o->output[0] == '\0')
         problem = "-o DIR is required";
+    else if (o->falsecolor && o->no_view)
+        problem = "--falsecolor shows the view: it cannot be given with --no-view";
     if (problem != NULL) {
         cli_error("relight", "%s", problem);
         return ILF_EXIT_USAGE;
@@ -720,7 +753,37 @@ static int write_view_image(relight_run *run, int k, int width, int height, cons
     return st == IMG_OK ? ILF_EXIT_OK : ILF_EXIT_FAILED;
 }
 
-/* Renders the camera's view and writes view.exr (radiance) and view.png (tone mapped). @return an exit code. */
+/* Renders the illuminance the camera sees into work ([height][width][3] floats, overwritten) and writes
+ * falsecolor.png of it with its legend. @return an exit code. */
+static int write_falsecolor(relight_run *run, int width, int height, float *work)
+{
+    const size_t count = (size_t)width * (size_t)height;
+    rl_status rs = rl_solution_render_irradiance(run->solution, &run->run_options, work);
+    if (rs != RL_OK)
+        return relight_failure("relight", rs);
+    /* lux in place, into the first count floats: pixel k's value is read before it is overwritten */
+    for (size_t k = 0; k < count; k++) {
+        const double e[3] = {work[3 * k], work[3 * k + 1], work[3 * k + 2]};
+        work[k] = e[0] < 0 ? -1.0f : (float)tone_lux(e);
+    }
+    double top = run->o->falsecolor_max > 0 ? run->o->falsecolor_max : falsecolor_auto_top(work, count);
+    int w = 0, h = 0;
+    float *image = top > 0 ? falsecolor_image(work, width, height, top, "lux", &w, &h) : NULL;
+    if (image == NULL) {
+        cli_error("relight", "out of memory for a %dx%d false-colour image", width, height);
+        return ILF_EXIT_FAILED;
+    }
+    char what[192];
+    snprintf(what, sizeof what, "%dx%d, illuminance 0 to %g lux (%s), %g lm/W; magenta above, grey no surface", w, h,
+             top, run->o->falsecolor_max > 0 ? "--falsecolor-max" : "99th percentile rounded up",
+             TONE_LUMENS_PER_WATT);
+    int code = write_view_image(run, OUT_FALSECOLOR, w, h, image, what);
+    free(image);
+    return code;
+}
+
+/* Renders the camera's view and writes view.exr (radiance) and view.png (tone mapped), and falsecolor.png when
+ * asked. @return an exit code. */
 static int write_view(relight_run *run)
 {
     uint32_t w = 0, h = 0;
@@ -742,16 +805,21 @@ static int write_view(relight_run *run)
         code = write_view_image(run, OUT_VIEW_EXR, width, height, pixels, what);
     if (code == ILF_EXIT_OK) {
         double scale = 1.0;
-        if (!tone_percentile_scale(pixels, count, 3, TONE_LUMINANCE, PNG_PERCENTILE, PNG_TARGET, &scale)) {
+        char how[96], auto_text[64];
+        snprintf(auto_text, sizeof auto_text, "90th percentile of luminance -> %.1f", PNG_TARGET);
+        if (!tone_fixed_scale(&run->o->tone, &scale)
+            && !tone_percentile_scale(pixels, count, 3, TONE_LUMINANCE, PNG_PERCENTILE, PNG_TARGET, &scale)) {
             cli_error("relight", "out of memory for the exposure of a %dx%d view", width, height);
             code = ILF_EXIT_FAILED;
         }
         tone_apply(pixels, count, 3, scale);
-        snprintf(what, sizeof what, "%dx%d, sRGB, scale %.6g (90th percentile of luminance -> %.1f)", width, height,
-                 scale, PNG_TARGET);
+        snprintf(what, sizeof what, "%dx%d, sRGB, scale %.6g (%s)", width, height, scale,
+                 tone_fixed_describe(&run->o->tone, auto_text, how, sizeof how));
         if (code == ILF_EXIT_OK)
             code = write_view_image(run, OUT_VIEW_PNG, width, height, pixels, what);
     }
+    if (code == ILF_EXIT_OK && run->o->falsecolor)
+        code = write_falsecolor(run, width, height, pixels);
     free(pixels);
     return code;
 }
@@ -894,7 +962,10 @@ static cJSON *stats_json(const relight_run *run, const run_memory *mem)
         cJSON_AddNumberToObject(x, "wait_seconds", log[k].wait_seconds);
         cJSON_AddNumberToObject(x, "move_seconds", log[k].move_seconds);
     }
-    cJSON *passes = ok ? cJSON_AddArrayToObject(root, "passes") : NULL;
+    cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");
+    for (size_t k = 0; warnings != NULL && k < cli_warning_count(); k++)
+        ok = ok && cJSON_AddItemToArray(warnings, cJSON_CreateString(cli_warning(k)));
+    cJSON *passes = ok && warnings != NULL ? cJSON_AddArrayToObject(root, "passes") : NULL;
     if (passes == NULL || !add_passes(passes, run->solution)) {
         cJSON_Delete(root);
         return NULL;
@@ -934,13 +1005,11 @@ static void print_run(const relight_run *run)
 {
     if (run->o->quiet)
         return;
-    const rl_sampling *s = rl_scene_sampling(run->scene);
+    char what[256];
     unsigned threads = relight_threads_used(&run->run_options);
-    printf("relit %s: method %s, partition n %" PRIu32 ", %" PRIu32 " ray%s per solid angle, %" PRIu32
-           " bounce%s, %u thread%s: %.3f s wall, %.3f s cpu\n",
-           run->o->scene, rl_method_name(s->method), s->partition_n, s->rays_per_solid_angle,
-           s->rays_per_solid_angle == 1 ? "" : "s", s->bounces, s->bounces == 1 ? "" : "s", threads,
-           threads == 1 ? "" : "s", run->wall_seconds, run->cpu_seconds);
+    printf("relit %s: %s, %u thread%s: %.3f s wall, %.3f s cpu\n", run->o->scene,
+           relight_describe(rl_scene_sampling(run->scene), what, sizeof what), threads, threads == 1 ? "" : "s",
+           run->wall_seconds, run->cpu_seconds);
     if (job_ranks() > 1)
         printf("job of %d ranks, each with the threads above; times are rank 0's, pass counts and cpu summed\n",
                job_ranks());
@@ -960,9 +1029,14 @@ int ilf_cmd_relight(int argc, char **argv)
     relight_run run = {.o = &o};
     /* ranks other than 0 only compute and write their part of radiance.h5 */
     o.quiet |= job_rank() != 0;
+    cli_set_quiet(o.quiet);
     code = job_agree(relight_scene_open("relight", o.scene, &o.sampling, &run.scene));
     if (code == ILF_EXIT_OK)
         relight_run_options(&o.sampling, run.scene, &run.run_options);
+    if (code == ILF_EXIT_OK && job_rank() == 0) {
+        relight_print_settings("relight", run.scene, &run.run_options);
+        relight_warn_scene(run.scene, !o.no_view);
+    }
     if (code == ILF_EXIT_OK)
         code = stage_open_job(&run);
     map_writer writer;
@@ -971,6 +1045,8 @@ int ilf_cmd_relight(int argc, char **argv)
         code = relight(&run);
     double engine_end = cli_clock_seconds(CLOCK_MONOTONIC);
     int rank0 = job_rank() == 0, view = rank0 && rl_scene_has_camera(run.scene) && !o.no_view;
+    if (code == ILF_EXIT_OK && rank0)
+        relight_warn_solution(run.solution, !o.no_view);
     if (code == ILF_EXIT_OK)
         print_run(&run);
     if (beside)

@@ -364,15 +364,20 @@ static int trace(void *user, const double org[3], const double dir[3], float rgb
 static int relight(const probes_options *o, const rl_scene *scene, rl_solution **sol)
 {
     cli_progress bar;
-    if (!o->quiet)
-        cli_progress_start(&bar, "relight", CLI_PROGRESS_STEPS);
     rl_run_options ro;
     relight_run_options(&o->sampling, scene, &ro);
+    cli_set_quiet(o->quiet);
+    relight_print_settings("render-probes", scene, &ro);
+    relight_warn_scene(scene, 0);
+    if (!o->quiet)
+        cli_progress_start(&bar, "relight", CLI_PROGRESS_STEPS);
     ro.progress = o->quiet ? NULL : cli_progress_fraction;
     ro.progress_user = &bar;
     rl_status st = rl_relight(scene, &ro, sol);
     if (!o->quiet)
         cli_progress_finish(&bar);
+    if (st == RL_OK)
+        relight_warn_solution(*sol, 0);
     return st == RL_OK ? ILF_EXIT_OK : relight_failure("render-probes", st);
 }
 
@@ -422,6 +427,10 @@ static int render_all(const probes_options *o, const rl_scene *scene, const rl_s
         cli_error("render-probes", "out of memory for a %dx%d probe", s.width, s.height);
         return ILF_EXIT_FAILED;
     }
+    /* every probe casts the same rays (pixels times strata squared): the bar counts probes */
+    cli_settings("render-probes", "%" PRIu32 "x%" PRIu32 " probes of %dx%d pixels, %" PRIu32
+                 " directions per pixel, %u thread%s", o->desc.nu, o->desc.nv, s.width, s.height, o->strata * o->strata,
+                 relight_threads_used(&ro), relight_threads_used(&ro) == 1 ? "" : "s");
     cli_progress bar;
     if (!o->quiet)
         cli_progress_start(&bar, "probes", probe_count(o));

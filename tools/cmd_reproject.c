@@ -22,6 +22,7 @@
 
 #include "capture/reproject.h"
 #include "cli.h"
+#include "ilf/pool.h"
 #include "commands.h"
 
 #define REPROJECT_CREATOR "ilf reproject (ilfkit " ILFKIT_VERSION ")"
@@ -184,25 +185,35 @@ static int read_captured(const reproject_options *o, captured_set *c)
 }
 
 /* @return the total positions over the proxy's rectangles. */
-static uint64_t proxy_positions(const cap_proxy *proxy)
+/* @return the rays one position of rectangle d samples (directions times strata squared): the progress bar's
+ * work, since rectangles of different partition levels cost different amounts per position. */
+static uint64_t position_rays(const lfio_slab_desc *d, uint32_t strata)
+{
+    return 4ull * d->n * d->n * strata * strata;
+}
+
+/* @return the rays of every rectangle of the proxy. */
+static uint64_t proxy_rays(const cap_proxy *proxy, uint32_t strata)
 {
     uint64_t total = 0;
-    for (size_t k = 0; k < cap_proxy_count(proxy); k++)
-        total += (uint64_t)cap_proxy_get_desc(proxy, k)->nu * cap_proxy_get_desc(proxy, k)->nv;
+    for (size_t k = 0; k < cap_proxy_count(proxy); k++) {
+        const lfio_slab_desc *d = cap_proxy_get_desc(proxy, k);
+        total += (uint64_t)d->nu * d->nv * position_rays(d, strata);
+    }
     return total;
 }
 
-/* The shared bar and the positions of the slabs already made, for one slab's progress. */
+/* The shared bar, the rays of the slabs already made and those of one position of this one. */
 typedef struct slab_progress {
     cli_progress *bar;
-    uint64_t offset;
+    uint64_t offset, per_position;
 } slab_progress;
 
-/* cap_progress_fn: a slab's positions done, shown after those of the earlier slabs. */
+/* cap_progress_fn: a slab's positions done, shown as rays after those of the earlier slabs. */
 static void on_slab_progress(void *user, uint64_t done, uint64_t total)
 {
     const slab_progress *sp = user;
-    ilf_capture_progress(sp->bar, sp->offset + done, total);
+    ilf_capture_progress(sp->bar, sp->offset + done * sp->per_position, total);
 }
 
 /* Makes one output slab per rectangle into lf, coverage in cov[k]. @return an exit code. */
@@ -210,15 +221,25 @@ static int reproject_all(const reproject_options *o, const captured_set *capture
                          lfio_lightfield *lf, cap_coverage *cov)
 {
     cli_progress bar;
-    slab_progress sp = {&bar, 0};
+    slab_progress sp = {&bar, 0, 0};
     cap_reproject_options ro = {o->plain ? CAP_REPROJECT_PLAIN : CAP_REPROJECT_DEPTH, o->strata, o->threads,
                                 o->quiet ? NULL : on_slab_progress, &sp, NULL};
+    uint32_t strata = o->strata ? o->strata : 2; /* cap_reproject_options' default */
+    unsigned threads = ilf_thread_count(o->threads);
+    char rays[32];
+    snprintf(rays, sizeof rays, "%.3g", (double)proxy_rays(proxy, strata));
+    cli_set_quiet(o->quiet);
+    cli_settings("reproject", "method %s, %zu rectangle%s, %ux%u rays per solid angle, %s rays, %u thread%s",
+                 o->plain ? "plain" : "depth-corrected", cap_proxy_count(proxy),
+                 cap_proxy_count(proxy) == 1 ? "" : "s", (unsigned)strata, (unsigned)strata, rays, threads,
+                 threads == 1 ? "" : "s");
     if (!o->quiet)
-        cli_progress_start(&bar, "reproject", proxy_positions(proxy));
+        cli_progress_start(&bar, "reproject", proxy_rays(proxy, strata));
     int code = ILF_EXIT_OK;
     for (size_t k = 0; code == ILF_EXIT_OK && k < cap_proxy_count(proxy); k++) {
         const lfio_slab_desc *d = cap_proxy_get_desc(proxy, k);
         lfio_slab *slab = NULL;
+        sp.per_position = position_rays(d, strata);
         /* The proxy's sizes passed lfio's 64 GiB radiance limit, so this count fits in size_t. */
         ro.covered = malloc((size_t)(4 * (uint64_t)d->n * d->n * d->nu * d->nv));
         if (ro.covered == NULL) {
@@ -230,7 +251,7 @@ static int reproject_all(const reproject_options *o, const captured_set *capture
                                             &cov[k]);
         if (st != CAP_OK)
             code = ilf_capture_failure("reproject", st);
-        sp.offset += (uint64_t)d->nu * d->nv;
+        sp.offset += (uint64_t)d->nu * d->nv * sp.per_position;
         lfio_status ls = code == ILF_EXIT_OK ? lfio_lightfield_take_slab(lf, slab) : LFIO_OK;
         if (ls == LFIO_OK && code == ILF_EXIT_OK)
             ls = lfio_lightfield_set_coverage(lf, k, ro.covered);

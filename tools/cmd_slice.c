@@ -15,9 +15,11 @@
  *       image up = +v, column 0 = lowest u.
  *
  * Invariants: EXR receives the raw float radiance; PNG receives the same
- * pixels scaled by one factor (2^EV, or 1 / the 99th percentile of the
+ * pixels scaled by one factor (2^EV, 1/W, or 1 / the 99th percentile of the
  * bright pixels' max(r,g,b)), sRGB-encoded and clamped; alpha is never
  * scaled (tonemap.c). Every check of the options happens before the file is opened.
+ * A --toward slice that comes out all black is told of with a warning
+ * giving the direction's elevation above the slab's plane.
  */
 #include <math.h>
 #include <stdio.h>
@@ -50,8 +52,7 @@ typedef struct slice_options {
     int layout_given;
     uint32_t size;
     int size_given;
-    double exposure;
-    int exposure_given;
+    tone_fixed tone; /* --exposure or --scale, for PNG */
 } slice_options;
 
 /* Pixels [y][x][channel], row 0 at the top. */
@@ -61,7 +62,7 @@ typedef struct slice_image {
 } slice_image;
 
 enum slice_option_id {
-    OPT_OUTPUT, OPT_SLAB, OPT_POSITION, OPT_LAYOUT, OPT_DIRECTION, OPT_TOWARD, OPT_SIZE, OPT_EXPOSURE
+    OPT_OUTPUT, OPT_SLAB, OPT_POSITION, OPT_LAYOUT, OPT_DIRECTION, OPT_TOWARD, OPT_SIZE, OPT_EXPOSURE, OPT_SCALE
 };
 
 static const cli_option slice_options_table[] = {
@@ -73,12 +74,14 @@ static const cli_option slice_options_table[] = {
     {"toward", 0, "X,Y,Z", "image of the positions for the direction containing world direction X,Y,Z"},
     {"size", 0, "PX", "for --position: PX x PX (unfold) or 2PX x PX (latlong), default 512"},
     {"exposure", 0, "EV", "PNG scale 2^EV (default: 1 / 99th percentile of max(r,g,b) > 0)"},
+    {"scale", 0, "W", "PNG scale 1/W: radiance W (W sr^-1 m^-2) shows as white, the same in every image"},
 };
 
 static const cli_usage slice_usage = {
     "slice",
     "FILE [--slab NAME|INDEX] (--position I,J [--layout unfold|latlong] [--size PX]\n"
-    "                 | --direction ID | --toward X,Y,Z) -o OUT.exr|OUT.png [--exposure EV]",
+    "                 | --direction ID | --toward X,Y,Z) -o OUT.exr|OUT.png\n"
+    "                 [--exposure EV | --scale W]",
     "Writes one slice of a slab as an image, reading only that slice from the file.\n"
     "--position: the directions of one position. 'unfold' maps pixel (a,b), |a|+|b| <= 1,\n"
     "to slab-frame direction (a, b, 1-|a|-|b|), showing each solid angle as a flat\n"
@@ -142,11 +145,8 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
     case OPT_TOWARD: count_mode(o, SLICE_TOWARD); return parse_toward(p, value, o->toward);
     case OPT_LAYOUT: o->layout_given = 1; return parse_layout(p, value, &o->layout);
     case OPT_SIZE: o->size_given = 1; return cli_value_u32(p, value, 1, SLICE_MAX_SIZE, &o->size);
-    case OPT_EXPOSURE:
-        o->exposure_given = 1;
-        if (!cli_value_double(p, value, &o->exposure))
-            return 0;
-        return fabs(o->exposure) <= 100.0 || (cli_bad_value(p, value, "must be from -100 to 100"), 0);
+    case OPT_EXPOSURE: return cli_value_tone(p, value, 1, &o->tone);
+    case OPT_SCALE: return cli_value_tone(p, value, 0, &o->tone);
     default: return 0;
     }
 }
@@ -305,6 +305,24 @@ static int direction_toward(const lfio_slab_desc *desc, const slice_options *o, 
     return ILF_EXIT_OK;
 }
 
+/* Warns when the --toward slice img (nu x nv, rgb) is all black: a direction this close to the slab's plane
+ * usually carries nothing, and a black image alone does not say why. */
+static void warn_black_toward(const slice_options *o, const lfio_slab_desc *d, const slice_image *img)
+{
+    size_t count = (size_t)img->width * img->height * 3;
+    for (size_t k = 0; k < count; k++)
+        if (img->pixels[k] != 0.0f)
+            return;
+    double len = sqrt(o->toward[0] * o->toward[0] + o->toward[1] * o->toward[1] + o->toward[2] * o->toward[2]);
+    double e3[3] = {d->u[1] * d->v[2] - d->u[2] * d->v[1], d->u[2] * d->v[0] - d->u[0] * d->v[2],
+                    d->u[0] * d->v[1] - d->u[1] * d->v[0]};
+    double e3len = sqrt(e3[0] * e3[0] + e3[1] * e3[1] + e3[2] * e3[2]);
+    double cosine = (o->toward[0] * e3[0] + o->toward[1] * e3[1] + o->toward[2] * e3[2]) / (len * e3len);
+    double elevation = 90.0 - acos(fmin(1.0, fmax(-1.0, cosine))) * 180.0 / ILF_PI;
+    cli_warn("--toward %g,%g,%g is %.1f degrees above the plane of slab '%s'%s: every position of the slice is black",
+             o->toward[0], o->toward[1], o->toward[2], elevation, d->name, elevation < 10.0 ? " (grazing)" : "");
+}
+
 /* Reads one direction and flips it so that +v is up. @return an exit code. */
 static int slice_direction(lfio_reader *r, size_t k, const slice_options *o, slice_image *img)
 {
@@ -336,6 +354,8 @@ static int slice_direction(lfio_reader *r, size_t k, const slice_options *o, sli
         memcpy(img->pixels + bottom * row, tmp, row * sizeof(float));
     }
     free(tmp);
+    if (o->mode == SLICE_TOWARD)
+        warn_black_toward(o, d, img);
     return ILF_EXIT_OK;
 }
 
@@ -360,10 +380,12 @@ static void describe_result(const slice_image *img, const slice_options *o, cons
     else
         printf("positions for one direction");
     printf(" of slab '%s'; ", slab);
+    char how[96];
     if (img_guess_format(o->output) == IMG_FORMAT_EXR)
-        printf("raw radiance (scale 1)%s\n", o->exposure_given ? ", --exposure applies to PNG only" : "");
+        printf("raw radiance (scale 1)%s\n",
+               o->tone.kind != TONE_AUTO ? ", --exposure and --scale apply to PNG only" : "");
     else
-        printf("scale %.6g (%s)\n", scale, o->exposure_given ? "from --exposure" : "auto: 1/99th percentile");
+        printf("scale %.6g (%s)\n", scale, tone_fixed_describe(&o->tone, "auto: 1/99th percentile", how, sizeof how));
 }
 
 static int slice_file(lfio_reader *r, const slice_options *o)
@@ -376,8 +398,8 @@ static int slice_file(lfio_reader *r, const slice_options *o)
     double scale = 1.0;
     if (code == ILF_EXIT_OK && img_guess_format(o->output) == IMG_FORMAT_PNG) {
         const size_t count = (size_t)img.width * img.height;
-        if (o->exposure_given)
-            scale = exp2(o->exposure);
+        if (tone_fixed_scale(&o->tone, &scale))
+            ;
         else if (!tone_percentile_scale(img.pixels, count, img.channels, TONE_PEAK, 0.99, 1.0, &scale)) {
             cli_error("slice", "out of memory for the exposure of a %dx%d image", img.width, img.height);
             code = ILF_EXIT_FAILED;

@@ -67,11 +67,13 @@ typedef struct synth_options {
     uint32_t seed;
     uint32_t threads;
     const char *output;
+    int quiet;
 } synth_options;
 
 enum synth_option_id {
     OPT_KIND, OPT_OUTPUT, OPT_GRID, OPT_N, OPT_ORIGIN, OPT_U, OPT_V, OPT_NAME, OPT_RADIANCE,
-    OPT_UNITS, OPT_MASK_THRESHOLD, OPT_SUPERSAMPLE, OPT_SEED, OPT_DEPTH, OPT_CONE, OPT_SPOT, OPT_THREADS
+    OPT_UNITS, OPT_MASK_THRESHOLD, OPT_SUPERSAMPLE, OPT_SEED, OPT_DEPTH, OPT_CONE, OPT_SPOT, OPT_THREADS,
+    OPT_QUIET
 };
 
 /* Indexed by enum synth_option_id. */
@@ -93,6 +95,7 @@ static const cli_option synth_options_table[] = {
     {"cone", 0, "DEG", "radial: cone half-angle a in degrees (default 20)"},
     {"spot", 0, "P:A:DEG:F[:R]", "spot: centre, axis, cone, falloff, radius (repeatable)"},
     {"threads", 0, "T", "worker threads (default: number of processors)"},
+    {"quiet", 'q', NULL, "no settings line, progress bar or summary"},
 };
 
 static const cli_usage synth_usage = {
@@ -267,6 +270,8 @@ static void run_batch(synth_batch *b, unsigned threads)
     ilf_parallel(ilf_thread_count(threads), synth_worker, b);
 }
 
+static const char *kind_name(synth_kind kind);
+
 /* Computes every position batch by batch and stores it in the slab. */
 static int fill_slab(lfio_slab *slab, const synth_model *model, const synth_options *o)
 {
@@ -280,6 +285,11 @@ static int fill_slab(lfio_slab *slab, const synth_model *model, const synth_opti
         cli_error("synth", "out of memory for %llu positions", (unsigned long long)batch_size);
         return ILF_EXIT_FAILED;
     }
+    /* every position costs the same (its directions times the strata): the bar counts positions */
+    cli_settings("synth", "kind %s, %ux%u positions, n %u (%llu directions), %u strata per direction, %u thread%s",
+                 kind_name(o->kind), (unsigned)d->nu, (unsigned)d->nv, (unsigned)d->n, (unsigned long long)ndir,
+                 model->kind == SYNTH_CONSTANT ? 1u : o->supersample * o->supersample, (unsigned)o->threads,
+                 o->threads == 1 ? "" : "s");
     cli_progress progress;
     cli_progress_start(&progress, "synth", npos);
     synth_batch batch = {.model = model, .slab = slab, .strata = o->supersample, .seed = o->seed,
@@ -480,6 +490,7 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
     case OPT_SUPERSAMPLE: return cli_value_u32(p, value, 1, SYNTH_MAX_SUPERSAMPLE, &o->supersample);
     case OPT_SEED: return cli_value_u32(p, value, 0, UINT32_MAX, &o->seed);
     case OPT_THREADS: return cli_value_u32(p, value, 1, 256, &o->threads);
+    case OPT_QUIET: o->quiet = 1; cli_set_quiet(1); return 1;
     case OPT_DEPTH:
         o->depth_given = 1;
         if (!cli_value_double(p, value, &o->depth))
@@ -590,6 +601,8 @@ static int write_file(lfio_slab *slab, const synth_options *o)
 
 static void print_summary(const synth_options *o)
 {
+    if (o->quiet)
+        return;
     const lfio_slab_desc *d = &o->desc;
     char size[32];
     printf("wrote %s: %s slab '%s', %ux%u positions, n=%u (%llu directions), %s\n", o->output,

@@ -1,7 +1,9 @@
 /*
  * cmd_verify.c - `ilf verify FILE...`: checks each file completely with
  * lfio_verify() and prints one line per file, "FILE: ok" or
- * "FILE: <first problem> (N problems)".
+ * "FILE: <first problem> (N problems)". stderr gets a settings line (how many
+ * files, how many bytes) and a progress bar weighted by the files' sizes (the
+ * work of a verification is reading every byte), neither with --quiet.
  *
  * Invariants: every file is checked even after a failure, so one run reports
  * on all of them; the exit code is 0 only when every file is valid, and 2
@@ -16,7 +18,7 @@
 #include "lfio/lightfield.h"
 
 static const cli_option verify_options[] = {
-    {"quiet", 'q', NULL, "print only the files that fail"},
+    {"quiet", 'q', NULL, "print only the files that fail; no settings line or progress bar"},
 };
 
 static const cli_usage verify_usage = {
@@ -30,11 +32,13 @@ static const cli_usage verify_usage = {
     "ilf verify scene.h5 backup/*.h5",
 };
 
-/* Verifies one file and prints its line. @return LFIO_OK if the file is valid, else lfio's status. */
-static lfio_status verify_one(const char *path, int quiet)
+/* Verifies one file and prints its line, clearing bar's line first. @return LFIO_OK if the file is valid, else
+ * lfio's status. */
+static lfio_status verify_one(const char *path, int quiet, cli_progress *bar)
 {
     lfio_verify_report report = {0};
     lfio_status status = lfio_verify(path, &report);
+    cli_progress_clear(bar);
     if (status == LFIO_OK) {
         if (!quiet)
             printf("%s: ok\n", path);
@@ -86,11 +90,24 @@ int ilf_cmd_verify(int argc, char **argv)
     if (code < 0) {
         /* Running out of memory says nothing about the file: that run failed (exit 1). */
         int all_valid = 1, unchecked = 0;
+        uint64_t bytes = 0;
+        for (size_t k = 0; k < file_count; k++)
+            bytes += cli_file_size(files[k]) > 0 ? (uint64_t)cli_file_size(files[k]) : 0u;
+        char size[32];
+        cli_set_quiet(quiet);
+        cli_settings("verify", "%zu file%s, %s, every byte read and checked", file_count, file_count == 1 ? "" : "s",
+                     cli_format_bytes((long long)bytes, size, sizeof size));
+        cli_progress bar;
+        cli_progress_start(&bar, "verify", bytes);
         for (size_t k = 0; k < file_count; k++) {
-            lfio_status st = verify_one(files[k], quiet);
+            long long done = cli_file_size(files[k]);
+            lfio_status st = verify_one(files[k], quiet, &bar);
+            fflush(stdout);
+            cli_progress_add(&bar, done > 0 ? (uint64_t)done : 0u);
             all_valid &= st == LFIO_OK;
             unchecked |= st == LFIO_ERR_NOMEM;
         }
+        cli_progress_finish(&bar);
         code = unchecked ? ILF_EXIT_FAILED : all_valid ? ILF_EXIT_OK : ILF_EXIT_USAGE;
     }
     free(files);

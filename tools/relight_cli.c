@@ -202,3 +202,57 @@ void relight_print_pass(FILE *out, uint32_t k, const rl_pass_stats *s)
         fprintf(out, "  adaptive: %" PRIu64 " refinements, estimated RMSE %.4g W m^-2%s\n", s->refinements,
                 s->estimated_rmse, s->budget_reached ? ", time budget reached" : "");
 }
+
+const char *relight_describe(const rl_sampling *s, char *buf, size_t size)
+{
+    char what[96], bounces[96] = "";
+    if (s->method == RL_METHOD_AREA || s->method == RL_METHOD_SOLIDANGLE)
+        snprintf(what, sizeof what, "%" PRIu32 " sample%s per cell and emitter", s->samples_per_cell,
+                 s->samples_per_cell == 1 ? "" : "s");
+    else
+        snprintf(what, sizeof what, "partition n %" PRIu32 ", %" PRIu32 " ray%s per solid angle", s->partition_n,
+                 s->rays_per_solid_angle, s->rays_per_solid_angle == 1 ? "" : "s");
+    if (s->bounces > 0 && s->bounce_rays > 0)
+        snprintf(bounces, sizeof bounces, " (%" PRIu32 " ray%s per bounce cell)", s->bounce_rays,
+                 s->bounce_rays == 1 ? "" : "s");
+    else if (s->bounces > 0)
+        snprintf(bounces, sizeof bounces, " (by the method)");
+    snprintf(buf, size, "method %s, %s, %" PRIu32 " bounce%s%s", rl_method_name(s->method), what, s->bounces,
+             s->bounces == 1 ? "" : "s", bounces);
+    return buf;
+}
+
+void relight_print_settings(const char *sub, const rl_scene *scene, const rl_run_options *ro)
+{
+    char what[256];
+    unsigned threads = relight_threads_used(ro);
+    cli_settings(sub, "%s, %u thread%s", relight_describe(rl_scene_sampling(scene), what, sizeof what), threads,
+                 threads == 1 ? "" : "s");
+}
+
+/* Warns of each of the n findings d (at most max kept) but those of kind skip (-1: none). */
+static void warn_findings(const rl_diagnostic *d, size_t n, size_t max, int skip)
+{
+    for (size_t k = 0; k < n && k < max; k++)
+        if ((int)d[k].kind != skip)
+            cli_warn("%s", d[k].text);
+    if (n > max)
+        cli_warn("%zu more findings left out", n - max);
+}
+
+/* Findings shown of one check: a scene with many light fields lists a few, then their count. */
+#define MAX_FINDINGS 8
+
+void relight_warn_scene(const rl_scene *scene, int want_view)
+{
+    rl_diagnostic d[MAX_FINDINGS];
+    size_t n = rl_scene_diagnose(scene, d, MAX_FINDINGS);
+    warn_findings(d, n, MAX_FINDINGS, want_view ? -1 : (int)RL_DIAG_NO_CAMERA);
+}
+
+void relight_warn_solution(const rl_solution *solution, int want_view)
+{
+    rl_diagnostic d[MAX_FINDINGS];
+    size_t n = rl_solution_diagnose(solution, d, MAX_FINDINGS);
+    warn_findings(d, n, MAX_FINDINGS, want_view ? -1 : (int)RL_DIAG_BACK_FACES);
+}

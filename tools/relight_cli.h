@@ -81,6 +81,26 @@ int relight_failure(const char *sub, rl_status st);
 /** @return the calling thread's engine message (rl_errmsg()) on one line in buf, or a generic one if empty. */
 const char *relight_failure_text(char *buf, size_t size);
 
+/**
+ * Describes sampling settings s for people into buf: the method and what it
+ * samples (the partition and rays per solid angle, or the samples per cell
+ * and emitter for area and solidangle), then the bounces and how they gather.
+ * @return buf.
+ */
+const char *relight_describe(const rl_sampling *s, char *buf, size_t size);
+
+/** Prints the settings line of a run on scene with options ro (cli_settings()): what it does and on how many
+ * threads, before it starts. */
+void relight_print_settings(const char *sub, const rl_scene *scene, const rl_run_options *ro);
+
+/** Warns (cli_warn()) of every finding of rl_scene_diagnose(scene), leaving out the missing camera unless
+ * want_view. */
+void relight_warn_scene(const rl_scene *scene, int want_view);
+
+/** Warns (cli_warn()) of every finding of rl_solution_diagnose(solution), leaving out what the camera sees
+ * unless want_view. */
+void relight_warn_solution(const rl_solution *solution, int want_view);
+
 /** Prints one line per pass statistic group for pass k ("pass 0 (direct): ..."). */
 void relight_print_pass(FILE *out, uint32_t k, const rl_pass_stats *s);
 

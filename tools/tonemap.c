@@ -10,6 +10,7 @@
 #include "tonemap.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "image/image.h"
@@ -89,4 +90,29 @@ void tone_apply(float *pixels, size_t count, int channels, double scale)
         for (int c = 0; c < 3; c++)
             px[c] = img_srgb_encode(scale * px[c]);
     }
+}
+
+int tone_fixed_scale(const tone_fixed *f, double *scale)
+{
+    if (f->kind == TONE_EXPOSURE)
+        *scale = exp2(f->value);
+    else if (f->kind == TONE_WHITE)
+        *scale = 1.0 / f->value;
+    return f->kind != TONE_AUTO;
+}
+
+const char *tone_fixed_describe(const tone_fixed *f, const char *auto_text, char *buf, size_t size)
+{
+    if (f->kind == TONE_EXPOSURE)
+        snprintf(buf, size, "from --exposure %g", f->value);
+    else if (f->kind == TONE_WHITE)
+        snprintf(buf, size, "from --scale: %g shows as white", f->value);
+    else
+        snprintf(buf, size, "%s", auto_text);
+    return buf;
+}
+
+double tone_lux(const double rgb[3])
+{
+    return TONE_LUMENS_PER_WATT * (0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]);
 }

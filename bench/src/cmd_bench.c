@@ -405,6 +405,9 @@ static int sweep(const bench_config *cfg, rl_scene *scene)
         return code;
     bench_sweep s = {.cfg = cfg, .ref = &ref, .entries = entries, .count = count, .threads = threads_used(cfg, scene),
                      .bounces = rl_scene_sampling(scene)->bounces};
+    cli_settings(BENCH_SUB, "sweep of %zu settings over %zu method%s, %" PRIu32 " bounce%s, time limit %.0f s per run, "
+                 "%u thread%s", count, cfg->nmethods, cfg->nmethods == 1 ? "" : "s", s.bounces,
+                 s.bounces == 1 ? "" : "s", cfg->time_limit, s.threads, s.threads == 1 ? "" : "s");
     rl_scene_camera_size(scene, &s.camera_width, &s.camera_height);
     for (size_t m = 0; m < BENCH_MAX_METHODS; m++)
         s.best[m] = -1;
@@ -461,6 +464,8 @@ static int rays_mode(const bench_config *cfg, rl_scene *scene)
         return ILF_EXIT_FAILED;
     bench_rays_job job = {scene, cfg->rays_count, {0}};
     relight_run_options(&cfg->sampling, scene, &job.run);
+    cli_settings(BENCH_SUB, "ray benchmark, %" PRIu64 " rays, %u thread%s", cfg->rays_count,
+                 threads_used(cfg, scene), threads_used(cfg, scene) == 1 ? "" : "s");
     bench_result r;
     if (!bench_fork(bench_rays_child, &job, &r) || !r.ok) {
         cli_error(BENCH_SUB, "%s", r.message);
@@ -498,6 +503,7 @@ int ilf_cmd_bench(int argc, char **argv)
     if (code >= 0)
         return code;
     record_command(&cfg, argc, argv);
+    cli_set_quiet(cfg.quiet);
     if (mode == MODE_SCALING)
         return bench_scaling(&cfg);
     rl_scene *scene = NULL;

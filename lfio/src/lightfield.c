@@ -152,7 +152,6 @@ const uint8_t *lfio_lightfield_coverage(const lfio_lightfield *lf, size_t k)
     return lf && k < lf->count ? lf->coverage[k] : NULL;
 }
 
-
 lfio_status lfio_lightfield_set_coverage_fraction(lfio_lightfield *lf, size_t k, double fraction)
 {
     if (!lf || k >= lf->count)
@@ -168,4 +167,24 @@ lfio_status lfio_lightfield_set_coverage_fraction(lfio_lightfield *lf, size_t k,
 double lfio_lightfield_coverage_fraction(const lfio_lightfield *lf, size_t k)
 {
     return lf && k < lf->count ? lf->fraction[k] : NAN;
+}
+
+double lfio_coverage_share(const lfio_slab_desc *desc, const uint8_t *coverage, uint64_t *covered)
+{
+    const uint64_t npos = (uint64_t)desc->nu * desc->nv, ndir = 4ull * desc->n * desc->n;
+    const double pole[3] = {0.0, 0.0, 1.0};
+    double share = 0.0, total = 0.0;
+    uint64_t all = 0;
+    for (uint64_t dir = 0; dir < ndir; dir++) {
+        uint64_t count = 0;
+        for (uint64_t p = 0; p < npos; p++)
+            count += coverage[dir * npos + p] != 0;
+        double etendue = lfio_part_projected_solid_angle(desc->n, dir, pole);
+        share += etendue * (double)count;
+        total += etendue * (double)npos;
+        all += count;
+    }
+    if (covered)
+        *covered = all;
+    return total > 0.0 ? share / total : 0.0;
 }

@@ -82,6 +82,8 @@ typedef struct pass_job {
     const work_item *items;
     size_t nitems;
     atomic_size_t next, done;
+    atomic_uint_fast64_t done_cells; /* cells of the items done: the pass's progress (tiles differ in size) */
+    uint64_t total_cells;            /* cells of all the items */
     atomic_int failed;
     rl_counters *counters; /* one per worker */
     double *seconds;       /* [nitems]: each tile's CPU time, or NULL */
@@ -153,6 +155,8 @@ static void tell_end(pass_job *job, int rc)
     job->left = NULL;
 }
 
+static uint32_t tile_work(const rl_map *maps, const work_item *w);
+
 /* Worker `index` of a pass: takes tiles until none are left. */
 static void worker(void *p, unsigned index)
 {
@@ -164,6 +168,7 @@ static void worker(void *p, unsigned index)
         if (k >= job->nitems || atomic_load(&job->failed))
             break;
         const work_item *w = &job->items[k];
+        uint32_t cells = tile_work(job->sets[w->set], w);
         double t0 = job->seconds ? ilf_clock_thread_cpu() : 0.0;
         if (w->row0 < w->row1 && rl__transfer_tile(&job->ctx, w->map, &job->sets[w->set][w->map], w->row0,
                                                    w->row1, &scratch, &job->counters[index]) != 0)
@@ -175,6 +180,7 @@ static void worker(void *p, unsigned index)
             map_complete(job, w->map);
             tell_ready(job);
         }
+        atomic_fetch_add(&job->done_cells, cells);
         atomic_fetch_add(&job->done, 1);
     }
     rl__scratch_free(&scratch);
@@ -189,7 +195,11 @@ static int run_job(pass_job *job, unsigned n, const rl__run *run, double base, d
         return -1;
     atomic_init(&job->next, 0);
     atomic_init(&job->done, 0);
+    atomic_init(&job->done_cells, 0);
     atomic_init(&job->failed, 0);
+    job->total_cells = 0;
+    for (size_t k = 0; k < job->nitems; k++)
+        job->total_cells += tile_work(job->sets[job->items[k].set], &job->items[k]);
     ilf_team *team;
     if (ilf_team_start(n, worker, job, &team) != 0) {
         free(job->counters);
@@ -199,8 +209,8 @@ static int run_job(pass_job *job, unsigned n, const rl__run *run, double base, d
     /* Without a started thread the work runs at join: nothing to wait for here. */
     while (run->progress && ilf_team_threads(team) > 0 && atomic_load(&job->done) < job->nitems &&
            !atomic_load(&job->failed)) {
-        run->progress(run->user,
-                      base + span * (double)atomic_load(&job->done) / (double)(job->nitems ? job->nitems : 1));
+        run->progress(run->user, base + span * (double)atomic_load(&job->done_cells) /
+                                            (double)(job->total_cells ? job->total_cells : 1));
         ilf_clock_sleep(PROGRESS_PERIOD);
     }
     ilf_team_join(team);
@@ -569,6 +579,66 @@ static rl_sampling pass_sampling(const rl_sampling *s, uint32_t p)
     return out;
 }
 
+/* ------------------------------------------------------------ progress weights */
+
+/* A run's progress is shared out between its passes by their expected work, counted in rays, so that a
+ * cheap pass does not take as much of the bar as a costly one (a direct pass of 4096 shadow rays per cell
+ * and emitter against a first-hit bounce of 256 rays per larger cell). The counts are estimates made
+ * before the pass runs: a culled or adaptive pass is taken to test a quarter of an emitter's 4n^2 solid
+ * angles; cells are the receivers' area over the cell's (the maps are not built yet). */
+
+double rl__pass_work(const rl_scene *scene, uint32_t pass, double cells, double emitters)
+{
+    rl_sampling s = pass_sampling(&scene->sampling, pass);
+    if (pass > 0 && s.bounce_rays > 0)
+        return cells * s.bounce_rays; /* first hits: the emitters are read where the rays land */
+    double per_pair = s.method == RL_METHOD_AREA || s.method == RL_METHOD_SOLIDANGLE
+                          ? (double)s.samples_per_cell
+                          : (double)s.rays_per_solid_angle * s.partition_n * s.partition_n;
+    return cells * emitters * per_pair;
+}
+
+/* @return the expected cells of the scene's receivers at factor times the scene's cell size, and their
+ * count in *receivers. */
+static double receiver_cells(const rl_scene *scene, double factor, size_t *receivers)
+{
+    double cells = 0.0, side = scene->cell_size * factor;
+    *receivers = 0;
+    for (size_t k = 0; k < scene->npolygons; k++) {
+        const float *al = scene->materials[scene->polygons[k].material].albedo;
+        if (al[0] > 0 || al[1] > 0 || al[2] > 0) {
+            cells += 1.0 + scene->polygons[k].area / (side * side);
+            ++*receivers;
+        }
+    }
+    return cells;
+}
+
+/* @return the factor by which bounce passes enlarge the cells they gather on (rl__solve()). */
+static uint32_t bounce_factor(const rl_sampling *s)
+{
+    return s->bounce_cell_factor ? s->bounce_cell_factor : s->bounce_rays > 0 ? 4 : 2;
+}
+
+double rl__solve_work(const rl_scene *scene, uint32_t passes, double *per_pass)
+{
+    size_t receivers = 0, ne = 0;
+    for (size_t k = 0; k < scene->npolygons; k++)
+        ne += positive3(scene->materials[scene->polygons[k].material].emission);
+    ne += scene->nlightfields;
+    double total = 0.0, fine = receiver_cells(scene, 1.0, &receivers);
+    double coarse = passes > 1 ? receiver_cells(scene, bounce_factor(&scene->sampling), &receivers) : fine;
+    for (uint32_t p = 0; p < passes; p++) {
+        /* a bounce pass's emitters are the lit receivers: at most all of them */
+        double w = p == 0 ? rl__pass_work(scene, 0, fine, (double)ne)
+                          : rl__pass_work(scene, p, coarse, (double)receivers);
+        if (per_pass)
+            per_pass[p] = w;
+        total += w;
+    }
+    return total;
+}
+
 /* Fills the shared context of a pass; sampling must outlive it. */
 static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, const rl__run *run, uint32_t pass,
                      const rl_sampling *sampling, const rl_emitter *e, size_t n, rl_transfer_ctx *ctx)
@@ -887,8 +957,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     size_t ncoarse = 0;
     /* by default 4 for the first-hit gather, which gathers the cells near occluders on their own; 2 for
      * the methods' own, which interpolates everywhere (as before the first-hit gather's flags) */
-    uint32_t factor = scene->sampling.bounce_cell_factor ? scene->sampling.bounce_cell_factor
-                      : scene->sampling.bounce_rays > 0 ? 4 : 2;
+    uint32_t factor = bounce_factor(&scene->sampling);
     if (passes > 1 && factor > 1)
         st = rl__maps_build_sized(scene, scene->cell_size * factor, run->threads, &coarse, &ncoarse);
     assert(!coarse || ncoarse == s->nmaps); /* one map per receiving polygon, in order, at any cell size */
@@ -904,6 +973,11 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
         st = rl__fail(RL_ERR_NOMEM, "out of memory for the maps' passes");
     for (size_t m = 0, at = 0; coarse_at && m < ncoarse; at += coarse[m++].ncells)
         coarse_at[m] = at;
+    /* each pass's share of [0, span) of the progress, by its expected work */
+    double *work = st == RL_OK ? calloc(passes + 1, sizeof *work) : NULL;
+    if (st == RL_OK && !work)
+        st = rl__fail(RL_ERR_NOMEM, "out of memory for the maps' passes");
+    double all_work = work ? rl__solve_work(scene, passes, work) : 0.0, work_before = 0.0;
     int told = 0, telling = 0; /* the caller was told of every map; of some, maybe */
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
         /* Cells near occluders are gathered on their own besides the larger cells once marked, unless the
@@ -913,7 +987,9 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
          * other, as they exchange the tiles of one set of maps at a time). */
         int gather_coarse = p > 0 && coarse, refining = gather_coarse && rf.near && !(rf.ready && rf.marked == 0);
         int together = refining && rf.ready && !cl, apart = refining && !together;
-        double base = span * p / passes, part = span / passes;
+        double base = all_work > 0 ? span * work_before / all_work : span * p / passes;
+        double part = all_work > 0 ? span * work[p] / all_work : span / passes;
+        work_before += work[p];
         if (p > 0)
             ne = rl__append_bounce_emitters(scene, s->maps, s->nmaps, e, 0);
         if (p < 2) {
@@ -955,6 +1031,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     refine_free(&rf, s->maps, s->nmaps);
     rl__maps_free(coarse, ncoarse);
     free(measured);
+    free(work);
     free(e);
     free(done);
     free(coarse_at);

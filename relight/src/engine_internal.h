@@ -55,6 +55,18 @@ const rl_cluster *rl__check_cluster(const rl_cluster *cl, rl_status *st);
 rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *run, uint32_t passes, double span,
                     rl_solution **out);
 
+/* @return the expected work of pass `pass` (rays; the sampling that pass uses) gathering on `cells` cells
+ * from `emitters` emitters: the weight of its share of a run's progress. */
+double rl__pass_work(const rl_scene *scene, uint32_t pass, double cells, double emitters);
+
+/* @return the expected work of rl__solve() with `passes` passes, each pass's in per_pass[0 .. passes) unless
+ * per_pass is NULL. */
+double rl__solve_work(const rl_scene *scene, uint32_t passes, double *per_pass);
+
+/* Casts the camera's rays through the centres of an nx x ny grid over its image (the scene has a camera):
+ * *hits of them meet a surface, *back of those its back face. */
+void rl__view_faces(const rl_solution *s, uint32_t nx, uint32_t ny, uint64_t *hits, uint64_t *back);
+
 /* Builds the emitters of the scene itself (pass 0), with room for `extra` more.
  * @return the array (count in *n) or NULL when out of memory. */
 rl_emitter *rl__primary_emitters(const rl_scene *scene, size_t extra, size_t *n);

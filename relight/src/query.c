@@ -14,9 +14,6 @@
 
 #include "engine_internal.h"
 
-/* Share of the progress given to the bounce passes solved before the points' pass. */
-#define SOLVE_SHARE(bounces) ((double)(bounces) / ((bounces) + 1.0))
-
 /* Checks the points and builds one zero-area receiver per point. @return RL_OK or an error. */
 static rl_status point_maps(const double *points, size_t count, rl_map **out)
 {
@@ -63,7 +60,16 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
     /* Light reflected by the scene: solve `bounces` passes and let every lit
      * map re-emit the irradiance summed over them. */
     uint32_t bounces = scene->sampling.bounces;
-    double share = SOLVE_SHARE(bounces);
+    /* the solve's share of the progress, by its expected work against the points' pass (engine.c) */
+    double solve = rl__solve_work(scene, bounces, NULL), receivers = 0.0, primary = 0.0;
+    for (size_t k = 0; k < scene->npolygons; k++) {
+        const rl_material *mat = &scene->materials[scene->polygons[k].material];
+        receivers += mat->albedo[0] > 0 || mat->albedo[1] > 0 || mat->albedo[2] > 0;
+        primary += mat->emission[0] > 0 || mat->emission[1] > 0 || mat->emission[2] > 0;
+    }
+    primary += (double)scene->nlightfields;
+    double points_work = rl__pass_work(scene, 0, (double)count, primary + (bounces > 0 ? receivers : 0.0));
+    double share = solve + points_work > 0 ? solve / (solve + points_work) : 0.0;
     run.maps_ready = NULL; /* these maps are the query's own */
     st = rl__solve(scene, cl, &run, bounces, share, &sol);
     size_t ne = 0;

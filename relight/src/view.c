@@ -1,7 +1,9 @@
 /*
  * view.c - what the camera sees of a solution: the first surface along a
  * ray (pick), its shading from the radiance maps (shade, rl_solution_trace)
- * and the camera's image (rl_solution_render, rl_solution_render_cells).
+ * and the camera's image (rl_solution_render, rl_solution_render_irradiance,
+ * rl_solution_render_cells), and
+ * how much of what the camera sees is the back of a surface (rl__view_faces).
  *
  * Invariants: rendering only reads the solution; each image row is written
  * by the one worker that took it from an atomic counter, and a pixel's value
@@ -17,7 +19,8 @@
 
 typedef struct render_job {
     const rl_solution *s;
-    float *rgb;                 /* radiance per pixel, or NULL */
+    float *rgb;                 /* radiance per pixel (irradiance with irradiance set), or NULL */
+    int irradiance;             /* rgb gets the irradiance of the receiving surface seen, -1 where none */
     int32_t *map_ids, *cell_ids; /* what each pixel sees, or NULL */
     v3 forward, right, up;
     double tan_half, aspect;
@@ -44,24 +47,48 @@ static int pick(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, int32_t *m
     return 1;
 }
 
+/* Finds the first front face along a ray and the irradiance on it (W m^-2, flat or interpolated as the
+ * solution says) into e, zero where it does not receive. @return the face's polygon's map (-1: it does not
+ * receive, or the ray meets no front face: then *poly is UINT32_MAX). */
+static int32_t surface_irradiance(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, double e[3])
+{
+    int32_t map;
+    int64_t cell;
+    v2 at;
+    e[0] = e[1] = e[2] = 0.0;
+    if (!pick(s, org, dir, poly, &map, &cell, &at)) {
+        *poly = UINT32_MAX;
+        return -1;
+    }
+    if (cell >= 0 && s->flat)
+        memcpy(e, s->maps[map].e_total[cell], 3 * sizeof *e);
+    else if (cell >= 0)
+        rl__map_sample(&s->maps[map], at, (const double(*)[3])s->maps[map].e_total, e);
+    return cell >= 0 ? map : -1;
+}
+
 /* Shades the first surface along one camera ray: emission plus albedo * E / pi. */
 static void shade(const rl_solution *s, v3 org, v3 dir, float out[3])
 {
     uint32_t poly;
-    int32_t map;
-    int64_t cell;
-    v2 at;
+    double e[3];
+    int32_t map = surface_irradiance(s, org, dir, &poly, e);
     out[0] = out[1] = out[2] = 0.0f;
-    if (!pick(s, org, dir, &poly, &map, &cell, &at))
+    if (poly == UINT32_MAX)
         return;
     const rl_material *mat = &s->scene->materials[s->scene->polygons[poly].material];
-    double e[3] = {0, 0, 0};
-    if (cell >= 0 && s->flat)
-        memcpy(e, s->maps[map].e_total[cell], sizeof e);
-    else if (cell >= 0)
-        rl__map_sample(&s->maps[map], at, (const double(*)[3])s->maps[map].e_total, e);
     for (int c = 0; c < 3; c++)
-        out[c] = (float)(mat->emission[c] + (cell >= 0 ? s->maps[map].albedo[c] * e[c] / RL_PI : 0.0));
+        out[c] = (float)(mat->emission[c] + (map >= 0 ? s->maps[map].albedo[c] * e[c] / RL_PI : 0.0));
+}
+
+/* The irradiance on the receiving surface seen along one camera ray, -1 in every channel where none is. */
+static void irradiance_seen(const rl_solution *s, v3 org, v3 dir, float out[3])
+{
+    uint32_t poly;
+    double e[3];
+    int receives = surface_irradiance(s, org, dir, &poly, e) >= 0;
+    for (int c = 0; c < 3; c++)
+        out[c] = receives ? (float)e[c] : -1.0f;
 }
 
 rl_status rl_solution_set_smooth(rl_solution *s, int smooth)
@@ -82,6 +109,43 @@ rl_status rl_solution_trace(const rl_solution *s, const double org[3], const dou
     return RL_OK;
 }
 
+/* Sets job's camera frame from the scene's camera. */
+static void camera_frame(const rl_camera *cam, render_job *job)
+{
+    job->forward = v3_norm(v3_sub(v3_load(cam->look_at), v3_load(cam->position)));
+    job->right = v3_norm(v3_cross(job->forward, v3_load(cam->up)));
+    job->up = v3_cross(job->right, job->forward);
+    job->tan_half = tan(cam->fov_deg * RL_PI / 360.0);
+    job->aspect = (double)cam->width / cam->height;
+}
+
+/* @return the unit direction of the camera ray through the point (fx, fy) of the image, [0, 1] from the left
+ * and from the top. */
+static v3 camera_ray(const render_job *job, double fx, double fy)
+{
+    double sx = (2.0 * fx - 1.0) * job->tan_half * job->aspect, sy = (1.0 - 2.0 * fy) * job->tan_half;
+    return v3_norm(v3_add(job->forward, v3_add(v3_scale(job->right, sx), v3_scale(job->up, sy))));
+}
+
+void rl__view_faces(const rl_solution *s, uint32_t nx, uint32_t ny, uint64_t *hits, uint64_t *back)
+{
+    render_job job;
+    const rl_camera *cam = &s->scene->camera;
+    camera_frame(cam, &job);
+    *hits = *back = 0;
+    rl__tracer_thread_init();
+    for (uint32_t y = 0; y < ny; y++)
+        for (uint32_t x = 0; x < nx; x++) {
+            v3 d = camera_ray(&job, (x + 0.5) / nx, (y + 0.5) / ny);
+            uint32_t poly;
+            double t;
+            if (!rl__tracer_hit(s->tracer, v3_load(cam->position), d, 0.0, INFINITY, &poly, &t))
+                continue;
+            ++*hits;
+            *back += v3_dot(d, v3_load(s->scene->polygons[poly].normal)) >= 0;
+        }
+}
+
 /* Worker of a render: renders rows until none are left. */
 static void render_worker(void *p, unsigned index)
 {
@@ -94,11 +158,11 @@ static void render_worker(void *p, unsigned index)
         if (y >= cam->height)
             break;
         for (unsigned x = 0; x < cam->width; x++) {
-            double sx = (2.0 * (x + 0.5) / cam->width - 1.0) * job->tan_half * job->aspect;
-            double sy = (1.0 - 2.0 * (y + 0.5) / cam->height) * job->tan_half;
-            v3 d = v3_norm(v3_add(job->forward, v3_add(v3_scale(job->right, sx), v3_scale(job->up, sy))));
+            v3 d = camera_ray(job, (x + 0.5) / cam->width, (y + 0.5) / cam->height);
             size_t px = (size_t)y * cam->width + x;
-            if (job->rgb)
+            if (job->rgb && job->irradiance)
+                irradiance_seen(job->s, v3_load(cam->position), d, job->rgb + 3 * px);
+            else if (job->rgb)
                 shade(job->s, v3_load(cam->position), d, job->rgb + 3 * px);
             if (job->map_ids) {
                 uint32_t poly;
@@ -115,7 +179,7 @@ static void render_worker(void *p, unsigned index)
 
 /* Runs a render job over the camera's rows on the options' threads. */
 static rl_status render(const char *call, const rl_solution *s, const rl_run_options *options, float *rgb,
-                        int32_t *map_ids, int32_t *cell_ids)
+                        int irradiance, int32_t *map_ids, int32_t *cell_ids)
 {
     if (!s || (!rgb && !map_ids) || (map_ids && !cell_ids))
         return rl__fail(RL_ERR_ARG, "%s: NULL argument", call);
@@ -129,13 +193,10 @@ static rl_status render(const char *call, const rl_solution *s, const rl_run_opt
     render_job job;
     job.s = s;
     job.rgb = rgb;
+    job.irradiance = irradiance;
     job.map_ids = map_ids;
     job.cell_ids = cell_ids;
-    job.forward = v3_norm(v3_sub(v3_load(cam->look_at), v3_load(cam->position)));
-    job.right = v3_norm(v3_cross(job.forward, v3_load(cam->up)));
-    job.up = v3_cross(job.right, job.forward);
-    job.tan_half = tan(cam->fov_deg * RL_PI / 360.0);
-    job.aspect = (double)cam->width / cam->height;
+    camera_frame(cam, &job);
     atomic_init(&job.next_row, 0);
     ilf_parallel(run.threads, render_worker, &job);
     return RL_OK;
@@ -143,11 +204,16 @@ static rl_status render(const char *call, const rl_solution *s, const rl_run_opt
 
 rl_status rl_solution_render(const rl_solution *s, const rl_run_options *options, float *rgb)
 {
-    return render("rl_solution_render", s, options, rgb, NULL, NULL);
+    return render("rl_solution_render", s, options, rgb, 0, NULL, NULL);
+}
+
+rl_status rl_solution_render_irradiance(const rl_solution *s, const rl_run_options *options, float *rgb)
+{
+    return render("rl_solution_render_irradiance", s, options, rgb, 1, NULL, NULL);
 }
 
 rl_status rl_solution_render_cells(const rl_solution *s, const rl_run_options *options, int32_t *map_ids,
                                    int32_t *cell_ids)
 {
-    return render("rl_solution_render_cells", s, options, NULL, map_ids, cell_ids);
+    return render("rl_solution_render_cells", s, options, NULL, 0, map_ids, cell_ids);
 }

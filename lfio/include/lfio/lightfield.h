@@ -423,6 +423,15 @@ lfio_status lfio_lightfield_set_coverage_fraction(lfio_lightfield *lf, size_t k,
 /** @return slab k's covered share of the etendue, 0 .. 1; NaN if it has none or k is out of range. */
 double lfio_lightfield_coverage_fraction(const lfio_lightfield *lf, size_t k);
 
+/**
+ * @return the covered share of a slab's etendue: each sample of coverage
+ * ([dir][j][i] for a slab of desc's geometry, values 0 or 1) weighted by the
+ * projected solid angle of its direction about the slab's normal, every
+ * position equally; 0 for a slab of no directions. *covered (unless NULL)
+ * gets the number of covered samples.
+ */
+double lfio_coverage_share(const lfio_slab_desc *desc, const uint8_t *coverage, uint64_t *covered);
+
 /** An open file whose slabs can be read in part. Opaque. */
 typedef struct lfio_reader lfio_reader;
 

@@ -219,6 +219,14 @@ rl_status rl_solution_trace(const rl_solution *s, const double org[3], const dou
 rl_status rl_solution_render(const rl_solution *s, const rl_run_options *options, float *rgb);
 
 /**
+ * Renders the irradiance (W m^-2, r g b, as rl_solution_render() would read it: smooth or flat) on the
+ * receiving surface each pixel of the camera sees, into rgb ([height][width][3], row 0 at the top): what a
+ * false-colour image of illuminance shows. Pixels that see no receiving front face get -1 in every channel.
+ * @return as rl_solution_render().
+ */
+rl_status rl_solution_render_irradiance(const rl_solution *s, const rl_run_options *options, float *rgb);
+
+/**
  * Renders which cell each camera pixel sees: map_ids and cell_ids get
  * width*height entries, rows top to bottom; -1 where the pixel sees no
  * map (background, back face, a surface that does not receive). Options as
@@ -270,6 +278,50 @@ rl_status rl_irradiance(const rl_scene *scene, const rl_run_options *options, co
  */
 rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_run_options *options,
                                 const double *points, size_t count, double *out, rl_pass_stats *stats);
+
+/* ------------------------------------------------------------ diagnostics */
+
+/** What a diagnostic is about: a scene or a result that is legal but almost surely not what was meant. */
+typedef enum rl_diagnostic_kind {
+    RL_DIAG_NO_EMITTER = 0,  /**< no emissive polygon and no light field: everything stays black */
+    RL_DIAG_NOT_FACING = 1,  /**< emitters and receivers exist, but no receiver faces any emitter from its
+                                  front (normals outward, reversed walls): no direct light can arrive;
+                                  quantity 1 */
+    RL_DIAG_COVERAGE = 2,    /**< a light field slab's coverage is below 100%: quantity is the share of its
+                                  etendue that emits nothing because nothing was captured there */
+    RL_DIAG_NO_CAMERA = 3,   /**< the scene has no camera: there is no view to render */
+    RL_DIAG_DARK_CELLS = 4,  /**< most cells received nothing: quantity is their share of the cells */
+    RL_DIAG_BACK_FACES = 5,  /**< most of what the camera sees is the back of a surface (drawn black):
+                                  quantity is that share of the camera's rays that hit anything */
+    RL_DIAG_EMITTER_UNSEEN = 6 /**< an emitter faces no receiver from its front while others do (a light
+                                  field placed without its flip, a lamp's normal reversed): quantity is the
+                                  share of the emitters that face none; one finding for each of the first four */
+} rl_diagnostic_kind;
+
+/** One finding of rl_scene_diagnose() or rl_solution_diagnose(). */
+typedef struct rl_diagnostic {
+    rl_diagnostic_kind kind;
+    double quantity; /**< the share measured, in [0, 1]; 0 for kinds that measure nothing */
+    char text[512];  /**< one line for people, naming what it is about and the quantity, no trailing newline */
+} rl_diagnostic;
+
+/**
+ * Checks a loaded scene for what leaves a run dark or without output: no
+ * emitter, no receiver facing an emitter or an emitter facing no receiver
+ * (a receiver faces an emitter when part of each lies in front of the
+ * other's plane), light field slabs whose coverage is below 100%, no
+ * camera. Writes up to max findings to out (out may be NULL with max 0), in
+ * that order.
+ * @return the number of findings, which may exceed max.
+ */
+size_t rl_scene_diagnose(const rl_scene *scene, rl_diagnostic *out, size_t max);
+
+/**
+ * Checks a solution: most cells received nothing (more than half), or the
+ * scene's camera sees mostly back faces (more than half of a 64 x 48 grid of
+ * its rays that hit anything). As rl_scene_diagnose() for out, max and the result.
+ */
+size_t rl_solution_diagnose(const rl_solution *solution, rl_diagnostic *out, size_t max);
 
 #ifdef __cplusplus
 }
