@@ -206,9 +206,15 @@ static int run_capture(const capture_options *o, const cap_manifest *m, lfio_lig
     uint64_t images = cap_manifest_image_count(m);
     /* the bar counts positions, each one probe image or one bracket of them */
     cli_set_quiet(o->quiet);
-    cli_settings("capture", "%" PRIu32 "x%" PRIu32 " positions, n %" PRIu32 " (%" PRIu64 " directions), %" PRIu64
-                 " image%s, %u thread%s", d->nu, d->nv, d->n, 4 * (uint64_t)d->n * d->n, images,
-                 images == 1 ? "" : "s", threads, threads == 1 ? "" : "s");
+    size_t planes = cap_manifest_plane_count(m);
+    const lfio_slab_desc *d = cap_manifest_get_desc(m, 0);
+    if (planes == 1)
+        cli_settings("capture", "%" PRIu32 "x%" PRIu32 " positions, n %" PRIu32 " (%" PRIu64 " directions), %" PRIu64
+                     " image%s, %u thread%s", d->nu, d->nv, d->n, 4 * (uint64_t)d->n * d->n, images,
+                     images == 1 ? "" : "s", threads, threads == 1 ? "" : "s");
+    else
+        cli_settings("capture", "%zu planes, %" PRIu64 " positions, %" PRIu64 " image%s, %u thread%s", planes,
+                     positions, images, images == 1 ? "" : "s", threads, threads == 1 ? "" : "s");
     if (!o->quiet) {
         cli_progress_start(&bar, "capture", positions);
         co.progress = ilf_capture_progress;

@@ -428,9 +428,14 @@ static int render_all(const probes_options *o, const rl_scene *scene, const rl_s
         return ILF_EXIT_FAILED;
     }
     /* every probe casts the same rays (pixels times strata squared): the bar counts probes */
-    cli_settings("render-probes", "%" PRIu32 "x%" PRIu32 " probes of %dx%d pixels, %" PRIu32
-                 " directions per pixel, %u thread%s", o->desc.nu, o->desc.nv, s.width, s.height, o->strata * o->strata,
-                 relight_threads_used(&ro), relight_threads_used(&ro) == 1 ? "" : "s");
+    char grid[64];
+    if (o->nplanes == 1)
+        snprintf(grid, sizeof grid, "%" PRIu32 "x%" PRIu32, o->planes[0].nu, o->planes[0].nv);
+    else
+        snprintf(grid, sizeof grid, "%zu planes, %" PRIu64, o->nplanes, probe_count(o));
+    cli_settings("render-probes", "%s probes of %dx%d pixels, %" PRIu32 " directions per pixel, %u thread%s", grid,
+                 s.width, s.height, o->strata * o->strata, relight_threads_used(&ro),
+                 relight_threads_used(&ro) == 1 ? "" : "s");
     cli_progress bar;
     if (!o->quiet)
         cli_progress_start(&bar, "probes", probe_count(o));
