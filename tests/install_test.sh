@@ -21,16 +21,19 @@ check test -f "$libdir/cmake/lfio/lfioConfig.cmake"
 # find_package
 cmake -S "$src" -B "$work/cm" -DCMAKE_PREFIX_PATH="$prefix" > "$work/cm.log" 2>&1 || cat "$work/cm.log"
 check cmake --build "$work/cm"
-check env LD_LIBRARY_PATH="$libdir" "$work/cm/consumer_cmake" "$work/a.h5"
+# Linking must carry the way to the library: every program below runs without LD_LIBRARY_PATH
+# (find_package gives the library's full path, pkg-config's lfio.pc an rpath).
+unset LD_LIBRARY_PATH
+check "$work/cm/consumer_cmake" "$work/a.h5"
 # pkg-config
 flags=$(PKG_CONFIG_PATH="$libdir/pkgconfig" pkg-config --cflags --libs lfio)
 check cc -std=c99 -o "$work/consumer_pc" "$src/consumer.c" $flags
-check env LD_LIBRARY_PATH="$libdir" "$work/consumer_pc" "$work/b.h5"
-check env LD_LIBRARY_PATH="$libdir" "$prefix/bin/ilf" --version
+check "$work/consumer_pc" "$work/b.h5"
+check "$prefix/bin/ilf" --version
 # the image module: installed, loaded by the installed ilf on its first image, never linked
 check test -f "$libdir/ilfkit/libilfkit_oiio.so"
 check test "$(ldd "$prefix/bin/ilf" | grep -c OpenImageIO)" -eq 0
-ilf() { env -u ILFKIT_IMAGE_MODULE LD_LIBRARY_PATH="$libdir" "$prefix/bin/ilf" "$@" >>"$work/ilf.log" 2>&1; }
+ilf() { env -u ILFKIT_IMAGE_MODULE "$prefix/bin/ilf" "$@" >>"$work/ilf.log" 2>&1; }
 check ilf synth --kind constant --grid 2x2 --n 2 -o "$work/c.h5"
 check ilf slice "$work/c.h5" --toward 0,0,1 -o "$work/c.png"
 check ilf slice "$work/c.h5" --position 0,0 --layout latlong -o "$work/c.exr"
