@@ -4,7 +4,9 @@
 # liblfio twice: through find_package(lfio) and through pkg-config. The
 # installed ilf does not link OpenImageIO, writes a PNG and an EXR without it,
 # and finds the installed image module (LIBDIR/ilfkit/libilfkit_oiio.so) to
-# read the EXR back as a probe.
+# read the EXR back as a probe. Nothing runs with LD_LIBRARY_PATH: the CMake package, lfio.pc's
+# rpath and ilf's own rpath must carry the way to the libraries. The manual pages (tools/man_pages.py)
+# are installed, one per command, each with every option of its --help, and render without warnings.
 set -eu
 build=$1 src=$2 work=$3
 rm -rf "$work"
@@ -42,5 +44,25 @@ printf '{"plane": {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0]}, "grid":
   "pattern": "c.exr"}\n' > "$work/probe.json"
 check ilf capture "$work/probe.json" -o "$work/probe.h5" --quiet
 check test -s "$work/probe.h5"
+# manual pages: one per command of --help, each naming every option its --help lists, and clean roff
+mandir=$prefix/share/man/man1
+check test -f "$mandir/ilf.1"
+commands=$("$prefix/bin/ilf" --help | awk '/^Commands:/ { on = 1; next } /^$/ { on = 0 } on { print $1 }')
+check test "$(echo "$commands" | wc -w)" -ge 10
+page_has_options() {  # PAGE CMD: every --option of 'ilf CMD --help' is in PAGE (roff's \- read as -)
+    local missing=0
+    for opt in $("$prefix/bin/ilf" "$2" --help | grep -oE '^ {2,8}(-[A-Za-z], )?--[a-z0-9-]+' | grep -oE -- '--[a-z0-9-]+'); do
+        sed 's/\\-/-/g' "$1" | grep -qF -- "$opt" || { echo "$1: no $opt"; missing=1; }
+    done
+    return $missing
+}
+page_names() { sed 's/\\-/-/g' "$1" | grep -qF -- "$2"; }
+renders_clean() { ! command -v groff >/dev/null || test -z "$(groff -man -Tutf8 -ww -z "$1" 2>&1)"; }
+for cmd in $commands; do
+    check test -f "$mandir/ilf-$cmd.1"
+    check page_has_options "$mandir/ilf-$cmd.1" "$cmd"
+    check renders_clean "$mandir/ilf-$cmd.1"
+    check page_names "$mandir/ilf.1" "ilf-$cmd"   # in its SEE ALSO
+done
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0
