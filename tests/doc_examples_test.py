@@ -10,6 +10,8 @@ README.md, then docs/*.md in name order. Their fenced blocks follow the conventi
                           here-documents joined), in order, in one scratch folder (WORK_DIR/run, holding
                           a copy of data/), with bash; each must exit 0, or N when its comment says
                           "exit status N". State does not carry from line to line (no cd, no variables).
+  ```python               run with this test's python3 (h5py and numpy) from the scratch folder, after the python blocks before it
+                          in the same document (as one session: a later block uses an earlier one's imports)
   ```sh illustration      shown, not run (a build, a cluster, a long benchmark: say why beside it)
   ```output [rtol=R]      what the last command of the sh block just before printed (stdout and stderr);
                           a line "..." stands for any number of lines; numbers agree within relative
@@ -261,8 +263,24 @@ class Run:
             self.fail(block, block.line, "the schema of %s differs from the file:\n    %s"
                       % (block.options["schema"], "\n    ".join(problems)))
 
+    def run_python(self, block, session):
+        """Runs the block after the document's earlier python blocks (session), as one script."""
+        self.count += 1
+        script = "\n".join(session + block.body) + "\n"
+        started = time.monotonic()
+        try:
+            p = subprocess.run([sys.executable, "-c", script], cwd=self.scratch, env=self.env, stdout=subprocess.PIPE,
+                               stderr=subprocess.STDOUT, text=True, timeout=COMMAND_TIMEOUT, errors="replace")
+            if p.returncode != 0:
+                self.fail(block, block.line, "the python block exited %d" % p.returncode, "python3 (the block)",
+                          p.stdout)
+        except subprocess.TimeoutExpired:
+            self.fail(block, block.line, "the python block still ran after %d s" % COMMAND_TIMEOUT)
+        self.times.append((time.monotonic() - started, "%s:%d" % (block.doc, block.line), "python block"))
+        session += block.body
+
     def run_document(self, doc):
-        previous, output, schemas = None, None, []
+        previous, output, schemas, session = None, None, [], []
         for block in read_blocks(os.path.join(self.src, doc), doc):
             illustration = "illustration" in block.words
             if block.kind == "":
@@ -271,6 +289,8 @@ class Run:
             elif block.kind in ("sh", "bash", "shell") and not illustration:
                 output, previous = self.run_sh(block), block
                 continue
+            elif block.kind == "python" and not illustration:
+                self.run_python(block, session)
             elif block.kind == "output":
                 self.check_output(block, previous, output)
             elif block.kind == "c" and not illustration and "file" not in block.options:
