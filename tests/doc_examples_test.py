@@ -27,7 +27,8 @@ README.md, then docs/*.md in name order. Their fenced blocks follow the conventi
   ```ANYTHING-ELSE        text, JSON, Python...: not run
   ```                     a block without an info string is an error: every block says what it is
 
-Commands find `ilf` in BUILD_DIR/tools first on PATH; the build is also installed into WORK_DIR/prefix
+Then docs/cli.md is held against the built `ilf --help` (check_cli_reference: commands, options,
+listed values, the help's column). Commands find `ilf` in BUILD_DIR/tools first on PATH; the build is also installed into WORK_DIR/prefix
 (cmake --install), whose bin/ comes next and whose lfio.pc is on PKG_CONFIG_PATH, so C examples build
 against an install, as a user's would. Every failure names the document, the line, the command and
 what it printed; all examples run even after one fails.
@@ -307,6 +308,49 @@ class Run:
             self.check_schema(block)
 
 
+HELP_OPTION = re.compile(r"^ {2,8}(?:(-[A-Za-z]), )?(--[a-z0-9-]+)", re.M)
+VALUE_LIST = re.compile(r"((?:[a-z]+, )+[a-z]+,? or [a-z]+)")  # "culled, naive, area or adaptive"
+
+
+def check_cli_reference(run):
+    """docs/cli.md against the built ilf's --help: its command table names every command, and the
+    section of each command it documents (a heading "## `ilf CMD`") names every option of that
+    command's --help (by its long name or its letter), and where the help lists an option's values
+    ("culled, naive or area"), that option's row of the section's table lists each of them."""
+    path = os.path.join(run.src, "docs/cli.md")
+    text = open(path, encoding="utf-8").read()
+    help_of = lambda *args: subprocess.run(["ilf", *args, "--help"], env=run.env, capture_output=True,
+                                           text=True).stdout
+    top = help_of()
+    commands = re.findall(r"^  (\S+)  +\S", top.split("Commands:", 1)[-1].split("\n\n", 1)[0], re.M)
+    where = Block("docs/cli.md", 1, "", [])
+    columns = {re.match(r"^  \S+ +", l).end() for l in top.split("Commands:", 1)[-1].split("\n\n", 1)[0].split("\n")
+               if re.match(r"^  \S+ +", l)}
+    if len(columns) != 1:
+        run.fail(where, 1, "the summaries of 'ilf --help' start in columns %s, not in one" % sorted(columns))
+    for c in commands:
+        if "| `%s`" % c not in text:
+            run.fail(where, 1, "the command table has no row for `%s`, which 'ilf --help' lists" % c)
+    sections = re.split(r"^## ", text, flags=re.M)
+    for c in commands:
+        section = next((s for s in sections if s.startswith("`ilf %s`\n" % c)), None)
+        if section is None:
+            continue
+        line = text[:text.index("## " + section[:40])].count("\n") + 1
+        for letter, name in HELP_OPTION.findall(help_of(c)):
+            by_letter = letter and re.search(r"(?<![\w-])%s\b" % letter, section)
+            if name != "--help" and name not in section and not by_letter:
+                run.fail(Block("docs/cli.md", line, "", []), line, "the section of `ilf %s` does not name %s, "
+                         "an option of 'ilf %s --help'" % (c, name, c))
+        for help_line in help_of(c).split("\n"):
+            m, values = HELP_OPTION.match(help_line), VALUE_LIST.search(help_line)
+            rows = [r for r in section.split("\n") if m and r.startswith("|") and "`%s" % m.group(2) in r]
+            for value in re.split(r",? or |, ", values.group(1)) if values and rows else []:
+                if "`%s`" % value not in rows[0]:
+                    run.fail(Block("docs/cli.md", line, "", []), line, "the row of %s in the section of `ilf %s` does "
+                             "not list `%s`, a value 'ilf %s --help' gives" % (m.group(2), c, value, c))
+
+
 def main():
     if len(sys.argv) not in (4, 5):
         sys.exit(__doc__.split("\n\n")[1])
@@ -314,6 +358,7 @@ def main():
     run = Run(src, build, work, sys.argv[4] if len(sys.argv) == 5 else "cmake")
     for doc in documents(src):
         run.run_document(doc)
+    check_cli_reference(run)
     print("%d commands run from %d documents, in %.1f s; the slowest:" % (run.count, len(documents(src)),
                                                                        sum(t[0] for t in run.times)))
     for seconds, where, command in sorted(run.times, reverse=True)[:5]:
