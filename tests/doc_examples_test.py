@@ -188,8 +188,9 @@ class Run:
         self.failures, self.count, self.times = [], 0, []
         shutil.rmtree(work, ignore_errors=True)
         os.makedirs(self.scratch)
+        # data/ as a fresh clone has it: without generated files (classroom_lightfield.h5, bench caches)
         shutil.copytree(os.path.join(src, "data"), os.path.join(self.scratch, "data"),
-                        ignore=shutil.ignore_patterns("__pycache__"))
+                        ignore=shutil.ignore_patterns("__pycache__", ".*", "classroom_lightfield.h5"))
         prefix = os.path.join(work, "prefix")
         log = subprocess.run([cmake, "--install", build, "--prefix", prefix], capture_output=True, text=True)
         if log.returncode != 0:
