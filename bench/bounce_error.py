@@ -9,7 +9,7 @@ seed and direct settings, so that its direct pass is the same). The bounce
 light of a pair is the difference of their irradiance, averaged over the RGB
 channels. Prints the reference's area-weighted mean bounce light, the run's
 mean against it, and the area-weighted RMSE and the largest difference over
-every cell, both as shares of that mean (BENCHMARKS.md, section 2d).
+every cell, both as shares of that mean (BENCHMARKS-journal.md, section 2d).
 """
 import sys
 

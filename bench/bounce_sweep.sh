@@ -1,6 +1,6 @@
 #!/bin/sh
 # bench/bounce_sweep.sh - the error and time of bounce settings against a
-# converged reference (BENCHMARKS.md, section 2g; docs/methods.md, Bounces).
+# converged reference (BENCHMARKS-journal.md, section 2g; docs/methods.md, Bounces).
 #
 #   bench/bounce_sweep.sh SCENE BOUNCES OUT [SETTINGS ...]
 #

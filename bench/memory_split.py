@@ -10,7 +10,7 @@ them). Sampling can miss a peak shorter than the interval; a relight run holds i
 its run. Linux only.
 
 Prints "anon_peak_kib A file_peak_kib F exit C". With --stats, the stats.json an `ilf relight` COMMAND
-writes, it prints instead one line for BENCHMARKS.md: the light the run held (memory.accumulator_bytes +
+writes, it prints instead one line for BENCHMARKS-journal.md: the light the run held (memory.accumulator_bytes +
 memory.lightfield_bytes) and the anon and whole-process peaks (memory.peak_resident_bytes) against it.
 Exit code: COMMAND's (128 + the signal when a signal ended it); 2 when it cannot be started or the stats
 cannot be read.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# bench/mpi.sh - ilf-mpi against ilf on one machine (BENCHMARKS.md, section 6).
+# bench/mpi.sh - ilf-mpi against ilf on one machine (BENCHMARKS-journal.md, section 6).
 #
 # Usage: bench/mpi.sh BUILD_MPI_DIR OUT [REPEATS]
 #

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Predicts ilf-mpi's speed-up on a cluster from bench/mpi.sh's measurements (BENCHMARKS.md, section 6).
+"""Predicts ilf-mpi's speed-up on a cluster from bench/mpi.sh's measurements (BENCHMARKS-journal.md, section 6).
 
 Usage: python3 bench/mpi_model.py OUT [--cores-per-rank T] [--bandwidth GBPS] [--latency US]
 

@@ -1,5 +1,5 @@
 #!/bin/sh
-# bench/reproduce.sh - every measurement behind BENCHMARKS.md, in one run.
+# bench/reproduce.sh - every measurement behind BENCHMARKS-journal.md, in one run.
 #
 #   bench/reproduce.sh [OUT]      (default OUT = out/benchmarks; needs a built build/tools/ilf)
 #
@@ -7,7 +7,7 @@
 # (fewer repeats, small sweeps), REPEATS (default 5), RTRACE and OCONV for
 # the Radiance column of the point queries (bench/points.sh; skipped
 # without), SECTIONS for some sections only (SECTIONS="3b 3d": their
-# numbers as in the headings; default all). Every number BENCHMARKS.md quotes is in
+# numbers as in the headings; default all). Every number BENCHMARKS-journal.md quotes is in
 # OUT/results.txt or in the bench folders below it. Runs that are compared
 # run alternately, so machine noise hits both sides alike; the medians of
 # the repeats are reported. Takes about an hour on 2 cores.

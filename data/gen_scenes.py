@@ -238,6 +238,12 @@ LIGHTFIELD_COMMAND = [
 ]
 
 
+def made_by(command, name):
+    """The scene's "made_by" for a light field file: the command that writes it, which the loader
+    quotes when the file is missing (it is generated, and classroom_lightfield.h5 is not kept)."""
+    return "ilf " + " ".join(command) + " data/" + name
+
+
 def beam_frame(yaw_deg, tilt_deg):
     """A right-handed frame: the beam's axis, a horizontal side, and their cross product."""
     yaw, tilt = math.radians(yaw_deg), math.radians(tilt_deg)
@@ -331,7 +337,8 @@ def beams_scenes():
     beams_room(lit)
     transform = [[1, 0, 0, ROOM[0] / 2], [0, -1, 0, ROOM[1] / 2], [0, 0, -1, LIGHT_Z], [0, 0, 0, 1]]
     beams = {"materials": lit.materials, "polygons": lit.polygons,
-             "lightfields": [{"file": "beams_lightfield.h5", "slab": "light", "transform": transform}]}
+             "lightfields": [{"file": "beams_lightfield.h5", "slab": "light", "transform": transform,
+                              "made_by": made_by(LIGHTFIELD_COMMAND, "beams_lightfield.h5")}]}
     beams.update(beams_settings())
 
     diffuse = Scene()
@@ -417,7 +424,8 @@ def classroom_scene(lightfield=False):
         if lightfield:
             # 180 degrees about x, then up to the lamp: the slab faces -z
             transform = [[1, 0, 0, lx], [0, -1, 0, ly], [0, 0, -1, round(Z - LAMP_DROP, DIGITS)], [0, 0, 0, 1]]
-            lightfields.append({"file": CLASSROOM_LIGHTFIELD, "slab": "lamp", "transform": transform})
+            lightfields.append({"file": CLASSROOM_LIGHTFIELD, "slab": "lamp", "transform": transform,
+                                "made_by": made_by(CLASSROOM_LIGHTFIELD_COMMAND, CLASSROOM_LIGHTFIELD)})
             continue
         c = [lx - LAMP_SIZE / 2, ly - LAMP_SIZE / 2, Z - LAMP_DROP]
         scene.add("lamp", rect(c, [0, LAMP_SIZE, 0], [LAMP_SIZE, 0, 0]), [lx, ly, 0])  # faces -z

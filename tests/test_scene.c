@@ -274,6 +274,10 @@ static const bad_case bad_cases[] = {
     {"bad_mesh_directory.json", RL_ERR_INPUT, "is not a regular file"},
     /* light fields */
     {"bad_missing_lightfield.json", RL_ERR_INPUT, "lightfields[0]: "},
+    /* a generated file that is missing: the message says how to make it */
+    {"bad_missing_lightfield_made_by.json", RL_ERR_INPUT,
+     "nothere.h5: cannot open: No such file or directory (it is generated: ilf synth --kind constant -o nothere.h5)"},
+    {"bad_made_by_type.json", RL_ERR_INPUT, "lightfields[0].made_by: expected a string, got a number"},
     {"bad_lightfield_not_h5.json", RL_ERR_INPUT, "lightfields[0]: "},
     {"bad_slab_type.json", RL_ERR_INPUT, "lightfields[0].slab: expected a slab name or index, got a boolean"},
     {"bad_transform_shear.json", RL_ERR_INPUT, "lightfields[0].transform: the upper 3x3 must be a rotation times a uniform scale (it shears"},

@@ -46,8 +46,13 @@ static void print_help(FILE *out)
             "       ilf --help | --version\n\n"
             "Tools for incident light fields stored as sphere-plane slabs in HDF5 files.\n\n"
             "Commands:\n");
+    /* The column is as wide as the longest name, so no name runs into its summary. */
+    int width = 0;
     for (size_t k = 0; k < command_count; k++)
-        fprintf(out, "  %-10s %s\n", commands[k].name, commands[k].summary);
+        if ((int)strlen(commands[k].name) > width)
+            width = (int)strlen(commands[k].name);
+    for (size_t k = 0; k < command_count; k++)
+        fprintf(out, "  %-*s  %s\n", width, commands[k].name, commands[k].summary);
     fprintf(out,
             "\nRun 'ilf COMMAND --help' for a command's options and examples.\n\n"
             "Exit status: 0 success; 1 failure while running (e.g. an output cannot be\n"

@@ -33,7 +33,7 @@
 /* Grid squares a work item holds (whole rows). Larger tiles set up fewer (emitter, tile) pairs and share
  * more of what a pair builds (shadows, tables, anchors); 8192 rather than 2048 took the light-field
  * classroom's direct pass at 1.3 M cells from 9.7 to 9.0 s (anchors on its 3-row tiles were measured
- * twice) and the paper's 'beams' from 1.24 to 1.04 s, errors unchanged (BENCHMARKS.md, section 2m),
+ * twice) and the paper's 'beams' from 1.24 to 1.04 s, errors unchanged (BENCHMARKS-journal.md, section 2m),
  * and still leaves hundreds of items to share out between threads. */
 #define TILE_CELLS 8192u
 /* Cells a pass gathering by first hits (bounce_rays) gathers in a work item: each cell casts its own rays,

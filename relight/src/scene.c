@@ -20,12 +20,14 @@
  * allocation is sized by a count read from a file before that count has
  * been checked against its limit; arrays grow as elements pass their checks.
  */
+#include <errno.h>
 #include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "emitter.h"
 #include "mesh.h"
@@ -505,10 +507,10 @@ static const rl_lightfield *earlier_lightfield(const rl_scene *s, const rl_light
 /* Reads one entry of "lightfields" into lf; the scene's destroy releases what it owns. */
 static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *elem, rl_lightfield *lf)
 {
-    static const char *const keys[] = {"file", "slab", "transform", NULL};
+    static const char *const keys[] = {"file", "slab", "transform", "made_by", NULL};
     char sub[ELEM_MAX];
-    const ilf_json *fj = NULL, *sj, *tj;
-    const char *file = NULL;
+    const ilf_json *fj = NULL, *sj, *tj, *mj;
+    const char *file = NULL, *made_by = NULL;
     double t[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     rl_status st = json_keys(b, j, elem, keys);
     if (st == RL_OK)
@@ -522,6 +524,10 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
     member_elem(sub, elem, "slab");
     if (st == RL_OK && sj && ilf_json_type_of(sj) != ILF_JSON_STRING && ilf_json_type_of(sj) != ILF_JSON_NUMBER)
         st = rl__build_fail(b, sub, "expected a slab name or index, got %s", json_kind(sj));
+    mj = member(j, "made_by");
+    member_elem(sub, elem, "made_by");
+    if (st == RL_OK && mj)
+        st = json_string(b, mj, sub, &made_by);
     tj = member(j, "transform");
     member_elem(sub, elem, "transform");
     if (st == RL_OK && tj)
@@ -538,9 +544,12 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
         lf->lf = same->lf;
     } else {
         lfio_status ls = lfio_lightfield_read(lf->file, &lf->lf);
+        if (ls == LFIO_ERR_NOMEM)
+            return rl__fail(RL_ERR_NOMEM, "%s: %s: %s", b->file, elem, lfio_errmsg());
+        if (ls != LFIO_OK && made_by && access(lf->file, F_OK) != 0 && errno == ENOENT)
+            return rl__build_fail(b, elem, "%s (it is generated: %.512s)", lfio_errmsg(), made_by);
         if (ls != LFIO_OK)
-            return ls == LFIO_ERR_NOMEM ? rl__fail(RL_ERR_NOMEM, "%s: %s: %s", b->file, elem, lfio_errmsg())
-                                        : rl__build_fail(b, elem, "%s", lfio_errmsg());
+            return rl__build_fail(b, elem, "%s", lfio_errmsg());
         lf->owns_lf = 1;
     }
     member_elem(sub, elem, "slab");
