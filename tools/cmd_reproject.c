@@ -225,8 +225,8 @@ int ilf_cmd_reproject(int argc, char **argv)
     int code = parse_arguments(&o, argc, argv);
     if (code >= 0)
         return code;
-    if (!cli_output_folder_exists("reproject", o.output))
-        return ILF_EXIT_FAILED;
+    if ((code = cli_output_check("reproject", o.output)) != ILF_EXIT_OK)
+        return code;
     cli_output_watch(o.output);
     lfio_slab *captured = NULL;
     cap_proxy *proxy = NULL;

@@ -607,8 +607,8 @@ int ilf_cmd_synth(int argc, char **argv)
         return code;
     if (!check_combination(&o) || !check_size(&o.desc))
         return ILF_EXIT_USAGE;
-    if (!cli_output_folder_exists("synth", o.output))
-        return ILF_EXIT_FAILED;
+    if ((code = cli_output_check("synth", o.output)) != ILF_EXIT_OK)
+        return code;
     cli_output_watch(o.output);
     lfio_slab *slab = NULL;
     lfio_status st = lfio_slab_new(&o.desc, &slab);
