@@ -67,6 +67,7 @@ static FILE *open_regular(const char *path)
 /* What the files assimp opened through mesh_io_open() came to: the first refusal, if any. */
 typedef struct mesh_io {
     char refused[512];
+    int nomem; /* an open failed for want of memory: the import fails as ILF_MESH_ERR_NOMEM */
 } mesh_io;
 
 static size_t mesh_io_read(struct aiFile *f, char *buf, size_t size, size_t count)
@@ -122,6 +123,7 @@ static struct aiFile *mesh_io_open(struct aiFileIO *io, const char *path, const 
             fclose(fp);
         else
             close(fd);
+        m->nomem = 1;
         return NULL;
     }
     f->ReadProc = mesh_io_read;
@@ -416,17 +418,20 @@ ilf_mesh_status ilf_mesh_import(const char *path, ilf_mesh **out, char *why, siz
         snprintf(why, why_size, "cannot read '%s': %s", path, problem);
         return ILF_MESH_ERR_INPUT;
     }
-    mesh_io files = {""};
+    mesh_io files = {"", 0};
     struct aiFileIO io = {mesh_io_open, mesh_io_close, (aiUserData)&files};
     const struct aiScene *sc =
         aiImportFileEx(path, aiProcess_PreTransformVertices | aiProcess_ValidateDataStructure, &io);
-    if (!sc || files.refused[0] != '\0') {
-        if (files.refused[0] != '\0')
+    if (!sc || files.refused[0] != '\0' || files.nomem) {
+        ilf_mesh_status failure = files.nomem && files.refused[0] == '\0' ? ILF_MESH_ERR_NOMEM : ILF_MESH_ERR_INPUT;
+        if (failure == ILF_MESH_ERR_NOMEM)
+            snprintf(why, why_size, "'%s': out of memory", path);
+        else if (files.refused[0] != '\0')
             snprintf(why, why_size, "cannot read '%s': %s", path, files.refused);
         else
             snprintf(why, why_size, "cannot read '%s': %s", path, aiGetErrorString());
         aiReleaseImport(sc);
-        return ILF_MESH_ERR_INPUT;
+        return failure;
     }
     ilf_mesh_status st = ILF_MESH_OK;
     if (sc->mFlags & AI_SCENE_FLAGS_INCOMPLETE) {
