@@ -22,7 +22,8 @@
 #     data chunks (located with h5py when present, else spread over a
 #     radiance-heavy file) must make `ilf verify` exit 2 naming a checksum.
 # (d) Output sets (docs/cli.md): `ilf relight -o new/deep` interrupted by
-#     SIGINT or SIGTERM leaves neither folder, and SIGINT says so in one line;
+#     SIGINT or SIGTERM leaves neither folder, and SIGINT says so in one line,
+#     as it does for `ilf irradiance`, which writes no file;
 #     with FAILRENAME_SHIM (tests/fault/failrename.c) one rename of the
 #     placing fails: the folder must hold the earlier run's files, byte for
 #     byte, and nothing else (the view of the earlier run included, when the
@@ -393,6 +394,18 @@ for sig in INT TERM; do
         rm -rf "$SETS/new"
     done
 done
+
+# A command that writes no file says it was interrupted all the same (a point query that would take minutes).
+printf '2 2 0 0 0 1\n' >"$SETS/points.txt"
+set -m
+"$ILF" irradiance "$ROOM" --points "$SETS/points.txt" --method area --samples 1048576 --bounces 3 >"$LOG" 2>&1 &
+pid=$!
+set +m
+sleep 1
+kill -INT "$pid" 2>/dev/null
+stop "$pid"
+check "irradiance, SIGINT: ends by it (exit $STATUS)" test "$STATUS" -eq 130
+check "irradiance, SIGINT: says so in one line" grep -q "^ilf: interrupted$" "$LOG"
 
 # placed_whole WHY FAILING ARGS...: a relight over $SETS/kept whose rename onto $SETS/kept/FAILING fails
 # must exit 1 naming it and leave the earlier run's files exactly as they were.

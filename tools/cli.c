@@ -38,8 +38,14 @@ void cli_set_identity(const char *program, const char *suffix)
     snprintf(message_suffix, sizeof message_suffix, "%s", suffix ? suffix : "");
 }
 
+/* Set by the interruption watcher once it cleans up: the main thread's errors about outputs vanishing under
+ * it are not news, and the watcher's own line says what happened. */
+static atomic_int interrupting;
+
 void cli_error(const char *sub, const char *fmt, ...)
 {
+    if (atomic_load(&interrupting))
+        return;
     va_list ap;
     fprintf(stderr, "%s %s%s: ", message_program, sub, message_suffix);
     va_start(ap, fmt);
@@ -608,9 +614,18 @@ static int signal_pipe[2] = {-1, -1};
 /* Set while the main thread holds watched_lock (cli_interrupts_hold()); only that thread reads or writes it. */
 static int held;
 
+/* The process that installed the handlers: a child forked after (bench's sweeps) ends by the signal itself
+ * instead of waking its parent's watcher through the inherited pipe. */
+static pid_t watcher_owner;
+
 /* Signal handler: hands the signal to the watcher thread. */
 static void on_interrupt(int sig)
 {
+    if (getpid() != watcher_owner) {
+        signal(sig, SIG_DFL);
+        raise(sig);
+        return;
+    }
     unsigned char byte = (unsigned char)sig;
     int saved = errno;
     if (write(signal_pipe[1], &byte, 1) < 0) {
@@ -703,15 +718,17 @@ static void remove_created(const char *path, size_t created_from)
     }
 }
 
-/* Says on stderr, in one line, which registered outputs the command had placed before the interruption. */
+/* Says on stderr, in one line, which registered outputs the command had placed before the interruption
+ * ("interrupted" alone for a command that writes no files). */
 static void say_what_was_kept(void)
 {
     int kept = 0;
-    fprintf(stderr, "%s%s%s: interrupted; ", isatty(STDERR_FILENO) ? "\n" : "", message_program, message_suffix);
+    fprintf(stderr, "%s%s%s: interrupted%s", isatty(STDERR_FILENO) ? "\n" : "", message_program, message_suffix,
+            watched_count > 0 ? "; " : "");
     for (size_t k = 0; k < watched_count; k++)
         if (watched_kind[k] == WATCH_FILE && watched[k][0] != '\0' && was_replaced(watched[k], &watched_before[k]))
             fprintf(stderr, "%s%s", kept++ ? ", " : "kept (complete) ", watched[k]);
-    fprintf(stderr, "%s\n", kept ? "" : "nothing written");
+    fprintf(stderr, "%s\n", kept || watched_count == 0 ? "" : "nothing written");
 }
 
 /* Watcher thread: waits for a signal, removes every registered output's temporaries, the staging folders and
@@ -724,6 +741,7 @@ static void *watch_interrupts(void *unused)
         if (errno != EINTR)
             return NULL;
     }
+    atomic_store(&interrupting, 1);
     pthread_mutex_lock(&watched_lock);
     for (size_t k = 0; k < watched_count; k++) {
         if (watched_kind[k] == WATCH_STAGING)
@@ -750,6 +768,7 @@ static int start_watcher(void)
         return started > 0;
     pthread_t thread;
     started = -1;
+    watcher_owner = getpid();
     if (pipe(signal_pipe) != 0)
         return 0;
     if (pthread_create(&thread, NULL, watch_interrupts, NULL) != 0)
@@ -793,6 +812,13 @@ static void unlock_watched(void)
 {
     if (!held)
         pthread_mutex_unlock(&watched_lock);
+}
+
+void cli_interrupts_install(void)
+{
+    lock_watched();
+    start_watcher();
+    unlock_watched();
 }
 
 void cli_interrupts_hold(void)

@@ -251,6 +251,10 @@ int cli_folder_make(const char *sub, const char *path, size_t *created_from);
  * first, each only if it is empty. */
 void cli_folder_unmake(const char *path, size_t created_from);
 
+/* Installs the handlers and the watcher of cli_output_watch() now, so that a command interrupted before it
+ * registers anything still says so in one line ("ilf: interrupted"). */
+void cli_interrupts_install(void);
+
 /*
  * Holds interruptions off (they wait, then clean up as above) while the calling thread places a set of outputs,
  * so that a set is never left half placed; registrations from the same thread go on meanwhile. Pair each call

@@ -86,6 +86,7 @@ int main(int argc, char **argv)
                 first);
         return ILF_EXIT_USAGE;
     }
+    cli_interrupts_install(); /* an interrupted command says so, and what it kept (cli.h) */
     /* results on stdout are outputs too: one that cannot be written (a full disk, /dev/full) fails the run */
     int code = cli_stdout_finish(first, command->run(argc - 1, argv + 1));
 #ifdef __SANITIZE_ADDRESS__

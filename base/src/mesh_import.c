@@ -393,7 +393,10 @@ ilf_mesh_status ilf_mesh_import(const char *path, ilf_mesh **out, char *why, siz
     char problem[256];
     int fd, err = ilf_input_open(path, &fd, problem, sizeof problem);
     if (err == EISDIR || err == EINVAL) {
-        snprintf(why, why_size, "'%s' %s", path, problem);
+        if (err == EISDIR)
+            snprintf(why, why_size, "'%s' is not a regular file (a folder)", path);
+        else
+            snprintf(why, why_size, "'%s' %s", path, problem);
         return ILF_MESH_ERR_INPUT;
     }
     if (err != 0 || fstat(fd, &sb) != 0) {
