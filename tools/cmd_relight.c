@@ -177,8 +177,8 @@ static char *join_path(const char *dir, const char *name)
 /* What an earlier run's file is called while it waits aside in the staging folder. */
 #define ASIDE_PREFIX ".earlier-"
 
-/* Makes every output's two paths for the staging folder named `stage` (the template's length): nothing is
- * allocated once outputs are placed. @return an exit code. */
+/* Makes every output's paths (staged, placed, aside) for the staging folder named `stage` (the template's
+ * length): nothing is allocated once outputs are placed. @return an exit code. */
 static int stage_paths(relight_run *run, const char *stage)
 {
     run->stage = join_path(run->o->output, stage);

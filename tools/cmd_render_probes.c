@@ -263,6 +263,9 @@ static int files_open(probes_files *f)
         f->stage[0] = '\0';
         return 0;
     }
+    char manifest[PATH_BYTES];
+    if (join(f->o->output, MANIFEST_NAME, manifest))
+        cli_output_watch(manifest); /* the set's last name: an interruption says whether the set was placed */
     return 1;
 }
 
