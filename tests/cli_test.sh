@@ -317,6 +317,31 @@ check "no partial synth output" absent "$TMP/no"
 expect 1 "slice into a missing folder" "$ILF" slice "$CONST" --direction 0 -o "$TMP/no/such/dir/x.exr"
 check "no partial slice output" absent "$TMP/no"
 
+# Outputs are checked before any work (docs/cli.md): each of these requests would compute for minutes
+# if it started (an 805 MB slab, 7e10 evaluations), so the time limit catches a check made too late.
+SLOW=(--kind radial --cone 180 --grid 128x128 --n 32 --supersample 32)
+SRC_SQUARE=$(cd "$(dirname "$0")" && pwd)/scenes/cli_square.json
+mkdir -p "$TMP/afolder"
+expect 2 "synth onto a folder is refused before the work" timeout 20 "$ILF" synth "${SLOW[@]}" -o "$TMP/afolder"
+check "synth onto a folder says so" stderr_has "is a folder, not a file"
+expect 2 "synth onto a name ending in / is refused" timeout 20 "$ILF" synth "${SLOW[@]}" -o "$TMP/afolder/"
+check "the folder is still empty" test -z "$(ls -A "$TMP/afolder")"
+mkfifo "$TMP/fifo.h5"
+expect 2 "synth onto a FIFO is refused before the work" timeout 20 "$ILF" synth "${SLOW[@]}" -o "$TMP/fifo.h5"
+check "synth onto a FIFO says so" stderr_has "is a FIFO, not a regular file"
+check "the FIFO is still a FIFO" test -p "$TMP/fifo.h5"
+expect 1 "synth into a missing folder fails before the work" timeout 20 "$ILF" synth "${SLOW[@]}" -o "$TMP/no/x.h5"
+expect 2 "relight into a FIFO is refused" "$ILF" relight "$SRC_SQUARE" -o "$TMP/fifo.h5" --quiet
+check "relight into a FIFO says so" stderr_has "is a FIFO, not a folder"
+mkdir -p "$TMP/fifodir"
+mkfifo "$TMP/fifodir/view.png"
+expect 2 "relight onto a FIFO named view.png is refused" "$ILF" relight "$SRC_SQUARE" -o "$TMP/fifodir" --quiet
+check "relight onto a FIFO named view.png names it" stderr_has "fifodir/view.png: is a FIFO"
+check "relight left the folder as it was" only_files "$TMP/fifodir" view.png
+# Results on standard output are outputs too: a full device fails the run with the system's reason.
+expect 1 "info with its standard output on /dev/full" bash -c '"$0" info "$1" >/dev/full' "$ILF" "$CONST"
+check "info on /dev/full gives the reason" stderr_has "cannot write the standard output: No space left on device"
+
 # A write that fails part-way (file size limit; SIGXFSZ ignored so write()
 # returns an error) must leave an existing output exactly as it was.
 KEEP=$TMP/keep
@@ -410,6 +435,11 @@ expect 0 "relight again over the same folder" "$ILF" relight "$SQUARE" -o "$RELI
 check "rewriting leaves no temporaries" only_files "$RELIT/quiet" radiance.h5 stats.json view.exr view.png
 expect 0 "relight --no-view" "$ILF" relight "$SQUARE" -o "$RELIT/noview" "${FAST[@]}" --quiet --no-view
 check "relight --no-view writes no view" only_files "$RELIT/noview" radiance.h5 stats.json
+cp -r "$RELIT/quiet" "$RELIT/quiet_again"
+expect 0 "relight --no-view over a run with a view" "$ILF" relight "$SQUARE" -o "$RELIT/quiet_again" "${FAST[@]}" \
+    --quiet --no-view
+check "the earlier run's view is gone: the folder describes one run" only_files "$RELIT/quiet_again" radiance.h5 \
+    stats.json
 expect 0 "relight --no-view again elsewhere" "$ILF" relight "$SQUARE" -o "$RELIT/noview2" "${FAST[@]}" --quiet \
     --no-view
 check "the same run writes the same radiance.h5, byte for byte" \
@@ -556,6 +586,15 @@ check "render-probes writes the probes and the manifest" only_files "$CAP/probes
     probe_0_1.exr probe_1_0.exr probe_1_1.exr
 check "probes are 64x32 float EXR" image_is "$CAP/probes/probe_1_1.exr" 64 32 3
 check "the manifest names the pattern" grep -q 'probe_{i}_{j}.exr' "$CAP/probes/manifest.json"
+cp -r "$CAP/probes" "$CAP/probes_again"
+expect 0 "render-probes of a smaller grid over the earlier probes" "$ILF" render-probes "$SRC/data/capture/scene.json" \
+    --plane "$PLANE" --grid 1x2 --size 64x32 --n 8 --partition-n 8 --rays 1 -o "$CAP/probes_again" --quiet
+check "the probes outside the new grid are gone" only_files "$CAP/probes_again" manifest.json probe_0_0.exr \
+    probe_0_1.exr
+expect 2 "render-probes past the work limit is refused" "$ILF" render-probes "$SRC/data/capture/scene.json" \
+    --plane "$PLANE" --grid 1024x1024 --size 4096x2048 -o "$CAP/never"
+check "render-probes past the work limit names the limit" stderr_has "ilf/limits.h"
+check "render-probes past the work limit created nothing" absent "$CAP/never"
 expect 0 "capture the rendered probes" "$ILF" capture "$CAP/probes/manifest.json" -o "$CAP/probes.h5" --threads 2
 check "capture reports energy" stdout_has "^energy: .* differs by at most"
 check "capture names the output" stdout_has "^wrote .*probes.h5: slab 'probes'"

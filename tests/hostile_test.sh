@@ -110,6 +110,23 @@ wrap() {
     echo "$file"
 }
 
+# run_outputs N PATH EXPECT...: every command that writes an output, with PATH as its output (a special
+# file); PATH must still be what it was afterwards (never replaced by a regular file).
+run_outputs() {
+    local n=$1 path=$2 out=$TMP/out/$1 before
+    shift 2
+    before=$(stat -L -c %F "$path")
+    "$@" - "$ILF" synth --kind constant --grid 2x2 --n 2 -o "$path"
+    "$@" - "$ILF" slice "$WORK/gen/base.h5" --position 0,0 -o "$path"
+    "$@" - "$ILF" relight "$TMP/valid.json" -o "$path" --quiet
+    "$@" - "$ILF" reproject "$WORK/gen/base.h5" --proxy "$PROXY" -o "$path" --quiet
+    "$@" - "$ILF" render-probes "$TMP/valid.json" --plane 0,0,0.5:1,0,0:0,1,0 -o "$path" --quiet
+    [ "$CAPTURE" -eq 1 ] && "$@" - "$ILF" capture "$STUDIO" -o "$path" --quiet
+    if [ "$(stat -L -c %F "$path")" != "$before" ]; then
+        echo "FAIL: $path was $before, is now $(stat -L -c %F "$path")" >>"$TMP/results/$n"
+    fi
+}
+
 # run_case N KIND EXIT FILE PROBLEM: runs every command of KIND on FILE; results go to results/N.
 run_case() {
     local n=$1 kind=$2 path=$WORK/$4 out=$TMP/out/$1
@@ -127,6 +144,9 @@ run_case() {
         "${expect[@]}" "$out" "$ILF" relight "$(wrap lightfield "$path" "$n")" -o "$out" --quiet
         ;;
     verify) "${expect[@]}" - "$ILF" verify "$path" ;;
+    points) "${expect[@]}" - "$ILF" irradiance "$TMP/valid.json" --points "$path" ;;
+    proxy) "${expect[@]}" "$out.h5" "$ILF" reproject "$WORK/gen/base.h5" --proxy "$path" -o "$out.h5" --quiet ;;
+    output) run_outputs "$n" "$path" "${expect[@]}" ;;
     manifest) "${expect[@]}" "$out.h5" "$ILF" capture "$path" -o "$out.h5" --quiet ;;
     image) "${expect[@]}" "$out.h5" "$ILF" capture "$(wrap image "$path" "$n")" -o "$out.h5" --quiet ;;
     *) echo "FAIL: cases.txt: unknown kind '$kind' for $4" >>"$TMP/results/$n" ;;
@@ -157,6 +177,31 @@ elif ! "$PY" "$WORK/gen_hostile.py" "$WORK/gen" "$WORK/gen/base.h5"; then
     echo "FAIL: gen_hostile.py failed" >"$TMP/results/gen"
 fi
 
+# ------------------------------------------------------------------ special files
+
+# Special files where a file belongs, and files naming them (cp -r does not copy FIFOs, so they are made
+# here, under gen/io): every input is opened without blocking and refused unless it is a regular file
+# (a FIFO would otherwise hang the command), every output refused unless it is a regular file or nothing.
+IO=$WORK/gen/io
+mkdir -p "$IO"
+for f in fifo.json fifo.obj fifo.mtl fifo.bin fifo.txt fifo.exr fifo.h5 fifo_out.png; do
+    mkfifo "$IO/$f"
+done
+ln -s /dev/zero "$IO/zero.json"
+ln -s /dev/null "$IO/null.png"
+printf 'mtllib fifo.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n' >"$IO/mtllib_fifo.obj"
+printf '{"asset": {"version": "2.0"}, "buffers": [{"uri": "fifo.bin", "byteLength": 48}],
+  "bufferViews": [{"buffer": 0, "byteLength": 48}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+  "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0}\n' >"$IO/buffer_fifo.gltf"
+printf '0 0 1 0 0 1\n1 1 0 0\0000 1\n' >"$IO/nul_in_line.txt"
+printf '{"pattern": "fifo.exr", "plane": {"origin": [0, 0, 1], "u": [1, 0, 0], "v": [0, -1, 0]},
+  "grid": {"nu": 1, "nv": 1}, "n": 2}\n' >"$IO/image_fifo.json"
+PROXY=$CORPUS/../../data/capture/proxy.json
+STUDIO=$CORPUS/../../data/capture/studio.json
+
 # ------------------------------------------------------------------ the baseline
 
 # The commands' own peak memory on small valid inputs: the largest is what a bad file's run
@@ -183,7 +228,6 @@ if [ -e "$WORK/gen/base.h5" ]; then
     baseline "$ILF" verify "$WORK/gen/base.h5"
     baseline "$ILF" slice "$WORK/gen/base.h5" --position 0,0 -o "$TMP/valid-slice.png"
 fi
-STUDIO=$CORPUS/../../data/capture/studio.json
 if [ "$CAPTURE" -eq 1 ] && [ -e "$STUDIO" ]; then
     baseline "$ILF" capture "$STUDIO" -o "$TMP/valid-capture.h5" --quiet
 fi

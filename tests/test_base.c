@@ -1,7 +1,9 @@
 /*
  * test_base.c - the ground floor (base/): the thread pool runs every index
  * exactly once whatever the count, and the atomic writer's temporaries follow
- * the one naming rule, vanish on release and replace the destination whole.
+ * the one naming rule, vanish on release and replace the destination whole;
+ * inputs that are not regular files are refused without blocking, and outputs
+ * that are not regular files are neither written nor replaced.
  */
 #include <dirent.h>
 #include <errno.h>
@@ -13,6 +15,7 @@
 #include <unistd.h>
 
 #include "ilf/atomic_file.h"
+#include "ilf/file_kind.h"
 #include "ilf/hash.h"
 #include "ilf/limits.h"
 #include "ilf/message.h"
@@ -192,6 +195,57 @@ static void test_atomic(const char *tmp)
     CHECK(rmdir(dir) == 0);
 }
 
+/* ----------------------------------------------------------- file kinds */
+
+/* A FIFO with no writer is refused at once (a blocking open would hang this test), as input and as output; a
+ * regular file is opened in blocking mode; a folder, /dev/null and a missing folder get their verdicts, and the
+ * atomic writer refuses to replace a FIFO. */
+static void test_file_kind(const char *tmp)
+{
+    char dir[4096], fifo[4200], file[4200], missing[4200], why[256];
+    snprintf(dir, sizeof dir, "%s/test_base_kind_%ld", tmp, (long)getpid());
+    CHECK(mkdir(dir, 0700) == 0);
+    snprintf(fifo, sizeof fifo, "%s/fifo", dir);
+    snprintf(file, sizeof file, "%s/file", dir);
+    snprintf(missing, sizeof missing, "%s/no/file", dir);
+    CHECK(mkfifo(fifo, 0600) == 0);
+    const char *step = NULL;
+    CHECK(ilf_atomic_write(file, "x", 1, &step) == 0);
+    int fd = -1;
+    CHECK(ilf_input_open(fifo, &fd, why, sizeof why) == EINVAL && fd == -1 && strstr(why, "is a FIFO") != NULL);
+    CHECK(ilf_input_open(dir, &fd, why, sizeof why) == EISDIR && fd == -1);
+    CHECK(ilf_input_open(missing, &fd, why, sizeof why) == ENOENT && fd == -1);
+    CHECK(ilf_input_open(file, &fd, why, sizeof why) == 0 && fd >= 0);
+    if (fd >= 0) {
+        char c = 0;
+        CHECK(read(fd, &c, 1) == 1 && c == 'x');
+        close(fd);
+    }
+    CHECK(ilf_input_check("/dev/null", why, sizeof why) == EINVAL && strstr(why, "character device") != NULL);
+    CHECK(ilf_output_check(file, why, sizeof why) == ILF_OUTPUT_OK);
+    CHECK(ilf_output_check(fifo, why, sizeof why) == ILF_OUTPUT_REFUSED && strstr(why, "is a FIFO") != NULL);
+    CHECK(ilf_output_check("/dev/null", why, sizeof why) == ILF_OUTPUT_REFUSED);
+    CHECK(ilf_output_check(dir, why, sizeof why) == ILF_OUTPUT_REFUSED);
+    CHECK(ilf_output_check(missing, why, sizeof why) == ILF_OUTPUT_FAILED && strstr(why, "does not exist") != NULL);
+    CHECK(ilf_output_folder_check(dir, why, sizeof why) == ILF_OUTPUT_OK);
+    CHECK(ilf_output_folder_check(missing, why, sizeof why) == ILF_OUTPUT_OK); /* can be created */
+    CHECK(ilf_output_folder_check(fifo, why, sizeof why) == ILF_OUTPUT_REFUSED);
+    CHECK(ilf_output_folder_check(file, why, sizeof why) == ILF_OUTPUT_FAILED);
+    CHECK(ilf_atomic_write(fifo, "y", 1, &step) == EEXIST && step != NULL);
+    struct stat st;
+    CHECK(lstat(fifo, &st) == 0 && S_ISFIFO(st.st_mode));
+    DIR *d = opendir(dir);
+    int entries = 0;
+    for (struct dirent *e; d != NULL && (e = readdir(d)) != NULL;)
+        entries += e->d_name[0] != '.';
+    if (d != NULL)
+        closedir(d);
+    CHECK(entries == 2); /* fifo and file: no temporary left */
+    unlink(fifo);
+    unlink(file);
+    CHECK(rmdir(dir) == 0);
+}
+
 /* The message rule: formatted, cut at a whole UTF-8 character, safe when an argument is the buffer. */
 static void test_message(void)
 {
@@ -219,6 +273,7 @@ int main(void)
     const char *tmp = getenv("ILF_TEST_TMP");
     test_pool();
     test_atomic(tmp && *tmp ? tmp : "/tmp");
+    test_file_kind(tmp && *tmp ? tmp : "/tmp");
     /* splitmix64 of 0 is the published first output of the generator seeded with 0. */
     CHECK(ilf_splitmix64(0) == 0xe220a8397b1dcdafull);
     if (failures)

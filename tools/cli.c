@@ -12,6 +12,7 @@
 #include "cli.h"
 #include "ilf/atomic_file.h"
 #include "tonemap.h"
+#include "ilf/file_kind.h"
 
 #include <ctype.h>
 #include <dirent.h>
@@ -38,8 +39,14 @@ void cli_set_identity(const char *program, const char *suffix)
     snprintf(message_suffix, sizeof message_suffix, "%s", suffix ? suffix : "");
 }
 
+/* Set by the interruption watcher once it cleans up: the main thread's errors about outputs vanishing under
+ * it are not news, and the watcher's own line says what happened. */
+static atomic_int interrupting;
+
 void cli_error(const char *sub, const char *fmt, ...)
 {
+    if (atomic_load(&interrupting))
+        return;
     va_list ap;
     fprintf(stderr, "%s %s%s: ", message_program, sub, message_suffix);
     va_start(ap, fmt);
@@ -479,22 +486,44 @@ int cli_select_slab(const char *sub, const char *path, const lfio_reader *r, con
     return 0;
 }
 
-int cli_output_folder_exists(const char *sub, const char *path)
+/* @return the exit code for verdict v on path, reported with why. */
+static int output_verdict(const char *sub, const char *path, ilf_output_verdict v, const char *why)
 {
-    const char *slash = strrchr(path, '/');
-    char folder[4096];
-    if (slash == NULL)
-        return 1; /* the current folder */
-    size_t len = slash == path ? 1 : (size_t)(slash - path); /* "/x" lives in "/" */
-    if (len >= sizeof folder)
-        return 1; /* leave such paths to the writer, which reports precisely */
-    memcpy(folder, path, len);
-    folder[len] = '\0';
+    if (v == ILF_OUTPUT_OK)
+        return ILF_EXIT_OK;
+    cli_error(sub, "cannot write %s: %s", path, why);
+    return v == ILF_OUTPUT_REFUSED ? ILF_EXIT_USAGE : ILF_EXIT_FAILED;
+}
+
+int cli_output_check(const char *sub, const char *path)
+{
+    char why[512];
+    return output_verdict(sub, path, ilf_output_check(path, why, sizeof why), why);
+}
+
+int cli_output_folder_check(const char *sub, const char *dir, const char *const *names, size_t count)
+{
+    char why[512], path[4096];
+    int code = output_verdict(sub, dir, ilf_output_folder_check(dir, why, sizeof why), why);
+    size_t len = strlen(dir);
     struct stat st;
-    if (stat(folder, &st) == 0 && S_ISDIR(st.st_mode))
-        return 1;
-    cli_error(sub, "cannot write %s: folder '%s' does not exist", path, folder);
-    return 0;
+    /* a folder still to be created holds nothing yet */
+    int exists = stat(dir, &st) == 0;
+    for (size_t k = 0; code == ILF_EXIT_OK && exists && k < count; k++) {
+        int n = snprintf(path, sizeof path, "%s%s%s", dir, len > 0 && dir[len - 1] == '/' ? "" : "/", names[k]);
+        if (n > 0 && (size_t)n < sizeof path)
+            code = output_verdict(sub, path, ilf_output_check(path, why, sizeof why), why);
+    }
+    return code;
+}
+
+int cli_stdout_finish(const char *sub, int code)
+{
+    errno = 0;
+    if (fflush(stdout) == 0 && !ferror(stdout))
+        return code;
+    cli_error(sub, "cannot write the standard output: %s", errno != 0 ? strerror(errno) : "write error");
+    return code == ILF_EXIT_OK ? ILF_EXIT_FAILED : code;
 }
 
 long long cli_file_size(const char *path)
@@ -651,31 +680,78 @@ void cli_progress_finish(cli_progress *p)
  * temporary name beside it, by the one rule of ilf/atomic_file.h
  * (".<name>.tmp-<tag>[.<ext>]"). A handler for SIGINT, SIGTERM and SIGHUP only writes the signal
  * number to a pipe, which is all a handler may safely do; a watcher thread
- * reading the pipe then removes the temporaries of every registered output
- * and ends the process by the same signal, its default action restored.
+ * reading the pipe then removes the temporaries of every registered output,
+ * every staging folder and every folder the command created, says in one line
+ * which registered outputs it had already placed ("kept ..." or "nothing
+ * written"), and ends the process by the same signal, its default action
+ * restored (so the shell sees 128 + the signal: 130 for SIGINT). While the
+ * main thread holds the watcher off (cli_interrupts_hold(), placing an output
+ * set), an interruption waits for it to finish.
  */
 
 #define MAX_WATCHED 16
 #define MAX_WATCHED_PATH 4096
 
+/* What a registered path is: an output file (its temporaries are removed), a staging folder (removed whole)
+ * or a folder the command created (removed, with its created parents, if empty). */
+enum watch_kind { WATCH_FILE, WATCH_STAGING, WATCH_CREATED };
+
+/* Which file a path named when it was registered, to tell at an interruption whether the command replaced it. */
+typedef struct file_identity {
+    int exists;
+    dev_t dev;
+    ino_t ino;
+    struct timespec mtime;
+} file_identity;
+
 static const int watched_signals[] = {SIGINT, SIGTERM, SIGHUP};
 static pthread_mutex_t watched_lock = PTHREAD_MUTEX_INITIALIZER;
-/* Fixed storage: registering an output cannot run out of memory. A folder
- * (is_folder) is a staging folder, removed whole. */
+/* Fixed storage: registering an output cannot run out of memory. */
 static char watched[MAX_WATCHED][MAX_WATCHED_PATH];
-static int watched_is_folder[MAX_WATCHED];
+static enum watch_kind watched_kind[MAX_WATCHED];
+static size_t watched_created_from[MAX_WATCHED]; /* WATCH_CREATED: length of the first folder created */
+static file_identity watched_before[MAX_WATCHED]; /* WATCH_FILE: what the path named when registered */
 static size_t watched_count;
 static int signal_pipe[2] = {-1, -1};
+/* Set while the main thread holds watched_lock (cli_interrupts_hold()); only that thread reads or writes it. */
+static int held;
+
+/* The process that installed the handlers: a child forked after (bench's sweeps) ends by the signal itself
+ * instead of waking its parent's watcher through the inherited pipe. */
+static pid_t watcher_owner;
 
 /* Signal handler: hands the signal to the watcher thread. */
 static void on_interrupt(int sig)
 {
+    if (getpid() != watcher_owner) {
+        signal(sig, SIG_DFL);
+        raise(sig);
+        return;
+    }
     unsigned char byte = (unsigned char)sig;
     int saved = errno;
     if (write(signal_pipe[1], &byte, 1) < 0) {
         /* the pipe is full: a signal is already on its way to the watcher */
     }
     errno = saved;
+}
+
+/* @return what path names now. */
+static file_identity identity_of(const char *path)
+{
+    struct stat st;
+    file_identity id = {0};
+    if (stat(path, &st) == 0)
+        id = (file_identity){1, st.st_dev, st.st_ino, st.st_mtim};
+    return id;
+}
+
+/* @return 1 if path names a file now that it did not name at registration (before). */
+static int was_replaced(const char *path, const file_identity *before)
+{
+    file_identity now = identity_of(path);
+    return now.exists && (!before->exists || now.dev != before->dev || now.ino != before->ino ||
+                          now.mtime.tv_sec != before->mtime.tv_sec || now.mtime.tv_nsec != before->mtime.tv_nsec);
 }
 
 /* Removes the temporaries of output path from its folder. */
@@ -722,7 +798,43 @@ static void remove_folder(const char *path)
     }
 }
 
-/* Watcher thread: waits for a signal, removes every registered output's temporaries, ends the process. */
+/* Removes folder path and its parents, deepest first, down to the first of them the command created (the
+ * prefix of created_from bytes), each only if empty. Allocates nothing. */
+static void remove_created(const char *path, size_t created_from)
+{
+    char folder[MAX_WATCHED_PATH];
+    size_t len = strlen(path);
+    if (created_from == 0 || len >= sizeof folder)
+        return;
+    memcpy(folder, path, len + 1);
+    while (len > 1 && folder[len - 1] == '/')
+        folder[--len] = '\0';
+    while (len >= created_from && rmdir(folder) == 0) {
+        char *slash = strrchr(folder, '/');
+        if (slash == NULL || len == created_from)
+            break;
+        while (slash > folder && slash[-1] == '/')
+            slash--;
+        *slash = '\0';
+        len = (size_t)(slash - folder);
+    }
+}
+
+/* Says on stderr, in one line, which registered outputs the command had placed before the interruption
+ * ("interrupted" alone for a command that writes no files). */
+static void say_what_was_kept(void)
+{
+    int kept = 0;
+    fprintf(stderr, "%s%s%s: interrupted%s", isatty(STDERR_FILENO) ? "\n" : "", message_program, message_suffix,
+            watched_count > 0 ? "; " : "");
+    for (size_t k = 0; k < watched_count; k++)
+        if (watched_kind[k] == WATCH_FILE && watched[k][0] != '\0' && was_replaced(watched[k], &watched_before[k]))
+            fprintf(stderr, "%s%s", kept++ ? ", " : "kept (complete) ", watched[k]);
+    fprintf(stderr, "%s\n", kept || watched_count == 0 ? "" : "nothing written");
+}
+
+/* Watcher thread: waits for a signal, removes every registered output's temporaries, the staging folders and
+ * the folders the command created, says what was kept, ends the process. */
 static void *watch_interrupts(void *unused)
 {
     (void)unused;
@@ -731,13 +843,19 @@ static void *watch_interrupts(void *unused)
         if (errno != EINTR)
             return NULL;
     }
+    atomic_store(&interrupting, 1);
     pthread_mutex_lock(&watched_lock);
     for (size_t k = 0; k < watched_count; k++) {
-        if (watched_is_folder[k])
+        if (watched_kind[k] == WATCH_STAGING)
             remove_folder(watched[k]);
-        else
+        else if (watched_kind[k] == WATCH_FILE)
             remove_temporaries(watched[k]);
     }
+    /* created folders last, once the staging folders in them are gone; the latest registered first */
+    for (size_t k = watched_count; k-- > 0;)
+        if (watched_kind[k] == WATCH_CREATED)
+            remove_created(watched[k], watched_created_from[k]);
+    say_what_was_kept();
     signal(sig, SIG_DFL);
     kill(getpid(), sig);
     pause(); /* the signal ends the process; the lock stays held so no output is registered meanwhile */
@@ -752,6 +870,7 @@ static int start_watcher(void)
         return started > 0;
     pthread_t thread;
     started = -1;
+    watcher_owner = getpid();
     if (pipe(signal_pipe) != 0)
         return 0;
     if (pthread_create(&thread, NULL, watch_interrupts, NULL) != 0)
@@ -772,21 +891,48 @@ static int start_watcher(void)
     return 1;
 }
 
-/* Registers path, a folder when is_folder; called with watched_lock held. */
-static void watch_locked(const char *path, int is_folder)
+/* Registers path as kind (created_from: WATCH_CREATED's prefix); called with watched_lock held. */
+static void watch_locked(const char *path, enum watch_kind kind, size_t created_from)
 {
     size_t length = strlen(path);
     if (watched_count < MAX_WATCHED && length < MAX_WATCHED_PATH && start_watcher()) {
-        watched_is_folder[watched_count] = is_folder;
+        watched_kind[watched_count] = kind;
+        watched_created_from[watched_count] = created_from;
+        watched_before[watched_count] = kind == WATCH_FILE ? identity_of(path) : (file_identity){0};
         memcpy(watched[watched_count++], path, length + 1);
     }
 }
 
-/* Registers path, a folder when is_folder. */
-static void watch(const char *path, int is_folder)
+/* Takes watched_lock unless this thread holds it already (cli_interrupts_hold()). */
+static void lock_watched(void)
+{
+    if (!held)
+        pthread_mutex_lock(&watched_lock);
+}
+
+static void unlock_watched(void)
+{
+    if (!held)
+        pthread_mutex_unlock(&watched_lock);
+}
+
+void cli_interrupts_install(void)
+{
+    lock_watched();
+    start_watcher();
+    unlock_watched();
+}
+
+void cli_interrupts_hold(void)
 {
     pthread_mutex_lock(&watched_lock);
-    watch_locked(path, is_folder);
+    start_watcher();
+    held = 1;
+}
+
+void cli_interrupts_release(void)
+{
+    held = 0;
     pthread_mutex_unlock(&watched_lock);
 }
 
@@ -796,27 +942,75 @@ char *cli_staging_make(char *template)
      * arrives in between waits for the registration, so it never leaves the folder behind. The
      * handlers go in first: a signal between mkdtemp and their installation would end the process
      * with the folder in place (starting the watcher's thread is slow under AddressSanitizer). */
-    pthread_mutex_lock(&watched_lock);
+    lock_watched();
     start_watcher();
     char *made = mkdtemp(template);
     int saved = errno;
     if (made != NULL)
-        watch_locked(made, 1);
-    pthread_mutex_unlock(&watched_lock);
+        watch_locked(made, WATCH_STAGING, 0);
+    unlock_watched();
     errno = saved;
     return made;
 }
 
+int cli_folder_make(const char *sub, const char *path, size_t *created_from)
+{
+    *created_from = 0;
+    char copy[MAX_WATCHED_PATH];
+    size_t len = strlen(path);
+    if (len == 0 || len >= sizeof copy) {
+        cli_error(sub, "cannot create folder '%s': %s", path, strerror(len ? ENAMETOOLONG : ENOENT));
+        return 0;
+    }
+    memcpy(copy, path, len + 1);
+    /* Under the watcher's lock, and registered before it is released: an interruption removes what was made. */
+    lock_watched();
+    start_watcher();
+    int ok = 1;
+    /* Each '/' after the first character ends a parent; the whole path ends the folder itself. */
+    for (char *at = copy + 1; ok; at++) {
+        int last = *at == '\0';
+        if (*at != '/' && !last)
+            continue;
+        *at = '\0';
+        struct stat st;
+        int made = mkdir(copy, 0777) == 0;
+        if (made && *created_from == 0)
+            *created_from = (size_t)(at - copy);
+        if (!made && errno != EEXIST) {
+            cli_error(sub, "cannot create folder '%s': %s", copy, strerror(errno));
+            ok = 0;
+        } else if (stat(copy, &st) != 0 || !S_ISDIR(st.st_mode)) {
+            cli_error(sub, "cannot use '%s' as a folder: it is not one", copy);
+            ok = 0;
+        }
+        if (last)
+            break;
+        *at = '/';
+    }
+    if (*created_from > 0)
+        watch_locked(path, WATCH_CREATED, *created_from);
+    unlock_watched();
+    return ok;
+}
+
+void cli_folder_unmake(const char *path, size_t created_from)
+{
+    remove_created(path, created_from);
+}
+
 void cli_output_watch(const char *path)
 {
-    watch(path, 0);
+    lock_watched();
+    watch_locked(path, WATCH_FILE, 0);
+    unlock_watched();
 }
 
 void cli_staging_forget(const char *path)
 {
-    pthread_mutex_lock(&watched_lock);
+    lock_watched();
     for (size_t k = 0; k < watched_count; k++)
-        if (watched_is_folder[k] && strcmp(watched[k], path) == 0)
+        if (watched_kind[k] == WATCH_STAGING && strcmp(watched[k], path) == 0)
             watched[k][0] = '\0'; /* opendir("") and rmdir("") fail harmlessly */
-    pthread_mutex_unlock(&watched_lock);
+    unlock_watched();
 }

@@ -220,11 +220,25 @@ int cli_select_slab(const char *sub, const char *path, const lfio_reader *r, con
                     size_t *index);
 
 /**
- * Checks that the folder an output goes into exists, so a long computation
- * does not end in a failed write. Reports the problem when it does not.
- * @return 1 if the folder exists, else 0.
+ * Checks, before any work, that file output path may be written (ilf/file_kind.h): it names a regular file or
+ * nothing (not a folder, a FIFO or a device node), in an existing folder this process may write. Reports the
+ * problem when not. @return ILF_EXIT_OK; ILF_EXIT_USAGE when path names what must not be replaced;
+ * ILF_EXIT_FAILED when its folder is missing or cannot be written (the system's reason).
  */
-int cli_output_folder_exists(const char *sub, const char *path);
+int cli_output_check(const char *sub, const char *path);
+
+/**
+ * As cli_output_check() for a folder of outputs: dir is a folder this process may write, or can be created
+ * (its nearest existing ancestor is one), and each of the count names in it that exists is a regular file.
+ */
+int cli_output_folder_check(const char *sub, const char *dir, const char *const *names, size_t count);
+
+/**
+ * Flushes standard output, where results are printed: a failed write (a full disk, /dev/full) is a failed
+ * output, reported with the system's reason. @return code, or ILF_EXIT_FAILED when code was ILF_EXIT_OK and
+ * the flush failed.
+ */
+int cli_stdout_finish(const char *sub, int code);
 
 /** Size of a file in bytes, or -1 if it cannot be examined. */
 long long cli_file_size(const char *path);
@@ -241,11 +255,15 @@ unsigned cli_default_threads(void);
  * Registers path as an output this command is about to write. The first call
  * installs handlers for SIGINT, SIGTERM and SIGHUP: on any of them the
  * temporaries the atomic writers keep beside every registered output
- * ("<name>.tmp-XXXXXX", ".<name>.tmp-XXXXXX.<ext>") are removed, then the
- * process ends by that signal. Outputs under their final names are always
+ * ("<name>.tmp-XXXXXX", ".<name>.tmp-XXXXXX.<ext>") are removed, with every
+ * staging folder and every folder the command created (cli_folder_make()),
+ * one line on stderr says which registered outputs had already been placed
+ * ("ilf: interrupted; kept (complete) PATH" or "ilf: interrupted; nothing
+ * written"), then the process ends by that signal (exit status 128 + its
+ * number: 130 for SIGINT). Outputs under their final names are always
  * complete, so an interrupted command leaves either the old file, the new
- * one, or nothing. At most 16 outputs, with paths under 4096 bytes; others
- * are not watched. It allocates nothing.
+ * one, or nothing. At most 16 registrations, with paths under 4096 bytes;
+ * others are not watched. It allocates nothing.
  */
 void cli_output_watch(const char *path);
 
@@ -260,6 +278,29 @@ char *cli_staging_make(char *template);
 
 /* Unregisters staging folder path, once it is gone or emptied into place. */
 void cli_staging_forget(const char *path);
+
+/*
+ * Creates folder path and any missing parents (mkdir -p) and registers what it created in the same step, so
+ * that an interruption at any moment removes them again when they are empty. *created_from receives the length
+ * of the first prefix of path it created (0: none). @return 1, or 0 after reporting.
+ */
+int cli_folder_make(const char *sub, const char *path, size_t *created_from);
+
+/* Removes folder path and its parents down to the prefix of created_from bytes (cli_folder_make()), deepest
+ * first, each only if it is empty. */
+void cli_folder_unmake(const char *path, size_t created_from);
+
+/* Installs the handlers and the watcher of cli_output_watch() now, so that a command interrupted before it
+ * registers anything still says so in one line ("ilf: interrupted"). */
+void cli_interrupts_install(void);
+
+/*
+ * Holds interruptions off (they wait, then clean up as above) while the calling thread places a set of outputs,
+ * so that a set is never left half placed; registrations from the same thread go on meanwhile. Pair each call
+ * with cli_interrupts_release().
+ */
+void cli_interrupts_hold(void);
+void cli_interrupts_release(void);
 
 /* ------------------------------------------------------------ progress */
 

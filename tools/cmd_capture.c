@@ -232,8 +232,8 @@ int ilf_cmd_capture(int argc, char **argv)
     int code = parse_arguments(&o, argc, argv);
     if (code >= 0)
         return code;
-    if (!cli_output_folder_exists("capture", o.output))
-        return ILF_EXIT_FAILED;
+    if ((code = cli_output_check("capture", o.output)) != ILF_EXIT_OK)
+        return code;
     cli_output_watch(o.output);
     cap_manifest *m = NULL;
     cap_status st = cap_manifest_load(o.manifest, &m);

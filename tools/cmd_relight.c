@@ -9,14 +9,18 @@
  *   falsecolor.png  with --falsecolor: the view's illuminance in false colour,
  *                with a legend (falsecolor.h)
  *
- * Invariants: DIR exists (it is created) before the engine runs, so a long
- * run never ends in an output that cannot be placed. Outputs are written into
- * a staging folder inside DIR (".relight.tmp-XXXXXX", each file atomically:
- * lfio, image/image.h, jsonout.h) and renamed into place together only once
- * every one is written: a run that fails (out of memory, a full disk, an
- * interruption) leaves DIR as it found it, removing the staging folder and any
- * folder it created, and DIR never holds a partial file or a mix of two runs'
- * outputs unless the final renames themselves fail;
+ * Invariants: DIR and the four names in it are checked before the scene is
+ * read (DIR a folder that can be written or created, each name a regular
+ * file or nothing), and DIR exists (it is created) before the engine runs,
+ * so a long run never ends in an output that cannot be placed. Outputs are
+ * written into a staging folder inside DIR (".relight.tmp-XXXXXX", each file
+ * atomically: lfio, image/image.h, jsonout.h) and placed together only once
+ * every one is written (output_set.h): the four names of an earlier run are
+ * moved aside, this run's files renamed in, and a failure puts everything
+ * back, so DIR describes one run (a view of an earlier run is removed when
+ * this one writes none) and a run that fails (out of memory, a full disk, an
+ * output that cannot be placed, an interruption) leaves DIR as it found it,
+ * removing the staging folder and any folder it created;
  * stdout carries the summary (nothing with --quiet), stderr errors and the
  * progress bar (only on a terminal, never with --quiet).
  *
@@ -47,6 +51,7 @@
 #include "job.h"
 #include "jsonout.h"
 #include "lfio/radmap.h"
+#include "output_set.h"
 #include "relight/engine.h"
 #include "relight_cli.h"
 #include "tonemap.h"
@@ -129,6 +134,7 @@ typedef struct relight_run {
     char *stage;                 /* the staging folder, or NULL */
     char *staged[OUT_COUNT];     /* each output's path in the staging folder */
     char *placed[OUT_COUNT];     /* and in DIR */
+    char *aside[OUT_COUNT];      /* where an earlier run's file of that name waits, in the staging folder */
     int written[OUT_COUNT];      /* staged and complete */
     char report[OUT_COUNT][192]; /* what each holds, printed once they are in place */
 } relight_run;
@@ -199,55 +205,23 @@ static char *join_path(const char *dir, const char *name)
     return path;
 }
 
-/* Creates folder path and any missing parents, like mkdir -p; *created_from receives the length of
- * the first prefix of path it created (0: none). @return 1, or 0 after reporting. */
-static int make_folder(const char *path, size_t *created_from)
-{
-    *created_from = 0;
-    char *copy = malloc(strlen(path) + 1);
-    if (copy == NULL) {
-        cli_error("relight", "out of memory");
-        return 0;
-    }
-    strcpy(copy, path);
-    int ok = 1;
-    /* Each '/' after the first character ends a parent; the whole path ends the folder itself. */
-    for (char *at = copy + 1; ok; at++) {
-        int last = *at == '\0';
-        if (*at != '/' && !last)
-            continue;
-        *at = '\0';
-        struct stat st;
-        int made = mkdir(copy, 0777) == 0;
-        if (made && *created_from == 0)
-            *created_from = (size_t)(at - copy);
-        if (!made && errno != EEXIST) {
-            cli_error("relight", "cannot create folder '%s': %s", copy, strerror(errno));
-            ok = 0;
-        } else if (stat(copy, &st) != 0 || !S_ISDIR(st.st_mode)) {
-            cli_error("relight", "cannot use '%s' as a folder: it is not one", copy);
-            ok = 0;
-        }
-        if (last)
-            break;
-        *at = '/';
-    }
-    free(copy);
-    return ok;
-}
-
 /* The staging folder's name template; mkdtemp replaces the X's. */
 #define STAGE_TEMPLATE ".relight.tmp-XXXXXX"
+/* What an earlier run's file is called while it waits aside in the staging folder. */
+#define ASIDE_PREFIX ".earlier-"
 
-/* Makes every output's two paths for the staging folder named `stage` (the template's length): nothing is
- * allocated once outputs are placed. @return an exit code. */
+/* Makes every output's paths (staged, placed, aside) for the staging folder named `stage` (the template's
+ * length): nothing is allocated once outputs are placed. @return an exit code. */
 static int stage_paths(relight_run *run, const char *stage)
 {
     run->stage = join_path(run->o->output, stage);
     int ok = run->stage != NULL;
+    char aside[64];
     for (int k = 0; ok && k < OUT_COUNT; k++)
         ok = (run->staged[k] = join_path(run->stage, output_names[k])) != NULL
-             && (run->placed[k] = join_path(run->o->output, output_names[k])) != NULL;
+             && (run->placed[k] = join_path(run->o->output, output_names[k])) != NULL
+             && snprintf(aside, sizeof aside, "%s%s", ASIDE_PREFIX, output_names[k]) > 0
+             && (run->aside[k] = join_path(run->stage, aside)) != NULL;
     if (!ok) {
         cli_error("relight", "out of memory");
         return ILF_EXIT_FAILED;
@@ -269,8 +243,11 @@ static int stage_open(relight_run *run)
     }
     /* mkdtemp replaced the X's in the folder's name; the staged paths must follow. */
     size_t len = strlen(run->stage);
-    for (int k = 0; k < OUT_COUNT; k++)
+    for (int k = 0; k < OUT_COUNT; k++) {
         memcpy(run->staged[k], run->stage, len);
+        memcpy(run->aside[k], run->stage, len);
+        cli_output_watch(run->placed[k]); /* so that an interruption says whether it was placed */
+    }
     return ILF_EXIT_OK;
 }
 
@@ -280,7 +257,7 @@ static int stage_open_job(relight_run *run)
 {
     int code = ILF_EXIT_OK;
     if (job_rank() == 0) {
-        if (!make_folder(run->o->output, &run->created_from))
+        if (!cli_folder_make("relight", run->o->output, &run->created_from))
             code = ILF_EXIT_FAILED;
         if (code == ILF_EXIT_OK)
             code = stage_open(run);
@@ -303,29 +280,23 @@ static void stage_done(relight_run *run, int k, const char *what)
     snprintf(run->report[k], sizeof run->report[k], "%s", what);
 }
 
-/* Renames every staged output into DIR, flushes DIR and removes the staging folder, then prints
- * "wrote PATH: what" for each unless quiet. @return an exit code. */
+/* output_slot_fn over a relight_run's outputs. */
+static int relight_slot(void *user, size_t k, output_slot *slot)
+{
+    const relight_run *run = user;
+    slot->written = run->written[k];
+    return snprintf(slot->staged, sizeof slot->staged, "%s", run->staged[k]) < (int)sizeof slot->staged
+           && snprintf(slot->placed, sizeof slot->placed, "%s", run->placed[k]) < (int)sizeof slot->placed
+           && snprintf(slot->aside, sizeof slot->aside, "%s", run->aside[k]) < (int)sizeof slot->aside;
+}
+
+/* Places the staged outputs into DIR as one step (output_set.h: an earlier run's files of the four names are
+ * removed, a failure puts DIR back as it was), then prints "wrote PATH: what" for each unless quiet.
+ * @return an exit code. */
 static int stage_commit(relight_run *run)
 {
-    int code = ILF_EXIT_OK;
-    for (int k = 0; k < OUT_COUNT && code == ILF_EXIT_OK; k++) {
-        if (run->written[k] && rename(run->staged[k], run->placed[k]) != 0) {
-            cli_error("relight", "%s: cannot move it into place from %s: %s", run->placed[k], run->stage,
-                      strerror(errno));
-            code = ILF_EXIT_FAILED;
-        }
-        run->written[k] &= code == ILF_EXIT_OK;
-    }
-    /* The renames are durable once DIR's entries are on disk. */
-    int fd = open(run->o->output, O_RDONLY | O_DIRECTORY);
-    if (fd >= 0) {
-        if (fsync(fd) != 0 && code == ILF_EXIT_OK) {
-            cli_error("relight", "%s: written, but cannot flush the folder: %s", run->o->output, strerror(errno));
-            code = ILF_EXIT_FAILED;
-        }
-        close(fd);
-    }
-    for (int k = 0; k < OUT_COUNT && !run->o->quiet; k++)
+    int code = output_set_place("relight", run->o->output, OUT_COUNT, relight_slot, run);
+    for (int k = 0; k < OUT_COUNT && !run->o->quiet && code == ILF_EXIT_OK; k++)
         if (run->written[k])
             printf("wrote %s: %s\n", run->placed[k], run->report[k]);
     return code;
@@ -338,38 +309,25 @@ static void free_paths(relight_run *run)
     for (int k = 0; k < OUT_COUNT; k++) {
         free(run->staged[k]);
         free(run->placed[k]);
+        free(run->aside[k]);
     }
 }
 
-/* Removes the staging folder and what is left in it, then the folders of DIR this run created if
- * they are empty, and frees the paths. */
+/* Removes the staging folder and what is left in it (an earlier run's files moved aside among them), then the
+ * folders of DIR this run created if they are empty, and frees the paths. */
 static void stage_close(relight_run *run)
 {
     if (run->stage != NULL) {
-        for (int k = 0; k < OUT_COUNT; k++)
+        for (int k = 0; k < OUT_COUNT; k++) {
             if (run->staged[k] != NULL)
                 unlink(run->staged[k]);
+            if (run->aside[k] != NULL)
+                unlink(run->aside[k]);
+        }
         rmdir(run->stage);
         cli_staging_forget(run->stage);
     }
-    char folder[4096];
-    size_t len = strlen(run->o->output);
-    if (run->created_from > 0 && len < sizeof folder) {
-        /* Deepest first, up to the first folder this run created; rmdir leaves any that is not
-         * empty (a successful run's DIR). */
-        memcpy(folder, run->o->output, len + 1);
-        while (len > 1 && folder[len - 1] == '/')
-            folder[--len] = '\0';
-        while (len >= run->created_from && rmdir(folder) == 0) {
-            char *slash = strrchr(folder, '/');
-            if (slash == NULL || len == run->created_from)
-                break;
-            while (slash > folder && slash[-1] == '/')
-                slash--;
-            *slash = '\0';
-            len = (size_t)(slash - folder);
-        }
-    }
+    cli_folder_unmake(run->o->output, run->created_from);
     free_paths(run);
 }
 
@@ -1030,7 +988,11 @@ int ilf_cmd_relight(int argc, char **argv)
     /* ranks other than 0 only compute and write their part of radiance.h5 */
     o.quiet |= job_rank() != 0;
     cli_set_quiet(o.quiet);
-    code = job_agree(relight_scene_open("relight", o.scene, &o.sampling, &run.scene));
+    /* DIR and its four names before anything is read or computed (rank 0 places the outputs) */
+    code = job_agree(job_rank() == 0 ? cli_output_folder_check("relight", o.output, output_names, OUT_COUNT)
+                                     : ILF_EXIT_OK);
+    if (code == ILF_EXIT_OK)
+        code = job_agree(relight_scene_open("relight", o.scene, &o.sampling, &run.scene));
     if (code == ILF_EXIT_OK)
         relight_run_options(&o.sampling, run.scene, &run.run_options);
     if (code == ILF_EXIT_OK && job_rank() == 0) {

@@ -8,13 +8,19 @@
  * DIR/probe_I_J.exr (one plane) or DIR/probe_K_I_J.exr (plane K of several),
  * and DIR/manifest.json describes them for `ilf capture`: one slab per plane.
  *
- * Invariants: every option is checked before the scene is relit; DIR is
- * created (its parent must exist) before any work; images and the manifest
- * are written atomically, the manifest last, so a DIR with a manifest holds
- * every image it names; probes use the identity orientation (camera forward
+ * Invariants: every option, the request's size (ILF_PROBE_MAX_PIXELS and
+ * ILF_PROBE_MAX_RAYS) and DIR (a folder that can be written or created,
+ * manifest.json a regular file or nothing) are checked before the scene is
+ * read; DIR is created (with any missing parents) before any work. Images
+ * and the manifest are written into a staging folder inside DIR
+ * (".render-probes.tmp-XXXXXX") and placed together once all are written
+ * (output_set.h): the probes of an earlier run that this grid does not
+ * have are removed in the same step, and a failure or an interruption
+ * leaves DIR as it was (removing the folders it created); probes use the identity orientation (camera forward
  * +x, up +z) and the jitter seed is the scene's (or --seed's) seed.
  */
 #include <cjson/cJSON.h>
+#include <dirent.h>
 #include <errno.h>
 #include <inttypes.h>
 #include <math.h>
@@ -22,17 +28,26 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "capture/projection.h"
 #include "cli.h"
 #include "commands.h"
 #include "image/image.h"
 #include "jsonout.h"
+#include "output_set.h"
 #include "relight/engine.h"
 #include "relight_cli.h"
 #include "ilf/limits.h"
 
 #define PATH_BYTES 4096
+/* The staging folder's name template (cli_staging_make()) and the prefix of an earlier file moved aside. */
+#define STAGE_TEMPLATE ".render-probes.tmp-XXXXXX"
+#define ASIDE_PREFIX ".earlier-"
+/* The names of the outputs. */
+#define PROBE_NAME "probe_%" PRIu32 "_%" PRIu32 ".exr"
+#define PLANE_PROBE_NAME "probe_%zu_%" PRIu32 "_%" PRIu32 ".exr"
+#define MANIFEST_NAME "manifest.json"
 #define MAX_GRID ILF_PROBE_MAX_GRID
 #define MAX_SIDE ILF_PROBE_MAX_SIDE
 #define MAX_PLANES ILF_CAPTURE_MAX_PLANES
@@ -225,6 +240,32 @@ static void finish_planes(probes_options *o)
     }
 }
 
+/* @return the probes over every plane. */
+static uint64_t probe_count(const probes_options *o)
+{
+    uint64_t total = 0;
+    for (size_t k = 0; k < o->nplanes; k++)
+        total += (uint64_t)o->planes[k].nu * o->planes[k].nv;
+    return total;
+}
+
+/* Checks that the probes o asks for are within ILF_PROBE_MAX_PIXELS and ILF_PROBE_MAX_RAYS (each option is
+ * bounded alone, but not their product). @return -1 to go on, or ILF_EXIT_USAGE after reporting. */
+static int check_work(const probes_options *o)
+{
+    uint64_t probes = probe_count(o);
+    uint64_t pixels = probes * o->size[0] * o->size[1]; /* < 64 * 2^20 * 2^28 */
+    uint64_t rays = pixels * o->strata * o->strata;                                 /* < 2^60 */
+    if (pixels > ILF_PROBE_MAX_PIXELS || rays > ILF_PROBE_MAX_RAYS) {
+        cli_error("render-probes", "%" PRIu64 " probes of %" PRIu32 "x%" PRIu32 " pixels with %" PRIu32
+                  "x%" PRIu32 " strata are %" PRIu64 " pixels and %" PRIu64 " rays, more than the limits of %" PRIu64
+                  " and %" PRIu64 " (ilf/limits.h)", probes, o->size[0], o->size[1], o->strata,
+                  o->strata, pixels, rays, (uint64_t)ILF_PROBE_MAX_PIXELS, (uint64_t)ILF_PROBE_MAX_RAYS);
+        return ILF_EXIT_USAGE;
+    }
+    return -1;
+}
+
 /* Parses argv into *o. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(probes_options *o, int argc, char **argv)
 {
@@ -249,36 +290,160 @@ static int parse_arguments(probes_options *o, int argc, char **argv)
         return ILF_EXIT_USAGE;
     }
     finish_planes(o);
-    return -1;
+    return check_work(o);
 }
 
 /* ------------------------------------------------------------ files */
 
-/* Creates DIR (not its parents). @return 1, or 0 after reporting. */
-static int make_output_folder(const char *dir)
+/* Where the run's files go: DIR, the staging folder in it, and what was created for them. */
+typedef struct probes_files {
+    const probes_options *o;
+    char stage[PATH_BYTES]; /* the staging folder, "" until made */
+    size_t created_from;    /* length of the first folder of DIR this run created (cli_folder_make()); 0: none */
+    char **stale;           /* probe files of an earlier run in DIR that this grid does not have */
+    size_t nstale;
+} probes_files;
+
+/* out = "dir/name" (PATH_BYTES). @return 1, or 0 when it does not fit. */
+static int join(const char *dir, const char *name, char out[PATH_BYTES])
 {
-    struct stat st;
-    if (mkdir(dir, 0777) != 0 && errno != EEXIST) {
-        cli_error("render-probes", "cannot create folder '%s': %s", dir, strerror(errno));
-        return 0;
-    }
-    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
-        cli_error("render-probes", "cannot use '%s' as a folder: it is not one", dir);
+    size_t len = strlen(dir);
+    int n = snprintf(out, PATH_BYTES, "%s%s%s", dir, len > 0 && dir[len - 1] == '/' ? "" : "/", name);
+    return n > 0 && n < PATH_BYTES;
+}
+
+/* out = the staged path of output name. @return 1, or 0 after reporting that it is too long. */
+static int output_path(const probes_files *f, const char *name, char out[PATH_BYTES])
+{
+    if (!join(f->stage, name, out)) {
+        cli_error("render-probes", "%s/%s: path too long", f->stage, name);
         return 0;
     }
     return 1;
 }
 
-/* out = "DIR/name" (PATH_BYTES). @return 1, or 0 after reporting that it is too long. */
-static int output_path(const char *dir, const char *name, char out[PATH_BYTES])
+/* Creates DIR (and missing parents) and the staging folder in it, both removed by an interruption.
+ * @return 1, or 0 after reporting. */
+static int files_open(probes_files *f)
 {
-    size_t len = strlen(dir);
-    int n = snprintf(out, PATH_BYTES, "%s%s%s", dir, len > 0 && dir[len - 1] == '/' ? "" : "/", name);
-    if (n < 0 || n >= PATH_BYTES) {
-        cli_error("render-probes", "%s/%s: path too long", dir, name);
+    if (!cli_folder_make("render-probes", f->o->output, &f->created_from))
+        return 0;
+    if (!join(f->o->output, STAGE_TEMPLATE, f->stage) || cli_staging_make(f->stage) == NULL) {
+        cli_error("render-probes", "cannot create a staging folder in '%s': %s", f->o->output, strerror(errno));
+        f->stage[0] = '\0';
         return 0;
     }
+    char manifest[PATH_BYTES];
+    if (join(f->o->output, MANIFEST_NAME, manifest))
+        cli_output_watch(manifest); /* the set's last name: an interruption says whether the set was placed */
     return 1;
+}
+
+/* The file name of probe (i, j) of plane k: PROBE_NAME for one plane, PLANE_PROBE_NAME for several. */
+static void probe_name(const probes_options *o, size_t k, uint32_t i, uint32_t j, char out[64])
+{
+    if (o->nplanes == 1)
+        snprintf(out, 64, PROBE_NAME, i, j);
+    else
+        snprintf(out, 64, PLANE_PROBE_NAME, k, i, j);
+}
+
+/* @return 1 if name is a probe file name (either form, exactly) that this run does not write. */
+static int stale_probe(const char *name, const probes_options *o)
+{
+    size_t k = 0;
+    uint32_t i, j;
+    char again[64];
+    if (sscanf(name, "probe_%zu_%" SCNu32 "_%" SCNu32 ".exr", &k, &i, &j) == 3) {
+        snprintf(again, sizeof again, PLANE_PROBE_NAME, k, i, j);
+        if (strcmp(again, name) != 0)
+            return 0;
+        return o->nplanes == 1 || k >= o->nplanes || i >= o->planes[k].nu || j >= o->planes[k].nv;
+    }
+    if (sscanf(name, "probe_%" SCNu32 "_%" SCNu32 ".exr", &i, &j) != 2)
+        return 0;
+    snprintf(again, sizeof again, PROBE_NAME, i, j);
+    return strcmp(again, name) == 0 && (o->nplanes != 1 || i >= o->planes[0].nu || j >= o->planes[0].nv);
+}
+
+/* Lists the probe files of an earlier run in DIR that this run's grid does not have. @return 1, or 0 after
+ * reporting (out of memory). */
+static int find_stale(probes_files *f)
+{
+    DIR *dir = opendir(f->o->output);
+    if (dir == NULL)
+        return 1; /* nothing to list: the placing reports what is wrong with DIR */
+    int ok = 1;
+    size_t cap = 0;
+    for (struct dirent *e; ok && (e = readdir(dir)) != NULL;) {
+        if (!stale_probe(e->d_name, f->o))
+            continue;
+        if (f->nstale == cap) {
+            size_t more = cap ? 2 * cap : 16;
+            char **grown = realloc(f->stale, more * sizeof *grown);
+            ok = grown != NULL;
+            if (ok)
+                f->stale = grown, cap = more;
+        }
+        if (ok && (f->stale[f->nstale] = strdup(e->d_name)) != NULL)
+            f->nstale++;
+        else
+            ok = 0;
+    }
+    closedir(dir);
+    if (!ok)
+        cli_error("render-probes", "out of memory while listing %s", f->o->output);
+    return ok;
+}
+
+/* output_slot_fn: slot k of the set, the probes plane by plane in grid order, then the manifest, then the stale probes. */
+static int probes_slot(void *user, size_t k, output_slot *slot)
+{
+    const probes_files *f = user;
+    const probes_options *o = f->o;
+    size_t probes = (size_t)probe_count(o), index = k, plane = 0;
+    char name[PATH_BYTES], aside[PATH_BYTES];
+    while (plane < o->nplanes && index >= (size_t)o->planes[plane].nu * o->planes[plane].nv)
+        index -= (size_t)o->planes[plane].nu * o->planes[plane].nv, plane++;
+    if (k < probes)
+        probe_name(o, plane, (uint32_t)(index % o->planes[plane].nu), (uint32_t)(index / o->planes[plane].nu), name);
+    else
+        snprintf(name, sizeof name, "%s", k == probes ? MANIFEST_NAME : f->stale[k - probes - 1]);
+    slot->written = k <= probes;
+    return snprintf(aside, sizeof aside, "%s%s", ASIDE_PREFIX, name) < (int)sizeof aside &&
+           join(f->stage, name, slot->staged) && join(f->o->output, name, slot->placed) &&
+           join(f->stage, aside, slot->aside);
+}
+
+/* Places every staged file into DIR as one step, with the earlier run's probes outside this grid removed.
+ * @return an exit code. */
+static int files_place(probes_files *f)
+{
+    if (!find_stale(f))
+        return ILF_EXIT_FAILED;
+    size_t count = (size_t)probe_count(f->o) + 1 + f->nstale;
+    return output_set_place("render-probes", f->o->output, count, probes_slot, f);
+}
+
+/* Removes the staging folder with what is left in it (files moved aside among them), then the folders this run
+ * created if they are empty. */
+static void files_close(probes_files *f)
+{
+    if (f->stage[0] != '\0') {
+        DIR *dir = opendir(f->stage);
+        char victim[PATH_BYTES];
+        for (struct dirent *e; dir != NULL && (e = readdir(dir)) != NULL;)
+            if (strcmp(e->d_name, ".") != 0 && strcmp(e->d_name, "..") != 0 && join(f->stage, e->d_name, victim))
+                unlink(victim);
+        if (dir != NULL)
+            closedir(dir);
+        rmdir(f->stage);
+        cli_staging_forget(f->stage);
+    }
+    cli_folder_unmake(f->o->output, f->created_from);
+    for (size_t k = 0; k < f->nstale; k++)
+        free(f->stale[k]);
+    free(f->stale);
 }
 
 /* The file name pattern of plane k's probes: probe_{i}_{j}.exr for one plane, probe_K_{i}_{j}.exr for several. */
@@ -330,12 +495,12 @@ static cJSON *manifest_json(const probes_options *o)
     return root;
 }
 
-static int write_manifest(const probes_options *o)
+static int write_manifest(const probes_files *f)
 {
+    const probes_options *o = f->o;
     char path[PATH_BYTES], err[1024];
-    if (!output_path(o->output, "manifest.json", path))
+    if (!output_path(f, MANIFEST_NAME, path))
         return ILF_EXIT_FAILED;
-    cli_output_watch(path);
     cJSON *root = manifest_json(o);
     int code = ILF_EXIT_OK;
     if (root == NULL) {
@@ -344,10 +509,6 @@ static int write_manifest(const probes_options *o)
     } else if (!json_write_file(path, root, err, sizeof err)) {
         cli_error("render-probes", "%s", err);
         code = ILF_EXIT_FAILED;
-    } else if (!o->quiet) {
-        for (size_t k = 0; k < o->nplanes; k++)
-            printf("%s%s: %" PRIu32 "x%" PRIu32 " positions, n %" PRIu32 ", slab '%s'\n", k == 0 ? "wrote " : "      ",
-                   k == 0 ? path : "", o->planes[k].nu, o->planes[k].nv, o->n, o->planes[k].name);
     }
     cJSON_Delete(root);
     return code;
@@ -382,10 +543,10 @@ static int relight(const probes_options *o, const rl_scene *scene, rl_solution *
 }
 
 /* Renders the probe of position (i, j) of plane k into pixels and writes it. @return an exit code. */
-static int render_probe(const probes_options *o, const rl_solution *sol, const cap_probe_settings *s, size_t k,
+static int render_probe(const probes_files *f, const rl_solution *sol, const cap_probe_settings *s, size_t k,
                         uint32_t i, uint32_t j, float *pixels)
 {
-    const lfio_slab_desc *d = &o->planes[k];
+    const lfio_slab_desc *d = &f->o->planes[k];
     double x[3];
     for (int a = 0; a < 3; a++)
         x[a] = d->origin[a] + (i + 0.5) / d->nu * d->u[a] + (j + 0.5) / d->nv * d->v[a];
@@ -393,13 +554,9 @@ static int render_probe(const probes_options *o, const rl_solution *sol, const c
     if (st != CAP_OK)
         return ilf_capture_failure("render-probes", st);
     char name[64], path[PATH_BYTES], err[1024];
-    if (o->nplanes == 1)
-        snprintf(name, sizeof name, "probe_%" PRIu32 "_%" PRIu32 ".exr", i, j);
-    else
-        snprintf(name, sizeof name, "probe_%zu_%" PRIu32 "_%" PRIu32 ".exr", k, i, j);
-    if (!output_path(o->output, name, path))
+    probe_name(f->o, k, i, j, name);
+    if (!output_path(f, name, path))
         return ILF_EXIT_FAILED;
-    cli_output_watch(path);
     if (img_write(path, s->width, s->height, 3, pixels, err, sizeof err) != IMG_OK) {
         cli_error("render-probes", "%s", err);
         return ILF_EXIT_FAILED;
@@ -407,17 +564,9 @@ static int render_probe(const probes_options *o, const rl_solution *sol, const c
     return ILF_EXIT_OK;
 }
 
-/* @return the probes over every plane. */
-static uint64_t probe_count(const probes_options *o)
+static int render_all(const probes_files *f, const rl_scene *scene, const rl_solution *sol)
 {
-    uint64_t total = 0;
-    for (size_t k = 0; k < o->nplanes; k++)
-        total += (uint64_t)o->planes[k].nu * o->planes[k].nv;
-    return total;
-}
-
-static int render_all(const probes_options *o, const rl_scene *scene, const rl_solution *sol)
-{
+    const probes_options *o = f->o;
     const rl_sampling *rs = rl_scene_sampling(scene);
     rl_run_options ro;
     relight_run_options(&o->sampling, scene, &ro);
@@ -443,7 +592,7 @@ static int render_all(const probes_options *o, const rl_scene *scene, const rl_s
     for (size_t k = 0; k < o->nplanes; k++)
         for (uint32_t j = 0; code == ILF_EXIT_OK && j < o->planes[k].nv; j++)
             for (uint32_t i = 0; code == ILF_EXIT_OK && i < o->planes[k].nu; i++) {
-                code = render_probe(o, sol, &s, k, i, j, pixels);
+                code = render_probe(f, sol, &s, k, i, j, pixels);
                 if (!o->quiet)
                     cli_progress_add(&bar, 1);
             }
@@ -462,20 +611,33 @@ int ilf_cmd_render_probes(int argc, char **argv)
         return code;
     rl_scene *scene = NULL;
     rl_solution *sol = NULL;
-    code = relight_scene_open("render-probes", o.scene, &o.sampling, &scene);
-    if (code == ILF_EXIT_OK && !make_output_folder(o.output))
+    probes_files files = {.o = &o};
+    static const char *const names[] = {MANIFEST_NAME};
+    /* DIR before anything is read or computed */
+    code = cli_output_folder_check("render-probes", o.output, names, 1);
+    if (code == ILF_EXIT_OK)
+        code = relight_scene_open("render-probes", o.scene, &o.sampling, &scene);
+    if (code == ILF_EXIT_OK && !files_open(&files))
         code = ILF_EXIT_FAILED;
     if (code == ILF_EXIT_OK)
         code = relight(&o, scene, &sol);
     if (code == ILF_EXIT_OK)
-        code = render_all(&o, scene, sol);
+        code = render_all(&files, scene, sol);
     if (code == ILF_EXIT_OK)
-        code = write_manifest(&o);
-    if (code == ILF_EXIT_OK && !o.quiet)
+        code = write_manifest(&files);
+    if (code == ILF_EXIT_OK)
+        code = files_place(&files);
+    if (code == ILF_EXIT_OK && !o.quiet) {
+        printf("wrote %s/%s:", o.output, MANIFEST_NAME);
+        for (size_t k = 0; k < o.nplanes; k++)
+            printf("%s %" PRIu32 "x%" PRIu32 " positions, n %" PRIu32 ", slab '%s'\n", k == 0 ? "" : "     ",
+                   o.planes[k].nu, o.planes[k].nv, o.n, o.planes[k].name);
         printf("rendered %" PRIu64 " probe%s of %" PRIu32 "x%" PRIu32 " pixels, %" PRIu32
                " directions per pixel, from %s into %s\n",
                probe_count(&o), probe_count(&o) == 1 ? "" : "s", o.size[0], o.size[1], o.strata * o.strata, o.scene,
                o.output);
+    }
+    files_close(&files);
     rl_solution_destroy(sol);
     rl_scene_destroy(scene);
     return code;

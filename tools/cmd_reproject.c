@@ -23,6 +23,8 @@
 #include "capture/reproject.h"
 #include "cli.h"
 #include "ilf/pool.h"
+#include "ilf/limits.h"
+#include "lfio/partition.h"
 #include "commands.h"
 
 #define REPROJECT_CREATOR "ilf reproject (ilfkit " ILFKIT_VERSION ")"
@@ -203,6 +205,34 @@ static uint64_t proxy_rays(const cap_proxy *proxy, uint32_t strata)
     return total;
 }
 
+/* Checks that the output the proxy asks for (every rectangle's slab, and the rays that fill them) is within
+ * ILF_REPROJECT_MAX_BYTES and ILF_REPROJECT_MAX_RAYS, before any work. @return an exit code. */
+static int check_work(const reproject_options *o, const cap_proxy *proxy)
+{
+    double bytes = 0.0, values = 0.0;
+    for (size_t k = 0; k < cap_proxy_count(proxy); k++) {
+        const lfio_slab_desc *d = cap_proxy_get_desc(proxy, k);
+        bytes += (double)lfio_slab_desc_bytes(d);
+        values += (double)d->nu * d->nv * (double)lfio_part_hemi_count(d->n);
+    }
+    double strata = o->strata ? (double)o->strata : 2.0, rays = values * strata * strata; /* 0: the default 2 */
+    char size[32], limit[32];
+    if (bytes > (double)ILF_REPROJECT_MAX_BYTES) {
+        cli_error("reproject", "%s: %zu rectangle%s ask for %s of radiance, more than the limit of %s (ilf/limits.h)",
+                  o->proxy, cap_proxy_count(proxy), cap_proxy_count(proxy) == 1 ? "" : "s",
+                  cli_format_bytes((long long)(bytes < 9e18 ? bytes : 9e18), size, sizeof size),
+                  cli_format_bytes((long long)ILF_REPROJECT_MAX_BYTES, limit, sizeof limit));
+        return ILF_EXIT_USAGE;
+    }
+    if (rays > (double)ILF_REPROJECT_MAX_RAYS) {
+        cli_error("reproject", "%s: %zu rectangle%s ask for %.3g rays, more than the limit of %.3g (ilf/limits.h)",
+                  o->proxy, cap_proxy_count(proxy), cap_proxy_count(proxy) == 1 ? "" : "s", rays,
+                  (double)ILF_REPROJECT_MAX_RAYS);
+        return ILF_EXIT_USAGE;
+    }
+    return ILF_EXIT_OK;
+}
+
 /* The shared bar, the rays of the slabs already made and those of one position of this one. */
 typedef struct slab_progress {
     cli_progress *bar;
@@ -324,8 +354,8 @@ int ilf_cmd_reproject(int argc, char **argv)
     int code = parse_arguments(&o, argc, argv);
     if (code >= 0)
         return code;
-    if (!cli_output_folder_exists("reproject", o.output))
-        return ILF_EXIT_FAILED;
+    if ((code = cli_output_check("reproject", o.output)) != ILF_EXIT_OK)
+        return code;
     cli_output_watch(o.output);
     captured_set captured = {NULL, 0};
     cap_proxy *proxy = NULL;
@@ -337,6 +367,8 @@ int ilf_cmd_reproject(int argc, char **argv)
         cap_status st = cap_proxy_load(o.proxy, &def, &proxy);
         code = st == CAP_OK ? ILF_EXIT_OK : ilf_capture_failure("reproject", st);
     }
+    if (code == ILF_EXIT_OK)
+        code = check_work(&o, proxy);
     if (code == ILF_EXIT_OK && (lfio_lightfield_new(&lf) != LFIO_OK ||
                                 (cov = calloc(cap_proxy_count(proxy), sizeof *cov)) == NULL)) {
         cli_error("reproject", "out of memory");

@@ -428,7 +428,9 @@ int ilf_cmd_slice(int argc, char **argv)
         return cli_lfio_failure("slice", st, CLI_INPUT, o.path);
     cli_output_watch(o.output);
     /* Checked after the input, so that bad input is reported as such first. */
-    code = cli_output_folder_exists("slice", o.output) ? slice_file(r, &o) : ILF_EXIT_FAILED;
+    code = cli_output_check("slice", o.output);
+    if (code == ILF_EXIT_OK)
+        code = slice_file(r, &o);
     lfio_reader_close(r);
     return code;
 }

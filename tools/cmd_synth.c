@@ -552,6 +552,24 @@ static int check_size(const lfio_slab_desc *d)
     return 1;
 }
 
+/* Checks that the evaluations o asks for (each radiance value, supersample^2 times each spot) are within
+ * ILF_SYNTH_MAX_EVALUATIONS, before any work. @return 1, or 0 after reporting. */
+static int check_work(const synth_options *o)
+{
+    const lfio_slab_desc *d = &o->desc;
+    /* each factor is bounded by its option's limit and lfio's slab size, so the product fits in a double */
+    double values = (double)d->nu * d->nv * (double)lfio_part_hemi_count(d->n);
+    double work = values * o->supersample * o->supersample * (o->spot_count > 0 ? (double)o->spot_count : 1.0);
+    if (work > (double)ILF_SYNTH_MAX_EVALUATIONS) {
+        cli_error("synth", "%ux%u positions, n=%u, supersample %u and %zu spot%s need %.3g evaluations, more than "
+                  "the limit of %.3g (ilf/limits.h)", (unsigned)d->nu, (unsigned)d->nv, (unsigned)d->n,
+                  (unsigned)o->supersample, o->spot_count, o->spot_count == 1 ? "" : "s", work,
+                  (double)ILF_SYNTH_MAX_EVALUATIONS);
+        return 0;
+    }
+    return 1;
+}
+
 /* Fixes the model's geometry once the slab (and so its frame) exists. */
 static void build_model(synth_options *o, const lfio_slab *slab, synth_model *m)
 {
@@ -618,10 +636,10 @@ int ilf_cmd_synth(int argc, char **argv)
     int code = parse_arguments(&o, argc, argv);
     if (code >= 0)
         return code;
-    if (!check_combination(&o) || !check_size(&o.desc))
+    if (!check_combination(&o) || !check_size(&o.desc) || !check_work(&o))
         return ILF_EXIT_USAGE;
-    if (!cli_output_folder_exists("synth", o.output))
-        return ILF_EXIT_FAILED;
+    if ((code = cli_output_check("synth", o.output)) != ILF_EXIT_OK)
+        return code;
     cli_output_watch(o.output);
     lfio_slab *slab = NULL;
     lfio_status st = lfio_slab_new(&o.desc, &slab);

@@ -91,7 +91,9 @@ int main(int argc, char **argv)
                 first);
         return ILF_EXIT_USAGE;
     }
-    int code = command->run(argc - 1, argv + 1);
+    cli_interrupts_install(); /* an interrupted command says so, and what it kept (cli.h) */
+    /* results on stdout are outputs too: one that cannot be written (a full disk, /dev/full) fails the run */
+    int code = cli_stdout_finish(first, command->run(argc - 1, argv + 1));
 #ifdef __SANITIZE_ADDRESS__
     /* Sanitizer builds look for leaks here, while the libraries' thread pools
      * are idle: at exit their static destructors stop those threads while

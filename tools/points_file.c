@@ -5,15 +5,20 @@
  * Invariants: memory grows with the file only (a line's buffer, then 48
  * bytes per point from lines of at least 12 bytes); every malformed line is
  * bad input, reported as FILE:LINE: problem; nothing is kept from a file
- * that fails. Fuzzed by tests/fuzz/fuzz_points.c.
+ * that fails; a line holding a NUL byte is refused (what follows the NUL
+ * would otherwise be silently dropped); a named file is opened without
+ * blocking and only if it is a regular file (ilf/file_kind.h), while "-"
+ * reads standard input, whatever it is. Fuzzed by tests/fuzz/fuzz_points.c.
  */
 #include "points_file.h"
 
 #include <errno.h>
+#include <unistd.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
+#include "ilf/file_kind.h"
 
 /* @return 1 if line holds only blanks, or a comment starting with '#' after them. */
 static int skippable(const char *line)
@@ -73,22 +78,36 @@ int points_read(const char *path, point_list *list)
 {
     int from_stdin = strcmp(path, "-") == 0;
     const char *shown = from_stdin ? "<stdin>" : path;
-    FILE *f = from_stdin ? stdin : fopen(path, "r");
-    if (f == NULL) {
-        cli_error("irradiance", "%s: cannot open: %s", path, strerror(errno));
-        return ILF_EXIT_USAGE;
+    FILE *f = stdin;
+    if (!from_stdin) {
+        char why[160];
+        int fd;
+        if (ilf_input_open(path, &fd, why, sizeof why) != 0) {
+            cli_error("irradiance", "%s: %s", path, why);
+            return ILF_EXIT_USAGE;
+        }
+        if ((f = fdopen(fd, "r")) == NULL) {
+            close(fd);
+            cli_error("irradiance", "%s: cannot open: %s", path, strerror(errno));
+            return ILF_EXIT_FAILED;
+        }
     }
     char *line = NULL;
     size_t cap = 0;
     unsigned long number = 0;
     int code = ILF_EXIT_OK;
-    while (code == ILF_EXIT_OK && getline(&line, &cap, f) >= 0) {
+    ssize_t length;
+    while (code == ILF_EXIT_OK && (length = getline(&line, &cap, f)) >= 0) {
         number++;
         double p[6];
         char why[256];
-        if (skippable(line))
+        if (strlen(line) != (size_t)length) {
+            cli_error("irradiance", "%s:%lu: a NUL byte inside the line (byte %zu)", shown, number,
+                      strlen(line) + 1);
+            code = ILF_EXIT_USAGE;
+        } else if (skippable(line)) {
             continue;
-        if (!parse_point(line, p, why, sizeof why)) {
+        } else if (!parse_point(line, p, why, sizeof why)) {
             cli_error("irradiance", "%s:%lu: %s", shown, number, why);
             code = ILF_EXIT_USAGE;
         } else if (!append_point(list, p)) {

@@ -5,7 +5,10 @@
  * Invariants: the temporary is created with O_EXCL under a fresh tag, so two
  * writers (threads, processes, MPI ranks) never share one; the folder's name
  * is taken when the writer is made, so once the rename has happened nothing
- * can fail for want of memory and turn a complete write into a reported error.
+ * can fail for want of memory and turn a complete write into a reported error;
+ * only a regular file (or nothing) is ever replaced: a destination that is a
+ * folder, a FIFO or a device node (/dev/null) is refused before the temporary
+ * is made and again before the rename.
  */
 #include "ilf/atomic_file.h"
 
@@ -65,6 +68,17 @@ static char *folder_of(const char *path)
     return dir;
 }
 
+/* @return 0 if path names nothing or a regular file (following links: the rename replaces the link, but a link
+ * to a device is a mistake), else EEXIST with *step saying why. */
+static int replaceable(const char *path, const char **step)
+{
+    struct stat sb;
+    if (stat(path, &sb) != 0 || S_ISREG(sb.st_mode))
+        return 0;
+    *step = "it exists and is not a regular file (only regular files are replaced)";
+    return EEXIST;
+}
+
 /* @return 0 once the folder's entries are on disk, or an errno value. */
 static int flush_folder(const char *folder)
 {
@@ -110,8 +124,15 @@ int ilf_atomic_new(const char *path, ilf_atomic **out, const char **step)
         ilf_atomic_release(a);
         return ENOMEM;
     }
+    int err = replaceable(path, step);
+    if (err != 0) {
+        free(a->temp);
+        a->temp = NULL;
+        ilf_atomic_release(a);
+        return err;
+    }
     *step = "cannot create a temporary file beside it";
-    int err = EEXIST;
+    err = EEXIST;
     for (int attempt = 0; attempt < TRIES && err == EEXIST; attempt++) {
         snprintf(a->temp, cap, "%.*s.%s%s%0*llx%s", (int)dirlen, path, name, mark, TAG_DIGITS, fresh_tag(), ext);
         a->fd = open(a->temp, O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
@@ -152,6 +173,8 @@ int ilf_atomic_commit(ilf_atomic *a, const char **step)
         err = errno;
     a->fd = -1;
     if (err != 0)
+        return err;
+    if ((err = replaceable(a->path, step)) != 0)
         return err;
     *step = "cannot rename the temporary file over it";
     if (rename(a->temp, a->path) != 0)

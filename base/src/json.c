@@ -21,7 +21,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
+#include "ilf/file_kind.h"
 #include "ilf/json.h"
 
 #if CJSON_NESTING_LIMIT < ILF_JSON_MAX_DEPTH
@@ -87,18 +89,22 @@ void ilf_json_item_name(char out[ILF_JSON_ELEM_MAX], const char *elem, size_t k)
 /* Reads the whole file into a NUL-terminated buffer. */
 static ilf_json_status read_text(ilf_json_ctx *ctx, size_t max_bytes, char **text, size_t *len)
 {
-    FILE *f = fopen(ctx->file, "rb");
-    if (f == NULL)
-        return file_fail(ctx, ILF_JSON_ERR_IO, "cannot open: %s", strerror(errno));
+    char why[160];
+    int fd;
+    /* a FIFO or a device where the file belongs is refused, never waited on */
+    int err = ilf_input_open(ctx->file, &fd, why, sizeof why);
+    if (err != 0)
+        return file_fail(ctx, ILF_JSON_ERR_IO, "%s", why);
+    FILE *f = fdopen(fd, "rb");
+    if (f == NULL) {
+        close(fd);
+        return file_fail(ctx, ILF_JSON_ERR_NOMEM, "out of memory");
+    }
     struct stat sb;
     ilf_json_status st = ILF_JSON_OK;
     char *buf = NULL;
     if (fstat(fileno(f), &sb) != 0)
         st = file_fail(ctx, ILF_JSON_ERR_IO, "cannot read: %s", strerror(errno));
-    else if (S_ISDIR(sb.st_mode))
-        st = file_fail(ctx, ILF_JSON_ERR_IO, "is a directory, not a regular file");
-    else if (!S_ISREG(sb.st_mode))
-        st = file_fail(ctx, ILF_JSON_ERR_IO, "not a regular file");
     else if ((uint64_t)sb.st_size > max_bytes)
         st = file_fail(ctx, ILF_JSON_ERR_INPUT, "%lld bytes, more than the limit of %zu bytes (%zu MiB)",
                        (long long)sb.st_size, max_bytes, max_bytes >> 20);

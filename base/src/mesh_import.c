@@ -15,6 +15,12 @@
  * nothing); assimp reads it with its data-structure validation; the result
  * is complete.
  *
+ * Every file is opened through ilf/file_kind.h, the mesh itself and every
+ * file it names (an OBJ's mtllib, a glTF buffer's uri): assimp reads through
+ * an aiFileIO of this file's own that opens without blocking and refuses
+ * anything but a regular file, and a refusal fails the import, where assimp
+ * would have gone on without the material library or waited on a FIFO.
+ *
  * Invariants: an imported soup satisfies ilf/mesh.h's invariants, or
  * nothing is returned and everything allocated on the way is freed; a
  * pre-check never rejects a file because it cannot make sense of it, it
@@ -24,6 +30,7 @@
 #define _POSIX_C_SOURCE 200809L /* stat(); the build defines it too */
 #endif
 
+#include <assimp/cfileio.h>
 #include <assimp/cimport.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
@@ -34,11 +41,109 @@
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
+#include "ilf/file_kind.h"
 #include "ilf/json.h"
 #include "ilf/limits.h"
 #include "ilf/mesh.h"
 #include "plycheck.h"
+
+/* ------------------------------------------------------------ files */
+
+/* @return path opened for reading if it is a regular file (ilf/file_kind.h), else NULL. */
+static FILE *open_regular(const char *path)
+{
+    char why[160];
+    int fd;
+    if (ilf_input_open(path, &fd, why, sizeof why) != 0)
+        return NULL;
+    FILE *f = fdopen(fd, "rb");
+    if (f == NULL)
+        close(fd);
+    return f;
+}
+
+/* What the files assimp opened through mesh_io_open() came to: the first refusal, if any. */
+typedef struct mesh_io {
+    char refused[512];
+    int nomem; /* an open failed for want of memory: the import fails as ILF_MESH_ERR_NOMEM */
+} mesh_io;
+
+static size_t mesh_io_read(struct aiFile *f, char *buf, size_t size, size_t count)
+{
+    return fread(buf, size, count, (FILE *)f->UserData);
+}
+
+static size_t mesh_io_write(struct aiFile *f, const char *buf, size_t size, size_t count)
+{
+    (void)f, (void)buf, (void)size, (void)count;
+    return 0; /* assimp only reads here */
+}
+
+static size_t mesh_io_tell(struct aiFile *f)
+{
+    long at = ftell((FILE *)f->UserData);
+    return at < 0 ? 0 : (size_t)at;
+}
+
+static size_t mesh_io_size(struct aiFile *f)
+{
+    struct stat sb;
+    return fstat(fileno((FILE *)f->UserData), &sb) == 0 ? (size_t)sb.st_size : 0;
+}
+
+static enum aiReturn mesh_io_seek(struct aiFile *f, size_t offset, enum aiOrigin origin)
+{
+    int whence = origin == aiOrigin_SET ? SEEK_SET : origin == aiOrigin_CUR ? SEEK_CUR : SEEK_END;
+    /* assimp passes a backward offset as a size_t that wrapped: off_t takes it back */
+    return fseeko((FILE *)f->UserData, (off_t)offset, whence) == 0 ? aiReturn_SUCCESS : aiReturn_FAILURE;
+}
+
+static void mesh_io_flush(struct aiFile *f) { (void)f; }
+
+/* aiFileIO's open: a regular file only, read-only; any other kind is recorded as the import's failure. */
+static struct aiFile *mesh_io_open(struct aiFileIO *io, const char *path, const char *mode)
+{
+    if (mode == NULL || mode[0] != 'r')
+        return NULL;
+    mesh_io *m = (mesh_io *)io->UserData;
+    char why[160];
+    int fd;
+    int err = ilf_input_open(path, &fd, why, sizeof why);
+    if (err != 0) {
+        if ((err == EISDIR || err == EINVAL) && m->refused[0] == '\0')
+            snprintf(m->refused, sizeof m->refused, "'%s' %s", path, why);
+        return NULL;
+    }
+    FILE *fp = fdopen(fd, "rb");
+    struct aiFile *f = fp != NULL ? calloc(1, sizeof *f) : NULL;
+    if (f == NULL) {
+        if (fp != NULL)
+            fclose(fp);
+        else
+            close(fd);
+        m->nomem = 1;
+        return NULL;
+    }
+    f->ReadProc = mesh_io_read;
+    f->WriteProc = mesh_io_write;
+    f->TellProc = mesh_io_tell;
+    f->FileSizeProc = mesh_io_size;
+    f->SeekProc = mesh_io_seek;
+    f->FlushProc = mesh_io_flush;
+    f->UserData = (aiUserData)fp;
+    return f;
+}
+
+static void mesh_io_close(struct aiFileIO *io, struct aiFile *f)
+{
+    (void)io;
+    if (f != NULL) {
+        fclose((FILE *)f->UserData);
+        free(f);
+    }
+}
 
 /* ------------------------------------------------------------ glTF */
 
@@ -106,7 +211,7 @@ static int gltf_check(const char *path, char *why, size_t size)
     int glb = dot && strcasecmp(dot, ".glb") == 0;
     if (!dot || (!glb && strcasecmp(dot, ".gltf") != 0))
         return 1;
-    FILE *f = fopen(path, "rb");
+    FILE *f = open_regular(path);
     if (!f)
         return 1;
     size_t len = 0, fsize = 0;
@@ -285,14 +390,22 @@ ilf_mesh_status ilf_mesh_import(const char *path, ilf_mesh **out, char *why, siz
 {
     *out = NULL;
     struct stat sb;
-    if (stat(path, &sb) != 0) {
-        snprintf(why, why_size, "cannot open '%s': %s", path, strerror(errno));
+    char problem[256];
+    int fd, err = ilf_input_open(path, &fd, problem, sizeof problem);
+    if (err == EISDIR || err == EINVAL) {
+        if (err == EISDIR)
+            snprintf(why, why_size, "'%s' is not a regular file (a folder)", path);
+        else
+            snprintf(why, why_size, "'%s' %s", path, problem);
         return ILF_MESH_ERR_INPUT;
     }
-    if (!S_ISREG(sb.st_mode)) {
-        snprintf(why, why_size, "'%s' is not a regular file", path);
+    if (err != 0 || fstat(fd, &sb) != 0) {
+        snprintf(why, why_size, "cannot open '%s': %s", path, strerror(err != 0 ? err : errno));
+        if (err == 0)
+            close(fd);
         return ILF_MESH_ERR_INPUT;
     }
+    close(fd);
     /* assimp reads uninitialised memory on an empty glTF (valgrind, a fuzz_mesh input) */
     if (sb.st_size == 0) {
         snprintf(why, why_size, "cannot read '%s': the file is empty", path);
@@ -303,16 +416,25 @@ ilf_mesh_status ilf_mesh_import(const char *path, ilf_mesh **out, char *why, siz
                  "and 3DS are: their readers check their counts)", path);
         return ILF_MESH_ERR_INPUT;
     }
-    char problem[256];
     /* assimp would trust a PLY header's counts (plycheck.h), and copy positions of any type (gltf_check) */
     if (!ilf__ply_check(path, problem, sizeof problem) || !gltf_check(path, problem, sizeof problem)) {
         snprintf(why, why_size, "cannot read '%s': %s", path, problem);
         return ILF_MESH_ERR_INPUT;
     }
-    const struct aiScene *sc = aiImportFile(path, aiProcess_PreTransformVertices | aiProcess_ValidateDataStructure);
-    if (!sc) {
-        snprintf(why, why_size, "cannot read '%s': %s", path, aiGetErrorString());
-        return ILF_MESH_ERR_INPUT;
+    mesh_io files = {"", 0};
+    struct aiFileIO io = {mesh_io_open, mesh_io_close, (aiUserData)&files};
+    const struct aiScene *sc =
+        aiImportFileEx(path, aiProcess_PreTransformVertices | aiProcess_ValidateDataStructure, &io);
+    if (!sc || files.refused[0] != '\0' || files.nomem) {
+        ilf_mesh_status failure = files.nomem && files.refused[0] == '\0' ? ILF_MESH_ERR_NOMEM : ILF_MESH_ERR_INPUT;
+        if (failure == ILF_MESH_ERR_NOMEM)
+            snprintf(why, why_size, "'%s': out of memory", path);
+        else if (files.refused[0] != '\0')
+            snprintf(why, why_size, "cannot read '%s': %s", path, files.refused);
+        else
+            snprintf(why, why_size, "cannot read '%s': %s", path, aiGetErrorString());
+        aiReleaseImport(sc);
+        return failure;
     }
     ilf_mesh_status st = ILF_MESH_OK;
     if (sc->mFlags & AI_SCENE_FLAGS_INCOMPLETE) {

@@ -423,7 +423,7 @@ static int check_bytes(const unsigned char *d, size_t size, int ply_name, char *
 
 int ilf__ply_check(const char *path, char *why, size_t why_size)
 {
-    int fd = open(path, O_RDONLY);
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC); /* a FIFO is never waited on: fstat refuses it */
     if (fd < 0)
         return 1; /* assimp reports what is wrong with the file */
     struct stat sb;

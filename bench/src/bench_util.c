@@ -15,9 +15,11 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "bench.h"
 #include "cli.h"
+#include "ilf/file_kind.h"
 #include "jsonout.h"
 
 void bench_printf(bench_text *t, const char *fmt, ...)
@@ -57,9 +59,16 @@ void bench_text_free(bench_text *t)
 
 char *bench_read_text(const char *path)
 {
-    FILE *f = fopen(path, "rb");
-    if (f == NULL)
+    /* opened without blocking, a regular file only: a FIFO never hangs the benchmark (ilf/file_kind.h) */
+    char why[160];
+    int fd;
+    if (ilf_input_open(path, &fd, why, sizeof why) != 0)
         return NULL;
+    FILE *f = fdopen(fd, "rb");
+    if (f == NULL) {
+        close(fd);
+        return NULL;
+    }
     bench_text t = {0};
     char buf[65536];
     size_t n;

@@ -47,6 +47,7 @@
 #include <unistd.h>
 
 #include "ilf/atomic_file.h"
+#include "ilf/file_kind.h"
 #include "ilf/limits.h"
 #include "module.h"
 #include "writers.h"
@@ -289,14 +290,16 @@ img_status img_write(const char *path, int width, int height, int channels, cons
 
 /* ------------------------------------------------------------ reading */
 
-/* @return IMG_OK if path exists and is not a folder, else IMG_ERR_INPUT with a message naming it. */
+/* @return IMG_OK if path is a regular file (opened without blocking: a FIFO is refused, never waited on), else
+ * IMG_ERR_INPUT with a message naming it. */
 static img_status check_readable(const char *path, char *err, size_t errlen)
 {
-    struct stat st;
-    if (stat(path, &st) != 0)
-        return fail(IMG_ERR_INPUT, err, errlen, "%s: %s", path, strerror(errno));
-    if (S_ISDIR(st.st_mode))
+    char why[160];
+    int code = ilf_input_check(path, why, sizeof why);
+    if (code == EISDIR)
         return fail(IMG_ERR_INPUT, err, errlen, "%s: is a folder, not an image", path);
+    if (code != 0)
+        return fail(IMG_ERR_INPUT, err, errlen, "%s: %s", path, why);
     return IMG_OK;
 }
 

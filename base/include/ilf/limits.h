@@ -114,6 +114,24 @@
  * it the error is the proxy's, not the sampling's. */
 #define ILF_REPROJECT_MAX_STRATA 16u
 
+/* Pixels of all the probes one `ilf render-probes` writes (grid positions times pixels a probe): 2^32,
+ * 48 GiB of float EXR on disk. The grid and the probe size are each bounded above, but together they
+ * could ask for petabytes; this is checked before the scene is relit. */
+#define ILF_PROBE_MAX_PIXELS ((uint64_t)1 << 32)
+
+/* Rays one `ilf render-probes` traces (pixels of all probes times strata^2): 2^38, hours of tracing on
+ * a small machine already. Checked with ILF_PROBE_MAX_PIXELS, before any work. */
+#define ILF_PROBE_MAX_RAYS ((uint64_t)1 << 38)
+
+/* Bytes of radiance of a whole light field that `ilf reproject` builds, over every proxy rectangle: the
+ * slabs are held in memory until the file is written, so a small proxy file naming many large
+ * rectangles must not start (the same 64 GiB as one slab's limit, LFIO_SLAB_MAX_BYTES). */
+#define ILF_REPROJECT_MAX_BYTES ((uint64_t)1 << 36)
+
+/* Stratified directions one `ilf reproject` traces in all (values of every output slab times strata^2):
+ * 2^40. Checked with ILF_REPROJECT_MAX_BYTES, before any work. */
+#define ILF_REPROJECT_MAX_RAYS ((uint64_t)1 << 40)
+
 /* ------------------------------------------------------------ relight */
 
 /* Vertices of one scene polygon. Larger convex faces are split into fans of polygons this size; the
@@ -143,5 +161,9 @@
 
 /* Supersamples per axis when synthesising one radiance value (`ilf synth --supersample`). */
 #define ILF_SYNTH_MAX_SUPERSAMPLE 64u
+
+/* Evaluations one `ilf synth` makes (radiance values times supersample^2 times spots, at least one): 2^40.
+ * Each option is bounded above, but together they could ask for years of work; checked before any. */
+#define ILF_SYNTH_MAX_EVALUATIONS ((uint64_t)1 << 40)
 
 #endif /* ILF_LIMITS_H */
