@@ -684,31 +684,89 @@ static void test_other_storage(const char *good)
             lfio_lightfield_destroy(back);
         }
     }
-    /* chunk 0 forged: a stream of 16 bytes that inflates to less than a chunk, under a right checksum */
-    hid_t dcpl = storage(lfio_shape, "sdf");
-    restore_radiance(fresh_copy(p, sizeof p, good, "short_chunk.h5"), "/slabs/1/radiance", H5T_IEEE_F32LE, dcpl, dims,
-                     values, dims[0], units);
-    H5Pclose(dcpl);
-    unsigned char raw[16] = {0}, forged[256];
-    uLongf packed = sizeof forged - 4;
-    CHECK(compress2(forged, &packed, raw, sizeof raw, 4) == Z_OK, "forge a short stream");
-    uint32_t sum = forge_fletcher32(forged, packed);
-    for (int k = 0; k < 4; k++)
-        forged[packed + k] = (unsigned char)(sum >> (8 * k));
-    hid_t f = edit_open(p), d = H5Dopen2(f, "/slabs/1/radiance", H5P_DEFAULT);
-    const hsize_t origin[4] = {0, 0, 0, 0};
-    CHECK(H5Dwrite_chunk(d, H5P_DEFAULT, 0, origin, packed + 4, forged) >= 0, "store the forged chunk");
-    H5Dclose(d);
-    H5Fclose(f);
-    for (unsigned threads = 1; threads <= 3; threads += 2) {
-        lfio_lightfield_set_read_threads(threads);
-        lfio_lightfield *back = NULL;
-        lfio_status st = lfio_lightfield_read(p, &back);
-        CHECK(st == LFIO_ERR_IO && back == NULL && strstr(lfio_errmsg(), "/slabs/1/radiance") &&
-                  strstr(lfio_errmsg(), "chunk 0 does not inflate"),
-              "forged chunk, %u threads: %s, '%s'", threads, lfio_status_name(st), lfio_errmsg());
-        lfio_lightfield_destroy(back);
+    /* chunk 0 forged, each time under a right checksum: a stream that inflates short of a chunk (16 bytes),
+     * one that inflates past it (ten chunks of zeros: a bomb of under 1 KB), both within the sizes a chunk
+     * can take, so that only inflating them finds them; one smaller than that (16 bytes in 15), and one
+     * smaller than its checksum (HDF5's Fletcher-32 filter reads before such a buffer); a chunk whose mask
+     * says its checksum was skipped, holding an altered value. */
+    const size_t chunk_bytes = 32 * 16 * 16 * 3 * sizeof(float);
+    unsigned char *zeros = calloc(10 * chunk_bytes, 1), *forged = malloc(2 * chunk_bytes);
+    const struct {
+        const char *name;
+        size_t raw;           /* zero bytes deflated into the stream (0: the stream is `literal`) */
+        size_t literal;       /* bytes of a stored chunk made of 0x5a */
+        unsigned mask;        /* filter mask stored with it */
+        lfio_status want;
+        const char *message;  /* of a whole read or verify (or of opening, which refuses it already) */
+        const char *partial;  /* of a partial read */
+        int at_open;          /* refused when the file is opened */
+    } forgeries[] = {
+        {"short stream", 0, 0, 0, LFIO_ERR_FORMAT, "stores 15 bytes", "", 1},
+        {"bomb", 10 * chunk_bytes, 0, 0, LFIO_ERR_FORMAT, "chunk 0 does not inflate", "does not inflate to its", 0},
+        {"noise", 4000, 0, 0, LFIO_ERR_FORMAT, "chunk 0 does not inflate", "does not inflate to its", 0},
+        {"under its checksum", 0, 2, 0, LFIO_ERR_FORMAT, "stores 2 bytes", "", 1},
+        {"checksum skipped", 0, 0, 4, LFIO_ERR_FORMAT, "skipped filters (filter mask 0x4)", "filter mask 0x4", 0},
+    };
+    for (size_t c = 0; zeros && forged && c < sizeof forgeries / sizeof forgeries[0]; c++) {
+        snprintf(name, sizeof name, "forged%zu.h5", c);
+        hid_t dcpl = storage(lfio_shape, "sdf");
+        restore_radiance(fresh_copy(p, sizeof p, good, name), "/slabs/1/radiance", H5T_IEEE_F32LE, dcpl, dims,
+                         values, dims[0], units);
+        H5Pclose(dcpl);
+        size_t stored = forgeries[c].literal;
+        if (stored > 0) {
+            memset(forged, 0x5a, stored);
+        } else {
+            /* noise: incompressible bytes, which deflate stores as they are */
+            for (size_t k = 0; forgeries[c].raw == 4000 && k < 4000; k++)
+                zeros[k] = (unsigned char)(rng_next() >> 24);
+            uLongf packed = (uLongf)(2 * chunk_bytes - 4);
+            CHECK(compress2(forged, &packed, zeros, forgeries[c].raw ? forgeries[c].raw : 16, 4) == Z_OK, "forge");
+            memset(zeros, 0, 4000);
+            if (forgeries[c].mask) /* a value changed: the stream of another chunk, no checksum after it */
+                packed = (uLongf)(2 * chunk_bytes - 4), compress2(forged, &packed, (const Bytef *)values, chunk_bytes, 4);
+            uint32_t sum = forge_fletcher32(forged, packed);
+            for (int k = 0; k < 4 && !forgeries[c].mask; k++)
+                forged[packed + k] = (unsigned char)(sum >> (8 * k));
+            stored = packed + (forgeries[c].mask ? 0 : 4);
+        }
+        hid_t f = edit_open(p), d = H5Dopen2(f, "/slabs/1/radiance", H5P_DEFAULT);
+        const hsize_t origin[4] = {0, 0, 0, 0};
+        CHECK(H5Dwrite_chunk(d, H5P_DEFAULT, forgeries[c].mask, origin, stored, forged) >= 0, "store the forged chunk");
+        H5Dclose(d);
+        H5Fclose(f);
+        for (unsigned threads = 1; threads <= 3; threads += 2) {
+            lfio_lightfield_set_read_threads(threads);
+            lfio_lightfield *back = NULL;
+            lfio_status st = lfio_lightfield_read(p, &back);
+            CHECK(st == forgeries[c].want && back == NULL && strstr(lfio_errmsg(), "/slabs/1/radiance") &&
+                      strstr(lfio_errmsg(), forgeries[c].message),
+                  "forged chunk (%s), %u threads: %s, '%s'", forgeries[c].name, threads, lfio_status_name(st),
+                  lfio_errmsg());
+            lfio_lightfield_destroy(back);
+        }
+        /* partial reads go through HDF5's filters: lfio inflates the chunk first, within its bytes */
+        lfio_reader *r = NULL;
+        lfio_status st = lfio_reader_open(p, &r);
+        CHECK(forgeries[c].at_open ? st == forgeries[c].want && r == NULL : st == LFIO_OK, "forged chunk (%s): open %s",
+              forgeries[c].name, lfio_errmsg());
+        float *img = malloc((size_t)(dims[1] * dims[2] * 3) * sizeof *img), rgb[4 * 64 * 3];
+        if (r && img && dims[0] <= 4 * 64) {
+            st = lfio_reader_read_direction(r, 1, 0, img);
+            CHECK(st == LFIO_ERR_FORMAT && strstr(lfio_errmsg(), forgeries[c].partial),
+                  "forged chunk (%s): direction read: %s", forgeries[c].name, lfio_errmsg());
+            st = lfio_reader_read_position(r, 1, 0, 0, rgb);
+            CHECK(st == LFIO_ERR_FORMAT, "forged chunk (%s): position read: %s", forgeries[c].name, lfio_errmsg());
+            CHECK(lfio_reader_read_direction(r, 0, 0, img) == LFIO_OK, "other slabs still readable: %s", lfio_errmsg());
+            lfio_verify_report rep;
+            CHECK(lfio_verify(p, &rep) == LFIO_ERR_FORMAT && strstr(rep.first, forgeries[c].message),
+                  "forged chunk (%s): verify: %s", forgeries[c].name, rep.first);
+        }
+        free(img);
+        lfio_reader_close(r);
     }
+    free(forged);
+    free(zeros);
     lfio_lightfield_set_read_threads(0);
     lfio_lightfield_destroy(ref);
 }

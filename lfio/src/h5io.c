@@ -25,8 +25,10 @@
  *     leaves the target untouched and removes its temporary
  *     (lfio__h5_write_atomic()).
  *   - An lfio_reader keeps one open radiance dataset per slab (and its
- *     coverage dataset, if any) and nothing else mutable, so reads on one
- *     reader only make HDF5 calls, which HDF5 serialises.
+ *     coverage dataset, if any) and nothing else mutable but a map of the
+ *     radiance chunks partial reads have vetted (h5util.h), whose bits are
+ *     set atomically, so reads on one reader from several threads only
+ *     make HDF5 calls, which HDF5 serialises, and atomic updates.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -201,6 +203,7 @@ struct stream {
     const struct ds_spec *sp;
     hid_t dset;
     int verify;               /* 0: write; 1: read and compare */
+    lfio__h5_vetted *vetted;  /* verify: the chunks vetted so far (blocks share chunks), or NULL */
     uint64_t mismatches;      /* verify: values off by more than VERIFY_TOL */
     char first[192];          /* verify: the first mismatch, described */
 };
@@ -290,8 +293,10 @@ static lfio_status stream_derived(struct stream *j)
             start[b] = r0;
             count[b] = min_h(rows_per_block, sp->lay.dims[b] - r0);
             fill_expected(j->s, sp, start, count[b], want);
-            st = lfio__h5_xfer(j->path, j->obj, j->dset, !j->verify, H5T_NATIVE_DOUBLE, sp->lay.rank, start,
-                               count, j->verify ? (void *)got : (void *)want);
+            st = j->verify ? lfio__h5_read_vetted(j->path, j->obj, j->dset, H5T_NATIVE_DOUBLE, sp->lay.rank, start,
+                                                  count, got, j->vetted)
+                           : lfio__h5_xfer(j->path, j->obj, j->dset, 1, H5T_NATIVE_DOUBLE, sp->lay.rank, start, count,
+                                           want);
             if (st == LFIO_OK && j->verify)
                 compare_block(j, start, b, inner, want, got, count[b] * inner);
         }
@@ -420,7 +425,7 @@ static lfio_status write_slab(const char *path, hid_t slabs, size_t k, const lfi
         } else if (specs[t].kind == DS_COVERAGE) {
             st = lfio__h5_xfer(path, dobj, d, 1, H5T_NATIVE_UINT8, 3, zero, specs[t].lay.dims, (void *)coverage);
         } else {
-            struct stream j = {path, dobj, s, &specs[t], d, 0, 0, ""};
+            struct stream j = {path, dobj, s, &specs[t], d, 0, NULL, 0, ""};
             st = stream_derived(&j);
         }
         /* Closing flushes the chunk cache: the last chunks reach the file only here. */
@@ -482,6 +487,7 @@ struct lfio_reader {
     lfio_slab_desc *desc;     /* nslabs, each passed lfio__check_desc() */
     hid_t *radiance;          /* nslabs open radiance datasets, shapes checked */
     hid_t *coverage;          /* nslabs open coverage datasets, shapes checked; -1 where a slab has none */
+    lfio__h5_vetted **vetted; /* nslabs maps of the radiance chunks partial reads have vetted (or NULL) */
 };
 
 /* Reads and checks the root attributes into r (version, creator, slab count). */
@@ -657,6 +663,9 @@ static lfio_status open_slab(lfio_reader *r, hid_t slabs, size_t k)
         st = check_dataset(r->path, obj, g, &specs[t], dapl, keep ? &r->radiance[k] : NULL);
         lfio__h5_close(dapl);
     }
+    size_t map_bytes = st == LFIO_OK ? lfio__h5_vetted_bytes(r->radiance[k]) : 0;
+    if (map_bytes > 0 && (r->vetted[k] = calloc(map_bytes, 1)) == NULL)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", r->path, obj);
     /* Coverage is optional: absent is fine, present must have the layout the slab's attributes imply. */
     htri_t has = st == LFIO_OK ? H5Lexists(g, "coverage", H5P_DEFAULT) : 0;
     if (has < 0)
@@ -706,7 +715,10 @@ static void reader_free(lfio_reader *r)
         lfio__h5_close(r->radiance[k]);
     for (size_t k = 0; r->coverage && k < r->nslabs; k++)
         lfio__h5_close(r->coverage[k]);
+    for (size_t k = 0; r->vetted && k < r->nslabs; k++)
+        free((void *)r->vetted[k]);
     lfio__h5_close(r->file);
+    free(r->vetted);
     free(r->radiance);
     free(r->coverage);
     free(r->desc);
@@ -735,7 +747,8 @@ static lfio_status reader_open_impl(const char *path, lfio_reader **out)
     /* nslabs <= MAX_SLABS here, so these allocations are bounded. */
     if (st == LFIO_OK && ((r->desc = calloc(r->nslabs, sizeof *r->desc)) == NULL
                           || (r->radiance = malloc(r->nslabs * sizeof *r->radiance)) == NULL
-                          || (r->coverage = malloc(r->nslabs * sizeof *r->coverage)) == NULL))
+                          || (r->coverage = malloc(r->nslabs * sizeof *r->coverage)) == NULL
+                          || (r->vetted = calloc(r->nslabs, sizeof *r->vetted)) == NULL))
         st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
     for (size_t k = 0; r->radiance && k < r->nslabs; k++)
         r->radiance[k] = -1;
@@ -892,7 +905,7 @@ static int read_radiance_direct(const char *path, const char *obj, hid_t d, cons
     if (rc == LFIO__STORED_CHECKSUM)
         *st = lfio__fail(LFIO_ERR_CHECKSUM, "%s: %s: checksum mismatch (cannot read)", path, obj);
     else if (rc == LFIO__STORED_BROKEN)
-        *st = lfio__fail(LFIO_ERR_IO, "%s: %s: cannot read (stored chunk %zu does not inflate to its %zu bytes)",
+        *st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: cannot read: stored chunk %zu does not inflate to its %zu bytes",
                          path, obj, bad, chunk_bytes);
     else if (rc == LFIO__STORED_NOMEM)
         *st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, obj);
@@ -1016,7 +1029,7 @@ lfio_status lfio_reader_read_direction(lfio_reader *r, size_t k, uint64_t dir, f
     const hsize_t start[4] = {dir, 0, 0, 0}, count[4] = {1, d->nv, d->nu, 3};
     lfio__h5_quiet q;
     lfio__h5_quiet_begin(&q);
-    st = lfio__h5_xfer(r->path, obj, r->radiance[k], 0, H5T_NATIVE_FLOAT, 4, start, count, img);
+    st = lfio__h5_read_vetted(r->path, obj, r->radiance[k], H5T_NATIVE_FLOAT, 4, start, count, img, r->vetted[k]);
     lfio__h5_quiet_end(&q);
     const size_t total = (size_t)d->nu * d->nv * 3;
     size_t p = st == LFIO_OK ? lfio__first_bad_value(img, total) : total;
@@ -1041,7 +1054,7 @@ lfio_status lfio_reader_read_position(lfio_reader *r, size_t k, uint32_t i, uint
     const hsize_t start[4] = {0, j, i, 0}, count[4] = {ndir, 1, 1, 3};
     lfio__h5_quiet q;
     lfio__h5_quiet_begin(&q);
-    st = lfio__h5_xfer(r->path, obj, r->radiance[k], 0, H5T_NATIVE_FLOAT, 4, start, count, rgb);
+    st = lfio__h5_read_vetted(r->path, obj, r->radiance[k], H5T_NATIVE_FLOAT, 4, start, count, rgb, r->vetted[k]);
     lfio__h5_quiet_end(&q);
     const size_t total = (size_t)ndir * 3;
     size_t p = st == LFIO_OK ? lfio__first_bad_value(rgb, total) : total;
@@ -1207,8 +1220,11 @@ static void verify_slab(struct vstate *v, lfio_reader *r, size_t k)
         }
         verify_checksummed(v, r->path, obj, d);
         if (specs[t].kind != DS_RADIANCE) {
-            struct stream j = {r->path, obj, s, &specs[t], d, 1, 0, ""};
-            st = stream_derived(&j);
+            size_t map_bytes = lfio__h5_vetted_bytes(d);
+            struct stream j = {r->path, obj, s, &specs[t], d, 1, map_bytes ? calloc(map_bytes, 1) : NULL, 0, ""};
+            st = map_bytes && j.vetted == NULL ? lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", r->path, obj)
+                                               : stream_derived(&j);
+            free((void *)j.vetted);
             if (st != LFIO_OK)
                 note(v, st);
             else if (j.mismatches)
