@@ -835,11 +835,10 @@ lfio_status lfio__h5_expect_link(const char *path, const char *obj, hid_t g, con
         return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot look it up");
     if (info.type == H5L_TYPE_HARD)
         return LFIO_OK;
-    return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: is %s, not the %s itself (lfio follows no links: it reads nothing "
-                      "from elsewhere or from other files)", path, obj,
+    return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: is %s: lfio follows no links (it reads nothing from elsewhere in "
+                      "the file or from other files)", path, obj,
                       info.type == H5L_TYPE_SOFT ? "a soft link" : info.type == H5L_TYPE_EXTERNAL ? "an external link"
-                                                                                            : "a user-defined link",
-                      what);
+                                                                                            : "a user-defined link");
 }
 
 /* Creates group name in parent with its attributes in its checksummed object header (see h5util.h). */

@@ -725,12 +725,14 @@ static lfio_status read_patch_attrs(const char *path, const char *obj, hid_t g, 
     return st;
 }
 
-/* @return the length of the first axis of dataset name of g; 0 if it is missing or not an array
- * (the full check reports that). */
+/* @return the length of the first axis of dataset name of g; 0 if it is missing, not an array or not a
+ * hard link, which is not followed (the full check reports that). */
 static hsize_t first_axis_length(hid_t g, const char *name)
 {
     hsize_t dims[H5S_MAX_RANK] = {0};
-    if (H5Lexists(g, name, H5P_DEFAULT) <= 0)
+    H5L_info_t info;
+    if (H5Lexists(g, name, H5P_DEFAULT) <= 0 || H5Lget_info(g, name, &info, H5P_DEFAULT) < 0
+        || info.type != H5L_TYPE_HARD)
         return 0;
     hid_t d = H5Dopen2(g, name, H5P_DEFAULT);
     hid_t space = d < 0 ? -1 : H5Dget_space(d);
