@@ -1,6 +1,8 @@
 /*
  * test_h5io.c - light field files (lfio/src/h5io.c): round trips, partial
- * reads, atomic writes, every documented failure of reading, and lfio_verify.
+ * reads, atomic writes, every documented failure of reading, and lfio_verify;
+ * and the storage checks light field and radiance-map readers share
+ * (lfio/src/h5util.c): links, forged chunks.
  *
  * Bad files are made by writing a good file with lfio and then editing it
  * with the HDF5 API (or by truncating and flipping bytes), so each case
@@ -30,6 +32,7 @@
 #include "check.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
+#include "radmap_patches.h"
 /* Only for the layout of struct lfio_slab: one test corrupts a slab in memory. */
 #include "../lfio/src/internal.h"
 
@@ -1035,6 +1038,85 @@ static void test_verify_tampered(const char *good)
     CHECK(lfio_verify(NULL, &rep) == LFIO_ERR_ARG && rep.problems == 1, "verify NULL path");
 }
 
+/* Stores data (bytes) as the chunk at the origin of dataset dset of path, with filter mask mask. */
+static void store_chunk(const char *path, const char *dset, int rank, const void *data, size_t bytes, uint32_t mask)
+{
+    hid_t f = edit_open(path), d = H5Dopen2(f, dset, H5P_DEFAULT);
+    const hsize_t origin[4] = {0, 0, 0, 0};
+    CHECK(rank <= 4 && H5Dwrite_chunk(d, H5P_DEFAULT, mask, origin, bytes, data) >= 0, "store a chunk in %s", dset);
+    H5Dclose(d);
+    H5Fclose(f);
+}
+
+/* Replaces the link to dataset dset (in group group) of path by a soft link to target, or an external
+ * link to target in file other when other is not NULL. */
+static void relink(const char *path, const char *group, const char *dset, const char *other, const char *target)
+{
+    hid_t f = edit_open(path), g = H5Gopen2(f, group, H5P_DEFAULT);
+    CHECK(H5Ldelete(g, dset, H5P_DEFAULT) >= 0, "unlink %s", dset);
+    herr_t rc = other ? H5Lcreate_external(other, target, g, dset, H5P_DEFAULT, H5P_DEFAULT)
+                      : H5Lcreate_soft(target, g, dset, H5P_DEFAULT, H5P_DEFAULT);
+    CHECK(rc >= 0, "link %s", dset);
+    H5Gclose(g);
+    H5Fclose(f);
+}
+
+/* Radiance-map files take the same storage checks as light fields: a dataset reached through a soft or an
+ * external link is refused (the external one before its file is opened), and so are forged chunks of a
+ * deflated cell dataset (three chunks of 16384 cells): under their checksum, a skipped checksum, a stream
+ * inflating ten times past its chunk. Each refusal is LFIO_ERR_FORMAT naming the file and the dataset. */
+static void test_radmap_storage(void)
+{
+    struct test_patch t;
+    make_patch(&t, "polygons[0]", 0, 2.0, 0.0, 0.01, 0); /* 40,000 cells */
+    char good[512], p[512];
+    CHECK(lfio_radmap_write(tmp_path(good, sizeof good, "map.h5"), "test_h5io", NULL, &t.p, 1) == LFIO_OK,
+          "write a radiance map: %s", lfio_errmsg());
+    lfio_radmap *map = NULL;
+    lfio_radmap_patch back;
+    CHECK(lfio_radmap_read(good, &map) == LFIO_OK, "read it back: %s", lfio_errmsg());
+    if (map && lfio_radmap_get(map, 0, &back) == LFIO_OK)
+        check_patch_equal(&back, &t.p, "map.h5");
+    lfio_radmap_destroy(map);
+    const size_t chunk_bytes = 16384 * 3 * sizeof(float);
+    unsigned char *zeros = calloc(10 * chunk_bytes, 1), *stream = malloc(2 * chunk_bytes);
+    uLongf packed = (uLongf)(2 * chunk_bytes - 4), bomb = packed;
+    CHECK(zeros && stream && compress2(stream, &packed, zeros, chunk_bytes, 1) == Z_OK, "deflate a chunk");
+    struct {
+        const char *name, *needle;
+    } cases[] = {
+        {"map_external.h5", "/patches/0/irradiance: is an external link"},
+        {"map_soft.h5", "/patches/0/vertices: is a soft link"},
+        {"map_tiny_chunk.h5", "stores 2 bytes"},
+        {"map_skipped.h5", "skipped filters (filter mask 0x4)"},
+        {"map_bomb.h5", "does not inflate to its 196608 bytes"},
+    };
+    relink(fresh_copy(p, sizeof p, good, cases[0].name), "/patches/0", "irradiance", good, "/patches/0/irradiance");
+    relink(fresh_copy(p, sizeof p, good, cases[1].name), "/patches/0", "vertices", NULL, "/patches/0/cell_area");
+    store_chunk(fresh_copy(p, sizeof p, good, cases[2].name), "/patches/0/irradiance", 2, "\x01\x02", 2, 0);
+    /* a stream of zeros where the cells were, its checksum skipped */
+    store_chunk(fresh_copy(p, sizeof p, good, cases[3].name), "/patches/0/irradiance", 2, stream, packed, 4);
+    if (zeros && stream && compress2(stream, &bomb, zeros, 10 * chunk_bytes, 9) == Z_OK) {
+        uint32_t sum = forge_fletcher32(stream, bomb);
+        for (int k = 0; k < 4; k++)
+            stream[bomb + k] = (unsigned char)(sum >> (8 * k));
+        store_chunk(fresh_copy(p, sizeof p, good, cases[4].name), "/patches/0/irradiance", 2, stream, bomb + 4, 0);
+    }
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        map = (lfio_radmap *)1;
+        capture_begin();
+        lfio_status st = lfio_radmap_read(tmp_path(p, sizeof p, cases[c].name), &map);
+        long printed = capture_end();
+        CHECK(st == LFIO_ERR_FORMAT && map == NULL && strstr(lfio_errmsg(), cases[c].name) &&
+                  strstr(lfio_errmsg(), cases[c].needle),
+              "%s: %s (%s)", cases[c].name, lfio_status_name(st), lfio_errmsg());
+        CHECK(printed == 0, "%s: %ld bytes printed", cases[c].name, printed);
+    }
+    free(stream);
+    free(zeros);
+    free_patch(&t);
+}
+
 int main(void)
 {
     const char *base = getenv("ILF_TEST_TMP");
@@ -1074,6 +1156,7 @@ int main(void)
     char cov[512];
     test_coverage(tmp_path(cov, sizeof cov, "coverage.h5"));
     test_verify_tampered(mid);
+    test_radmap_storage();
     CHECK(count_temporaries() == 0, "temporaries left at the end");
     return check_report();
 }
