@@ -367,36 +367,45 @@ static lfio_status check_chunked(const char *path, const char *obj, hid_t d, hid
     return walk_chunks(path, obj, d, &w);
 }
 
+/* Checks that the layout of dataset obj (from its creation list dcpl) keeps its values in the file
+ * itself, chunked or contiguous. @return LFIO_OK or LFIO_ERR_FORMAT. */
+static lfio_status check_layout(const char *path, const char *obj, hid_t dcpl, H5D_layout_t layout)
+{
+    int external = H5Pget_external_count(dcpl);
+    if (layout == H5D_LAYOUT_ERROR || external < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its storage layout");
+    if (layout == H5D_VIRTUAL)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: is a virtual dataset, whose values come from other datasets or "
+                          "files: lfio reads only data stored in the file", path, obj);
+    if (external > 0)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: keeps its values in %d external file(s): lfio reads only data "
+                          "stored in the file", path, obj, external);
+    if (layout != H5D_CHUNKED && layout != H5D_CONTIGUOUS)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: is stored %s: lfio reads chunked and contiguous datasets only",
+                          path, obj, layout == H5D_COMPACT ? "compact, in its object header" : "in an unknown layout");
+    return LFIO_OK;
+}
+
 /* Checks how dataset d (obj, layout l already matched) is stored, before any of its values is read
  * (see h5util.h). @return LFIO_OK or LFIO_ERR_FORMAT. */
 static lfio_status check_storage(const char *path, const char *obj, hid_t d, const lfio__h5_layout *l)
 {
     uint64_t file = 0, bytes = l->size;
     lfio_status st = file_bytes(path, &file);
+    if (st != LFIO_OK)
+        return st;
     for (int a = 0; a < l->rank; a++)
         bytes *= l->dims[a]; /* no overflow: the callers bound the dims before they check a dataset */
-    hid_t dcpl = st == LFIO_OK ? H5Dget_create_plist(d) : -1;
+    hid_t dcpl = H5Dget_create_plist(d);
     H5D_layout_t layout = dcpl < 0 ? H5D_LAYOUT_ERROR : H5Pget_layout(dcpl);
-    int external = dcpl < 0 ? -1 : H5Pget_external_count(dcpl);
     pipeline pl;
-    if (st != LFIO_OK) {
-    } else if (layout == H5D_LAYOUT_ERROR || external < 0) {
-        st = lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its storage layout");
-    } else if (layout == H5D_VIRTUAL) {
-        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: is a virtual dataset, whose values come from other datasets or "
-                        "files: lfio reads only data stored in the file", path, obj);
-    } else if (external > 0) {
-        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: keeps its values in %d external file(s): lfio reads only data "
-                        "stored in the file", path, obj, external);
-    } else if (layout != H5D_CHUNKED && layout != H5D_CONTIGUOUS) {
-        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: is stored %s: lfio reads chunked and contiguous datasets only",
-                        path, obj, layout == H5D_COMPACT ? "compact, in its object header" : "in an unknown layout");
-    } else if ((st = check_pipeline(path, obj, dcpl, &pl)) != LFIO_OK) {
-    } else if (layout == H5D_CONTIGUOUS) {
-        st = check_contiguous(path, obj, d, bytes, file);
-    } else {
-        st = check_chunked(path, obj, d, dcpl, l, &pl, file);
-    }
+    st = dcpl < 0 ? lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its storage layout")
+                  : check_layout(path, obj, dcpl, layout);
+    if (st == LFIO_OK)
+        st = check_pipeline(path, obj, dcpl, &pl);
+    if (st == LFIO_OK)
+        st = layout == H5D_CONTIGUOUS ? check_contiguous(path, obj, d, bytes, file)
+                                      : check_chunked(path, obj, d, dcpl, l, &pl, file);
     lfio__h5_close(dcpl);
     return st;
 }
@@ -429,15 +438,17 @@ static int vet_info_get(const char *path, const char *obj, hid_t dset, vet_info 
         lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its storage layout");
     else if (chunked && check_pipeline(path, obj, dcpl, &v->pl) != LFIO_OK)
         rc = -1;
-    else if (chunked && (v->pl.shuffle || v->pl.deflate || v->pl.fletcher32)) {
-        uint64_t bytes = H5Tget_size(t);
-        for (int a = 0; a < v->rank && bytes <= LFIO__H5_CHUNK_MAX; a++) {
-            bytes *= v->chunk[a] > 0 ? v->chunk[a] : UINT64_MAX / LFIO__H5_CHUNK_MAX;
-            v->grid[a] = v->chunk[a] > 0 ? (v->dims[a] + v->chunk[a] - 1) / v->chunk[a] : 0;
-        }
+    else if (chunked && (v->pl.shuffle || v->pl.deflate || v->pl.fletcher32))
         rc = 1;
-        if (bytes > LFIO__H5_CHUNK_MAX) /* lfio__h5_check_dataset() refused it: a caller that did not check */
-            rc = -1, lfio__fail(LFIO_ERR_FORMAT, "%s: %s: chunks of more than %zu bytes", path, obj, LFIO__H5_CHUNK_MAX);
+    /* HDF5 makes every chunk dimension >= 1; the product stays below 2^54 until it passes the maximum */
+    uint64_t bytes = rc == 1 ? H5Tget_size(t) : 0;
+    for (int a = 0; rc == 1 && a < v->rank; a++) {
+        bytes = bytes <= LFIO__H5_CHUNK_MAX ? bytes * v->chunk[a] : bytes;
+        v->grid[a] = (v->dims[a] + v->chunk[a] - 1) / v->chunk[a];
+    }
+    if (rc == 1 && (bytes == 0 || bytes > LFIO__H5_CHUNK_MAX)) /* lfio__h5_check_dataset() refuses these */
+        rc = -1, lfio__fail(LFIO_ERR_FORMAT, "%s: %s: chunks of more than %zu bytes", path, obj, LFIO__H5_CHUNK_MAX);
+    if (rc == 1) {
         v->chunk_bytes = (size_t)bytes;
         v->least = (size_t)stored_least(bytes, &v->pl);
         v->most = (size_t)stored_most(bytes, &v->pl);
