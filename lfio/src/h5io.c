@@ -1191,7 +1191,8 @@ static void verify_checksummed(struct vstate *v, const char *path, const char *o
         note(v, lfio__fail(LFIO_ERR_FORMAT, "%s: %s: stored without a fletcher32 checksum", path, obj));
 }
 
-/* Verifies slab k: reads its radiance, then checks every dataset's checksum filter and derived values. */
+/* Verifies slab k: reads its radiance, then checks every dataset's checksum filter, that every chunk of it is
+ * stored, and the derived values. */
 static void verify_slab(struct vstate *v, lfio_reader *r, size_t k)
 {
     lfio_slab *s = NULL;
@@ -1219,6 +1220,8 @@ static void verify_slab(struct vstate *v, lfio_reader *r, size_t k)
             continue;
         }
         verify_checksummed(v, r->path, obj, d);
+        if (lfio__h5_expect_whole(r->path, obj, d, &specs[t].lay) != LFIO_OK)
+            note(v, LFIO_ERR_FORMAT);
         if (specs[t].kind != DS_RADIANCE) {
             size_t map_bytes = lfio__h5_vetted_bytes(d);
             struct stream j = {r->path, obj, s, &specs[t], d, 1, map_bytes ? calloc(map_bytes, 1) : NULL, 0, ""};
@@ -1237,6 +1240,10 @@ static void verify_slab(struct vstate *v, lfio_reader *r, size_t k)
         char obj[128];
         snprintf(obj, sizeof obj, "%s/coverage", gobj);
         verify_checksummed(v, r->path, obj, r->coverage[k]);
+        struct ds_spec cov;
+        ds_spec_make(&s->desc, DS_COVERAGE, 0, &cov);
+        if (lfio__h5_expect_whole(r->path, obj, r->coverage[k], &cov.lay) != LFIO_OK)
+            note(v, LFIO_ERR_FORMAT);
         uint8_t *buf = malloc((size_t)(s->ndir * s->npos));
         st = buf ? read_coverage_impl(r, k, buf) : lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", r->path, obj);
         if (st != LFIO_OK)

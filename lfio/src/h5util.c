@@ -237,19 +237,21 @@ typedef struct chunk_walk {
     uint64_t stored;        /* bytes of the chunks seen so far */
     uint64_t count, missing;
     hsize_t first_missing[H5S_MAX_RANK];
+    int whole;              /* refuse any chunk not stored (lfio__h5_expect_whole()) */
 } chunk_walk;
 
-/* H5Ewalk2 visitor: notes a record saying that a chunk is not allocated. */
+/* H5Ewalk2 visitor: notes a record saying that a chunk is not stored. */
 static herr_t unallocated_visit(unsigned n, const H5E_error2_t *e, void *data)
 {
     (void)n;
-    if (e->desc && strstr(e->desc, "not allocated"))
+    if (e->desc && (strstr(e->desc, "not allocated") || strstr(e->desc, "address isn't defined")))
         *(int *)data = 1;
     return 0;
 }
 
 /* Finds the stored size of the chunk at offset of dataset d, 0 if it is not stored: HDF5 1.10 looks it up
- * in the index directly, and fails saying "not allocated" for a chunk never written.
+ * in the index directly, and fails for a chunk never written, saying "chunk storage is not allocated" (or,
+ * once a read has cached the chunk, "chunk address isn't defined").
  * @return 0, or -1 with HDF5's error stack kept. */
 static int stored_size(hid_t d, const hsize_t *offset, hsize_t *size)
 {
@@ -313,7 +315,7 @@ static lfio_status walk_chunks(const char *path, const char *obj, hid_t d, chunk
      * dataset declares stays within what its stored bytes could inflate to, so that reading it allocates
      * in proportion to the file, never a size declared with nothing behind it. */
     uint64_t declared = w->count * w->chunk_bytes; /* no overflow: at most the file's bytes times 4 MiB */
-    if (st == LFIO_OK && w->missing > 0 && declared / LFIO__H5_INFLATE_MAX > w->stored) {
+    if (st == LFIO_OK && w->missing > 0 && (w->whole || declared / LFIO__H5_INFLATE_MAX > w->stored)) {
         char at[128];
         lfio__h5_format_dims(at, sizeof at, w->rank, w->first_missing);
         st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: %llu of its %llu chunks are not stored (the first at %s): it "
@@ -323,12 +325,12 @@ static lfio_status walk_chunks(const char *path, const char *obj, hid_t d, chunk
     return st;
 }
 
-/* Checks chunked dataset d (obj, layout l, created with dcpl, filters pl) and every one of its chunks.
- * @return LFIO_OK or LFIO_ERR_FORMAT. */
+/* Checks chunked dataset d (obj, layout l, created with dcpl, filters pl) and every one of its chunks;
+ * with whole, refuses any chunk not stored. @return LFIO_OK or LFIO_ERR_FORMAT. */
 static lfio_status check_chunked(const char *path, const char *obj, hid_t d, hid_t dcpl, const lfio__h5_layout *l,
-                                 const pipeline *pl, uint64_t file)
+                                 const pipeline *pl, uint64_t file, int whole)
 {
-    chunk_walk w = {.rank = l->rank, .file = file, .count = 1};
+    chunk_walk w = {.rank = l->rank, .file = file, .count = 1, .whole = whole};
     if (H5Pget_chunk(dcpl, l->rank, w.chunk) != l->rank)
         return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its chunk shape");
     uint64_t chunk_bytes = l->size;
@@ -387,8 +389,8 @@ static lfio_status check_layout(const char *path, const char *obj, hid_t dcpl, H
 }
 
 /* Checks how dataset d (obj, layout l already matched) is stored, before any of its values is read
- * (see h5util.h). @return LFIO_OK or LFIO_ERR_FORMAT. */
-static lfio_status check_storage(const char *path, const char *obj, hid_t d, const lfio__h5_layout *l)
+ * (see h5util.h); with whole, refuses any chunk not stored. @return LFIO_OK or LFIO_ERR_FORMAT. */
+static lfio_status check_storage(const char *path, const char *obj, hid_t d, const lfio__h5_layout *l, int whole)
 {
     uint64_t file = 0, bytes = l->size;
     lfio_status st = file_bytes(path, &file);
@@ -405,9 +407,14 @@ static lfio_status check_storage(const char *path, const char *obj, hid_t d, con
         st = check_pipeline(path, obj, dcpl, &pl);
     if (st == LFIO_OK)
         st = layout == H5D_CONTIGUOUS ? check_contiguous(path, obj, d, bytes, file)
-                                      : check_chunked(path, obj, d, dcpl, l, &pl, file);
+                                      : check_chunked(path, obj, d, dcpl, l, &pl, file, whole);
     lfio__h5_close(dcpl);
     return st;
+}
+
+lfio_status lfio__h5_expect_whole(const char *path, const char *obj, hid_t d, const lfio__h5_layout *l)
+{
+    return check_storage(path, obj, d, l, 1);
 }
 
 /* Sets bit k of map (atomically: readers of one lfio_reader may share it across threads). */
@@ -962,7 +969,7 @@ lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, 
                         path, obj, got, want, source);
     }
     if (st == LFIO_OK)
-        st = check_storage(path, obj, d, l);
+        st = check_storage(path, obj, d, l, 0);
     if (st == LFIO_OK)
         st = lfio__h5_expect_str_attr(path, obj, d, "units", l->units);
     if (st == LFIO_OK)

@@ -167,6 +167,15 @@ lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, 
                                    const char *source, hid_t dapl, hid_t *out);
 
 /*
+ * Checks dataset d (obj, open and checked by lfio__h5_check_dataset() against
+ * layout l) as that does, and that every one of its chunks is stored: a
+ * chunk never written reads as the fill value, which lfio accepts from other
+ * writers but never writes, so lfio_verify() reports it.
+ * @return LFIO_OK or LFIO_ERR_FORMAT.
+ */
+lfio_status lfio__h5_expect_whole(const char *path, const char *obj, hid_t d, const lfio__h5_layout *l);
+
+/*
  * Transfers the hyperslab [start, start+count) of dset to or from buf (packed,
  * row-major) as memory type mtype; an empty hyperslab transfers nothing.
  * Reading, every filtered chunk the hyperslab touches is first vetted:
