@@ -618,10 +618,13 @@ static hid_t radiance_dapl(const struct ds_spec *sp)
 static lfio_status check_dataset(const char *path, const char *gobj, hid_t g, const struct ds_spec *sp,
                                  hid_t dapl, hid_t *out)
 {
-    /* H5Lexists fails rather than answering 0 when an intermediate group is missing. */
+    /* H5Lexists fails rather than answering 0 when an intermediate group is missing; and the mask group's
+     * links are looked up below, so its format is checked first. */
     char obj[128];
     snprintf(obj, sizeof obj, "%s/mask", gobj);
-    lfio_status st = sp->kind == DS_MASK ? lfio__h5_expect_link(path, obj, g, "mask", "group") : LFIO_OK;
+    hid_t mask = -1;
+    lfio_status st = sp->kind == DS_MASK ? lfio__h5_open_group(path, obj, g, "mask", "group", &mask) : LFIO_OK;
+    lfio__h5_close(mask);
     if (st != LFIO_OK)
         return st;
     hid_t d = -1;
@@ -646,12 +649,10 @@ static lfio_status open_slab(lfio_reader *r, hid_t slabs, size_t k)
     snprintf(obj, sizeof obj, "/slabs/%zu", k);
     char what[64];
     snprintf(what, sizeof what, "slab group (slab_count is %zu)", r->nslabs);
-    lfio_status st = lfio__h5_expect_link(r->path, obj, slabs, name, what);
+    hid_t g;
+    lfio_status st = lfio__h5_open_group(r->path, obj, slabs, name, what, &g);
     if (st != LFIO_OK)
         return st;
-    hid_t g = H5Gopen2(slabs, name, H5P_DEFAULT);
-    if (g < 0)
-        return lfio__h5_fail(LFIO_ERR_FORMAT, r->path, obj, "cannot open as a group");
     st = read_desc(r->path, obj, g, &r->desc[k]);
     if (st == LFIO_OK)
         st = check_slab_desc(r->path, obj, &r->desc[k]);
@@ -756,9 +757,7 @@ static lfio_status reader_open_impl(const char *path, lfio_reader **out)
         r->coverage[k] = -1;
     hid_t slabs = -1;
     if (st == LFIO_OK)
-        st = lfio__h5_expect_link(path, "/slabs", r->file, "slabs", "group");
-    if (st == LFIO_OK && (slabs = H5Gopen2(r->file, "slabs", H5P_DEFAULT)) < 0)
-        st = lfio__h5_fail(LFIO_ERR_FORMAT, path, "/slabs", "cannot open as a group");
+        st = lfio__h5_open_group(path, "/slabs", r->file, "slabs", "group", &slabs);
     for (size_t k = 0; st == LFIO_OK && k < r->nslabs; k++)
         st = open_slab(r, slabs, k);
     lfio__h5_close(slabs);

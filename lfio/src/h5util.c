@@ -859,6 +859,40 @@ lfio_status lfio__h5_expect_link(const char *path, const char *obj, hid_t g, con
                                                                                             : "a user-defined link");
 }
 
+/* Checks that group g (obj) keeps its links in its object header or in a dense index (HDF5 1.8's formats
+ * and later: a v2 B-tree whose depth is bounded), not in a symbol table: its version 1 B-tree carries no
+ * checksum and HDF5 walks it recursively without a bound (a node that is its own child overflows the
+ * stack). The header says which, before any link of the group is looked up. */
+static lfio_status check_group_format(const char *path, const char *obj, hid_t g)
+{
+    H5O_info_t info;
+    if (H5Oget_info2(g, &info, H5O_INFO_HDR) < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its object header");
+    const unsigned symbol_table_message = 0x11; /* H5O_STAB_ID of the file format */
+    if (info.hdr.mesg.present & ((uint64_t)1 << symbol_table_message))
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: is a group of HDF5's original format, whose links a version 1 "
+                          "B-tree indexes, which lfio does not walk (h5repack or h5py's libver=\"v110\" writes "
+                          "groups lfio reads)", path, obj);
+    return LFIO_OK;
+}
+
+lfio_status lfio__h5_open_group(const char *path, const char *obj, hid_t parent, const char *name, const char *what,
+                                hid_t *out)
+{
+    *out = -1;
+    lfio_status st = lfio__h5_expect_link(path, obj, parent, name, what);
+    if (st != LFIO_OK)
+        return st;
+    hid_t g = H5Gopen2(parent, name, H5P_DEFAULT);
+    if (g < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a group");
+    if ((st = check_group_format(path, obj, g)) != LFIO_OK)
+        lfio__h5_close(g);
+    else
+        *out = g;
+    return st;
+}
+
 /* Creates group name in parent with its attributes in its checksummed object header (see h5util.h). */
 lfio_status lfio__h5_create_group(const char *path, const char *obj, hid_t parent, const char *name, hid_t *out)
 {
@@ -1221,6 +1255,10 @@ lfio_status lfio__h5_open_read(const char *path, hid_t *file)
     *file = H5Fopen(path, H5F_ACC_RDONLY, fapl >= 0 ? fapl : H5P_DEFAULT);
     if (*file < 0)
         st = lfio__h5_fail(LFIO_ERR_FORMAT, path, "/", "cannot open as HDF5");
+    else if ((st = check_group_format(path, "/", *file)) != LFIO_OK) {
+        lfio__h5_close(*file);
+        *file = -1;
+    }
     lfio__h5_close(fapl);
     return st;
 }

@@ -121,6 +121,16 @@ lfio_status lfio__h5_get_int_attr(const char *path, const char *obj, hid_t id, c
 lfio_status lfio__h5_expect_link(const char *path, const char *obj, hid_t g, const char *name, const char *what);
 
 /*
+ * Opens group name of parent (obj, its full name, and what, its kind, for
+ * messages) after lfio__h5_expect_link(), and checks that it does not index
+ * its links with a symbol table (HDF5's original format: a version 1 B-tree
+ * without checksums, which HDF5 walks without a bound on its depth).
+ * @return LFIO_OK and *out open; LFIO_ERR_FORMAT (or what HDF5 reports) with *out = -1.
+ */
+lfio_status lfio__h5_open_group(const char *path, const char *obj, hid_t parent, const char *name, const char *what,
+                                hid_t *out);
+
+/*
  * Creates group name in parent (obj names it in messages) with up to 64
  * attributes kept in its object header. HDF5 moves more than 8 into a
  * fractal heap, whose blocks carry no checksum: a damaged slab origin would
@@ -276,7 +286,8 @@ lfio_status lfio__h5_write_collective(const char *path, lfio__h5_fill_fn fill, c
 
 /*
  * Checks that path is a readable regular HDF5 file, then opens it read-only
- * with strong close. Does not silence HDF5.
+ * with strong close, and checks its root group as lfio__h5_open_group() does.
+ * Does not silence HDF5.
  * @return LFIO_OK and *file; LFIO_ERR_NOTFOUND, LFIO_ERR_IO or LFIO_ERR_FORMAT with *file = -1.
  */
 lfio_status lfio__h5_open_read(const char *path, hid_t *file);

@@ -805,22 +805,22 @@ static lfio_status read_patch(const char *path, hid_t patches, size_t k, lfio_ra
     char obj[64], name[24];
     snprintf(name, sizeof name, "%zu", k);
     snprintf(obj, sizeof obj, "/patches/%zu", k);
-    lfio_status st = lfio__h5_expect_link(path, obj, patches, name, "patch group");
+    hid_t g;
+    lfio_status st = lfio__h5_open_group(path, obj, patches, name, "patch group", &g);
     if (st != LFIO_OK)
         return st;
     if (map->count == map->capacity) {
         size_t grown = map->capacity ? 2 * map->capacity : 16;
         struct map_patch *more = realloc(map->patches, grown * sizeof *more);
-        if (more == NULL)
+        if (more == NULL) {
+            lfio__h5_close(g);
             return lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, obj);
+        }
         map->patches = more;
         map->capacity = grown;
     }
     struct map_patch *mp = &map->patches[map->count++]; /* counted now, so map_free() releases it */
     memset(mp, 0, sizeof *mp);
-    hid_t g = H5Gopen2(patches, name, H5P_DEFAULT);
-    if (g < 0)
-        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a group");
     st = read_patch_attrs(path, obj, g, mp);
     if (st == LFIO_OK)
         st = read_patch_counts(path, obj, g, map, &mp->pub);
@@ -845,9 +845,7 @@ static lfio_status radmap_read_impl(const char *path, lfio_radmap **out)
     if (st == LFIO_OK)
         st = read_root(path, file, map, &count);
     if (st == LFIO_OK)
-        st = lfio__h5_expect_link(path, "/patches", file, "patches", "group");
-    if (st == LFIO_OK && (patches = H5Gopen2(file, "patches", H5P_DEFAULT)) < 0)
-        st = lfio__h5_fail(LFIO_ERR_FORMAT, path, "/patches", "cannot open as a group");
+        st = lfio__h5_open_group(path, "/patches", file, "patches", "group", &patches);
     for (size_t k = 0; st == LFIO_OK && k < count; k++)
         st = read_patch(path, patches, k, map);
     lfio__h5_close(patches);

@@ -383,20 +383,22 @@ def resize_slab(f, nu, nv, chunk):
         new.attrs[k] = v
 
 
-def btree_cycle(path):
-    """Makes the first v1 B-tree node of path a node of level 1 whose children are itself: HDF5 1.10.8
-    follows the cycle until its stack overflows."""
+def btree_cycle(path, node_type):
+    """Makes the first v1 B-tree node of path of node_type (0: a group's links, 1: a rank-4 dataset's
+    chunks) a node of level 1 whose children are itself: HDF5 1.10.8 follows the cycle until its stack
+    overflows."""
     data = bytearray(open(path, "rb").read())
     at = data.find(b"TREE")
-    while data[at + 4] != 1:  # node type 1: chunks (0 is a group's)
+    while data[at + 4] != node_type:
         at = data.find(b"TREE", at + 4)
     used, = struct.unpack("<H", data[at + 6:at + 8])
     data[at + 5] = 1  # level
-    rank_keys = 8 + 8 * 5  # chunk size, filter mask, 4 offsets and the element offset
-    child = at + 24 + rank_keys
+    # a key: a heap offset (group), or a chunk's size, filter mask, 4 offsets and the element offset
+    key = 8 if node_type == 0 else 8 + 8 * 5
+    child = at + 24 + key
     for _ in range(used):
         data[child:child + 8] = struct.pack("<Q", at)
-        child += 8 + rank_keys
+        child += 8 + key
     write(path, bytes(data))
 
 
@@ -439,16 +441,19 @@ def hostile_storage(out, base):
     }
     for name, edit in cases.items():
         edited(d, base, name, edit, libver="v110")
-    # HDF5 1.8's formats index chunks with a v1 B-tree (h5py's default, but a file with a 1.10 superblock
-    # keeps 1.10's formats): the base copied into a new file, its radiance in four chunks, then a cycle
-    path = os.path.join(d, "chunk_btree_cycle.h5")
-    with h5py.File(base, "r") as src, h5py.File(path, "w", libver="earliest") as f:
-        for k, v in src.attrs.items():
-            f.attrs[k] = v
-        src.copy(src["slabs"], f)
-        swap_radiance(f, lambda g, n, v: g.create_dataset(n, data=v, dtype="<f4", chunks=(4, 3, 4, 3),
-                                                          fletcher32=True))
-    btree_cycle(path)
+    # HDF5's original formats index chunks, and a group's links, with v1 B-trees (h5py's default, but a
+    # file with a 1.10 superblock keeps 1.10's formats): the base copied into a new file (its groups keep
+    # their formats; the root group tracks link order, which gives it 1.8's), its radiance in four
+    # chunks, then a cycle in the chunks' tree; and, with a root of the original format, in the root's.
+    for name, node_type in (("chunk_btree_cycle.h5", 1), ("group_btree_cycle.h5", 0)):
+        path = os.path.join(d, name)
+        with h5py.File(base, "r") as src, h5py.File(path, "w", libver="earliest", track_order=node_type == 1) as f:
+            for k, v in src.attrs.items():
+                f.attrs[k] = v
+            src.copy(src["slabs"], f)
+            swap_radiance(f, lambda g, n, v: g.create_dataset(n, data=v, dtype="<f4", chunks=(4, 3, 4, 3),
+                                                              fletcher32=True))
+        btree_cycle(path, node_type)
 
 
 def duplicate_slab(f):
