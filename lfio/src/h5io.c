@@ -855,7 +855,8 @@ static int read_radiance_direct(const char *path, const char *obj, hid_t d, cons
     size_t chunk_bytes = sizeof(float);
     for (int a = 0; a < 4; a++)
         chunk_bytes *= (size_t)places.chunk[a];
-    /* a stored chunk is at most its deflated bound and the checksum: larger sizes are HDF5's to refuse */
+    /* a stored chunk is at most its deflated bound and the checksum (lfio__h5_check_dataset() refused larger
+     * ones); a chunk that fails a check here goes to HDF5's path, where lfio__h5_xfer() vets it and says why */
     size_t most = lfio__chunks_stored_most(chunk_bytes), total = 0;
     hsize_t *offset = malloc((size_t)n * 4 * sizeof *offset);
     lfio__stored *c = calloc((size_t)n, sizeof *c);

@@ -274,9 +274,9 @@ static lfio_status check_chunk(const char *path, const char *obj, hid_t d, const
 {
     hsize_t size = 0;
     char at[128];
-    lfio__h5_format_dims(at, sizeof at, w->rank, offset);
     if (stored_size(d, offset, &size) < 0) {
-        char what[160];
+        char what[192];
+        lfio__h5_format_dims(at, sizeof at, w->rank, offset);
         snprintf(what, sizeof what, "cannot look up the chunk at %s", at);
         return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, what);
     }
@@ -285,10 +285,12 @@ static lfio_status check_chunk(const char *path, const char *obj, hid_t d, const
             memcpy(w->first_missing, offset, sizeof w->first_missing);
         return LFIO_OK;
     }
-    if (size < w->least || size > w->most)
+    if (size < w->least || size > w->most) {
+        lfio__h5_format_dims(at, sizeof at, w->rank, offset);
         return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: the chunk at %s stores %llu bytes; its filters make %llu to %llu",
                           path, obj, at, (unsigned long long)size, (unsigned long long)w->least,
                           (unsigned long long)w->most);
+    }
     w->stored += size;
     if (w->stored > w->file) /* chunks sharing bytes: an index pointing many chunks at one stream */
         return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: its chunks store more bytes than the file holds (%llu): they "
@@ -515,8 +517,8 @@ static lfio_status vet_chunks(const char *path, const char *obj, hid_t dset, int
     hsize_t first[H5S_MAX_RANK], c[H5S_MAX_RANK], offset[H5S_MAX_RANK];
     for (int a = 0; a < rank; a++)
         first[a] = c[a] = start[a] / v.chunk[a];
-    unsigned char *raw = malloc(v.most), *out = malloc(v.chunk_bytes);
-    lfio_status st = raw && out ? LFIO_OK : lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, obj);
+    unsigned char *raw = NULL, *out = NULL; /* made for the first chunk to vet: a repeated read needs none */
+    lfio_status st = LFIO_OK;
     for (int more = 1; st == LFIO_OK && more;) {
         uint64_t k = 0;
         for (int a = 0; a < rank; a++) {
@@ -524,6 +526,10 @@ static lfio_status vet_chunks(const char *path, const char *obj, hid_t dset, int
             offset[a] = c[a] * v.chunk[a];
         }
         if (map == NULL || !(atomic_load(&map[k / 8]) & (1u << (k % 8)))) {
+            if (raw == NULL && ((raw = malloc(v.most)) == NULL || (out = malloc(v.chunk_bytes)) == NULL)) {
+                st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, obj);
+                break;
+            }
             st = vet_one(path, obj, dset, &v, offset, raw, out);
             if (st == LFIO_OK && map != NULL)
                 vetted_set(map, k);
