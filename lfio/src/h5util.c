@@ -390,6 +390,28 @@ static lfio_status check_layout(const char *path, const char *obj, hid_t dcpl, H
     return LFIO_OK;
 }
 
+lfio_status lfio__h5_open_dataset(const char *path, const char *obj, hid_t g, const char *name, hid_t dapl, hid_t *out)
+{
+    *out = -1;
+    lfio_status st = lfio__h5_expect_link(path, obj, g, name, "dataset");
+    if (st != LFIO_OK)
+        return st;
+    hid_t d = H5Dopen2(g, name, dapl >= 0 ? dapl : H5P_DEFAULT);
+    if (d < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a dataset");
+    /* before anything asks for its extent: HDF5 opens the source files of a virtual dataset with an
+     * unlimited mapping to compute it (a FIFO among them blocks the open) */
+    hid_t dcpl = H5Dget_create_plist(d);
+    st = dcpl < 0 ? lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its storage layout")
+                  : check_layout(path, obj, dcpl, H5Pget_layout(dcpl));
+    lfio__h5_close(dcpl);
+    if (st != LFIO_OK)
+        lfio__h5_close(d);
+    else
+        *out = d;
+    return st;
+}
+
 /* Checks how dataset d (obj, layout l already matched) is stored, before any of its values is read
  * (see h5util.h); with whole, refuses any chunk not stored. @return LFIO_OK or LFIO_ERR_FORMAT. */
 static lfio_status check_storage(const char *path, const char *obj, hid_t d, const lfio__h5_layout *l, int whole)
@@ -975,12 +997,10 @@ lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, 
     snprintf(obj, sizeof obj, "%s/%s", gobj, l->name);
     if (out)
         *out = -1;
-    lfio_status st = lfio__h5_expect_link(path, obj, g, l->name, "dataset");
+    hid_t d;
+    lfio_status st = lfio__h5_open_dataset(path, obj, g, l->name, dapl, &d);
     if (st != LFIO_OK)
         return st;
-    hid_t d = H5Dopen2(g, l->name, dapl >= 0 ? dapl : H5P_DEFAULT);
-    if (d < 0)
-        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a dataset");
     hid_t t = H5Dget_type(d), space = H5Dget_space(d);
     H5T_class_t cls = t < 0 ? H5T_NO_CLASS : H5Tget_class(t);
     size_t elem = t < 0 ? 0 : H5Tget_size(t);

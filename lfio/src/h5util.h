@@ -165,6 +165,17 @@ lfio_status lfio__h5_create_dataset(const char *path, const char *gobj, hid_t g,
                                     const lfio__h5_layout *l, hid_t *out);
 
 /*
+ * Opens dataset name of group g (obj, its full name, for messages) with
+ * access list dapl (or the default when negative) after
+ * lfio__h5_expect_link(), and checks that its values are kept in the file
+ * itself (not virtual, no external storage, chunked or contiguous) before
+ * anything asks for its extent, which makes HDF5 open the source files of
+ * some virtual datasets. @return LFIO_OK and *out open; LFIO_ERR_FORMAT with *out = -1.
+ */
+lfio_status lfio__h5_open_dataset(const char *path, const char *obj, hid_t g, const char *name, hid_t dapl,
+                                  hid_t *out);
+
+/*
  * Opens dataset l of group g (gobj) with access list dapl (or the default
  * when negative) and checks its link (a hard one), class, element size,
  * rank, dims, storage (see the top of this file) and its units and axes

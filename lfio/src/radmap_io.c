@@ -725,17 +725,16 @@ static lfio_status read_patch_attrs(const char *path, const char *obj, hid_t g, 
     return st;
 }
 
-/* @return the length of the first axis of dataset name of g; 0 if it is missing, not an array or not a
- * hard link, which is not followed (the full check reports that). */
-static hsize_t first_axis_length(hid_t g, const char *name)
+/* @return the length of the first axis of dataset name of g (obj, for lfio__h5_open_dataset()'s messages);
+ * 0 if it is missing, not an array, not a hard link or not stored in the file, which the full check
+ * reports. */
+static hsize_t first_axis_length(const char *path, const char *obj, hid_t g, const char *name)
 {
     hsize_t dims[H5S_MAX_RANK] = {0};
-    H5L_info_t info;
-    if (H5Lexists(g, name, H5P_DEFAULT) <= 0 || H5Lget_info(g, name, &info, H5P_DEFAULT) < 0
-        || info.type != H5L_TYPE_HARD)
+    hid_t d = -1;
+    if (lfio__h5_open_dataset(path, obj, g, name, -1, &d) != LFIO_OK)
         return 0;
-    hid_t d = H5Dopen2(g, name, H5P_DEFAULT);
-    hid_t space = d < 0 ? -1 : H5Dget_space(d);
+    hid_t space = H5Dget_space(d);
     int rank = space < 0 ? -1 : H5Sget_simple_extent_ndims(space);
     if (rank < 1 || rank > H5S_MAX_RANK || H5Sget_simple_extent_dims(space, dims, NULL) < 0)
         dims[0] = 0;
@@ -748,7 +747,10 @@ static hsize_t first_axis_length(hid_t g, const char *name)
 static lfio_status read_patch_counts(const char *path, const char *obj, hid_t g, const lfio_radmap *map,
                                      lfio_radmap_patch *p)
 {
-    const hsize_t nverts = first_axis_length(g, "vertices"), ncells = first_axis_length(g, "cell_ij");
+    char vobj[128], cobj[128];
+    snprintf(vobj, sizeof vobj, "%.63s/vertices", obj);
+    snprintf(cobj, sizeof cobj, "%.63s/cell_ij", obj);
+    const hsize_t nverts = first_axis_length(path, vobj, g, "vertices"), ncells = first_axis_length(path, cobj, g, "cell_ij");
     if (nverts > LFIO_RADMAP_MAX_VERTS)
         return lfio__fail(LFIO_ERR_FORMAT, "%s: %s/vertices: %llu vertices, at most %u allowed", path, obj,
                           (unsigned long long)nverts, LFIO_RADMAP_MAX_VERTS);

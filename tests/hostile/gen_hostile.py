@@ -402,9 +402,24 @@ def btree_cycle(path, node_type):
     write(path, bytes(data))
 
 
+def virtual_unlimited(source):
+    """An edit making radiance a virtual dataset with an unlimited mapping onto dataset x of source: HDF5
+    opens source as soon as the dataset's extent is asked for."""
+    def make(g, n, v):
+        shape, maxshape = v.shape, (None,) + v.shape[1:]
+        layout = h5py.VirtualLayout(shape=shape, maxshape=maxshape, dtype="<f4")
+        src = h5py.VirtualSource(source, "x", shape=shape, maxshape=maxshape)
+        layout[0:h5py.h5s.UNLIMITED, ...] = src[0:h5py.h5s.UNLIMITED, ...]
+        return g.create_virtual_dataset(n, layout)
+    return lambda f: swap_radiance(f, make)
+
+
 def hostile_storage(out, base):
     d = os.path.join(out, "lf")
     other = os.path.abspath(base)  # a file the user can read, as the source of another file's bytes
+    fifo = os.path.abspath(os.path.join(d, "fifo_source.h5"))  # opening it for reading blocks
+    if not os.path.exists(fifo):
+        os.mkfifo(fifo)
     nbytes = 16 * 3 * 4 * 3 * 4
     cases = {
         # HDF5's Fletcher-32 filter reads 4 bytes before a buffer of fewer
@@ -425,6 +440,7 @@ def hostile_storage(out, base):
         "radiance_virtual.h5": lambda f: swap_radiance(f, lambda g, n, v: g.create_virtual_dataset(
             n, (lambda lay: (lay.__setitem__(slice(None), h5py.VirtualSource(other, RADIANCE, shape=v.shape)),
                              lay)[1])(h5py.VirtualLayout(shape=v.shape, dtype="<f4")))),
+        "radiance_virtual_fifo.h5": virtual_unlimited(fifo),
         "radiance_external_link.h5": lambda f: (f["slabs/0"].__delitem__("radiance"),
                                                 f["slabs/0"].__setitem__("radiance",
                                                                          h5py.ExternalLink(other, "/" + RADIANCE))),
