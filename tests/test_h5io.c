@@ -1,6 +1,8 @@
 /*
  * test_h5io.c - light field files (lfio/src/h5io.c): round trips, partial
- * reads, atomic writes, every documented failure of reading, and lfio_verify.
+ * reads, atomic writes, every documented failure of reading, and lfio_verify;
+ * and the storage checks light field and radiance-map readers share
+ * (lfio/src/h5util.c): links, forged chunks.
  *
  * Bad files are made by writing a good file with lfio and then editing it
  * with the HDF5 API (or by truncating and flipping bytes), so each case
@@ -30,6 +32,7 @@
 #include "check.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
+#include "radmap_patches.h"
 /* Only for the layout of struct lfio_slab: one test corrupts a slab in memory. */
 #include "../lfio/src/internal.h"
 
@@ -683,32 +686,96 @@ static void test_other_storage(const char *good)
             CHECK(got && wrong == 0, "%s, %u threads: %zu values differ", cases[c].name, threads, wrong);
             lfio_lightfield_destroy(back);
         }
+        /* readers take unwritten chunks as zeros; verify says that lfio never leaves one out */
+        lfio_verify_report rep;
+        lfio_status vst = lfio_verify(p, &rep);
+        CHECK(cases[c].written == dims[0] || (vst == LFIO_ERR_FORMAT && strstr(rep.first, "/slabs/1/radiance: 132 of its 264 "
+                                                                                           "chunks are not stored")),
+              "%s: verify: %s", cases[c].name, rep.first);
     }
-    /* chunk 0 forged: a stream of 16 bytes that inflates to less than a chunk, under a right checksum */
-    hid_t dcpl = storage(lfio_shape, "sdf");
-    restore_radiance(fresh_copy(p, sizeof p, good, "short_chunk.h5"), "/slabs/1/radiance", H5T_IEEE_F32LE, dcpl, dims,
-                     values, dims[0], units);
-    H5Pclose(dcpl);
-    unsigned char raw[16] = {0}, forged[256];
-    uLongf packed = sizeof forged - 4;
-    CHECK(compress2(forged, &packed, raw, sizeof raw, 4) == Z_OK, "forge a short stream");
-    uint32_t sum = forge_fletcher32(forged, packed);
-    for (int k = 0; k < 4; k++)
-        forged[packed + k] = (unsigned char)(sum >> (8 * k));
-    hid_t f = edit_open(p), d = H5Dopen2(f, "/slabs/1/radiance", H5P_DEFAULT);
-    const hsize_t origin[4] = {0, 0, 0, 0};
-    CHECK(H5Dwrite_chunk(d, H5P_DEFAULT, 0, origin, packed + 4, forged) >= 0, "store the forged chunk");
-    H5Dclose(d);
-    H5Fclose(f);
-    for (unsigned threads = 1; threads <= 3; threads += 2) {
-        lfio_lightfield_set_read_threads(threads);
-        lfio_lightfield *back = NULL;
-        lfio_status st = lfio_lightfield_read(p, &back);
-        CHECK(st == LFIO_ERR_IO && back == NULL && strstr(lfio_errmsg(), "/slabs/1/radiance") &&
-                  strstr(lfio_errmsg(), "chunk 0 does not inflate"),
-              "forged chunk, %u threads: %s, '%s'", threads, lfio_status_name(st), lfio_errmsg());
-        lfio_lightfield_destroy(back);
+    /* chunk 0 forged, each time under a right checksum: a stream that inflates short of a chunk (16 bytes),
+     * one that inflates past it (ten chunks of zeros: a bomb of under 1 KB), both within the sizes a chunk
+     * can take, so that only inflating them finds them; one smaller than that (16 bytes in 15), and one
+     * smaller than its checksum (HDF5's Fletcher-32 filter reads before such a buffer); a chunk whose mask
+     * says its checksum was skipped, holding an altered value. */
+    const size_t chunk_bytes = 32 * 16 * 16 * 3 * sizeof(float);
+    unsigned char *zeros = calloc(10 * chunk_bytes, 1), *forged = malloc(2 * chunk_bytes);
+    const struct {
+        const char *name;
+        size_t raw;           /* zero bytes deflated into the stream (0: the stream is `literal`) */
+        size_t literal;       /* bytes of a stored chunk made of 0x5a */
+        unsigned mask;        /* filter mask stored with it */
+        lfio_status want;
+        const char *message;  /* of a whole read or verify (or of opening, which refuses it already) */
+        const char *partial;  /* of a partial read */
+        int at_open;          /* refused when the file is opened */
+    } forgeries[] = {
+        {"short stream", 0, 0, 0, LFIO_ERR_FORMAT, "stores 15 bytes", "", 1},
+        {"bomb", 10 * chunk_bytes, 0, 0, LFIO_ERR_FORMAT, "chunk 0 does not inflate", "does not inflate to its", 0},
+        {"noise", 4000, 0, 0, LFIO_ERR_FORMAT, "chunk 0 does not inflate", "does not inflate to its", 0},
+        {"under its checksum", 0, 2, 0, LFIO_ERR_FORMAT, "stores 2 bytes", "", 1},
+        {"checksum skipped", 0, 0, 4, LFIO_ERR_FORMAT, "skipped filters (filter mask 0x4)", "filter mask 0x4", 0},
+    };
+    for (size_t c = 0; zeros && forged && c < sizeof forgeries / sizeof forgeries[0]; c++) {
+        snprintf(name, sizeof name, "forged%zu.h5", c);
+        hid_t dcpl = storage(lfio_shape, "sdf");
+        restore_radiance(fresh_copy(p, sizeof p, good, name), "/slabs/1/radiance", H5T_IEEE_F32LE, dcpl, dims,
+                         values, dims[0], units);
+        H5Pclose(dcpl);
+        size_t stored = forgeries[c].literal;
+        if (stored > 0) {
+            memset(forged, 0x5a, stored);
+        } else {
+            /* noise: incompressible bytes, which deflate stores as they are */
+            for (size_t k = 0; forgeries[c].raw == 4000 && k < 4000; k++)
+                zeros[k] = (unsigned char)(rng_next() >> 24);
+            uLongf packed = (uLongf)(2 * chunk_bytes - 4);
+            CHECK(compress2(forged, &packed, zeros, forgeries[c].raw ? forgeries[c].raw : 16, 4) == Z_OK, "forge");
+            memset(zeros, 0, 4000);
+            if (forgeries[c].mask) /* a value changed: the stream of another chunk, no checksum after it */
+                packed = (uLongf)(2 * chunk_bytes - 4), compress2(forged, &packed, (const Bytef *)values, chunk_bytes, 4);
+            uint32_t sum = forge_fletcher32(forged, packed);
+            for (int k = 0; k < 4 && !forgeries[c].mask; k++)
+                forged[packed + k] = (unsigned char)(sum >> (8 * k));
+            stored = packed + (forgeries[c].mask ? 0 : 4);
+        }
+        hid_t f = edit_open(p), d = H5Dopen2(f, "/slabs/1/radiance", H5P_DEFAULT);
+        const hsize_t origin[4] = {0, 0, 0, 0};
+        CHECK(H5Dwrite_chunk(d, H5P_DEFAULT, forgeries[c].mask, origin, stored, forged) >= 0, "store the forged chunk");
+        H5Dclose(d);
+        H5Fclose(f);
+        for (unsigned threads = 1; threads <= 3; threads += 2) {
+            lfio_lightfield_set_read_threads(threads);
+            lfio_lightfield *back = NULL;
+            lfio_status st = lfio_lightfield_read(p, &back);
+            CHECK(st == forgeries[c].want && back == NULL && strstr(lfio_errmsg(), "/slabs/1/radiance") &&
+                      strstr(lfio_errmsg(), forgeries[c].message),
+                  "forged chunk (%s), %u threads: %s, '%s'", forgeries[c].name, threads, lfio_status_name(st),
+                  lfio_errmsg());
+            lfio_lightfield_destroy(back);
+        }
+        /* partial reads go through HDF5's filters: lfio inflates the chunk first, within its bytes */
+        lfio_reader *r = NULL;
+        lfio_status st = lfio_reader_open(p, &r);
+        CHECK(forgeries[c].at_open ? st == forgeries[c].want && r == NULL : st == LFIO_OK, "forged chunk (%s): open %s",
+              forgeries[c].name, lfio_errmsg());
+        float *img = malloc((size_t)(dims[1] * dims[2] * 3) * sizeof *img), rgb[4 * 64 * 3];
+        if (r && img && dims[0] <= 4 * 64) {
+            st = lfio_reader_read_direction(r, 1, 0, img);
+            CHECK(st == LFIO_ERR_FORMAT && strstr(lfio_errmsg(), forgeries[c].partial),
+                  "forged chunk (%s): direction read: %s", forgeries[c].name, lfio_errmsg());
+            st = lfio_reader_read_position(r, 1, 0, 0, rgb);
+            CHECK(st == LFIO_ERR_FORMAT, "forged chunk (%s): position read: %s", forgeries[c].name, lfio_errmsg());
+            CHECK(lfio_reader_read_direction(r, 0, 0, img) == LFIO_OK, "other slabs still readable: %s", lfio_errmsg());
+            lfio_verify_report rep;
+            CHECK(lfio_verify(p, &rep) == LFIO_ERR_FORMAT && strstr(rep.first, forgeries[c].message),
+                  "forged chunk (%s): verify: %s", forgeries[c].name, rep.first);
+        }
+        free(img);
+        lfio_reader_close(r);
     }
+    free(forged);
+    free(zeros);
     lfio_lightfield_set_read_threads(0);
     lfio_lightfield_destroy(ref);
 }
@@ -977,6 +1044,85 @@ static void test_verify_tampered(const char *good)
     CHECK(lfio_verify(NULL, &rep) == LFIO_ERR_ARG && rep.problems == 1, "verify NULL path");
 }
 
+/* Stores data (bytes) as the chunk at the origin of dataset dset of path, with filter mask mask. */
+static void store_chunk(const char *path, const char *dset, int rank, const void *data, size_t bytes, uint32_t mask)
+{
+    hid_t f = edit_open(path), d = H5Dopen2(f, dset, H5P_DEFAULT);
+    const hsize_t origin[4] = {0, 0, 0, 0};
+    CHECK(rank <= 4 && H5Dwrite_chunk(d, H5P_DEFAULT, mask, origin, bytes, data) >= 0, "store a chunk in %s", dset);
+    H5Dclose(d);
+    H5Fclose(f);
+}
+
+/* Replaces the link to dataset dset (in group group) of path by a soft link to target, or an external
+ * link to target in file other when other is not NULL. */
+static void relink(const char *path, const char *group, const char *dset, const char *other, const char *target)
+{
+    hid_t f = edit_open(path), g = H5Gopen2(f, group, H5P_DEFAULT);
+    CHECK(H5Ldelete(g, dset, H5P_DEFAULT) >= 0, "unlink %s", dset);
+    herr_t rc = other ? H5Lcreate_external(other, target, g, dset, H5P_DEFAULT, H5P_DEFAULT)
+                      : H5Lcreate_soft(target, g, dset, H5P_DEFAULT, H5P_DEFAULT);
+    CHECK(rc >= 0, "link %s", dset);
+    H5Gclose(g);
+    H5Fclose(f);
+}
+
+/* Radiance-map files take the same storage checks as light fields: a dataset reached through a soft or an
+ * external link is refused (the external one before its file is opened), and so are forged chunks of a
+ * deflated cell dataset (three chunks of 16384 cells): under their checksum, a skipped checksum, a stream
+ * inflating ten times past its chunk. Each refusal is LFIO_ERR_FORMAT naming the file and the dataset. */
+static void test_radmap_storage(void)
+{
+    struct test_patch t;
+    make_patch(&t, "polygons[0]", 0, 2.0, 0.0, 0.01, 0); /* 40,000 cells */
+    char good[512], p[512];
+    CHECK(lfio_radmap_write(tmp_path(good, sizeof good, "map.h5"), "test_h5io", NULL, &t.p, 1) == LFIO_OK,
+          "write a radiance map: %s", lfio_errmsg());
+    lfio_radmap *map = NULL;
+    lfio_radmap_patch back;
+    CHECK(lfio_radmap_read(good, &map) == LFIO_OK, "read it back: %s", lfio_errmsg());
+    if (map && lfio_radmap_get(map, 0, &back) == LFIO_OK)
+        check_patch_equal(&back, &t.p, "map.h5");
+    lfio_radmap_destroy(map);
+    const size_t chunk_bytes = 16384 * 3 * sizeof(float);
+    unsigned char *zeros = calloc(10 * chunk_bytes, 1), *stream = malloc(2 * chunk_bytes);
+    uLongf packed = (uLongf)(2 * chunk_bytes - 4), bomb = packed;
+    CHECK(zeros && stream && compress2(stream, &packed, zeros, chunk_bytes, 1) == Z_OK, "deflate a chunk");
+    struct {
+        const char *name, *needle;
+    } cases[] = {
+        {"map_external.h5", "/patches/0/irradiance: is an external link"},
+        {"map_soft.h5", "/patches/0/vertices: is a soft link"},
+        {"map_tiny_chunk.h5", "stores 2 bytes"},
+        {"map_skipped.h5", "skipped filters (filter mask 0x4)"},
+        {"map_bomb.h5", "does not inflate to its 196608 bytes"},
+    };
+    relink(fresh_copy(p, sizeof p, good, cases[0].name), "/patches/0", "irradiance", good, "/patches/0/irradiance");
+    relink(fresh_copy(p, sizeof p, good, cases[1].name), "/patches/0", "vertices", NULL, "/patches/0/cell_area");
+    store_chunk(fresh_copy(p, sizeof p, good, cases[2].name), "/patches/0/irradiance", 2, "\x01\x02", 2, 0);
+    /* a stream of zeros where the cells were, its checksum skipped */
+    store_chunk(fresh_copy(p, sizeof p, good, cases[3].name), "/patches/0/irradiance", 2, stream, packed, 4);
+    if (zeros && stream && compress2(stream, &bomb, zeros, 10 * chunk_bytes, 9) == Z_OK) {
+        uint32_t sum = forge_fletcher32(stream, bomb);
+        for (int k = 0; k < 4; k++)
+            stream[bomb + k] = (unsigned char)(sum >> (8 * k));
+        store_chunk(fresh_copy(p, sizeof p, good, cases[4].name), "/patches/0/irradiance", 2, stream, bomb + 4, 0);
+    }
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        map = (lfio_radmap *)1;
+        capture_begin();
+        lfio_status st = lfio_radmap_read(tmp_path(p, sizeof p, cases[c].name), &map);
+        long printed = capture_end();
+        CHECK(st == LFIO_ERR_FORMAT && map == NULL && strstr(lfio_errmsg(), cases[c].name) &&
+                  strstr(lfio_errmsg(), cases[c].needle),
+              "%s: %s (%s)", cases[c].name, lfio_status_name(st), lfio_errmsg());
+        CHECK(printed == 0, "%s: %ld bytes printed", cases[c].name, printed);
+    }
+    free(stream);
+    free(zeros);
+    free_patch(&t);
+}
+
 int main(void)
 {
     const char *base = getenv("ILF_TEST_TMP");
@@ -1016,6 +1162,7 @@ int main(void)
     char cov[512];
     test_coverage(tmp_path(cov, sizeof cov, "coverage.h5"));
     test_verify_tampered(mid);
+    test_radmap_storage();
     CHECK(count_temporaries() == 0, "temporaries left at the end");
     return check_report();
 }

@@ -153,21 +153,35 @@ typedef struct unfilter_work {
     atomic_int failed;
 } unfilter_work;
 
+int lfio__chunks_check(const lfio__stored *c, int fletcher32, int deflate, unsigned char *out)
+{
+    size_t packed = c->in_bytes;
+    if (fletcher32) {
+        if (packed < 4)
+            return LFIO__STORED_BROKEN;
+        packed -= 4;
+        uint32_t sum = 0;
+        for (int k = 0; k < 4; k++)
+            sum |= (uint32_t)c->in[packed + k] << (8 * k);
+        if (lfio__fletcher32(c->in, packed) != sum)
+            return LFIO__STORED_CHECKSUM;
+    }
+    if (!deflate)
+        return packed == c->chunk_bytes ? LFIO__STORED_OK : LFIO__STORED_BROKEN;
+    /* uncompress() stops at the buffer's end: a stream that would go on is an error, never more memory */
+    uLongf got = (uLongf)c->chunk_bytes;
+    if (uncompress(out, &got, c->in, (uLong)packed) != Z_OK || got != c->chunk_bytes)
+        return LFIO__STORED_BROKEN;
+    return LFIO__STORED_OK;
+}
+
 /* Undoes one chunk's pipeline into values, with scratch for the shuffled bytes (both chunk_bytes).
  * @return an LFIO__STORED_ value. */
 static int unfilter_one(const lfio__stored *c, unsigned char *scratch, unsigned char *values)
 {
-    if (c->in_bytes < 4)
-        return LFIO__STORED_BROKEN;
-    size_t packed = c->in_bytes - 4;
-    uint32_t sum = 0;
-    for (int k = 0; k < 4; k++)
-        sum |= (uint32_t)c->in[packed + k] << (8 * k);
-    if (lfio__fletcher32(c->in, packed) != sum)
-        return LFIO__STORED_CHECKSUM;
-    uLongf got = (uLongf)c->chunk_bytes;
-    if (uncompress(scratch, &got, c->in, (uLong)packed) != Z_OK || got != c->chunk_bytes)
-        return LFIO__STORED_BROKEN;
+    int rc = lfio__chunks_check(c, 1, 1, scratch);
+    if (rc != LFIO__STORED_OK)
+        return rc;
     size_t count = c->chunk_bytes / c->elem;
     for (size_t i = 0; i < count; i++)
         for (size_t k = 0; k < c->elem; k++)

@@ -58,6 +58,11 @@ size_t lfio__chunks_stored_most(size_t chunk_bytes);
 /* What lfio__chunks_unfilter() found wrong with a chunk. */
 enum { LFIO__STORED_OK, LFIO__STORED_CHECKSUM, LFIO__STORED_BROKEN, LFIO__STORED_NOMEM };
 
+/* Checks stored chunk c of a pipeline ending in deflate when deflate, then Fletcher-32 when fletcher32: its
+ * checksum, and that it holds (inflates to) exactly c->chunk_bytes; inflates it into out (that many bytes;
+ * still shuffled if it was). @return LFIO__STORED_OK, LFIO__STORED_CHECKSUM or LFIO__STORED_BROKEN. */
+int lfio__chunks_check(const lfio__stored *c, int fletcher32, int deflate, unsigned char *out);
+
 /* Undoes the pipeline of c[0..n) on up to threads threads, the calling thread among them: checks each
  * chunk's checksum, inflates and unshuffles it, and hands its values to place(user, k, values) (from any of
  * the threads, values valid during the call only; chunks in any order). Stops early after a failure.

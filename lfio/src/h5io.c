@@ -26,8 +26,10 @@
  *     leaves the target untouched and removes its temporary
  *     (lfio__h5_write_atomic()).
  *   - An lfio_reader keeps one open radiance dataset per slab (and its
- *     coverage dataset, if any) and nothing else mutable, so reads on one
- *     reader only make HDF5 calls, which HDF5 serialises.
+ *     coverage dataset, if any) and nothing else mutable but a map of the
+ *     radiance chunks partial reads have vetted (h5util.h), whose bits are
+ *     set atomically, so reads on one reader from several threads only
+ *     make HDF5 calls, which HDF5 serialises, and atomic updates.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -202,6 +204,7 @@ struct stream {
     const struct ds_spec *sp;
     hid_t dset;
     int verify;               /* 0: write; 1: read and compare */
+    lfio__h5_vetted *vetted;  /* verify: the chunks vetted so far (blocks share chunks), or NULL */
     uint64_t mismatches;      /* verify: values off by more than VERIFY_TOL */
     char first[192];          /* verify: the first mismatch, described */
 };
@@ -291,8 +294,10 @@ static lfio_status stream_derived(struct stream *j)
             start[b] = r0;
             count[b] = min_h(rows_per_block, sp->lay.dims[b] - r0);
             fill_expected(j->s, sp, start, count[b], want);
-            st = lfio__h5_xfer(j->path, j->obj, j->dset, !j->verify, H5T_NATIVE_DOUBLE, sp->lay.rank, start,
-                               count, j->verify ? (void *)got : (void *)want);
+            st = j->verify ? lfio__h5_read_vetted(j->path, j->obj, j->dset, H5T_NATIVE_DOUBLE, sp->lay.rank, start,
+                                                  count, got, j->vetted)
+                           : lfio__h5_xfer(j->path, j->obj, j->dset, 1, H5T_NATIVE_DOUBLE, sp->lay.rank, start, count,
+                                           want);
             if (st == LFIO_OK && j->verify)
                 compare_block(j, start, b, inner, want, got, count[b] * inner);
         }
@@ -425,7 +430,7 @@ static lfio_status write_slab(const char *path, hid_t slabs, size_t k, const lfi
         } else if (specs[t].kind == DS_COVERAGE) {
             st = lfio__h5_xfer(path, dobj, d, 1, H5T_NATIVE_UINT8, 3, zero, specs[t].lay.dims, (void *)coverage);
         } else {
-            struct stream j = {path, dobj, s, &specs[t], d, 0, 0, ""};
+            struct stream j = {path, dobj, s, &specs[t], d, 0, NULL, 0, ""};
             st = stream_derived(&j);
         }
         /* Closing flushes the chunk cache: the last chunks reach the file only here. */
@@ -489,6 +494,7 @@ struct lfio_reader {
     hid_t *radiance;          /* nslabs open radiance datasets, shapes checked */
     hid_t *coverage;          /* nslabs open coverage datasets, shapes checked; -1 where a slab has none */
     double *fraction;         /* nslabs coverage_fraction attributes, in [0, 1]; NaN where a slab has none */
+    lfio__h5_vetted **vetted; /* nslabs maps of the radiance chunks partial reads have vetted (or NULL) */
 };
 
 /* Reads and checks the root attributes into r (version, creator, slab count). */
@@ -619,10 +625,13 @@ static hid_t radiance_dapl(const struct ds_spec *sp)
 static lfio_status check_dataset(const char *path, const char *gobj, hid_t g, const struct ds_spec *sp,
                                  hid_t dapl, hid_t *out)
 {
-    /* H5Lexists fails rather than answering 0 when an intermediate group is missing. */
+    /* H5Lexists fails rather than answering 0 when an intermediate group is missing; and the mask group's
+     * links are looked up below, so its format is checked first. */
     char obj[128];
     snprintf(obj, sizeof obj, "%s/mask", gobj);
-    lfio_status st = sp->kind == DS_MASK ? lfio__h5_expect_link(path, obj, g, "mask", "group") : LFIO_OK;
+    hid_t mask = -1;
+    lfio_status st = sp->kind == DS_MASK ? lfio__h5_open_group(path, obj, g, "mask", "group", &mask) : LFIO_OK;
+    lfio__h5_close(mask);
     if (st != LFIO_OK)
         return st;
     hid_t d = -1;
@@ -665,12 +674,10 @@ static lfio_status open_slab(lfio_reader *r, hid_t slabs, size_t k)
     snprintf(obj, sizeof obj, "/slabs/%zu", k);
     char what[64];
     snprintf(what, sizeof what, "slab group (slab_count is %zu)", r->nslabs);
-    lfio_status st = lfio__h5_expect_link(r->path, obj, slabs, name, what);
+    hid_t g;
+    lfio_status st = lfio__h5_open_group(r->path, obj, slabs, name, what, &g);
     if (st != LFIO_OK)
         return st;
-    hid_t g = H5Gopen2(slabs, name, H5P_DEFAULT);
-    if (g < 0)
-        return lfio__h5_fail(LFIO_ERR_FORMAT, r->path, obj, "cannot open as a group");
     st = read_desc(r->path, obj, g, &r->desc[k]);
     if (st == LFIO_OK)
         st = check_slab_desc(r->path, obj, &r->desc[k]);
@@ -684,6 +691,9 @@ static lfio_status open_slab(lfio_reader *r, hid_t slabs, size_t k)
     }
     if (st == LFIO_OK)
         st = read_fraction(r->path, obj, g, &r->fraction[k]);
+    size_t map_bytes = st == LFIO_OK ? lfio__h5_vetted_bytes(r->radiance[k]) : 0;
+    if (map_bytes > 0 && (r->vetted[k] = calloc(map_bytes, 1)) == NULL)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", r->path, obj);
     /* Coverage is optional: absent is fine, present must have the layout the slab's attributes imply. */
     htri_t has = st == LFIO_OK ? H5Lexists(g, "coverage", H5P_DEFAULT) : 0;
     if (has < 0)
@@ -733,7 +743,10 @@ static void reader_free(lfio_reader *r)
         lfio__h5_close(r->radiance[k]);
     for (size_t k = 0; r->coverage && k < r->nslabs; k++)
         lfio__h5_close(r->coverage[k]);
+    for (size_t k = 0; r->vetted && k < r->nslabs; k++)
+        free((void *)r->vetted[k]);
     lfio__h5_close(r->file);
+    free(r->vetted);
     free(r->radiance);
     free(r->coverage);
     free(r->fraction);
@@ -764,7 +777,9 @@ static lfio_status reader_open_impl(const char *path, lfio_reader **out)
     if (st == LFIO_OK && ((r->desc = calloc(r->nslabs, sizeof *r->desc)) == NULL
                           || (r->radiance = malloc(r->nslabs * sizeof *r->radiance)) == NULL
                           || (r->coverage = malloc(r->nslabs * sizeof *r->coverage)) == NULL
-                          || (r->fraction = malloc(r->nslabs * sizeof *r->fraction)) == NULL))
+                          || (r->fraction = malloc(r->nslabs * sizeof *r->fraction)) == NULL
+
+                          || (r->vetted = calloc(r->nslabs, sizeof *r->vetted)) == NULL))
         st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
     for (size_t k = 0; r->radiance && k < r->nslabs; k++)
         r->radiance[k] = -1;
@@ -772,9 +787,7 @@ static lfio_status reader_open_impl(const char *path, lfio_reader **out)
         r->coverage[k] = -1;
     hid_t slabs = -1;
     if (st == LFIO_OK)
-        st = lfio__h5_expect_link(path, "/slabs", r->file, "slabs", "group");
-    if (st == LFIO_OK && (slabs = H5Gopen2(r->file, "slabs", H5P_DEFAULT)) < 0)
-        st = lfio__h5_fail(LFIO_ERR_FORMAT, path, "/slabs", "cannot open as a group");
+        st = lfio__h5_open_group(path, "/slabs", r->file, "slabs", "group", &slabs);
     for (size_t k = 0; st == LFIO_OK && k < r->nslabs; k++)
         st = open_slab(r, slabs, k);
     lfio__h5_close(slabs);
@@ -872,7 +885,8 @@ static int read_radiance_direct(const char *path, const char *obj, hid_t d, cons
     size_t chunk_bytes = sizeof(float);
     for (int a = 0; a < 4; a++)
         chunk_bytes *= (size_t)places.chunk[a];
-    /* a stored chunk is at most its deflated bound and the checksum: larger sizes are HDF5's to refuse */
+    /* a stored chunk is at most its deflated bound and the checksum (lfio__h5_check_dataset() refused larger
+     * ones); a chunk that fails a check here goes to HDF5's path, where lfio__h5_xfer() vets it and says why */
     size_t most = lfio__chunks_stored_most(chunk_bytes), total = 0;
     hsize_t *offset = malloc((size_t)n * 4 * sizeof *offset);
     lfio__stored *c = calloc((size_t)n, sizeof *c);
@@ -921,7 +935,7 @@ static int read_radiance_direct(const char *path, const char *obj, hid_t d, cons
     if (rc == LFIO__STORED_CHECKSUM)
         *st = lfio__fail(LFIO_ERR_CHECKSUM, "%s: %s: checksum mismatch (cannot read)", path, obj);
     else if (rc == LFIO__STORED_BROKEN)
-        *st = lfio__fail(LFIO_ERR_IO, "%s: %s: cannot read (stored chunk %zu does not inflate to its %zu bytes)",
+        *st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: cannot read: stored chunk %zu does not inflate to its %zu bytes",
                          path, obj, bad, chunk_bytes);
     else if (rc == LFIO__STORED_NOMEM)
         *st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, obj);
@@ -1045,7 +1059,7 @@ lfio_status lfio_reader_read_direction(lfio_reader *r, size_t k, uint64_t dir, f
     const hsize_t start[4] = {dir, 0, 0, 0}, count[4] = {1, d->nv, d->nu, 3};
     lfio__h5_quiet q;
     lfio__h5_quiet_begin(&q);
-    st = lfio__h5_xfer(r->path, obj, r->radiance[k], 0, H5T_NATIVE_FLOAT, 4, start, count, img);
+    st = lfio__h5_read_vetted(r->path, obj, r->radiance[k], H5T_NATIVE_FLOAT, 4, start, count, img, r->vetted[k]);
     lfio__h5_quiet_end(&q);
     const size_t total = (size_t)d->nu * d->nv * 3;
     size_t p = st == LFIO_OK ? lfio__first_bad_value(img, total) : total;
@@ -1070,7 +1084,7 @@ lfio_status lfio_reader_read_position(lfio_reader *r, size_t k, uint32_t i, uint
     const hsize_t start[4] = {0, j, i, 0}, count[4] = {ndir, 1, 1, 3};
     lfio__h5_quiet q;
     lfio__h5_quiet_begin(&q);
-    st = lfio__h5_xfer(r->path, obj, r->radiance[k], 0, H5T_NATIVE_FLOAT, 4, start, count, rgb);
+    st = lfio__h5_read_vetted(r->path, obj, r->radiance[k], H5T_NATIVE_FLOAT, 4, start, count, rgb, r->vetted[k]);
     lfio__h5_quiet_end(&q);
     const size_t total = (size_t)ndir * 3;
     size_t p = st == LFIO_OK ? lfio__first_bad_value(rgb, total) : total;
@@ -1215,7 +1229,8 @@ static void verify_checksummed(struct vstate *v, const char *path, const char *o
         note(v, lfio__fail(LFIO_ERR_FORMAT, "%s: %s: stored without a fletcher32 checksum", path, obj));
 }
 
-/* Verifies slab k: reads its radiance, then checks every dataset's checksum filter and derived values. */
+/* Verifies slab k: reads its radiance, then checks every dataset's checksum filter, that every chunk of it is
+ * stored, and the derived values. */
 static void verify_slab(struct vstate *v, lfio_reader *r, size_t k)
 {
     lfio_slab *s = NULL;
@@ -1243,9 +1258,14 @@ static void verify_slab(struct vstate *v, lfio_reader *r, size_t k)
             continue;
         }
         verify_checksummed(v, r->path, obj, d);
+        if (lfio__h5_expect_whole(r->path, obj, d, &specs[t].lay) != LFIO_OK)
+            note(v, LFIO_ERR_FORMAT);
         if (specs[t].kind != DS_RADIANCE) {
-            struct stream j = {r->path, obj, s, &specs[t], d, 1, 0, ""};
-            st = stream_derived(&j);
+            size_t map_bytes = lfio__h5_vetted_bytes(d);
+            struct stream j = {r->path, obj, s, &specs[t], d, 1, map_bytes ? calloc(map_bytes, 1) : NULL, 0, ""};
+            st = map_bytes && j.vetted == NULL ? lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", r->path, obj)
+                                               : stream_derived(&j);
+            free((void *)j.vetted);
             if (st != LFIO_OK)
                 note(v, st);
             else if (j.mismatches)
@@ -1258,6 +1278,10 @@ static void verify_slab(struct vstate *v, lfio_reader *r, size_t k)
         char obj[128];
         snprintf(obj, sizeof obj, "%s/coverage", gobj);
         verify_checksummed(v, r->path, obj, r->coverage[k]);
+        struct ds_spec cov;
+        ds_spec_make(&s->desc, DS_COVERAGE, 0, &cov);
+        if (lfio__h5_expect_whole(r->path, obj, r->coverage[k], &cov.lay) != LFIO_OK)
+            note(v, LFIO_ERR_FORMAT);
         uint8_t *buf = malloc((size_t)(s->ndir * s->npos));
         st = buf ? read_coverage_impl(r, k, buf) : lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", r->path, obj);
         if (st != LFIO_OK)

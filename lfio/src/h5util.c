@@ -21,12 +21,14 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "chunks.h"
 #include "h5util.h"
 #include "ilf/atomic_file.h"
 #include "internal.h"
@@ -146,17 +148,452 @@ void lfio__h5_format_dims(char *buf, size_t size, int rank, const hsize_t *dims)
         snprintf(buf + used, size - used, "]");
 }
 
+/* ------------------------------------------------------------ stored data */
+
+/* The filters a dataset's pipeline holds, each at most once and in this order: HDF5's shuffle, deflate
+ * and Fletcher-32, what lfio writes (any of them may be absent: other writers' files). */
+typedef struct pipeline {
+    int shuffle, deflate, fletcher32;
+} pipeline;
+
+/* Checks the filter pipeline of dcpl (dataset obj) and notes its filters in *pl. Any other filter is
+ * refused: HDF5 would load plugins for unknown ones, and scale-offset, n-bit and szip change or hide
+ * what the values are. @return LFIO_OK or LFIO_ERR_FORMAT. */
+static lfio_status check_pipeline(const char *path, const char *obj, hid_t dcpl, pipeline *pl)
+{
+    static const H5Z_filter_t order[3] = {H5Z_FILTER_SHUFFLE, H5Z_FILTER_DEFLATE, H5Z_FILTER_FLETCHER32};
+    int *const seen[3] = {&pl->shuffle, &pl->deflate, &pl->fletcher32};
+    *pl = (pipeline){0, 0, 0};
+    int n = H5Pget_nfilters(dcpl);
+    if (n < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its filter pipeline");
+    unsigned next = 0; /* the first filter of order[] still allowed */
+    for (int f = 0; f < n; f++) {
+        unsigned flags = 0, config = 0, cd[8];
+        size_t ncd = 8;
+        char name[64] = "";
+        H5Z_filter_t id = H5Pget_filter2(dcpl, (unsigned)f, &flags, &ncd, cd, sizeof name, name, &config);
+        unsigned k = next;
+        while (k < 3 && order[k] != id)
+            k++;
+        if (k == 3)
+            return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: filter %d ('%.40s') in place %d of its pipeline: lfio reads "
+                              "shuffle, deflate and fletcher32 only, each once and in that order",
+                              path, obj, (int)id, name, f + 1);
+        *seen[k] = 1;
+        next = k + 1;
+    }
+    return LFIO_OK;
+}
+
+/* @return the fewest bytes a stored chunk of chunk_bytes can take through pipeline pl: a zlib stream has
+ * 6 bytes around its data (LFIO__H5_INFLATE_MAX). */
+static uint64_t stored_least(uint64_t chunk_bytes, const pipeline *pl)
+{
+    return (pl->deflate ? 6 + chunk_bytes / LFIO__H5_INFLATE_MAX : chunk_bytes) + (pl->fletcher32 ? 4 : 0);
+}
+
+/* @return the most bytes a stored chunk of chunk_bytes can take through pipeline pl: HDF5's deflate
+ * filter gives up past ceil(1.001 n) + 12 bytes (the chunk is then stored unfiltered, which its filter
+ * mask says, and lfio refuses). */
+static uint64_t stored_most(uint64_t chunk_bytes, const pipeline *pl)
+{
+    return (pl->deflate ? chunk_bytes + (chunk_bytes + 999) / 1000 + 12 : chunk_bytes) + (pl->fletcher32 ? 4 : 0);
+}
+
+/* @return the size of the file path names in *bytes, or an error (message set). */
+static lfio_status file_bytes(const char *path, uint64_t *bytes)
+{
+    struct stat sb;
+    if (stat(path, &sb) != 0)
+        return lfio__fail(LFIO_ERR_IO, "%s: cannot stat: %s", path, strerror(errno));
+    *bytes = (uint64_t)sb.st_size;
+    return LFIO_OK;
+}
+
+/* Checks contiguous dataset d (obj) of bytes: stored whole, inside the file. @return LFIO_OK or LFIO_ERR_FORMAT. */
+static lfio_status check_contiguous(const char *path, const char *obj, hid_t d, uint64_t bytes, uint64_t file)
+{
+    haddr_t at = H5Dget_offset(d);
+    if (bytes == 0)
+        return LFIO_OK;
+    if (at == HADDR_UNDEF)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: declares %llu bytes but stores none (lfio reads only data "
+                          "stored in the file)", path, obj, (unsigned long long)bytes);
+    if (at > file || bytes > file - at)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: its %llu bytes at offset %llu lie past the end of the file "
+                          "(%llu bytes)", path, obj, (unsigned long long)bytes, (unsigned long long)at,
+                          (unsigned long long)file);
+    return LFIO_OK;
+}
+
+/* What the chunks of one dataset must be like, and what the walk over them found. */
+typedef struct chunk_walk {
+    int rank;
+    hsize_t dims[H5S_MAX_RANK], chunk[H5S_MAX_RANK];
+    uint64_t chunk_bytes;   /* values of a chunk */
+    uint64_t least, most;   /* stored bytes of a chunk */
+    uint64_t file;          /* bytes in the file */
+    uint64_t stored;        /* bytes of the chunks seen so far */
+    uint64_t count, missing;
+    hsize_t first_missing[H5S_MAX_RANK];
+    int whole;              /* refuse any chunk not stored (lfio__h5_expect_whole()) */
+} chunk_walk;
+
+/* H5Ewalk2 visitor: notes a record saying that a chunk is not stored. */
+static herr_t unallocated_visit(unsigned n, const H5E_error2_t *e, void *data)
+{
+    (void)n;
+    if (e->desc && (strstr(e->desc, "not allocated") || strstr(e->desc, "address isn't defined")))
+        *(int *)data = 1;
+    return 0;
+}
+
+/* Finds the stored size of the chunk at offset of dataset d, 0 if it is not stored: HDF5 1.10 looks it up
+ * in the index directly, and fails for a chunk never written, saying "chunk storage is not allocated" (or,
+ * once a read has cached the chunk, "chunk address isn't defined").
+ * @return 0, or -1 with HDF5's error stack kept. */
+static int stored_size(hid_t d, const hsize_t *offset, hsize_t *size)
+{
+    *size = 0;
+    if (H5Dget_chunk_storage_size(d, offset, size) >= 0)
+        return 0;
+    int unallocated = 0;
+    H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, unallocated_visit, &unallocated);
+    if (!unallocated)
+        return -1;
+    H5Eclear2(H5E_DEFAULT);
+    *size = 0;
+    return 0;
+}
+
+/* Checks the stored size of the chunk at offset of dataset d (obj) as chunk_walk w says: HDF5 finds it in
+ * the index directly (where its address and filter mask take a walk over the index per chunk, which
+ * lfio__h5_xfer() checks when it reads the chunk). @return LFIO_OK or LFIO_ERR_FORMAT. */
+static lfio_status check_chunk(const char *path, const char *obj, hid_t d, const hsize_t *offset, chunk_walk *w)
+{
+    hsize_t size = 0;
+    char at[128];
+    if (stored_size(d, offset, &size) < 0) {
+        char what[192];
+        lfio__h5_format_dims(at, sizeof at, w->rank, offset);
+        snprintf(what, sizeof what, "cannot look up the chunk at %s", at);
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, what);
+    }
+    if (size == 0) { /* not stored; counted: a message says how many */
+        if (w->missing++ == 0)
+            memcpy(w->first_missing, offset, sizeof w->first_missing);
+        return LFIO_OK;
+    }
+    if (size < w->least || size > w->most) {
+        lfio__h5_format_dims(at, sizeof at, w->rank, offset);
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: the chunk at %s stores %llu bytes; its filters make %llu to %llu",
+                          path, obj, at, (unsigned long long)size, (unsigned long long)w->least,
+                          (unsigned long long)w->most);
+    }
+    w->stored += size;
+    if (w->stored > w->file) /* chunks sharing bytes: an index pointing many chunks at one stream */
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: its chunks store more bytes than the file holds (%llu): they "
+                          "overlap", path, obj, (unsigned long long)w->file);
+    return LFIO_OK;
+}
+
+/* Looks up every chunk of dataset d (obj) on its grid, in order, by its coordinates: the index is
+ * asked w->count questions, never walked (a cycle in it cannot make this loop). @return LFIO_OK or LFIO_ERR_FORMAT. */
+static lfio_status walk_chunks(const char *path, const char *obj, hid_t d, chunk_walk *w)
+{
+    hsize_t offset[H5S_MAX_RANK] = {0};
+    lfio_status st = LFIO_OK;
+    for (uint64_t k = 0; st == LFIO_OK && k < w->count; k++) {
+        st = check_chunk(path, obj, d, offset, w);
+        for (int a = w->rank - 1; a >= 0; a--) { /* the next grid position, last axis fastest */
+            offset[a] += w->chunk[a];
+            if (offset[a] < w->dims[a])
+                break;
+            offset[a] = 0;
+        }
+    }
+    /* Chunks never written read as the fill value: accepted (other writers leave them out) while what the
+     * dataset declares stays within what its stored bytes could inflate to, so that reading it allocates
+     * in proportion to the file, never a size declared with nothing behind it. */
+    uint64_t declared = w->count * w->chunk_bytes; /* no overflow: at most the file's bytes times 4 MiB */
+    if (st == LFIO_OK && w->missing > 0 && (w->whole || declared / LFIO__H5_INFLATE_MAX > w->stored)) {
+        char at[128];
+        lfio__h5_format_dims(at, sizeof at, w->rank, w->first_missing);
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: %llu of its %llu chunks are not stored (the first at %s): it "
+                        "declares %llu bytes of values and stores %llu", path, obj, (unsigned long long)w->missing,
+                        (unsigned long long)w->count, at, (unsigned long long)declared, (unsigned long long)w->stored);
+    }
+    return st;
+}
+
+/* Checks chunked dataset d (obj, layout l, created with dcpl, filters pl) and every one of its chunks;
+ * with whole, refuses any chunk not stored. @return LFIO_OK or LFIO_ERR_FORMAT. */
+static lfio_status check_chunked(const char *path, const char *obj, hid_t d, hid_t dcpl, const lfio__h5_layout *l,
+                                 const pipeline *pl, uint64_t file, int whole)
+{
+    chunk_walk w = {.rank = l->rank, .file = file, .count = 1, .whole = whole};
+    if (H5Pget_chunk(dcpl, l->rank, w.chunk) != l->rank)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its chunk shape");
+    uint64_t chunk_bytes = l->size;
+    for (int a = 0; a < l->rank; a++) {
+        w.dims[a] = l->dims[a];
+        if (w.chunk[a] == 0 || !lfio__mul_u64(chunk_bytes, w.chunk[a], &chunk_bytes))
+            chunk_bytes = UINT64_MAX;
+        else
+            w.count *= (w.dims[a] + w.chunk[a] - 1) / w.chunk[a]; /* at most the elements: dims were checked */
+    }
+    if (chunk_bytes > LFIO__H5_CHUNK_MAX) {
+        char shape[128];
+        lfio__h5_format_dims(shape, sizeof shape, l->rank, w.chunk);
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: chunks of %s values, more than the %zu bytes a chunk may hold",
+                          path, obj, shape, LFIO__H5_CHUNK_MAX);
+    }
+    /* v1 and v2 B-trees are walked recursively by HDF5, without a bound on their depth (a cycle in a v1
+     * tree recurses until the stack overflows), and v1 nodes carry no checksum; HDF5 1.10 gives every
+     * dataset lfio writes one of the others, whose depth is fixed. */
+    H5D_chunk_index_t index;
+    if (H5Dget_chunk_index_type(d, &index) < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its chunk index type");
+    if (index != H5D_CHUNK_IDX_SINGLE && index != H5D_CHUNK_IDX_NONE && index != H5D_CHUNK_IDX_FARRAY &&
+        index != H5D_CHUNK_IDX_EARRAY)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: its chunks are indexed by a %s B-tree, which lfio does not walk: "
+                          "it reads the chunk indexes of HDF5 1.10's file format (h5repack or h5py's "
+                          "libver=\"v110\" writes them)", path, obj, index == H5D_CHUNK_IDX_BTREE ? "version 1" : "version 2");
+    w.chunk_bytes = chunk_bytes;
+    w.least = stored_least(chunk_bytes, pl);
+    w.most = stored_most(chunk_bytes, pl);
+    /* every chunk takes at least w.least bytes of the file: a count beyond that is refused before the walk */
+    if (w.count > file / w.least)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: declares %llu chunks of at least %llu stored bytes each, more "
+                          "than the file's %llu bytes hold", path, obj, (unsigned long long)w.count,
+                          (unsigned long long)w.least, (unsigned long long)file);
+    return walk_chunks(path, obj, d, &w);
+}
+
+/* Checks that the layout of dataset obj (from its creation list dcpl) keeps its values in the file
+ * itself, chunked or contiguous. @return LFIO_OK or LFIO_ERR_FORMAT. */
+static lfio_status check_layout(const char *path, const char *obj, hid_t dcpl, H5D_layout_t layout)
+{
+    int external = H5Pget_external_count(dcpl);
+    if (layout == H5D_LAYOUT_ERROR || external < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its storage layout");
+    if (layout == H5D_VIRTUAL)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: is a virtual dataset, whose values come from other datasets or "
+                          "files: lfio reads only data stored in the file", path, obj);
+    if (external > 0)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: keeps its values in %d external file(s): lfio reads only data "
+                          "stored in the file", path, obj, external);
+    if (layout != H5D_CHUNKED && layout != H5D_CONTIGUOUS)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: is stored %s: lfio reads chunked and contiguous datasets only",
+                          path, obj, layout == H5D_COMPACT ? "compact, in its object header" : "in an unknown layout");
+    return LFIO_OK;
+}
+
+lfio_status lfio__h5_open_dataset(const char *path, const char *obj, hid_t g, const char *name, hid_t dapl, hid_t *out)
+{
+    *out = -1;
+    lfio_status st = lfio__h5_expect_link(path, obj, g, name, "dataset");
+    if (st != LFIO_OK)
+        return st;
+    hid_t d = H5Dopen2(g, name, dapl >= 0 ? dapl : H5P_DEFAULT);
+    if (d < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a dataset");
+    /* before anything asks for its extent: HDF5 opens the source files of a virtual dataset with an
+     * unlimited mapping to compute it (a FIFO among them blocks the open) */
+    hid_t dcpl = H5Dget_create_plist(d);
+    st = dcpl < 0 ? lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its storage layout")
+                  : check_layout(path, obj, dcpl, H5Pget_layout(dcpl));
+    lfio__h5_close(dcpl);
+    if (st != LFIO_OK)
+        lfio__h5_close(d);
+    else
+        *out = d;
+    return st;
+}
+
+/* Checks how dataset d (obj, layout l already matched) is stored, before any of its values is read
+ * (see h5util.h); with whole, refuses any chunk not stored. @return LFIO_OK or LFIO_ERR_FORMAT. */
+static lfio_status check_storage(const char *path, const char *obj, hid_t d, const lfio__h5_layout *l, int whole)
+{
+    uint64_t file = 0, bytes = l->size;
+    lfio_status st = file_bytes(path, &file);
+    if (st != LFIO_OK)
+        return st;
+    for (int a = 0; a < l->rank; a++)
+        bytes *= l->dims[a]; /* no overflow: the callers bound the dims before they check a dataset */
+    hid_t dcpl = H5Dget_create_plist(d);
+    H5D_layout_t layout = dcpl < 0 ? H5D_LAYOUT_ERROR : H5Pget_layout(dcpl);
+    pipeline pl;
+    st = dcpl < 0 ? lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its storage layout")
+                  : check_layout(path, obj, dcpl, layout);
+    if (st == LFIO_OK)
+        st = check_pipeline(path, obj, dcpl, &pl);
+    if (st == LFIO_OK)
+        st = layout == H5D_CONTIGUOUS ? check_contiguous(path, obj, d, bytes, file)
+                                      : check_chunked(path, obj, d, dcpl, l, &pl, file, whole);
+    lfio__h5_close(dcpl);
+    return st;
+}
+
+lfio_status lfio__h5_expect_whole(const char *path, const char *obj, hid_t d, const lfio__h5_layout *l)
+{
+    return check_storage(path, obj, d, l, 1);
+}
+
+/* Sets bit k of map (atomically: readers of one lfio_reader may share it across threads). */
+static void vetted_set(lfio__h5_vetted *map, uint64_t k)
+{
+    atomic_fetch_or(&map[k / 8], (unsigned char)(1u << (k % 8)));
+}
+
+/* What vet_chunks() needs of a dataset: its dims, chunk shape and grid, pipeline and chunk sizes. */
+typedef struct vet_info {
+    int rank;
+    hsize_t dims[H5S_MAX_RANK], chunk[H5S_MAX_RANK], grid[H5S_MAX_RANK];
+    pipeline pl;
+    size_t chunk_bytes, least, most;
+} vet_info;
+
+/* Fills *v for dataset dset (obj). @return 1 if its chunks are filtered (and then need vetting), 0 if
+ * not, -1 on failure (message set). */
+static int vet_info_get(const char *path, const char *obj, hid_t dset, vet_info *v)
+{
+    hid_t dcpl = H5Dget_create_plist(dset), space = H5Dget_space(dset), t = H5Dget_type(dset);
+    int chunked = dcpl >= 0 && H5Pget_layout(dcpl) == H5D_CHUNKED;
+    v->rank = space >= 0 ? H5Sget_simple_extent_ndims(space) : -1;
+    int ok = t >= 0 && v->rank >= 0 && v->rank <= H5S_MAX_RANK && H5Sget_simple_extent_dims(space, v->dims, NULL) >= 0
+             && (!chunked || H5Pget_chunk(dcpl, v->rank, v->chunk) == v->rank);
+    int rc = ok ? 0 : -1;
+    if (!ok)
+        lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its storage layout");
+    else if (chunked && check_pipeline(path, obj, dcpl, &v->pl) != LFIO_OK)
+        rc = -1;
+    else if (chunked && (v->pl.shuffle || v->pl.deflate || v->pl.fletcher32))
+        rc = 1;
+    /* HDF5 makes every chunk dimension >= 1; the product stays below 2^54 until it passes the maximum */
+    uint64_t bytes = rc == 1 ? H5Tget_size(t) : 0;
+    for (int a = 0; rc == 1 && a < v->rank; a++) {
+        bytes = bytes <= LFIO__H5_CHUNK_MAX ? bytes * v->chunk[a] : bytes;
+        v->grid[a] = (v->dims[a] + v->chunk[a] - 1) / v->chunk[a];
+    }
+    if (rc == 1 && (bytes == 0 || bytes > LFIO__H5_CHUNK_MAX)) /* lfio__h5_check_dataset() refuses these */
+        rc = -1, lfio__fail(LFIO_ERR_FORMAT, "%s: %s: chunks of more than %zu bytes", path, obj, LFIO__H5_CHUNK_MAX);
+    if (rc == 1) {
+        v->chunk_bytes = (size_t)bytes;
+        v->least = (size_t)stored_least(bytes, &v->pl);
+        v->most = (size_t)stored_most(bytes, &v->pl);
+    }
+    lfio__h5_close(t);
+    lfio__h5_close(space);
+    lfio__h5_close(dcpl);
+    return rc;
+}
+
+/* Vets the chunk at offset of dataset dset (obj) with v's shape: reads it as stored, checks its filter
+ * mask (every filter applied), its size and its checksum, and inflates it with lfio's bounded inflater,
+ * into raw (v->most bytes) and out (v->chunk_bytes). @return LFIO_OK; LFIO_ERR_CHECKSUM; LFIO_ERR_FORMAT;
+ * LFIO_ERR_IO. */
+static lfio_status vet_one(const char *path, const char *obj, hid_t dset, const vet_info *v, const hsize_t *offset,
+                           unsigned char *raw, unsigned char *out)
+{
+    uint32_t mask = 0;
+    hsize_t size = 0;
+    char at[128];
+    lfio__h5_format_dims(at, sizeof at, v->rank, offset);
+    if (stored_size(dset, offset, &size) < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot look up a chunk");
+    if (size == 0) /* not stored: HDF5 fills it, filtering nothing */
+        return LFIO_OK;
+    if (size < v->least || size > v->most)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: the chunk at %s stores %llu bytes; its filters make %zu to %zu",
+                          path, obj, at, (unsigned long long)size, v->least, v->most);
+    if (H5Dread_chunk(dset, H5P_DEFAULT, offset, &mask, raw) < 0)
+        return lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot read a stored chunk");
+    if (mask != 0)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: the chunk at %s skipped filters (filter mask 0x%x): its values "
+                          "would be read without them, its checksum unchecked", path, obj, at, (unsigned)mask);
+    lfio__stored c = {raw, (size_t)size, v->chunk_bytes, 1};
+    int rc = lfio__chunks_check(&c, v->pl.fletcher32, v->pl.deflate, out);
+    if (rc == LFIO__STORED_CHECKSUM)
+        return lfio__fail(LFIO_ERR_CHECKSUM, "%s: %s: checksum mismatch (the chunk at %s)", path, obj, at);
+    if (rc != LFIO__STORED_OK)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: the stored chunk at %s does not inflate to its %zu bytes", path,
+                          obj, at, v->chunk_bytes);
+    return LFIO_OK;
+}
+
+/* Vets every filtered chunk of dset (obj) that the hyperslab [start, start+count) touches and map (if not
+ * NULL) does not mark, before HDF5 filters them: HDF5's deflate filter doubles its buffer for as long as
+ * a stream goes on (lfio's stops at the chunk's size), and HDF5 skips the filters a chunk's mask names.
+ * @return LFIO_OK or the first chunk's failure. */
+static lfio_status vet_chunks(const char *path, const char *obj, hid_t dset, int rank, const hsize_t *start,
+                              const hsize_t *count, lfio__h5_vetted *map)
+{
+    vet_info v;
+    int need = vet_info_get(path, obj, dset, &v);
+    if (need <= 0)
+        return need == 0 ? LFIO_OK : LFIO_ERR_FORMAT;
+    if (v.rank != rank)
+        return lfio__fail(LFIO_ERR_ARG, "%s: %s: a selection of rank %d on a dataset of rank %d", path, obj, rank, v.rank);
+    hsize_t first[H5S_MAX_RANK], c[H5S_MAX_RANK], offset[H5S_MAX_RANK];
+    for (int a = 0; a < rank; a++)
+        first[a] = c[a] = start[a] / v.chunk[a];
+    unsigned char *raw = NULL, *out = NULL; /* made for the first chunk to vet: a repeated read needs none */
+    lfio_status st = LFIO_OK;
+    for (int more = 1; st == LFIO_OK && more;) {
+        uint64_t k = 0;
+        for (int a = 0; a < rank; a++) {
+            k = k * v.grid[a] + c[a];
+            offset[a] = c[a] * v.chunk[a];
+        }
+        if (map == NULL || !(atomic_load(&map[k / 8]) & (1u << (k % 8)))) {
+            if (raw == NULL && ((raw = malloc(v.most)) == NULL || (out = malloc(v.chunk_bytes)) == NULL)) {
+                st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, obj);
+                break;
+            }
+            st = vet_one(path, obj, dset, &v, offset, raw, out);
+            if (st == LFIO_OK && map != NULL)
+                vetted_set(map, k);
+        }
+        more = 0;
+        for (int a = rank - 1; a >= 0 && !more; a--) { /* the next chunk of the selection, last axis fastest */
+            if (++c[a] <= (start[a] + count[a] - 1) / v.chunk[a])
+                more = 1;
+            else
+                c[a] = first[a];
+        }
+    }
+    free(out);
+    free(raw);
+    return st;
+}
+
+size_t lfio__h5_vetted_bytes(hid_t dset)
+{
+    vet_info v;
+    if (vet_info_get("", "", dset, &v) <= 0)
+        return 0;
+    uint64_t chunks = 1;
+    for (int a = 0; a < v.rank; a++)
+        chunks *= v.grid[a]; /* bounded by lfio__h5_check_dataset(): at most the file's bytes */
+    return (size_t)((chunks + 7) / 8);
+}
+
 /* Transfers a hyperslab of dset to or from buf through transfer list dxpl; with !mine this process
  * selects nothing (its part of a collective write). An empty hyperslab transfers nothing. */
 static lfio_status xfer(const char *path, const char *obj, hid_t dset, int write, hid_t mtype, int rank,
-                        const hsize_t *start, const hsize_t *count, void *buf, hid_t dxpl, int mine)
+                        const hsize_t *start, const hsize_t *count, void *buf, hid_t dxpl, int mine,
+                        lfio__h5_vetted *vetted)
 {
     hsize_t nelem = 1;
     for (int k = 0; k < rank; k++)
         nelem *= count[k];
     if (nelem == 0)
         return LFIO_OK;
-    lfio_status st = LFIO_OK;
+    lfio_status st = write ? LFIO_OK : vet_chunks(path, obj, dset, rank, start, count, vetted);
+    if (st != LFIO_OK)
+        return st;
     hid_t fspace = H5Dget_space(dset);
     /* the memory space has the selection's shape (buf is packed row-major): HDF5 then copies whole
      * rows, where a flat one against a 2-D selection took its element-by-element iterator */
@@ -178,7 +615,13 @@ static lfio_status xfer(const char *path, const char *obj, hid_t dset, int write
 lfio_status lfio__h5_xfer(const char *path, const char *obj, hid_t dset, int write, hid_t mtype,
                           int rank, const hsize_t *start, const hsize_t *count, void *buf)
 {
-    return xfer(path, obj, dset, write, mtype, rank, start, count, buf, H5P_DEFAULT, 1);
+    return xfer(path, obj, dset, write, mtype, rank, start, count, buf, H5P_DEFAULT, 1, NULL);
+}
+
+lfio_status lfio__h5_read_vetted(const char *path, const char *obj, hid_t dset, hid_t mtype, int rank,
+                                 const hsize_t *start, const hsize_t *count, void *buf, lfio__h5_vetted *vetted)
+{
+    return xfer(path, obj, dset, 0, mtype, rank, start, count, buf, H5P_DEFAULT, 1, vetted);
 }
 
 #ifdef LFIO_MPI
@@ -207,12 +650,12 @@ lfio_status lfio__h5_write_part(const char *path, const char *obj, hid_t dset, h
             return lfio__h5_fail(LFIO_ERR_IO, path, obj, "cannot set up a collective write");
         }
         lfio_status st = xfer(path, obj, dset, 1, mtype, rank, start, count, (void *)(mine ? buf : &nothing),
-                              dxpl, mine);
+                              dxpl, mine, NULL);
         lfio__h5_close(dxpl);
         return st;
     }
 #endif
-    return mine ? xfer(path, obj, dset, 1, mtype, rank, start, count, (void *)buf, H5P_DEFAULT, 1) : LFIO_OK;
+    return mine ? xfer(path, obj, dset, 1, mtype, rank, start, count, (void *)buf, H5P_DEFAULT, 1, NULL) : LFIO_OK;
 }
 
 /* ----------------------------------------------------------------- attributes */
@@ -424,13 +867,58 @@ lfio_status lfio__h5_get_int_attr(const char *path, const char *obj, hid_t id, c
 
 /* -------------------------------------------------------------------- groups */
 
-/* Checks that link name of g exists, telling a damaged group from a missing link (see h5util.h). */
+/* Checks that link name of g exists and is a hard link, telling a damaged group from a missing link
+ * (see h5util.h). H5Lget_info reads the link alone: a soft or external one is not followed. */
 lfio_status lfio__h5_expect_link(const char *path, const char *obj, hid_t g, const char *name, const char *what)
 {
     htri_t exists = H5Lexists(g, name, H5P_DEFAULT);
     if (exists < 0)
         return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot look it up");
-    return exists ? LFIO_OK : lfio__fail(LFIO_ERR_FORMAT, "%s: %s: missing %s", path, obj, what);
+    if (!exists)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: missing %s", path, obj, what);
+    H5L_info_t info;
+    if (H5Lget_info(g, name, &info, H5P_DEFAULT) < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot look it up");
+    if (info.type == H5L_TYPE_HARD)
+        return LFIO_OK;
+    return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: is %s: lfio follows no links (it reads nothing from elsewhere in "
+                      "the file or from other files)", path, obj,
+                      info.type == H5L_TYPE_SOFT ? "a soft link" : info.type == H5L_TYPE_EXTERNAL ? "an external link"
+                                                                                            : "a user-defined link");
+}
+
+/* Checks that group g (obj) keeps its links in its object header or in a dense index (HDF5 1.8's formats
+ * and later: a v2 B-tree whose depth is bounded), not in a symbol table: its version 1 B-tree carries no
+ * checksum and HDF5 walks it recursively without a bound (a node that is its own child overflows the
+ * stack). The header says which, before any link of the group is looked up. */
+static lfio_status check_group_format(const char *path, const char *obj, hid_t g)
+{
+    H5O_info_t info;
+    if (H5Oget_info2(g, &info, H5O_INFO_HDR) < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its object header");
+    const unsigned symbol_table_message = 0x11; /* H5O_STAB_ID of the file format */
+    if (info.hdr.mesg.present & ((uint64_t)1 << symbol_table_message))
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: %s: is a group of HDF5's original format, whose links a version 1 "
+                          "B-tree indexes, which lfio does not walk (h5repack or h5py's libver=\"v110\" writes "
+                          "groups lfio reads)", path, obj);
+    return LFIO_OK;
+}
+
+lfio_status lfio__h5_open_group(const char *path, const char *obj, hid_t parent, const char *name, const char *what,
+                                hid_t *out)
+{
+    *out = -1;
+    lfio_status st = lfio__h5_expect_link(path, obj, parent, name, what);
+    if (st != LFIO_OK)
+        return st;
+    hid_t g = H5Gopen2(parent, name, H5P_DEFAULT);
+    if (g < 0)
+        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a group");
+    if ((st = check_group_format(path, obj, g)) != LFIO_OK)
+        lfio__h5_close(g);
+    else
+        *out = g;
+    return st;
 }
 
 /* Creates group name in parent with its attributes in its checksummed object header (see h5util.h). */
@@ -509,12 +997,10 @@ lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, 
     snprintf(obj, sizeof obj, "%s/%s", gobj, l->name);
     if (out)
         *out = -1;
-    lfio_status st = lfio__h5_expect_link(path, obj, g, l->name, "dataset");
+    hid_t d;
+    lfio_status st = lfio__h5_open_dataset(path, obj, g, l->name, dapl, &d);
     if (st != LFIO_OK)
         return st;
-    hid_t d = H5Dopen2(g, l->name, dapl >= 0 ? dapl : H5P_DEFAULT);
-    if (d < 0)
-        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a dataset");
     hid_t t = H5Dget_type(d), space = H5Dget_space(d);
     H5T_class_t cls = t < 0 ? H5T_NO_CLASS : H5Tget_class(t);
     size_t elem = t < 0 ? 0 : H5Tget_size(t);
@@ -542,6 +1028,8 @@ lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, 
         st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: dims mismatch: shape %s, expected %s from %s",
                         path, obj, got, want, source);
     }
+    if (st == LFIO_OK)
+        st = check_storage(path, obj, d, l, 0);
     if (st == LFIO_OK)
         st = lfio__h5_expect_str_attr(path, obj, d, "units", l->units);
     if (st == LFIO_OK)
@@ -793,6 +1281,10 @@ lfio_status lfio__h5_open_read(const char *path, hid_t *file)
     *file = H5Fopen(path, H5F_ACC_RDONLY, fapl >= 0 ? fapl : H5P_DEFAULT);
     if (*file < 0)
         st = lfio__h5_fail(LFIO_ERR_FORMAT, path, "/", "cannot open as HDF5");
+    else if ((st = check_group_format(path, "/", *file)) != LFIO_OK) {
+        lfio__h5_close(*file);
+        *file = -1;
+    }
     lfio__h5_close(fapl);
     return st;
 }

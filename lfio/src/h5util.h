@@ -16,6 +16,14 @@
  *     expected layout before anything is read.
  *   - None of these functions silences HDF5 itself: public entry points wrap
  *     their whole body in lfio__h5_quiet_begin() / lfio__h5_quiet_end().
+ *   - Nothing of a file is trusted before it is checked: the structure lfio
+ *     walks holds hard links only (no soft or external links), and a dataset
+ *     is read only after lfio__h5_check_dataset() has checked its storage
+ *     (docs/robustness.md, "HDF5 features"): chunked or contiguous in the file
+ *     itself, lfio's own filters, chunk indexes that cannot loop, chunks of
+ *     a size their pipeline can produce and in proportion to the file; a
+ *     filtered chunk is vetted by lfio (filter mask, checksum, a bounded
+ *     inflate) before HDF5's filters see it (lfio__h5_xfer()).
  */
 #ifndef LFIO_H5UTIL_H
 #define LFIO_H5UTIL_H
@@ -29,6 +37,15 @@
 
 /* Longest free-text string attribute read from a file (units, axes, frame ...), in bytes. */
 #define LFIO__H5_TEXT_MAX 1023
+
+/* Largest chunk of a dataset lfio reads, in bytes (values, before filtering). lfio writes chunks of at
+ * most 384 KiB; the bound keeps what one chunk can make HDF5 allocate, and one stored chunk inflate to,
+ * small whatever a file declares. */
+#define LFIO__H5_CHUNK_MAX ((size_t)4 << 20)
+
+/* Most bytes one byte of a deflate stream inflates to: deflate codes at most 258 bytes (one match) in 2
+ * bits. A dataset's declared size is held to this many times the bytes it stores. */
+#define LFIO__H5_INFLATE_MAX 1032u
 
 /* ---------------------------------------------------------------- errors */
 
@@ -93,13 +110,25 @@ lfio_status lfio__h5_get_int_attr(const char *path, const char *obj, hid_t id, c
 /* ---------------------------------------------------------------- groups */
 
 /*
- * Checks that link name of group g exists; obj is the linked object's full
- * name and what its kind ("dataset") for messages.
- * @return LFIO_OK; LFIO_ERR_FORMAT "<path>: <obj>: missing <what>"; or, when
- * HDF5 cannot tell because g itself is damaged, what its error stack says
- * (LFIO_ERR_CHECKSUM for a checksum mismatch).
+ * Checks that link name of group g exists and is a hard link (a soft link or
+ * an external link, which would take the object from elsewhere or from
+ * another file, is refused before it is followed); obj is the linked
+ * object's full name and what its kind ("dataset") for messages.
+ * @return LFIO_OK; LFIO_ERR_FORMAT "<path>: <obj>: missing <what>" or naming
+ * the kind of link; or, when HDF5 cannot tell because g itself is damaged,
+ * what its error stack says (LFIO_ERR_CHECKSUM for a checksum mismatch).
  */
 lfio_status lfio__h5_expect_link(const char *path, const char *obj, hid_t g, const char *name, const char *what);
+
+/*
+ * Opens group name of parent (obj, its full name, and what, its kind, for
+ * messages) after lfio__h5_expect_link(), and checks that it does not index
+ * its links with a symbol table (HDF5's original format: a version 1 B-tree
+ * without checksums, which HDF5 walks without a bound on its depth).
+ * @return LFIO_OK and *out open; LFIO_ERR_FORMAT (or what HDF5 reports) with *out = -1.
+ */
+lfio_status lfio__h5_open_group(const char *path, const char *obj, hid_t parent, const char *name, const char *what,
+                                hid_t *out);
 
 /*
  * Creates group name in parent (obj names it in messages) with up to 64
@@ -136,22 +165,67 @@ lfio_status lfio__h5_create_dataset(const char *path, const char *gobj, hid_t g,
                                     const lfio__h5_layout *l, hid_t *out);
 
 /*
+ * Opens dataset name of group g (obj, its full name, for messages) with
+ * access list dapl (or the default when negative) after
+ * lfio__h5_expect_link(), and checks that its values are kept in the file
+ * itself (not virtual, no external storage, chunked or contiguous) before
+ * anything asks for its extent, which makes HDF5 open the source files of
+ * some virtual datasets. @return LFIO_OK and *out open; LFIO_ERR_FORMAT with *out = -1.
+ */
+lfio_status lfio__h5_open_dataset(const char *path, const char *obj, hid_t g, const char *name, hid_t dapl,
+                                  hid_t *out);
+
+/*
  * Opens dataset l of group g (gobj) with access list dapl (or the default
- * when negative) and checks its class, element size, rank, dims, units and
- * axes without reading data; source says in messages where the expected
- * dims came from ("the slab's attributes").
+ * when negative) and checks its link (a hard one), class, element size,
+ * rank, dims, storage (see the top of this file) and its units and axes
+ * without reading data; source says in messages where the expected dims
+ * came from ("the slab's attributes"). Its chunks are looked up one by one,
+ * after checks that bound their number by the file's size.
  * @return LFIO_OK and *out open if out is not NULL; LFIO_ERR_FORMAT.
  */
 lfio_status lfio__h5_check_dataset(const char *path, const char *gobj, hid_t g, const lfio__h5_layout *l,
                                    const char *source, hid_t dapl, hid_t *out);
 
 /*
+ * Checks dataset d (obj, open and checked by lfio__h5_check_dataset() against
+ * layout l) as that does, and that every one of its chunks is stored: a
+ * chunk never written reads as the fill value, which lfio accepts from other
+ * writers but never writes, so lfio_verify() reports it.
+ * @return LFIO_OK or LFIO_ERR_FORMAT.
+ */
+lfio_status lfio__h5_expect_whole(const char *path, const char *obj, hid_t d, const lfio__h5_layout *l);
+
+/*
  * Transfers the hyperslab [start, start+count) of dset to or from buf (packed,
  * row-major) as memory type mtype; an empty hyperslab transfers nothing.
- * @return LFIO_OK; LFIO_ERR_IO or LFIO_ERR_CHECKSUM with the message set.
+ * Reading, every filtered chunk the hyperslab touches is first vetted:
+ * read as stored, its filter mask checked (a chunk that skipped a filter is
+ * refused), its checksum checked and its stream inflated by lfio, which
+ * stops at the chunk's size. One that does not inflate to exactly its
+ * chunk's bytes fails the read (LFIO_ERR_FORMAT) before HDF5's filter,
+ * which would grow its buffer for as long as the stream goes on, sees it.
+ * @return LFIO_OK; LFIO_ERR_IO, LFIO_ERR_FORMAT or LFIO_ERR_CHECKSUM with the message set.
  */
 lfio_status lfio__h5_xfer(const char *path, const char *obj, hid_t dset, int write, hid_t mtype,
                           int rank, const hsize_t *start, const hsize_t *count, void *buf);
+
+/* A map of the chunks of a dataset that a reader has vetted (lfio__h5_read_vetted()): one bit a chunk, in
+ * row-major order of the chunk grid, set from any thread. */
+typedef _Atomic unsigned char lfio__h5_vetted;
+
+/* @return the bytes of a zeroed map for dset (see lfio__h5_read_vetted()); 0 when its chunks are not
+ * filtered, which then needs none. dset must have passed lfio__h5_check_dataset(). */
+size_t lfio__h5_vetted_bytes(hid_t dset);
+
+/*
+ * Reads the hyperslab [start, start+count) of dset as lfio__h5_xfer() does, vetting only the chunks map
+ * does not mark yet and marking them (map: lfio__h5_vetted_bytes() zeroed bytes, or NULL to vet every
+ * chunk touched): repeated partial reads of one dataset then inflate each chunk once more, not once a read.
+ * @return as lfio__h5_xfer().
+ */
+lfio_status lfio__h5_read_vetted(const char *path, const char *obj, hid_t dset, hid_t mtype, int rank,
+                                 const hsize_t *start, const hsize_t *count, void *buf, lfio__h5_vetted *map);
 
 /*
  * Writes the hyperslab [start, start+count) of dset from buf, as lfio__h5_xfer()
@@ -223,7 +297,8 @@ lfio_status lfio__h5_write_collective(const char *path, lfio__h5_fill_fn fill, c
 
 /*
  * Checks that path is a readable regular HDF5 file, then opens it read-only
- * with strong close. Does not silence HDF5.
+ * with strong close, and checks its root group as lfio__h5_open_group() does.
+ * Does not silence HDF5.
  * @return LFIO_OK and *file; LFIO_ERR_NOTFOUND, LFIO_ERR_IO or LFIO_ERR_FORMAT with *file = -1.
  */
 lfio_status lfio__h5_open_read(const char *path, hid_t *file);

@@ -725,15 +725,16 @@ static lfio_status read_patch_attrs(const char *path, const char *obj, hid_t g, 
     return st;
 }
 
-/* @return the length of the first axis of dataset name of g; 0 if it is missing or not an array
- * (the full check reports that). */
-static hsize_t first_axis_length(hid_t g, const char *name)
+/* @return the length of the first axis of dataset name of g (obj, for lfio__h5_open_dataset()'s messages);
+ * 0 if it is missing, not an array, not a hard link or not stored in the file, which the full check
+ * reports. */
+static hsize_t first_axis_length(const char *path, const char *obj, hid_t g, const char *name)
 {
     hsize_t dims[H5S_MAX_RANK] = {0};
-    if (H5Lexists(g, name, H5P_DEFAULT) <= 0)
+    hid_t d = -1;
+    if (lfio__h5_open_dataset(path, obj, g, name, -1, &d) != LFIO_OK)
         return 0;
-    hid_t d = H5Dopen2(g, name, H5P_DEFAULT);
-    hid_t space = d < 0 ? -1 : H5Dget_space(d);
+    hid_t space = H5Dget_space(d);
     int rank = space < 0 ? -1 : H5Sget_simple_extent_ndims(space);
     if (rank < 1 || rank > H5S_MAX_RANK || H5Sget_simple_extent_dims(space, dims, NULL) < 0)
         dims[0] = 0;
@@ -746,7 +747,10 @@ static hsize_t first_axis_length(hid_t g, const char *name)
 static lfio_status read_patch_counts(const char *path, const char *obj, hid_t g, const lfio_radmap *map,
                                      lfio_radmap_patch *p)
 {
-    const hsize_t nverts = first_axis_length(g, "vertices"), ncells = first_axis_length(g, "cell_ij");
+    char vobj[128], cobj[128];
+    snprintf(vobj, sizeof vobj, "%.63s/vertices", obj);
+    snprintf(cobj, sizeof cobj, "%.63s/cell_ij", obj);
+    const hsize_t nverts = first_axis_length(path, vobj, g, "vertices"), ncells = first_axis_length(path, cobj, g, "cell_ij");
     if (nverts > LFIO_RADMAP_MAX_VERTS)
         return lfio__fail(LFIO_ERR_FORMAT, "%s: %s/vertices: %llu vertices, at most %u allowed", path, obj,
                           (unsigned long long)nverts, LFIO_RADMAP_MAX_VERTS);
@@ -803,22 +807,22 @@ static lfio_status read_patch(const char *path, hid_t patches, size_t k, lfio_ra
     char obj[64], name[24];
     snprintf(name, sizeof name, "%zu", k);
     snprintf(obj, sizeof obj, "/patches/%zu", k);
-    lfio_status st = lfio__h5_expect_link(path, obj, patches, name, "patch group");
+    hid_t g;
+    lfio_status st = lfio__h5_open_group(path, obj, patches, name, "patch group", &g);
     if (st != LFIO_OK)
         return st;
     if (map->count == map->capacity) {
         size_t grown = map->capacity ? 2 * map->capacity : 16;
         struct map_patch *more = realloc(map->patches, grown * sizeof *more);
-        if (more == NULL)
+        if (more == NULL) {
+            lfio__h5_close(g);
             return lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, obj);
+        }
         map->patches = more;
         map->capacity = grown;
     }
     struct map_patch *mp = &map->patches[map->count++]; /* counted now, so map_free() releases it */
     memset(mp, 0, sizeof *mp);
-    hid_t g = H5Gopen2(patches, name, H5P_DEFAULT);
-    if (g < 0)
-        return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a group");
     st = read_patch_attrs(path, obj, g, mp);
     if (st == LFIO_OK)
         st = read_patch_counts(path, obj, g, map, &mp->pub);
@@ -843,9 +847,7 @@ static lfio_status radmap_read_impl(const char *path, lfio_radmap **out)
     if (st == LFIO_OK)
         st = read_root(path, file, map, &count);
     if (st == LFIO_OK)
-        st = lfio__h5_expect_link(path, "/patches", file, "patches", "group");
-    if (st == LFIO_OK && (patches = H5Gopen2(file, "patches", H5P_DEFAULT)) < 0)
-        st = lfio__h5_fail(LFIO_ERR_FORMAT, path, "/patches", "cannot open as a group");
+        st = lfio__h5_open_group(path, "/patches", file, "patches", "group", &patches);
     for (size_t k = 0; st == LFIO_OK && k < count; k++)
         st = read_patch(path, patches, k, map);
     lfio__h5_close(patches);

@@ -3,7 +3,7 @@
 #
 # Usage: tests/fuzz/run.sh TARGET SECONDS [BUILD_DIR]
 #
-#   TARGET     fuzz_scene, fuzz_mesh, fuzz_lightfield, fuzz_radmap, fuzz_manifest or fuzz_points
+#   TARGET     fuzz_scene, fuzz_mesh, fuzz_lightfield, fuzz_radmap, fuzz_h5read, fuzz_manifest or fuzz_points
 #   SECONDS    how long to fuzz
 #   BUILD_DIR  a build configured with ILFKIT_FUZZ=ON (default build-fuzz):
 #                CC=clang CXX=clang++ cmake -S . -B build-fuzz -DILFKIT_FUZZ=ON

@@ -208,12 +208,14 @@ def stdlib_lightfields(out, base):
     folder(os.path.join(d, "directory.h5"))
 
 
-def edited(d, base, name, edit):
-    """Copies base to d/name and applies edit(h5py.File) to the copy."""
+def edited(d, base, name, edit, libver=None):
+    """Copies base to d/name and applies edit(h5py.File) to the copy, opened with libver (h5py's default
+    when None: objects it creates then take HDF5 1.8's formats, 'v110' gives HDF5 1.10's)."""
     path = os.path.join(d, name)
     shutil.copyfile(base, path)
-    with h5py.File(path, "r+") as f:
+    with h5py.File(path, "r+", libver=libver) as f:
         edit(f)
+    return path
 
 
 def set_attr(obj, name, value, dtype=None):
@@ -300,6 +302,176 @@ def h5py_lightfields(out, base):
            lambda f: f["slabs/0/mask"].__setitem__("loop", f["slabs/0"]))
 
 
+# ---------------------------------------------------------------- crafted HDF5 storage
+# What lfio must not trust in an HDF5 file (docs/robustness.md, "HDF5 features"): where a dataset's
+# bytes come from, its filters, its chunk index, each chunk's size and filter mask, and a size declared
+# with nothing stored behind it. Each edit keeps the radiance dataset's type, shape, units and axes, so
+# that only the storage is wrong.
+
+RADIANCE = "slabs/0/radiance"
+
+
+def swap_radiance(f, make):
+    """Replaces the radiance dataset by make(group, name, values), keeping its units and axes."""
+    group, old = f["slabs/0"], f[RADIANCE]
+    values, attrs = old[...], {k: old.attrs[k] for k in old.attrs}
+    del group["radiance"]
+    new = make(group, "radiance", values)
+    for k, v in attrs.items():
+        new.attrs[k] = v
+
+
+def lowlevel_radiance(f, configure):
+    """Replaces radiance by a dataset made with h5py's low-level API, configure(dcpl) setting its
+    layout and filters, holding the same values."""
+    def make(group, name, values):
+        dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
+        configure(dcpl, values.shape)
+        space = h5py.h5s.create_simple(values.shape)
+        dset = h5py.h5d.create(group.id, name.encode(), h5py.h5t.IEEE_F32LE, space, dcpl=dcpl)
+        dset.write(h5py.h5s.ALL, h5py.h5s.ALL, values)
+        return group[name]
+    swap_radiance(f, make)
+
+
+def shuffled(values):
+    """values (float32) as HDF5's shuffle filter stores them: byte k of every value together."""
+    return np.ascontiguousarray(values.astype("<f4")).view(np.uint8).reshape(-1, 4).T.tobytes()
+
+
+def fletcher32(data):
+    """HDF5's Fletcher-32 of data (16-bit big-endian words, an odd last byte as the high half)."""
+    if len(data) % 2:
+        data = data + b"\0"
+    a = b = 0
+    for (word,) in struct.iter_unpack(">H", data):
+        a = (a + word) % 65535
+        b = (b + a) % 65535
+    return struct.pack("<I", (b << 16) | a)
+
+
+def store_chunk(f, data, mask=0):
+    """Stores data as radiance's first chunk, with filter mask mask."""
+    dset = f[RADIANCE]
+    dset.id.write_direct_chunk((0,) * dset.ndim, data, mask)
+
+
+def skipped_checksum(f):
+    """Radiance in four chunks, the first stored with a changed value and a mask saying that its
+    Fletcher-32 filter was skipped, so that nothing checks it."""
+    swap_radiance(f, lambda g, n, v: g.create_dataset(n, data=v, dtype="<f4", chunks=(4, 3, 4, 3), shuffle=True,
+                                                      compression="gzip", fletcher32=True))
+    values = f[RADIANCE][0:4, ...]
+    values[0, 0, 0, :] = 7.0
+    store_chunk(f, zlib.compress(shuffled(values), 4), mask=4)
+
+
+def resize_slab(f, nu, nv, chunk):
+    """Declares nu x nv positions, with a radiance dataset of that shape in chunks of chunk and a
+    position dataset to match (the other datasets do not depend on the positions), nothing written:
+    no chunk stored behind a slab of 16 * nu * nv * 12 bytes."""
+    set_attr(f["slabs/0"], "nu", np.uint32(nu))
+    set_attr(f["slabs/0"], "nv", np.uint32(nv))
+    swap_radiance(f, lambda g, n, v: g.create_dataset(n, shape=(16, nv, nu, 3), dtype="<f4", chunks=chunk,
+                                                      shuffle=True, compression="gzip", fletcher32=True))
+    old = f["slabs/0/position"]
+    attrs = {k: old.attrs[k] for k in old.attrs}
+    del f["slabs/0"]["position"]
+    new = f["slabs/0"].create_dataset("position", shape=(nv, nu, 3), dtype="<f8", chunks=(min(nv, 64), min(nu, 64), 3),
+                                      fletcher32=True)
+    for k, v in attrs.items():
+        new.attrs[k] = v
+
+
+def btree_cycle(path, node_type):
+    """Makes the first v1 B-tree node of path of node_type (0: a group's links, 1: a rank-4 dataset's
+    chunks) a node of level 1 whose children are itself: HDF5 1.10.8 follows the cycle until its stack
+    overflows."""
+    data = bytearray(open(path, "rb").read())
+    at = data.find(b"TREE")
+    while data[at + 4] != node_type:
+        at = data.find(b"TREE", at + 4)
+    used, = struct.unpack("<H", data[at + 6:at + 8])
+    data[at + 5] = 1  # level
+    # a key: a heap offset (group), or a chunk's size, filter mask, 4 offsets and the element offset
+    key = 8 if node_type == 0 else 8 + 8 * 5
+    child = at + 24 + key
+    for _ in range(used):
+        data[child:child + 8] = struct.pack("<Q", at)
+        child += 8 + key
+    write(path, bytes(data))
+
+
+def virtual_unlimited(source):
+    """An edit making radiance a virtual dataset with an unlimited mapping onto dataset x of source: HDF5
+    opens source as soon as the dataset's extent is asked for."""
+    def make(g, n, v):
+        shape, maxshape = v.shape, (None,) + v.shape[1:]
+        layout = h5py.VirtualLayout(shape=shape, maxshape=maxshape, dtype="<f4")
+        src = h5py.VirtualSource(source, "x", shape=shape, maxshape=maxshape)
+        layout[0:h5py.h5s.UNLIMITED, ...] = src[0:h5py.h5s.UNLIMITED, ...]
+        return g.create_virtual_dataset(n, layout)
+    return lambda f: swap_radiance(f, make)
+
+
+def hostile_storage(out, base):
+    d = os.path.join(out, "lf")
+    other = os.path.abspath(base)  # a file the user can read, as the source of another file's bytes
+    fifo = os.path.abspath(os.path.join(d, "fifo_source.h5"))  # opening it for reading blocks
+    if not os.path.exists(fifo):
+        os.mkfifo(fifo)
+    nbytes = 16 * 3 * 4 * 3 * 4
+    cases = {
+        # HDF5's Fletcher-32 filter reads 4 bytes before a buffer of fewer
+        "chunk_under_checksum.h5": lambda f: store_chunk(f, b"\x01\x02"),
+        # a 2 KB stream of 2 MB of zeros, under a right checksum: within the sizes a chunk of 2304 bytes
+        # can take, it inflates a thousand times past the chunk
+        "chunk_bomb.h5": lambda f: store_chunk(f, (lambda z: z + fletcher32(z))(zlib.compress(b"\0" * (2 << 20), 9))),
+        # a chunk that says its checksum was skipped, holding a changed value
+        "chunk_mask_skipped.h5": skipped_checksum,
+        # one chunk of 12 MiB of zeros, stored in 13 KB
+        "chunk_huge.h5": lambda f: (resize_slab(f, 256, 256, (16, 256, 256, 3)),
+                                    store_chunk(f, (lambda z: z + fletcher32(z))(
+                                        zlib.compress(b"\0" * (16 * 256 * 256 * 12), 9)))),
+        "declared_805MB.h5": lambda f: resize_slab(f, 2048, 2048, (16, 16, 16, 3)),
+        "declared_51GiB.h5": lambda f: resize_slab(f, 16896, 16896, (16, 16, 16, 3)),
+        "radiance_external_file.h5": lambda f: swap_radiance(f, lambda g, n, v: g.create_dataset(
+            n, shape=v.shape, dtype="<f4", external=[(other, 0, nbytes)])),
+        "radiance_virtual.h5": lambda f: swap_radiance(f, lambda g, n, v: g.create_virtual_dataset(
+            n, (lambda lay: (lay.__setitem__(slice(None), h5py.VirtualSource(other, RADIANCE, shape=v.shape)),
+                             lay)[1])(h5py.VirtualLayout(shape=v.shape, dtype="<f4")))),
+        "radiance_virtual_fifo.h5": virtual_unlimited(fifo),
+        "radiance_external_link.h5": lambda f: (f["slabs/0"].__delitem__("radiance"),
+                                                f["slabs/0"].__setitem__("radiance",
+                                                                         h5py.ExternalLink(other, "/" + RADIANCE))),
+        "radiance_soft_link.h5": lambda f: (f.copy(f[RADIANCE], f, name="elsewhere"),
+                                            f["slabs/0"].__delitem__("radiance"),
+                                            f["slabs/0"].__setitem__("radiance", h5py.SoftLink("/elsewhere"))),
+        "radiance_compact.h5": lambda f: lowlevel_radiance(f, lambda dcpl, shape: dcpl.set_layout(h5py.h5d.COMPACT)),
+        "radiance_contiguous_empty.h5": lambda f: swap_radiance(f, lambda g, n, v: g.create_dataset(
+            n, shape=v.shape, dtype="<f4")),
+        "radiance_scaleoffset.h5": lambda f: swap_radiance(f, lambda g, n, v: g.create_dataset(
+            n, data=v, dtype="<f4", chunks=v.shape, scaleoffset=3)),
+        "radiance_filter_order.h5": lambda f: lowlevel_radiance(
+            f, lambda dcpl, shape: (dcpl.set_chunk(shape), dcpl.set_fletcher32(), dcpl.set_deflate(4))),
+    }
+    for name, edit in cases.items():
+        edited(d, base, name, edit, libver="v110")
+    # HDF5's original formats index chunks, and a group's links, with v1 B-trees (h5py's default, but a
+    # file with a 1.10 superblock keeps 1.10's formats): the base copied into a new file (its groups keep
+    # their formats; the root group tracks link order, which gives it 1.8's), its radiance in four
+    # chunks, then a cycle in the chunks' tree; and, with a root of the original format, in the root's.
+    for name, node_type in (("chunk_btree_cycle.h5", 1), ("group_btree_cycle.h5", 0)):
+        path = os.path.join(d, name)
+        with h5py.File(base, "r") as src, h5py.File(path, "w", libver="earliest", track_order=node_type == 1) as f:
+            for k, v in src.attrs.items():
+                f.attrs[k] = v
+            src.copy(src["slabs"], f)
+            swap_radiance(f, lambda g, n, v: g.create_dataset(n, data=v, dtype="<f4", chunks=(4, 3, 4, 3),
+                                                              fletcher32=True))
+        btree_cycle(path, node_type)
+
+
 def duplicate_slab(f):
     """A second slab, a copy of the first under the same name."""
     f.copy(f["slabs/0"], f["slabs"], name="1")
@@ -320,6 +492,7 @@ def main():
         print("gen_hostile.py: h5py not available: the edited light field files are not written")
     else:
         h5py_lightfields(out, base)
+        hostile_storage(out, base)
 
 
 if __name__ == "__main__":
