@@ -196,7 +196,8 @@ def write_by_assimp():
 
 
 def write_scenes(extra):
-    query = {"radiance_maps": {"cell_size": 0.25}, "sampling": {"bounces": 0}}
+    query = {"radiance_maps": {"cell_size": 0.25}, "sampling": {"bounces": 1, "bounce_rays": 64},
+             "camera": {"position": [1, 0.15, 1], "look_at": [1, 2, 0.7], "fov_deg": 90, "width": 48, "height": 36}}
     entries = {
         "obj": [{"file": "room.obj"}],
         "gltf": [{"file": "room.gltf"}],
