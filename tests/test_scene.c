@@ -8,7 +8,9 @@
  * and materials, and every loaded polygon is checked here, independently of
  * the loader, against the invariants of scene_internal.h. Bad scenes are
  * one table: file, expected status, expected substring of the message; the
- * message must also name the scene file.
+ * message must also name the scene file. tests/scenes/rooms holds one room
+ * in every mesh format (gen_rooms.py), which must give the same polygons,
+ * lamp, irradiance and view.
  */
 #define _XOPEN_SOURCE 700 /* POSIX 2008 and realpath() */
 

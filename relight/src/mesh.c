@@ -26,7 +26,12 @@
  *
  * Mesh files are imported by ilf_mesh_import(), which makes every check
  * before assimp reads them (PLY counts, glTF headers and accessor types,
- * the accepted formats) and returns a polygon soup. A
+ * the accepted formats) and returns a polygon soup with emission in the
+ * scene's units and the file's declared up axis. Here the soup is turned
+ * up (an entry's "up", else what the file declares), its faces that are
+ * planar and convex are merged with coplanar neighbours of their material
+ * (see Merging below), and each result is added as it is, turned over
+ * ("flip") or both ways ("two_sided"). A
  * mesh file that yields no polygon at all is an error rather than an empty
  * contribution: it is almost certainly the wrong file or a broken one.
  *
@@ -642,22 +647,25 @@ static uint32_t join(const pool *p, const loop *a, uint32_t i, const loop *c, ui
     return (uint32_t)chk.n;
 }
 
-/* Room for one union in merge_pass(): its ids, then its count. */
-#define UNION_SLOT (RL_SCENE_MAX_POLY_VERTS + 3)
+/* partner[] of a loop joined into another in this pass. */
+#define ABSORBED (UINT32_MAX - 1)
 
 /*
  * One pass of merging over p: joins pairs across shared edges, each loop at
- * most once, and compacts the pool. @return the number of joins, or -1 for memory.
+ * most once, and compacts the pool. A pair found joinable is recorded by its
+ * owner (the loop whose edge came first: partner and the two edge
+ * positions) and joined again while the pool is compacted, so that a pass
+ * needs 16 bytes per loop besides its edges. @return the number of joins,
+ * or -1 for memory.
  */
 static long merge_pass(pool *p)
 {
     size_t nl = p->nloops ? p->nloops : 1;
     edge *e = malloc((p->nids ? p->nids : 1) * sizeof *e);
-    uint32_t *partner = malloc(nl * sizeof *partner);
-    uint32_t *unions = malloc(nl * UNION_SLOT * sizeof *unions); /* the union a loop owns, by its index */
+    uint32_t *partner = malloc(nl * 3 * sizeof *partner); /* partner, then edge i and j of owners */
     pool next = {.at = p->at};
     long joins = 0;
-    if (!e || !partner || !unions) {
+    if (!e || !partner) {
         joins = -1;
         goto done;
     }
@@ -671,6 +679,7 @@ static long merge_pass(pool *p)
         }
     }
     qsort(e, ne, sizeof *e, edge_order);
+    uint32_t scratch[RL_SCENE_MAX_POLY_VERTS + 2];
     for (size_t k = 0; k + 1 < ne;) {
         size_t end = k + 1;
         while (end < ne && e[end].lo == e[k].lo && e[end].hi == e[k].hi)
@@ -679,27 +688,25 @@ static long merge_pass(pool *p)
         /* exactly two loops on the edge, both free this pass, running it opposite ways */
         if (end - k == 2 && x->loop != y->loop && partner[x->loop] == UINT32_MAX &&
             partner[y->loop] == UINT32_MAX &&
-            p->ids[p->loops[x->loop].start + x->i] != p->ids[p->loops[y->loop].start + y->i]) {
-            uint32_t *out = unions + (size_t)x->loop * UNION_SLOT;
-            uint32_t n = join(p, &p->loops[x->loop], x->i, &p->loops[y->loop], y->i, out);
-            if (n > 0) {
-                out[UNION_SLOT - 1] = n;
-                partner[x->loop] = y->loop;
-                partner[y->loop] = UINT32_MAX - 1; /* absorbed */
-                joins++;
-            }
+            p->ids[p->loops[x->loop].start + x->i] != p->ids[p->loops[y->loop].start + y->i] &&
+            join(p, &p->loops[x->loop], x->i, &p->loops[y->loop], y->i, scratch) > 0) {
+            partner[x->loop] = y->loop;
+            partner[nl + x->loop] = x->i;
+            partner[2 * nl + x->loop] = y->i;
+            partner[y->loop] = ABSORBED;
+            joins++;
         }
         k = end;
     }
     for (uint32_t l = 0; l < p->nloops && joins >= 0; l++) {
         loop head = p->loops[l];
         const uint32_t *ids = p->ids + head.start;
-        if (partner[l] == UINT32_MAX - 1)
+        if (partner[l] == ABSORBED)
             continue;
         if (partner[l] != UINT32_MAX) {
             const loop *other = &p->loops[partner[l]];
-            ids = unions + (size_t)l * UNION_SLOT;
-            head.n = ids[UNION_SLOT - 1];
+            head.n = join(p, &head, partner[nl + l], other, partner[2 * nl + l], scratch);
+            ids = scratch;
             head.face = head.face < other->face ? head.face : other->face;
             head.joined += other->joined + 1;
         }
@@ -709,7 +716,6 @@ static long merge_pass(pool *p)
 done:
     free(e);
     free(partner);
-    free(unions);
     if (joins >= 0) {
         free(p->loops);
         free(p->ids);
