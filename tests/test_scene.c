@@ -1013,6 +1013,31 @@ static double lamp_side(const rl_scene *s, double z, double sign)
     return st == RL_OK ? e[0] : -1;
 }
 
+/* The view of a two-sided unit square lamp of radiance 3 (two coincident polygons, back to back) from above
+ * and from below: every pixel that sees it shows its radiance, whichever of the two the ray meets first. */
+static void two_sided_view(rl_scene *s)
+{
+    enum { N = 16 };
+    float img[N * N * 3];
+    for (int side = 0; side < 2; side++) {
+        double z = side ? -1 : 1;
+        rl_camera *c = &s->camera;
+        *c = (rl_camera){{0.5, 0.5, z}, {0.5, 0.5, 0}, {0, 1, 0}, 30, N, N};
+        s->has_camera = 1;
+        rl_run_options opt;
+        rl_run_options_default(&opt);
+        rl_solution *sol = NULL;
+        int ok = rl_relight(s, &opt, &sol) == RL_OK && rl_solution_render(sol, &opt, img) == RL_OK;
+        CHECK(ok, "two-sided view: %s", rl_errmsg());
+        size_t lit = 0;
+        for (size_t k = 0; ok && k < N * N * 3; k++)
+            lit += img[k] == 3.0f;
+        CHECK(lit == N * N * 3, "two-sided lamp seen from %s: %zu of %d channels show its radiance",
+              side ? "below" : "above", lit, N * N * 3);
+        rl_solution_destroy(sol);
+    }
+}
+
 /*
  * Per-mesh options: a unit square lamp facing up (counter-clockwise from
  * above) lights a point above it and not one below; "flip": true turns it
@@ -1042,6 +1067,8 @@ static void test_mesh_options(void)
         count[k] = s ? s->npolygons : 0;
         if (s)
             check_invariants(s, scene);
+        if (s && k == 2)
+            two_sided_view(s);
         rl_scene_destroy(s);
     }
     double lit = square_irradiance(3, 0.5, 0.5);

@@ -844,7 +844,8 @@ static rl_status add_pool(rl_build *b, mesh_job *job)
     while (joins > 0);
     if (joins < 0)
         return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
-    qsort(job->pool.loops, job->pool.nloops, sizeof *job->pool.loops, loop_order);
+    if (job->pool.nloops > 1) /* loops is NULL when nothing was pooled */
+        qsort(job->pool.loops, job->pool.nloops, sizeof *job->pool.loops, loop_order);
     rl_status st = RL_OK;
     for (size_t l = 0; l < job->pool.nloops && st == RL_OK; l++) {
         const loop *lp = &job->pool.loops[l];
