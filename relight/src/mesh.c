@@ -411,6 +411,15 @@ static rl_status split_face(rl_build *b, poly_check *c, uint32_t material, const
     return RL_OK;
 }
 
+/* @return the index of the first of the n vertices with a coordinate that is not finite, or n. */
+static size_t first_nonfinite(const double (*v)[3], size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(v[i][0]) || !isfinite(v[i][1]) || !isfinite(v[i][2]))
+            return i;
+    return n;
+}
+
 rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_t material,
                             const char *label, rl_poly_policy policy)
 {
@@ -418,9 +427,9 @@ rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_
         return policy == RL_POLY_STRICT
                    ? rl__build_fail(b, label, "needs at least 3 vertices, got %zu", n)
                    : RL_OK;
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(v[i][0]) || !isfinite(v[i][1]) || !isfinite(v[i][2]))
-            return rl__build_fail(b, label, "vertex %zu is not finite", i);
+    size_t bad = first_nonfinite(v, n);
+    if (bad < n)
+        return rl__build_fail(b, label, "vertex %zu is not finite", bad);
 
     poly_check c = {.p = v, .keep = b->keep};
     verdict outcome = check_polygon(&c, n, policy == RL_POLY_SPLIT);
@@ -817,9 +826,9 @@ static rl_status add_faces(rl_build *b, mesh_job *job)
         size_t k = f->material < mesh->nmaterials ? f->material : mesh->nmaterials;
         if (st == RL_OK && job->materials[k] == MATERIAL_UNSET)
             st = file_material(b, mesh, (uint32_t)k, job->elem, job->shown, job->opt->fallback, &job->materials[k]);
-        for (uint32_t i = 0; i < f->count && st == RL_OK; i++)
-            if (!isfinite(b->face[i][0]) || !isfinite(b->face[i][1]) || !isfinite(b->face[i][2]))
-                st = rl__build_fail(b, label, "vertex %u is not finite", i);
+        size_t bad = st == RL_OK ? first_nonfinite((const double (*)[3])b->face, f->count) : f->count;
+        if (bad < f->count) /* before the face is pooled, whose checks assume finite coordinates */
+            st = rl__build_fail(b, label, "vertex %zu is not finite", bad);
         if (st == RL_OK)
             st = take_face(b, job, face_no, job->materials[k], label);
         if (st != RL_OK)
