@@ -1111,25 +1111,51 @@ static void test_mesh_options(void)
     }
 }
 
-/* A glTF lamp whose KHR_materials_emissive_strength is negative is refused, naming the material. */
-static void test_mesh_bad_strength(void)
+/* Writes tmpdir/name: the text of tests/scenes/rooms/room.<ext> with its first `from` replaced by `to`.
+ * @return 1, or 0 with a failure reported when from is not there. */
+static int room_variant(const char *ext, const char *from, const char *to, const char *name)
 {
     char path[2048];
-    snprintf(path, sizeof path, "%s/rooms/room.gltf", corpus);
+    snprintf(path, sizeof path, "%s/rooms/room.%s", corpus, ext);
     FILE *f = fopen(path, "rb");
-    static char text[16384];
+    static char text[65536], out[65536 + 64];
     size_t n = f ? fread(text, 1, sizeof text - 1, f) : 0;
     if (f)
         fclose(f);
     text[n] = '\0';
-    char *at = strstr(text, "\"emissiveStrength\": 20");
-    CHECK(at != NULL, "room.gltf has no emissiveStrength 20");
-    if (!at)
+    char *at = strstr(text, from);
+    CHECK(at != NULL && strlen(to) <= 64, "room.%s has no '%s'", ext, from);
+    if (!at || strlen(to) > 64)
+        return 0;
+    snprintf(out, sizeof out, "%.*s%s%s", (int)(at - text), text, to, at + strlen(from));
+    write_text(name, out);
+    return 1;
+}
+
+/* An FBX room in centimetres (UnitScaleFactor 1) comes in a hundred times smaller than the same room in
+ * metres (100): its lamp 1.9 cm up, not 1.9 m. */
+static void test_mesh_fbx_units(void)
+{
+    if (!room_variant("fbx", "\"UnitScaleFactor\", \"double\", \"Number\", \"\", 100",
+                      "\"UnitScaleFactor\", \"double\", \"Number\", \"\", 1", "room_cm.fbx"))
         return;
-    memcpy(at + strlen("\"emissiveStrength\": "), "-2", 2);
-    write_text("negative.gltf", text);
+    write_text("room_cm.json", "{\"meshes\": [{\"file\": \"room_cm.fbx\"}]}");
+    rl_scene *s = load(tmpdir, "room_cm.json");
+    double top = -INFINITY;
+    for (size_t k = 0; s && k < s->nvertices; k++)
+        top = fmax(top, s->vertices[k][2]);
+    CHECK(s && fabs(top - 0.02) < 1e-9, "an FBX file in centimetres: its 2 m room is %g m high, 0.02 expected", top);
+    rl_scene_destroy(s);
+}
+
+/* A glTF lamp whose KHR_materials_emissive_strength is negative is refused, naming the material. */
+static void test_mesh_bad_strength(void)
+{
+    if (!room_variant("gltf", "\"emissiveStrength\": 20", "\"emissiveStrength\": -2", "negative.gltf"))
+        return;
     write_text("negative.json", "{\"meshes\": [{\"file\": \"negative.gltf\"}]}");
     rl_scene *s = NULL;
+    char path[2048];
     snprintf(path, sizeof path, "%s/negative.json", tmpdir);
     rl_status st = rl_scene_load(path, &s);
     CHECK(st == RL_ERR_INPUT && strstr(rl_errmsg(), "materials[1]: KHR_materials_emissive_strength") != NULL,
@@ -1167,5 +1193,6 @@ int main(int argc, char **argv)
     test_mesh_merge();
     test_mesh_options();
     test_mesh_bad_strength();
+    test_mesh_fbx_units();
     return check_report();
 }

@@ -22,6 +22,8 @@
  * material k is assimp's material k: its importer keeps their order and
  * appends its default material). assimp's 3DS reader turns the file's Z-up
  * frame to Y-up by its root node's transform; the vertices are turned back.
+ * An FBX file's lengths are scaled to metres by its UnitScaleFactor, which
+ * assimp reports but does not apply.
  *
  * Invariants: an imported soup satisfies ilf/mesh.h's invariants, or
  * nothing is returned and everything allocated on the way is freed; a
@@ -294,6 +296,24 @@ static int has_extension(const char *path, const char *ext)
     return dot && strcasecmp(dot, ext) == 0;
 }
 
+/* @return the number sc's metadata holds under key (an int32, float or double), or fallback. */
+static double metadata_number(const struct aiScene *sc, const char *key, double fallback)
+{
+    const struct aiMetadata *md = sc->mMetaData;
+    for (unsigned k = 0; md && k < md->mNumProperties; k++) {
+        const void *v = md->mValues[k].mData;
+        if (!v || strcmp(md->mKeys[k].data, key) != 0)
+            continue;
+        switch (md->mValues[k].mType) {
+        case AI_INT32: return *(const int32_t *)v;
+        case AI_FLOAT: return *(const float *)v;
+        case AI_DOUBLE: return *(const double *)v;
+        default: return fallback;
+        }
+    }
+    return fallback;
+}
+
 /* @return the up axis that sc's file declares (ilf/mesh.h): glTF's +Y, FBX's GlobalSettings, 3DS's +Z. */
 static ilf_mesh_up declared_up(const char *path, const struct aiScene *sc)
 {
@@ -301,19 +321,19 @@ static ilf_mesh_up declared_up(const char *path, const struct aiScene *sc)
         return ILF_MESH_UP_Y;
     if (has_extension(path, ".3ds"))
         return ILF_MESH_UP_Z;
-    int32_t axis = -1, sign = 0;
-    if (has_extension(path, ".fbx") && sc->mMetaData) {
-        const struct aiMetadata *md = sc->mMetaData;
-        for (unsigned k = 0; k < md->mNumProperties; k++) {
-            if (md->mValues[k].mType != AI_INT32 || !md->mValues[k].mData)
-                continue;
-            if (strcmp(md->mKeys[k].data, "UpAxis") == 0)
-                axis = *(const int32_t *)md->mValues[k].mData;
-            else if (strcmp(md->mKeys[k].data, "UpAxisSign") == 0)
-                sign = *(const int32_t *)md->mValues[k].mData;
-        }
-    }
+    if (!has_extension(path, ".fbx"))
+        return ILF_MESH_UP_UNKNOWN;
+    double axis = metadata_number(sc, "UpAxis", -1), sign = metadata_number(sc, "UpAxisSign", 0);
     return sign == 1 && axis == 1 ? ILF_MESH_UP_Y : sign == 1 && axis == 2 ? ILF_MESH_UP_Z : ILF_MESH_UP_UNKNOWN;
+}
+
+/* @return metres per unit of sc's file: an FBX file's GlobalSettings UnitScaleFactor (centimetres per unit,
+ * which assimp 5.2 reports but does not apply) over 100; 1 for other formats and for a factor that is not
+ * a positive finite number. */
+static double metres_per_unit(const char *path, const struct aiScene *sc)
+{
+    double cm = has_extension(path, ".fbx") ? metadata_number(sc, "UnitScaleFactor", 100) : 100;
+    return cm > 0 && isfinite(cm) ? cm / 100 : 1;
 }
 
 /* Copies what assimp read into a new soup. @return ILF_MESH_OK and *out, ILF_MESH_ERR_INPUT (an index out of
@@ -344,13 +364,14 @@ static ilf_mesh_status soup_new(const char *path, const struct aiScene *sc, cons
         copy_material(sc->mMaterials[k], k < gltf->count ? gltf->strength[k] : 1.0, &m->materials[k]);
     m->up = declared_up(path, sc);
     int unturn = has_extension(path, ".3ds"); /* assimp's (x, y, z) is the file's (x, -z, y) */
+    double unit = metres_per_unit(path, sc);
     size_t v0 = 0, nf = 0, ni = 0;
     for (unsigned mi = 0; mi < sc->mNumMeshes; mi++) {
         const struct aiMesh *a = sc->mMeshes[mi];
         for (unsigned k = 0; k < a->mNumVertices; k++) {
-            m->vertices[v0 + k][0] = a->mVertices[k].x;
-            m->vertices[v0 + k][1] = unturn ? -a->mVertices[k].z : a->mVertices[k].y;
-            m->vertices[v0 + k][2] = unturn ? a->mVertices[k].y : a->mVertices[k].z;
+            m->vertices[v0 + k][0] = unit * a->mVertices[k].x;
+            m->vertices[v0 + k][1] = unit * (unturn ? -a->mVertices[k].z : a->mVertices[k].y);
+            m->vertices[v0 + k][2] = unit * (unturn ? a->mVertices[k].y : a->mVertices[k].z);
         }
         uint32_t material = a->mMaterialIndex < sc->mNumMaterials ? a->mMaterialIndex : ILF_MESH_NO_MATERIAL;
         for (unsigned fi = 0; fi < a->mNumFaces; fi++, nf++) {

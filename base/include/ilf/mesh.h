@@ -28,6 +28,9 @@
  * product); 3DS's emissive colour as assimp reports it. PLY and STL carry no
  * material.
  *
+ * Lengths: vertices are in the file's units, taken as metres, except an FBX
+ * file's, scaled to metres by its UnitScaleFactor (centimetres per unit).
+ *
  * Axes: vertices are as the file stores them. assimp turns a 3DS file's
  * Z-up frame into Y-up; that turn is undone here. up records which axis the
  * file itself declares up (glTF: always +Y; FBX: its GlobalSettings UpAxis
@@ -72,7 +75,7 @@ typedef struct ilf_mesh_face {
 
 typedef struct ilf_mesh {
     size_t nvertices, nfaces, nindices, nmaterials;
-    double (*vertices)[3];        /* [nvertices], all meshes' vertices placed in the file's frame */
+    double (*vertices)[3];        /* [nvertices], all meshes' vertices placed in the file's frame, metres */
     ilf_mesh_face *faces;         /* [nfaces], over all meshes in order */
     uint32_t *indices;            /* [nindices], each < nvertices */
     ilf_mesh_material *materials; /* [nmaterials] */

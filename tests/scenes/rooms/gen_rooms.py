@@ -18,9 +18,9 @@ exporter does:
                         readers): the scene's entries give them
   room.fbx, room.3ds    written by assimp's own exporters (libassimp through
                         ctypes; no other dependency) when the library is
-                        found: 3DS Z-up in triangles, FBX (ASCII) Y-up with
-                        EmissiveColor 1 times EmissiveFactor 20, as Blender
-                        writes them (write_by_assimp() says how)
+                        found: 3DS Z-up in triangles, FBX (ASCII) Y-up in
+                        metres with EmissiveColor 1 times EmissiveFactor 20,
+                        as Blender writes them (write_by_assimp() says how)
 
 and room_<format>.json is the scene that reads each. Run from anywhere:
 python3 gen_rooms.py writes next to itself.
@@ -149,8 +149,9 @@ def write_by_assimp():
 
     room.3ds is room.obj converted (3DS is Z-up, as the scene). room.fbx is
     written the way Blender writes FBX: the geometry turned Y-up (its
-    GlobalSettings say UpAxis 1, +Y), and the lamp's colour 1 with
-    EmissiveFactor 20. assimp's writer puts the emission in the legacy
+    GlobalSettings say UpAxis 1, +Y) in metres (UnitScaleFactor 100: FBX
+    counts centimetres per unit; assimp writes 1), and the lamp's colour 1
+    with EmissiveFactor 20. assimp's writer puts the emission in the legacy
     Emissive property alone (its reader then reports the template's black
     EmissiveColor), so the lamp's EmissiveColor and EmissiveFactor lines are
     added to its ASCII output."""
@@ -190,6 +191,10 @@ def write_by_assimp():
         assert legacy in body
         body = body.replace(legacy, 'P: "EmissiveColor", "Color", "", "A", 1, 1, 1\n\t\t\t'
                             'P: "EmissiveFactor", "Number", "", "A", %g\n\t\t\t%s' % (RADIANCE, legacy), 1)
+        for key in ("UnitScaleFactor", "OriginalUnitScaleFactor"):  # centimetres per unit: metres
+            unit = 'P: "%s", "double", "Number", "", ' % key
+            assert unit + "1\n" in head
+            head = head.replace(unit + "1\n", unit + "100\n", 1)
         stamp = re.compile(r"(CreationTimeStamp:  \{.*?\n\t\})", re.S)  # the writer's clock: fixed, so
         fixed = "Year: 2000\n\t\tMonth: 1\n\t\tDay: 1\n\t\tHour: 0\n\t\tMinute: 0\n\t\tSecond: 0"  # reruns match
         head = stamp.sub(lambda m: re.sub(r"Year: \d+.*Second: \d+", fixed, m.group(1), flags=re.S), head)
