@@ -48,6 +48,7 @@
 #include <string.h>
 
 #include "mesh.h"
+#include "ilf/limits.h"
 #include "ilf/mesh.h"
 #include "ilf/vec.h"
 
@@ -503,7 +504,8 @@ static void turn_up(ilf_mesh *mesh, rl_mesh_up up)
  * pass, so each pass reads loops that do not change under it; the union
  * keeps the first loop's starting vertex, so a quad written as two
  * triangles (0 1 2) (0 2 3) comes back as the quad 0 1 2 3. Non-convex
- * unions are not formed: a wall with a hole stays in convex pieces.
+ * unions are not formed: a wall with a hole stays in convex pieces. At most
+ * ILF_MESH_MERGE_MAX_PASSES passes are made (ilf/limits.h says why).
  */
 
 /* A pooled loop: ids[start .. start + n) of its pool. */
@@ -847,10 +849,9 @@ static int loop_order(const void *pa, const void *pb)
 /* Merges the pooled faces and adds what remains, in the order of their first faces. @return as rl__build_mesh(). */
 static rl_status add_pool(rl_build *b, mesh_job *job)
 {
-    long joins;
-    do
+    long joins = 1;
+    for (int pass = 0; pass < ILF_MESH_MERGE_MAX_PASSES && joins > 0; pass++)
         joins = merge_pass(&job->pool);
-    while (joins > 0);
     if (joins < 0)
         return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
     if (job->pool.nloops > 1) /* loops is NULL when nothing was pooled */
