@@ -39,8 +39,9 @@
  * names the input vertex at fault. Mesh faces (RL_POLY_SPLIT) failing steps
  * 1-3 are dropped, as they carry no area; failing step 4 or 6 they are
  * projected onto their best-fit plane and ear clipped into triangles, each
- * of which passes the same steps before it is kept. Whatever is appended
- * therefore satisfies the polygon invariants of scene_internal.h.
+ * of which passes the same steps before it is pooled for merging (merged
+ * polygons pass them again when appended). Whatever is appended therefore
+ * satisfies the polygon invariants of scene_internal.h.
  */
 #include <math.h>
 #include <stdio.h>
@@ -386,8 +387,12 @@ static rl_status append_polygon(rl_build *b, const poly_check *c, uint32_t mater
     return st;
 }
 
-/* Ear clips the cleaned face c and appends its non-degenerate triangles. @return as rl__build_polygon(). */
-static rl_status split_face(rl_build *b, poly_check *c, uint32_t material, const char *label)
+/* Takes one triangle of a split face: part (checked, its keep indexing at, which holds indices into
+ * the face's input vertices), numbered t. @return RL_OK, or a status that stops the split. */
+typedef rl_status (*part_sink)(rl_build *b, void *ctx, const poly_check *part, const size_t at[3], size_t t);
+
+/* Ear clips the cleaned face c and hands its non-degenerate triangles to sink. @return as rl__build_polygon(). */
+static rl_status clip_face(rl_build *b, poly_check *c, const char *label, part_sink sink, void *ctx)
 {
     project(c, b->flat);
     size_t count = ear_clip((const double (*)[2])b->flat, c->n, b->link, b->tris);
@@ -403,13 +408,27 @@ static rl_status split_face(rl_build *b, poly_check *c, uint32_t material, const
         poly_check part = {.p = (const double (*)[3])corners, .keep = b->keep};
         if (check_polygon(&part, 3, 1) != V_OK)
             continue; /* a sliver: no area to carry light */
-        char name[sizeof ((rl_polygon *)0)->label];
-        rl__format(name, sizeof name, "%s part %zu", label, t);
-        rl_status st = append_polygon(b, &part, material, name);
+        rl_status st = sink(b, ctx, &part, b->tris[t], t);
         if (st != RL_OK)
             return st;
     }
     return RL_OK;
+}
+
+/* What append_part() appends with. */
+typedef struct append_ctx {
+    uint32_t material;
+    const char *label;
+} append_ctx;
+
+/* A part_sink that appends the triangle as a polygon labelled "<label> part <t>". */
+static rl_status append_part(rl_build *b, void *ctx, const poly_check *part, const size_t at[3], size_t t)
+{
+    (void)at;
+    const append_ctx *a = ctx;
+    char name[sizeof ((rl_polygon *)0)->label];
+    rl__format(name, sizeof name, "%s part %zu", a->label, t);
+    return append_polygon(b, part, a->material, name);
 }
 
 /* @return the index of the first of the n vertices with a coordinate that is not finite, or n. */
@@ -440,7 +459,8 @@ rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_
         return rl__build_fail(b, label, "%s", c.why);
     if (outcome == V_DEGENERATE)
         return RL_OK; /* a mesh face without area carries no light */
-    return split_face(b, &c, material, label);
+    append_ctx a = {material, label};
+    return clip_face(b, &c, label, append_part, &a);
 }
 
 /* ----------------------------------------------------------- mesh files */
@@ -491,7 +511,8 @@ static void turn_up(ilf_mesh *mesh, rl_mesh_up up)
 
 /*
  * Merging. Faces that are planar and convex as they stand (the usual case:
- * triangles, and quads) are pooled as loops of welded vertex ids: vertices
+ * triangles, and quads), and the triangles of faces that had to be split,
+ * are pooled as loops of welded vertex ids: vertices
  * at bit-identical positions share an id, so that triangles of one quad,
  * which exporters write with the same coordinates whether or not they share
  * an index, find their common edge. Then, in passes until nothing changes,
@@ -515,8 +536,12 @@ typedef struct loop {
     uint32_t material;
     uint32_t face;   /* the smallest face number joined into it, for its label */
     uint32_t joined; /* how many faces besides that one */
+    uint32_t part;   /* which triangle of a split face it is, or NO_PART */
     v3 normal;
 } loop;
+
+/* loop.part of a whole face. */
+#define NO_PART UINT32_MAX
 
 /* The pooled loops of one mesh file. */
 typedef struct pool {
@@ -775,13 +800,17 @@ static rl_status emit_face(rl_build *b, size_t n, uint32_t material, const char 
     return rl__build_polygon(b, (const double (*)[3])b->face, n, material, back, RL_POLY_SPLIT);
 }
 
-/* Writes the label of a mesh polygon: elem, the file's name (its end when long), the face and joins. */
-static void face_label(char *out, size_t cap, const char *elem, const char *shown, size_t face, uint32_t joined)
+/* Writes the label of a mesh polygon: elem, the file's name (its end when long), the face, and the part
+ * of a split face left alone or the number of faces merged into it. */
+static void face_label(char *out, size_t cap, const char *elem, const char *shown, size_t face, uint32_t part,
+                       uint32_t joined)
 {
     size_t len = strlen(shown); /* a long name keeps its end, where the file's own name is */
     char more[32] = "";
     if (joined > 0)
         rl__format(more, sizeof more, " (+%u merged)", joined);
+    else if (part != NO_PART)
+        rl__format(more, sizeof more, " part %u", part);
     rl__format(out, cap, "%s (%s%s) face %zu%s", elem, len > 40 ? "..." : "", len > 40 ? shown + len - 37 : shown,
                face, more);
 }
@@ -796,22 +825,57 @@ typedef struct mesh_job {
     pool pool;
 } mesh_job;
 
-/* Pools face f (in b->face, checked finite) when it is planar and convex; else adds it at once (split or
- * dropped). @return as rl__build_polygon(), or RL_ERR_NOMEM. */
+/* Pools n ids of loop head (its material, face, part and normal set). @return RL_OK or RL_ERR_NOMEM. */
+static rl_status pool_loop(rl_build *b, mesh_job *job, const uint32_t *ids, size_t n, loop head)
+{
+    return pool_add(&job->pool, ids, (uint32_t)n, head) ? RL_OK : rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
+}
+
+/* What pool_part() pools with. */
+typedef struct pool_ctx {
+    mesh_job *job;
+    const ilf_mesh_face *face;
+    loop head;
+} pool_ctx;
+
+/* A part_sink that pools the triangle of a split face. */
+static rl_status pool_part(rl_build *b, void *ctx, const poly_check *part, const size_t at[3], size_t t)
+{
+    pool_ctx *pc = ctx;
+    uint32_t ids[3];
+    for (size_t k = 0; k < part->n; k++)
+        ids[k] = pc->job->id[pc->job->mesh->indices[pc->face->first + at[part->keep[k]]]];
+    loop head = pc->head;
+    head.part = (uint32_t)t;
+    head.normal = part->normal;
+    return pool_loop(b, pc->job, ids, part->n, head);
+}
+
+/*
+ * Pools face f (in b->face, checked finite) when it is planar and convex,
+ * or its triangles when it has to be split (so that they can merge back
+ * into convex pieces); drops it when it has no area; adds a planar convex
+ * face too large to join anything at once. @return as rl__build_polygon(),
+ * or RL_ERR_NOMEM.
+ */
 static rl_status take_face(rl_build *b, mesh_job *job, size_t face_no, uint32_t material, const char *label)
 {
     const ilf_mesh_face *f = &job->mesh->faces[face_no];
     poly_check c = {.p = (const double (*)[3])b->face, .keep = b->keep};
-    if (check_polygon(&c, f->count, 1) != V_OK)
+    verdict v = check_polygon(&c, f->count, 1);
+    loop head = {.material = material, .face = (uint32_t)face_no, .part = NO_PART, .normal = c.normal};
+    if (v == V_DEGENERATE)
+        return RL_OK; /* a face without area carries no light */
+    if (v != V_OK) {
+        pool_ctx pc = {job, f, head};
+        return clip_face(b, &c, label, pool_part, &pc);
+    }
+    if (c.n > RL_SCENE_MAX_POLY_VERTS)
         return emit_face(b, f->count, material, label, job->opt);
     uint32_t ids[RL_SCENE_MAX_POLY_VERTS];
-    if (c.n > RL_SCENE_MAX_POLY_VERTS) /* too large to join anything: as a polygon of its own */
-        return emit_face(b, f->count, material, label, job->opt);
     for (size_t k = 0; k < c.n; k++)
         ids[k] = job->id[job->mesh->indices[f->first + c.keep[k]]];
-    loop head = {.material = material, .face = (uint32_t)face_no, .normal = c.normal};
-    return pool_add(&job->pool, ids, (uint32_t)c.n, head) ? RL_OK
-                                                          : rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
+    return pool_loop(b, job, ids, c.n, head);
 }
 
 /* Reads every face of the imported mesh: material, vertices, then pooled or added. @return as rl__build_mesh(). */
@@ -823,7 +887,7 @@ static rl_status add_faces(rl_build *b, mesh_job *job)
         if (f->count < 3)
             continue; /* points and lines carry no light */
         char label[sizeof ((rl_polygon *)0)->label];
-        face_label(label, sizeof label, job->elem, job->shown, face_no, 0);
+        face_label(label, sizeof label, job->elem, job->shown, face_no, NO_PART, 0);
         rl_status st = gather_face(b, mesh, f, label);
         size_t k = f->material < mesh->nmaterials ? f->material : mesh->nmaterials;
         if (st == RL_OK && job->materials[k] == MATERIAL_UNSET)
@@ -862,7 +926,7 @@ static rl_status add_pool(rl_build *b, mesh_job *job)
         for (uint32_t k = 0; k < lp->n; k++)
             memcpy(b->face[k], job->pool.at[job->pool.ids[lp->start + k]], sizeof b->face[k]);
         char label[sizeof ((rl_polygon *)0)->label];
-        face_label(label, sizeof label, job->elem, job->shown, lp->face, lp->joined);
+        face_label(label, sizeof label, job->elem, job->shown, lp->face, lp->part, lp->joined);
         st = emit_face(b, lp->n, lp->material, label, job->opt);
     }
     return st;
