@@ -8,9 +8,11 @@
  * and materials, and every loaded polygon is checked here, independently of
  * the loader, against the invariants of scene_internal.h. Bad scenes are
  * one table: file, expected status, expected substring of the message; the
- * message must also name the scene file.
+ * message must also name the scene file. tests/scenes/rooms holds one room
+ * in every mesh format (gen_rooms.py), which must give the same polygons,
+ * lamp, irradiance and view.
  */
-#define _POSIX_C_SOURCE 200809L
+#define _XOPEN_SOURCE 700 /* POSIX 2008 and realpath() */
 
 #include <math.h>
 #include <stdio.h>
@@ -179,10 +181,13 @@ static void test_meshes(void)
     s = load(corpus, "good_mesh_lshape.json");
     if (s) {
         double area = 0;
-        CHECK(s->npolygons == 4, "L-shaped face ear clipped into %zu polygons", s->npolygons);
+        /* ear clipping gives 4 triangles, merged back into the fewest convex pieces an L allows */
+        CHECK(s->npolygons == 2, "L-shaped face: %zu polygons, 2 convex pieces expected", s->npolygons);
         for (size_t i = 0; i < s->npolygons; i++) {
             area += s->polygons[i].area;
-            CHECK(s->polygons[i].count == 3 && near3(s->polygons[i].normal, 0, 0, 1, 1e-15), "part %zu", i);
+            CHECK(s->polygons[i].count == 4 && near3(s->polygons[i].normal, 0, 0, 1, 1e-15) &&
+                      strstr(s->polygons[i].label, "face 0 (+1 merged)"),
+                  "piece %zu: %u vertices, '%s'", i, s->polygons[i].count, s->polygons[i].label);
         }
         CHECK(fabs(area - 3) < 1e-12, "parts cover the L: area %g", area);
         check_invariants(s, "good_mesh_lshape.json");
@@ -272,6 +277,9 @@ static const bad_case bad_cases[] = {
     {"bad_mesh_garbage.json", RL_ERR_INPUT, "meshes[0]: cannot read '"},
     {"bad_mesh_material.json", RL_ERR_INPUT, "meshes[0].material: unknown material 'nope'"},
     {"bad_mesh_directory.json", RL_ERR_INPUT, "is not a regular file"},
+    {"bad_mesh_up.json", RL_ERR_INPUT, "meshes[0].up: expected \"z\" or \"y\", got 'x'"},
+    {"bad_mesh_flip.json", RL_ERR_INPUT, "meshes[0].flip: expected true, false, 0 or 1, got a string"},
+    {"bad_mesh_two_sided.json", RL_ERR_INPUT, "meshes[0].two_sided: expected true, false, 0 or 1, got a number"},
     /* light fields */
     {"bad_missing_lightfield.json", RL_ERR_INPUT, "lightfields[0]: "},
     /* a generated file that is missing: the message says how to make it */
@@ -854,6 +862,314 @@ static void test_cell_budget(void)
     rl_scene_destroy(s);
 }
 
+/* ------------------------------------------------------- mesh formats */
+
+/* The room of tests/scenes/rooms in every format gen_rooms.py writes. */
+static const char *const room_formats[] = {"obj", "gltf", "glb", "ply", "stl", "fbx", "3ds"};
+#define ROOM_FORMATS (sizeof room_formats / sizeof *room_formats)
+
+/* Points of the room (x y z, normal): under the lamp's centre facing up, low on a wall, on another wall. */
+static const double room_points[] = {1, 1, 0.5, 0, 0, 1, 0.3, 0.4, 1, 1, 0, 0, 1.5, 1.8, 1.2, 0, -1, 0};
+#define ROOM_POINTS 3
+
+/* Irradiance under the centre of a square of radiance L, half side a, at height h (Lambert's formula). */
+static double square_irradiance(double L, double a, double h)
+{
+    double x = a / h, r = sqrt(1 + x * x);
+    return 4 * RL_PI * L * (2 * x / r * atan(x / r)) / (2 * RL_PI);
+}
+
+/* Loads the room in format fmt, checks its polygons and lamp, and writes its irradiance at room_points
+ * (one bounce) to e and its view to img (48 x 36 rgb). @return 1, or 0 on a failure reported. */
+static int room_measure(const char *fmt, double e[3 * ROOM_POINTS], float *img)
+{
+    char dir[2048], name[64];
+    snprintf(dir, sizeof dir, "%s/rooms", corpus);
+    snprintf(name, sizeof name, "room_%s.json", fmt);
+    rl_scene *s = load(dir, name);
+    if (!s)
+        return 0;
+    /* six walls and the lamp, whatever the format made of them (glTF, STL, 3DS: triangles) */
+    CHECK(s->npolygons == 7, "%s: %zu polygons, 7 expected (the triangles of each wall merged)", fmt, s->npolygons);
+    double lamp = -1;
+    for (size_t k = 0; k < s->nmaterials; k++)
+        if (s->materials[k].emission[0] > 0)
+            lamp = s->materials[k].emission[0];
+    CHECK(lamp == 20, "%s: the lamp's radiance is %g W sr^-1 m^-2, 20 expected", fmt, lamp);
+    for (size_t i = 0; i < s->npolygons; i++) {
+        const rl_polygon *p = &s->polygons[i];
+        CHECK(p->count == 4 && fabs(p->area - (s->materials[p->material].emission[0] > 0 ? 0.64 : 4)) < 1e-6,
+              "%s: polygon %zu (%s) has %u vertices and area %g", fmt, i, p->label, p->count, p->area);
+    }
+    check_invariants(s, name);
+    rl_run_options opt;
+    rl_run_options_default(&opt);
+    rl_solution *sol = NULL;
+    int ok = rl_irradiance(s, &opt, room_points, ROOM_POINTS, e, NULL) == RL_OK &&
+             rl_relight(s, &opt, &sol) == RL_OK && rl_solution_render(sol, &opt, img) == RL_OK;
+    CHECK(ok, "%s: %s", fmt, rl_errmsg());
+    /* direct light alone under the lamp's centre: Lambert's formula for a 0.8 m square 1.4 m above */
+    rl_sampling direct = *rl_scene_sampling(s);
+    direct.bounces = 0;
+    double d[3] = {0, 0, 0}, exact = square_irradiance(20, 0.4, 1.4);
+    ok = ok && rl_scene_set_sampling(s, &direct) == RL_OK && rl_irradiance(s, &opt, room_points, 1, d, NULL) == RL_OK;
+    CHECK(ok && fabs(d[0] / exact - 1) < 1e-6, "%s: direct light %.7g W m^-2 under the lamp, %.7g expected", fmt,
+          d[0], exact);
+    rl_solution_destroy(sol);
+    rl_scene_destroy(s);
+    return ok;
+}
+
+/*
+ * The same room from every format gives the same light: the lamp's
+ * radiance (OBJ's Ke 20, glTF's emissiveFactor 1 times
+ * KHR_materials_emissive_strength 20, FBX's EmissiveColor 1 times
+ * EmissiveFactor 20, 3DS, the PLY and STL entries' material), the axes
+ * (glTF and FBX are Y-up) and the walls (glTF, STL and 3DS write each as
+ * two triangles, merged back). In every format the direct light under the
+ * lamp is Lambert's closed form to 1e-6; irradiance with one bounce agrees
+ * with OBJ's within 0.1%, and so does the view, pixel by pixel: a
+ * triangulated wall left in triangles (the diagonal seam of the smooth
+ * view) differs by tens of per cent.
+ */
+static void test_mesh_formats(void)
+{
+    enum { W = 48, H = 36 };
+    static float img[ROOM_FORMATS][W * H * 3];
+    double e[ROOM_FORMATS][3 * ROOM_POINTS];
+    int ok[ROOM_FORMATS];
+    for (size_t f = 0; f < ROOM_FORMATS; f++)
+        ok[f] = room_measure(room_formats[f], e[f], img[f]);
+    if (!ok[0])
+        return;
+    /* one bounce adds to the direct light, never removes */
+    double direct = square_irradiance(20, 0.4, 1.4);
+    CHECK(e[0][0] > direct && e[0][0] < 1.3 * direct, "OBJ: %g W m^-2 under the lamp, direct alone %g", e[0][0],
+          direct);
+    float peak = 0;
+    for (size_t k = 0; k < W * H * 3; k++)
+        peak = fmaxf(peak, img[0][k]);
+    CHECK(peak > 0, "the OBJ room's view is black");
+    for (size_t f = 1; f < ROOM_FORMATS; f++) {
+        if (!ok[f])
+            continue;
+        double worst = 0;
+        for (size_t k = 0; k < 3 * ROOM_POINTS; k++)
+            worst = fmax(worst, fabs(e[f][k] / e[0][k] - 1));
+        CHECK(worst <= 1e-3, "%s: irradiance differs from OBJ's by %.3g%%", room_formats[f], 100 * worst);
+        double diff = 0; /* relative, pixel by pixel: the walls are 40 times darker than the lamp */
+        for (size_t k = 0; k < W * H * 3; k++)
+            diff = fmax(diff, fabs(img[f][k] - img[0][k]) / fmax(img[0][k], 1e-6 * peak));
+        CHECK(diff <= 1e-3, "%s: a pixel of the view differs from OBJ's by %.3g%%", room_formats[f], 100 * diff);
+    }
+}
+
+/* Writes tmpdir/name from an OBJ body and loads it as the only mesh, material "m". @return the scene or NULL. */
+static rl_scene *load_obj(const char *name, const char *obj, const char *entry_extra)
+{
+    char json[1024], scene[128];
+    write_text(name, obj);
+    snprintf(json, sizeof json, "{\"materials\": {\"m\": {}, \"lamp\": {\"emission\": [2, 2, 2]}}, "
+             "\"meshes\": [{\"file\": \"%s\", \"material\": \"m\"%s}]}", name, entry_extra);
+    snprintf(scene, sizeof scene, "%s.json", name);
+    write_text(scene, json);
+    return load(tmpdir, scene);
+}
+
+/*
+ * Merging: a hexagon written as a fan of four triangles comes back as the
+ * hexagon; a coplanar neighbour of another material, one bent out of the
+ * plane, two coplanar triangles that only touch at a corner, and an L of
+ * two quads (whose union is not convex) stay apart.
+ */
+static void test_mesh_merge(void)
+{
+    rl_scene *s = load_obj("fan.obj",
+                           "v 0 0 0\nv 2 0 0\nv 3 1 0\nv 2 2 0\nv 0 2 0\nv -1 1 0\n"
+                           "f 1 2 3\nf 1 3 4\nf 1 4 5\nf 1 5 6\n"
+                           "v 3 1 0\nv 2 0 0\nv 4 0 1\nf 7 8 9\n" /* shares the edge 2-3, bent out of plane */
+                           "v 10 0 0\nv 11 0 0\nv 11 1 0\nv 12 1 0\nv 12 2 0\n"
+                           "f 10 11 12\nf 12 13 14\n" /* meet at a corner */
+                           "v 20 0 0\nv 21 0 0\nv 21 1 0\nv 20 1 0\nv 22 -1 0\n"
+                           "f 15 16 17 18\nf 15 19 16\n", /* share an edge; their union is not convex */
+                           "");
+    if (!s)
+        return;
+    size_t hexagon = 0, triangles = 0, quads = 0;
+    for (size_t i = 0; i < s->npolygons; i++) {
+        hexagon += s->polygons[i].count == 6 && fabs(s->polygons[i].area - 6) < 1e-12 &&
+                   strstr(s->polygons[i].label, "face 0 (+3 merged)") != NULL;
+        triangles += s->polygons[i].count == 3;
+        quads += s->polygons[i].count == 4;
+    }
+    CHECK(hexagon == 1, "the fan of four triangles is one hexagon labelled 'face 0 (+3 merged)'");
+    CHECK(s->npolygons == 6 && triangles == 4 && quads == 1, "%zu polygons: %zu triangles, %zu quads",
+          s->npolygons, triangles, quads);
+    check_invariants(s, "fan.obj");
+    rl_scene_destroy(s);
+    /* the two triangles of a quad, one lit and one not: not merged */
+    write_text("twomat.mtl", "newmtl A\nKd 0.5 0.5 0.5\nnewmtl B\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+    s = load_obj("twomat.obj", "mtllib twomat.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                 "usemtl A\nf 1 2 3\nusemtl B\nf 1 3 4\n", "");
+    if (s) {
+        CHECK(s->npolygons == 2, "triangles of different materials merged: %zu polygons", s->npolygons);
+        rl_scene_destroy(s);
+    }
+}
+
+/* Irradiance at (0.5, 0.5, z) facing the way sign says. @return its red channel, or -1 on failure. */
+static double lamp_side(const rl_scene *s, double z, double sign)
+{
+    double p[6] = {0.5, 0.5, z, 0, 0, sign}, e[3];
+    rl_run_options opt;
+    rl_run_options_default(&opt);
+    rl_status st = rl_irradiance(s, &opt, p, 1, e, NULL);
+    CHECK(st == RL_OK, "irradiance: %s", rl_errmsg());
+    return st == RL_OK ? e[0] : -1;
+}
+
+/* The view of a two-sided unit square lamp of radiance 3 (two coincident polygons, back to back) from above
+ * and from below: every pixel that sees it shows its radiance, whichever of the two the ray meets first. */
+static void two_sided_view(rl_scene *s)
+{
+    enum { N = 16 };
+    float img[N * N * 3];
+    for (int side = 0; side < 2; side++) {
+        double z = side ? -1 : 1;
+        rl_camera *c = &s->camera;
+        *c = (rl_camera){{0.5, 0.5, z}, {0.5, 0.5, 0}, {0, 1, 0}, 30, N, N};
+        s->has_camera = 1;
+        rl_run_options opt;
+        rl_run_options_default(&opt);
+        rl_solution *sol = NULL;
+        int ok = rl_relight(s, &opt, &sol) == RL_OK && rl_solution_render(sol, &opt, img) == RL_OK;
+        CHECK(ok, "two-sided view: %s", rl_errmsg());
+        size_t lit = 0;
+        for (size_t k = 0; ok && k < N * N * 3; k++)
+            lit += img[k] == 3.0f;
+        CHECK(lit == N * N * 3, "two-sided lamp seen from %s: %zu of %d channels show its radiance",
+              side ? "below" : "above", lit, N * N * 3);
+        rl_solution_destroy(sol);
+    }
+}
+
+/*
+ * Per-mesh options: a unit square lamp facing up (counter-clockwise from
+ * above) lights a point above it and not one below; "flip": true turns it
+ * over; "two_sided": true lights both, each as much as the one side alone;
+ * "up": "y" turns the file's +y to the scene's +z.
+ */
+static void test_mesh_options(void)
+{
+    static const char *const square = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    const char *extra[] = {"", ", \"flip\": true", ", \"two_sided\": true", ", \"flip\": 1, \"two_sided\": 1"};
+    double above[4], below[4];
+    size_t count[4] = {0};
+    for (int k = 0; k < 4; k++) {
+        char name[32], entry[96];
+        snprintf(name, sizeof name, "lamp%d.obj", k);
+        snprintf(entry, sizeof entry, "%s", extra[k]);
+        char json[512], scene[64];
+        write_text(name, square);
+        snprintf(json, sizeof json, "{\"materials\": {\"lamp\": {\"albedo\": [0, 0, 0], \"emission\": [3, 3, 3]}}, "
+                 "\"meshes\": [{\"file\": \"%s\", \"material\": \"lamp\"%s}], \"sampling\": {\"bounces\": 0}}",
+                 name, entry);
+        snprintf(scene, sizeof scene, "%s.json", name);
+        write_text(scene, json);
+        rl_scene *s = load(tmpdir, scene);
+        above[k] = s ? lamp_side(s, 0.5, -1) : -1;
+        below[k] = s ? lamp_side(s, -0.5, 1) : -1;
+        count[k] = s ? s->npolygons : 0;
+        if (s)
+            check_invariants(s, scene);
+        if (s && k == 2)
+            two_sided_view(s);
+        rl_scene_destroy(s);
+    }
+    double lit = square_irradiance(3, 0.5, 0.5);
+    CHECK(fabs(above[0] / lit - 1) < 1e-3 && below[0] == 0, "one-sided: %g above (%g expected), %g below", above[0],
+          lit, below[0]);
+    CHECK(above[1] == 0 && fabs(below[1] / lit - 1) < 1e-3, "flip: %g above, %g below", above[1], below[1]);
+    CHECK(fabs(above[2] / lit - 1) < 1e-3 && fabs(below[2] / lit - 1) < 1e-3 && count[2] == 2,
+          "two_sided: %g above, %g below, %zu polygons", above[2], below[2], count[2]);
+    CHECK(fabs(above[3] / lit - 1) < 1e-3 && fabs(below[3] / lit - 1) < 1e-3 && count[3] == 2,
+          "flip and two_sided: %g above, %g below", above[3], below[3]);
+
+    /* "up": the glTF room as stored (+y up) puts its lamp at y = 1.9; the default turns it to z = 1.9 */
+    char dir[2048];
+    snprintf(dir, sizeof dir, "%s/rooms", corpus);
+    char json[2300], *abs = realpath(dir, NULL); /* the scene is in tmpdir */
+    snprintf(json, sizeof json, "{\"meshes\": [{\"file\": \"%s/room.gltf\", \"up\": \"z\"}]}", abs ? abs : dir);
+    free(abs);
+    write_text("room_asis.json", json);
+    for (int asis = 0; asis < 2; asis++) {
+        rl_scene *s = asis ? load(tmpdir, "room_asis.json") : load(dir, "room_gltf.json");
+        double lamp_y = NAN, lamp_z = NAN;
+        for (size_t i = 0; s && i < s->npolygons; i++)
+            if (s->materials[s->polygons[i].material].emission[0] > 0) {
+                lamp_y = s->vertices[s->polygons[i].first][1];
+                lamp_z = s->vertices[s->polygons[i].first][2];
+            }
+        if (asis)
+            CHECK(fabs(lamp_y - 1.9) < 1e-6, "\"up\": \"z\" keeps glTF's +y up: lamp at y = %g", lamp_y);
+        else
+            CHECK(fabs(lamp_z - 1.9) < 1e-6, "glTF's +y turned up by default: lamp at z = %g", lamp_z);
+        rl_scene_destroy(s);
+    }
+}
+
+/* Writes tmpdir/name: the text of tests/scenes/rooms/room.<ext> with its first `from` replaced by `to`.
+ * @return 1, or 0 with a failure reported when from is not there. */
+static int room_variant(const char *ext, const char *from, const char *to, const char *name)
+{
+    char path[2048];
+    snprintf(path, sizeof path, "%s/rooms/room.%s", corpus, ext);
+    FILE *f = fopen(path, "rb");
+    static char text[65536], out[65536 + 64];
+    size_t n = f ? fread(text, 1, sizeof text - 1, f) : 0;
+    if (f)
+        fclose(f);
+    text[n] = '\0';
+    char *at = strstr(text, from);
+    CHECK(at != NULL && strlen(to) <= 64, "room.%s has no '%s'", ext, from);
+    if (!at || strlen(to) > 64)
+        return 0;
+    snprintf(out, sizeof out, "%.*s%s%s", (int)(at - text), text, to, at + strlen(from));
+    write_text(name, out);
+    return 1;
+}
+
+/* An FBX room in centimetres (UnitScaleFactor 1) comes in a hundred times smaller than the same room in
+ * metres (100): its lamp 1.9 cm up, not 1.9 m. */
+static void test_mesh_fbx_units(void)
+{
+    if (!room_variant("fbx", "\"UnitScaleFactor\", \"double\", \"Number\", \"\", 100",
+                      "\"UnitScaleFactor\", \"double\", \"Number\", \"\", 1", "room_cm.fbx"))
+        return;
+    write_text("room_cm.json", "{\"meshes\": [{\"file\": \"room_cm.fbx\"}]}");
+    rl_scene *s = load(tmpdir, "room_cm.json");
+    double top = -INFINITY;
+    for (size_t k = 0; s && k < s->nvertices; k++)
+        top = fmax(top, s->vertices[k][2]);
+    CHECK(s && fabs(top - 0.02) < 1e-9, "an FBX file in centimetres: its 2 m room is %g m high, 0.02 expected", top);
+    rl_scene_destroy(s);
+}
+
+/* A glTF lamp whose KHR_materials_emissive_strength is negative is refused, naming the material. */
+static void test_mesh_bad_strength(void)
+{
+    if (!room_variant("gltf", "\"emissiveStrength\": 20", "\"emissiveStrength\": -2", "negative.gltf"))
+        return;
+    write_text("negative.json", "{\"meshes\": [{\"file\": \"negative.gltf\"}]}");
+    rl_scene *s = NULL;
+    char path[2048];
+    snprintf(path, sizeof path, "%s/negative.json", tmpdir);
+    rl_status st = rl_scene_load(path, &s);
+    CHECK(st == RL_ERR_INPUT && strstr(rl_errmsg(), "materials[1]: KHR_materials_emissive_strength") != NULL,
+          "negative strength: status %d: %s", (int)st, rl_errmsg());
+    rl_scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 3) {
@@ -880,5 +1196,10 @@ int main(int argc, char **argv)
     test_interpolation();
     test_mark_direct();
     test_cell_budget();
+    test_mesh_formats();
+    test_mesh_merge();
+    test_mesh_options();
+    test_mesh_bad_strength();
+    test_mesh_fbx_units();
     return check_report();
 }

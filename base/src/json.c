@@ -396,6 +396,20 @@ ilf_json_status ilf_json_integer(ilf_json_ctx *ctx, const ilf_json *j, const cha
     return ILF_JSON_OK;
 }
 
+ilf_json_status ilf_json_flag(ilf_json_ctx *ctx, const ilf_json *j, const char *elem, int *out)
+{
+    *out = 0;
+    if (cJSON_IsBool(j)) {
+        *out = cJSON_IsTrue(j);
+        return ILF_JSON_OK;
+    }
+    if (cJSON_IsNumber(j) && (j->valuedouble == 0 || j->valuedouble == 1)) {
+        *out = j->valuedouble == 1;
+        return ILF_JSON_OK;
+    }
+    return ilf_json_fail(ctx, elem, "expected true, false, 0 or 1, got %s", ilf_json_kind(j));
+}
+
 ilf_json_status ilf_json_string(ilf_json_ctx *ctx, const ilf_json *j, const char *elem, const char **out)
 {
     *out = "";

@@ -12,8 +12,18 @@
  * file's position and index accessors have the types glTF 2.0 requires
  * (assimp copies positions of any type as raw bytes into its vertices: a
  * position accessor of another type would load silently as garbage or
- * nothing); assimp reads it with its data-structure validation; the result
- * is complete.
+ * nothing), and every KHR_materials_emissive_strength is a number >= 0;
+ * assimp reads it with its data-structure validation; the result is
+ * complete.
+ *
+ * Materials and axes (ilf/mesh.h): assimp 5.2 drops glTF's
+ * KHR_materials_emissive_strength, so the strengths are read from the JSON
+ * the check parses anyway and multiply assimp's emissive colour (glTF
+ * material k is assimp's material k: its importer keeps their order and
+ * appends its default material). assimp's 3DS reader turns the file's Z-up
+ * frame to Y-up by its root node's transform; the vertices are turned back.
+ * An FBX file's lengths are scaled to metres by its UnitScaleFactor, which
+ * assimp reports but does not apply.
  *
  * Every file is opened through ilf/file_kind.h, the mesh itself and every
  * file it names (an OBJ's mtllib, a glTF buffer's uri): assimp reads through
@@ -36,6 +46,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -200,13 +211,60 @@ static int gltf_accessor_ok(const ilf_json *accessors, const ilf_json *at, int i
 }
 
 /*
+ * Reads materials[k].extensions.KHR_materials_emissive_strength.emissiveStrength
+ * of each glTF material into a new array (1 where absent; *out NULL when
+ * there are no materials). @return 1; 0 with why for a strength that is not
+ * a finite number >= 0, or for memory (*nomem set).
+ */
+static int gltf_strengths(const ilf_json *root, double **out, size_t *count, int *nomem, char *why, size_t size)
+{
+    const ilf_json *materials = ilf_json_get(root, "materials");
+    size_t n = ilf_json_type_of(materials) == ILF_JSON_ARRAY ? ilf_json_count(materials) : 0;
+    if (n == 0)
+        return 1;
+    double *s = malloc(n * sizeof *s);
+    if (!s) {
+        *nomem = 1;
+        snprintf(why, size, "out of memory");
+        return 0;
+    }
+    size_t k = 0;
+    for (const ilf_json *m = ilf_json_first(materials); m; m = ilf_json_next(m), k++) {
+        const ilf_json *ext = ilf_json_get(ilf_json_get(m, "extensions"), "KHR_materials_emissive_strength");
+        const ilf_json *v = ilf_json_get(ext, "emissiveStrength");
+        s[k] = 1.0; /* the extension's default, and glTF's without it */
+        if (!v)
+            continue;
+        s[k] = ilf_json_type_of(v) == ILF_JSON_NUMBER ? ilf_json_value(v) : -1.0;
+        if (!(s[k] >= 0) || !isfinite(s[k])) {
+            snprintf(why, size, "materials[%zu]: KHR_materials_emissive_strength.emissiveStrength must be a "
+                     "number >= 0", k);
+            free(s);
+            return 0;
+        }
+    }
+    *out = s;
+    *count = n;
+    return 1;
+}
+
+/* The emissive strengths of a glTF file's materials, by glTF material index. */
+typedef struct gltf_info {
+    double *strength; /* [count], or NULL */
+    size_t count;
+    int nomem;        /* the check failed for memory, not for the file */
+} gltf_info;
+
+/*
  * Reads the JSON of a glTF 2.0 file (.gltf: the file; .glb: its first
- * chunk) and checks every mesh primitive's POSITION and indices accessors.
+ * chunk), checks every mesh primitive's POSITION and indices accessors and
+ * reads its materials' emissive strengths into info (zeroed first).
  * Anything it cannot make sense of is left to assimp, which reports it.
  * @return 1 (fine, or not a glTF 2.0 file), or 0 with why.
  */
-static int gltf_check(const char *path, char *why, size_t size)
+static int gltf_check(const char *path, gltf_info *info, char *why, size_t size)
 {
+    memset(info, 0, sizeof *info);
     const char *dot = strrchr(path, '.');
     int glb = dot && strcasecmp(dot, ".glb") == 0;
     if (!dot || (!glb && strcasecmp(dot, ".gltf") != 0))
@@ -286,6 +344,8 @@ static int gltf_check(const char *path, char *why, size_t size)
             }
         }
     }
+    if (ok && ilf_json_type_of(version) == ILF_JSON_STRING && ilf_json_text(version)[0] == '2')
+        ok = gltf_strengths(root, &info->strength, &info->count, &info->nomem, why, size);
     ilf_json_free(root);
     return ok;
 }
@@ -319,8 +379,9 @@ void ilf_mesh_destroy(ilf_mesh *m)
     free(m);
 }
 
-/* Copies material m's name (or "" for assimp's stand-in and unnamed ones) and colours into out. */
-static void copy_material(const struct aiMaterial *m, ilf_mesh_material *out)
+/* Copies material m's name (or "" for assimp's stand-in and unnamed ones) and colours into out, its
+ * emissive colour times strength (the file's own factor, 1 for most formats). */
+static void copy_material(const struct aiMaterial *m, double strength, ilf_mesh_material *out)
 {
     struct aiString name;
     struct aiColor4D c;
@@ -330,12 +391,60 @@ static void copy_material(const struct aiMaterial *m, ilf_mesh_material *out)
     if ((out->has_diffuse = aiGetMaterialColor(m, AI_MATKEY_COLOR_DIFFUSE, &c) == aiReturn_SUCCESS))
         out->diffuse[0] = c.r, out->diffuse[1] = c.g, out->diffuse[2] = c.b;
     if ((out->has_emissive = aiGetMaterialColor(m, AI_MATKEY_COLOR_EMISSIVE, &c) == aiReturn_SUCCESS))
-        out->emissive[0] = c.r, out->emissive[1] = c.g, out->emissive[2] = c.b;
+        out->emissive[0] = c.r * strength, out->emissive[1] = c.g * strength, out->emissive[2] = c.b * strength;
+}
+
+/* @return whether path's extension is ext (with its dot, any case). */
+static int has_extension(const char *path, const char *ext)
+{
+    const char *dot = strrchr(path, '.');
+    return dot && strcasecmp(dot, ext) == 0;
+}
+
+/* @return the number sc's metadata holds under key (an int32, float or double), or fallback. */
+static double metadata_number(const struct aiScene *sc, const char *key, double fallback)
+{
+    const struct aiMetadata *md = sc->mMetaData;
+    for (unsigned k = 0; md && k < md->mNumProperties; k++) {
+        const void *v = md->mValues[k].mData;
+        if (!v || strcmp(md->mKeys[k].data, key) != 0)
+            continue;
+        switch (md->mValues[k].mType) {
+        case AI_INT32: return *(const int32_t *)v;
+        case AI_FLOAT: return *(const float *)v;
+        case AI_DOUBLE: return *(const double *)v;
+        default: return fallback;
+        }
+    }
+    return fallback;
+}
+
+/* @return the up axis that sc's file declares (ilf/mesh.h): glTF's +Y, FBX's GlobalSettings, 3DS's +Z. */
+static ilf_mesh_up declared_up(const char *path, const struct aiScene *sc)
+{
+    if (has_extension(path, ".gltf") || has_extension(path, ".glb"))
+        return ILF_MESH_UP_Y;
+    if (has_extension(path, ".3ds"))
+        return ILF_MESH_UP_Z;
+    if (!has_extension(path, ".fbx"))
+        return ILF_MESH_UP_UNKNOWN;
+    double axis = metadata_number(sc, "UpAxis", -1), sign = metadata_number(sc, "UpAxisSign", 0);
+    return sign == 1 && axis == 1 ? ILF_MESH_UP_Y : sign == 1 && axis == 2 ? ILF_MESH_UP_Z : ILF_MESH_UP_UNKNOWN;
+}
+
+/* @return metres per unit of sc's file: an FBX file's GlobalSettings UnitScaleFactor (centimetres per unit,
+ * which assimp 5.2 reports but does not apply) over 100; 1 for other formats and for a factor that is not
+ * a positive finite number. */
+static double metres_per_unit(const char *path, const struct aiScene *sc)
+{
+    double cm = has_extension(path, ".fbx") ? metadata_number(sc, "UnitScaleFactor", 100) : 100;
+    return cm > 0 && isfinite(cm) ? cm / 100 : 1;
 }
 
 /* Copies what assimp read into a new soup. @return ILF_MESH_OK and *out, ILF_MESH_ERR_INPUT (an index out of
  * range, or more than SIZE_MAX of something) with why, or ILF_MESH_ERR_NOMEM. */
-static ilf_mesh_status soup_new(const char *path, const struct aiScene *sc, ilf_mesh **out, char *why, size_t size)
+static ilf_mesh_status soup_new(const char *path, const struct aiScene *sc, const gltf_info *gltf, ilf_mesh **out,
+                                char *why, size_t size)
 {
     ilf_mesh *m = calloc(1, sizeof *m);
     if (!m)
@@ -357,14 +466,17 @@ static ilf_mesh_status soup_new(const char *path, const struct aiScene *sc, ilf_
         return ILF_MESH_ERR_NOMEM;
     }
     for (size_t k = 0; k < m->nmaterials; k++)
-        copy_material(sc->mMaterials[k], &m->materials[k]);
+        copy_material(sc->mMaterials[k], k < gltf->count ? gltf->strength[k] : 1.0, &m->materials[k]);
+    m->up = declared_up(path, sc);
+    int unturn = has_extension(path, ".3ds"); /* assimp's (x, y, z) is the file's (x, -z, y) */
+    double unit = metres_per_unit(path, sc);
     size_t v0 = 0, nf = 0, ni = 0;
     for (unsigned mi = 0; mi < sc->mNumMeshes; mi++) {
         const struct aiMesh *a = sc->mMeshes[mi];
         for (unsigned k = 0; k < a->mNumVertices; k++) {
-            m->vertices[v0 + k][0] = a->mVertices[k].x;
-            m->vertices[v0 + k][1] = a->mVertices[k].y;
-            m->vertices[v0 + k][2] = a->mVertices[k].z;
+            m->vertices[v0 + k][0] = unit * a->mVertices[k].x;
+            m->vertices[v0 + k][1] = unit * (unturn ? -a->mVertices[k].z : a->mVertices[k].y);
+            m->vertices[v0 + k][2] = unit * (unturn ? a->mVertices[k].y : a->mVertices[k].z);
         }
         uint32_t material = a->mMaterialIndex < sc->mNumMaterials ? a->mMaterialIndex : ILF_MESH_NO_MATERIAL;
         for (unsigned fi = 0; fi < a->mNumFaces; fi++, nf++) {
@@ -416,10 +528,14 @@ ilf_mesh_status ilf_mesh_import(const char *path, ilf_mesh **out, char *why, siz
                  "and 3DS are: their readers check their counts)", path);
         return ILF_MESH_ERR_INPUT;
     }
+    gltf_info gltf = {0};
     /* assimp would trust a PLY header's counts (plycheck.h), and copy positions of any type (gltf_check) */
-    if (!ilf__ply_check(path, problem, sizeof problem) || !gltf_check(path, problem, sizeof problem)) {
-        snprintf(why, why_size, "cannot read '%s': %s", path, problem);
-        return ILF_MESH_ERR_INPUT;
+    if (!ilf__ply_check(path, problem, sizeof problem) || !gltf_check(path, &gltf, problem, sizeof problem)) {
+        if (gltf.nomem)
+            snprintf(why, why_size, "'%s': out of memory", path);
+        else
+            snprintf(why, why_size, "cannot read '%s': %s", path, problem);
+        return gltf.nomem ? ILF_MESH_ERR_NOMEM : ILF_MESH_ERR_INPUT;
     }
     mesh_io files = {"", 0};
     struct aiFileIO io = {mesh_io_open, mesh_io_close, (aiUserData)&files};
@@ -434,6 +550,7 @@ ilf_mesh_status ilf_mesh_import(const char *path, ilf_mesh **out, char *why, siz
         else
             snprintf(why, why_size, "cannot read '%s': %s", path, aiGetErrorString());
         aiReleaseImport(sc);
+        free(gltf.strength);
         return failure;
     }
     ilf_mesh_status st = ILF_MESH_OK;
@@ -441,10 +558,11 @@ ilf_mesh_status ilf_mesh_import(const char *path, ilf_mesh **out, char *why, siz
         snprintf(why, why_size, "'%s' holds no complete mesh", path);
         st = ILF_MESH_ERR_INPUT;
     } else {
-        st = soup_new(path, sc, out, why, why_size);
+        st = soup_new(path, sc, &gltf, out, why, why_size);
         if (st == ILF_MESH_ERR_NOMEM)
             snprintf(why, why_size, "'%s': out of memory", path);
     }
     aiReleaseImport(sc);
+    free(gltf.strength);
     return st;
 }

@@ -778,7 +778,6 @@ static lfio_status reader_open_impl(const char *path, lfio_reader **out)
                           || (r->radiance = malloc(r->nslabs * sizeof *r->radiance)) == NULL
                           || (r->coverage = malloc(r->nslabs * sizeof *r->coverage)) == NULL
                           || (r->fraction = malloc(r->nslabs * sizeof *r->fraction)) == NULL
-
                           || (r->vetted = calloc(r->nslabs, sizeof *r->vetted)) == NULL))
         st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
     for (size_t k = 0; r->radiance && k < r->nslabs; k++)

@@ -26,7 +26,12 @@
  *
  * Mesh files are imported by ilf_mesh_import(), which makes every check
  * before assimp reads them (PLY counts, glTF headers and accessor types,
- * the accepted formats) and returns a polygon soup. A
+ * the accepted formats) and returns a polygon soup with emission in the
+ * scene's units and the file's declared up axis. Here the soup is turned
+ * up (an entry's "up", else what the file declares), its faces that are
+ * planar and convex are merged with coplanar neighbours of their material
+ * (see Merging below), and each result is added as it is, turned over
+ * ("flip") or both ways ("two_sided"). A
  * mesh file that yields no polygon at all is an error rather than an empty
  * contribution: it is almost certainly the wrong file or a broken one.
  *
@@ -34,8 +39,9 @@
  * names the input vertex at fault. Mesh faces (RL_POLY_SPLIT) failing steps
  * 1-3 are dropped, as they carry no area; failing step 4 or 6 they are
  * projected onto their best-fit plane and ear clipped into triangles, each
- * of which passes the same steps before it is kept. Whatever is appended
- * therefore satisfies the polygon invariants of scene_internal.h.
+ * of which passes the same steps before it is pooled for merging (merged
+ * polygons pass them again when appended). Whatever is appended therefore
+ * satisfies the polygon invariants of scene_internal.h.
  */
 #include <math.h>
 #include <stdio.h>
@@ -43,6 +49,7 @@
 #include <string.h>
 
 #include "mesh.h"
+#include "ilf/limits.h"
 #include "ilf/mesh.h"
 #include "ilf/vec.h"
 
@@ -380,8 +387,12 @@ static rl_status append_polygon(rl_build *b, const poly_check *c, uint32_t mater
     return st;
 }
 
-/* Ear clips the cleaned face c and appends its non-degenerate triangles. @return as rl__build_polygon(). */
-static rl_status split_face(rl_build *b, poly_check *c, uint32_t material, const char *label)
+/* Takes one triangle of a split face: part (checked, its keep indexing at, which holds indices into
+ * the face's input vertices), numbered t. @return RL_OK, or a status that stops the split. */
+typedef rl_status (*part_sink)(rl_build *b, void *ctx, const poly_check *part, const size_t at[3], size_t t);
+
+/* Ear clips the cleaned face c and hands its non-degenerate triangles to sink. @return as rl__build_polygon(). */
+static rl_status clip_face(rl_build *b, poly_check *c, const char *label, part_sink sink, void *ctx)
 {
     project(c, b->flat);
     size_t count = ear_clip((const double (*)[2])b->flat, c->n, b->link, b->tris);
@@ -397,13 +408,36 @@ static rl_status split_face(rl_build *b, poly_check *c, uint32_t material, const
         poly_check part = {.p = (const double (*)[3])corners, .keep = b->keep};
         if (check_polygon(&part, 3, 1) != V_OK)
             continue; /* a sliver: no area to carry light */
-        char name[sizeof ((rl_polygon *)0)->label];
-        rl__format(name, sizeof name, "%s part %zu", label, t);
-        rl_status st = append_polygon(b, &part, material, name);
+        rl_status st = sink(b, ctx, &part, b->tris[t], t);
         if (st != RL_OK)
             return st;
     }
     return RL_OK;
+}
+
+/* What append_part() appends with. */
+typedef struct append_ctx {
+    uint32_t material;
+    const char *label;
+} append_ctx;
+
+/* A part_sink that appends the triangle as a polygon labelled "<label> part <t>". */
+static rl_status append_part(rl_build *b, void *ctx, const poly_check *part, const size_t at[3], size_t t)
+{
+    (void)at;
+    const append_ctx *a = ctx;
+    char name[sizeof ((rl_polygon *)0)->label];
+    rl__format(name, sizeof name, "%s part %zu", a->label, t);
+    return append_polygon(b, part, a->material, name);
+}
+
+/* @return the index of the first of the n vertices with a coordinate that is not finite, or n. */
+static size_t first_nonfinite(const double (*v)[3], size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(v[i][0]) || !isfinite(v[i][1]) || !isfinite(v[i][2]))
+            return i;
+    return n;
 }
 
 rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_t material,
@@ -413,9 +447,9 @@ rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_
         return policy == RL_POLY_STRICT
                    ? rl__build_fail(b, label, "needs at least 3 vertices, got %zu", n)
                    : RL_OK;
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(v[i][0]) || !isfinite(v[i][1]) || !isfinite(v[i][2]))
-            return rl__build_fail(b, label, "vertex %zu is not finite", i);
+    size_t bad = first_nonfinite(v, n);
+    if (bad < n)
+        return rl__build_fail(b, label, "vertex %zu is not finite", bad);
 
     poly_check c = {.p = v, .keep = b->keep};
     verdict outcome = check_polygon(&c, n, policy == RL_POLY_SPLIT);
@@ -425,7 +459,8 @@ rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_
         return rl__build_fail(b, label, "%s", c.why);
     if (outcome == V_DEGENERATE)
         return RL_OK; /* a mesh face without area carries no light */
-    return split_face(b, &c, material, label);
+    append_ctx a = {material, label};
+    return clip_face(b, &c, label, append_part, &a);
 }
 
 /* ----------------------------------------------------------- mesh files */
@@ -460,6 +495,274 @@ static rl_status file_material(rl_build *b, const ilf_mesh *mesh, uint32_t k, co
     return rl__build_material(b, where, full, albedo, emission, out);
 }
 
+/* Turns every vertex of mesh so that the axis opt chooses (or the file declares) points up (+z). */
+static void turn_up(ilf_mesh *mesh, rl_mesh_up up)
+{
+    if (up == RL_MESH_UP_DECLARED)
+        up = mesh->up == ILF_MESH_UP_Y ? RL_MESH_UP_Y : RL_MESH_UP_Z;
+    if (up != RL_MESH_UP_Y)
+        return;
+    for (size_t k = 0; k < mesh->nvertices; k++) {
+        double y = mesh->vertices[k][1], z = mesh->vertices[k][2];
+        mesh->vertices[k][1] = -z; /* a quarter turn about x: +y to +z, and glTF's forward -z to +y */
+        mesh->vertices[k][2] = y;
+    }
+}
+
+/*
+ * Merging. Faces that are planar and convex as they stand (the usual case:
+ * triangles, and quads), and the triangles of faces that had to be split,
+ * are pooled as loops of welded vertex ids: vertices
+ * at bit-identical positions share an id, so that triangles of one quad,
+ * which exporters write with the same coordinates whether or not they share
+ * an index, find their common edge. Then, in passes until nothing changes,
+ * every edge that exactly two pooled loops share, one running a->b and the
+ * other b->a (consistent winding, so they face the same way), joins them
+ * when they have the same material, every vertex of the pair lies within
+ * plane_tol of the pair's diameter of the first loop's plane, and the union
+ * stays strictly convex (vertices left on a straight line are dropped) with
+ * at most RL_SCENE_MAX_POLY_VERTS vertices. A loop joins at most once per
+ * pass, so each pass reads loops that do not change under it; the union
+ * keeps the first loop's starting vertex, so a quad written as two
+ * triangles (0 1 2) (0 2 3) comes back as the quad 0 1 2 3. Non-convex
+ * unions are not formed: a wall with a hole stays in convex pieces. At most
+ * ILF_MESH_MERGE_MAX_PASSES passes are made (ilf/limits.h says why).
+ */
+
+/* A pooled loop: ids[start .. start + n) of its pool. */
+typedef struct loop {
+    size_t start;
+    uint32_t n;
+    uint32_t material;
+    uint32_t face;   /* the smallest face number joined into it, for its label */
+    uint32_t joined; /* how many faces besides that one */
+    uint32_t part;   /* which triangle of a split face it is, or NO_PART */
+    v3 normal;
+} loop;
+
+/* loop.part of a whole face. */
+#define NO_PART UINT32_MAX
+
+/* The pooled loops of one mesh file. */
+typedef struct pool {
+    loop *loops;
+    size_t nloops, loop_cap;
+    uint32_t *ids;
+    size_t nids, id_cap;
+    const double (*at)[3]; /* position of each welded id */
+} pool;
+
+/* One directed edge of a pooled loop, keyed by its unordered ends. */
+typedef struct edge {
+    uint32_t lo, hi; /* its ends, lo < hi */
+    uint32_t loop;   /* which loop */
+    uint32_t i;      /* it runs from vertex i of the loop to vertex i + 1 */
+} edge;
+
+/* qsort order of edges: by ends, then loop. */
+static int edge_order(const void *pa, const void *pb)
+{
+    const edge *a = pa, *b = pb;
+    if (a->lo != b->lo)
+        return a->lo < b->lo ? -1 : 1;
+    if (a->hi != b->hi)
+        return a->hi < b->hi ? -1 : 1;
+    return a->loop < b->loop ? -1 : a->loop > b->loop;
+}
+
+/* A vertex with its index, for welding. */
+typedef struct weld_item {
+    double p[3];
+    uint32_t index;
+} weld_item;
+
+/* qsort order of positions: lexicographic, NaN after every number, so the order is total. */
+static int weld_order(const void *pa, const void *pb)
+{
+    const weld_item *a = pa, *b = pb;
+    for (int c = 0; c < 3; c++) {
+        int na = isnan(a->p[c]), nb = isnan(b->p[c]);
+        if (na != nb)
+            return na - nb;
+        if (!na && a->p[c] != b->p[c])
+            return a->p[c] < b->p[c] ? -1 : 1;
+    }
+    return 0;
+}
+
+/* Gives each vertex of mesh the id of the first vertex at its exact position (id[k] <= k).
+ * @return id (nvertices), or NULL for memory. */
+static uint32_t *weld(const ilf_mesh *mesh)
+{
+    uint32_t *id = malloc((mesh->nvertices ? mesh->nvertices : 1) * sizeof *id);
+    weld_item *w = malloc((mesh->nvertices ? mesh->nvertices : 1) * sizeof *w);
+    if (!id || !w) {
+        free(id);
+        free(w);
+        return NULL;
+    }
+    for (size_t k = 0; k < mesh->nvertices; k++) {
+        memcpy(w[k].p, mesh->vertices[k], sizeof w[k].p);
+        w[k].index = (uint32_t)k;
+    }
+    qsort(w, mesh->nvertices, sizeof *w, weld_order);
+    /* the smallest index of each run of equal positions names the run */
+    for (size_t k = 0; k < mesh->nvertices;) {
+        size_t end = k + 1;
+        uint32_t least = w[k].index;
+        while (end < mesh->nvertices && weld_order(&w[end], &w[k]) == 0)
+            least = w[end].index < least ? w[end].index : least, end++;
+        for (size_t m = k; m < end; m++)
+            id[w[m].index] = least;
+        k = end;
+    }
+    free(w);
+    return id;
+}
+
+/* Appends a loop of n ids to p. @return 1, or 0 for memory. */
+static int pool_add(pool *p, const uint32_t *ids, uint32_t n, loop head)
+{
+    void *l = rl__grow(p->loops, &p->loop_cap, p->nloops + 1, sizeof *p->loops);
+    if (l)
+        p->loops = l;
+    void *i = l ? rl__grow(p->ids, &p->id_cap, p->nids + n, sizeof *p->ids) : NULL;
+    if (!i)
+        return 0;
+    p->ids = i;
+    head.start = p->nids;
+    head.n = n;
+    memcpy(p->ids + p->nids, ids, n * sizeof *ids);
+    p->nids += n;
+    p->loops[p->nloops++] = head;
+    return 1;
+}
+
+/* @return the position of vertex i (cyclic) of loop l. */
+static v3 loop_at(const pool *p, const loop *l, size_t i)
+{
+    return v3_load(p->at[p->ids[l->start + i % l->n]]);
+}
+
+/*
+ * Joins loop a (its edge from vertex i) with loop c (its edge from vertex j,
+ * the same edge reversed) into out (RL_SCENE_MAX_POLY_VERTS + 2 ids) when
+ * their union is coplanar and strictly convex. @return its vertex count, or
+ * 0 when they do not join.
+ */
+static uint32_t join(const pool *p, const loop *a, uint32_t i, const loop *c, uint32_t j, uint32_t *out)
+{
+    if (a->material != c->material || a->n + c->n - 2 > RL_SCENE_MAX_POLY_VERTS + 2)
+        return 0;
+    uint32_t m = 0;
+    for (uint32_t k = 0; k <= i; k++)
+        out[m++] = p->ids[a->start + k];
+    for (uint32_t k = 2; k < c->n; k++)
+        out[m++] = p->ids[c->start + (j + k) % c->n];
+    for (uint32_t k = i + 1; k < a->n; k++)
+        out[m++] = p->ids[a->start + k];
+    double pts[RL_SCENE_MAX_POLY_VERTS + 2][3];
+    for (uint32_t k = 0; k < m; k++)
+        memcpy(pts[k], p->at[out[k]], sizeof pts[k]);
+    size_t keep[RL_SCENE_MAX_POLY_VERTS + 2];
+    poly_check chk = {.p = (const double (*)[3])pts, .keep = keep};
+    chk.diameter = diameter(chk.p, m);
+    chk.tol = plane_tol * chk.diameter;
+    v3 o = loop_at(p, a, 0);
+    for (uint32_t k = 0; k < m; k++)
+        if (fabs(v3_dot(v3_sub(v3_load(pts[k]), o), a->normal)) > chk.tol)
+            return 0; /* not coplanar */
+    for (size_t k = 0; k < m; k++)
+        keep[k] = k;
+    chk.n = m;
+    chk.normal = a->normal;
+    if (!drop_collinear(&chk, 0) || chk.n < 3 || chk.n > RL_SCENE_MAX_POLY_VERTS || !check_convex(&chk))
+        return 0;
+    for (size_t k = 0; k < chk.n; k++)
+        out[k] = out[keep[k]];
+    return (uint32_t)chk.n;
+}
+
+/* partner[] of a loop joined into another in this pass. */
+#define ABSORBED (UINT32_MAX - 1)
+
+/*
+ * One pass of merging over p: joins pairs across shared edges, each loop at
+ * most once, and compacts the pool. A pair found joinable is recorded by its
+ * owner (the loop whose edge came first: partner and the two edge
+ * positions) and joined again while the pool is compacted, so that a pass
+ * needs 16 bytes per loop besides its edges. @return the number of joins,
+ * or -1 for memory.
+ */
+static long merge_pass(pool *p)
+{
+    size_t nl = p->nloops ? p->nloops : 1;
+    edge *e = malloc((p->nids ? p->nids : 1) * sizeof *e);
+    uint32_t *partner = malloc(nl * 3 * sizeof *partner); /* partner, then edge i and j of owners */
+    pool next = {.at = p->at};
+    long joins = 0;
+    if (!e || !partner) {
+        joins = -1;
+        goto done;
+    }
+    size_t ne = 0;
+    for (uint32_t l = 0; l < p->nloops; l++) {
+        partner[l] = UINT32_MAX;
+        const loop *lp = &p->loops[l];
+        for (uint32_t i = 0; i < lp->n; i++) {
+            uint32_t u = p->ids[lp->start + i], v = p->ids[lp->start + (i + 1) % lp->n];
+            e[ne++] = (edge){u < v ? u : v, u < v ? v : u, l, i};
+        }
+    }
+    qsort(e, ne, sizeof *e, edge_order);
+    uint32_t scratch[RL_SCENE_MAX_POLY_VERTS + 2];
+    for (size_t k = 0; k + 1 < ne;) {
+        size_t end = k + 1;
+        while (end < ne && e[end].lo == e[k].lo && e[end].hi == e[k].hi)
+            end++;
+        const edge *x = &e[k], *y = &e[k + 1];
+        /* exactly two loops on the edge, both free this pass, running it opposite ways */
+        if (end - k == 2 && x->loop != y->loop && partner[x->loop] == UINT32_MAX &&
+            partner[y->loop] == UINT32_MAX &&
+            p->ids[p->loops[x->loop].start + x->i] != p->ids[p->loops[y->loop].start + y->i] &&
+            join(p, &p->loops[x->loop], x->i, &p->loops[y->loop], y->i, scratch) > 0) {
+            partner[x->loop] = y->loop;
+            partner[nl + x->loop] = x->i;
+            partner[2 * nl + x->loop] = y->i;
+            partner[y->loop] = ABSORBED;
+            joins++;
+        }
+        k = end;
+    }
+    for (uint32_t l = 0; l < p->nloops && joins >= 0; l++) {
+        loop head = p->loops[l];
+        const uint32_t *ids = p->ids + head.start;
+        if (partner[l] == ABSORBED)
+            continue;
+        if (partner[l] != UINT32_MAX) {
+            const loop *other = &p->loops[partner[l]];
+            head.n = join(p, &head, partner[nl + l], other, partner[2 * nl + l], scratch);
+            ids = scratch;
+            head.face = head.face < other->face ? head.face : other->face;
+            head.joined += other->joined + 1;
+        }
+        if (!pool_add(&next, ids, head.n, head))
+            joins = -1;
+    }
+done:
+    free(e);
+    free(partner);
+    if (joins >= 0) {
+        free(p->loops);
+        free(p->ids);
+        *p = next;
+    } else {
+        free(next.loops);
+        free(next.ids);
+    }
+    return joins;
+}
+
 /* Copies face f of the imported mesh into b->face. @return RL_OK, or RL_ERR_INPUT for too many vertices. */
 static rl_status gather_face(rl_build *b, const ilf_mesh *mesh, const ilf_mesh_face *f, const char *label)
 {
@@ -471,33 +774,166 @@ static rl_status gather_face(rl_build *b, const ilf_mesh *mesh, const ilf_mesh_f
     return RL_OK;
 }
 
-/* Adds every face of the imported mesh. @return as rl__build_mesh(). */
-static rl_status add_faces(rl_build *b, const ilf_mesh *mesh, uint32_t *materials, const char *elem,
-                           const char *shown, const uint32_t *fallback)
+/* Reverses the n vertices of b->face. */
+static void reverse_face(rl_build *b, size_t n)
 {
+    for (size_t i = 0, j = n - 1; i < j; i++, j--) {
+        double t[3];
+        memcpy(t, b->face[i], sizeof t);
+        memcpy(b->face[i], b->face[j], sizeof t);
+        memcpy(b->face[j], t, sizeof t);
+    }
+}
+
+/* Adds the n vertices of b->face as a mesh face: as they are, turned over (flip), or both ways (two_sided;
+ * the turned copy labelled "back"). @return as rl__build_polygon(). */
+static rl_status emit_face(rl_build *b, size_t n, uint32_t material, const char *label, const rl_mesh_options *opt)
+{
+    rl_status st = RL_OK;
+    if (!opt->flip || opt->two_sided)
+        st = rl__build_polygon(b, (const double (*)[3])b->face, n, material, label, RL_POLY_SPLIT);
+    if (st != RL_OK || (!opt->flip && !opt->two_sided))
+        return st;
+    char back[sizeof ((rl_polygon *)0)->label];
+    rl__format(back, sizeof back, "%s%s", label, opt->two_sided ? " back" : "");
+    reverse_face(b, n);
+    return rl__build_polygon(b, (const double (*)[3])b->face, n, material, back, RL_POLY_SPLIT);
+}
+
+/* Writes the label of a mesh polygon: elem, the file's name (its end when long), the face, and the part
+ * of a split face left alone or the number of faces merged into it. */
+static void face_label(char *out, size_t cap, const char *elem, const char *shown, size_t face, uint32_t part,
+                       uint32_t joined)
+{
+    size_t len = strlen(shown); /* a long name keeps its end, where the file's own name is */
+    char more[32] = "";
+    if (joined > 0)
+        rl__format(more, sizeof more, " (+%u merged)", joined);
+    else if (part != NO_PART)
+        rl__format(more, sizeof more, " part %u", part);
+    rl__format(out, cap, "%s (%s%s) face %zu%s", elem, len > 40 ? "..." : "", len > 40 ? shown + len - 37 : shown,
+               face, more);
+}
+
+/* What add_faces() needs besides the builder. */
+typedef struct mesh_job {
+    const ilf_mesh *mesh;
+    const uint32_t *id; /* welded id of each vertex */
+    uint32_t *materials; /* scene material per file material, MATERIAL_UNSET until needed */
+    const char *elem, *shown;
+    const rl_mesh_options *opt;
+    pool pool;
+} mesh_job;
+
+/* Pools n ids of loop head (its material, face, part and normal set). @return RL_OK or RL_ERR_NOMEM. */
+static rl_status pool_loop(rl_build *b, mesh_job *job, const uint32_t *ids, size_t n, loop head)
+{
+    return pool_add(&job->pool, ids, (uint32_t)n, head) ? RL_OK : rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
+}
+
+/* What pool_part() pools with. */
+typedef struct pool_ctx {
+    mesh_job *job;
+    const ilf_mesh_face *face;
+    loop head;
+} pool_ctx;
+
+/* A part_sink that pools the triangle of a split face. */
+static rl_status pool_part(rl_build *b, void *ctx, const poly_check *part, const size_t at[3], size_t t)
+{
+    pool_ctx *pc = ctx;
+    uint32_t ids[3];
+    for (size_t k = 0; k < part->n; k++)
+        ids[k] = pc->job->id[pc->job->mesh->indices[pc->face->first + at[part->keep[k]]]];
+    loop head = pc->head;
+    head.part = (uint32_t)t;
+    head.normal = part->normal;
+    return pool_loop(b, pc->job, ids, part->n, head);
+}
+
+/*
+ * Pools face f (in b->face, checked finite) when it is planar and convex,
+ * or its triangles when it has to be split (so that they can merge back
+ * into convex pieces); drops it when it has no area; adds a planar convex
+ * face too large to join anything at once. @return as rl__build_polygon(),
+ * or RL_ERR_NOMEM.
+ */
+static rl_status take_face(rl_build *b, mesh_job *job, size_t face_no, uint32_t material, const char *label)
+{
+    const ilf_mesh_face *f = &job->mesh->faces[face_no];
+    poly_check c = {.p = (const double (*)[3])b->face, .keep = b->keep};
+    verdict v = check_polygon(&c, f->count, 1);
+    loop head = {.material = material, .face = (uint32_t)face_no, .part = NO_PART, .normal = c.normal};
+    if (v == V_DEGENERATE)
+        return RL_OK; /* a face without area carries no light */
+    if (v != V_OK) {
+        pool_ctx pc = {job, f, head};
+        return clip_face(b, &c, label, pool_part, &pc);
+    }
+    if (c.n > RL_SCENE_MAX_POLY_VERTS)
+        return emit_face(b, f->count, material, label, job->opt);
+    uint32_t ids[RL_SCENE_MAX_POLY_VERTS];
+    for (size_t k = 0; k < c.n; k++)
+        ids[k] = job->id[job->mesh->indices[f->first + c.keep[k]]];
+    return pool_loop(b, job, ids, c.n, head);
+}
+
+/* Reads every face of the imported mesh: material, vertices, then pooled or added. @return as rl__build_mesh(). */
+static rl_status add_faces(rl_build *b, mesh_job *job)
+{
+    const ilf_mesh *mesh = job->mesh;
     for (size_t face_no = 0; face_no < mesh->nfaces; face_no++) {
         const ilf_mesh_face *f = &mesh->faces[face_no];
         if (f->count < 3)
             continue; /* points and lines carry no light */
         char label[sizeof ((rl_polygon *)0)->label];
-        /* A long name keeps its end, where the file's own name is. */
-        size_t len = strlen(shown);
-        rl__format(label, sizeof label, "%s (%s%s) face %zu", elem, len > 40 ? "..." : "",
-                   len > 40 ? shown + len - 37 : shown, face_no);
+        face_label(label, sizeof label, job->elem, job->shown, face_no, NO_PART, 0);
         rl_status st = gather_face(b, mesh, f, label);
         size_t k = f->material < mesh->nmaterials ? f->material : mesh->nmaterials;
-        if (st == RL_OK && materials[k] == MATERIAL_UNSET)
-            st = file_material(b, mesh, (uint32_t)k, elem, shown, fallback, &materials[k]);
+        if (st == RL_OK && job->materials[k] == MATERIAL_UNSET)
+            st = file_material(b, mesh, (uint32_t)k, job->elem, job->shown, job->opt->fallback, &job->materials[k]);
+        size_t bad = st == RL_OK ? first_nonfinite((const double (*)[3])b->face, f->count) : f->count;
+        if (bad < f->count) /* before the face is pooled, whose checks assume finite coordinates */
+            st = rl__build_fail(b, label, "vertex %zu is not finite", bad);
         if (st == RL_OK)
-            st = rl__build_polygon(b, (const double (*)[3])b->face, f->count, materials[k], label, RL_POLY_SPLIT);
+            st = take_face(b, job, face_no, job->materials[k], label);
         if (st != RL_OK)
             return st;
     }
     return RL_OK;
 }
 
+/* qsort order of loops: by first face. */
+static int loop_order(const void *pa, const void *pb)
+{
+    const loop *a = pa, *b = pb;
+    return a->face < b->face ? -1 : a->face > b->face;
+}
+
+/* Merges the pooled faces and adds what remains, in the order of their first faces. @return as rl__build_mesh(). */
+static rl_status add_pool(rl_build *b, mesh_job *job)
+{
+    long joins = 1;
+    for (int pass = 0; pass < ILF_MESH_MERGE_MAX_PASSES && joins > 0; pass++)
+        joins = merge_pass(&job->pool);
+    if (joins < 0)
+        return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
+    if (job->pool.nloops > 1) /* loops is NULL when nothing was pooled */
+        qsort(job->pool.loops, job->pool.nloops, sizeof *job->pool.loops, loop_order);
+    rl_status st = RL_OK;
+    for (size_t l = 0; l < job->pool.nloops && st == RL_OK; l++) {
+        const loop *lp = &job->pool.loops[l];
+        for (uint32_t k = 0; k < lp->n; k++)
+            memcpy(b->face[k], job->pool.at[job->pool.ids[lp->start + k]], sizeof b->face[k]);
+        char label[sizeof ((rl_polygon *)0)->label];
+        face_label(label, sizeof label, job->elem, job->shown, lp->face, lp->part, lp->joined);
+        st = emit_face(b, lp->n, lp->material, label, job->opt);
+    }
+    return st;
+}
+
 rl_status rl__build_mesh(rl_build *b, const char *path, const char *elem, const char *shown,
-                         const uint32_t *fallback)
+                         const rl_mesh_options *opt)
 {
     ilf_mesh *mesh = NULL;
     char why[ILF_MESSAGE_BYTES];
@@ -506,17 +942,26 @@ rl_status rl__build_mesh(rl_build *b, const char *path, const char *elem, const 
         return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
     if (ms != ILF_MESH_OK)
         return rl__build_fail(b, elem, "%s", why);
+    turn_up(mesh, opt->up);
     /* one slot per file material, plus one for meshes whose material index is out of range */
-    uint32_t *materials = malloc((mesh->nmaterials + 1) * sizeof *materials);
-    if (!materials) {
-        ilf_mesh_destroy(mesh);
-        return rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
-    }
-    for (size_t k = 0; k <= mesh->nmaterials; k++)
-        materials[k] = MATERIAL_UNSET;
+    mesh_job job = {.mesh = mesh, .elem = elem, .shown = shown, .opt = opt, .pool.at = mesh->vertices};
+    job.materials = malloc((mesh->nmaterials + 1) * sizeof *job.materials);
+    uint32_t *id = weld(mesh);
+    job.id = id;
+    rl_status st = RL_OK;
+    if (!job.materials || !id)
+        st = rl__fail(RL_ERR_NOMEM, "%s: out of memory", b->file);
+    for (size_t k = 0; st == RL_OK && k <= mesh->nmaterials; k++)
+        job.materials[k] = MATERIAL_UNSET;
     size_t before = b->scene->npolygons, faces = mesh->nfaces;
-    rl_status st = add_faces(b, mesh, materials, elem, shown, fallback);
-    free(materials);
+    if (st == RL_OK)
+        st = add_faces(b, &job);
+    if (st == RL_OK)
+        st = add_pool(b, &job);
+    free(job.pool.loops);
+    free(job.pool.ids);
+    free(job.materials);
+    free(id);
     ilf_mesh_destroy(mesh);
     /* Every face dropped (points, lines, no area): nothing to light or be lit, almost surely a broken file. */
     if (st == RL_OK && b->scene->npolygons == before)

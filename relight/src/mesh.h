@@ -88,13 +88,29 @@ rl_status rl__build_material(rl_build *b, const char *elem, const char *name,
 rl_status rl__build_polygon(rl_build *b, const double (*v)[3], size_t n, uint32_t material,
                             const char *label, rl_poly_policy policy);
 
+/* Which axis of a mesh file is up (docs/scene.md, meshes). */
+typedef enum rl_mesh_up {
+    RL_MESH_UP_DECLARED, /* what the file declares (glTF +y, FBX its UpAxis), else z */
+    RL_MESH_UP_Z,        /* +z: kept as stored */
+    RL_MESH_UP_Y         /* +y: turned so that +y becomes +z, (x, y, z) -> (x, -z, y) */
+} rl_mesh_up;
+
+/* How one "meshes" entry is read. */
+typedef struct rl_mesh_options {
+    const uint32_t *fallback; /* the material of faces without their own, or NULL: such faces are an error */
+    rl_mesh_up up;
+    int flip;      /* every face turned over: its front becomes its back */
+    int two_sided; /* every face added twice, once facing each way */
+} rl_mesh_options;
+
 /*
  * Reads the mesh file at path (already resolved) for scene element elem;
- * shown is the name the scene gave it. Faces without a material of their own
- * use *fallback, or are an error when fallback is NULL.
+ * shown is the name the scene gave it. Faces are turned up, flipped and
+ * doubled as opt says, and adjacent coplanar convex faces of one material
+ * are merged into convex polygons (mesh.c says how).
  * @return RL_OK; RL_ERR_INPUT naming elem and the file; RL_ERR_NOMEM.
  */
 rl_status rl__build_mesh(rl_build *b, const char *path, const char *elem, const char *shown,
-                         const uint32_t *fallback);
+                         const rl_mesh_options *opt);
 
 #endif /* RELIGHT_MESH_H */

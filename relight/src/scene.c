@@ -370,10 +370,36 @@ static rl_status read_polygons(rl_build *b, const ilf_json *j)
     return RL_OK;
 }
 
-/* Reads "meshes": an array of {"file", "material"}. */
+/* Reads the optional keys "up", "flip" and "two_sided" of mesh entry m into opt. @return RL_OK or RL_ERR_INPUT. */
+static rl_status read_mesh_options(const rl_build *b, const ilf_json *m, const char *elem, rl_mesh_options *opt)
+{
+    char sub[ELEM_MAX];
+    ilf_json_ctx c = {.file = b->file};
+    const ilf_json *up = member(m, "up");
+    rl_status st = RL_OK;
+    if (up) {
+        const char *axis = NULL;
+        member_elem(sub, elem, "up");
+        st = json_string(b, up, sub, &axis);
+        if (st == RL_OK && strcmp(axis, "z") != 0 && strcmp(axis, "y") != 0)
+            st = rl__build_fail(b, sub, "expected \"z\" or \"y\", got '%.40s'", axis);
+        opt->up = st == RL_OK && axis[0] == 'y' ? RL_MESH_UP_Y : RL_MESH_UP_Z;
+    }
+    static const char *const flags[] = {"flip", "two_sided"};
+    int *out[] = {&opt->flip, &opt->two_sided};
+    for (int k = 0; k < 2 && st == RL_OK; k++) {
+        const ilf_json *f = member(m, flags[k]);
+        member_elem(sub, elem, flags[k]);
+        if (f)
+            st = json_result(&c, ilf_json_flag(&c, f, sub, out[k]));
+    }
+    return st;
+}
+
+/* Reads "meshes": an array of {"file", "material", "up", "flip", "two_sided"}. */
 static rl_status read_meshes(rl_build *b, const ilf_json *j)
 {
-    static const char *const keys[] = {"file", "material", NULL};
+    static const char *const keys[] = {"file", "material", "up", "flip", "two_sided", NULL};
     if (ilf_json_type_of(j) != ILF_JSON_ARRAY)
         return rl__build_fail(b, "meshes", "expected an array, got %s", json_kind(j));
     size_t i = 0;
@@ -395,8 +421,11 @@ static rl_status read_meshes(rl_build *b, const ilf_json *j)
         member_elem(sub, elem, "material");
         if (st == RL_OK && mj)
             st = read_material_ref(b, mj, sub, &material);
+        rl_mesh_options opt = {.fallback = mj ? &material : NULL, .up = RL_MESH_UP_DECLARED};
         if (st == RL_OK)
-            st = rl__build_mesh(b, path, elem, file, mj ? &material : NULL);
+            st = read_mesh_options(b, m, elem, &opt);
+        if (st == RL_OK)
+            st = rl__build_mesh(b, path, elem, file, &opt);
         if (st != RL_OK)
             return st;
     }

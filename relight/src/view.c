@@ -37,8 +37,11 @@ static int pick(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, int32_t *m
     *cell = -1;
     if (!rl__tracer_hit(s->tracer, org, dir, 0.0, INFINITY, poly, &t))
         return 0;
-    if (v3_dot(dir, v3_load(s->scene->polygons[*poly].normal)) >= 0)
-        return 0; /* the back of a one-sided surface */
+    /* the back of a one-sided surface, unless a polygon lies back to back with it (a two-sided mesh, a
+     * panel modelled as two faces), whose front the ray meets at the same distance up to rounding */
+    if (v3_dot(dir, v3_load(s->scene->polygons[*poly].normal)) >= 0 &&
+        !rl__tracer_hit_front(s->tracer, org, dir, t - (1e-9 + 1e-6 * t), t + 1e-9 + 1e-6 * t, poly, &t))
+        return 0;
     *map = s->polygon_map[*poly];
     if (*map >= 0) {
         *at = frame_project(&s->maps[*map].frame, v3_madd(org, dir, t));

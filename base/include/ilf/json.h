@@ -140,6 +140,10 @@ ilf_json_status ilf_json_vector(ilf_json_ctx *ctx, const ilf_json *j, const char
 ilf_json_status ilf_json_integer(ilf_json_ctx *ctx, const ilf_json *j, const char *elem, uint64_t lo, uint64_t hi,
                                  int pow2, uint64_t *out);
 
+/* Reads a flag: true or false, or the integers 1 and 0 that other flags of ilfkit's files use.
+ * @return ILF_JSON_OK and *out (1 or 0), or ILF_JSON_ERR_INPUT; *out is 0 on failure. */
+ilf_json_status ilf_json_flag(ilf_json_ctx *ctx, const ilf_json *j, const char *elem, int *out);
+
 /* Reads a non-empty string. @return ILF_JSON_OK and *out (borrowed from j), or ILF_JSON_ERR_INPUT;
  * *out is "" on failure, never undefined. */
 ilf_json_status ilf_json_string(ilf_json_ctx *ctx, const ilf_json *j, const char *elem, const char **out);

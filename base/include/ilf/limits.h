@@ -62,6 +62,11 @@
  * convex face with more corners than this is a mistake or an attack, not a lamp. */
 #define ILF_MESH_MAX_FACE_VERTICES 4096u
 
+/* Passes of the merging of coplanar mesh faces (relight/src/mesh.c): a pass sorts every edge, and
+ * joins a face at most once, so a flat grid of 180,000 triangles needs 20 passes (halving the
+ * faces at each) where a file built to join one pair a pass would take one pass per face. */
+#define ILF_MESH_MERGE_MAX_PASSES 64
+
 /* Bytes of a glTF file's JSON read by the accessor pre-check (.gltf: the whole file; .glb: its JSON
  * chunk). Parsing costs several times this in memory; a GLB whose JSON chunk is larger is refused,
  * a larger .gltf is left to assimp unchecked. */

@@ -19,6 +19,22 @@
  * included (count 1 or 2), so messages can name a face as the file's own
  * readers count it; a face's material is an index into materials or
  * ILF_MESH_NO_MATERIAL.
+ *
+ * Emission: a material's emissive is the file's emissive colour times the
+ * format's own strength, in the file's units (the caller takes them as
+ * W sr^-1 m^-2): OBJ's Ke as written; glTF's emissiveFactor times
+ * KHR_materials_emissive_strength (read here from the JSON, as assimp 5.2
+ * drops that extension); FBX's EmissiveColor times EmissiveFactor (assimp's
+ * product); 3DS's emissive colour as assimp reports it. PLY and STL carry no
+ * material.
+ *
+ * Lengths: vertices are in the file's units, taken as metres, except an FBX
+ * file's, scaled to metres by its UnitScaleFactor (centimetres per unit).
+ *
+ * Axes: vertices are as the file stores them. assimp turns a 3DS file's
+ * Z-up frame into Y-up; that turn is undone here. up records which axis the
+ * file itself declares up (glTF: always +Y; FBX: its GlobalSettings UpAxis
+ * when it is +Y or +Z; 3DS: +Z), or ILF_MESH_UP_UNKNOWN.
  */
 #ifndef ILF_MESH_H
 #define ILF_MESH_H
@@ -34,6 +50,9 @@
 /* Bytes of a material name, its terminator included (assimp's own limit). */
 #define ILF_MESH_NAME_BYTES 1024
 
+/* The up axis a mesh file declares. */
+typedef enum ilf_mesh_up { ILF_MESH_UP_UNKNOWN = 0, ILF_MESH_UP_Y, ILF_MESH_UP_Z } ilf_mesh_up;
+
 typedef enum ilf_mesh_status {
     ILF_MESH_OK = 0,
     ILF_MESH_ERR_INPUT, /* the file is missing, unreadable, of a refused format, or broken */
@@ -43,7 +62,7 @@ typedef enum ilf_mesh_status {
 typedef struct ilf_mesh_material {
     char name[ILF_MESH_NAME_BYTES]; /* "" when the file gives none (or only assimp's stand-in) */
     int has_diffuse, has_emissive;  /* whether the file gives these colours */
-    double diffuse[3], emissive[3]; /* RGB, as the file gives them */
+    double diffuse[3], emissive[3]; /* RGB, as the file gives them; emissive times the format's strength */
 } ilf_mesh_material;
 
 typedef struct ilf_mesh_face {
@@ -56,10 +75,11 @@ typedef struct ilf_mesh_face {
 
 typedef struct ilf_mesh {
     size_t nvertices, nfaces, nindices, nmaterials;
-    double (*vertices)[3];        /* [nvertices], all meshes' vertices placed in the file's frame */
+    double (*vertices)[3];        /* [nvertices], all meshes' vertices placed in the file's frame, metres */
     ilf_mesh_face *faces;         /* [nfaces], over all meshes in order */
     uint32_t *indices;            /* [nindices], each < nvertices */
     ilf_mesh_material *materials; /* [nmaterials] */
+    ilf_mesh_up up;               /* the up axis the file declares (see Axes above) */
 } ilf_mesh;
 
 /*
