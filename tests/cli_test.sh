@@ -31,29 +31,6 @@ ERR=$TMP/stderr
 . "$(dirname "$0")/checks.sh"
 status=0
 
-# run COMMAND...: runs it, keeping stdout in $OUT, stderr in $ERR, exit code in $status.
-run() {
-    "$@" >"$OUT" 2>"$ERR"
-    status=$?
-}
-
-# expect CODE DESCRIPTION COMMAND...: runs COMMAND and checks its exit code.
-expect() {
-    local code=$1 what=$2
-    shift 2
-    run "$@"
-    if [ "$status" -eq "$code" ]; then
-        passed=$((passed + 1))
-    else
-        failed=$((failed + 1))
-        echo "FAIL: $what: exit $status, expected $code"
-        sed 's/^/    stderr: /' "$ERR" | head -n 5
-    fi
-}
-
-# Helpers usable as check's COMMAND.
-stdout_has() { grep -q -e "$1" "$OUT"; }
-stderr_has() { grep -q -F -e "$1" "$ERR"; }
 nonempty() { [ -s "$1" ]; }
 absent() { [ ! -e "$1" ]; }
 none_match() { ! compgen -G "$1" >/dev/null; }

@@ -34,24 +34,6 @@ ERR=$TMP/stderr
 . "$(dirname "$0")/checks.sh"
 status=0
 
-run() {
-    "$@" >"$OUT" 2>"$ERR"
-    status=$?
-}
-expect() {
-    local code=$1 what=$2
-    shift 2
-    run "$@"
-    if [ "$status" -eq "$code" ]; then
-        passed=$((passed + 1))
-    else
-        failed=$((failed + 1))
-        echo "FAIL: $what: exit $status, expected $code"
-        sed 's/^/    stderr: /' "$ERR" | head -n 5
-    fi
-}
-stdout_has() { grep -q -e "$1" "$OUT"; }
-stderr_has() { grep -q -e "$1" "$ERR"; }
 stderr_empty() { [ ! -s "$ERR" ]; }
 absent_view() { [ ! -e "$1/view.png" ] && [ ! -e "$1/view.exr" ]; }
 absent_dir() { [ ! -e "$1" ]; }
@@ -114,21 +96,21 @@ expect 0 "relight the room as modelled" "$ILF" relight "$ROOM" -o "$TMP/room" "$
 check "a good room gives no warning" [ "$(warnings)" -eq 0 ]
 check "stats.json has an empty warnings list" [ "$(json_warnings "$TMP/room/stats.json")" -eq 0 ]
 check "the settings line names method, rays, bounces and threads" \
-    stderr_has '^ilf relight: method culled, partition n 4, 1 ray per solid angle, 1 bounce (16 rays per bounce cell), 2 threads$'
+    stderr_matches '^ilf relight: method culled, partition n 4, 1 ray per solid angle, 1 bounce (16 rays per bounce cell), 2 threads$'
 
 expect 0 "relight the room turned inside out" "$ILF" relight "$SCENES/warn_room_outward.json" -o "$TMP/out" "${FAST[@]}"
-check "no receiver faces the lamp" stderr_has '^ilf: warning: .*warn_room_outward.json: none of the 6 receiving polygons faces any of the 1 emitter from its front'
-check "every cell is dark, with the share" stderr_has '^ilf: warning: .*100.0% of the cells (1280 of 1280) received no light'
-check "the camera sees back faces, with the share" stderr_has '^ilf: warning: .*camera sees mostly back faces, drawn black: 100.0%'
+check "no receiver faces the lamp" stderr_matches '^ilf: warning: .*warn_room_outward.json: none of the 6 receiving polygons faces any of the 1 emitter from its front'
+check "every cell is dark, with the share" stderr_matches '^ilf: warning: .*100.0% of the cells (1280 of 1280) received no light'
+check "the camera sees back faces, with the share" stderr_matches '^ilf: warning: .*camera sees mostly back faces, drawn black: 100.0%'
 check "stats.json lists the three warnings" [ "$(json_warnings "$TMP/out/stats.json")" -eq 3 ]
 expect 0 "the same, --quiet" "$ILF" relight "$SCENES/warn_room_outward.json" -o "$TMP/out-q" "${FAST[@]}" --quiet
 check "--quiet: nothing on stderr" stderr_empty
 check "--quiet: stats.json still lists the warnings" [ "$(json_warnings "$TMP/out-q/stats.json")" -eq 3 ]
 
 expect 0 "relight a room without emitters" "$ILF" relight "$SCENES/warn_room_no_emitter.json" -o "$TMP/dark" "${FAST[@]}"
-check "no emitter is told" stderr_has '^ilf: warning: .*warn_room_no_emitter.json: no emitter'
+check "no emitter is told" stderr_matches '^ilf: warning: .*warn_room_no_emitter.json: no emitter'
 expect 0 "relight a room without a camera" "$ILF" relight "$SCENES/warn_room_no_camera.json" -o "$TMP/nocam" "${FAST[@]}"
-check "no camera, no view: told" stderr_has '^ilf: warning: .*no camera, so there is no view'
+check "no camera, no view: told" stderr_matches '^ilf: warning: .*no camera, so there is no view'
 check "and there is no view" absent_view "$TMP/nocam"
 expect 0 "--no-view without a camera" "$ILF" relight "$SCENES/warn_room_no_camera.json" -o "$TMP/nocam2" --no-view "${FAST[@]}"
 check "--no-view: the missing camera is no news" [ "$(warnings)" -eq 0 ]
@@ -141,10 +123,10 @@ expect 0 "render probes" "$ILF" render-probes "$SRC/data/capture/scene.json" --p
 check "render-probes: settings of the relight and of the probes" \
     bash -c "grep -q '^ilf render-probes: method culled, partition n 8' '$ERR' && grep -q '^ilf render-probes: 2x2 probes of 64x32 pixels, 4 directions per pixel' '$ERR'"
 expect 0 "capture them" "$ILF" capture "$CAP/probes/manifest.json" -o "$CAP/probes.h5" "${FAST[@]}"
-check "capture: its settings line" stderr_has '^ilf capture: 2x2 positions, n 8 (256 directions), 4 images, 2 threads$'
+check "capture: its settings line" stderr_matches '^ilf capture: 2x2 positions, n 8 (256 directions), 4 images, 2 threads$'
 expect 0 "reproject onto the lamp" "$ILF" reproject "$CAP/probes.h5" --proxy "$SRC/data/capture/proxy.json" \
     -o "$CAP/lamp.h5" --n 8 "${FAST[@]}"
-check "reproject: its settings line" stderr_has '^ilf reproject: method depth-corrected, 1 rectangle, 2x2 rays per solid angle, .* rays, 2 threads$'
+check "reproject: its settings line" stderr_matches '^ilf reproject: method depth-corrected, 1 rectangle, 2x2 rays per solid angle, .* rays, 2 threads$'
 cat >"$CAP/lit.json" <<'EOF'
 {"materials": {"grey": {"albedo": [0.5, 0.5, 0.5]}},
  "polygons": [{"material": "grey", "vertices": [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]]}],
@@ -153,7 +135,7 @@ cat >"$CAP/lit.json" <<'EOF'
  "sampling": {"method": "culled", "partition_n": 4, "rays_per_solid_angle": 1, "bounces": 0}}
 EOF
 expect 0 "relight with the reprojected lamp" "$ILF" relight "$CAP/lit.json" -o "$CAP/lit" --no-view "${FAST[@]}"
-check "the uncovered etendue is told" stderr_has "^ilf: warning: .*lightfields\[0\] (.*lamp.h5, slab 'lamp'): coverage"
+check "the uncovered etendue is told" stderr_matches "^ilf: warning: .*lightfields\[0\] (.*lamp.h5, slab 'lamp'): coverage"
 "$ILF" info "$CAP/lamp.h5" --json >"$CAP/info.json"
 check "the share told is info's" py '
 import json, re, sys
@@ -169,7 +151,7 @@ printf '2 2 0 0 0 1\n2 2 0.001 0 0 -1\n' >"$TMP/points.txt"
 expect 0 "irradiance in the room" "$ILF" irradiance "$ROOM" --points "$TMP/points.txt" --method area --samples 64 "${FAST[@]}"
 cp "$OUT" "$TMP/rgb.txt"
 check "the settings line gives the samples and the bounces it takes from the scene" \
-    stderr_has '^ilf irradiance: method area, 64 samples per cell and emitter, 1 bounce (16 rays per bounce cell), 2 threads$'
+    stderr_matches '^ilf irradiance: method area, 64 samples per cell and emitter, 1 bounce (16 rays per bounce cell), 2 threads$'
 expect 0 "--lux" "$ILF" irradiance "$ROOM" --points "$TMP/points.txt" --method area --samples 64 --lux --quiet "${FAST[@]}"
 check "--quiet: nothing on stderr" stderr_empty
 check "--lux is 179 lm/W times the Rec.709 luminance" py '
@@ -183,18 +165,18 @@ for (r, g, b), e in zip(rgb, lux):
 ' "$TMP/rgb.txt" "$OUT"
 printf '2 2 3.5 0 0 1\n2 2 3.6 0 0 1\n1 1 3.5 0 0 1\n' >"$TMP/up.txt"
 expect 0 "irradiance at points facing away from everything" "$ILF" irradiance "$ROOM" --points "$TMP/up.txt" --bounces 0 "${FAST[@]}"
-check "unlit points are told, with their share" stderr_has '^ilf: warning: .*: 3 of the 3 points (100.0%) received no light'
+check "unlit points are told, with their share" stderr_matches '^ilf: warning: .*: 3 of the 3 points (100.0%) received no light'
 expect 0 "irradiance with no emitter" "$ILF" irradiance "$SCENES/warn_room_no_emitter.json" --points "$TMP/points.txt" "${FAST[@]}"
-check "irradiance: no emitter is told" stderr_has '^ilf: warning: .*no emitter'
+check "irradiance: no emitter is told" stderr_matches '^ilf: warning: .*no emitter'
 check "irradiance: no word of a camera" bash -c "! grep -q camera '$ERR'"
 
 # ------------------------------------------------------------------ other commands' settings lines and --quiet
 expect 0 "synth" "$ILF" synth --kind radial --cone 30 --grid 8x8 --n 8 -o "$TMP/radial.h5" --threads 2
-check "synth: its settings line" stderr_has '^ilf synth: kind radial, 8x8 positions, n 8 (256 directions), 16 strata per direction, 2 threads$'
+check "synth: its settings line" stderr_matches '^ilf synth: kind radial, 8x8 positions, n 8 (256 directions), 16 strata per direction, 2 threads$'
 expect 0 "synth --quiet" "$ILF" synth --kind radial --cone 30 --grid 8x8 --n 8 -o "$TMP/radial.h5" --quiet
 check "synth --quiet: nothing at all" bash -c "[ ! -s '$OUT' ] && [ ! -s '$ERR' ]"
 expect 0 "verify" "$ILF" verify "$TMP/radial.h5" "$CAP/lamp.h5"
-check "verify: its settings line" stderr_has '^ilf verify: 2 files, .* every byte read and checked$'
+check "verify: its settings line" stderr_matches '^ilf verify: 2 files, .* every byte read and checked$'
 expect 0 "verify --quiet" "$ILF" verify --quiet "$TMP/radial.h5"
 check "verify --quiet: nothing at all" bash -c "[ ! -s '$OUT' ] && [ ! -s '$ERR' ]"
 
@@ -212,7 +194,7 @@ fi
 # ------------------------------------------------------------------ slice: grazing --toward, --scale
 expect 0 "slice toward a grazing direction" "$ILF" slice "$TMP/radial.h5" --toward 1,0,0.05 -o "$TMP/graze.png"
 check "an all-black grazing slice is told, with its elevation" \
-    stderr_has "^ilf: warning: --toward 1,0,0.05 is 2.9 degrees above the plane of slab 'synth' (grazing): every position of the slice is black"
+    stderr_matches "^ilf: warning: --toward 1,0,0.05 is 2.9 degrees above the plane of slab 'synth' (grazing): every position of the slice is black"
 expect 0 "slice straight up" "$ILF" slice "$TMP/radial.h5" --toward 0,0,1 -o "$TMP/up.png"
 check "a lit slice gives no warning" stderr_empty
 expect 0 "slice --scale" "$ILF" slice "$TMP/radial.h5" --toward 0,0,1 -o "$TMP/up.png" --scale 4

@@ -43,16 +43,22 @@ void cli_set_identity(const char *program, const char *suffix)
  * it are not news, and the watcher's own line says what happened. */
 static atomic_int interrupting;
 
+/* Prints "PROGRAM SUB[SUFFIX]: " and the formatted text as one line on stderr. */
+static void message_line(const char *sub, const char *fmt, va_list ap)
+{
+    fprintf(stderr, "%s %s%s: ", message_program, sub, message_suffix);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+}
+
 void cli_error(const char *sub, const char *fmt, ...)
 {
     if (atomic_load(&interrupting))
         return;
     va_list ap;
-    fprintf(stderr, "%s %s%s: ", message_program, sub, message_suffix);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    message_line(sub, fmt, ap);
     va_end(ap);
-    fputc('\n', stderr);
 }
 
 /* -------------------------------------------------------------- warnings */
@@ -97,11 +103,9 @@ void cli_settings(const char *sub, const char *fmt, ...)
     if (quiet_mode)
         return;
     va_list ap;
-    fprintf(stderr, "%s %s%s: ", message_program, sub, message_suffix);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    message_line(sub, fmt, ap);
     va_end(ap);
-    fputc('\n', stderr);
 }
 
 const char *cli_one_line(const char *text, char *buf, size_t size)
