@@ -1245,6 +1245,36 @@ lfio_status lfio__h5_agree(const char *path, lfio_status st)
     return st;
 }
 
+/* Checks that the superblock of HDF5 file path (found where HDF5 looks for it: at byte 0, 512, 1024, 2048
+ * ...) is of version 2 or later, HDF5 1.8's format, which carries a checksum. Versions 0 and 1 carry none:
+ * a damaged or crafted field of theirs (the root group's address, the end of the file) reaches HDF5's
+ * metadata reads unchecked, and lfio writes neither. @return LFIO_OK; LFIO_ERR_FORMAT; LFIO_ERR_IO. */
+static lfio_status check_superblock(const char *path)
+{
+    static const unsigned char signature[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+    int fd = open(path, O_RDONLY);
+    struct stat sb;
+    if (fd < 0 || fstat(fd, &sb) != 0) {
+        lfio_status st = lfio__fail(LFIO_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+        if (fd >= 0)
+            close(fd);
+        return st;
+    }
+    int version = -1;
+    unsigned char head[9];
+    for (off_t at = 0; version < 0 && at + (off_t)sizeof head <= sb.st_size; at = at ? 2 * at : 512)
+        if (pread(fd, head, sizeof head, at) == (ssize_t)sizeof head && memcmp(head, signature, 8) == 0)
+            version = head[8];
+    close(fd);
+    if (version < 0)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: not an HDF5 file", path);
+    if (version < 2)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: superblock of version %d (HDF5's original format, without "
+                          "checksums): lfio reads files of HDF5 1.8's format and later (h5repack, or h5py's "
+                          "libver=\"v110\", writes them)", path, version);
+    return LFIO_OK;
+}
+
 /* Checks that path names a readable regular file in HDF5 format, before HDF5 opens it. */
 static lfio_status check_file(const char *path)
 {
@@ -1263,7 +1293,7 @@ static lfio_status check_file(const char *path)
     /* The file is readable, so a failing signature search means "not HDF5", not an I/O error. */
     if (H5Fis_hdf5(path) <= 0)
         return lfio__fail(LFIO_ERR_FORMAT, "%s: not an HDF5 file", path);
-    return LFIO_OK;
+    return check_superblock(path);
 }
 
 /* Opens path read-only after check_file(), with strong close (see h5util.h). */
