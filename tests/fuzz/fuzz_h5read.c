@@ -7,7 +7,7 @@
  * radiance-map file with lfio_radmap_read(). The seeds in
  * corpus/fuzz_h5read/ are small valid files and the crafted-storage cases of
  * the hostile suite (a chunk under its checksum, a skipped checksum, a bomb,
- * v1 B-tree cycles, external data). Any call may fail; none may crash,
+ * v1 B-tree cycles, external storage, an old superblock). Any call may fail; none may crash,
  * leak, overflow or allocate beyond what the file's size justifies.
  */
 #include <stddef.h>
