@@ -375,7 +375,7 @@ static lfio_status check_chunked(const char *path, const char *obj, hid_t d, hid
  * itself, chunked or contiguous. @return LFIO_OK or LFIO_ERR_FORMAT. */
 static lfio_status check_layout(const char *path, const char *obj, hid_t dcpl, H5D_layout_t layout)
 {
-    int external = H5Pget_external_count(dcpl);
+    int external = layout == H5D_VIRTUAL ? 0 : H5Pget_external_count(dcpl);
     if (layout == H5D_LAYOUT_ERROR || external < 0)
         return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot read its storage layout");
     if (layout == H5D_VIRTUAL)
@@ -390,12 +390,79 @@ static lfio_status check_layout(const char *path, const char *obj, hid_t dcpl, H
     return LFIO_OK;
 }
 
+/* @return the little-endian unsigned integer of n bytes (n <= 8) at p. */
+static uint64_t get_le(const unsigned char *p, unsigned n)
+{
+    uint64_t v = 0;
+    for (unsigned k = n; k-- > 0;)
+        v = v << 8 | p[k];
+    return v;
+}
+
+/* Finds the class of the layout message among the messages of an object header's first chunk, h[0..n)
+ * (version 1 or 2 of the format). @return 0 compact, 1 contiguous, 2 chunked, 3 virtual; -1 if the
+ * header is of another version, damaged, or has its layout elsewhere. */
+static int header_layout_class(const unsigned char *h, size_t n)
+{
+    size_t at, end, head; /* first message, end of the chunk's messages, bytes of a message's header */
+    int v2 = n >= 6 && memcmp(h, "OHDR", 4) == 0 && h[4] == 2;
+    if (v2) {
+        unsigned flags = h[5], width = 1u << (flags & 3);
+        at = 6 + (flags & 0x20 ? 16 : 0) + (flags & 0x10 ? 4 : 0);
+        if (at + width > n)
+            return -1;
+        end = at + width + (size_t)get_le(h + at, width);
+        at += width;
+        head = 4 + (flags & 0x04 ? 2 : 0);
+    } else if (n >= 16 && h[0] == 1) {
+        at = 16;
+        end = 16 + (size_t)get_le(h + 8, 4);
+        head = 8;
+    } else {
+        return -1;
+    }
+    end = end < n ? end : n;
+    while (at + head <= end) {
+        unsigned type = v2 ? h[at] : (unsigned)get_le(h + at, 2);
+        size_t size = (size_t)get_le(h + at + (v2 ? 1 : 2), 2);
+        const unsigned char *m = h + at + head;
+        if (type == 8 && at + head + 3 <= end) /* layout: version, then (before version 3, after the rank) class */
+            return m[0] >= 3 ? m[1] : m[2];
+        at += head + size;
+    }
+    return -1;
+}
+
+/* Reads the first chunk of the object header of object name of g (a hard link) from the file itself and
+ * @return the class of its layout message (header_layout_class()), -1 if it cannot tell. HDF5 decodes a
+ * virtual dataset's layout from the global heap as it opens the dataset, and a crafted heap makes
+ * HDF5 1.10.8 loop there: a virtual dataset must be refused before H5Dopen2(). */
+static int stored_layout_class(const char *path, hid_t g, const char *name)
+{
+    H5O_info_t info;
+    hsize_t base = 0;
+    hid_t file = H5Iget_file_id(g), fcpl = file >= 0 ? H5Fget_create_plist(file) : -1;
+    int known = fcpl >= 0 && H5Pget_userblock(fcpl, &base) >= 0
+                && H5Oget_info_by_name2(g, name, &info, H5O_INFO_BASIC, H5P_DEFAULT) >= 0 && info.addr != HADDR_UNDEF;
+    lfio__h5_close(fcpl);
+    lfio__h5_close(file);
+    H5Eclear2(H5E_DEFAULT); /* what fails here, H5Dopen2 reports */
+    unsigned char h[4096];
+    int fd = known ? open(path, O_RDONLY) : -1;
+    ssize_t n = fd >= 0 ? pread(fd, h, sizeof h, (off_t)(base + info.addr)) : -1;
+    if (fd >= 0)
+        close(fd);
+    return n > 0 ? header_layout_class(h, (size_t)n) : -1;
+}
+
 lfio_status lfio__h5_open_dataset(const char *path, const char *obj, hid_t g, const char *name, hid_t dapl, hid_t *out)
 {
     *out = -1;
     lfio_status st = lfio__h5_expect_link(path, obj, g, name, "dataset");
     if (st != LFIO_OK)
         return st;
+    if (stored_layout_class(path, g, name) == H5D_VIRTUAL)
+        return check_layout(path, obj, -1, H5D_VIRTUAL);
     hid_t d = H5Dopen2(g, name, dapl >= 0 ? dapl : H5P_DEFAULT);
     if (d < 0)
         return lfio__h5_fail(LFIO_ERR_FORMAT, path, obj, "cannot open as a dataset");
@@ -1245,6 +1312,36 @@ lfio_status lfio__h5_agree(const char *path, lfio_status st)
     return st;
 }
 
+/* Checks that the superblock of HDF5 file path (found where HDF5 looks for it: at byte 0, 512, 1024, 2048
+ * ...) is of version 2 or later, HDF5 1.8's format, which carries a checksum. Versions 0 and 1 carry none:
+ * a damaged or crafted field of theirs (the root group's address, the end of the file) reaches HDF5's
+ * metadata reads unchecked, and lfio writes neither. @return LFIO_OK; LFIO_ERR_FORMAT; LFIO_ERR_IO. */
+static lfio_status check_superblock(const char *path)
+{
+    static const unsigned char signature[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+    int fd = open(path, O_RDONLY);
+    struct stat sb;
+    if (fd < 0 || fstat(fd, &sb) != 0) {
+        lfio_status st = lfio__fail(LFIO_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+        if (fd >= 0)
+            close(fd);
+        return st;
+    }
+    int version = -1;
+    unsigned char head[9];
+    for (off_t at = 0; version < 0 && at + (off_t)sizeof head <= sb.st_size; at = at ? 2 * at : 512)
+        if (pread(fd, head, sizeof head, at) == (ssize_t)sizeof head && memcmp(head, signature, 8) == 0)
+            version = head[8];
+    close(fd);
+    if (version < 0)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: not an HDF5 file", path);
+    if (version < 2)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: superblock of version %d (HDF5's original format, without "
+                          "checksums): lfio reads files of HDF5 1.8's format and later (h5repack, or h5py's "
+                          "libver=\"v110\", writes them)", path, version);
+    return LFIO_OK;
+}
+
 /* Checks that path names a readable regular file in HDF5 format, before HDF5 opens it. */
 static lfio_status check_file(const char *path)
 {
@@ -1263,7 +1360,7 @@ static lfio_status check_file(const char *path)
     /* The file is readable, so a failing signature search means "not HDF5", not an I/O error. */
     if (H5Fis_hdf5(path) <= 0)
         return lfio__fail(LFIO_ERR_FORMAT, "%s: not an HDF5 file", path);
-    return LFIO_OK;
+    return check_superblock(path);
 }
 
 /* Opens path read-only after check_file(), with strong close (see h5util.h). */

@@ -170,7 +170,10 @@ lfio_status lfio__h5_create_dataset(const char *path, const char *gobj, hid_t g,
  * lfio__h5_expect_link(), and checks that its values are kept in the file
  * itself (not virtual, no external storage, chunked or contiguous) before
  * anything asks for its extent, which makes HDF5 open the source files of
- * some virtual datasets. @return LFIO_OK and *out open; LFIO_ERR_FORMAT with *out = -1.
+ * some virtual datasets. A virtual layout found in the first chunk of the
+ * object header, read from the file's bytes, is refused before HDF5 opens
+ * the dataset (opening decodes its mappings from the global heap).
+ * @return LFIO_OK and *out open; LFIO_ERR_FORMAT with *out = -1.
  */
 lfio_status lfio__h5_open_dataset(const char *path, const char *obj, hid_t g, const char *name, hid_t dapl,
                                   hid_t *out);

@@ -7,8 +7,9 @@
  * radiance-map file with lfio_radmap_read(). The seeds in
  * corpus/fuzz_h5read/ are small valid files and the crafted-storage cases of
  * the hostile suite (a chunk under its checksum, a skipped checksum, a bomb,
- * v1 B-tree cycles, external data). Any call may fail; none may crash,
- * leak, overflow or allocate beyond what the file's size justifies.
+ * v1 B-tree cycles, external and virtual data) and its own findings. Any
+ * call may fail; none may crash, leak, overflow, hang or allocate beyond
+ * what the file's size justifies.
  */
 #include <stddef.h>
 #include <stdint.h>

@@ -389,8 +389,10 @@ def btree_cycle(path, node_type):
     overflows."""
     data = bytearray(open(path, "rb").read())
     at = data.find(b"TREE")
-    while data[at + 4] != node_type:
+    while at >= 0 and data[at + 4] != node_type:
         at = data.find(b"TREE", at + 4)
+    if at < 0:
+        raise RuntimeError("%s: no v1 B-tree node of type %d" % (path, node_type))
     used, = struct.unpack("<H", data[at + 6:at + 8])
     data[at + 5] = 1  # level
     # a key: a heap offset (group), or a chunk's size, filter mask, 4 offsets and the element offset
@@ -457,13 +459,14 @@ def hostile_storage(out, base):
     }
     for name, edit in cases.items():
         edited(d, base, name, edit, libver="v110")
-    # HDF5's original formats index chunks, and a group's links, with v1 B-trees (h5py's default, but a
-    # file with a 1.10 superblock keeps 1.10's formats): the base copied into a new file (its groups keep
-    # their formats; the root group tracks link order, which gives it 1.8's), its radiance in four
-    # chunks, then a cycle in the chunks' tree; and, with a root of the original format, in the root's.
-    for name, node_type in (("chunk_btree_cycle.h5", 1), ("group_btree_cycle.h5", 0)):
+    # HDF5 1.8's format indexes chunks with a v1 B-tree, and HDF5's original format a group's links too
+    # (h5py's default; a file with a 1.10 superblock keeps 1.10's formats): the base copied into a file
+    # of 1.8's format, its radiance in four chunks, then a cycle in the chunks' tree; and the base
+    # copied into a file of the original format (whose superblock, without a checksum, lfio refuses
+    # before HDF5 reads further), with a cycle in its root group's tree.
+    for name, node_type, libver in (("chunk_btree_cycle.h5", 1, "v108"), ("group_btree_cycle.h5", 0, "earliest")):
         path = os.path.join(d, name)
-        with h5py.File(base, "r") as src, h5py.File(path, "w", libver="earliest", track_order=node_type == 1) as f:
+        with h5py.File(base, "r") as src, h5py.File(path, "w", libver=libver) as f:
             for k, v in src.attrs.items():
                 f.attrs[k] = v
             src.copy(src["slabs"], f)
