@@ -138,7 +138,7 @@ run_case() {
         ;;
     mesh) "${expect[@]}" "$out" "$ILF" relight "$(wrap mesh "$path" "$n")" -o "$out" --quiet ;;
     lightfield)
-        "${expect[@]}" - "$ILF" info "$path"
+        "${expect[@]}" - "$ILF" info "$path" --stats
         "${expect[@]}" - "$ILF" verify "$path"
         "${expect[@]}" "$out.png" "$ILF" slice "$path" --position 0,0 -o "$out.png"
         "${expect[@]}" "$out" "$ILF" relight "$(wrap lightfield "$path" "$n")" -o "$out" --quiet
@@ -224,7 +224,7 @@ baseline() {
 baseline "$ILF" relight "$TMP/valid.json" -o "$TMP/valid-out" --quiet
 baseline "$ILF" irradiance "$TMP/valid.json" --points "$POINTS"
 if [ -e "$WORK/gen/base.h5" ]; then
-    baseline "$ILF" info "$WORK/gen/base.h5"
+    baseline "$ILF" info "$WORK/gen/base.h5" --stats
     baseline "$ILF" verify "$WORK/gen/base.h5"
     baseline "$ILF" slice "$WORK/gen/base.h5" --position 0,0 -o "$TMP/valid-slice.png"
 fi
