@@ -489,7 +489,9 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
         return cli_single_path("export", &o->output, value);
     if (opt == OPT_FORMAT) {
         o->format = format_named(value);
-        return o->format != FMT_NONE || cli_bad_value(p, value, "expected glb, ply or csv");
+        if (o->format == FMT_NONE)
+            cli_bad_value(p, value, "expected glb, ply or csv");
+        return o->format != FMT_NONE;
     }
     return cli_value_tone(p, value, opt == OPT_EXPOSURE, &o->tone);
 }
