@@ -215,5 +215,74 @@ expect 1 "export failing mid-write" bash -c "trap '' XFSZ; ulimit -f 8; exec \"\
 check "a failed export leaves the earlier file as it was" cmp -s "$TMP/room.glb" "$TMP/keep.glb"
 check "a failed export leaves no temporary" bash -c "! compgen -G '$TMP/.room*' >/dev/null"
 
+# ------------------------------------------------------------------ slice --envmap
+# read_hdr PATH: a Radiance .hdr decoded with the standard library alone (flat and run-length scanlines)
+HDR='
+import math
+def read_hdr(path):
+    b = open(path, "rb").read()
+    head, _, rest = b.partition(b"\n\n")
+    assert head.startswith(b"#?RADIANCE") and b"FORMAT=32-bit_rle_rgbe" in head, head
+    res, _, data = rest.partition(b"\n")
+    _, h, _, w = res.split()
+    h, w = int(h), int(w)
+    at, rows = 0, []
+    for y in range(h):
+        if data[at] == 2 and data[at + 1] == 2:
+            at += 4
+            planes = []
+            for c in range(4):
+                plane = []
+                while len(plane) < w:
+                    n = data[at]; at += 1
+                    if n > 128:
+                        plane += [data[at]] * (n - 128); at += 1
+                    else:
+                        plane += list(data[at:at + n]); at += n
+                planes.append(plane)
+            px = list(zip(*planes))
+        else:
+            px = [tuple(data[at + 4 * x:at + 4 * x + 4]) for x in range(w)]; at += 4 * w
+        rows.append([[0.0] * 3 if e == 0 else [(v + 0.5) * math.ldexp(1, e - 136) for v in (r, g, bb)]
+                     for r, g, bb, e in px])
+    assert at == len(data), (at, len(data))
+    return rows
+'
+# Light travelling down (e3 = u x v = -z), up the +y axis (e3 = +y) and along +x: each lights the half of the
+# sphere it comes from, and nothing else.
+"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,1,0 --v 1,0,0 --radiance 1,2,3 -o "$TMP/down.h5" >/dev/null
+"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,0,1 --v 1,0,0 -o "$TMP/north.h5" >/dev/null
+"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,1,0 --v 0,0,1 -o "$TMP/east.h5" >/dev/null
+expect 0 "slice --envmap to .hdr" "$ILF" slice "$TMP/down.h5" --position 0,0 --envmap --size 32 -o "$TMP/down.hdr"
+check "slice says what the envmap is" stdout_has "64x32, environment map (equirectangular, +Z up)"
+check "light travelling down fills the upper half of the envmap (+Z up), the lower half is black" py "$HDR"'
+import sys
+rows = read_hdr(sys.argv[1])
+assert len(rows) == 32 and len(rows[0]) == 64
+for y, row in enumerate(rows):
+    for px in row:
+        if y < 16:
+            assert all(abs(v - c) < 0.01 * c for v, c in zip(px, (1, 2, 3))), (y, px)
+        else:
+            assert px == [0.0, 0.0, 0.0], (y, px)
+' "$TMP/down.hdr"
+expect 0 "slice --layout envmap to .hdr" "$ILF" slice "$TMP/north.h5" --position 1,1 --layout envmap --size 16 \
+    -o "$TMP/north.hdr"
+expect 0 "slice --envmap of light along +x" "$ILF" slice "$TMP/east.h5" --position 1,1 --envmap --size 16 \
+    -o "$TMP/east.hdr"
+check "longitude as Blender reads it: centre column +X, right half -Y" py "$HDR"'
+import sys
+north, east = read_hdr(sys.argv[1]), read_hdr(sys.argv[2])
+# light travelling along +y comes from -y: the right half; along +x comes from -x: the outer quarters
+for y in range(16):
+    for x in range(32):
+        assert (north[y][x][0] > 0.5) == (x >= 16), ("north", y, x, north[y][x])
+        assert (east[y][x][0] > 0.5) == (x < 8 or x >= 24), ("east", y, x, east[y][x])
+' "$TMP/north.hdr" "$TMP/east.hdr"
+expect 0 "slice --envmap to EXR" "$ILF" slice "$TMP/down.h5" --position 0,0 --envmap --size 8 -o "$TMP/down.exr"
+check "the EXR is written" test -s "$TMP/down.exr"
+expect 2 "--envmap needs --position" "$ILF" slice "$TMP/down.h5" --direction 0 --envmap -o "$TMP/never.hdr"
+check "slice says --envmap is for --position" stderr_has "--envmap"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
