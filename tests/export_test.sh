@@ -250,9 +250,9 @@ def read_hdr(path):
 '
 # Light travelling down (e3 = u x v = -z), up the +y axis (e3 = +y) and along +x: each lights the half of the
 # sphere it comes from, and nothing else.
-"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,1,0 --v 1,0,0 --radiance 1,2,3 -o "$TMP/down.h5" >/dev/null
-"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,0,1 --v 1,0,0 -o "$TMP/north.h5" >/dev/null
-"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,1,0 --v 0,0,1 -o "$TMP/east.h5" >/dev/null
+"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,1,0 --v 1,0,0 --radiance 1,2,3 -o "$TMP/down.h5" -q
+"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,0,1 --v 1,0,0 -o "$TMP/north.h5" -q
+"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,1,0 --v 0,0,1 -o "$TMP/east.h5" -q
 expect 0 "slice --envmap to .hdr" "$ILF" slice "$TMP/down.h5" --position 0,0 --envmap --size 32 -o "$TMP/down.hdr"
 check "slice says what the envmap is" stdout_has "64x32, environment map (equirectangular, +Z up)"
 check "light travelling down fills the upper half of the envmap (+Z up), the lower half is black" py "$HDR"'
