@@ -2,7 +2,9 @@
 # export_test.sh - `ilf` on what relighting leaves: info and verify on a
 # radiance map (radiance.h5), `ilf export` to glTF binary, PLY and CSV (the
 # glTF checked by the Khronos validator, npm's gltf-validator, when node can
-# load it; required when CI=true), and their error paths.
+# load it; required when CI=true), `ilf view` of a radiance map, `ilf slice
+# --envmap` (read back by a standard-library .hdr decoder), and their error
+# paths.
 #
 # Usage: bash export_test.sh ILF_BINARY TMPDIR
 #
@@ -283,6 +285,38 @@ expect 0 "slice --envmap to EXR" "$ILF" slice "$TMP/down.h5" --position 0,0 --en
 check "the EXR is written" test -s "$TMP/down.exr"
 expect 2 "--envmap needs --position" "$ILF" slice "$TMP/down.h5" --direction 0 --envmap -o "$TMP/never.hdr"
 check "slice says --envmap is for --position" stderr_has "--envmap"
+
+# ------------------------------------------------------------------ view
+expect 0 "view from above the floor to .hdr" "$ILF" view "$RAD" -o "$TMP/top.hdr" --position 0.6,0.6,3 \
+    --look-at 0.6,0.6,0 --up 0,1,0 --fov 10 --size 33x21
+check "view says what it wrote" stdout_has "^wrote .*top.hdr: 33x21, 2 maps, raw radiance"
+check "the centre pixel shows the radiance (radiosity / pi) of the floor cell under it" py "$HDR"'
+import csv, sys
+rows = read_hdr(sys.argv[1])
+assert len(rows) == 21 and len(rows[0]) == 33
+cell = [r for r in csv.DictReader(open(sys.argv[2])) if r["label"] == "polygons[1]"
+        and abs(float(r["x"]) - 0.6) < 0.125 and abs(float(r["y"]) - 0.6) < 0.125]
+assert len(cell) == 1, cell
+want = [float(cell[0]["radiosity_" + c]) / math.pi for c in "rgb"]
+got = rows[10][16]
+assert all(abs(g - w) <= 0.01 * max(want) for g, w in zip(got, want)), (got, want)
+' "$TMP/top.hdr" "$TMP/cells.csv"
+expect 0 "view from below the floor" "$ILF" view "$RAD" -o "$TMP/below.hdr" --position 0.6,0.6,-3 \
+    --look-at 0.6,0.6,0 --up 0,1,0 --fov 10 --size 9x9
+check "the back of the floor is black" py "$HDR"'
+import sys
+assert all(px == [0.0, 0.0, 0.0] for row in read_hdr(sys.argv[1]) for px in row)
+' "$TMP/below.hdr"
+expect 0 "view to PNG with --exposure" "$ILF" view "$RAD" -o "$TMP/room.png" --position 1.5,1.5,0.8 \
+    --look-at 0,1,0.5 --size 64x48 --exposure 1
+check "view to PNG says its scale" stdout_has "scale 2 (from --exposure 1)"
+expect 2 "view without --look-at" "$ILF" view "$RAD" -o "$TMP/never.png" --position 1,1,1
+check "view says what is missing" stderr_has "--look-at"
+expect 2 "view with up along the view direction" "$ILF" view "$RAD" -o "$TMP/never.png" --position 0,0,3 \
+    --look-at 0,0,0
+expect 2 "view with --fov 180" "$ILF" view "$RAD" -o "$TMP/never.png" --position 1,1,1 --look-at 0,0,0 --fov 180
+expect 2 "view of a light field" "$ILF" view "$TMP/down.h5" -o "$TMP/never.png" --position 1,1,1 --look-at 0,0,0
+check "no output is left by failed views" bash -c "! compgen -G '$TMP/never*' >/dev/null"
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -30,6 +30,7 @@ static const ilf_command commands[] = {
     {"slice", "write one position or one direction of a slab as an EXR or PNG image", ilf_cmd_slice},
     {"relight", "relight a scene: radiance maps, statistics and the camera's view", ilf_cmd_relight},
     {"export", "export a radiance map's relit surfaces to glTF (.glb), PLY or CSV", ilf_cmd_export},
+    {"view", "render a camera's view of a radiance map without relighting", ilf_cmd_view},
     {"irradiance", "print the irradiance of a scene at given points (like rtrace -I)", ilf_cmd_irradiance},
     {"capture", "turn light probe images (a manifest) into a light field file", ilf_cmd_capture},
     {"render-probes", "render the light probes a scene gives on a grid of a plane, and their manifest",
