@@ -205,6 +205,9 @@ fi
 
 expect 0 "--format overrides the extension" "$ILF" export "$RAD" -o "$TMP/cells.txt" --format csv
 check "the .txt holds the CSV" cmp -s "$TMP/cells.txt" "$TMP/cells.csv"
+expect 2 "export of a damaged radiance.h5" "$ILF" export "$TMP/damaged.h5" -o "$TMP/never.glb"
+check "export names the damaged file" stderr_has "damaged.h5"
+expect 2 "info of a damaged radiance.h5" "$ILF" info "$TMP/damaged.h5"
 expect 2 "export of a light field" "$ILF" export "$TMP/text.h5" -o "$TMP/never.glb"
 check "export names the bad input" stderr_has "text.h5"
 expect 2 "export to an unknown extension" "$ILF" export "$RAD" -o "$TMP/never.obj"
@@ -315,6 +318,8 @@ check "view says what is missing" stderr_has "--look-at"
 expect 2 "view with up along the view direction" "$ILF" view "$RAD" -o "$TMP/never.png" --position 0,0,3 \
     --look-at 0,0,0
 expect 2 "view with --fov 180" "$ILF" view "$RAD" -o "$TMP/never.png" --position 1,1,1 --look-at 0,0,0 --fov 180
+expect 2 "view of a damaged radiance.h5" "$ILF" view "$TMP/damaged.h5" -o "$TMP/never.png" --position 1,1,1 \
+    --look-at 0,0,0
 expect 2 "view of a light field" "$ILF" view "$TMP/down.h5" -o "$TMP/never.png" --position 1,1,1 --look-at 0,0,0
 check "no output is left by failed views" bash -c "! compgen -G '$TMP/never*' >/dev/null"
 

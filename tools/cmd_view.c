@@ -71,16 +71,22 @@ static const cli_usage view_usage = {
 
 /* ------------------------------------------------------------ the maps as ray targets */
 
-/* One map prepared for intersection: the polygon in (u, v), and its cells' grid keys sorted. */
+/* A stored cell by its place in the grid, j * nu + i (up to 2^64 - 1: nu and nv are 32-bit). */
+typedef struct cell_key {
+    uint64_t grid;
+    uint32_t cell;
+} cell_key;
+
+/* One map prepared for intersection: the polygon in (u, v), and its cells' keys sorted by grid place. */
 typedef struct target {
     lfio_radmap_patch p;
     radmap_clipper poly; /* poly.poly: the polygon in (u, v) */
-    uint64_t *keys;      /* [ncells] (j * nu + i) << 32 | cell index, sorted */
+    cell_key *keys;      /* [ncells] */
 } target;
 
 static int compare_keys(const void *a, const void *b)
 {
-    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    uint64_t x = ((const cell_key *)a)->grid, y = ((const cell_key *)b)->grid;
     return x < y ? -1 : x > y;
 }
 
@@ -101,14 +107,14 @@ static target *targets_make(const lfio_radmap *map)
     for (size_t k = 0; t != NULL && k < count; k++) {
         lfio_radmap_get(map, k, &t[k].p);
         const lfio_radmap_patch *p = &t[k].p;
-        t[k].keys = malloc(sizeof(uint64_t) * (p->ncells > 0 ? p->ncells : 1));
+        t[k].keys = malloc(sizeof(cell_key) * (p->ncells > 0 ? p->ncells : 1));
         if (t[k].keys == NULL || !radmap_clipper_init(&t[k].poly, p)) {
             targets_free(t, k + 1);
             return NULL;
         }
         for (uint32_t c = 0; c < p->ncells; c++)
-            t[k].keys[c] = (((uint64_t)p->cell_ij[2 * c + 1] * p->nu + p->cell_ij[2 * c]) << 32) | c;
-        qsort(t[k].keys, p->ncells, sizeof(uint64_t), compare_keys);
+            t[k].keys[c] = (cell_key){(uint64_t)p->cell_ij[2 * c + 1] * p->nu + p->cell_ij[2 * c], c};
+        qsort(t[k].keys, p->ncells, sizeof(cell_key), compare_keys);
     }
     return t;
 }
@@ -140,12 +146,12 @@ static int64_t cell_at(const target *t, double u, double v)
     size_t lo = 0, hi = p->ncells;
     while (lo < hi) {
         size_t mid = lo + (hi - lo) / 2;
-        if ((t->keys[mid] >> 32) < want)
+        if (t->keys[mid].grid < want)
             lo = mid + 1;
         else
             hi = mid;
     }
-    return lo < p->ncells && (t->keys[lo] >> 32) == want ? (int64_t)(t->keys[lo] & 0xffffffffu) : -1;
+    return lo < p->ncells && t->keys[lo].grid == want ? (int64_t)t->keys[lo].cell : -1;
 }
 
 /* Shades the first surface along the ray org + s dir, s > 0: radiance of its cell, black for a back face. */
