@@ -17,13 +17,26 @@
 #include "jsonout.h"
 #include "radmap_cli.h"
 
+/* The root attribute "format" of a radiance-map file (docs/format.md, section 6), which the light field
+ * reader's refusal quotes when it found one. */
+#define RADMAP_FORMAT_NAME "ilfkit-radiance-maps"
+
 lfio_status ilf_radmap_try(const char *path, const char *lf_msg, lfio_radmap **out, char *msg, size_t msg_size)
 {
     lfio_status st = lfio_radmap_read(path, out);
     if (st == LFIO_OK)
         return LFIO_OK;
-    /* Neither kind: the light field reader's message is the one a user of light fields expects. */
-    snprintf(msg, msg_size, "%s", st == LFIO_ERR_FORMAT ? lf_msg : lfio_errmsg());
+    /* A file that fails the radiance-map reader otherwise than on its format is a damaged radiance map. One
+     * whose format attribute names radiance maps gets both readers' word: it may be a damaged radiance map or
+     * a light field whose attribute is wrong. Anything else is reported as a light field, the kind most
+     * commands read, with that reader's message. */
+    if (st != LFIO_ERR_FORMAT)
+        snprintf(msg, msg_size, "%s", lfio_errmsg());
+    else if (strstr(lf_msg, RADMAP_FORMAT_NAME) != NULL)
+        snprintf(msg, msg_size, "%s (read as the radiance map its format attribute names; as a light field: %s)",
+                 lfio_errmsg(), lf_msg);
+    else
+        snprintf(msg, msg_size, "%s", lf_msg);
     return st;
 }
 

@@ -15,8 +15,10 @@
 /**
  * Reads path as a radiance map after lfio's light field reader refused it
  * with LFIO_ERR_FORMAT and message lf_msg: a file that is not a radiance map
- * either keeps the light field's message and status; one that is a radiance
- * map but damaged gets the radiance-map reader's.
+ * either keeps the light field's message; one that is a radiance map but
+ * damaged (the radiance-map reader fails otherwise than on the format, or
+ * the light field reader quotes the radiance-map format name) gets the
+ * radiance-map reader's.
  * @return LFIO_OK and *out; else the status, with the message to report in
  * msg (msg_size bytes).
  */

@@ -5,7 +5,9 @@
  *
  * Invariants: the polygon is projected once per patch; clipping a convex
  * polygon by half-planes keeps it convex and its order (counter-clockwise
- * from the front), so each pass adds at most one vertex.
+ * from the front), so each pass adds at most one vertex. lfio's reader does
+ * not check convexity: a pass that would pass the capacity (a non-convex
+ * polygon in a hand-edited file) gives no cell rather than overrun.
  */
 #include <stdlib.h>
 
@@ -46,19 +48,24 @@ void radmap_point(const lfio_radmap_patch *p, double u, double v, double out[3])
         out[i] = p->origin[i] + u * p->e1[i] + v * p->e2[i];
 }
 
-/* Keeps the part of polygon in[n] where sign * (coordinate axis - bound) >= 0, into out. @return its count. */
-static uint32_t clip_side(const double *in, uint32_t n, int axis, double bound, double sign, double *out)
+/* Keeps the part of polygon in[n] where sign * (coordinate axis - bound) >= 0, into out (room for cap
+ * vertices). @return its count, 0 if it would not fit. */
+static uint32_t clip_side(const double *in, uint32_t n, int axis, double bound, double sign, double *out,
+                          uint32_t cap)
 {
     uint32_t m = 0;
     for (uint32_t k = 0; k < n; k++) {
         const double *p = in + 2 * k, *q = in + 2 * ((k + 1) % n);
         double dp = sign * (p[axis] - bound), dq = sign * (q[axis] - bound);
-        if (dp >= 0) {
+        int keep = dp >= 0, cross = (dp >= 0) != (dq >= 0);
+        if (m + (uint32_t)keep + (uint32_t)cross > cap)
+            return 0;
+        if (keep) {
             out[2 * m] = p[0];
             out[2 * m + 1] = p[1];
             m++;
         }
-        if ((dp >= 0) != (dq >= 0)) {
+        if (cross) {
             double t = dp / (dp - dq);
             out[2 * m] = p[0] + t * (q[0] - p[0]);
             out[2 * m + 1] = p[1] + t * (q[1] - p[1]);
@@ -72,10 +79,10 @@ uint32_t radmap_clipper_cell(radmap_clipper *c, uint32_t k, double *world)
 {
     const lfio_radmap_patch *p = c->p;
     double u0 = p->u0 + p->cell_ij[2 * k] * p->cell_size, v0 = p->v0 + p->cell_ij[2 * k + 1] * p->cell_size;
-    uint32_t n = clip_side(c->poly, p->nverts, 0, u0, 1.0, c->a);
-    n = clip_side(c->a, n, 0, u0 + p->cell_size, -1.0, c->b);
-    n = clip_side(c->b, n, 1, v0, 1.0, c->a);
-    n = clip_side(c->a, n, 1, v0 + p->cell_size, -1.0, c->b);
+    uint32_t n = clip_side(c->poly, p->nverts, 0, u0, 1.0, c->a, c->cap);
+    n = clip_side(c->a, n, 0, u0 + p->cell_size, -1.0, c->b, c->cap);
+    n = clip_side(c->b, n, 1, v0, 1.0, c->a, c->cap);
+    n = clip_side(c->a, n, 1, v0 + p->cell_size, -1.0, c->b, c->cap);
     if (n < 3)
         return 0;
     for (uint32_t i = 0; i < n; i++)
