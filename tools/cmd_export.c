@@ -319,7 +319,7 @@ static void glb_chunk(bytes *out, const char *type, const void *data, size_t siz
         bytes_append(out, &pad, 1);
 }
 
-/* Builds the whole .glb in out. @return 1, or 0 when memory runs out. */
+/* Builds the whole .glb in out. @return 1; 0 when memory runs out; -1 when it would pass GLB's 32-bit length. */
 static int build_glb(const lfio_radmap *map, double scale, bytes *out)
 {
     cJSON *root = gltf_root(map);
@@ -344,7 +344,7 @@ static int build_glb(const lfio_radmap *map, double scale, bytes *out)
         bytes_append(out, header, sizeof header);
         glb_chunk(out, "JSON", json, jlen, ' ');
         glb_chunk(out, "BIN\0", bin.data, bin.size, '\0');
-        ok = !out->failed && total <= UINT32_MAX;
+        ok = total > UINT32_MAX ? -1 : !out->failed;
     } else {
         ok = 0;
     }
@@ -526,9 +526,12 @@ static int export_map(const lfio_radmap *map, const export_options *o)
         ok = o->format == FMT_GLB ? build_glb(map, scale, &out)
              : o->format == FMT_PLY ? build_ply(map, scale, &out)
                                     : build_csv(map, &out);
-    if (!ok) {
+    if (ok != 1) {
         free(out.data);
-        cli_error("export", "%s: out of memory while building the output", o->output);
+        if (ok < 0)
+            cli_error("export", "%s: more than the 4 GiB a glTF binary can hold: export to .ply or .csv", o->output);
+        else
+            cli_error("export", "%s: out of memory while building the output", o->output);
         return ILF_EXIT_FAILED;
     }
     char err[1024];
