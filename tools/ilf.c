@@ -27,7 +27,7 @@ static const ilf_command commands[] = {
     {"synth", "write a synthetic light field (constant, radial or spot emitters)", ilf_cmd_synth},
     {"info", "describe a light field or radiance-map file: headers; --stats for the data", ilf_cmd_info},
     {"verify", "check light field and radiance-map files completely: format, checksums, values", ilf_cmd_verify},
-    {"slice", "write one position or one direction of a slab as an EXR or PNG image", ilf_cmd_slice},
+    {"slice", "write one position (or its environment map) or one direction of a slab as an image", ilf_cmd_slice},
     {"relight", "relight a scene: radiance maps, statistics and the camera's view", ilf_cmd_relight},
     {"export", "export a radiance map's relit surfaces to glTF (.glb), PLY or CSV", ilf_cmd_export},
     {"view", "render a camera's view of a radiance map without relighting", ilf_cmd_view},
