@@ -139,7 +139,7 @@ walk() {
 }
 
 walk "write a light field" out.h5 "$ILF" synth --kind radial --grid 4x4 --n 4 -o out.h5
-walk "read a light field (info)" - "$ILF" info captured.h5
+walk "read a light field (info)" - "$ILF" info captured.h5 --stats
 walk "read a light field (verify)" - "$ILF" verify slab.h5
 walk "capture a probe grid" cap.h5 "$ILF" capture probes/manifest.json -o cap.h5 --threads 1 -q
 walk "depth correction" lamp.h5 "$ILF" reproject captured.h5 --proxy proxy.json -o lamp.h5 --threads 1 -q

@@ -130,12 +130,12 @@ check "the result does not depend on the thread count" \
     diff <(grep -v -e '^file' -e 'creator' "$TMP/info-1thread.txt") <(grep -v -e '^file' -e 'creator' "$OUT")
 
 # ------------------------------------------------------------------ info
-expect 0 "info (text)" "$ILF" info "$CONST"
+expect 0 "info (text)" "$ILF" info "$CONST" --stats
 check "info shows the grid" stdout_has "8x6 positions"
 check "info shows n" stdout_has "n: *4 (64 directions)"
 check "info shows the name" stdout_has "slab 0: flat"
 check "info shows the radiance" stdout_has "radiance max: *2 2 2"
-expect 0 "info --json" "$ILF" info "$CONST" --json
+expect 0 "info --json" "$ILF" info "$CONST" --json --stats
 check "info --json is JSON" py 'import json,sys; json.load(sys.stdin)' <"$OUT"
 check "info --json has the values given" py '
 import json, sys
@@ -146,6 +146,13 @@ assert s["directions"] == 64 and s["units"] == "W sr^-1 m^-2", s
 assert s["radiance_min"] == [2, 2, 2] and s["zero_fraction"] == 0, s
 assert s["mask"][-1] == {"n": 4, "set": 64, "total": 64}, s["mask"]
 assert d["file_bytes"] > 0 and d["format_version"] >= 1 and "irradiance" not in s
+' <"$OUT"
+expect 0 "info without --stats" "$ILF" info "$CONST" --json
+check "info reads headers only unless asked: no statistics" py '
+import json, sys
+s = json.load(sys.stdin)["slabs"][0]
+assert s["nu"] == 8 and s["directions"] == 64, s
+assert not any(k in s for k in ("radiance_min", "zero_fraction", "mask", "coverage")), s
 ' <"$OUT"
 expect 0 "info --irradiance" "$ILF" info "$CONST" --json --irradiance 3,2
 check "irradiance of constant radiance 2 is 2*pi" py '
@@ -161,7 +168,7 @@ expect 0 "info --slab by index" "$ILF" info "$CONST" --slab 0
 expect 2 "info --slab that does not exist" "$ILF" info "$CONST" --slab nosuch
 check "missing slab is named" stderr_has "nosuch"
 expect 2 "info --irradiance outside the grid" "$ILF" info "$CONST" --irradiance 8,0
-expect 0 "info of the spot file" "$ILF" info "$SPOT" --json
+expect 0 "info of the spot file" "$ILF" info "$SPOT" --json --stats
 check "spot file has dark and bright samples" py '
 import json, sys
 s = json.load(sys.stdin)["slabs"][0]
@@ -594,7 +601,7 @@ check "reproject prints the coverage" stdout_has "^slab 'lamp': 12x12 positions,
 check "reproject writes no sidecar file" absent "$CAP/lamp.coverage.json"
 cp "$OUT" "$CAP/lamp.stdout"
 expect 0 "the reprojected file verifies" "$ILF" verify "$CAP/lamp.h5"
-expect 0 "info on the reprojected file" "$ILF" info "$CAP/lamp.h5" --json
+expect 0 "info on the reprojected file" "$ILF" info "$CAP/lamp.h5" --json --stats
 check "info reads the coverage stored in the file" py '
 import json, re, sys
 info = json.load(open(sys.argv[1]))
@@ -604,9 +611,9 @@ assert cov["samples"] == 12 * 12 * 256 and 0 < cov["covered"] < cov["samples"], 
 # a sample is covered when any of its rays is: at least the share of covered rays, and close to it
 assert rays <= cov["fraction"] + 1e-4 and cov["fraction"] < rays + 0.1, (cov, rays)
 ' "$OUT" "$CAP/lamp.stdout"
-expect 0 "info text shows the coverage" "$ILF" info "$CAP/lamp.h5"
+expect 0 "info text shows the coverage" "$ILF" info "$CAP/lamp.h5" --stats
 check "info text has a coverage line" stdout_has "^  coverage: .*% of the etendue"
-expect 0 "info on a captured file" "$ILF" info "$CAP/probes.h5"
+expect 0 "info on a captured file" "$ILF" info "$CAP/probes.h5" --stats
 check "a file without coverage shows none" bash -c "! grep -q coverage '$OUT'"
 printf 'v -0.3 0.3 2\nv 0.3 0.3 2\nv 0.3 -0.3 2\nv -0.3 -0.3 2\nf 1 4 3 2\n' >"$CAP/lamp.obj"
 expect 0 "reproject onto a mesh quad" "$ILF" reproject "$CAP/probes.h5" --proxy "$CAP/lamp.obj" -o "$CAP/mesh.h5" \

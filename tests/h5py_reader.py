@@ -336,7 +336,7 @@ def check_reprojected(ilf, tmp):
     check(0 < int(cov.sum()) < cov.size, "lamp.h5: some samples covered, some not")
     # The covered share of the etendue, from the file alone, as `ilf info --json` reports it.
     share = float((cov * psa[:, None, None]).sum() / (psa.sum() * cov.shape[1] * cov.shape[2]))
-    status, out = run([ilf, "info", lamp, "--json"])
+    status, out = run([ilf, "info", lamp, "--json", "--stats"])
     got = json.loads(out)["slabs"][0].get("coverage", {}) if status == 0 else {}
     check(close(share, got.get("fraction", -1), rel=1e-9) and got.get("covered") == int(cov.sum()),
           f"lamp.h5: covered share {share} vs ilf info {got}")

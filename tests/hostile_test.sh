@@ -22,9 +22,8 @@
 # line is "N passed, M failed"; the exit status is nonzero if anything
 # failed. Leaks inside third-party libraries are suppressed (tests/lsan.supp).
 #
-# Readers without a command of their own are reported as skipped: radiance-map
-# files (no `ilf` command reads them; tests/fuzz/fuzz_radmap.c covers their
-# reader) and, with an `ilf` that has no capture command, manifests and images.
+# Readers without a command of their own are reported as skipped: with an
+# `ilf` that has no capture command, manifests and images.
 set -u
 
 if [ $# -lt 3 ] || [ $# -gt 4 ] || { [ $# -eq 4 ] && [ "$4" != --no-budget ]; }; then
@@ -138,12 +137,18 @@ run_case() {
         ;;
     mesh) "${expect[@]}" "$out" "$ILF" relight "$(wrap mesh "$path" "$n")" -o "$out" --quiet ;;
     lightfield)
-        "${expect[@]}" - "$ILF" info "$path"
+        "${expect[@]}" - "$ILF" info "$path" --stats
         "${expect[@]}" - "$ILF" verify "$path"
         "${expect[@]}" "$out.png" "$ILF" slice "$path" --position 0,0 -o "$out.png"
         "${expect[@]}" "$out" "$ILF" relight "$(wrap lightfield "$path" "$n")" -o "$out" --quiet
         ;;
     verify) "${expect[@]}" - "$ILF" verify "$path" ;;
+    radmap)
+        "${expect[@]}" - "$ILF" info "$path" --stats
+        "${expect[@]}" - "$ILF" verify "$path"
+        "${expect[@]}" "$out.glb" "$ILF" export "$path" -o "$out.glb"
+        "${expect[@]}" "$out.png" "$ILF" view "$path" -o "$out.png" --position 1,1,2 --look-at 1,1,0 --up 0,1,0
+        ;;
     points) "${expect[@]}" - "$ILF" irradiance "$TMP/valid.json" --points "$path" ;;
     proxy) "${expect[@]}" "$out.h5" "$ILF" reproject "$WORK/gen/base.h5" --proxy "$path" -o "$out.h5" --quiet ;;
     output) run_outputs "$n" "$path" "${expect[@]}" ;;
@@ -173,7 +178,9 @@ elif [ "$CAPTURE" -eq 1 ] && ! "$ILF" slice "$WORK/gen/base.h5" --direction 0 -o
     echo "FAIL: cannot write the valid image with ilf slice" >"$TMP/results/image"
 elif [ -z "$PY" ]; then
     echo "note: python3 not found: the generated cases are skipped"
-elif ! "$PY" "$WORK/gen_hostile.py" "$WORK/gen" "$WORK/gen/base.h5"; then
+elif ! "$ILF" relight "$(dirname "$0")/scenes/cli_square.json" -o "$WORK/gen/relit" --no-view --quiet; then
+    echo "FAIL: cannot write the base radiance map with ilf relight" >"$TMP/results/radmap"
+elif ! "$PY" "$WORK/gen_hostile.py" "$WORK/gen" "$WORK/gen/base.h5" "$WORK/gen/relit/radiance.h5"; then
     echo "FAIL: gen_hostile.py failed" >"$TMP/results/gen"
 fi
 
@@ -224,7 +231,7 @@ baseline() {
 baseline "$ILF" relight "$TMP/valid.json" -o "$TMP/valid-out" --quiet
 baseline "$ILF" irradiance "$TMP/valid.json" --points "$POINTS"
 if [ -e "$WORK/gen/base.h5" ]; then
-    baseline "$ILF" info "$WORK/gen/base.h5"
+    baseline "$ILF" info "$WORK/gen/base.h5" --stats
     baseline "$ILF" verify "$WORK/gen/base.h5"
     baseline "$ILF" slice "$WORK/gen/base.h5" --position 0,0 -o "$TMP/valid-slice.png"
 fi
@@ -259,7 +266,6 @@ while read -r kind want file problem; do
 done <"$WORK/cases.txt"
 wait
 
-echo "skip: radiance-map files: no ilf command reads them (tests/fuzz/fuzz_radmap.c covers lfio_radmap_read)"
 [ "$CAPTURE" -eq 1 ] || echo "skip: capture manifests and images: this ilf has no capture command"
 
 echo "what each run cost (CPU time, peak memory), most expensive first:"

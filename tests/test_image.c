@@ -225,6 +225,36 @@ static void test_writers(void)
         CHECK(worst < 1e-6f, "PNG of %d channel(s) quantised as documented (worst %g)", channels, (double)worst);
         img_free(&img);
     }
+    /* Radiance .hdr: RGBE keeps each value within 1% of the pixel's largest channel (8-bit mantissas); rows
+     * wider than 7 are run-length encoded (a constant stretch, then varied values), narrower ones flat;
+     * negative and NaN values come back 0, gray as r = g = b */
+    static float hpx[W * H * 3]; /* px keeps its values for the failures below */
+    for (int wide = 0; wide <= 1; wide++) {
+        int w = wide ? W : 5;
+        for (size_t k = 0; k < (size_t)w * H * 3; k++)
+            hpx[k] = k % 97 < 40 ? 2.5f : (float)(sample_value(k) * 100.0);
+        hpx[3] = -1.0f;
+        hpx[4] = NAN;
+        const char *path = tmp_path(wide ? "writer-wide.hdr" : "writer-narrow.hdr");
+        CHECK(img_guess_format(path) == IMG_FORMAT_HDR, "the .hdr extension names Radiance's format");
+        CHECK(img_write(path, w, H, 3, hpx, err, sizeof err) == IMG_OK, "%s", err);
+        img_image img;
+        CHECK(img_read(path, &img, err, sizeof err) == IMG_OK && img.pixels != NULL && img.width == w &&
+                  img.height == H && img.channels == 3,
+              "HDR read back (%dx%d): %s", w, H, err);
+        double worst = 0.0;
+        for (size_t p = 0; img.pixels != NULL && p < (size_t)w * H; p++) {
+            double top = 0.0;
+            for (int c = 0; c < 3; c++)
+                top = fmax(top, hpx[3 * p + c] > 0 ? hpx[3 * p + c] : 0.0);
+            for (int c = 0; c < 3; c++) {
+                double want_v = hpx[3 * p + c] > 0 ? hpx[3 * p + c] : 0.0; /* NaN compares false: 0 */
+                worst = fmax(worst, fabs(img.pixels[3 * p + c] - want_v) / (top > 0 ? top : 1.0));
+            }
+        }
+        CHECK(worst < 0.01, "HDR %d wide within 1%% of each pixel's largest channel (worst %g)", w, worst);
+        img_free(&img);
+    }
     /* The encoders' own failures: a file that cannot be opened, or that cannot take the bytes (a file
      * size limit, SIGXFSZ ignored so that writes fail with EFBIG: 64 bytes stop the header, 16 KiB an
      * EXR chunk in the middle). Not /dev/full: OpenEXR removes the file it failed to write. */

@@ -136,7 +136,7 @@ cat >"$CAP/lit.json" <<'EOF'
 EOF
 expect 0 "relight with the reprojected lamp" "$ILF" relight "$CAP/lit.json" -o "$CAP/lit" --no-view "${FAST[@]}"
 check "the uncovered etendue is told" stderr_matches "^ilf: warning: .*lightfields\[0\] (.*lamp.h5, slab 'lamp'): coverage"
-"$ILF" info "$CAP/lamp.h5" --json >"$CAP/info.json"
+"$ILF" info "$CAP/lamp.h5" --json --stats >"$CAP/info.json"
 check "the share told is info's" py '
 import json, re, sys
 info = json.load(open(sys.argv[1]))["slabs"][0]["coverage"]["fraction"]

@@ -1,13 +1,17 @@
 /*
- * cmd_info.c - `ilf info FILE [--json] [--slab NAME|INDEX] [--irradiance I,J]`:
+ * cmd_info.c - `ilf info FILE [--json] [--slab NAME|INDEX] [--stats] [--irradiance I,J]`:
  * describes a light field file: its format version, creator and size, and for
- * each slab its geometry, sampling, units, radiance statistics, zero-radiance
- * mask occupancy, the covered share when the slab has a coverage dataset
- * and, on request, the irradiance at one position centre.
+ * each slab its geometry, sampling, units and stored coverage_fraction; with
+ * --stats also its radiance statistics, zero-radiance mask occupancy and the
+ * covered share when the slab has a coverage dataset; with --irradiance the
+ * irradiance at one position centre. A radiance-map file (radiance.h5, as
+ * `ilf relight` writes) is described by info_radmap.c instead.
  *
- * Invariants: slabs are read one at a time (the memory needed is one slab,
- * not the file); the same slab_report feeds the text and the JSON output, so
- * they cannot disagree; the JSON schema is the one documented in docs/cli.md.
+ * Invariants: without --stats or --irradiance only the file's headers are
+ * read (no slab is decompressed), so info answers at once on any file; with
+ * them slabs are read one at a time (the memory needed is one slab, not the
+ * file); the same slab_report feeds the text and the JSON output, so they
+ * cannot disagree; the JSON schema is the one documented in docs/cli.md.
  */
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -20,6 +24,7 @@
 #include "jsonout.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
+#include "radmap_cli.h"
 
 #define INFO_MAX_MASK_LEVELS 32
 
@@ -28,6 +33,7 @@ typedef struct info_options {
     const char *slab;     /* NULL: every slab */
     int json;
     int want_irradiance;
+    int want_stats;       /* --stats: read every slab's data */
     uint32_t position[2]; /* (i, j) for --irradiance */
 } info_options;
 
@@ -35,6 +41,7 @@ typedef struct info_options {
 typedef struct slab_report {
     lfio_slab_desc desc;
     uint64_t directions;
+    int has_stats;        /* the fields below up to mask_set were gathered (--stats) */
     double min[3], max[3], mean[3];
     double zero_fraction; /* samples whose r, g and b are all 0 */
     uint32_t mask_levels;
@@ -48,25 +55,33 @@ typedef struct slab_report {
     uint64_t covered, samples;
 } slab_report;
 
-enum info_option_id { OPT_JSON, OPT_SLAB, OPT_IRRADIANCE };
+enum info_option_id { OPT_JSON, OPT_SLAB, OPT_STATS, OPT_IRRADIANCE };
 
 static const cli_option info_options_table[] = {
     {"json", 0, NULL, "print JSON (schema in docs/cli.md) instead of text"},
     {"slab", 0, "NAME|INDEX", "describe only this slab (default: every slab)"},
+    {"stats", 0, NULL, "also read the data: radiance statistics, mask, coverage (default: headers only)"},
     {"irradiance", 0, "I,J", "also report the irradiance at the centre of position (I,J)"},
 };
 
 static const cli_usage info_usage = {
     "info",
-    "FILE [--json] [--slab NAME|INDEX] [--irradiance I,J]",
-    "Describes a light field file: format version, creator, file size and, per slab,\n"
-    "name, origin, u, v, grid, partition level n, directions, units, mask threshold,\n"
-    "radiance min/max/mean per channel over all samples, the fraction of zero samples,\n"
-    "the mask's set/total bits per level and, for a slab with a coverage dataset (as\n"
-    "'ilf reproject' writes), the covered share of its etendue. --irradiance I,J adds the irradiance at\n"
-    "s=(I+0.5)/nu, t=(J+0.5)/nv on a surface facing -e3 (lfio_slab_irradiance).",
+    "FILE [--json] [--slab NAME|INDEX] [--stats] [--irradiance I,J]",
+    "Describes a light field file from its headers alone: format version, creator,\n"
+    "file size and, per slab, name, origin, u, v, grid, partition level n, directions,\n"
+    "units, mask threshold and the stored coverage_fraction. --stats reads the data\n"
+    "too: radiance min/max/mean per channel over all samples, the fraction of zero\n"
+    "samples, the mask's set/total bits per level and, for a slab with a coverage\n"
+    "dataset (as 'ilf reproject' writes), the covered share of its etendue.\n"
+    "--irradiance I,J adds the irradiance at s=(I+0.5)/nu, t=(J+0.5)/nv on a surface\n"
+    "facing -e3 (lfio_slab_irradiance).\n"
+    "A radiance-map file (radiance.h5 of 'ilf relight') is described too: creator,\n"
+    "scene, maps, cells, and per map its label, vertices, grid and cell count; with\n"
+    "--stats the irradiance and radiosity min/max/area-weighted mean.",
     "ilf info scene.h5\n"
-    "ilf info scene.h5 --json --irradiance 16,16 | python3 -m json.tool",
+    "ilf info scene.h5 --stats\n"
+    "ilf info scene.h5 --json --irradiance 16,16 | python3 -m json.tool\n"
+    "ilf info out/radiance.h5 --stats",
 };
 
 /* ------------------------------------------------------------ gathering */
@@ -129,20 +144,33 @@ static int gather_coverage(lfio_reader *r, size_t k, const info_options *o, slab
     return ILF_EXIT_OK;
 }
 
-/* Reads slab k whole and fills its report. @return an exit code. */
+/* Fills slab k's report from the file's headers alone (checked when the file was opened). */
+static void gather_header(const lfio_reader *r, size_t k, slab_report *rep)
+{
+    memset(rep, 0, sizeof *rep);
+    rep->desc = *lfio_reader_slab_desc(r, k);
+    rep->directions = lfio_part_hemi_count(rep->desc.n);
+    rep->stored_fraction = lfio_reader_coverage_fraction(r, k);
+}
+
+/* Fills slab k's report: its headers, and with --stats or --irradiance what its data give (the slab read whole).
+ * @return an exit code. */
 static int gather_slab(lfio_reader *r, size_t k, const info_options *o, slab_report *rep)
 {
+    gather_header(r, k, rep);
+    if (!o->want_stats && !o->want_irradiance)
+        return ILF_EXIT_OK;
     lfio_slab *slab = NULL;
     lfio_status st = lfio_reader_read_slab(r, k, &slab);
     if (st != LFIO_OK)
         return cli_lfio_failure("info", st, CLI_INPUT, o->path);
-    memset(rep, 0, sizeof *rep);
-    rep->desc = *lfio_slab_get_desc(slab);
-    rep->directions = lfio_slab_dir_count(slab);
-    gather_radiance_stats(slab, rep);
-    gather_mask(slab, rep);
-    rep->stored_fraction = lfio_reader_coverage_fraction(r, k);
-    int code = gather_coverage(r, k, o, rep);
+    int code = ILF_EXIT_OK;
+    if (o->want_stats) {
+        rep->has_stats = 1;
+        gather_radiance_stats(slab, rep);
+        gather_mask(slab, rep);
+        code = gather_coverage(r, k, o, rep);
+    }
     if (code == ILF_EXIT_OK && o->want_irradiance) {
         uint32_t i = o->position[0], j = o->position[1];
         if (i >= rep->desc.nu || j >= rep->desc.nv) {
@@ -194,10 +222,12 @@ static void print_slab_text(size_t k, const slab_report *rep, const info_options
     printf("  %-16s %u (%llu directions)\n", "n:", (unsigned)d->n, (unsigned long long)rep->directions);
     printf("  %-16s %s\n", "units:", units_name(d->units));
     printf("  %-16s %.9g\n", "mask threshold:", (double)d->mask_threshold);
-    print_vec3("radiance min:", rep->min);
-    print_vec3("radiance max:", rep->max);
-    print_vec3("radiance mean:", rep->mean);
-    printf("  %-16s %.4f%%\n", "zero samples:", 100.0 * rep->zero_fraction);
+    if (rep->has_stats) {
+        print_vec3("radiance min:", rep->min);
+        print_vec3("radiance max:", rep->max);
+        print_vec3("radiance mean:", rep->mean);
+        printf("  %-16s %.4f%%\n", "zero samples:", 100.0 * rep->zero_fraction);
+    }
     for (uint32_t l = 0; l < rep->mask_levels; l++)
         printf("  %-16s n=%u: %llu/%llu set\n", l == 0 ? "mask:" : "", (unsigned)rep->mask_n[l],
                (unsigned long long)rep->mask_set[l], (unsigned long long)lfio_part_hemi_count(rep->mask_n[l]));
@@ -249,11 +279,13 @@ static cJSON *slab_json(const slab_report *rep, const info_options *o)
     cJSON_AddNumberToObject(s, "directions", (double)rep->directions);
     cJSON_AddStringToObject(s, "units", units_name(d->units));
     cJSON_AddNumberToObject(s, "mask_threshold", d->mask_threshold);
-    ok = ok && json_add_doubles(s, "radiance_min", rep->min, 3) &&
-         json_add_doubles(s, "radiance_max", rep->max, 3) && json_add_doubles(s, "radiance_mean", rep->mean, 3);
-    cJSON_AddNumberToObject(s, "zero_fraction", rep->zero_fraction);
-    cJSON *mask = mask_json(rep);
-    ok = ok && mask != NULL && cJSON_AddItemToObject(s, "mask", mask);
+    if (rep->has_stats) {
+        ok = ok && json_add_doubles(s, "radiance_min", rep->min, 3) &&
+             json_add_doubles(s, "radiance_max", rep->max, 3) && json_add_doubles(s, "radiance_mean", rep->mean, 3);
+        cJSON_AddNumberToObject(s, "zero_fraction", rep->zero_fraction);
+        cJSON *mask = mask_json(rep);
+        ok = ok && mask != NULL && cJSON_AddItemToObject(s, "mask", mask);
+    }
     if (!isnan(rep->stored_fraction))
         ok = ok && cJSON_AddNumberToObject(s, "coverage_fraction", rep->stored_fraction);
     if (rep->has_coverage) {
@@ -300,6 +332,8 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
         o->json = 1;
     else if (opt == OPT_SLAB)
         o->slab = value;
+    else if (opt == OPT_STATS)
+        o->want_stats = 1;
     else
         return o->want_irradiance = cli_value_u32_pair(p, value, ',', 0, UINT32_MAX, o->position);
     return 1;
@@ -373,6 +407,26 @@ static int describe_file(lfio_reader *r, const info_options *o)
     return code;
 }
 
+/* A file lfio's light field reader refused as not one: a radiance map, or the light field reader's message. */
+static int describe_radmap(const info_options *o)
+{
+    char lf_msg[1024], msg[1024];
+    snprintf(lf_msg, sizeof lf_msg, "%s", lfio_errmsg());
+    lfio_radmap *map = NULL;
+    lfio_status st = ilf_radmap_try(o->path, lf_msg, &map, msg, sizeof msg);
+    if (st != LFIO_OK)
+        return cli_lfio_failure_msg("info", st, CLI_INPUT, o->path, msg);
+    int code = ILF_EXIT_OK;
+    if (o->slab != NULL || o->want_irradiance) {
+        cli_error("info", "%s: a radiance map has no slabs: --slab and --irradiance are for light fields", o->path);
+        code = ILF_EXIT_USAGE;
+    } else {
+        code = ilf_info_radmap(o->path, map, o->json, o->want_stats);
+    }
+    lfio_radmap_destroy(map);
+    return code;
+}
+
 int ilf_cmd_info(int argc, char **argv)
 {
     info_options o = {0};
@@ -381,6 +435,8 @@ int ilf_cmd_info(int argc, char **argv)
         return code;
     lfio_reader *r = NULL;
     lfio_status st = lfio_reader_open(o.path, &r);
+    if (st == LFIO_ERR_FORMAT)
+        return describe_radmap(&o);
     if (st != LFIO_OK)
         return cli_lfio_failure("info", st, CLI_INPUT, o.path);
     code = describe_file(r, &o);

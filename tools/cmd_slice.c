@@ -11,6 +11,15 @@
  *   --position I,J --layout latlong  the hemisphere in longitude (phi from e1
  *       around e3) and colatitude (theta from the pole at the top row),
  *       interpolated with lfio_part_interp().
+ *   --position I,J --envmap  (or --layout envmap) the full sphere of
+ *       directions from which light arrives at the position, in the world
+ *       frame, as an equirectangular (latlong) environment map with +Z up
+ *       as Blender reads one: row 0 is +Z, the middle row the horizon, the
+ *       centre column looks along +X and columns to its right turn toward
+ *       -Y (longitude phi = atan2(y, x) = pi (1 - 2 (x + 0.5) / width)).
+ *       Pixel direction d shows the radiance travelling along -d; the slab
+ *       stores only light travelling to its front (-d.e3 >= 0), so the
+ *       other hemisphere is black.
  *   --direction ID | --toward X,Y,Z  the nu x nv image of one direction,
  *       image up = +v, column 0 = lowest u.
  *
@@ -37,7 +46,7 @@
 #define SLICE_MAX_SIZE ILF_SLICE_MAX_SIDE
 
 typedef enum slice_mode { SLICE_NONE, SLICE_POSITION, SLICE_DIRECTION, SLICE_TOWARD } slice_mode;
-typedef enum slice_layout { LAYOUT_UNFOLD, LAYOUT_LATLONG } slice_layout;
+typedef enum slice_layout { LAYOUT_UNFOLD, LAYOUT_LATLONG, LAYOUT_ENVMAP } slice_layout;
 
 typedef struct slice_options {
     const char *path;
@@ -62,36 +71,42 @@ typedef struct slice_image {
 } slice_image;
 
 enum slice_option_id {
-    OPT_OUTPUT, OPT_SLAB, OPT_POSITION, OPT_LAYOUT, OPT_DIRECTION, OPT_TOWARD, OPT_SIZE, OPT_EXPOSURE, OPT_SCALE
+    OPT_OUTPUT, OPT_SLAB, OPT_POSITION, OPT_LAYOUT, OPT_ENVMAP, OPT_DIRECTION, OPT_TOWARD, OPT_SIZE, OPT_EXPOSURE,
+    OPT_SCALE
 };
 
 static const cli_option slice_options_table[] = {
-    {"output", 'o', "OUT.exr|OUT.png", "image to write (required): EXR raw float, PNG tone-mapped"},
+    {"output", 'o', "OUT.exr|OUT.hdr|OUT.png", "image to write (required): EXR or HDR raw float, PNG tone-mapped"},
     {"slab", 0, "NAME|INDEX", "slab to slice (default 0)"},
     {"position", 0, "I,J", "image of the directions at position (I,J)"},
-    {"layout", 0, "LAYOUT", "for --position: unfold (default, octahedral) or latlong"},
+    {"layout", 0, "LAYOUT", "for --position: unfold (default, octahedral), latlong or envmap"},
+    {"envmap", 0, NULL, "for --position: a full-sphere world latlong environment map, +Z up (--layout envmap)"},
     {"direction", 0, "ID", "image of the positions for hemisphere direction ID (0 .. 4n^2-1)"},
     {"toward", 0, "X,Y,Z", "image of the positions for the direction containing world direction X,Y,Z"},
-    {"size", 0, "PX", "for --position: PX x PX (unfold) or 2PX x PX (latlong), default 512"},
+    {"size", 0, "PX", "for --position: PX x PX (unfold) or 2PX x PX (latlong, envmap), default 512"},
     {"exposure", 0, "EV", "PNG scale 2^EV (default: 1 / 99th percentile of max(r,g,b) > 0)"},
     {"scale", 0, "W", "PNG scale 1/W: radiance W (W sr^-1 m^-2) shows as white, the same in every image"},
 };
 
 static const cli_usage slice_usage = {
     "slice",
-    "FILE [--slab NAME|INDEX] (--position I,J [--layout unfold|latlong] [--size PX]\n"
-    "                 | --direction ID | --toward X,Y,Z) -o OUT.exr|OUT.png\n"
+    "FILE [--slab NAME|INDEX] (--position I,J [--layout unfold|latlong|envmap] [--size PX]\n"
+    "                 | --direction ID | --toward X,Y,Z) -o OUT.exr|OUT.hdr|OUT.png\n"
     "                 [--exposure EV | --scale W]",
     "Writes one slice of a slab as an image, reading only that slice from the file.\n"
     "--position: the directions of one position. 'unfold' maps pixel (a,b), |a|+|b| <= 1,\n"
     "to slab-frame direction (a, b, 1-|a|-|b|), showing each solid angle as a flat\n"
     "triangle (outside the diamond: alpha 0); 'latlong' shows the hemisphere with phi\n"
-    "from e1 around e3 across and theta from the pole (top row) down, interpolated.\n"
+    "from e1 around e3 across and theta from the pole (top row) down, interpolated;\n"
+    "'envmap' (--envmap) is an HDRI of the light arriving at the position: the world's\n"
+    "full sphere, equirectangular, +Z up (row 0), the centre column toward +X, as\n"
+    "Blender's Environment Texture reads it; the hemisphere behind the slab is black.\n"
     "--direction/--toward: the nu x nv image of one direction (up = +v, left = low u);\n"
     "--toward takes the world direction the light travels in, which must face the\n"
     "slab's front (w.e3 >= 0).",
     "ilf slice scene.h5 --position 16,16 -o position.png\n"
     "ilf slice scene.h5 --position 16,16 --layout latlong --size 256 -o position.exr\n"
+    "ilf slice scene.h5 --position 16,16 --envmap -o env.hdr\n"
     "ilf slice scene.h5 --toward 0,0,1 --exposure -2 -o straight-up.png",
 };
 
@@ -103,8 +118,10 @@ static int parse_layout(const cli_parser *p, const char *text, slice_layout *lay
         *layout = LAYOUT_UNFOLD;
     else if (strcmp(text, "latlong") == 0)
         *layout = LAYOUT_LATLONG;
+    else if (strcmp(text, "envmap") == 0)
+        *layout = LAYOUT_ENVMAP;
     else
-        return cli_bad_value(p, text, "expected unfold or latlong"), 0;
+        return cli_bad_value(p, text, "expected unfold, latlong or envmap"), 0;
     return 1;
 }
 
@@ -144,6 +161,7 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
     case OPT_DIRECTION: count_mode(o, SLICE_DIRECTION); return parse_direction_id(p, value, &o->direction);
     case OPT_TOWARD: count_mode(o, SLICE_TOWARD); return parse_toward(p, value, o->toward);
     case OPT_LAYOUT: o->layout_given = 1; return parse_layout(p, value, &o->layout);
+    case OPT_ENVMAP: o->layout_given = 1; o->layout = LAYOUT_ENVMAP; return 1;
     case OPT_SIZE: o->size_given = 1; return cli_value_u32(p, value, 1, SLICE_MAX_SIZE, &o->size);
     case OPT_EXPOSURE: return cli_value_tone(p, value, 1, &o->tone);
     case OPT_SCALE: return cli_value_tone(p, value, 0, &o->tone);
@@ -160,11 +178,11 @@ static int check_combination(const slice_options *o)
     else if (o->mode_count != 1)
         problem = "give exactly one of --position, --direction and --toward";
     else if (o->output == NULL)
-        problem = "-o OUT.exr|OUT.png is required";
+        problem = "-o OUT.exr|OUT.hdr|OUT.png is required";
     else if (img_guess_format(o->output) == IMG_FORMAT_UNKNOWN)
-        problem = "the output must end in .exr or .png";
+        problem = "the output must end in .exr, .hdr or .png";
     else if (o->mode != SLICE_POSITION && (o->layout_given || o->size_given))
-        problem = "--layout and --size apply to --position only";
+        problem = "--layout, --envmap and --size apply to --position only";
     if (problem != NULL) {
         cli_error("slice", "%s", problem);
         return 0;
@@ -245,6 +263,33 @@ static void render_latlong(const float *radiance, uint32_t n, slice_image *img)
     }
 }
 
+/* Makes a one-position slab with desc's geometry: lfio's own world-to-slab conversion, so that the frame's
+ * definition has no second copy here (the reader gives only the description). @return an exit code. */
+static int slab_frame(const lfio_slab_desc *desc, const char *path, lfio_slab **frame)
+{
+    lfio_slab_desc tiny = *desc;
+    tiny.nu = tiny.nv = tiny.n = 1;
+    lfio_status st = lfio_slab_new(&tiny, frame);
+    return st == LFIO_OK ? ILF_EXIT_OK : cli_lfio_failure("slice", st, CLI_INPUT, path);
+}
+
+/* The full-sphere environment map of one position (see the file's comment for the convention). */
+static void render_envmap(const float *radiance, uint32_t n, const lfio_slab *frame, slice_image *img)
+{
+    for (int y = 0; y < img->height; y++) {
+        double elevation = 0.5 * ILF_PI - ILF_PI * (y + 0.5) / img->height;
+        for (int x = 0; x < img->width; x++) {
+            double phi = ILF_PI * (1.0 - 2.0 * (x + 0.5) / img->width);
+            /* the light seen looking along d travels along -d */
+            double w[3] = {-cos(elevation) * cos(phi), -cos(elevation) * sin(phi), -sin(elevation)}, local[3];
+            lfio_slab_to_local(frame, w, local);
+            float *px = img->pixels + ((size_t)y * img->width + x) * 3;
+            if (local[2] >= 0.0)
+                interpolate(radiance, n, local, px);
+        }
+    }
+}
+
 /* Reads one position and renders it in the chosen layout. @return an exit code. */
 static int slice_position(lfio_reader *r, size_t k, const slice_options *o, slice_image *img)
 {
@@ -263,33 +308,34 @@ static int slice_position(lfio_reader *r, size_t k, const slice_options *o, slic
     int code = ILF_EXIT_OK;
     lfio_status st = lfio_reader_read_position(r, k, i, j, radiance);
     int px = (int)(o->size_given ? o->size : 512);
-    int unfold = o->layout == LAYOUT_UNFOLD; /* unfold: PX x PX RGBA; latlong: 2PX x PX RGB */
+    int unfold = o->layout == LAYOUT_UNFOLD; /* unfold: PX x PX RGBA; latlong, envmap: 2PX x PX RGB */
+    lfio_slab *frame = NULL;
     if (st != LFIO_OK)
         code = cli_lfio_failure("slice", st, CLI_INPUT, o->path);
-    else if (!image_alloc(img, unfold ? px : 2 * px, px, unfold ? 4 : 3))
+    else if (o->layout == LAYOUT_ENVMAP)
+        code = slab_frame(d, o->path, &frame);
+    if (code == ILF_EXIT_OK && !image_alloc(img, unfold ? px : 2 * px, px, unfold ? 4 : 3))
         code = ILF_EXIT_FAILED;
+    if (code != ILF_EXIT_OK)
+        ;
     else if (unfold)
         render_unfold(radiance, d->n, img);
-    else
+    else if (o->layout == LAYOUT_LATLONG)
         render_latlong(radiance, d->n, img);
+    else
+        render_envmap(radiance, d->n, frame, img);
+    lfio_slab_destroy(frame);
     free(radiance);
     return code;
 }
 
-/*
- * Finds the hemisphere id containing world direction w. The reader gives
- * only the description, so a one-position slab with the same geometry
- * provides lfio's own world-to-slab conversion (no second copy of the
- * frame's definition here).
- */
+/* Finds the hemisphere id containing world direction w (slab_frame() converts it). */
 static int direction_toward(const lfio_slab_desc *desc, const slice_options *o, uint64_t *id)
 {
-    lfio_slab_desc tiny = *desc;
-    tiny.nu = tiny.nv = tiny.n = 1;
     lfio_slab *frame = NULL;
-    lfio_status st = lfio_slab_new(&tiny, &frame);
-    if (st != LFIO_OK)
-        return cli_lfio_failure("slice", st, CLI_INPUT, o->path);
+    int code = slab_frame(desc, o->path, &frame);
+    if (code != ILF_EXIT_OK)
+        return code;
     double local[3];
     lfio_slab_to_local(frame, o->toward, local);
     lfio_slab_destroy(frame);
@@ -375,13 +421,16 @@ static void describe_result(const slice_image *img, const slice_options *o, cons
 {
     printf("wrote %s: %dx%d, ", o->output, img->width, img->height);
     if (o->mode == SLICE_POSITION)
-        printf("%s view of position (%u,%u)", o->layout == LAYOUT_UNFOLD ? "unfold" : "latlong",
+        printf("%s of position (%u,%u)",
+               o->layout == LAYOUT_UNFOLD    ? "unfold view"
+               : o->layout == LAYOUT_LATLONG ? "latlong view"
+                                             : "environment map (equirectangular, +Z up)",
                (unsigned)o->position[0], (unsigned)o->position[1]);
     else
         printf("positions for one direction");
     printf(" of slab '%s'; ", slab);
     char how[96];
-    if (img_guess_format(o->output) == IMG_FORMAT_EXR)
+    if (img_guess_format(o->output) != IMG_FORMAT_PNG)
         printf("raw radiance (scale 1)%s\n",
                o->tone.kind != TONE_AUTO ? ", --exposure and --scale apply to PNG only" : "");
     else

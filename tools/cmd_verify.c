@@ -16,6 +16,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "lfio/lightfield.h"
+#include "radmap_cli.h"
 
 static const cli_option verify_options[] = {
     {"quiet", 'q', NULL, "print only the files that fail; no settings line or progress bar"},
@@ -26,11 +27,28 @@ static const cli_usage verify_usage = {
     "[--quiet] FILE...",
     "Checks each light field file completely: format, attributes and shapes, every\n"
     "checksum (by reading all data), the stored directions, solid angles and mask.\n"
+    "A radiance-map file (radiance.h5 of 'ilf relight') is checked as lfio reads it:\n"
+    "format, shapes, every checksum and value.\n"
     "Prints \"FILE: ok\" or \"FILE: <first problem> (N problems)\" for each file and\n"
     "exits 0 when all are valid, 2 when one is not, 1 when one could not be checked\n"
     "for want of memory.",
-    "ilf verify scene.h5 backup/*.h5",
+    "ilf verify scene.h5 backup/*.h5 out/radiance.h5",
 };
+
+/* Checks a file lfio_verify() refused as no light field as a radiance map, read whole (every checksum and value).
+ * A file that is neither keeps the light field's report. @return LFIO_OK if it is a valid radiance map, else the
+ * status, with *report's first problem the one to print. */
+static lfio_status verify_radmap(const char *path, lfio_verify_report *report)
+{
+    char lf_msg[sizeof report->first];
+    snprintf(lf_msg, sizeof lf_msg, "%s", report->first[0] != '\0' ? report->first : lfio_errmsg());
+    lfio_radmap *map = NULL;
+    lfio_status st = ilf_radmap_try(path, lf_msg, &map, report->first, sizeof report->first);
+    lfio_radmap_destroy(map);
+    if (st != LFIO_OK && st != LFIO_ERR_FORMAT)
+        report->problems = 1;
+    return st;
+}
 
 /* Verifies one file and prints its line, clearing bar's line first. @return LFIO_OK if the file is valid, else
  * lfio's status. */
@@ -38,6 +56,8 @@ static lfio_status verify_one(const char *path, int quiet, cli_progress *bar)
 {
     lfio_verify_report report = {0};
     lfio_status status = lfio_verify(path, &report);
+    if (status == LFIO_ERR_FORMAT)
+        status = verify_radmap(path, &report);
     cli_progress_clear(bar);
     if (status == LFIO_OK) {
         if (!quiet)

@@ -25,10 +25,12 @@ typedef struct ilf_command {
 
 static const ilf_command commands[] = {
     {"synth", "write a synthetic light field (constant, radial or spot emitters)", ilf_cmd_synth},
-    {"info", "describe a light field file: slabs, radiance statistics, mask, irradiance", ilf_cmd_info},
-    {"verify", "check files completely: format, checksums, directions and masks", ilf_cmd_verify},
-    {"slice", "write one position or one direction of a slab as an EXR or PNG image", ilf_cmd_slice},
+    {"info", "describe a light field or radiance-map file: headers; --stats for the data", ilf_cmd_info},
+    {"verify", "check light field and radiance-map files completely: format, checksums, values", ilf_cmd_verify},
+    {"slice", "write one position (or its environment map) or one direction of a slab as an image", ilf_cmd_slice},
     {"relight", "relight a scene: radiance maps, statistics and the camera's view", ilf_cmd_relight},
+    {"export", "export a radiance map's relit surfaces to glTF (.glb), PLY or CSV", ilf_cmd_export},
+    {"view", "render a camera's view of a radiance map without relighting", ilf_cmd_view},
     {"irradiance", "print the irradiance of a scene at given points (like rtrace -I)", ilf_cmd_irradiance},
     {"capture", "turn light probe images (a manifest) into a light field file", ilf_cmd_capture},
     {"render-probes", "render the light probes a scene gives on a grid of a plane, and their manifest",

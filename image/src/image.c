@@ -235,6 +235,8 @@ img_format img_guess_format(const char *path)
         return IMG_FORMAT_EXR;
     if (equals_ignoring_case(ext, "png"))
         return IMG_FORMAT_PNG;
+    if (equals_ignoring_case(ext, "hdr"))
+        return IMG_FORMAT_HDR;
     return IMG_FORMAT_UNKNOWN;
 }
 

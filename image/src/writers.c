@@ -1,7 +1,8 @@
 /*
- * writers.c - the encoders of image/image.h's two output formats, without
+ * writers.c - the encoders of image/image.h's output formats, without
  * OpenImageIO: OpenEXR through OpenEXR's C core library (OpenEXRCore, which
- * needs only zlib), PNG through libpng. The only files of ilfkit that include
+ * needs only zlib), PNG through libpng, Radiance .hdr (RGBE with run-length
+ * encoded scanlines, a format of a page) here. The only files of ilfkit that include
  * openexr.h and png.h (test_image_writers_contained).
  *
  * Why not the image module: Debian's OpenImageIO maps a reader for every
@@ -27,6 +28,7 @@
 #include "writers.h"
 
 #include <errno.h>
+#include <math.h>
 #include <openexr.h>
 #include <png.h>
 #include <setjmp.h>
@@ -239,12 +241,122 @@ static img_status write_png(const char *file, const char *path, int width, int h
     return status;
 }
 
-/* ------------------------------------------------------------ both */
+/* ------------------------------------------------------------ Radiance HDR */
+
+/* Radiance's RGBE of one linear colour: a shared exponent e, each channel mantissa * 2^(e - 136). Negative,
+ * NaN and tiny values are 0; a value too large for the exponent saturates. */
+static void rgbe_encode(const float *px, int channels, unsigned char out[4])
+{
+    double rgb[3];
+    for (int c = 0; c < 3; c++) {
+        double v = channels >= 3 ? px[c] : px[0];
+        rgb[c] = v > 0.0 ? v : 0.0; /* also NaN */
+    }
+    double top = rgb[0] > rgb[1] ? rgb[0] : rgb[1];
+    top = rgb[2] > top ? rgb[2] : top;
+    if (top < 1e-32) {
+        out[0] = out[1] = out[2] = out[3] = 0;
+        return;
+    }
+    int e;
+    double m = frexp(top > 1.7e38 ? 1.7e38 : top, &e) * 256.0 / top;
+    for (int c = 0; c < 3; c++) {
+        double v = rgb[c] * m;
+        out[c] = (unsigned char)(v >= 255.0 ? 255 : v);
+    }
+    out[3] = (unsigned char)(e + 128);
+}
+
+/* Appends to out the run-length encoding of n bytes of one component (runs of 3 or more: 128 + count, value;
+ * the rest as literals: count, bytes). @return the bytes written (at most n + n / 128 + 1). */
+static size_t rle_component(const unsigned char *v, size_t n, unsigned char *out)
+{
+    size_t at = 0, k = 0;
+    while (k < n) {
+        size_t run = 1;
+        while (k + run < n && run < 127 && v[k + run] == v[k])
+            run++;
+        if (run >= 3) {
+            out[at++] = (unsigned char)(128 + run);
+            out[at++] = v[k];
+            k += run;
+            continue;
+        }
+        size_t lit = 0; /* literals up to the next run of 3 */
+        while (k + lit < n && lit < 128 &&
+               !(k + lit + 2 < n && v[k + lit] == v[k + lit + 1] && v[k + lit] == v[k + lit + 2]))
+            lit++;
+        out[at++] = (unsigned char)lit;
+        memcpy(out + at, v + k, lit);
+        at += lit;
+        k += lit;
+    }
+    return at;
+}
+
+/* Encodes one row into out (scan: width * 4 bytes, planes component by component). @return its length. Rows
+ * 8 to 32767 wide are run-length encoded (new-style, starting 2, 2); others flat, as Radiance does. */
+static size_t hdr_row(const float *row, int width, int channels, unsigned char *scan, unsigned char *out)
+{
+    size_t w = (size_t)width;
+    for (size_t x = 0; x < w; x++) {
+        unsigned char rgbe[4];
+        rgbe_encode(row + x * channels, channels, rgbe);
+        for (int c = 0; c < 4; c++)
+            scan[c * w + x] = rgbe[c];
+    }
+    if (width < 8 || width > 32767) {
+        for (size_t x = 0; x < w; x++)
+            for (int c = 0; c < 4; c++)
+                out[4 * x + c] = scan[c * w + x];
+        return 4 * w;
+    }
+    size_t at = 0;
+    out[at++] = 2;
+    out[at++] = 2;
+    out[at++] = (unsigned char)(width >> 8);
+    out[at++] = (unsigned char)(width & 255);
+    for (int c = 0; c < 4; c++)
+        at += rle_component(scan + c * w, w, out + at);
+    return at;
+}
+
+/* Writes a Radiance .hdr into file. @return IMG_OK, or IMG_ERR_OUTPUT / IMG_ERR_NOMEM with a message naming path. */
+static img_status write_hdr(const char *file, const char *path, int width, int height, int channels,
+                            const float *pixels, char *msg, size_t msglen)
+{
+    size_t w = (size_t)width;
+    unsigned char *scan = malloc(4 * w), *out = malloc(4 + 4 * w + 4 * (w / 128 + 1));
+    FILE *f = NULL;
+    img_status status = IMG_OK;
+    if (scan == NULL || out == NULL) {
+        status = fail(IMG_ERR_NOMEM, msg, msglen, "%s: out of memory for a row of %d pixels", path, width);
+    } else if ((f = fopen(file, "wbe")) == NULL) {
+        status = fail(IMG_ERR_OUTPUT, msg, msglen, "%s: cannot write image: %s", path, strerror(errno));
+    } else {
+        int ok = fprintf(f, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n", height, width) > 0;
+        for (int y = 0; ok && y < height; y++) {
+            size_t len = hdr_row(pixels + (size_t)y * w * channels, width, channels, scan, out);
+            ok = fwrite(out, 1, len, f) == len;
+        }
+        if (!ok)
+            status = fail(IMG_ERR_OUTPUT, msg, msglen, "%s: cannot write image: %s", path, strerror(errno));
+    }
+    if (f != NULL && fclose(f) != 0 && status == IMG_OK)
+        status = fail(IMG_ERR_OUTPUT, msg, msglen, "%s: cannot write image: %s", path, strerror(errno));
+    free(scan);
+    free(out);
+    return status;
+}
+
+/* ------------------------------------------------------------ every format */
 
 img_status img__write_pixels(const char *file, const char *path, img_format format, int width, int height,
                              int channels, const float *pixels, char *msg, size_t msglen)
 {
     if (format == IMG_FORMAT_EXR)
         return write_exr(file, path, width, height, channels, pixels, msg, msglen);
+    if (format == IMG_FORMAT_HDR)
+        return write_hdr(file, path, width, height, channels, pixels, msg, msglen);
     return write_png(file, path, width, height, channels, pixels, msg, msglen);
 }

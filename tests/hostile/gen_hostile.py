@@ -208,6 +208,27 @@ def stdlib_lightfields(out, base):
     folder(os.path.join(d, "directory.h5"))
 
 
+def radiance_maps(out, base):
+    """Damaged copies of a valid radiance map (radiance.h5 of ilf relight), under rm/: cut, scrambled, and
+    with h5py a value and a cell index the reader must refuse."""
+    d = os.path.join(out, "rm")
+    data = open(base, "rb").read()
+    for name, cut in (("truncated_50", len(data) // 2), ("truncated_last", len(data) - 1)):
+        write(os.path.join(d, name + ".h5"), data[:cut])
+    write(os.path.join(d, "superblock_garbage.h5"), data[:8] + garbage(56) + data[64:])
+    if h5py is None:
+        return
+
+    def poke(dataset, index, value):
+        def edit(f):
+            f["patches/0/" + dataset][index] = value
+        return edit
+    edited(d, base, "irradiance_nan.h5", poke("irradiance", (0, 0), np.nan))
+    edited(d, base, "radiosity_negative.h5", poke("radiosity", (1, 2), -1.0))
+    edited(d, base, "cell_outside.h5", poke("cell_ij", (0, 0), 1000000))
+    edited(d, base, "vertex_inf.h5", poke("vertices", (0, 0), np.inf))
+
+
 def edited(d, base, name, edit, libver=None):
     """Copies base to d/name and applies edit(h5py.File) to the copy, opened with libver (h5py's default
     when None: objects it creates then take HDF5 1.8's formats, 'v110' gives HDF5 1.10's)."""
@@ -482,8 +503,8 @@ def duplicate_slab(f):
 
 
 def main():
-    if len(sys.argv) != 3:
-        sys.exit("usage: gen_hostile.py OUTDIR BASE_H5")
+    if len(sys.argv) not in (3, 4):
+        sys.exit("usage: gen_hostile.py OUTDIR BASE_H5 [BASE_RADIANCE_H5]")
     out, base = sys.argv[1], sys.argv[2]
     scenes(out)
     meshes(out)
@@ -491,6 +512,8 @@ def main():
     images(out)
     other_formats(out)
     stdlib_lightfields(out, base)
+    if len(sys.argv) == 4:
+        radiance_maps(out, sys.argv[3])
     if h5py is None:
         print("gen_hostile.py: h5py not available: the edited light field files are not written")
     else:

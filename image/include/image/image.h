@@ -34,7 +34,10 @@
  *     values as given; .png as 8 bits with values clamped to [0, 1] and
  *     rounded to the nearest of 255 steps, NaN as 0 (callers apply
  *     img_srgb_encode()). Channels: 1 is gray (EXR "Y"), 2 gray and alpha in
- *     PNG ("R", "G" in EXR), 3 RGB, 4 RGBA.
+ *     PNG ("R", "G" in EXR), 3 RGB, 4 RGBA. .hdr is Radiance's RGBE
+ *     (shared 8-bit exponent, 1% precision), linear, scanlines run-length
+ *     encoded, rows top to bottom ("-Y H +X W"); gray is written as r = g = b,
+ *     alpha is dropped, negative and NaN values are written as 0.
  *   - Writes are atomic (base's ilf/atomic_file.h): the image is written to
  *     FOLDER/.NAME.tmp-<12 hex>.EXT beside the path, flushed and renamed over
  *     it; on failure the temporary is removed and an existing file at the
@@ -79,7 +82,8 @@ typedef enum img_status {
 typedef enum img_format {
     IMG_FORMAT_UNKNOWN = 0,
     IMG_FORMAT_EXR = 1, /**< OpenEXR, 32-bit float, linear */
-    IMG_FORMAT_PNG = 2  /**< PNG, 8 bits per channel, display-encoded */
+    IMG_FORMAT_PNG = 2, /**< PNG, 8 bits per channel, display-encoded */
+    IMG_FORMAT_HDR = 3  /**< Radiance RGBE (.hdr), linear, run-length encoded scanlines */
 } img_format;
 
 /** An image read from a file. */
@@ -94,7 +98,7 @@ typedef struct img_image {
 /** @return a static name for s ("ok", "bad argument", "bad input", "cannot write", "out of memory", "unknown status"). */
 const char *img_status_name(img_status s);
 
-/** @return the writable format for path's extension (.exr or .png, any case); UNKNOWN otherwise or for NULL. */
+/** @return the writable format for path's extension (.exr, .png or .hdr, any case); UNKNOWN otherwise or for NULL. */
 img_format img_guess_format(const char *path);
 
 /**

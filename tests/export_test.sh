@@ -1,0 +1,327 @@
+#!/usr/bin/env bash
+# export_test.sh - `ilf` on what relighting leaves: info and verify on a
+# radiance map (radiance.h5), `ilf export` to glTF binary, PLY and CSV (the
+# glTF checked by the Khronos validator, npm's gltf-validator, when node can
+# load it; required when CI=true), `ilf view` of a radiance map, `ilf slice
+# --envmap` (read back by a standard-library .hdr decoder), and their error
+# paths.
+#
+# Usage: bash export_test.sh ILF_BINARY TMPDIR
+#
+# The scene has a triangle and a pentagon whose edges cross the cells, so
+# exported cells are clipped: the triangles of every export must add up to
+# the area the file stores. python3 (standard library only) reads the
+# outputs. The last line is "N passed, M failed"; the exit status is nonzero
+# when anything failed.
+set -u
+
+if [ $# -ne 2 ]; then
+    echo "usage: bash export_test.sh ILF_BINARY TMPDIR" >&2
+    exit 2
+fi
+ILF=$1
+TMP=$2
+rm -rf "$TMP"
+mkdir -p "$TMP"
+OUT=$TMP/stdout
+ERR=$TMP/stderr
+. "$(dirname "$0")/checks.sh"
+status=0
+
+run() {
+    "$@" >"$OUT" 2>"$ERR"
+    status=$?
+}
+expect() {
+    local code=$1 what=$2
+    shift 2
+    run "$@"
+    if [ "$status" -eq "$code" ]; then
+        passed=$((passed + 1))
+    else
+        failed=$((failed + 1))
+        echo "FAIL: $what: exit $status, expected $code"
+        sed 's/^/    stderr: /' "$ERR" | head -n 5
+    fi
+}
+stdout_has() { grep -q -e "$1" "$OUT"; }
+stderr_has() { grep -q -F -e "$1" "$ERR"; }
+py() { python3 -c "$@"; }
+
+cat >"$TMP/scene.json" <<'JSON'
+{
+  "materials": {
+    "lamp": {"albedo": [0, 0, 0], "emission": [10, 10, 10]},
+    "floor": {"albedo": [0.5, 0.4, 0.3]},
+    "wall": {"albedo": [0.2, 0.6, 0.2]}
+  },
+  "polygons": [
+    {"material": "lamp", "vertices": [[0.5, 0.5, 1], [0.5, 1.5, 1], [1.5, 1.5, 1], [1.5, 0.5, 1]]},
+    {"material": "floor", "vertices": [[0, 0, 0], [2.1, 0, 0], [0, 2.3, 0]]},
+    {"material": "wall", "vertices": [[0, 0, 0], [0, 0, 1.1], [0, 1, 1.3], [0, 2, 1.1], [0, 2, 0]]}
+  ],
+  "radiance_maps": {"cell_size": 0.25},
+  "sampling": {"method": "culled", "partition_n": 8, "rays_per_solid_angle": 1, "bounces": 1, "seed": 1}
+}
+JSON
+RAD=$TMP/relit/radiance.h5
+expect 0 "relight the test scene" "$ILF" relight "$TMP/scene.json" -o "$TMP/relit" --no-view --threads 2 -q
+
+# ------------------------------------------------------------------ info, verify
+expect 0 "info on radiance.h5" "$ILF" info "$RAD"
+check "info says it is a radiance map" stdout_has "^kind: *radiance map"
+check "info counts the maps" stdout_has "^maps: *2$"
+expect 0 "info --json --stats on radiance.h5" "$ILF" info "$RAD" --json --stats
+cp "$OUT" "$TMP/info.json"
+check "info --json: maps, cells and areas agree; the floor's area is its triangle's" py '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["kind"] == "radiance map" and len(d["maps"]) == 2, d
+assert d["cells"] == sum(m["cells"] for m in d["maps"]), d
+assert abs(d["area"] - sum(m["area"] for m in d["maps"])) < 1e-9, d
+floor = [m for m in d["maps"] if m["label"] == "polygons[1]"][0]
+assert abs(floor["area"] - 0.5 * 2.1 * 2.3) < 1e-6, floor
+assert floor["irradiance_max"][0] > floor["irradiance_mean"][0] > floor["irradiance_min"][0] >= 0, floor
+assert d["irradiance_mean"][0] > 0, d
+' "$TMP/info.json"
+expect 0 "info without --stats has no statistics" "$ILF" info "$RAD" --json
+check "no irradiance keys without --stats" py '
+import json, sys
+d = json.load(sys.stdin)
+assert not any(k.startswith(("irradiance", "radiosity")) for k in d), d
+' <"$OUT"
+expect 2 "info --slab on a radiance map" "$ILF" info "$RAD" --slab 0
+check "info says why" stderr_has "no slabs"
+expect 0 "verify radiance.h5" "$ILF" verify "$RAD"
+check "verify says ok" stdout_has ": ok$"
+cp "$RAD" "$TMP/damaged.h5"
+size=$(wc -c <"$TMP/damaged.h5")
+printf '\xff\xff\xff\xff\xff\xff\xff\xff' | dd of="$TMP/damaged.h5" bs=1 seek=$((size - 200)) conv=notrunc status=none
+expect 2 "verify a damaged radiance.h5" "$ILF" verify "$TMP/damaged.h5"
+check "verify names the damaged file" stdout_has "damaged.h5: .*problem"
+printf 'not hdf5\n' >"$TMP/text.h5"
+expect 2 "info on a text file" "$ILF" info "$TMP/text.h5"
+check "a file that is neither keeps the light field message" stderr_has "not an HDF5 file"
+
+# ------------------------------------------------------------------ export
+expect 0 "export CSV" "$ILF" export "$RAD" -o "$TMP/cells.csv"
+check "CSV: one row per cell, areas and irradiance as info says" py '
+import csv, json, sys
+d = json.load(open(sys.argv[1]))
+rows = list(csv.DictReader(open(sys.argv[2])))
+assert len(rows) == d["cells"], (len(rows), d["cells"])
+area = sum(float(r["area_m2"]) for r in rows)
+assert abs(area - d["area"]) < 1e-6 * d["area"], (area, d["area"])
+mean = sum(float(r["area_m2"]) * float(r["irradiance_r"]) for r in rows) / area
+assert abs(mean - d["irradiance_mean"][0]) < 1e-5 * d["irradiance_mean"][0], (mean, d["irradiance_mean"])
+assert {r["label"] for r in rows} == {m["label"] for m in d["maps"]}
+' "$TMP/info.json" "$TMP/cells.csv"
+
+# area TRIANGLES: the summed area of [[p, q, r], ...]
+AREA='
+def area(tris):
+    s = 0.0
+    for p, q, r in tris:
+        a = [q[i] - p[i] for i in range(3)]
+        b = [r[i] - p[i] for i in range(3)]
+        c = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+        s += 0.5 * sum(x * x for x in c) ** 0.5
+    return s
+'
+expect 0 "export PLY" "$ILF" export "$RAD" -o "$TMP/room.ply" --exposure 0
+check "PLY: its triangles cover the stored area; sRGB bytes; irradiance as stored" py "$AREA"'
+import json, sys
+d = json.load(open(sys.argv[1]))
+lines = open(sys.argv[2]).read().split("\n")
+end = lines.index("end_header")
+nv = int([l for l in lines if l.startswith("element vertex")][0].split()[2])
+nf = int([l for l in lines if l.startswith("element face")][0].split()[2])
+verts = [l.split() for l in lines[end + 1:end + 1 + nv]]
+faces = [l.split() for l in lines[end + 1 + nv:end + 1 + nv + nf]]
+pos = [[float(x) for x in v[:3]] for v in verts]
+assert all(f[0] == "3" for f in faces)
+a = area([[pos[int(i)] for i in f[1:]] for f in faces])
+assert abs(a - d["area"]) < 1e-4 * d["area"], (a, d["area"])
+assert all(0 <= int(c) <= 255 for v in verts for c in v[3:6])
+assert max(int(v[3]) for v in verts) > 0
+emax = max(float(v[6]) for v in verts)
+assert abs(emax - max(m["irradiance_max"][0] for m in d["maps"])) < 1e-5 * emax, emax
+' "$TMP/info.json" "$TMP/room.ply"
+
+expect 0 "export glTF binary" "$ILF" export "$RAD" -o "$TMP/room.glb"
+check "export prints what it wrote" stdout_has "^wrote .*room.glb: 2 maps"
+check "GLB: header and chunks; triangles cover the stored area; COLOR_0 in [0, 1]; _IRRADIANCE per vertex" \
+    py "$AREA"'
+import json, struct, sys
+d = json.load(open(sys.argv[1]))
+b = open(sys.argv[2], "rb").read()
+magic, version, length = struct.unpack_from("<4sII", b, 0)
+assert magic == b"glTF" and version == 2 and length == len(b), (magic, version, length)
+jlen, jtype = struct.unpack_from("<I4s", b, 12)
+assert jtype == b"JSON" and jlen % 4 == 0
+g = json.loads(b[20:20 + jlen])
+blen, btype = struct.unpack_from("<I4s", b, 20 + jlen)
+assert btype == b"BIN\0"
+bin_ = b[28 + jlen:28 + jlen + blen]
+def read(acc, fmt, n):
+    a = g["accessors"][acc]
+    v = g["bufferViews"][a["bufferView"]]
+    return [struct.unpack_from("<" + fmt * n, bin_, v["byteOffset"] + k * 4 * n) for k in range(a["count"])]
+total = 0.0
+assert len(g["meshes"]) == 2 and "KHR_materials_unlit" in g["extensionsUsed"]
+for m in g["meshes"]:
+    pr = m["primitives"][0]
+    pos = read(pr["attributes"]["POSITION"], "f", 3)
+    idx = read(pr["indices"], "I", 1)
+    col = read(pr["attributes"]["COLOR_0"], "f", 3)
+    irr = read(pr["attributes"]["_IRRADIANCE"], "f", 3)
+    assert len(col) == len(pos) == len(irr)
+    assert all(0 <= c <= 1 for rgb in col for c in rgb)
+    total += area([[pos[idx[3 * t][0]], pos[idx[3 * t + 1][0]], pos[idx[3 * t + 2][0]]] for t in range(len(idx) // 3)])
+assert abs(total - d["area"]) < 1e-4 * d["area"], (total, d["area"])
+' "$TMP/info.json" "$TMP/room.glb"
+
+# The Khronos validator: optional on a developer machine, required in CI (.ci/run installs it).
+VALIDATOR_JS='
+const fs = require("fs");
+const validator = require("gltf-validator");
+validator.validateBytes(new Uint8Array(fs.readFileSync(process.argv[1]))).then((r) => {
+  console.log(`errors ${r.issues.numErrors} warnings ${r.issues.numWarnings}`);
+  for (const m of r.issues.messages) console.log(`${m.code} ${m.pointer || ""} ${m.message}`);
+  process.exit(r.issues.numErrors === 0 ? 0 : 1);
+}).catch((e) => { console.log(String(e)); process.exit(1); });
+'
+NODE_PATH=${NODE_PATH:-$(npm root -g 2>/dev/null)}
+export NODE_PATH
+if command -v node >/dev/null && node -e 'require("gltf-validator")' 2>/dev/null; then
+    check "the Khronos glTF validator finds no error in room.glb" \
+        bash -c 'node -e "$0" "$1" >"$2"' "$VALIDATOR_JS" "$TMP/room.glb" "$TMP/validator.txt"
+    head -n 5 "$TMP/validator.txt" | sed 's/^/validator: /'
+elif [ "${CI:-}" = true ]; then
+    check "CI=true: the glTF validator (npm gltf-validator) must be installed" false
+else
+    echo "note: node or npm's gltf-validator is missing, so the glTF validator is not run (CI requires it)"
+fi
+
+expect 0 "--format overrides the extension" "$ILF" export "$RAD" -o "$TMP/cells.txt" --format csv
+check "the .txt holds the CSV" cmp -s "$TMP/cells.txt" "$TMP/cells.csv"
+expect 2 "export of a damaged radiance.h5" "$ILF" export "$TMP/damaged.h5" -o "$TMP/never.glb"
+check "export names the damaged file" stderr_has "damaged.h5"
+expect 2 "info of a damaged radiance.h5" "$ILF" info "$TMP/damaged.h5"
+expect 2 "export of a light field" "$ILF" export "$TMP/text.h5" -o "$TMP/never.glb"
+check "export names the bad input" stderr_has "text.h5"
+expect 2 "export to an unknown extension" "$ILF" export "$RAD" -o "$TMP/never.obj"
+check "export says which extensions it knows" stderr_has ".glb, .ply or .csv"
+expect 2 "export with a bad --format" "$ILF" export "$RAD" -o "$TMP/never.glb" --format obj
+expect 1 "export into a missing folder" "$ILF" export "$RAD" -o "$TMP/missing/room.glb"
+cp "$TMP/room.glb" "$TMP/keep.glb"
+expect 1 "export failing mid-write" bash -c "trap '' XFSZ; ulimit -f 8; exec \"\$0\" \"\$@\"" \
+    "$ILF" export "$RAD" -o "$TMP/room.glb"
+check "a failed export leaves the earlier file as it was" cmp -s "$TMP/room.glb" "$TMP/keep.glb"
+check "a failed export leaves no temporary" bash -c "! compgen -G '$TMP/.room*' >/dev/null"
+
+# ------------------------------------------------------------------ slice --envmap
+# read_hdr PATH: a Radiance .hdr decoded with the standard library alone (flat and run-length scanlines)
+HDR='
+import math
+def read_hdr(path):
+    b = open(path, "rb").read()
+    head, _, rest = b.partition(b"\n\n")
+    assert head.startswith(b"#?RADIANCE") and b"FORMAT=32-bit_rle_rgbe" in head, head
+    res, _, data = rest.partition(b"\n")
+    _, h, _, w = res.split()
+    h, w = int(h), int(w)
+    at, rows = 0, []
+    for y in range(h):
+        if data[at] == 2 and data[at + 1] == 2:
+            at += 4
+            planes = []
+            for c in range(4):
+                plane = []
+                while len(plane) < w:
+                    n = data[at]; at += 1
+                    if n > 128:
+                        plane += [data[at]] * (n - 128); at += 1
+                    else:
+                        plane += list(data[at:at + n]); at += n
+                planes.append(plane)
+            px = list(zip(*planes))
+        else:
+            px = [tuple(data[at + 4 * x:at + 4 * x + 4]) for x in range(w)]; at += 4 * w
+        rows.append([[0.0] * 3 if e == 0 else [(v + 0.5) * math.ldexp(1, e - 136) for v in (r, g, bb)]
+                     for r, g, bb, e in px])
+    assert at == len(data), (at, len(data))
+    return rows
+'
+# Light travelling down (e3 = u x v = -z), up the +y axis (e3 = +y) and along +x: each lights the half of the
+# sphere it comes from, and nothing else.
+"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,1,0 --v 1,0,0 --radiance 1,2,3 -o "$TMP/down.h5" -q
+"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,0,1 --v 1,0,0 -o "$TMP/north.h5" -q
+"$ILF" synth --kind constant --grid 2x2 --n 8 --u 0,1,0 --v 0,0,1 -o "$TMP/east.h5" -q
+expect 0 "slice --envmap to .hdr" "$ILF" slice "$TMP/down.h5" --position 0,0 --envmap --size 32 -o "$TMP/down.hdr"
+check "slice says what the envmap is" stdout_has "64x32, environment map (equirectangular, +Z up)"
+check "light travelling down fills the upper half of the envmap (+Z up), the lower half is black" py "$HDR"'
+import sys
+rows = read_hdr(sys.argv[1])
+assert len(rows) == 32 and len(rows[0]) == 64
+for y, row in enumerate(rows):
+    for px in row:
+        if y < 16:
+            assert all(abs(v - c) < 0.01 * c for v, c in zip(px, (1, 2, 3))), (y, px)
+        else:
+            assert px == [0.0, 0.0, 0.0], (y, px)
+' "$TMP/down.hdr"
+expect 0 "slice --layout envmap to .hdr" "$ILF" slice "$TMP/north.h5" --position 1,1 --layout envmap --size 16 \
+    -o "$TMP/north.hdr"
+expect 0 "slice --envmap of light along +x" "$ILF" slice "$TMP/east.h5" --position 1,1 --envmap --size 16 \
+    -o "$TMP/east.hdr"
+check "longitude as Blender reads it: centre column +X, right half -Y" py "$HDR"'
+import sys
+north, east = read_hdr(sys.argv[1]), read_hdr(sys.argv[2])
+# light travelling along +y comes from -y: the right half; along +x comes from -x: the outer quarters
+for y in range(16):
+    for x in range(32):
+        assert (north[y][x][0] > 0.5) == (x >= 16), ("north", y, x, north[y][x])
+        assert (east[y][x][0] > 0.5) == (x < 8 or x >= 24), ("east", y, x, east[y][x])
+' "$TMP/north.hdr" "$TMP/east.hdr"
+expect 0 "slice --envmap to EXR" "$ILF" slice "$TMP/down.h5" --position 0,0 --envmap --size 8 -o "$TMP/down.exr"
+check "the EXR is written" test -s "$TMP/down.exr"
+expect 2 "--envmap needs --position" "$ILF" slice "$TMP/down.h5" --direction 0 --envmap -o "$TMP/never.hdr"
+check "slice says --envmap is for --position" stderr_has "--envmap"
+
+# ------------------------------------------------------------------ view
+expect 0 "view from above the floor to .hdr" "$ILF" view "$RAD" -o "$TMP/top.hdr" --position 0.6,0.6,3 \
+    --look-at 0.6,0.6,0 --up 0,1,0 --fov 10 --size 33x21
+check "view says what it wrote" stdout_has "^wrote .*top.hdr: 33x21, 2 maps, raw radiance"
+check "the centre pixel shows the radiance (radiosity / pi) of the floor cell under it" py "$HDR"'
+import csv, sys
+rows = read_hdr(sys.argv[1])
+assert len(rows) == 21 and len(rows[0]) == 33
+cell = [r for r in csv.DictReader(open(sys.argv[2])) if r["label"] == "polygons[1]"
+        and abs(float(r["x"]) - 0.6) < 0.125 and abs(float(r["y"]) - 0.6) < 0.125]
+assert len(cell) == 1, cell
+want = [float(cell[0]["radiosity_" + c]) / math.pi for c in "rgb"]
+got = rows[10][16]
+assert all(abs(g - w) <= 0.01 * max(want) for g, w in zip(got, want)), (got, want)
+' "$TMP/top.hdr" "$TMP/cells.csv"
+expect 0 "view from below the floor" "$ILF" view "$RAD" -o "$TMP/below.hdr" --position 0.6,0.6,-3 \
+    --look-at 0.6,0.6,0 --up 0,1,0 --fov 10 --size 9x9
+check "the back of the floor is black" py "$HDR"'
+import sys
+assert all(px == [0.0, 0.0, 0.0] for row in read_hdr(sys.argv[1]) for px in row)
+' "$TMP/below.hdr"
+expect 0 "view to PNG with --exposure" "$ILF" view "$RAD" -o "$TMP/room.png" --position 1.5,1.5,0.8 \
+    --look-at 0,1,0.5 --size 64x48 --exposure 1
+check "view to PNG says its scale" stdout_has "scale 2 (from --exposure 1)"
+expect 2 "view without --look-at" "$ILF" view "$RAD" -o "$TMP/never.png" --position 1,1,1
+check "view says what is missing" stderr_has "--look-at"
+expect 2 "view with up along the view direction" "$ILF" view "$RAD" -o "$TMP/never.png" --position 0,0,3 \
+    --look-at 0,0,0
+expect 2 "view with --fov 180" "$ILF" view "$RAD" -o "$TMP/never.png" --position 1,1,1 --look-at 0,0,0 --fov 180
+expect 2 "view of a damaged radiance.h5" "$ILF" view "$TMP/damaged.h5" -o "$TMP/never.png" --position 1,1,1 \
+    --look-at 0,0,0
+expect 2 "view of a light field" "$ILF" view "$TMP/down.h5" -o "$TMP/never.png" --position 1,1,1 --look-at 0,0,0
+check "no output is left by failed views" bash -c "! compgen -G '$TMP/never*' >/dev/null"
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
