@@ -18,14 +18,18 @@
  *   E = D(x0) + a1 (D(x1) + a2 (D(x2) + ...)), up to `bounces` reflections,
  * where x(k+1) is the first front hit along a cosine-weighted direction
  * about n(k), a(k) its albedo (the pi of the cosine pdf cancels the 1/pi
- * of the Lambertian BRDF), and D(x) is next-event estimation of direct
- * irradiance: one point on every light field slab, drawn uniformly over its
+ * of the Lambertian BRDF), and D(x) is direct irradiance by two strategies
+ * combined with the balance heuristic of multiple importance sampling:
+ * light sampling (one point on every light field slab, uniform over its
  * rectangle, and one point on one emitting polygon, chosen with probability
- * proportional to area times luminance of emission and drawn uniformly over
- * its area; each weighted by cos at x, cos at the emitter, 1/r^2, over its
- * density, and kept when nothing lies between. Emission met by a bounce ray
- * is not added (next-event estimation already counts it). A ray meeting a
- * polygon's back ends the path, as an opaque black back face.
+ * proportional to area times luminance of emission, uniform over its area)
+ * and one cosine-weighted ray (the slabs it crosses before its first hit,
+ * and the emitting front it meets). Each sample adds L cos / (p_light +
+ * p_cosine) in solid-angle densities, never more than pi L: the 1/r^2 of
+ * light sampling next to an emitter cannot make a cell's estimate heavy-
+ * tailed. The bounce ray is separate from D's ray, so emission it meets is
+ * not added again. A ray meeting a polygon's back ends the path, as an
+ * opaque black back face.
  *
  * Light arriving through a slab: radiance L(s, t, d) where the segment from
  * x toward the slab point crosses it, d the direction light travels
@@ -61,6 +65,11 @@ typedef struct pt_emitter {
     double power;
 } pt_emitter;
 
+/* A slab's plane: unit normal of its front and area. */
+typedef struct pt_slab {
+    double normal[3], area;
+} pt_slab;
+
 struct bench_pt {
     const rl_scene *scene;
     rl_raycaster *rc;
@@ -69,8 +78,10 @@ struct bench_pt {
     size_t nemitters;
     pt_emitter *emitters;
     double total_power;
+    double *emit_prob; /* [npolygons] probability that light sampling picks the polygon (0: never) */
     size_t nslabs;
     rl_lightfield_desc *slabs;
+    pt_slab *geo;      /* [nslabs] */
 };
 
 /* ------------------------------------------------------------ small maths */
@@ -159,7 +170,9 @@ bench_pt *bench_pt_new(const rl_scene *scene, char *why, size_t size)
     pt->polygons = calloc(pt->npolygons ? pt->npolygons : 1, sizeof *pt->polygons);
     pt->emitters = calloc(pt->npolygons ? pt->npolygons : 1, sizeof *pt->emitters);
     pt->slabs = calloc(pt->nslabs ? pt->nslabs : 1, sizeof *pt->slabs);
-    if (pt->polygons == NULL || pt->emitters == NULL || pt->slabs == NULL) {
+    pt->geo = calloc(pt->nslabs ? pt->nslabs : 1, sizeof *pt->geo);
+    pt->emit_prob = calloc(pt->npolygons ? pt->npolygons : 1, sizeof *pt->emit_prob);
+    if (pt->polygons == NULL || pt->emitters == NULL || pt->slabs == NULL || pt->geo == NULL || pt->emit_prob == NULL) {
         snprintf(why, size, "out of memory");
         bench_pt_destroy(pt);
         return NULL;
@@ -174,10 +187,18 @@ bench_pt *bench_pt_new(const rl_scene *scene, char *why, size_t size)
         pt->total_power += power;
         pt->emitters[pt->nemitters++] = (pt_emitter){(uint32_t)k, pt->total_power, power};
     }
-    for (size_t k = 0; k < pt->nemitters; k++)
+    for (size_t k = 0; k < pt->nemitters; k++) {
         pt->emitters[k].cdf /= pt->total_power;
-    for (size_t k = 0; k < pt->nslabs; k++)
-        rl_scene_lightfield_describe(scene, k, &pt->slabs[k]);
+        pt->emit_prob[pt->emitters[k].polygon] = pt->emitters[k].power / pt->total_power;
+    }
+    for (size_t k = 0; k < pt->nslabs; k++) {
+        rl_lightfield_desc *d = &pt->slabs[k];
+        rl_scene_lightfield_describe(scene, k, d);
+        cross3(d->u, d->v, pt->geo[k].normal);
+        pt->geo[k].area = sqrt(dot3(pt->geo[k].normal, pt->geo[k].normal));
+        for (int c = 0; c < 3; c++)
+            pt->geo[k].normal[c] /= pt->geo[k].area;
+    }
     if (rl_raycaster_new(scene, &pt->rc) != RL_OK) {
         snprintf(why, size, "%s", rl_errmsg());
         bench_pt_destroy(pt);
@@ -194,21 +215,52 @@ void bench_pt_destroy(bench_pt *pt)
     free(pt->polygons);
     free(pt->emitters);
     free(pt->slabs);
+    free(pt->geo);
+    free(pt->emit_prob);
     free(pt);
 }
 
 /* ------------------------------------------------------------ direct light */
 
-/* @return 1 when nothing lies between x (offset along n) and y, r apart along unit w. */
+/* @return the solid-angle density with which light sampling draws a point r^2 away, seen at cosine cos_e
+ * off the normal of an emitter of the given area chosen with probability prob. */
+static double light_pdf(double prob, double area, double r2, double cos_e)
+{
+    return prob * r2 / (area * cos_e);
+}
+
+/* Adds to e L cos_x / (p_light + cos_x / pi): one sample of either strategy, weighted by the balance heuristic. */
+static void add_mis(double e[3], const double L[3], double cos_x, double p_light)
+{
+    double g = cos_x / (p_light + cos_x / PT_PI);
+    for (int k = 0; k < 3; k++)
+        e[k] += g * L[k];
+}
+
+/* @return 1 when nothing lies between x and the point r away along unit w. */
 static int visible(const bench_pt *pt, const double x[3], const double w[3], double r)
 {
     rl_ray_hit h;
     return !rl_raycaster_hit(pt->rc, x, w, PT_EPS, r - PT_EPS, &h);
 }
 
-/* Adds to e the irradiance at x (normal n) from one point drawn on emitting polygon em, over its density. */
-static void direct_polygon(const bench_pt *pt, const pt_emitter *em, double prob, const double x[3],
-                           const double n[3], uint64_t *rng, double e[3])
+/* Writes into L the radiance of slab k at (a, b) that travels along -w (w points from the receiver to it). */
+static void slab_radiance(const bench_pt *pt, size_t k, double a, double b, const double w[3], double L[3])
+{
+    const double(*R)[3] = pt->slabs[k].rot;
+    double d[3] = {-(R[0][0] * w[0] + R[1][0] * w[1] + R[2][0] * w[2]),
+                   -(R[0][1] * w[0] + R[1][1] * w[1] + R[2][1] * w[2]),
+                   -(R[0][2] * w[0] + R[1][2] * w[1] + R[2][2] * w[2])};
+    float rgb[3] = {0, 0, 0};
+    if (lfio_slab_radiance_interp(pt->slabs[k].slab, a, b, d, rgb) != LFIO_OK)
+        rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    for (int c = 0; c < 3; c++)
+        L[c] = rgb[c];
+}
+
+/* Light sampling of emitting polygon em (chosen with probability prob): a point drawn uniformly on it. */
+static void light_polygon(const bench_pt *pt, const pt_emitter *em, double prob, const double x[3],
+                          const double n[3], uint64_t *rng, double e[3])
 {
     const rl_polygon_desc *p = &pt->polygons[em->polygon];
     double y[3], w[3];
@@ -223,64 +275,101 @@ static void direct_polygon(const bench_pt *pt, const pt_emitter *em, double prob
     double cos_x = dot3(w, n), cos_y = -dot3(w, p->normal);
     if (cos_x <= 0.0 || cos_y <= 0.0 || !visible(pt, x, w, r))
         return;
-    double g = cos_x * cos_y / r2 * p->area / prob;
-    for (int k = 0; k < 3; k++)
-        e[k] += g * p->emission[k];
+    double L[3] = {p->emission[0], p->emission[1], p->emission[2]};
+    add_mis(e, L, cos_x, light_pdf(prob, p->area, r2, cos_y));
 }
 
-/* Adds to e the irradiance at x (normal n) from one point drawn uniformly on slab s. */
-static void direct_slab(const bench_pt *pt, const rl_lightfield_desc *s, const double x[3], const double n[3],
-                        uint64_t *rng, double e[3])
+/* Light sampling of slab k: a point drawn uniformly on its rectangle. */
+static void light_slab(const bench_pt *pt, size_t k, const double x[3], const double n[3], uint64_t *rng, double e[3])
 {
-    double a = rnd(rng), b = rnd(rng), y[3], w[3], ns[3];
-    for (int k = 0; k < 3; k++)
-        y[k] = s->origin[k] + a * s->u[k] + b * s->v[k];
-    cross3(s->u, s->v, ns);
-    double area = sqrt(dot3(ns, ns));
-    for (int k = 0; k < 3; k++) {
-        ns[k] /= area;
-        w[k] = y[k] - x[k];
-    }
+    const pt_slab *s = &pt->geo[k];
+    const rl_lightfield_desc *d = &pt->slabs[k];
+    double a = rnd(rng), b = rnd(rng), w[3];
+    for (int c = 0; c < 3; c++)
+        w[c] = d->origin[c] + a * d->u[c] + b * d->v[c] - x[c];
     double r2 = dot3(w, w), r = sqrt(r2);
     if (!(r > 2.0 * PT_EPS))
         return;
-    for (int k = 0; k < 3; k++)
-        w[k] /= r;
+    for (int c = 0; c < 3; c++)
+        w[c] /= r;
     /* light travels along -w, from the slab toward x: it leaves the slab's front */
-    double cos_x = dot3(w, n), cos_s = -dot3(w, ns);
+    double cos_x = dot3(w, n), cos_s = -dot3(w, s->normal);
     if (cos_x <= 0.0 || cos_s <= 0.0 || !visible(pt, x, w, r))
         return;
-    const double(*R)[3] = s->rot;
-    double d[3] = {-(R[0][0] * w[0] + R[1][0] * w[1] + R[2][0] * w[2]),
-                   -(R[0][1] * w[0] + R[1][1] * w[1] + R[2][1] * w[2]),
-                   -(R[0][2] * w[0] + R[1][2] * w[1] + R[2][2] * w[2])};
-    float L[3] = {0, 0, 0};
-    if (lfio_slab_radiance_interp(s->slab, a, b, d, L) != LFIO_OK)
-        return;
-    double g = cos_x * cos_s / r2 * area;
-    for (int k = 0; k < 3; k++)
-        e[k] += g * L[k];
+    double L[3];
+    slab_radiance(pt, k, a, b, w, L);
+    add_mis(e, L, cos_x, light_pdf(1.0, s->area, r2, cos_s));
 }
 
-/* Writes into e the next-event estimate of direct irradiance at x (normal n): every slab once, one emitting polygon. */
+/* Where the ray x + t w (t in (0, tmax)) crosses slab k from its front. @return 1 with *t, *a, *b. */
+static int slab_crossing(const bench_pt *pt, size_t k, const double x[3], const double w[3], double tmax, double *t,
+                         double *a, double *b)
+{
+    const pt_slab *s = &pt->geo[k];
+    const rl_lightfield_desc *d = &pt->slabs[k];
+    double wn = dot3(w, s->normal);
+    if (wn >= 0.0) /* the ray must meet the front: light leaving it travels back along -w */
+        return 0;
+    double o[3] = {d->origin[0] - x[0], d->origin[1] - x[1], d->origin[2] - x[2]};
+    *t = dot3(o, s->normal) / wn;
+    if (!(*t > PT_EPS && *t < tmax))
+        return 0;
+    double q[3] = {x[0] + *t * w[0] - d->origin[0], x[1] + *t * w[1] - d->origin[1], x[2] + *t * w[2] - d->origin[2]};
+    *a = dot3(q, d->u) / dot3(d->u, d->u);
+    *b = dot3(q, d->v) / dot3(d->v, d->v);
+    return *a >= 0.0 && *a <= 1.0 && *b >= 0.0 && *b <= 1.0;
+}
+
+/* BRDF (cosine) sampling of every emitter at once: one cosine-weighted ray, the slabs it crosses before its
+ * first hit and the emitting front it meets. */
+static void hemisphere_emitters(const bench_pt *pt, const double x[3], const double n[3], uint64_t *rng, double e[3])
+{
+    double w[3];
+    cosine_direction(n, rng, w);
+    double cos_x = dot3(w, n);
+    if (cos_x <= 0.0)
+        return;
+    rl_ray_hit h;
+    int hit = rl_raycaster_hit(pt->rc, x, w, PT_EPS, INFINITY, &h);
+    for (size_t k = 0; k < pt->nslabs; k++) {
+        double t, a, b, L[3];
+        if (!slab_crossing(pt, k, x, w, hit ? h.distance : INFINITY, &t, &a, &b))
+            continue;
+        slab_radiance(pt, k, a, b, w, L);
+        add_mis(e, L, cos_x, light_pdf(1.0, pt->geo[k].area, t * t, -dot3(w, pt->geo[k].normal)));
+    }
+    if (!hit || !h.front)
+        return;
+    const rl_polygon_desc *p = &pt->polygons[h.polygon];
+    if (!(p->emission[0] > 0.0f || p->emission[1] > 0.0f || p->emission[2] > 0.0f))
+        return;
+    double L[3] = {p->emission[0], p->emission[1], p->emission[2]};
+    double prob = pt->emit_prob[h.polygon];
+    add_mis(e, L, cos_x,
+            prob > 0.0 ? light_pdf(prob, p->area, h.distance * h.distance, -dot3(w, p->normal)) : 0.0);
+}
+
+/* Writes into e the estimate of direct irradiance at x (normal n): light sampling of every slab and of one
+ * emitting polygon, and one cosine-weighted ray, combined by multiple importance sampling. */
 static void direct(const bench_pt *pt, const double x[3], const double n[3], uint64_t *rng, double e[3])
 {
     e[0] = e[1] = e[2] = 0.0;
     for (size_t k = 0; k < pt->nslabs; k++)
-        direct_slab(pt, &pt->slabs[k], x, n, rng, e);
-    if (pt->nemitters == 0)
-        return;
-    double u = rnd(rng);
-    size_t lo = 0, hi = pt->nemitters - 1;
-    while (lo < hi) { /* the first emitter whose cdf exceeds u */
-        size_t mid = (lo + hi) / 2;
-        if (pt->emitters[mid].cdf > u)
-            hi = mid;
-        else
-            lo = mid + 1;
+        light_slab(pt, k, x, n, rng, e);
+    if (pt->nemitters > 0) {
+        double u = rnd(rng);
+        size_t lo = 0, hi = pt->nemitters - 1;
+        while (lo < hi) { /* the first emitter whose cdf exceeds u */
+            size_t mid = (lo + hi) / 2;
+            if (pt->emitters[mid].cdf > u)
+                hi = mid;
+            else
+                lo = mid + 1;
+        }
+        const pt_emitter *em = &pt->emitters[lo];
+        light_polygon(pt, em, pt->emit_prob[em->polygon], x, n, rng, e);
     }
-    const pt_emitter *em = &pt->emitters[lo];
-    direct_polygon(pt, em, em->power / pt->total_power, x, n, rng, e);
+    hemisphere_emitters(pt, x, n, rng, e);
 }
 
 /* ------------------------------------------------------------ paths */
