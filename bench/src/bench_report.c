@@ -598,7 +598,8 @@ static void md_comparisons(bench_text *t, const bench_sweep *s)
 static void md_definitions(bench_text *t, const bench_sweep *s)
 {
     bench_printf(t, "## Definitions\n\n"
-                    "Errors are over every cell of every radiance map (with `--reference pathtrace`, over its sampled cells), on the luminance Y = 0.2126 R + 0.7152 G + "
+                    "Errors are over every cell of every radiance map (with `--reference pathtrace`, over its "
+                    "sampled cells), on the luminance Y = 0.2126 R + 0.7152 G + "
                     "0.0722 B of irradiance (W m^-2): RMSE = sqrt(mean (Y - Yref)^2); relative RMSE = RMSE / mean "
                     "Yref; SNR = 10 log10(sum Yref^2 / sum (Y - Yref)^2) dB. Times are the relighting alone (wall, "
                     "and CPU over all threads); rays / cpu s = rays cast / CPU seconds; \"of ceiling\" divides it "

@@ -77,7 +77,8 @@ static const cli_option bench_options_table[] = {
     {"cache", 0, "DIR", "reference cache (default $XDG_CACHE_HOME/ilfkit, else DIR/../ilf-cache)"},
     {"reference-samples", 0, "N", "samples per (cell, emitter) of each reference run; pathtrace: paths per cell "
                                   "(default 4096; --quick 256)"},
-    {"reference", 0, "KIND", "solidangle (default: two converged engine runs) or pathtrace (independent, sampled cells)"},
+    {"reference", 0, "KIND",
+     "solidangle (default: two converged engine runs) or pathtrace (independent, sampled cells)"},
     {"reference-cells", 0, "N", "cells the pathtrace reference samples, evenly spaced (default 256)"},
     {"scene-settings", 0, NULL, "instead of a sweep, one run at the scene's own sampling settings"},
     {"time-limit", 0, "S", "skip settings predicted to take longer than S seconds (default 120)"},

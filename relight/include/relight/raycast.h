@@ -53,13 +53,15 @@ typedef struct rl_lightfield_desc {
     double rot[3][3];                  /**< rotation from the slab's frame to the scene's */
 } rl_lightfield_desc;
 
-/** Builds a ray caster over the scene's polygons (one thread builds it). @return RL_OK and *out; RL_ERR_ARG, RL_ERR_NOMEM, RL_ERR_INTERNAL. */
+/** Builds a ray caster over the scene's polygons (one thread builds it).
+ * @return RL_OK and *out; RL_ERR_ARG (no polygons), RL_ERR_NOMEM, RL_ERR_INTERNAL. */
 rl_status rl_raycaster_new(const rl_scene *scene, rl_raycaster **out);
 
 /** Releases a ray caster. NULL is a no-op. */
 void rl_raycaster_destroy(rl_raycaster *rc);
 
-/** Finds the first polygon met by org + s dir for s in [tnear, tfar] (dir of unit length). @return 1 with *hit, or 0. */
+/** Finds the first polygon met by org + s dir for s in [tnear, tfar] (dir of unit length).
+ * @return 1 with *hit, or 0 when the ray meets none. */
 int rl_raycaster_hit(const rl_raycaster *rc, const double org[3], const double dir[3], double tnear, double tfar,
                      rl_ray_hit *hit);
 
