@@ -104,6 +104,27 @@ check "coarse reference: runs marked unresolved" grep -q 'unresolved' "$TMP/coar
 check "coarse reference: no run on a front" awk -F, 'NR > 1 && $21 == 1 { bad = 1 } END { exit bad }' \
     "$TMP/coarse/bench.csv"
 
+# The independent reference: path tracing on 32 sampled cells, one run at the scene's own settings.
+ptbench() {
+    "$ILF" bench "$TMP/tiny.json" -o "$TMP/pt" --reference pathtrace --reference-cells 32 --reference-samples 256 \
+        --scene-settings --cache "$CACHE" "$@"
+}
+ptbench >"$TMP/pt1.out" 2>&1
+code=$?
+check "--reference pathtrace exits 0 (got $code)" [ "$code" -eq 0 ]
+check "pathtrace: computes its reference" grep -q '^reference: computing: pathtrace, 32 cells' "$TMP/pt1.out"
+check "pathtrace: cached as a .pt file" compgen -G "$CACHE/ref-*.pt" >/dev/null
+check "pathtrace: bench.json names the method and its 32 cells" \
+    bash -c "grep -q '\"method\":[[:space:]]*\"pathtrace\"' '$TMP/pt/bench.json' &&
+             grep -q '\"cells_with_values\":[[:space:]]*32' '$TMP/pt/bench.json'"
+check "pathtrace: --scene-settings runs one setting" csv_ok "$TMP/pt/bench.csv" 1
+check "pathtrace: the summary says what the reference is" grep -q 'Independent path tracing' "$TMP/pt/summary.md"
+ptbench >"$TMP/pt2.out" 2>&1
+check "pathtrace: the second run reuses it" grep -q '^reference: cached .*\.pt: pathtrace' "$TMP/pt2.out"
+"$ILF" bench "$TMP/tiny.json" -o "$TMP/pt" --reference nosuch >/dev/null 2>&1
+code=$?
+check "an unknown --reference is bad usage (got $code)" [ "$code" -eq 2 ]
+
 # The ray ceiling.
 "$ILF" bench --rays "$TMP/tiny.json" --rays-count 100000 -o "$TMP/rays" >"$TMP/rays.out" 2>&1
 code=$?

@@ -7,6 +7,7 @@
 #include "lfio/partition.h"
 #include "lfio/radmap.h"
 #include "relight/engine.h"
+#include "relight/raycast.h"
 #include "relight/reference.h"
 #include "relight/relight.h"
 #include "relight/scene.h"

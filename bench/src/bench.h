@@ -5,6 +5,8 @@
  *   bench_run.c      one measured job in a forked child: a relighting with
  *                    its error against the reference, or the ray ceiling
  *   bench_ref.c      the reference solution: cache key, computing, loading
+ *   bench_ptref.c    the path-traced reference (--reference pathtrace) on
+ *                    sampled cells, with bench_pathtrace.c's estimator
  *   bench_report.c   Pareto fronts, ratios at equal error and equal time,
  *                    bench.csv, bench.json and summary.md
  *   bench_plot.c     gnuplot scripts and running gnuplot
@@ -42,7 +44,10 @@ typedef struct bench_config {
     sampling_overrides sampling;    /**< threads and bounces (bounces given as 0 unless --bounces) */
     rl_method methods[BENCH_MAX_METHODS];
     size_t nmethods;
-    uint32_t reference_samples;     /**< per (cell, emitter) of each reference run */
+    uint32_t reference_samples;     /**< per (cell, emitter) of each reference run; pathtrace: paths per cell */
+    int reference_pathtrace;        /**< --reference pathtrace: bench_ptref.c's reference instead of solidangle's */
+    uint32_t reference_cells;       /**< pathtrace: cells sampled, evenly spaced in the engine's order */
+    int scene_settings;             /**< --scene-settings: one run at the scene's own sampling settings */
     uint64_t rays_count;            /**< --rays: rays to trace */
     double time_limit;              /**< seconds: skip a setting predicted to take longer */
     int quick, quiet;
@@ -121,10 +126,13 @@ typedef struct bench_reference {
     size_t maps, cells;
     uint32_t *polygon;   /**< [maps] scene polygon of each map */
     size_t *offset;      /**< [maps + 1] first cell of each map in y */
-    double *y;           /**< [cells] luminance of irradiance, W m^-2 */
-    double mean, peak;   /**< over cells */
-    double error;        /**< its own RMSE estimate, RMSE(a - b) / 2 */
-    uint32_t samples;    /**< per (cell, emitter) of each run */
+    double *y;           /**< [cells] luminance of irradiance, W m^-2; NaN where the reference has no value
+                          *   (pathtrace samples some cells): errors are over the finite cells alone */
+    double mean, peak;   /**< over cells with a value */
+    double error;        /**< its own RMSE estimate: RMSE(a - b) / 2, or pathtrace's RMS standard error */
+    uint32_t samples;    /**< per (cell, emitter) of each run; pathtrace: paths per cell */
+    size_t valued;       /**< cells with a value (all but pathtrace's unsampled) */
+    const char *method;  /**< "solidangle" or "pathtrace" */
     uint64_t seeds[2];
     int cached;          /**< 1 when read from the cache rather than computed now */
     double wall_seconds; /**< wall time its computation took (now, or when it was cached) */
@@ -189,6 +197,18 @@ void bench_idle_child(void *arg, bench_result *out);
  * @return an exit code.
  */
 int bench_reference_obtain(const bench_config *cfg, rl_scene *scene, bench_reference *r);
+
+/* ------------------------------------------------------------ bench_ref.c, bench_ptref.c */
+
+/** Computes the cache key of the scene's reference: the scene's and its files' bytes and the given
+ * settings line. @return 1, or 0 after reporting. */
+int bench_reference_key(const bench_config *cfg, const char *settings, uint64_t *key);
+
+/**
+ * Makes r the path-traced reference of the loaded scene (bench_ptref.c): read from the cache when its
+ * key matches, else computed in a child and cached. Prints which unless quiet. @return an exit code.
+ */
+int bench_reference_pathtrace(const bench_config *cfg, rl_scene *scene, bench_reference *r);
 
 /* ------------------------------------------------------------ bench_report.c */
 

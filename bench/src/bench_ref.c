@@ -13,6 +13,9 @@
  * .mtl, are not included); the cell size; and the reference settings
  * (method, samples, seeds, bounces, bounce level, cell factor and rays, partition level, descent).
  *
+ * bench_reference_key() is that key over any settings line: bench_ptref.c's
+ * path-traced reference (--reference pathtrace) keys its cache the same way.
+ *
  * Invariants: a cached reference is used only when both files read back
  * whole and the sidecar carries the same key; the computation runs in a
  * child (bench_run.c), so the parent only ever reads the cache; the maps of
@@ -110,10 +113,8 @@ static uint32_t reference_bounce_rays(const bench_config *cfg, const rl_sampling
     return s->bounce_rays > 0 ? cfg->reference_samples : 0;
 }
 
-/* Computes the cache key of the scene's reference with the given settings. @return 1, or 0 after reporting. */
-static int reference_key(const bench_config *cfg, const rl_scene *scene, uint64_t *key)
+int bench_reference_key(const bench_config *cfg, const char *settings, uint64_t *key)
 {
-    const rl_sampling *s = rl_scene_sampling(scene);
     uint64_t h = fnv1a(FNV_OFFSET, KEY_TAG, sizeof KEY_TAG);
     char *text = bench_read_text(cfg->scene);
     cJSON *root = text != NULL ? cJSON_Parse(text) : NULL;
@@ -125,6 +126,16 @@ static int reference_key(const bench_config *cfg, const rl_scene *scene, uint64_
         ok = hash_section_files(&h, cfg->scene, root, "meshes") &&
              hash_section_files(&h, cfg->scene, root, "lightfields");
     }
+    *key = fnv1a(h, settings, strlen(settings));
+    cJSON_Delete(root);
+    free(text);
+    return ok;
+}
+
+/* Computes the cache key of the scene's solidangle reference with the given settings. @return 1, or 0 after reporting. */
+static int reference_key(const bench_config *cfg, const rl_scene *scene, uint64_t *key)
+{
+    const rl_sampling *s = rl_scene_sampling(scene);
     char settings[512];
     snprintf(settings, sizeof settings,
              "cell_size=%.17g method=solidangle samples=%" PRIu32 " seeds=%" PRIu64 ",%" PRIu64
@@ -134,10 +145,7 @@ static int reference_key(const bench_config *cfg, const rl_scene *scene, uint64_
              rl_scene_cell_size(scene), cfg->reference_samples, REFERENCE_SEEDS[0], REFERENCE_SEEDS[1], s->bounces,
              s->bounce_partition_n, s->bounce_cell_factor, reference_bounce_rays(cfg, s), s->partition_n,
              s->descend);
-    *key = fnv1a(h, settings, strlen(settings));
-    cJSON_Delete(root);
-    free(text);
-    return ok;
+    return bench_reference_key(cfg, settings, key);
 }
 
 /* ------------------------------------------------------------ computing (in a child) */
@@ -396,6 +404,7 @@ static int read_maps(const char *path, bench_reference *r)
         }
     }
     r->mean = r->cells > 0 ? sum / (double)r->cells : 0.0;
+    r->valued = r->cells;
     lfio_radmap_destroy(map);
     if (!ok)
         bench_reference_free(r);
@@ -429,7 +438,10 @@ static int compute(const bench_config *cfg, rl_scene *scene, const char *h5, con
 
 int bench_reference_obtain(const bench_config *cfg, rl_scene *scene, bench_reference *r)
 {
+    if (cfg->reference_pathtrace)
+        return bench_reference_pathtrace(cfg, scene, r);
     memset(r, 0, sizeof *r);
+    r->method = "solidangle";
     uint64_t key;
     if (!reference_key(cfg, scene, &key) || !bench_make_folder(cfg->cache))
         return ILF_EXIT_USAGE;

@@ -382,7 +382,8 @@ static cJSON *reference_json(const bench_sweep *s)
     double seeds[2] = {(double)ref->seeds[0], (double)ref->seeds[1]};
     cJSON_AddStringToObject(j, "path", ref->path);
     cJSON_AddBoolToObject(j, "cached", ref->cached);
-    cJSON_AddStringToObject(j, "method", "solidangle");
+    cJSON_AddStringToObject(j, "method", ref->method);
+    cJSON_AddNumberToObject(j, "cells_with_values", (double)ref->valued);
     cJSON_AddNumberToObject(j, "samples_per_cell", ref->samples);
     json_add_doubles(j, "seeds", seeds, 2);
     cJSON_AddNumberToObject(j, "cells", (double)ref->cells);
@@ -477,13 +478,23 @@ static void md_header(bench_text *t, const bench_sweep *s)
                  s->threads == 1 ? "" : "s", s->bounces, s->bounces == 1 ? "" : "s", s->cfg->time_limit,
                  s->cfg->quick ? ", --quick" : "");
     bench_printf(t, "## Reference\n\n");
-    bench_printf(t, "Mean of two `solidangle` runs, %" PRIu32 " samples per (cell, emitter), seeds %" PRIu64
-                    " and %" PRIu64 ", %.1f s wall to compute; %s `%s`.\n\n",
-                 ref->samples, ref->seeds[0], ref->seeds[1], ref->wall_seconds,
-                 ref->cached ? "read from the cache" : "computed by this run and cached in", ref->path);
-    bench_printf(t, "- cells: %zu; mean Y %.6g W m^-2, peak %.6g W m^-2\n", ref->cells, ref->mean, ref->peak);
-    bench_printf(t, "- own error estimate RMSE(a - b) / 2 = %.4g W m^-2 (%.3g%% of the mean)\n\n", ref->error,
-                 ref->mean > 0 ? 100.0 * ref->error / ref->mean : NAN);
+    if (strcmp(ref->method, "pathtrace") == 0) {
+        bench_printf(t, "Independent path tracing (`--reference pathtrace`), %" PRIu32 " paths per cell on %zu of the "
+                        "%zu cells, %.1f s wall to compute; %s `%s`. Errors are over these cells alone.\n\n",
+                     ref->samples, ref->valued, ref->cells, ref->wall_seconds,
+                     ref->cached ? "read from the cache" : "computed by this run and cached in", ref->path);
+        bench_printf(t, "- mean Y %.6g W m^-2, peak %.6g W m^-2 over the sampled cells\n", ref->mean, ref->peak);
+        bench_printf(t, "- own error estimate: RMS standard error %.4g W m^-2 (%.3g%% of the mean)\n\n", ref->error,
+                     ref->mean > 0 ? 100.0 * ref->error / ref->mean : NAN);
+    } else {
+        bench_printf(t, "Mean of two `solidangle` runs, %" PRIu32 " samples per (cell, emitter), seeds %" PRIu64
+                        " and %" PRIu64 ", %.1f s wall to compute; %s `%s`.\n\n",
+                     ref->samples, ref->seeds[0], ref->seeds[1], ref->wall_seconds,
+                     ref->cached ? "read from the cache" : "computed by this run and cached in", ref->path);
+        bench_printf(t, "- cells: %zu; mean Y %.6g W m^-2, peak %.6g W m^-2\n", ref->cells, ref->mean, ref->peak);
+        bench_printf(t, "- own error estimate RMSE(a - b) / 2 = %.4g W m^-2 (%.3g%% of the mean)\n\n", ref->error,
+                     ref->mean > 0 ? 100.0 * ref->error / ref->mean : NAN);
+    }
     size_t unresolved = 0;
     for (size_t i = 0; i < s->count; i++)
         unresolved += usable(&s->entries[i]) && !resolved(s, &s->entries[i]);
@@ -587,7 +598,8 @@ static void md_comparisons(bench_text *t, const bench_sweep *s)
 static void md_definitions(bench_text *t, const bench_sweep *s)
 {
     bench_printf(t, "## Definitions\n\n"
-                    "Errors are over every cell of every radiance map, on the luminance Y = 0.2126 R + 0.7152 G + "
+                    "Errors are over every cell of every radiance map (with `--reference pathtrace`, over its "
+                    "sampled cells), on the luminance Y = 0.2126 R + 0.7152 G + "
                     "0.0722 B of irradiance (W m^-2): RMSE = sqrt(mean (Y - Yref)^2); relative RMSE = RMSE / mean "
                     "Yref; SNR = 10 log10(sum Yref^2 / sum (Y - Yref)^2) dB. Times are the relighting alone (wall, "
                     "and CPU over all threads); rays / cpu s = rays cast / CPU seconds; \"of ceiling\" divides it "

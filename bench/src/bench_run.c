@@ -233,17 +233,21 @@ static int solution_luminance(const rl_solution *sol, const bench_reference *ref
     return ok;
 }
 
-/* Sets r's RMSE, relative RMSE and SNR of y against the reference. */
+/* Sets r's RMSE, relative RMSE and SNR of y against the reference, over the cells it has a value for. */
 static void error_metrics(const double *y, const bench_reference *ref, bench_result *r)
 {
     double sum_err2 = 0.0, sum_ref2 = 0.0;
+    size_t n = 0;
     for (size_t c = 0; c < ref->cells; c++) {
+        if (!isfinite(ref->y[c]))
+            continue; /* a cell the reference did not sample (pathtrace) */
         double d = y[c] - ref->y[c];
         sum_err2 += d * d;
         sum_ref2 += ref->y[c] * ref->y[c];
+        n++;
     }
-    r->cells = ref->cells;
-    r->rmse = ref->cells > 0 ? sqrt(sum_err2 / (double)ref->cells) : 0.0;
+    r->cells = n;
+    r->rmse = n > 0 ? sqrt(sum_err2 / (double)n) : 0.0;
     r->rel_rmse = ref->mean > 0.0 ? r->rmse / ref->mean : NAN;
     r->snr_db = sum_err2 > 0.0 ? 10.0 * log10(sum_ref2 / sum_err2) : INFINITY;
 }

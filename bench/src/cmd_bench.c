@@ -41,6 +41,7 @@ static const double TARGETS[] = {0.3, 0.1, 0.03}, TARGETS_QUICK[] = {0.3};
 /* Defaults of the options. */
 #define DEFAULT_REFERENCE_SAMPLES 4096u
 #define QUICK_REFERENCE_SAMPLES 256u
+#define DEFAULT_REFERENCE_CELLS 256u
 #define DEFAULT_TIME_LIMIT 120.0
 #define DEFAULT_RAYS_COUNT 10000000u
 /* Rays of the ceiling measured alongside a sweep, full and --quick. */
@@ -57,6 +58,9 @@ enum bench_option_id {
     OPT_BOUNCES,
     OPT_CACHE,
     OPT_REFERENCE_SAMPLES,
+    OPT_REFERENCE,
+    OPT_REFERENCE_CELLS,
+    OPT_SCENE_SETTINGS,
     OPT_TIME_LIMIT,
     OPT_RAYS,
     OPT_RAYS_COUNT,
@@ -71,7 +75,12 @@ static const cli_option bench_options_table[] = {
     {"threads", 0, "N", "worker threads, 0 = every processor (default 0)"},
     {"bounces", 0, "B", "diffuse passes after the direct one (default 0, not the scene's)"},
     {"cache", 0, "DIR", "reference cache (default $XDG_CACHE_HOME/ilfkit, else DIR/../ilf-cache)"},
-    {"reference-samples", 0, "N", "samples per (cell, emitter) of each reference run (default 4096; --quick 256)"},
+    {"reference-samples", 0, "N", "samples per (cell, emitter) of each reference run; pathtrace: paths per cell "
+                                  "(default 4096; --quick 256)"},
+    {"reference", 0, "KIND",
+     "solidangle (default: two converged engine runs) or pathtrace (independent, sampled cells)"},
+    {"reference-cells", 0, "N", "cells the pathtrace reference samples, evenly spaced (default 256)"},
+    {"scene-settings", 0, NULL, "instead of a sweep, one run at the scene's own sampling settings"},
     {"time-limit", 0, "S", "skip settings predicted to take longer than S seconds (default 120)"},
     {"rays", 0, NULL, "measure the ray tracer alone (rl_bench_rays): the ceiling"},
     {"rays-count", 0, "N", "rays for --rays (default 10000000)"},
@@ -82,14 +91,16 @@ static const cli_option bench_options_table[] = {
 static const cli_usage bench_usage = {
     "bench",
     "SCENE -o DIR [--quick] [--methods LIST] [--threads N] [--bounces B] [--cache DIR]\n"
-    "                 [--reference-samples N] [--time-limit S] [--quiet]\n"
+    "                 [--reference-samples N] [--reference solidangle|pathtrace] [--reference-cells N]\n"
+    "                 [--scene-settings] [--time-limit S] [--quiet]\n"
     "       ilf bench --rays SCENE [-o DIR] [--rays-count N] [--threads N]\n"
     "       ilf bench --scaling SCENE -o DIR [--threads N] [--time-limit S]",
     "Measures speed against accuracy. The sweep runs culled and naive over partition n\n"
     "{8,16,32} x rays {1,4,16}, area and solidangle over samples {16,64,256,1024},\n"
     "adaptive over partition n x target error {0.3,0.1,0.03} (--quick: {8,16} x {1,4},\n"
     "{16,64}, {8,16} x {0.3}), each in a child process, against a reference\n"
-    "(two converged solidangle runs, cached), and writes bench.csv, bench.json,\n"
+    "(two converged solidangle runs, cached; or --reference pathtrace: independent\n"
+    "path tracing of sampled cells), and writes bench.csv, bench.json,\n"
     "summary.md, error_vs_time.png and error_<method>.png (plots need gnuplot).\n"
     "Errors are on the luminance of irradiance over every cell (docs/bench.md).",
     "ilf bench data/beams_diffuse.json -o out/bench-beams --threads 0\n"
@@ -140,7 +151,7 @@ static void record_command(bench_config *cfg, int argc, char **argv)
 typedef struct bench_args {
     bench_config *cfg;
     enum bench_mode *mode;
-    int samples_given;
+    int samples_given, bounces_given;
 } bench_args;
 
 /* Applies one option to the bench_args ctx. @return 1, or 0 after reporting. */
@@ -154,7 +165,9 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
     case OPT_QUICK: cfg->quick = 1; return 1;
     case OPT_METHODS: return parse_methods(p, value, cfg);
     case OPT_THREADS: return sampling_option_apply(p, &cfg->sampling, SAMPLING_OPT_THREADS, value);
-    case OPT_BOUNCES: return sampling_option_apply(p, &cfg->sampling, (int)rl_sampling_setting_find("bounces"), value);
+    case OPT_BOUNCES:
+        a->bounces_given = 1;
+        return sampling_option_apply(p, &cfg->sampling, (int)rl_sampling_setting_find("bounces"), value);
     case OPT_CACHE:
         if (snprintf(cfg->cache, sizeof cfg->cache, "%s", value) >= (int)sizeof cfg->cache)
             return cli_bad_value(p, value, "path too long"), 0;
@@ -162,6 +175,13 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
     case OPT_REFERENCE_SAMPLES:
         a->samples_given = 1;
         return cli_value_u32(p, value, 1, 1048576, &cfg->reference_samples);
+    case OPT_REFERENCE:
+        if (strcmp(value, "pathtrace") != 0 && strcmp(value, "solidangle") != 0)
+            return cli_bad_value(p, value, "expected solidangle or pathtrace"), 0;
+        cfg->reference_pathtrace = strcmp(value, "pathtrace") == 0;
+        return 1;
+    case OPT_REFERENCE_CELLS: return cli_value_u32(p, value, 1, 1048576, &cfg->reference_cells);
+    case OPT_SCENE_SETTINGS: cfg->scene_settings = 1; return 1;
     case OPT_TIME_LIMIT:
         if (!cli_value_double(p, value, &cfg->time_limit))
             return 0;
@@ -208,7 +228,7 @@ static int finish_defaults(bench_config *cfg, int samples_given)
 /* Parses argv into cfg and mode. @return -1 to go on, or an exit code (help printed, or a reported error). */
 static int parse_arguments(bench_config *cfg, enum bench_mode *mode, int argc, char **argv)
 {
-    bench_args args = {cfg, mode, 0};
+    bench_args args = {cfg, mode, 0, 0};
     int code = cli_parse(&bench_usage, bench_options_table, COUNT(bench_options_table), argc, argv, &cfg->scene,
                          apply_option, &args);
     if (code != -1)
@@ -222,6 +242,8 @@ static int parse_arguments(bench_config *cfg, enum bench_mode *mode, int argc, c
         cli_error(BENCH_SUB, "%s", problem);
         return ILF_EXIT_USAGE;
     }
+    if (cfg->scene_settings && !args.bounces_given) /* the scene's own settings include its bounces */
+        cfg->sampling.given &= ~(1u << rl_sampling_setting_find("bounces"));
     return finish_defaults(cfg, args.samples_given) ? -1 : ILF_EXIT_USAGE;
 }
 
@@ -276,6 +298,14 @@ static size_t build_settings(const bench_config *cfg, bench_setting *out)
         }
     }
     return count;
+}
+
+/* @return the scene's own sampling settings as the one setting of --scene-settings. */
+static bench_setting scene_setting(const rl_scene *scene)
+{
+    const rl_sampling *smp = rl_scene_sampling(scene);
+    return (bench_setting){.method = smp->method, .partition_n = smp->partition_n, .rays = smp->rays_per_solid_angle,
+                           .samples = smp->samples_per_cell, .target_error = smp->target_error, .cost = 1.0};
 }
 
 /* ------------------------------------------------------------ the sweep */
@@ -396,7 +426,9 @@ static int sweep(const bench_config *cfg, rl_scene *scene)
 {
     static bench_setting settings[MAX_SETTINGS];
     static bench_entry entries[MAX_SETTINGS];
-    size_t count = build_settings(cfg, settings);
+    size_t count = cfg->scene_settings ? 1 : build_settings(cfg, settings);
+    if (cfg->scene_settings)
+        settings[0] = scene_setting(scene);
     if (count == 0)
         return ILF_EXIT_USAGE;
     bench_reference ref;
@@ -497,6 +529,7 @@ int ilf_cmd_bench(int argc, char **argv)
     cfg.methods[3] = RL_METHOD_SOLIDANGLE;
     cfg.methods[4] = RL_METHOD_ADAPTIVE;
     cfg.nmethods = 5;
+    cfg.reference_cells = DEFAULT_REFERENCE_CELLS;
     cfg.sampling.given = 1u << rl_sampling_setting_find("bounces"); /* bounces 0 unless --bounces */
     enum bench_mode mode = MODE_SWEEP;
     int code = parse_arguments(&cfg, &mode, argc, argv);
@@ -508,6 +541,10 @@ int ilf_cmd_bench(int argc, char **argv)
         return bench_scaling(&cfg);
     rl_scene *scene = NULL;
     code = relight_scene_open(BENCH_SUB, cfg.scene, &cfg.sampling, &scene);
+    if (code == ILF_EXIT_OK && cfg.scene_settings) { /* the one method swept is the scene's */
+        cfg.methods[0] = rl_scene_sampling(scene)->method;
+        cfg.nmethods = 1;
+    }
     if (code == ILF_EXIT_OK && mode == MODE_RAYS)
         code = rays_mode(&cfg, scene);
     else if (code == ILF_EXIT_OK)
