@@ -78,10 +78,10 @@ static const cli_usage info_usage = {
     "A radiance-map file (radiance.h5 of 'ilf relight') is described too: creator,\n"
     "scene, maps, cells, and per map its label, vertices, grid and cell count; with\n"
     "--stats the irradiance and radiosity min/max/area-weighted mean.",
-    "ilf info scene.h5\n"
-    "ilf info scene.h5 --stats\n"
-    "ilf info scene.h5 --json --irradiance 16,16 | python3 -m json.tool\n"
-    "ilf info out/radiance.h5 --stats",
+    "ilf info data/beams_lightfield.h5\n"
+    "ilf info data/beams_lightfield.h5 --stats\n"
+    "ilf info data/beams_lightfield.h5 --json --irradiance 8,8 | python3 -m json.tool\n"
+    "ilf info out/beams/radiance.h5 --stats",
 };
 
 /* ------------------------------------------------------------ gathering */

@@ -56,7 +56,7 @@ static const cli_usage irradiance_usage = {
     "scene is included. Sampling options replace the scene's own settings. stderr\n"
     "gets the settings used (method, samples, bounces, threads), a progress bar and\n"
     "warnings (a scene without emitters, most points unlit) unless --quiet.",
-    "ilf irradiance data/beams_diffuse.json --points sensors.txt\n"
+    "ilf irradiance data/beams_diffuse.json --points sensors.txt   # one x y z nx ny nz a line\n"
     "printf '2.5 2.5 0 0 0 1\\n' | ilf irradiance data/beams_diffuse.json --points - --bounces 1\n"
     "printf '2.5 2.5 0 0 0 1\\n' | ilf irradiance data/beams_diffuse.json --points - --lux --quiet",
 };

@@ -111,7 +111,7 @@ static const cli_usage relight_usage = {
     "back faces, partial light field coverage, no camera), also kept in stats.json.",
     "ilf relight data/beams_diffuse.json -o out/beams\n"
     "ilf relight data/classroom.json -o out/classroom --partition-n 16 --rays 2 --bounces 1\n"
-    "ilf relight scene.json -o out/naive --method naive --threads 4 --quiet\n"
+    "ilf relight data/beams_diffuse.json -o out/naive --method naive --threads 4 --quiet\n"
     "ilf relight data/beams_diffuse.json -o out/beams --scale 5 --falsecolor --falsecolor-max 2000",
 };
 

@@ -104,10 +104,10 @@ static const cli_usage slice_usage = {
     "--direction/--toward: the nu x nv image of one direction (up = +v, left = low u);\n"
     "--toward takes the world direction the light travels in, which must face the\n"
     "slab's front (w.e3 >= 0).",
-    "ilf slice scene.h5 --position 16,16 -o position.png\n"
-    "ilf slice scene.h5 --position 16,16 --layout latlong --size 256 -o position.exr\n"
-    "ilf slice scene.h5 --position 16,16 --envmap -o env.hdr\n"
-    "ilf slice scene.h5 --toward 0,0,1 --exposure -2 -o straight-up.png",
+    "ilf slice data/beams_lightfield.h5 --position 8,8 -o position.png\n"
+    "ilf slice data/beams_lightfield.h5 --position 8,8 --layout latlong --size 256 -o position.exr\n"
+    "ilf slice data/beams_lightfield.h5 --position 8,8 --envmap -o env.hdr\n"
+    "ilf slice data/beams_lightfield.h5 --toward 0,0,1 --exposure -2 -o straight-up.png",
 };
 
 /* ------------------------------------------------------------ options */

@@ -32,7 +32,7 @@ static const cli_usage verify_usage = {
     "Prints \"FILE: ok\" or \"FILE: <first problem> (N problems)\" for each file and\n"
     "exits 0 when all are valid, 2 when one is not, 1 when one could not be checked\n"
     "for want of memory.",
-    "ilf verify scene.h5 backup/*.h5 out/radiance.h5",
+    "ilf verify data/beams_lightfield.h5 out/beams/radiance.h5",
 };
 
 /* Checks a file lfio_verify() refused as no light field as a radiance map, read whole (every checksum and value).
