@@ -790,7 +790,9 @@ static lfio_status v2_write_dataset(const struct map_content *mc, const char *pa
         if (direct && l.deflate)
             st = v2_store_direct(path, d, &l, v->a[t], t, ilf_thread_count(mc->threads));
         else {
-            const hsize_t start[2] = {first, 0}, count[2] = {rows, l.dims[1]};
+            /* a rank with nothing of its own still takes part (lfio__h5_write_part() selects none when !mine),
+             * with a count that is not empty, which it would skip */
+            const hsize_t start[2] = {mine ? first : 0, 0}, count[2] = {mine ? rows : l.dims[0], l.dims[1]};
             st = lfio__h5_write_part(path, dobj, d, v2_memory_type(t), l.rank, start, count, v->a[t], mine);
         }
     }
