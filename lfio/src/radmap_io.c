@@ -1,6 +1,8 @@
 /*
  * radmap_io.c - radiance-map files (lfio/radmap.h; docs/format.md,
- * "Radiance-map files"): the atomic writer and the validating reader.
+ * "Radiance-map files"): the atomic writer and the validating reader, of
+ * format 2 (each array once for all patches: written by default) and
+ * format 1 (a group a patch: read, and written when asked).
  *
  * Invariants:
  *   - The layout of every dataset of a patch (name, type, shape, chunks,
@@ -11,7 +13,13 @@
  *     applies to a patch's description and then to each slice of its
  *     cells). The writer refuses (LFIO_ERR_ARG) exactly what the reader
  *     refuses (LFIO_ERR_FORMAT), so every file written reads back.
- *   - A serial write holds one slice of a patch's cells at a time
+ *   - Format 2: the writer gathers every patch's description and vertices
+ *     and the cells of this writer's patches (all of them in a serial write,
+ *     a contiguous run of them on a rank of a collective one), then writes
+ *     one dataset at a time, from one table (v2_datasets[], through
+ *     v2_layout()) that the reader checks against; the reader checks the
+ *     per-patch tables and offsets before it sizes any vertex or cell array.
+ *   - Format 1: a serial write holds one slice of a patch's cells at a time
  *     (LFIO_RADMAP_ROWS_MAX, a whole number of chunks) and their compressed
  *     chunks; a write through MPI-IO, which HDF5 filters, one whole patch.
  *   - The reader allocates nothing from a number found in a file before
@@ -269,7 +277,8 @@ struct map_content {
     lfio_radmap_describe_fn describe;
     lfio_radmap_rows_fn rows; /* NULL: the cells are the described patch's own arrays */
     void *user;
-    int rank, ranks; /* this writer among those of a collective write: patch k's arrays are rank k mod ranks's */
+    int rank, ranks; /* this writer among those of a collective write (format 1: patch k's arrays are rank k mod
+                      * ranks's; format 2: v2_gather()) */
     int serial;      /* written by lfio_radmap_write_rows() (or _each()), not through MPI-IO (even with one rank) */
     int format;      /* the format version written: 1 or 2 */
     unsigned threads; /* format 2: threads compressing chunks (0: every core) */
