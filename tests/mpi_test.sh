@@ -78,8 +78,15 @@ for kt in "1 2" "2 1" "2 2" "3 1"; do
 done
 # h5diff compares values; the arrays' bytes as read are compared too, and the files are format 2 (each array
 # once for all maps, written by every rank collectively)
+H5PY=""  # a python3 with h5py, if any (h5diff's comparison of values stands without it)
+for candidate in python3 /usr/bin/python3; do
+    if command -v "$candidate" >/dev/null && "$candidate" -c "import h5py" 2>/dev/null; then
+        H5PY=$candidate
+        break
+    fi
+done
 same_arrays() { # A B: radiance.h5 files of format 2 whose every dataset holds the same bytes
-    python3 -c "
+    "$H5PY" -c "
 import sys, h5py
 a, b = (h5py.File(p, 'r') for p in sys.argv[1:])
 assert int(a.attrs['format_version']) == 2 and int(b.attrs['format_version']) == 2
@@ -88,9 +95,10 @@ sys.exit(any(a['patches'][k][()].tobytes() != b['patches'][k][()].tobytes() for 
 }
 for kt in "1 2" "2 1" "3 1"; do
     set -- $kt
-    check "relight: $1 rank(s) x $2 thread(s) writes format 2 with the bytes of one process" \
+    [ -n "$H5PY" ] && check "relight: $1 rank(s) x $2 thread(s) writes format 2 with the bytes of one process" \
         same_arrays ref/radiance.h5 "k$1t$2/radiance.h5"
 done
+[ -z "$H5PY" ] && echo "note: no python3 with h5py: the arrays' bytes and the format version are not compared"
 check "h5diff sees a different seed (the comparison can fail)" \
     bash -c "'$ilf' relight scene.json -o seed --threads 1 --quiet --seed 9 --no-view && ! h5diff -q ref/radiance.h5 seed/radiance.h5 >/dev/null"
 # a bounce pass exchanges twice when it gathers some cells on their own (near an occluder) after the larger ones
