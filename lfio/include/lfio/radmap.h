@@ -87,13 +87,15 @@ typedef struct lfio_radmap_patch {
 typedef struct lfio_radmap lfio_radmap;
 
 /**
- * Sets how many threads the serial radiance-map writers (lfio_radmap_write(),
- * lfio_radmap_write_each()) may use to compress a patch's chunks while HDF5
- * makes its objects: 0 (the default) for every online core, 1 for the
- * calling thread alone (at most 1024). The chunks' bytes are the same
- * whatever the count. MPI writes and big-endian machines compress through
- * HDF5 on one thread and ignore it. Safe to call from any thread; a write
- * already under way may take the old value or the new.
+ * Sets how many threads the serial radiance-map writers that take no options
+ * (lfio_radmap_write(), lfio_radmap_write_each(), lfio_radmap_write_rows())
+ * may use to compress chunks, and the default threads of
+ * lfio_radmap_write_options_init(): 0 (the default) for every online core, 1
+ * for the calling thread alone (at most 1024). The chunks' bytes are the
+ * same whatever the count. MPI writes and big-endian machines compress
+ * through HDF5 on one thread and ignore it. Safe to call from any thread; a
+ * write already under way may take the old value or the new. A caller that
+ * owns its write passes lfio_radmap_write_options instead.
  */
 void lfio_radmap_set_threads(unsigned threads);
 
@@ -153,7 +155,8 @@ typedef lfio_status (*lfio_radmap_rows_fn)(void *user, size_t k, uint32_t first,
  * Writes a file as lfio_radmap_write_each() does, but describe gives each
  * patch without its cells (its five cell arrays are ignored) and rows gives
  * them a slice at a time, so that a caller need hold at most
- * LFIO_RADMAP_ROWS_MAX cells' arrays, and lfio their compressed chunks. The
+ * LFIO_RADMAP_ROWS_MAX cells' arrays (lfio gathers them all in format 2, 64
+ * bytes a cell; in format 1 it holds one slice's compressed chunks). The
  * file is the same. Each slice is checked as it arrives. rows NULL: the
  * cells are the described patch's arrays, as in lfio_radmap_write_each().
  * @return as lfio_radmap_write_each(), or rows's status.
