@@ -13,18 +13,15 @@ every cell, both as shares of that mean (BENCHMARKS-journal.md, section 2d).
 """
 import sys
 
-import h5py
 import numpy as np
+
+from radmap_cells import cells as map_cells
 
 
 def cells(path):
-    """Irradiance (mean of RGB) and area of every cell, in patch order."""
-    with h5py.File(path, "r") as f:
-        patches = f["patches"]
-        keys = sorted(patches.keys(), key=int)
-        e = [patches[k]["irradiance"][()].astype(np.float64).mean(axis=1) for k in keys]
-        a = [patches[k]["cell_area"][()].astype(np.float64) for k in keys]
-    return np.concatenate(e), np.concatenate(a)
+    """Irradiance (mean of RGB) and area of every cell, in patch order (either format of radiance.h5)."""
+    e = map_cells(path, "irradiance").astype(np.float64).mean(axis=1)
+    return e, map_cells(path, "cell_area").astype(np.float64)
 
 
 def main(argv):

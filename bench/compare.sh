@@ -34,14 +34,14 @@ median() { $py -c "import sys,statistics; print('%.4g' % statistics.median(map(f
 stat() { $py -c "import json,sys; d=json.load(open(sys.argv[1])); [d := d[k] if not k.isdigit() else d[int(k)] for k in sys.argv[2:]]; print(d)" "$@"; }
 # rmse REF.h5 RUN.h5: RMSE of the luminance of irradiance over every cell
 rmse() {
-    $py - "$1" "$2" <<'EOF'
-import sys, h5py, numpy as np
+    PYTHONPATH="$PWD/bench${PYTHONPATH:+:$PYTHONPATH}" $py - "$1" "$2" <<'EOF'
+import sys, numpy as np
+from radmap_cells import cells
 w = np.array([0.2126, 0.7152, 0.0722])
 def y(p):
-    f = h5py.File(p, 'r')
-    return {k: np.asarray(f['patches'][k]['irradiance'], dtype=float) @ w for k in f['patches']}
+    return np.asarray(cells(p, 'irradiance'), dtype=float) @ w
 a, b = y(sys.argv[1]), y(sys.argv[2])
-print('%.5g' % np.sqrt(np.mean(np.concatenate([(a[k] - b[k]) ** 2 for k in sorted(a)]))))
+print('%.5g' % np.sqrt(np.mean((a - b) ** 2)))
 EOF
 }
 # reference SCENE BOUNCES: the path of the cached reference of SCENE (computed once)

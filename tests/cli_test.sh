@@ -399,15 +399,17 @@ if [ -n "$H5PY" ]; then
 import sys
 import h5py, numpy as np
 with h5py.File(sys.argv[1], "r") as f:
-    assert f.attrs["format"].decode() == "ilfkit-radiance-maps" and int(f.attrs["format_version"]) == 1
+    assert f.attrs["format"].decode() == "ilfkit-radiance-maps" and int(f.attrs["format_version"]) == 2
     assert f.attrs["scene"].decode().endswith("cli_square.json") and int(f.attrs["patch_count"]) == 1
-    patch = f["patches"]["0"]
-    assert patch.attrs["label"].decode() == "polygons[1]", patch.attrs["label"]
-    E = patch["irradiance"][:].astype(np.float64)
-    A = patch["cell_area"][:]
+    maps = f["patches"]
+    labels = maps["label"][:].tobytes().split(b"\0")[:-1]
+    assert labels == [b"polygons[1]"], labels
+    a, b = maps["cell_offset"][0:2]
+    E = maps["irradiance"][a:b].astype(np.float64)
+    A = maps["cell_area"][a:b]
     P = (E * A[:, None]).sum(axis=0)
     assert abs(A.sum() - 4.0) < 1e-9 and 5 < P[0] < np.pi * 10, (A.sum(), P)
-    assert patch["irradiance"].attrs["axes"].decode() == "cell:rgb"
+    assert maps["irradiance"].attrs["axes"].decode() == "cell:rgb"
 ' "$RELIT/square/radiance.h5"
 fi
 

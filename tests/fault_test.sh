@@ -106,8 +106,12 @@ elif kind == "radmap":
     import h5py
     with h5py.File(path, "r") as f:
         assert f.attrs["format"].decode() == "ilfkit-radiance-maps"
-        for k in range(int(f.attrs["patch_count"])):
-            for name, d in f["patches"][str(k)].items():
+        if int(f.attrs["format_version"]) == 1:
+            groups = [f["patches"][str(k)] for k in range(int(f.attrs["patch_count"]))]
+        else:
+            groups = [f["patches"]]
+        for g in groups:
+            for name, d in g.items():
                 d[...]
 '
 

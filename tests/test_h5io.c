@@ -1067,20 +1067,39 @@ static void relink(const char *path, const char *group, const char *dset, const 
     H5Fclose(f);
 }
 
+/* lfio_radmap_write_with()'s describe: the one patch user points to. */
+static lfio_status describe_one(void *user, size_t k, lfio_radmap_patch *out)
+{
+    (void)k;
+    *out = *(const lfio_radmap_patch *)user;
+    return LFIO_OK;
+}
+
 /* Radiance-map files take the same storage checks as light fields: a dataset reached through a soft or an
  * external link is refused (the external one before its file is opened), and so are forged chunks of a
  * deflated cell dataset (three chunks of 16384 cells): under their checksum, a skipped checksum, a stream
- * inflating ten times past its chunk. Each refusal is LFIO_ERR_FORMAT naming the file and the dataset. */
-static void test_radmap_storage(void)
+ * inflating ten times past its chunk. Each refusal is LFIO_ERR_FORMAT naming the file and the dataset.
+ * In format 1 (a group a patch) and format 2 (each array once for all patches, in /patches). */
+static void test_radmap_storage(int format)
 {
+    const char *group = format == 1 ? "/patches/0" : "/patches";
+    char irr[64], verts[64], area[64];
+    snprintf(irr, sizeof irr, "%s/irradiance", group);
+    snprintf(verts, sizeof verts, "%s/vertices", group);
+    snprintf(area, sizeof area, "%s/cell_area", group);
+    lfio_radmap_write_options opt;
+    lfio_radmap_write_options_init(&opt);
+    opt.format_version = format;
     struct test_patch t;
     make_patch(&t, "polygons[0]", 0, 2.0, 0.0, 0.01, 0); /* 40,000 cells */
     char good[512], p[512];
-    CHECK(lfio_radmap_write(tmp_path(good, sizeof good, "map.h5"), "test_h5io", NULL, &t.p, 1) == LFIO_OK,
-          "write a radiance map: %s", lfio_errmsg());
+    CHECK(lfio_radmap_write_with(tmp_path(good, sizeof good, "map.h5"), "test_h5io", NULL, 1, describe_one, NULL,
+                                 &t.p, &opt) == LFIO_OK,
+          "write a radiance map (format %d): %s", format, lfio_errmsg());
     lfio_radmap *map = NULL;
     lfio_radmap_patch back;
-    CHECK(lfio_radmap_read(good, &map) == LFIO_OK, "read it back: %s", lfio_errmsg());
+    CHECK(lfio_radmap_read(good, &map) == LFIO_OK && lfio_radmap_format_version(map) == format, "read it back: %s",
+          lfio_errmsg());
     if (map && lfio_radmap_get(map, 0, &back) == LFIO_OK)
         check_patch_equal(&back, &t.p, "map.h5");
     lfio_radmap_destroy(map);
@@ -1088,25 +1107,28 @@ static void test_radmap_storage(void)
     unsigned char *zeros = calloc(10 * chunk_bytes, 1), *stream = malloc(2 * chunk_bytes);
     uLongf packed = (uLongf)(2 * chunk_bytes - 4), bomb = packed;
     CHECK(zeros && stream && compress2(stream, &packed, zeros, chunk_bytes, 1) == Z_OK, "deflate a chunk");
+    char external[96], soft[96];
+    snprintf(external, sizeof external, "%s: is an external link", irr);
+    snprintf(soft, sizeof soft, "%s: is a soft link", verts);
     struct {
         const char *name, *needle;
     } cases[] = {
-        {"map_external.h5", "/patches/0/irradiance: is an external link"},
-        {"map_soft.h5", "/patches/0/vertices: is a soft link"},
+        {"map_external.h5", external},
+        {"map_soft.h5", soft},
         {"map_tiny_chunk.h5", "stores 2 bytes"},
         {"map_skipped.h5", "skipped filters (filter mask 0x4)"},
         {"map_bomb.h5", "does not inflate to its 196608 bytes"},
     };
-    relink(fresh_copy(p, sizeof p, good, cases[0].name), "/patches/0", "irradiance", good, "/patches/0/irradiance");
-    relink(fresh_copy(p, sizeof p, good, cases[1].name), "/patches/0", "vertices", NULL, "/patches/0/cell_area");
-    store_chunk(fresh_copy(p, sizeof p, good, cases[2].name), "/patches/0/irradiance", 2, "\x01\x02", 2, 0);
+    relink(fresh_copy(p, sizeof p, good, cases[0].name), group, "irradiance", good, irr);
+    relink(fresh_copy(p, sizeof p, good, cases[1].name), group, "vertices", NULL, area);
+    store_chunk(fresh_copy(p, sizeof p, good, cases[2].name), irr, 2, "\x01\x02", 2, 0);
     /* a stream of zeros where the cells were, its checksum skipped */
-    store_chunk(fresh_copy(p, sizeof p, good, cases[3].name), "/patches/0/irradiance", 2, stream, packed, 4);
+    store_chunk(fresh_copy(p, sizeof p, good, cases[3].name), irr, 2, stream, packed, 4);
     if (zeros && stream && compress2(stream, &bomb, zeros, 10 * chunk_bytes, 9) == Z_OK) {
         uint32_t sum = forge_fletcher32(stream, bomb);
         for (int k = 0; k < 4; k++)
             stream[bomb + k] = (unsigned char)(sum >> (8 * k));
-        store_chunk(fresh_copy(p, sizeof p, good, cases[4].name), "/patches/0/irradiance", 2, stream, bomb + 4, 0);
+        store_chunk(fresh_copy(p, sizeof p, good, cases[4].name), irr, 2, stream, bomb + 4, 0);
     }
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         map = (lfio_radmap *)1;
@@ -1162,7 +1184,8 @@ int main(void)
     char cov[512];
     test_coverage(tmp_path(cov, sizeof cov, "coverage.h5"));
     test_verify_tampered(mid);
-    test_radmap_storage();
+    test_radmap_storage(1);
+    test_radmap_storage(2);
     CHECK(count_temporaries() == 0, "temporaries left at the end");
     return check_report();
 }

@@ -21,6 +21,8 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <stddef.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -580,7 +582,7 @@ static void expect_bad(const char *path, lfio_status want, const char *needle, c
         lfio_radmap_destroy(map);
 }
 
-/* Every documented way a file can be bad; good has patches 0 (cells), 1 (no cells), 2 (many cells). */
+/* Every documented way a format-1 file can be bad; good has patches 0 (cells), 1 (no cells), 2 (many cells). */
 static void test_bad_files(const char *good)
 {
     char p[512];
@@ -608,10 +610,10 @@ static void test_bad_files(const char *good)
 
     edit_attr_str(copy_to(p, sizeof p, good, "wrong_format.h5"), "/", "format", "ilfkit-lightfield");
     expect_bad(p, LFIO_ERR_FORMAT, "'ilfkit-lightfield', expected 'ilfkit-radiance-maps'", "wrong format string");
-    const int32_t two = 2;
-    edit_attr(copy_to(p, sizeof p, good, "version2.h5"), "/", "format_version", H5T_STD_I32LE, H5T_NATIVE_INT32, 0,
-              &two);
-    expect_bad(p, LFIO_ERR_FORMAT, "format_version 2", "format_version 2");
+    const int32_t three = 3;
+    edit_attr(copy_to(p, sizeof p, good, "version3.h5"), "/", "format_version", H5T_STD_I32LE, H5T_NATIVE_INT32, 0,
+              &three);
+    expect_bad(p, LFIO_ERR_FORMAT, "format_version 3", "format_version 3");
     const uint32_t four = 4, one = 1;
     edit_attr(copy_to(p, sizeof p, good, "count4.h5"), "/", "patch_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0,
               &four);
@@ -660,6 +662,111 @@ static void test_bad_files(const char *good)
     CHECK(lfio_radmap_read(good, NULL) == LFIO_ERR_ARG, "NULL output");
 }
 
+/* Every way a format-2 file can be bad that format 1 cannot: good has patches 0 (12 cells), 1 (none) and
+ * 2 (40000), so its cells 12 .. 40011 are patch 2's. The storage checks are test_h5io's. */
+static void test_bad_files_v2(const char *good)
+{
+    char p[512];
+    copy_to(p, sizeof p, good, "v2_flipped.h5");
+    CHECK(flip_chunk_byte(p, "/patches/irradiance"), "flip a byte of an irradiance chunk");
+    expect_bad(p, LFIO_ERR_CHECKSUM, "/patches/irradiance", "format 2: flipped irradiance byte");
+    const uint32_t four = 4;
+    edit_attr(copy_to(p, sizeof p, good, "v2_count4.h5"), "/", "patch_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0,
+              &four);
+    expect_bad(p, LFIO_ERR_FORMAT, "/patches/label", "format 2: patch_count 4 with three patches");
+    /* patch 1 claims patch 2's first cell: patch 2 then ends past the cells stored */
+    edit_element(copy_to(p, sizeof p, good, "v2_offset_late.h5"), "/patches/cell_offset", 2, 0, 13);
+    edit_element(p, "/patches/cell_offset", 3, 0, 40013);
+    expect_bad(p, LFIO_ERR_FORMAT, "/patches/cell_ij: dims mismatch", "format 2: cell offsets past the cells");
+    edit_element(copy_to(p, sizeof p, good, "v2_offset_back.h5"), "/patches/cell_offset", 2, 0, 5);
+    expect_bad(p, LFIO_ERR_FORMAT, "/patches/cell_offset: offset 2 decreases", "format 2: decreasing offsets");
+    edit_element(copy_to(p, sizeof p, good, "v2_offset_start.h5"), "/patches/vertex_offset", 0, 0, 1);
+    expect_bad(p, LFIO_ERR_FORMAT, "/patches/vertex_offset: must start at 0", "format 2: offsets not from 0");
+    edit_element(copy_to(p, sizeof p, good, "v2_small_grid.h5"), "/patches/nv", 0, 0, 1);
+    expect_bad(p, LFIO_ERR_FORMAT, "patch 0: 12 cells in a grid", "format 2: more cells than nu*nv");
+    edit_element(copy_to(p, sizeof p, good, "v2_nan.h5"), "/patches/irradiance", 12 + 5, 1, NAN);
+    expect_bad(p, LFIO_ERR_FORMAT, "patch 2: irradiance of cell 5", "format 2: NaN irradiance");
+    edit_element(copy_to(p, sizeof p, good, "v2_albedo.h5"), "/patches/albedo", 1, 2, 1.5);
+    expect_bad(p, LFIO_ERR_FORMAT, "patch 1: albedo", "format 2: albedo above 1");
+    edit_element(copy_to(p, sizeof p, good, "v2_label.h5"), "/patches/label", 0, 0, 0);
+    expect_bad(p, LFIO_ERR_FORMAT, "NUL-terminated labels", "format 2: a label split in two");
+    const hsize_t rgb[2] = {40012, 3};
+    edit_replace_dataset(copy_to(p, sizeof p, good, "v2_units.h5"), "/patches/radiosity", H5T_IEEE_F32LE, 2, rgb, 1.0,
+                         "W sr^-1 m^-2", "cell:rgb");
+    expect_bad(p, LFIO_ERR_FORMAT, "units", "format 2: radiosity in radiance units");
+}
+
+/* Writes count patches to path in format version `format` through lfio_radmap_write_with(). */
+static lfio_status write_format(const char *path, const lfio_radmap_patch *patches, size_t count, int format)
+{
+    lfio_radmap_write_options opt;
+    lfio_radmap_write_options_init(&opt);
+    opt.format_version = format;
+    return lfio_radmap_write_with(path, "test_radmap", "scenes/test.json", count, describe_some,
+                                  NULL, &(struct describer){patches, SIZE_MAX, 0}, &opt);
+}
+
+/* @return the format version of the file at path as lfio reads it, or -1 if it does not read. */
+static int read_format(const char *path)
+{
+    lfio_radmap *map = NULL;
+    int v = lfio_radmap_read(path, &map) == LFIO_OK ? lfio_radmap_format_version(map) : -1;
+    lfio_radmap_destroy(map);
+    return v;
+}
+
+/* Both formats hold the same content; the options are checked; a format-1 file written by an older build
+ * (the fuzzing corpus's seed, beside this file) still reads. */
+static void test_formats(const lfio_radmap_patch *patches, size_t count)
+{
+    char one[512], two[512];
+    lfio_radmap *a = NULL, *b = NULL;
+    CHECK(write_format(tmp_path(one, sizeof one, "format1.h5"), patches, count, 1) == LFIO_OK, "write format 1: %s",
+          lfio_errmsg());
+    CHECK(write_format(tmp_path(two, sizeof two, "format2.h5"), patches, count, 2) == LFIO_OK, "write format 2: %s",
+          lfio_errmsg());
+    CHECK(lfio_radmap_read(one, &a) == LFIO_OK && lfio_radmap_format_version(a) == 1, "read format 1: %s",
+          lfio_errmsg());
+    CHECK(lfio_radmap_read(two, &b) == LFIO_OK && lfio_radmap_format_version(b) == 2, "read format 2: %s",
+          lfio_errmsg());
+    for (size_t k = 0; a && b && k < count; k++) {
+        lfio_radmap_patch pa, pb;
+        CHECK(lfio_radmap_get(a, k, &pa) == LFIO_OK && lfio_radmap_get(b, k, &pb) == LFIO_OK, "get %zu", k);
+        check_patch_equal(&pa, &pb, pa.label);
+    }
+    lfio_radmap_destroy(a);
+    lfio_radmap_destroy(b);
+    CHECK(lfio_radmap_format_version(NULL) == 0, "format of NULL");
+    lfio_radmap_write_options opt;
+    lfio_radmap_write_options_init(&opt);
+    opt.deflate_level = 0; /* stored without compression: still the same content */
+    CHECK(lfio_radmap_write_with(two, NULL, NULL, count, describe_some, NULL, &(struct describer){patches, SIZE_MAX, 0},
+                                 &opt) == LFIO_OK && read_format(two) == 2, "format 2 without deflate: %s", lfio_errmsg());
+    opt.deflate_level = 10;
+    CHECK(lfio_radmap_write_with(two, NULL, NULL, 0, NULL, NULL, NULL, &opt) == LFIO_ERR_ARG, "deflate level 10");
+    lfio_radmap_write_options_init(&opt);
+    opt.format_version = 3;
+    CHECK(lfio_radmap_write_with(two, NULL, NULL, 0, NULL, NULL, NULL, &opt) == LFIO_ERR_ARG, "format 3");
+    opt.format_version = 2;
+    opt.size = 3;
+    CHECK(lfio_radmap_write_with(two, NULL, NULL, 0, NULL, NULL, NULL, &opt) == LFIO_ERR_ARG, "options of size 3");
+    /* an older caller's struct (size and threads only) takes the defaults for the rest */
+    opt.size = offsetof(lfio_radmap_write_options, deflate_level);
+    opt.format_version = 99;
+    CHECK(lfio_radmap_write_with(two, NULL, NULL, 0, NULL, NULL, NULL, &opt) == LFIO_OK && read_format(two) == 2,
+          "options of an older size: %s", lfio_errmsg());
+    char fixture[1024];
+    const char *slash = strrchr(__FILE__, '/');
+    snprintf(fixture, sizeof fixture, "%.*sfuzz/corpus/fuzz_radmap/square.h5", slash ? (int)(slash - __FILE__ + 1) : 0,
+             __FILE__);
+    lfio_radmap *old = NULL;
+    lfio_radmap_patch p;
+    CHECK(lfio_radmap_read(fixture, &old) == LFIO_OK && lfio_radmap_format_version(old) == 1
+              && lfio_radmap_count(old) == 1 && lfio_radmap_get(old, 0, &p) == LFIO_OK && p.ncells == 4,
+          "format-1 fixture %s: %s", fixture, lfio_errmsg());
+    lfio_radmap_destroy(old);
+}
+
 int main(void)
 {
     const char *base = getenv("ILF_TEST_TMP");
@@ -706,7 +813,12 @@ int main(void)
     test_write_fails_midway(patches, 4, stopped, 2048);
     test_write_fails_midway(patches, 4, stopped, 96 * 1024);
     test_writer_refusals(&t[0], good);
-    test_bad_files(good);
+    test_formats(patches, 4);
+    test_bad_files_v2(good);
+    char good1[512];
+    CHECK(write_format(tmp_path(good1, sizeof good1, "good1.h5"), patches, 3, 1) == LFIO_OK, "write format 1: %s",
+          lfio_errmsg());
+    test_bad_files(good1);
     CHECK(sweep_tmpdir(1) == 0, "temporaries left at the end");
     for (int k = 0; k < 4; k++)
         free_patch(&t[k]);

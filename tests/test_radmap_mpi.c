@@ -3,7 +3,8 @@
  * under mpirun with any number of ranks (ctest runs 1 and 3):
  *   - a file written by every rank together reads back through
  *     lfio_radmap_read() with exactly the patches given, and holds what the
- *     serial writer writes (empty patches and a 100,000-cell one included);
+ *     serial writer writes (empty patches and a 100,000-cell one included),
+ *     in format 2, or in format 1 when asked; fewer patches than ranks too;
  *   - a describe() that fails on the last rank alone fails the write on every
  *     rank (with "another rank" in the others' messages), leaves an existing
  *     file as it was and no temporary beside it;
@@ -93,9 +94,35 @@ int main(int argc, char **argv)
             check_patch_equal(&pa, &pb, what);
         }
     }
+    CHECK(lfio_radmap_format_version(a) == 2 && lfio_radmap_format_version(b) == 2, "format 2 written");
     lfio_radmap_destroy(a);
     lfio_radmap_destroy(b);
     MPI_Barrier(MPI_COMM_WORLD);
+
+    /* Format 1 on request, and format 2 of fewer patches than ranks (a rank with no cells of its own). */
+    for (size_t v = 1; v <= 2; v++) {
+        char path[512];
+        const size_t count = v == 1 ? NPATCHES : 2;
+        snprintf(path, sizeof path, "%s/format%zu-%d.h5", dir, v, ranks);
+        lfio_radmap_write_options opt;
+        lfio_radmap_write_options_init(&opt);
+        opt.format_version = (int)v;
+        st = lfio_radmap_write_with_mpi(path, "test_radmap_mpi", NULL, count, describe, NULL, &opt, MPI_COMM_WORLD);
+        CHECK(st == LFIO_OK, "collective write of format %zu: %s", v, lfio_errmsg());
+        MPI_Barrier(MPI_COMM_WORLD);
+        CHECK(lfio_radmap_read(path, &a) == LFIO_OK && lfio_radmap_format_version(a) == (int)v
+                  && lfio_radmap_count(a) == count, "read %s: %s", path, lfio_errmsg());
+        for (size_t k = 0; a && k < count && k < lfio_radmap_count(a); k++) {
+            lfio_radmap_patch pa;
+            char what[64];
+            snprintf(what, sizeof what, "format %zu, rank %d, patch %zu", v, rank, k);
+            CHECK(lfio_radmap_get(a, k, &pa) == LFIO_OK, "%s: get", what);
+            check_patch_equal(&pa, &patches[k].p, what);
+        }
+        lfio_radmap_destroy(a);
+        a = NULL;
+        MPI_Barrier(MPI_COMM_WORLD);
+    }
 
     /* One rank fails to describe a patch: every rank fails, the old file stays, no temporary. */
     fail_on_rank_label = "tiny";

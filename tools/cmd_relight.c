@@ -363,8 +363,9 @@ static int relight(relight_run *run)
 /*
  * radiance.h5 beside the engine (one process): the engine tells which maps
  * are final as its last pass goes (rl_maps_ready_fn), and a thread of its
- * own writes them in order meanwhile, so that HDF5's serial work on the
- * maps' objects overlaps the engine's rather than following it. That
+ * own hands them to lfio in order meanwhile, so that checking and gathering
+ * their cells overlaps the engine; lfio stores the file (a few datasets,
+ * compressed on the engine's threads) once the last map is final. That
  * thread prints nothing: it keeps its messages, and the main thread reports
  * the write once both end.
  */
@@ -586,11 +587,13 @@ static lfio_status radiance_write(relight_run *run, const rl_solution *solution,
                                   uint64_t *cells, int *reported)
 {
     patch_arrays arrays = {solution, beside, beside ? beside->held : NULL, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
-    /* the chunks are compressed on the threads the engine uses, once it has returned (writer_finish()) */
-    if (beside == NULL)
-        lfio_radmap_set_threads(relight_threads_used(&run->run_options));
+    lfio_radmap_write_options opt;
+    lfio_radmap_write_options_init(&opt);
+    /* lfio gathers every map before it compresses anything, so the chunks are compressed once the last map
+     * is final, on the threads the engine used */
+    opt.threads = relight_threads_used(&run->run_options);
     lfio_status st = job_radmap_write(run->staged[OUT_RADIANCE], RELIGHT_CREATOR, run->o->scene, n, describe_map,
-                                      map_rows, &arrays);
+                                      map_rows, &arrays, &opt);
     *cells = arrays.cells;
     *reported = arrays.reported;
     free(arrays.ij);
@@ -666,7 +669,6 @@ static int writer_start(map_writer *w, relight_run *run)
     }
     run->run_options.maps_ready = writer_told;
     run->run_options.maps_ready_user = w;
-    lfio_radmap_set_threads(1); /* while the engine's threads take every core */
     if (pthread_create(&w->thread, NULL, writer_main, w) != 0) {
         run->run_options.maps_ready = NULL;
         pthread_cond_destroy(&w->moved);
@@ -680,8 +682,6 @@ static int writer_start(map_writer *w, relight_run *run)
  * engine succeeded). @return an exit code. */
 static int writer_finish(map_writer *w, int code, double engine_end)
 {
-    /* the engine's threads are free: the rest of the write may compress on them (read per map) */
-    lfio_radmap_set_threads(relight_threads_used(&w->run->run_options));
     writer_over(w);
     pthread_join(w->thread, NULL);
     pthread_cond_destroy(&w->moved);

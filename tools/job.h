@@ -45,11 +45,13 @@ int job_share(const char *sub, void *buf, size_t size);
  */
 int job_fail(int code);
 
-/** Collective: writes a radiance-map file as lfio_radmap_write_rows() does; in a job of several ranks
- * through parallel HDF5 (lfio/radmap_mpi.h), each patch's cells asked of rows whole (count unbounded).
- * @return as lfio_radmap_write_rows(), the same on every rank. */
+/** Collective: writes a radiance-map file as lfio_radmap_write_with() does, stored as opt says; in a job of
+ * several ranks through parallel HDF5 (lfio/radmap_mpi.h), each patch's cells asked of rows whole (count
+ * unbounded), each rank writing those of its own patches.
+ * @return as lfio_radmap_write_with(), the same on every rank. */
 lfio_status job_radmap_write(const char *path, const char *creator, const char *scene, size_t count,
-                             lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user);
+                             lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user,
+                             const lfio_radmap_write_options *opt);
 
 /** @return 1 if radiance.h5 may be written on a thread of its own while the engine runs (one process: no
  * MPI call leaves the main thread), else 0. */

@@ -182,10 +182,11 @@ static lfio_status describe_whole(void *user, size_t k, lfio_radmap_patch *out)
 }
 
 lfio_status job_radmap_write(const char *path, const char *creator, const char *scene, size_t count,
-                             lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user)
+                             lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user,
+                             const lfio_radmap_write_options *opt)
 {
     whole_patches w = {describe, rows, user};
-    return lfio_radmap_write_each_mpi(path, creator, scene, count, describe_whole, &w, job_comm);
+    return lfio_radmap_write_with_mpi(path, creator, scene, count, describe_whole, &w, opt, job_comm);
 }
 
 /* --------------------------------------------------------------- job_mpi.h */

@@ -38,9 +38,10 @@ int job_fail(int code)
 }
 
 lfio_status job_radmap_write(const char *path, const char *creator, const char *scene, size_t count,
-                             lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user)
+                             lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user,
+                             const lfio_radmap_write_options *opt)
 {
-    return lfio_radmap_write_rows(path, creator, scene, count, describe, rows, user);
+    return lfio_radmap_write_with(path, creator, scene, count, describe, rows, user, opt);
 }
 
 int job_write_beside(void)

@@ -1,6 +1,8 @@
 /*
  * radmap_io.c - radiance-map files (lfio/radmap.h; docs/format.md,
- * "Radiance-map files"): the atomic writer and the validating reader.
+ * "Radiance-map files"): the atomic writer and the validating reader, of
+ * format 2 (each array once for all patches: written by default) and
+ * format 1 (a group a patch: read, and written when asked).
  *
  * Invariants:
  *   - The layout of every dataset of a patch (name, type, shape, chunks,
@@ -11,7 +13,13 @@
  *     applies to a patch's description and then to each slice of its
  *     cells). The writer refuses (LFIO_ERR_ARG) exactly what the reader
  *     refuses (LFIO_ERR_FORMAT), so every file written reads back.
- *   - A serial write holds one slice of a patch's cells at a time
+ *   - Format 2: the writer gathers every patch's description and vertices
+ *     and the cells of this writer's patches (all of them in a serial write,
+ *     a contiguous run of them on a rank of a collective one), then writes
+ *     one dataset at a time, from one table (v2_datasets[], through
+ *     v2_layout()) that the reader checks against; the reader checks the
+ *     per-patch tables and offsets before it sizes any vertex or cell array.
+ *   - Format 1: a serial write holds one slice of a patch's cells at a time
  *     (LFIO_RADMAP_ROWS_MAX, a whole number of chunks) and their compressed
  *     chunks; a write through MPI-IO, which HDF5 filters, one whole patch.
  *   - The reader allocates nothing from a number found in a file before
@@ -27,6 +35,7 @@
  */
 #include <math.h>
 #include <stdatomic.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -268,8 +277,12 @@ struct map_content {
     lfio_radmap_describe_fn describe;
     lfio_radmap_rows_fn rows; /* NULL: the cells are the described patch's own arrays */
     void *user;
-    int rank, ranks; /* this writer among those of a collective write: patch k's arrays are rank k mod ranks's */
+    int rank, ranks; /* this writer among those of a collective write (format 1: patch k's arrays are rank k mod
+                      * ranks's; format 2: v2_gather()) */
     int serial;      /* written by lfio_radmap_write_rows() (or _each()), not through MPI-IO (even with one rank) */
+    int format;      /* the format version written: 1 or 2 */
+    unsigned threads; /* format 2: threads compressing chunks (0: every core) */
+    int level;       /* format 2: zlib level of datasets of 1 KiB or more, 0 for none */
 };
 
 /* Writes the attributes of patch group g (obj) describing p. */
@@ -505,10 +518,340 @@ static lfio_status write_patch(const struct map_content *mc, const char *path, h
     return w.st;
 }
 
+/* ------------------------------------------------------- format 2: writing */
+
+/*
+ * Format 2 stores each array once for all patches (docs/format.md, "Format
+ * version 2"): the per-patch tables (one row a patch), the offsets of each
+ * patch's vertices and cells (patch_count + 1 rows), the NUL-terminated
+ * labels one after another, and the vertices and cells of every patch
+ * concatenated in patch order. A write is then one transfer a dataset
+ * whatever the number of patches. The writer gathers the whole content
+ * first (every rank all the tables and vertices, each rank the cells of its
+ * own patches: a contiguous run of them), then creates and writes the
+ * datasets; the reader checks the tables before it sizes the arrays.
+ */
+
+/* The datasets of format 2, in file order. */
+enum v2_ds { V2_LABEL, V2_POLYGON, V2_NU, V2_NV, V2_ORIGIN, V2_E1, V2_E2, V2_NORMAL, V2_CELL_SIZE, V2_U0, V2_V0,
+             V2_ALBEDO, V2_EMISSION, V2_VERTEX_OFFSET, V2_CELL_OFFSET, V2_VERTICES, V2_CELL_IJ, V2_CELL_AREA,
+             V2_CELL_CENTRE, V2_IRRADIANCE, V2_RADIOSITY, V2_COUNT };
+
+/* What the rows of a format-2 dataset are. */
+enum v2_rows { ROWS_LABEL_BYTES, ROWS_PATCH, ROWS_OFFSET, ROWS_VERTEX, ROWS_CELL };
+
+/* One dataset of format 2: as map_datasets[], and what its rows are. */
+struct v2_dataset {
+    const char *name;
+    int width;
+    H5T_class_t cls;
+    size_t size;
+    const char *units;
+    const char *axes;
+    enum v2_rows rows;
+};
+
+static const struct v2_dataset v2_datasets[V2_COUNT] = {
+    {"label", 0, H5T_INTEGER, 1, "1", "byte", ROWS_LABEL_BYTES},
+    {"polygon", 0, H5T_INTEGER, 4, "1", "patch", ROWS_PATCH},
+    {"nu", 0, H5T_INTEGER, 4, "1", "patch", ROWS_PATCH},
+    {"nv", 0, H5T_INTEGER, 4, "1", "patch", ROWS_PATCH},
+    {"origin", 3, H5T_FLOAT, 8, "m", "patch:xyz", ROWS_PATCH},
+    {"e1", 3, H5T_FLOAT, 8, "1", "patch:xyz", ROWS_PATCH},
+    {"e2", 3, H5T_FLOAT, 8, "1", "patch:xyz", ROWS_PATCH},
+    {"normal", 3, H5T_FLOAT, 8, "1", "patch:xyz", ROWS_PATCH},
+    {"cell_size", 0, H5T_FLOAT, 8, "m", "patch", ROWS_PATCH},
+    {"u0", 0, H5T_FLOAT, 8, "m", "patch", ROWS_PATCH},
+    {"v0", 0, H5T_FLOAT, 8, "m", "patch", ROWS_PATCH},
+    {"albedo", 3, H5T_FLOAT, 4, "1", "patch:rgb", ROWS_PATCH},
+    {"emission", 3, H5T_FLOAT, 4, "W sr^-1 m^-2", "patch:rgb", ROWS_PATCH},
+    {"vertex_offset", 0, H5T_INTEGER, 4, "1", "patch", ROWS_OFFSET},
+    {"cell_offset", 0, H5T_INTEGER, 4, "1", "patch", ROWS_OFFSET},
+    {"vertices", 3, H5T_FLOAT, 8, "m", "vertex:xyz", ROWS_VERTEX},
+    {"cell_ij", 2, H5T_INTEGER, 4, "1", "cell:ij", ROWS_CELL},
+    {"cell_area", 0, H5T_FLOAT, 8, "m^2", "cell", ROWS_CELL},
+    {"cell_centre", 3, H5T_FLOAT, 8, "m", "cell:xyz", ROWS_CELL},
+    {"irradiance", 3, H5T_FLOAT, 4, "W m^-2", "cell:rgb", ROWS_CELL},
+    {"radiosity", 3, H5T_FLOAT, 4, "W m^-2", "cell:rgb", ROWS_CELL},
+};
+
+/* Rows per chunk of every format-2 dataset: at most 384 KiB of values. */
+#define V2_CHUNK 16384
+
+/* @return the bytes of one row of format-2 dataset t. */
+static size_t v2_row_bytes(enum v2_ds t)
+{
+    const struct v2_dataset *m = &v2_datasets[t];
+    return (size_t)(m->width ? m->width : 1) * m->size;
+}
+
+/* Fills *l with the layout of format-2 dataset t of rows rows, deflated at level when 1 KiB or more. */
+static void v2_layout(enum v2_ds t, uint64_t rows, int level, lfio__h5_layout *l)
+{
+    const struct v2_dataset *m = &v2_datasets[t];
+    memset(l, 0, sizeof *l);
+    snprintf(l->name, sizeof l->name, "%s", m->name);
+    l->rank = m->width ? 2 : 1;
+    l->dims[0] = rows;
+    l->chunk[0] = chunk_rows(rows, V2_CHUNK);
+    if (m->width) {
+        l->dims[1] = (hsize_t)m->width;
+        l->chunk[1] = (hsize_t)m->width;
+    }
+    l->cls = m->cls;
+    l->size = m->size;
+    l->units = m->units;
+    l->axes = m->axes;
+    l->deflate = level > 0 && rows * v2_row_bytes(t) >= DEFLATE_MIN_BYTES ? level : 0;
+}
+
+/* @return the native memory type of format-2 dataset t. */
+static hid_t v2_memory_type(enum v2_ds t)
+{
+    const struct v2_dataset *m = &v2_datasets[t];
+    if (m->cls == H5T_INTEGER)
+        return m->size == 4 ? H5T_NATIVE_UINT32 : H5T_NATIVE_UINT8;
+    return m->size == 4 ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE;
+}
+
+/* The whole content of a format-2 file, gathered: one array a dataset. Cells are those of patches
+ * [mine_first, mine_end) alone, cells [cell_first, cell_first + rows[cells]) of the file. */
+typedef struct v2_content {
+    unsigned char *a[V2_COUNT];
+    uint64_t rows[V2_COUNT], cap[V2_COUNT];
+    size_t mine_first, mine_end;
+    uint64_t cell_first;
+} v2_content;
+
+/* Makes room for more rows of dataset t of v. @return 1, or 0 when memory runs out. */
+static int v2_reserve(v2_content *v, enum v2_ds t, uint64_t more)
+{
+    const uint64_t need = v->rows[t] + more;
+    if (need <= v->cap[t])
+        return 1;
+    uint64_t cap = v->cap[t] ? 2 * v->cap[t] : 64;
+    while (cap < need)
+        cap *= 2;
+    if (cap > SIZE_MAX / v2_row_bytes(t))
+        return 0;
+    void *p = realloc(v->a[t], (size_t)cap * v2_row_bytes(t));
+    if (p == NULL)
+        return 0;
+    v->a[t] = p;
+    v->cap[t] = cap;
+    return 1;
+}
+
+/* Appends rows rows of dataset t of v from src. @return 1, or 0 when memory runs out. */
+static int v2_append(v2_content *v, enum v2_ds t, const void *src, uint64_t rows)
+{
+    if (rows == 0)
+        return 1;
+    if (!v2_reserve(v, t, rows))
+        return 0;
+    memcpy(v->a[t] + (size_t)v->rows[t] * v2_row_bytes(t), src, (size_t)rows * v2_row_bytes(t));
+    v->rows[t] += rows;
+    return 1;
+}
+
+/* Frees v's arrays. */
+static void v2_free(v2_content *v)
+{
+    for (int t = 0; t < V2_COUNT; t++)
+        free(v->a[t]);
+}
+
+/* Appends the table rows of patch p (its label, scalars, frame, material, vertices, next offsets) to v.
+ * @return 1, or 0 when memory runs out. */
+static int v2_add_patch(v2_content *v, const lfio_radmap_patch *p, uint32_t vertex_end, uint32_t cell_end)
+{
+    const struct {
+        enum v2_ds t;
+        const void *src;
+    } rows[] = {{V2_POLYGON, &p->polygon},      {V2_NU, &p->nu},         {V2_NV, &p->nv},
+                {V2_ORIGIN, p->origin},         {V2_E1, p->e1},          {V2_E2, p->e2},
+                {V2_NORMAL, p->normal},         {V2_CELL_SIZE, &p->cell_size}, {V2_U0, &p->u0},
+                {V2_V0, &p->v0},                {V2_ALBEDO, p->albedo},  {V2_EMISSION, p->emission},
+                {V2_VERTEX_OFFSET, &vertex_end}, {V2_CELL_OFFSET, &cell_end}};
+    int ok = v2_append(v, V2_LABEL, p->label, strlen(p->label) + 1);
+    for (size_t k = 0; ok && k < sizeof rows / sizeof rows[0]; k++)
+        ok = v2_append(v, rows[k].t, rows[k].src, 1);
+    return ok && v2_append(v, V2_VERTICES, p->vertices, p->nverts);
+}
+
+/* Appends cells q (a checked slice of one patch) to v's cell arrays. @return 1, or 0 when memory runs out. */
+static int v2_add_cells(v2_content *v, const lfio_radmap_patch *q)
+{
+    return v2_append(v, V2_CELL_IJ, q->cell_ij, q->ncells) && v2_append(v, V2_CELL_AREA, q->cell_area, q->ncells)
+           && v2_append(v, V2_CELL_CENTRE, q->cell_centre, q->ncells)
+           && v2_append(v, V2_IRRADIANCE, q->irradiance, q->ncells)
+           && v2_append(v, V2_RADIOSITY, q->radiosity, q->ncells);
+}
+
+/* Takes the cells of patch k (described as p), a slice at a time, checked, into v. @return LFIO_OK or the
+ * first failure's status. */
+static lfio_status v2_gather_cells(const struct map_content *mc, const char *path, size_t k,
+                                   const lfio_radmap_patch *p, v2_content *v)
+{
+    const uint32_t step = mc->serial ? LFIO_RADMAP_ROWS_MAX : p->ncells;
+    uint32_t first = 0;
+    do {
+        lfio_radmap_patch q;
+        const uint32_t count = p->ncells - first < step ? p->ncells - first : step;
+        lfio_status st = patch_slice(mc, path, k, p, first, count, &q);
+        if (st != LFIO_OK)
+            return st;
+        if (!v2_add_cells(v, &q))
+            return lfio__fail(LFIO_ERR_NOMEM, "%s: patch %zu: out of memory", path, k);
+        first += count;
+    } while (first < p->ncells);
+    return LFIO_OK;
+}
+
+/* Describes every patch of mc into v, checking each, with the cells of this rank's patches.
+ * @return LFIO_OK or the first failure's status. */
+static lfio_status v2_gather(const struct map_content *mc, const char *path, v2_content *v)
+{
+    const uint32_t zero = 0;
+    uint64_t vertices = 0, cells = 0;
+    v->mine_first = mc->count * (size_t)mc->rank / (size_t)mc->ranks;
+    v->mine_end = mc->count * ((size_t)mc->rank + 1) / (size_t)mc->ranks;
+    if (!v2_append(v, V2_VERTEX_OFFSET, &zero, 1) || !v2_append(v, V2_CELL_OFFSET, &zero, 1))
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
+    for (size_t k = 0; k < mc->count; k++) {
+        lfio_radmap_patch p;
+        memset(&p, 0, sizeof p);
+        char why[256];
+        lfio_status st = mc->describe(mc->user, k, &p);
+        if (st != LFIO_OK)
+            return st;
+        if (!check_patch_scalars(&p, why, sizeof why))
+            return lfio__fail(LFIO_ERR_ARG, "%s: patch %zu (%s): %s", path, k, p.label ? p.label : "no label", why);
+        if ((cells += p.ncells) > LFIO_RADMAP_MAX_CELLS)
+            return lfio__fail(LFIO_ERR_ARG, "%s: more than %llu cells", path, (unsigned long long)LFIO_RADMAP_MAX_CELLS);
+        if ((vertices += p.nverts) > LFIO_RADMAP_MAX_FILE_VERTS)
+            return lfio__fail(LFIO_ERR_ARG, "%s: more than %llu vertices", path,
+                              (unsigned long long)LFIO_RADMAP_MAX_FILE_VERTS);
+        if (p.vertices == NULL || !all_finite(p.vertices, 3 * (size_t)p.nverts))
+            return lfio__fail(LFIO_ERR_ARG, "%s: patch %zu (%s): vertices are NULL or not finite", path, k, p.label);
+        if (k == v->mine_first)
+            v->cell_first = cells - p.ncells;
+        if (!v2_add_patch(v, &p, (uint32_t)vertices, (uint32_t)cells))
+            return lfio__fail(LFIO_ERR_NOMEM, "%s: patch %zu: out of memory", path, k);
+        if (k >= v->mine_first && k < v->mine_end && (st = v2_gather_cells(mc, path, k, &p, v)) != LFIO_OK)
+            return st;
+    }
+    if (v->mine_first == mc->count)
+        v->cell_first = cells;
+    return LFIO_OK;
+}
+
+/* Stores dataset d (layout l, v's array of t, rows [0, l->dims[0])) as chunks lfio filters on threads
+ * threads, then hands to HDF5 as they are. @return LFIO_OK, LFIO_ERR_NOMEM or LFIO_ERR_IO. */
+static lfio_status v2_store_direct(const char *path, hid_t d, const lfio__h5_layout *l, const unsigned char *a,
+                                   enum v2_ds t, unsigned threads)
+{
+    const size_t row = v2_row_bytes(t), n = (size_t)((l->dims[0] + l->chunk[0] - 1) / l->chunk[0]);
+    lfio__chunk *c = calloc(n ? n : 1, sizeof *c);
+    if (c == NULL)
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: /patches/%s: out of memory", path, l->name);
+    for (size_t k = 0; k < n; k++) {
+        const hsize_t r0 = (hsize_t)k * l->chunk[0];
+        const size_t take = (size_t)(l->dims[0] - r0 < l->chunk[0] ? l->dims[0] - r0 : l->chunk[0]);
+        c[k] = (lfio__chunk){a + (size_t)r0 * row, take * row, (size_t)l->chunk[0] * row, l->size, l->deflate,
+                             NULL, 0};
+    }
+    lfio_status st = LFIO_OK;
+    if (lfio__chunks_filter(c, n, threads, NULL, NULL) != 0)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: /patches/%s: out of memory", path, l->name);
+    for (size_t k = 0; st == LFIO_OK && k < n; k++) {
+        const hsize_t offset[2] = {(hsize_t)k * l->chunk[0], 0};
+        /* filter mask 0: every filter of the pipeline was applied */
+        if (H5Dwrite_chunk(d, H5P_DEFAULT, 0, offset, c[k].out_bytes, c[k].out) < 0) {
+            char dobj[64];
+            snprintf(dobj, sizeof dobj, "/patches/%s", l->name);
+            st = lfio__h5_fail(LFIO_ERR_IO, path, dobj, "cannot store a chunk");
+        }
+    }
+    lfio__chunks_free(c, n);
+    free(c);
+    return st;
+}
+
+/* Creates format-2 dataset t in group g and writes this rank's part of it from v: the cells of its own
+ * patches, every other dataset on rank 0 (all ranks take part in a collective write). direct: lfio filters
+ * the chunks itself (a serial write on a little-endian machine). @return LFIO_OK or the failure's status. */
+static lfio_status v2_write_dataset(const struct map_content *mc, const char *path, hid_t g, const v2_content *v,
+                                    enum v2_ds t, uint64_t cells, int direct)
+{
+    const int is_cells = v2_datasets[t].rows == ROWS_CELL;
+    lfio__h5_layout l;
+    v2_layout(t, is_cells ? cells : v->rows[t], mc->level, &l);
+    hid_t d;
+    lfio_status st = lfio__h5_create_dataset(path, "/patches", g, &l, &d);
+    if (st != LFIO_OK)
+        return st;
+    char dobj[64];
+    snprintf(dobj, sizeof dobj, "/patches/%s", l.name);
+    if (l.dims[0] > 0) {
+        const uint64_t first = is_cells ? v->cell_first : 0, rows = v->rows[t];
+        const int mine = is_cells ? rows > 0 : mc->rank == 0;
+        if (direct && l.deflate)
+            st = v2_store_direct(path, d, &l, v->a[t], t, ilf_thread_count(mc->threads));
+        else {
+            /* a rank with nothing of its own still takes part (lfio__h5_write_part() selects none when !mine),
+             * with a count that is not empty, which it would skip */
+            const hsize_t start[2] = {mine ? first : 0, 0}, count[2] = {mine ? rows : l.dims[0], l.dims[1]};
+            st = lfio__h5_write_part(path, dobj, d, v2_memory_type(t), l.rank, start, count, v->a[t], mine);
+        }
+    }
+    /* closing flushes the chunk cache: the last chunks reach the file only here */
+    if (H5Dclose(d) < 0 && st == LFIO_OK)
+        st = lfio__h5_fail(LFIO_ERR_IO, path, dobj, "cannot flush dataset");
+    return st;
+}
+
+/* write_contents() for format 2: the root attributes, then every patch gathered and written one dataset
+ * at a time. */
+static lfio_status write_contents_v2(const char *path, hid_t file, const struct map_content *c)
+{
+    const int32_t version = 2;
+    const uint32_t count = (uint32_t)c->count;
+    lfio_status st = lfio__h5_put_str_attr(path, "/", file, "format", FORMAT_NAME);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_num_attr(path, "/", file, "format_version", H5T_STD_I32LE, H5T_NATIVE_INT32, 0,
+                                   &version);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_str_attr(path, "/", file, "creator", c->creator);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_str_attr(path, "/", file, "scene", c->scene);
+    if (st == LFIO_OK)
+        st = lfio__h5_put_num_attr(path, "/", file, "patch_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0, &count);
+    if (st != LFIO_OK)
+        return st;
+    v2_content v;
+    memset(&v, 0, sizeof v);
+    /* describing can fail on one rank of a collective write alone (out of memory): agree before HDF5 */
+    st = lfio__h5_agree(path, v2_gather(c, path, &v));
+    hid_t patches = -1;
+    if (st == LFIO_OK)
+        st = lfio__h5_create_group(path, "/patches", file, "patches", &patches);
+    const uint32_t *cell_end = (const uint32_t *)v.a[V2_CELL_OFFSET];
+    const uint64_t cells = st == LFIO_OK ? cell_end[c->count] : 0;
+    const int direct = c->serial && LFIO_LITTLE_ENDIAN;
+    for (int t = 0; st == LFIO_OK && t < V2_COUNT; t++)
+        st = v2_write_dataset(c, path, patches, &v, (enum v2_ds)t, cells, direct);
+    lfio__h5_close(patches);
+    v2_free(&v);
+    return st;
+}
+
 /* Writes the root attributes and every patch of the map content into the open, empty file. */
 static lfio_status write_contents(const char *path, hid_t file, const void *content)
 {
     const struct map_content *c = content;
+    if (c->format == 2)
+        return write_contents_v2(path, file, c);
     const int32_t version = FORMAT_VERSION;
     const uint32_t count = (uint32_t)c->count;
     lfio_status st = lfio__h5_put_str_attr(path, "/", file, "format", FORMAT_NAME);
@@ -562,17 +905,59 @@ static lfio_status check_write_args(const char *path, const struct map_content *
     return LFIO_OK;
 }
 
-lfio_status lfio_radmap_write_rows(const char *path, const char *creator, const char *scene, size_t count,
-                                   lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user)
+void lfio_radmap_write_options_init(lfio_radmap_write_options *opt)
+{
+    if (opt == NULL)
+        return;
+    memset(opt, 0, sizeof *opt);
+    opt->size = sizeof *opt;
+    opt->threads = atomic_load_explicit(&write_threads, memory_order_relaxed);
+    opt->deflate_level = MAP_DEFLATE_LEVEL;
+    opt->format_version = LFIO_RADMAP_FORMAT_VERSION;
+}
+
+/* Reads the caller's options (NULL: the defaults) into the writer's fields of c, the part of them its size
+ * holds. @return LFIO_OK, or LFIO_ERR_ARG naming the bad field. */
+static lfio_status take_options(const char *path, const lfio_radmap_write_options *opt, struct map_content *c)
+{
+    lfio_radmap_write_options o;
+    lfio_radmap_write_options_init(&o);
+    if (opt != NULL) {
+        if (opt->size < offsetof(lfio_radmap_write_options, threads) + sizeof opt->threads || opt->size > sizeof o)
+            return lfio__fail(LFIO_ERR_ARG, "%s: lfio_radmap_write_options.size %zu is not one this library knows",
+                              path, opt->size);
+        memcpy(&o, opt, opt->size);
+    }
+    if (o.threads > 1024 || o.deflate_level < 0 || o.deflate_level > 9 || o.format_version < 1
+        || o.format_version > LFIO_RADMAP_FORMAT_VERSION)
+        return lfio__fail(LFIO_ERR_ARG, "%s: write options out of range (threads <= 1024, deflate_level 0 .. 9, "
+                          "format_version 1 .. %d)", path, LFIO_RADMAP_FORMAT_VERSION);
+    c->threads = o.threads;
+    c->level = o.deflate_level;
+    c->format = o.format_version;
+    return LFIO_OK;
+}
+
+lfio_status lfio_radmap_write_with(const char *path, const char *creator, const char *scene, size_t count,
+                                   lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user,
+                                   const lfio_radmap_write_options *opt)
 {
     if (path == NULL || path[0] == '\0')
         return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_write: NULL or empty path");
     if (describe == NULL && count > 0)
         return lfio__fail(LFIO_ERR_ARG, "%s: NULL describe function", path);
-    const struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", count,
-                                  describe, rows, user, 0, 1, 1};
-    lfio_status st = check_write_args(path, &c);
+    struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", count,
+                            describe, rows, user, 0, 1, 1, 2, 0, MAP_DEFLATE_LEVEL};
+    lfio_status st = take_options(path, opt, &c);
+    if (st == LFIO_OK)
+        st = check_write_args(path, &c);
     return st == LFIO_OK ? lfio__h5_write_atomic(path, write_contents, &c) : st;
+}
+
+lfio_status lfio_radmap_write_rows(const char *path, const char *creator, const char *scene, size_t count,
+                                   lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user)
+{
+    return lfio_radmap_write_with(path, creator, scene, count, describe, rows, user, NULL);
 }
 
 lfio_status lfio_radmap_write_each(const char *path, const char *creator, const char *scene, size_t count,
@@ -582,8 +967,9 @@ lfio_status lfio_radmap_write_each(const char *path, const char *creator, const 
 }
 
 #ifdef LFIO_MPI
-lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, const char *scene, size_t count,
-                                       lfio_radmap_describe_fn describe, void *user, MPI_Comm comm)
+lfio_status lfio_radmap_write_with_mpi(const char *path, const char *creator, const char *scene, size_t count,
+                                       lfio_radmap_describe_fn describe, void *user,
+                                       const lfio_radmap_write_options *opt, MPI_Comm comm)
 {
     int rank = 0, ranks = 1;
     if (MPI_Comm_rank(comm, &rank) != MPI_SUCCESS || MPI_Comm_size(comm, &ranks) != MPI_SUCCESS)
@@ -593,10 +979,18 @@ lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, co
         return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_write: NULL or empty path");
     if (describe == NULL && count > 0)
         return lfio__fail(LFIO_ERR_ARG, "%s: NULL describe function", path);
-    const struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", count,
-                                  describe, NULL, user, rank, ranks, 0};
-    lfio_status st = check_write_args(path, &c);
+    struct map_content c = {creator ? creator : "lfio " LFIO_VERSION_STRING, scene ? scene : "", count,
+                            describe, NULL, user, rank, ranks, 0, 2, 1, MAP_DEFLATE_LEVEL};
+    lfio_status st = take_options(path, opt, &c);
+    if (st == LFIO_OK)
+        st = check_write_args(path, &c);
     return st == LFIO_OK ? lfio__h5_write_collective(path, write_contents, &c, comm) : st;
+}
+
+lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, const char *scene, size_t count,
+                                       lfio_radmap_describe_fn describe, void *user, MPI_Comm comm)
+{
+    return lfio_radmap_write_with_mpi(path, creator, scene, count, describe, user, NULL, comm);
 }
 #endif
 
@@ -631,6 +1025,8 @@ struct lfio_radmap {
     size_t capacity;
     struct map_patch *patches;
     uint64_t cells;           /* over all patches read, <= LFIO_RADMAP_MAX_CELLS */
+    int format;               /* the file's format_version */
+    unsigned char *whole[V2_COUNT]; /* format 2: each dataset's array, which the patches point into */
 };
 
 /* Frees one patch's arrays and label. */
@@ -649,6 +1045,8 @@ static void map_free(lfio_radmap *map)
     for (size_t k = 0; k < map->count; k++)
         patch_free(&map->patches[k]);
     free(map->patches);
+    for (int t = 0; t < V2_COUNT; t++)
+        free(map->whole[t]);
     free(map->creator);
     free(map->scene);
     free(map);
@@ -661,9 +1059,10 @@ static lfio_status read_root(const char *path, hid_t file, lfio_radmap *map, siz
     lfio_status st = lfio__h5_expect_str_attr(path, "/", file, "format", FORMAT_NAME);
     if (st == LFIO_OK)
         st = lfio__h5_get_int_attr(path, "/", file, "format_version", INT32_MIN, INT32_MAX, &version);
-    if (st == LFIO_OK && version > FORMAT_VERSION)
+    if (st == LFIO_OK && version > LFIO_RADMAP_FORMAT_VERSION)
         st = lfio__fail(LFIO_ERR_FORMAT, "%s: /: format_version %lld is newer than this library reads (version %d)",
-                        path, (long long)version, FORMAT_VERSION);
+                        path, (long long)version, LFIO_RADMAP_FORMAT_VERSION);
+    map->format = (int)version;
     if (st == LFIO_OK && version < 1)
         st = lfio__fail(LFIO_ERR_FORMAT, "%s: /: invalid format_version %lld", path, (long long)version);
     if (st == LFIO_OK)
@@ -837,6 +1236,131 @@ static lfio_status read_patch(const char *path, hid_t patches, size_t k, lfio_ra
     return st;
 }
 
+/* ------------------------------------------------------- format 2: reading */
+
+/* Opens format-2 dataset t of group g, checks it against its layout for rows rows (source: where rows came
+ * from, for messages), and reads it whole into a new array *out (NULL when empty). */
+static lfio_status v2_read_dataset(const char *path, hid_t g, enum v2_ds t, uint64_t rows, const char *source,
+                                   unsigned char **out)
+{
+    lfio__h5_layout l;
+    v2_layout(t, rows, 0, &l);
+    char dobj[64];
+    snprintf(dobj, sizeof dobj, "/patches/%s", l.name);
+    hid_t d = -1;
+    *out = NULL;
+    lfio_status st = lfio__h5_check_dataset(path, "/patches", g, &l, source, -1, &d);
+    const size_t bytes = (size_t)rows * v2_row_bytes(t);
+    if (st == LFIO_OK && bytes > 0 && (*out = malloc(bytes)) == NULL)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, dobj);
+    const hsize_t zero[2] = {0, 0};
+    if (st == LFIO_OK)
+        st = lfio__h5_xfer(path, dobj, d, 0, v2_memory_type(t), l.rank, zero, l.dims, *out);
+    lfio__h5_close(d);
+    return st;
+}
+
+/* Checks the offsets table t (count + 1 rows) of map: starting at 0, never decreasing, ending at most at
+ * limit. @return LFIO_OK and *total, the last offset; LFIO_ERR_FORMAT. */
+static lfio_status v2_check_offsets(const char *path, const lfio_radmap *map, enum v2_ds t, size_t count,
+                                    uint64_t limit, uint64_t *total)
+{
+    const uint32_t *off = (const uint32_t *)map->whole[t];
+    for (size_t k = 0; k < count; k++)
+        if (off[k + 1] < off[k])
+            return lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/%s: offset %zu decreases", path, v2_datasets[t].name, k + 1);
+    if (off[0] != 0 || off[count] > limit)
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/%s: must start at 0 and end at most at %llu", path,
+                          v2_datasets[t].name, (unsigned long long)limit);
+    *total = off[count];
+    return LFIO_OK;
+}
+
+/* Reads the NUL-terminated labels of count patches into map->whole[V2_LABEL]. */
+static lfio_status v2_read_labels(const char *path, hid_t g, lfio_radmap *map, size_t count)
+{
+    const hsize_t bytes = first_axis_length(path, "/patches/label", g, "label");
+    if (bytes > (hsize_t)count * (LFIO_RADMAP_TEXT_MAX + 1))
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/label: %llu bytes for %zu labels of at most %u bytes", path,
+                          (unsigned long long)bytes, count, LFIO_RADMAP_TEXT_MAX);
+    lfio_status st = v2_read_dataset(path, g, V2_LABEL, bytes, "its own length", &map->whole[V2_LABEL]);
+    size_t nul = 0;
+    for (hsize_t b = 0; st == LFIO_OK && b < bytes; b++)
+        nul += map->whole[V2_LABEL][b] == '\0';
+    if (st == LFIO_OK && (nul != count || (bytes > 0 && map->whole[V2_LABEL][bytes - 1] != '\0')))
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/label: expected %zu NUL-terminated labels", path, count);
+    return st;
+}
+
+/* Points patch k of map (format 2, its arrays read) into the whole arrays and checks it. */
+static lfio_status v2_make_patch(const char *path, lfio_radmap *map, size_t k, const char *label)
+{
+    struct map_patch *mp = &map->patches[k];
+    lfio_radmap_patch *p = &mp->pub;
+    unsigned char *const *w = map->whole;
+    const uint32_t *voff = (const uint32_t *)w[V2_VERTEX_OFFSET], *coff = (const uint32_t *)w[V2_CELL_OFFSET];
+    memset(mp, 0, sizeof *mp);
+    p->label = label;
+    p->polygon = ((const uint32_t *)w[V2_POLYGON])[k];
+    p->nu = ((const uint32_t *)w[V2_NU])[k];
+    p->nv = ((const uint32_t *)w[V2_NV])[k];
+    memcpy(p->origin, w[V2_ORIGIN] + 24 * k, 24);
+    memcpy(p->e1, w[V2_E1] + 24 * k, 24);
+    memcpy(p->e2, w[V2_E2] + 24 * k, 24);
+    memcpy(p->normal, w[V2_NORMAL] + 24 * k, 24);
+    memcpy(&p->cell_size, w[V2_CELL_SIZE] + 8 * k, 8);
+    memcpy(&p->u0, w[V2_U0] + 8 * k, 8);
+    memcpy(&p->v0, w[V2_V0] + 8 * k, 8);
+    memcpy(p->albedo, w[V2_ALBEDO] + 12 * k, 12);
+    memcpy(p->emission, w[V2_EMISSION] + 12 * k, 12);
+    p->nverts = voff[k + 1] - voff[k];
+    p->ncells = coff[k + 1] - coff[k];
+    const size_t v0 = voff[k], c0 = coff[k];
+    p->vertices = w[V2_VERTICES] ? (const double *)w[V2_VERTICES] + 3 * v0 : NULL;
+    p->cell_ij = w[V2_CELL_IJ] ? (const uint32_t *)w[V2_CELL_IJ] + 2 * c0 : NULL;
+    p->cell_area = w[V2_CELL_AREA] ? (const double *)w[V2_CELL_AREA] + c0 : NULL;
+    p->cell_centre = w[V2_CELL_CENTRE] ? (const double *)w[V2_CELL_CENTRE] + 3 * c0 : NULL;
+    p->irradiance = w[V2_IRRADIANCE] ? (const float *)w[V2_IRRADIANCE] + 3 * c0 : NULL;
+    p->radiosity = w[V2_RADIOSITY] ? (const float *)w[V2_RADIOSITY] + 3 * c0 : NULL;
+    char why[256];
+    if (!check_patch(p, why, sizeof why))
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: /patches: patch %zu: %s", path, k, why);
+    map->cells += p->ncells;
+    return LFIO_OK;
+}
+
+/* Reads the datasets of format-2 group g (count patches, from the root) into map, checking the tables
+ * before sizing the vertex and cell arrays from them. */
+static lfio_status read_patches_v2(const char *path, hid_t g, lfio_radmap *map, size_t count)
+{
+    lfio_status st = v2_read_labels(path, g, map, count);
+    for (int t = 0; st == LFIO_OK && t < V2_COUNT; t++) {
+        const enum v2_rows r = v2_datasets[t].rows;
+        if (r == ROWS_PATCH || r == ROWS_OFFSET)
+            st = v2_read_dataset(path, g, (enum v2_ds)t, count + (r == ROWS_OFFSET), "patch_count", &map->whole[t]);
+    }
+    uint64_t vertices = 0, cells = 0;
+    if (st == LFIO_OK)
+        st = v2_check_offsets(path, map, V2_VERTEX_OFFSET, count, LFIO_RADMAP_MAX_FILE_VERTS, &vertices);
+    if (st == LFIO_OK)
+        st = v2_check_offsets(path, map, V2_CELL_OFFSET, count, LFIO_RADMAP_MAX_CELLS, &cells);
+    for (int t = 0; st == LFIO_OK && t < V2_COUNT; t++) {
+        const enum v2_rows r = v2_datasets[t].rows;
+        if (r == ROWS_VERTEX || r == ROWS_CELL)
+            st = v2_read_dataset(path, g, (enum v2_ds)t, r == ROWS_VERTEX ? vertices : cells,
+                                 r == ROWS_VERTEX ? "vertex_offset" : "cell_offset", &map->whole[t]);
+    }
+    if (st == LFIO_OK && count > 0 && (map->patches = calloc(count, sizeof *map->patches)) == NULL)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: /patches: out of memory", path);
+    const char *label = (const char *)map->whole[V2_LABEL];
+    for (size_t k = 0; st == LFIO_OK && k < count; k++) {
+        map->count = map->capacity = k + 1;
+        st = v2_make_patch(path, map, k, label);
+        label += strlen(label) + 1;
+    }
+    return st;
+}
+
 /* lfio_radmap_read() without silencing HDF5. */
 static lfio_status radmap_read_impl(const char *path, lfio_radmap **out)
 {
@@ -848,7 +1372,9 @@ static lfio_status radmap_read_impl(const char *path, lfio_radmap **out)
         st = read_root(path, file, map, &count);
     if (st == LFIO_OK)
         st = lfio__h5_open_group(path, "/patches", file, "patches", "group", &patches);
-    for (size_t k = 0; st == LFIO_OK && k < count; k++)
+    if (st == LFIO_OK && map->format == 2)
+        st = read_patches_v2(path, patches, map, count);
+    for (size_t k = 0; st == LFIO_OK && map->format == 1 && k < count; k++)
         st = read_patch(path, patches, k, map);
     lfio__h5_close(patches);
     lfio__h5_close(file);
@@ -907,4 +1433,10 @@ const char *lfio_radmap_creator(const lfio_radmap *map)
 const char *lfio_radmap_scene(const lfio_radmap *map)
 {
     return map ? map->scene : "";
+}
+
+/* @return the format_version of the file map was read from; 0 for NULL. */
+int lfio_radmap_format_version(const lfio_radmap *map)
+{
+    return map ? map->format : 0;
 }

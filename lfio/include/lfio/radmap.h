@@ -54,6 +54,12 @@ extern "C" {
 /** Most cells one file may hold, over all its patches (64 bytes each in memory). */
 #define LFIO_RADMAP_MAX_CELLS ((uint64_t)1 << 26)
 
+/** Most vertices one file may hold, over all its patches (format 2 stores their offsets as uint32). */
+#define LFIO_RADMAP_MAX_FILE_VERTS ((uint64_t)1 << 28)
+
+/** The newest format_version lfio writes and reads (docs/format.md, section 6); it reads every older one. */
+#define LFIO_RADMAP_FORMAT_VERSION 2
+
 /** One receiving polygon and its map; see the conventions above. */
 typedef struct lfio_radmap_patch {
     const char *label;        /**< the polygon's element name in the scene file, e.g. "polygons[3]" */
@@ -81,19 +87,22 @@ typedef struct lfio_radmap_patch {
 typedef struct lfio_radmap lfio_radmap;
 
 /**
- * Sets how many threads the serial radiance-map writers (lfio_radmap_write(),
- * lfio_radmap_write_each()) may use to compress a patch's chunks while HDF5
- * makes its objects: 0 (the default) for every online core, 1 for the
- * calling thread alone (at most 1024). The chunks' bytes are the same
- * whatever the count. MPI writes and big-endian machines compress through
- * HDF5 on one thread and ignore it. Safe to call from any thread; a write
- * already under way may take the old value or the new.
+ * Sets how many threads the serial radiance-map writers that take no options
+ * (lfio_radmap_write(), lfio_radmap_write_each(), lfio_radmap_write_rows())
+ * may use to compress chunks, and the default threads of
+ * lfio_radmap_write_options_init(): 0 (the default) for every online core, 1
+ * for the calling thread alone (at most 1024). The chunks' bytes are the
+ * same whatever the count. MPI writes and big-endian machines compress
+ * through HDF5 on one thread and ignore it. Safe to call from any thread; a
+ * write already under way may take the old value or the new. A caller that
+ * owns its write passes lfio_radmap_write_options instead.
  */
 void lfio_radmap_set_threads(unsigned threads);
 
 /**
  * Writes count patches (count may be 0) to path atomically, as
- * lfio_lightfield_write() does. creator names the program (NULL: "lfio
+ * lfio_lightfield_write() does, in the newest format (see
+ * lfio_radmap_write_with() for the others). creator names the program (NULL: "lfio
  * VERSION"), scene the scene file it relit (NULL: ""). Every patch is checked
  * as the reader checks it, so a written file always reads back.
  * @return LFIO_OK; LFIO_ERR_ARG (the message names the patch and problem); LFIO_ERR_IO; LFIO_ERR_NOMEM.
@@ -146,13 +155,41 @@ typedef lfio_status (*lfio_radmap_rows_fn)(void *user, size_t k, uint32_t first,
  * Writes a file as lfio_radmap_write_each() does, but describe gives each
  * patch without its cells (its five cell arrays are ignored) and rows gives
  * them a slice at a time, so that a caller need hold at most
- * LFIO_RADMAP_ROWS_MAX cells' arrays, and lfio their compressed chunks. The
+ * LFIO_RADMAP_ROWS_MAX cells' arrays (lfio gathers them all in format 2, 64
+ * bytes a cell; in format 1 it holds one slice's compressed chunks). The
  * file is the same. Each slice is checked as it arrives. rows NULL: the
  * cells are the described patch's arrays, as in lfio_radmap_write_each().
  * @return as lfio_radmap_write_each(), or rows's status.
  */
 lfio_status lfio_radmap_write_rows(const char *path, const char *creator, const char *scene, size_t count,
                                    lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user);
+
+/**
+ * How a write stores its file. Set size to sizeof(lfio_radmap_write_options)
+ * (lfio_radmap_write_options_init() does), so that a later lfio with more
+ * fields still takes it; fields past size take their defaults.
+ */
+typedef struct lfio_radmap_write_options {
+    size_t size;         /**< sizeof(lfio_radmap_write_options) as the caller was compiled */
+    unsigned threads;    /**< threads compressing chunks in a serial write: 0 every core (at most 1024) */
+    int deflate_level;   /**< zlib level, 0 (no compression) .. 9, of datasets of 1 KiB or more (format 2; default 1) */
+    int format_version;  /**< 1 or 2 (LFIO_RADMAP_FORMAT_VERSION, the default): format 1 only for older readers */
+} lfio_radmap_write_options;
+
+/** Fills *opt with the defaults: threads as lfio_radmap_set_threads() last set, level 1, the newest format. */
+void lfio_radmap_write_options_init(lfio_radmap_write_options *opt);
+
+/**
+ * Writes a file as lfio_radmap_write_rows() does, stored as opt says (NULL:
+ * the defaults of lfio_radmap_write_options_init()). In format 2 every array
+ * is stored once for all patches, so the write holds every cell's arrays
+ * (64 bytes a cell) until it ends, and is one transfer a dataset whatever
+ * the number of patches.
+ * @return as lfio_radmap_write_rows(); LFIO_ERR_ARG for options out of range.
+ */
+lfio_status lfio_radmap_write_with(const char *path, const char *creator, const char *scene, size_t count,
+                                   lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user,
+                                   const lfio_radmap_write_options *opt);
 
 /**
  * Reads a whole file, checking format, attributes, shapes and limits before
@@ -176,6 +213,9 @@ const char *lfio_radmap_creator(const lfio_radmap *map);
 
 /** @return the scene path stored in the file (borrowed); "" for NULL. */
 const char *lfio_radmap_scene(const lfio_radmap *map);
+
+/** @return the format_version of the file map was read from (1 or 2); 0 for NULL. */
+int lfio_radmap_format_version(const lfio_radmap *map);
 
 #ifdef __cplusplus
 }

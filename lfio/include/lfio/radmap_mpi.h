@@ -24,7 +24,7 @@ extern "C" {
  * Writes count patches to path as lfio_radmap_write_each() does, collectively
  * over comm: every rank calls it with the same arguments, and describe must
  * give every rank the same patch k (each rank checks every patch); the arrays
- * of patch k are written by rank k mod size. Rank 0 creates the temporary
+ * of patch k are written by one rank (format 2: see lfio_radmap_write_with_mpi()). Rank 0 creates the temporary
  * beside path (so every rank must see path's folder) and renames it over path
  * once every rank has written its part; on failure path is untouched.
  * @return on every rank: LFIO_OK once the file is in place; this rank's error,
@@ -32,6 +32,19 @@ extern "C" {
  */
 lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, const char *scene, size_t count,
                                        lfio_radmap_describe_fn describe, void *user, MPI_Comm comm);
+
+/**
+ * Writes a file as lfio_radmap_write_each_mpi() does, stored as opt says
+ * (lfio/radmap.h; NULL: the defaults; threads is ignored: HDF5 compresses).
+ * In format 2, each rank holds the cells of its own patches, a contiguous
+ * run of them (patches [count * rank / size, count * (rank + 1) / size)),
+ * and writes them as one hyperslab of each cell dataset, collectively; rank
+ * 0 writes the per-patch tables and the vertices.
+ * @return as lfio_radmap_write_each_mpi(); LFIO_ERR_ARG for options out of range.
+ */
+lfio_status lfio_radmap_write_with_mpi(const char *path, const char *creator, const char *scene, size_t count,
+                                       lfio_radmap_describe_fn describe, void *user,
+                                       const lfio_radmap_write_options *opt, MPI_Comm comm);
 
 #ifdef __cplusplus
 }
