@@ -220,8 +220,11 @@ def radiance_maps(out, base):
         return
 
     def poke(dataset, index, value):
+        """Sets one value of patch 0's rows (format 2: each array concatenated over the patches, patch 0 first;
+        format 1: patch 0's own group)."""
         def edit(f):
-            f["patches/0/" + dataset][index] = value
+            name = "patches/" + dataset if f.attrs["format_version"] >= 2 else "patches/0/" + dataset
+            f[name][index] = value
         return edit
     edited(d, base, "irradiance_nan.h5", poke("irradiance", (0, 0), np.nan))
     edited(d, base, "radiosity_negative.h5", poke("radiosity", (1, 2), -1.0))
