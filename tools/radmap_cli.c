@@ -206,6 +206,7 @@ static cJSON *file_json(const char *path, const lfio_radmap *map, const map_summ
     if (root == NULL)
         return NULL;
     int ok = cJSON_AddStringToObject(root, "file", path) && cJSON_AddStringToObject(root, "kind", "radiance map") &&
+             cJSON_AddNumberToObject(root, "format_version", lfio_radmap_format_version(map)) &&
              cJSON_AddStringToObject(root, "creator", lfio_radmap_creator(map)) &&
              cJSON_AddStringToObject(root, "scene", lfio_radmap_scene(map)) &&
              cJSON_AddNumberToObject(root, "file_bytes", (double)cli_file_size(path)) &&
@@ -227,6 +228,7 @@ static void print_file_text(const char *path, const lfio_radmap *map, const map_
     long long bytes = cli_file_size(path);
     printf("file:             %s\n", path);
     printf("kind:             radiance map\n");
+    printf("format version:   %d\n", lfio_radmap_format_version(map));
     printf("creator:          %s\n", lfio_radmap_creator(map));
     printf("scene:            %s\n", lfio_radmap_scene(map));
     printf("file size:        %s (%lld bytes)\n", cli_format_bytes(bytes, size, sizeof size), bytes);
