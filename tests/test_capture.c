@@ -21,6 +21,11 @@
  *     writes, which need no module, succeed;
  *   - manifest, image and proxy errors: status and a message naming the file
  *     and the element;
+ *   - the bound on samples read: an image whose header claims 32768 x 16384
+ *     RGB (no pixel data) named at 64 positions, or in 4 brackets of 16, is
+ *     refused before any decode with the total and the limit, within a second
+ *     of CPU time; named at 16 positions it is under the bound and fails only
+ *     on decoding its data;
  *   - the real probe data/capture/probes/studio.exr end to end: energy
  *     within 0.5% and the count of its negative values;
  *   - closed loop: capture(render-probes(scene)) against the radiance the
@@ -42,6 +47,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -627,6 +633,45 @@ static void test_capture_errors(void)
                          "coarse.exr is 8x4 but", "constant.exr is 64x32");
     expect_capture_error("{" DOWN_PLANE ", " GRID1 ", \"projection\": \"mirror_ball\", \"pattern\": \"constant.exr\"}",
                          "64x32", "square");
+}
+
+/* A manifest of an nu x nv grid whose every position names image, as one image or a bracket of `bracket`
+ * copies (0: a single image), into text (size bytes). */
+static void repeated_manifest(char *text, size_t size, int nu, int nv, const char *image, int bracket)
+{
+    size_t len = (size_t)snprintf(text, size, "{" DOWN_PLANE ", \"grid\": {\"nu\": %d, \"nv\": %d}, \"positions\": [",
+                                  nu, nv);
+    for (int k = 0; k < nu * nv && len < size; k++) {
+        len += (size_t)snprintf(text + len, size - len, "%s{\"i\": %d, \"j\": %d, ", k ? ", " : "", k % nu, k / nu);
+        if (bracket == 0)
+            len += (size_t)snprintf(text + len, size - len, "\"image\": \"%s\"}", image);
+        else
+            for (int b = 0; b < bracket && len < size; b++)
+                len += (size_t)snprintf(text + len, size - len, "%s{\"file\": \"%s\", \"exposure\": %d}%s",
+                                        b ? ", " : "\"bracket\": [", image, b + 1, b + 1 < bracket ? "" : "]}");
+    }
+    if (len < size)
+        snprintf(text + len, size - len, "]}");
+}
+
+static void test_sample_bound(void)
+{
+    /* 32768 x 16384 x 3 = 1610612736 samples a read, no pixel data: a decode would fail on the data */
+    write_text(tmp_path("header_only.hdr"), "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16384 +X 32768\n");
+    static char text[65536];
+    char total[64];
+    snprintf(total, sizeof total, "%llu samples", 64ull * 1610612736ull);
+    char limit[64];
+    snprintf(limit, sizeof limit, "limit of %llu", (unsigned long long)CAP_CAPTURE_MAX_SAMPLES);
+    clock_t start = clock();
+    repeated_manifest(text, sizeof text, 8, 8, "header_only.hdr", 0);
+    expect_capture_error(text, total, limit);
+    repeated_manifest(text, sizeof text, 2, 2, "header_only.hdr", 16);
+    expect_capture_error(text, total, limit);
+    double cpu = (double)(clock() - start) / CLOCKS_PER_SEC;
+    CHECK(cpu < 1.0, "64 reads of one image refused from its header in %.3f s of CPU time", cpu);
+    repeated_manifest(text, sizeof text, 4, 4, "header_only.hdr", 0);
+    expect_capture_error(text, "positions[0]", "cannot read image data");
 }
 
 /* ------------------------------------------------------------ the image module */
@@ -1673,6 +1718,7 @@ int main(int argc, char **argv)
     test_brackets();
     test_manifest_errors();
     test_capture_errors();
+    test_sample_bound();
     test_real_probe();
     test_render();
     test_proxies();

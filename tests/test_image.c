@@ -19,7 +19,12 @@
  *     that cannot be opened or filled (a missing folder, a file size limit)
  *     refused as IMG_ERR_OUTPUT with a message naming the image;
  *   - reads: missing files, folders and non-images refused as bad input with
- *     the image zeroed; NULL err and a short err buffer are safe.
+ *     the image zeroed; NULL err and a short err buffer are safe;
+ *   - header reads: EXR, HDR and PNG written here described as img_read()
+ *     describes them; a Radiance header claiming 32768 x 16384 with no pixel
+ *     data behind it described (no pixel decoded) where img_read() fails on
+ *     its data; a size img_read() refuses, a FIFO, a missing file and NULLs
+ *     refused with *hdr zeroed.
  * Scratch files go to $ILF_TEST_TMP/image. The last line is "N passed, M failed".
  */
 #include <dirent.h>
@@ -306,6 +311,67 @@ static void test_reads(void)
           "one line naming the problem: %s", err);
 }
 
+/* Writes text to path. @return 1 on success. */
+static int write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (f == NULL)
+        return 0;
+    int ok = fputs(text, f) >= 0;
+    return fclose(f) == 0 && ok;
+}
+
+static void test_headers(void)
+{
+    char err[512] = "";
+    static const float px[7 * 4 * 3] = {0.25f};
+    static const struct { const char *name; int w, h, channels; } files[] = {
+        {"head.exr", 5, 3, 2}, {"head.hdr", 7, 4, 3}, {"head.png", 4, 2, 3}};
+    for (size_t k = 0; k < sizeof files / sizeof files[0]; k++) {
+        const char *path = tmp_path(files[k].name);
+        CHECK(img_write(path, files[k].w, files[k].h, files[k].channels, px, err, sizeof err) == IMG_OK, "%s", err);
+        img_header hdr;
+        img_image img;
+        CHECK(img_header_read(path, &hdr, err, sizeof err) == IMG_OK, "%s", err);
+        CHECK(img_read(path, &img, err, sizeof err) == IMG_OK, "%s", err);
+        CHECK(hdr.width == files[k].w && hdr.height == files[k].h && hdr.width == img.width &&
+                  hdr.height == img.height && hdr.channels == img.channels && hdr.integer == img.integer &&
+                  hdr.bits == img.bits,
+              "%s: header %dx%dx%d (integer %d, %d bits) as read %dx%dx%d (integer %d, %d bits)", files[k].name,
+              hdr.width, hdr.height, hdr.channels, hdr.integer, hdr.bits, img.width, img.height, img.channels,
+              img.integer, img.bits);
+        CHECK(hdr.integer == (k == 2) && hdr.bits == (k == 2 ? 8 : 32), "%s: %s", files[k].name,
+              k == 2 ? "8-bit integers" : "32-bit floats");
+        img_free(&img);
+    }
+    /* a header with no data behind it: only a header read can succeed, so none decodes a pixel */
+    const char *lying = tmp_path("lying.hdr");
+    CHECK(write_text(lying, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16384 +X 32768\n"), "write %s", lying);
+    img_header hdr;
+    CHECK(img_header_read(lying, &hdr, err, sizeof err) == IMG_OK && hdr.width == 32768 && hdr.height == 16384 &&
+              hdr.channels == 3,
+          "a header alone is described (%dx%dx%d): %s", hdr.width, hdr.height, hdr.channels, err);
+    img_image img;
+    CHECK(img_read(lying, &img, err, sizeof err) == IMG_ERR_INPUT && strstr(err, "cannot read image data") != NULL,
+          "while reading its pixels fails: %s", err);
+    const char *absurd = tmp_path("absurd.hdr");
+    CHECK(write_text(absurd, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1000000 +X 1000000\n"), "write %s", absurd);
+    CHECK(img_header_read(absurd, &hdr, err, sizeof err) == IMG_ERR_INPUT && hdr.width == 0 &&
+              strstr(err, "unsupported image size 1000000x1000000") != NULL,
+          "a size img_read refuses, refused alike: %s", err);
+    const char *fifo = tmp_path("fifo.exr");
+    remove(fifo);
+    CHECK(mkfifo(fifo, 0600) == 0 && img_header_read(fifo, &hdr, err, sizeof err) == IMG_ERR_INPUT &&
+              strstr(err, "not a regular file") != NULL,
+          "a FIFO refused, not waited on: %s", err);
+    remove(fifo);
+    CHECK(img_header_read(tmp_path("missing.exr"), &hdr, err, sizeof err) == IMG_ERR_INPUT &&
+              strstr(err, "missing.exr") != NULL && hdr.width == 0,
+          "a missing file: %s", err);
+    CHECK(img_header_read(NULL, &hdr, err, sizeof err) == IMG_ERR_ARG && img_header_read(lying, NULL, NULL, 0) ==
+              IMG_ERR_ARG, "NULL path or header");
+}
+
 int main(void)
 {
     const char *base = getenv("ILF_TEST_TMP");
@@ -317,5 +383,6 @@ int main(void)
     test_writes();
     test_writers();
     test_reads();
+    test_headers();
     return check_report();
 }

@@ -1,6 +1,7 @@
 /*
- * capture.c - a whole capture (cap_capture_run in capture/capture.h): for
- * every plane of the manifest, one slab: for every grid position, read and
+ * capture.c - a whole capture (cap_capture_run in capture/capture.h): after
+ * bounding the samples it will read (budget.c), for every plane of the
+ * manifest, one slab: for every grid position, read and
  * merge its images (merge.c), box-filter them onto the slab's hemisphere
  * (resample.c), store the result (runner.c), then check energy at every
  * position and gather the plane's report into the capture's.
@@ -264,8 +265,9 @@ cap_status cap_capture_run(const cap_manifest *m, const cap_capture_options *o, 
     for (size_t q = 0; q < m->nplanes; q++)
         pp.total += (uint64_t)m->planes[q].desc.nu * m->planes[q].desc.nv;
     lfio_lightfield *lf = NULL;
-    cap_status st = lfio_lightfield_new(&lf) == LFIO_OK ? CAP_OK
-                                                        : cap__fail(CAP_ERR_NOMEM, "%s: out of memory", m->path);
+    cap_status st = cap__check_samples(m);
+    if (st == CAP_OK && lfio_lightfield_new(&lf) != LFIO_OK)
+        st = cap__fail(CAP_ERR_NOMEM, "%s: out of memory", m->path);
     for (uint32_t q = 0; st == CAP_OK && q < m->nplanes; q++) {
         lfio_slab *slab = NULL;
         st = capture_plane(m, q, o, &pp, &slab, r);

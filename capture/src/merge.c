@@ -213,8 +213,7 @@ static cap_status acc_alloc(bracket_acc *acc, size_t pixels)
 
 /* ------------------------------------------------------------ reading */
 
-/* @return the capture status of the same meaning as the image library's s. */
-static cap_status from_image(img_status s)
+cap_status cap__from_image(img_status s)
 {
     switch (s) {
     case IMG_OK:
@@ -236,7 +235,7 @@ static cap_status read_image(const cap_manifest *m, const cap__entry *e, uint32_
                              img_image *img)
 {
     char msg[ILF_MESSAGE_BYTES];
-    cap_status st = from_image(img_read(e->files[k], img, msg, sizeof msg));
+    cap_status st = cap__from_image(img_read(e->files[k], img, msg, sizeof msg));
     if (st != CAP_OK) {
         cap__fail_text(st, msg);
         return cap__fail_prefix(st, "%s: %s", m->path, e->element);

@@ -12,6 +12,7 @@
 #define CAPTURE_PROBE_H
 
 #include "capture/capture.h"
+#include "image/image.h"
 #include "manifest.h"
 
 /* A position's merged image: linear radiance, RGB, [y][x][rgb]. */
@@ -28,6 +29,18 @@ typedef struct cap__hdr {
  */
 cap_status cap__load_position(const cap_manifest *m, const cap__entry *e, uint32_t i, uint32_t j, cap__hdr *out,
                               cap_repair *repairs, uint64_t *unmerged);
+
+/* @return the capture status of the same meaning as the image library's s. */
+cap_status cap__from_image(img_status s);
+
+/*
+ * Sums width * height * channels over every image m's capture will read, each
+ * time it reads it, from the images' headers (budget.c), before any is decoded.
+ * @return CAP_OK; CAP_ERR_INPUT past ILF_CAPTURE_MAX_SAMPLES or for an image
+ * whose header cannot be read (the message names the manifest, and the element
+ * and file, or the total and the limit); CAP_ERR_NOMEM.
+ */
+cap_status cap__check_samples(const cap_manifest *m);
 
 /* What resampling one position found. */
 typedef struct cap__resample_stats {

@@ -3,7 +3,7 @@
  * writes (base's ilf/atomic_file.h) and input checks in plain C. Writes are
  * encoded by writers.c (OpenEXR's core library and libpng); reads are decoded
  * by the image module libilfkit_oiio.so (oiio_module.cpp, the table of
- * module.h), loaded on the first read. Programs that never read an image
+ * module.h), loaded on the first read or header read. Programs that never read an image
  * therefore never map OpenImageIO.
  *
  * Where the module is looked for, once per process (pthread_once), loaded
@@ -305,22 +305,45 @@ static img_status check_readable(const char *path, char *err, size_t errlen)
     return IMG_OK;
 }
 
+/* Checks path as a readable regular file and loads the module. @return the module, or NULL with err set. */
+static const img__module *reader_for(const char *path, char *err, size_t errlen)
+{
+    if (check_readable(path, err, errlen) != IMG_OK)
+        return NULL;
+    return need_module(path, err, errlen);
+}
+
 img_status img_read(const char *path, img_image *img, char *err, size_t errlen)
 {
     if (img != NULL)
         memset(img, 0, sizeof *img);
     if (path == NULL || img == NULL)
         return fail(IMG_ERR_ARG, err, errlen, "image path or output missing");
-    img_status status = check_readable(path, err, errlen);
-    if (status != IMG_OK)
-        return status;
-    const img__module *m = need_module(path, err, errlen);
+    const img__module *m = reader_for(path, err, errlen);
     if (m == NULL)
         return IMG_ERR_INPUT;
     char msg[MESSAGE_BYTES] = "";
-    status = m->read(path, img, msg, sizeof msg);
+    img_status status = m->read(path, img, msg, sizeof msg);
     if (status != IMG_OK) {
         memset(img, 0, sizeof *img);
+        return fail(status, err, errlen, "%s", msg);
+    }
+    return IMG_OK;
+}
+
+img_status img_header_read(const char *path, img_header *hdr, char *err, size_t errlen)
+{
+    if (hdr != NULL)
+        memset(hdr, 0, sizeof *hdr);
+    if (path == NULL || hdr == NULL)
+        return fail(IMG_ERR_ARG, err, errlen, "image path or output missing");
+    const img__module *m = reader_for(path, err, errlen);
+    if (m == NULL)
+        return IMG_ERR_INPUT;
+    char msg[MESSAGE_BYTES] = "";
+    img_status status = m->header(path, hdr, msg, sizeof msg);
+    if (status != IMG_OK) {
+        memset(hdr, 0, sizeof *hdr);
         return fail(status, err, errlen, "%s", msg);
     }
     return IMG_OK;

@@ -11,7 +11,7 @@
  * so that a module from another build is refused, not called.
  *
  * Division of work: image.c checks arguments, stats inputs and makes
- * writes atomic (base's atomic writer); the module only decodes pixels. The module is self-contained:
+ * writes atomic (base's atomic writer); the module only decodes headers and pixels. The module is self-contained:
  * it calls nothing of ilfkit (its messages go to the caller's buffer) and
  * never lets an exception out.
  *
@@ -29,8 +29,8 @@ extern "C" {
 #endif
 
 /** The table layout and meaning this build expects; raise on any change. (Version 2: the module no longer
- * writes; writers.c encodes without OpenImageIO.) */
-#define IMG__MODULE_VERSION 2u
+ * writes; writers.c encodes without OpenImageIO. Version 3: header reads.) */
+#define IMG__MODULE_VERSION 3u
 
 /** Name of the exported entry function (an img__module_entry_fn). */
 #define IMG__MODULE_ENTRY "ilfkit_image_module"
@@ -45,6 +45,13 @@ typedef struct img__module {
      * @return IMG_OK with *img filled; IMG_ERR_INPUT or IMG_ERR_NOMEM with *img untouched and a message naming path.
      */
     img_status (*read)(const char *path, img_image *img, char *msg, size_t msglen);
+
+    /**
+     * Reads only the header of path's first subimage (no pixel is decoded) and checks its size as read()
+     * does, so that a size read() refuses is refused here with the same message.
+     * @return IMG_OK with *hdr filled; IMG_ERR_INPUT or IMG_ERR_NOMEM with *hdr untouched and a message naming path.
+     */
+    img_status (*header)(const char *path, img_header *hdr, char *msg, size_t msglen);
 } img__module;
 
 /** @return the module's static table (never NULL). */

@@ -1,6 +1,6 @@
 /*
- * oiio_module.cpp - the image module libilfkit_oiio.so: decoding pixels
- * with OpenImageIO behind the entry table of module.h, which
+ * oiio_module.cpp - the image module libilfkit_oiio.so: reading headers and
+ * decoding pixels with OpenImageIO behind the entry table of module.h, which
  * image/src/image.c loads on the first image read (writes go through
  * writers.c, which needs no OpenImageIO). This is the
  * only file in ilfkit that includes OpenImageIO headers, and the only C++
@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <memory>
 #include <new>
 #include <string>
 
@@ -57,9 +58,10 @@ bool is_integer_type(OIIO::TypeDesc t)
            t.basetype != OIIO::TypeDesc::DOUBLE;
 }
 
-img_status read_pixels(const char *path, img_image *img, char *msg, size_t msglen)
+/* Opens path and checks the size its header gives against the reader's bounds. @return IMG_OK with *in open. */
+img_status open_checked(const char *path, std::unique_ptr<OIIO::ImageInput> &in, char *msg, size_t msglen)
 {
-    auto in = OIIO::ImageInput::open(path);
+    in = OIIO::ImageInput::open(path);
     if (!in)
         return fail(IMG_ERR_INPUT, msg, msglen, "%s: not a readable image: %s", path,
                     first_line(OIIO::geterror()).c_str());
@@ -69,6 +71,36 @@ img_status read_pixels(const char *path, img_image *img, char *msg, size_t msgle
         spec.height > max_side || spec.depth > 1 || samples > max_samples)
         return fail(IMG_ERR_INPUT, msg, msglen, "%s: unsupported image size %dx%dx%d with %d channels", path,
                     spec.width, spec.height, spec.depth, spec.nchannels);
+    return IMG_OK;
+}
+
+/* Fills hdr from spec, whose size open_checked() accepted. */
+void describe(const OIIO::ImageSpec &spec, img_header *hdr)
+{
+    hdr->width = spec.width;
+    hdr->height = spec.height;
+    hdr->channels = spec.nchannels;
+    hdr->integer = is_integer_type(spec.format) ? 1 : 0;
+    hdr->bits = static_cast<int>(spec.format.size() * 8);
+}
+
+img_status read_header(const char *path, img_header *hdr, char *msg, size_t msglen)
+{
+    std::unique_ptr<OIIO::ImageInput> in;
+    img_status status = open_checked(path, in, msg, msglen);
+    if (status == IMG_OK)
+        describe(in->spec(), hdr);
+    return status;
+}
+
+img_status read_pixels(const char *path, img_image *img, char *msg, size_t msglen)
+{
+    std::unique_ptr<OIIO::ImageInput> in;
+    img_status status = open_checked(path, in, msg, msglen);
+    if (status != IMG_OK)
+        return status;
+    const OIIO::ImageSpec &spec = in->spec();
+    long long samples = static_cast<long long>(spec.width) * spec.height * spec.nchannels;
     float *buf = static_cast<float *>(std::malloc(static_cast<size_t>(samples) * sizeof(float)));
     if (buf == nullptr)
         return fail(IMG_ERR_NOMEM, msg, msglen, "%s: out of memory for %lld samples", path, samples);
@@ -77,20 +109,22 @@ img_status read_pixels(const char *path, img_image *img, char *msg, size_t msgle
         return fail(IMG_ERR_INPUT, msg, msglen, "%s: cannot read image data: %s", path,
                     first_line(in->geterror()).c_str());
     }
-    img->width = spec.width;
-    img->height = spec.height;
-    img->channels = spec.nchannels;
+    img_header hdr;
+    describe(spec, &hdr);
+    img->width = hdr.width;
+    img->height = hdr.height;
+    img->channels = hdr.channels;
     img->pixels = buf;
-    img->integer = is_integer_type(spec.format) ? 1 : 0;
-    img->bits = static_cast<int>(spec.format.size() * 8);
+    img->integer = hdr.integer;
+    img->bits = hdr.bits;
     return IMG_OK;
 }
 
-/* Table entry: read_pixels with every exception turned into a status. */
-img_status module_read(const char *path, img_image *img, char *msg, size_t msglen)
+/* Runs body (a reader) with every exception turned into a status and message naming path. */
+template <typename Body> img_status guarded(const char *path, char *msg, size_t msglen, Body body)
 {
     try {
-        return read_pixels(path, img, msg, msglen);
+        return body();
     } catch (const std::bad_alloc &) {
         return fail(IMG_ERR_NOMEM, msg, msglen, "%s: out of memory while reading", path);
     } catch (const std::exception &e) {
@@ -100,7 +134,19 @@ img_status module_read(const char *path, img_image *img, char *msg, size_t msgle
     }
 }
 
-const img__module table = {IMG__MODULE_VERSION, module_read};
+/* Table entry: read_pixels, guarded. */
+img_status module_read(const char *path, img_image *img, char *msg, size_t msglen)
+{
+    return guarded(path, msg, msglen, [&] { return read_pixels(path, img, msg, msglen); });
+}
+
+/* Table entry: read_header, guarded. */
+img_status module_header(const char *path, img_header *hdr, char *msg, size_t msglen)
+{
+    return guarded(path, msg, msglen, [&] { return read_header(path, hdr, msg, msglen); });
+}
+
+const img__module table = {IMG__MODULE_VERSION, module_read, module_header};
 
 } // namespace
 

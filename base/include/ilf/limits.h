@@ -91,6 +91,14 @@
  * bracket is held in memory while the bracket is merged. */
 #define ILF_CAPTURE_MAX_BRACKET 16u
 
+/* Image samples (width * height * channels) one capture reads in all, over every image it decodes, an image
+ * named again (at another position or in a bracket) counted each time it is read: 2^36, some 700 probes of
+ * 8192 x 4096 RGB, a large rig's brackets. The positions, brackets and each image's size are bounded above,
+ * but together they could ask for 2^55 samples from one small, highly compressed image named at every
+ * position; each sample is decoded, repaired and resampled, so the total is checked from the images' headers
+ * before any is decoded (the same 2^36 as a slab's radiance bytes, LFIO_SLAB_MAX_BYTES). */
+#define ILF_CAPTURE_MAX_SAMPLES ((uint64_t)1 << 36)
+
 /* Capture planes one manifest may name (each becomes a slab): a box around a fixture needs 5 or 6; every
  * reprojected ray is traced back to every plane, so the work grows with their number. */
 #define ILF_CAPTURE_MAX_PLANES 64u

@@ -70,6 +70,9 @@ extern "C" {
 /** Most capture planes (slabs) in one manifest. */
 #define CAP_PLANES_MAX ILF_CAPTURE_MAX_PLANES
 
+/** Most image samples (width * height * channels) one capture reads, over every image read, repeats counted. */
+#define CAP_CAPTURE_MAX_SAMPLES ILF_CAPTURE_MAX_SAMPLES
+
 /** Largest manifest file accepted, bytes. */
 #define CAP_MANIFEST_MAX_BYTES ILF_MANIFEST_MAX_BYTES
 
@@ -176,7 +179,10 @@ void cap_report_free(cap_report *report);
  * threads, plane after plane; the report covers them all and progress counts
  * positions over all planes. o may be NULL (all defaults).
  * @return CAP_OK with *out (owned by the caller) and *report filled (report
- * may be NULL); CAP_ERR_INPUT (an image is unreadable, has a size its
+ * may be NULL); CAP_ERR_INPUT (the images ask for more than
+ * CAP_CAPTURE_MAX_SAMPLES samples in all, an image counted each time a position
+ * or bracket names it, found from their headers before any image is decoded;
+ * an image is unreadable, has a size its
  * projection does not accept, or differs in size from the rest of its
  * bracket: the message names the manifest element and file); CAP_ERR_NOMEM
  * (including a slab over lfio's size limit); CAP_ERR_ARG for NULL. On

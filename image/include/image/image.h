@@ -6,7 +6,7 @@
  * slices, rendered probes) with it. It depends on base/ only.
  *
  * OpenImageIO is loaded lazily: image/src/image.c implements these functions
- * and, on the first img_read() of the process, loads the image
+ * and, on the first img_read() or img_header_read() of the process, loads the image
  * module libilfkit_oiio.so (image/src/oiio_module.cpp, the only file of ilfkit
  * that includes OpenImageIO headers) with dlopen(), once, thread-safely;
  * programs that never read an image never map OpenImageIO. Writing needs no
@@ -95,6 +95,14 @@ typedef struct img_image {
     int bits;          /**< bits per stored channel value: 8, 16 (integer or half), 32 or 64 */
 } img_image;
 
+/** What an image file's header says, read without decoding a pixel (img_header_read()). */
+typedef struct img_header {
+    int width, height; /**< pixels, 1 .. IMG_MAX_SIDE */
+    int channels;      /**< channels per pixel, >= 1; width * height * channels <= IMG_MAX_SAMPLES */
+    int integer;       /**< as img_image's */
+    int bits;          /**< as img_image's */
+} img_header;
+
 /** @return a static name for s ("ok", "bad argument", "bad input", "cannot write", "out of memory", "unknown status"). */
 const char *img_status_name(img_status s);
 
@@ -115,6 +123,15 @@ img_status img_write(const char *path, int width, int height, int channels, cons
  * @return IMG_OK and *img filled; IMG_ERR_INPUT (missing, a folder, unreadable, not an image, too large, no image module) or IMG_ERR_NOMEM with *img zeroed; IMG_ERR_ARG if path or img is NULL.
  */
 img_status img_read(const char *path, img_image *img, char *err, size_t errlen);
+
+/**
+ * Reads only the header of path's first subimage: what img_read() would return, without its pixels and at a
+ * cost that does not grow with the image's size. The file is checked as img_read() checks it (a regular file,
+ * opened without blocking), and a size img_read() refuses is refused with the same message; pixel data is not
+ * looked at, so a later img_read() may still fail on it.
+ * @return IMG_OK and *hdr filled; IMG_ERR_INPUT or IMG_ERR_NOMEM with *hdr zeroed; IMG_ERR_ARG if path or hdr is NULL.
+ */
+img_status img_header_read(const char *path, img_header *hdr, char *err, size_t errlen);
 
 /** Releases img's pixels and zeroes it. NULL is a no-op. */
 void img_free(img_image *img);
