@@ -15,6 +15,7 @@ and patched from OUTDIR/image/valid.exr when the driver has written one.
 Without h5py (or valid.exr) those files are not written, and the driver skips
 their cases with a message. Everything is deterministic (a fixed random seed).
 """
+import json
 import os
 import random
 import shutil
@@ -190,6 +191,24 @@ def images(out):
         write(os.path.join(d, "truncated.exr"), data[:len(data) // 2])
         write(os.path.join(d, "window_absurd.exr"), exr_windows(data, 2 ** 30, 2 ** 30))
         write(os.path.join(d, "window_negative.exr"), exr_windows(data, -5, -5))
+
+
+# ---------------------------------------------------------------- the samples a capture reads
+
+def repeated_image(out):
+    """A valid 16384 x 8192 gray PNG of 130 KB (2^27 samples, zeros compressed 1000:1) named in brackets of 16
+    at 33 positions: 528 reads, 2^27 * 528 samples, over capture's 2^36."""
+    rows = zlib.compressobj(9)
+    row = b"\0" * (1 + 16384)
+    data = b"".join(rows.compress(row) for _ in range(8192)) + rows.flush()
+    header = struct.pack(">IIBBBBB", 16384, 8192, 8, 0, 0, 0, 0)
+    write(os.path.join(out, "image", "compressed_large.png"),
+          b"\x89PNG\r\n\x1a\n" + png_chunk(b"IHDR", header) + png_chunk(b"IDAT", data) + png_chunk(b"IEND", b""))
+    bracket = [{"file": "../image/compressed_large.png", "exposure": k + 1} for k in range(16)]
+    positions = [{"i": i, "j": j, "bracket": bracket} for j in range(3) for i in range(11)]
+    write(os.path.join(out, "manifest", "repeated_image.json"), json.dumps(
+        {"plane": {"origin": [0, 0, 1], "u": [1, 0, 0], "v": [0, -1, 0]}, "grid": {"nu": 11, "nv": 3},
+         "positions": positions}))
 
 
 # ---------------------------------------------------------------- light fields
@@ -513,6 +532,7 @@ def main():
     meshes(out)
     manifests(out)
     images(out)
+    repeated_image(out)
     other_formats(out)
     stdlib_lightfields(out, base)
     if len(sys.argv) == 4:
