@@ -28,7 +28,8 @@
 #include <stdlib.h>
 
 #include "ilf/pool.h"
-#include "method.h"
+#include "bounce.h"
+#include "pair.h"
 
 /* Maps (a, b) in [0, 1)^2 to the unit disc, area-preserving, squares to rings (Shirley and Chiu 1997). */
 static void concentric_disc(double a, double b, double *x, double *y)

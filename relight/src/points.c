@@ -30,7 +30,7 @@
 #include <lfio/partition.h>
 
 #include "sampling.h"
-#include "transfer.h"
+#include "points.h"
 
 /* Levels of the walk (partition_n is at most 4096 = 2^12, plus level 1). */
 #define WALK_LEVELS 16

@@ -49,6 +49,7 @@
 
 #include "mesh.h"
 #include "method.h"
+#include "points.h"
 
 /* @return the world point at the vertex mean of domain dom of map m: where a
  * cell's view of an emitter is measured. */
