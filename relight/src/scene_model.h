@@ -1,5 +1,5 @@
 /*
- * scene_internal.h - the layout of a loaded scene, shared by the loader
+ * scene_model.h - the layout of a loaded scene, shared by the loader
  * (scene.c, mesh.c) and the engine. Invariants established by rl_scene_load():
  *   - every polygon has 3 .. RL_SCENE_MAX_POLY_VERTS vertices, is planar (every vertex within
  *     1e-6 * its diameter of the plane), strictly convex (collinear vertices
@@ -16,6 +16,7 @@
 
 #include <lfio/lightfield.h>
 
+#include "common.h"
 #include "relight/scene.h"
 #include "ilf/limits.h"
 
@@ -85,12 +86,5 @@ struct rl_scene {
     int has_camera;
     rl_camera camera;
 };
-
-/* Records a formatted message for rl_errmsg(). @return status. */
-rl_status rl__fail(rl_status status, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
 
 #endif /* RELIGHT_SCENE_INTERNAL_H */
