@@ -16,7 +16,7 @@
  *
  * and they share: leaves (leaf.c: a solid angle prepared for sampling),
  * pairs, tiles, origin domains and shadow-ray packets (pair.c), and the
- * estimator that replaces leaves where leaves are the wrong tool (views.c:
+ * estimator that replaces leaves where leaves are the wrong tool (lambert.c:
  * Lambert's formula times visibility for a constant emitter, and times the
  * weighted mean of radiance * visibility for an emitter smaller than a
  * solid angle).
@@ -43,7 +43,7 @@
 
 /* Lambert's formula times the weighted mean of radiance * visibility, for
  * every cell of the tile: a constant emitter, or one a few solid angles
- * across (views.c). Blocks of cells that see all of the emitter or none of
+ * across (lambert.c). Blocks of cells that see all of the emitter or none of
  * it (shadow.h) take the rays' outcome without tracing them.
  * @return 0, or -1 if s ran out of memory. */
 int rl__gather_lambert(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_tile *t, uint32_t ei, rl_scratch *s,

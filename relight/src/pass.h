@@ -5,7 +5,7 @@
  * and what a bounce pass by first hits reads of each polygon (rl_glow).
  * The types of the pass, below everything that runs one: the dispatcher
  * (transfer.h), the methods (method.h) and the gathers they share (leaf.h,
- * pair.h, points.h, bounce.h) all stand on this header.
+ * pair.h, point_gather.h, bounce.h) all stand on this header.
  */
 #ifndef RELIGHT_PASS_H
 #define RELIGHT_PASS_H
@@ -62,7 +62,7 @@ typedef struct rl_scratch {
     size_t vis_cap;
     uint32_t *block_occ;  /* and the possible occluders of each level of its blocks */
     struct rl_beam *beam; /* one beam's room (shadow.h), for Lambert's gather and point receivers */
-    double (*anchor)[3];  /* Lambert's gather: a light field's unshadowed light at the tile's anchors (views.c) */
+    double (*anchor)[3];  /* Lambert's gather: a light field's unshadowed light at the tile's anchors (lambert.c) */
     size_t anchor_cap;
     float *blend;         /* a light field leaf's mixed radiance tables (rl__leaf_blend()) */
     struct rl_shadows *shadows; /* the current leaf's shadows (leaf_shadow.c) */

@@ -13,7 +13,7 @@
 
 #include "bounce.h"
 #include "method.h"
-#include "points.h"
+#include "point_gather.h"
 #include "transfer.h"
 
 const rl_method_impl *rl__method_for(rl_method id)

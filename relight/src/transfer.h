@@ -1,7 +1,7 @@
 /*
  * transfer.h - one tile of one pass, the entry point the scheduler calls:
  * it picks the pass's method (method.h), or the point receivers' own-view
- * gather (points.h), or the bounce gather by first hits (bounce.h), and
+ * gather (point_gather.h), or the bounce gather by first hits (bounce.h), and
  * gathers every emitter into the tile. The shared types of the pass are
  * in pass.h, below this dispatcher.
  */

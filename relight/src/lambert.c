@@ -1,5 +1,5 @@
 /*
- * views.c - the estimator that replaces leaves where leaves are the wrong
+ * lambert.c - the estimator that replaces leaves where leaves are the wrong
  * tool, for culled and its relatives: Lambert's formula times what sampling
  * alone can tell (rl__gather_lambert()).
  *
@@ -49,7 +49,7 @@
 
 #include "mesh.h"
 #include "method.h"
-#include "points.h"
+#include "point_gather.h"
 
 /* @return the world point at the vertex mean of domain dom of map m: where a
  * cell's view of an emitter is measured. */
