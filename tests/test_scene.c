@@ -876,7 +876,7 @@ static const double room_points[] = {1, 1, 0.5, 0, 0, 1, 0.3, 0.4, 1, 1, 0, 0, 1
 static double square_irradiance(double L, double a, double h)
 {
     double x = a / h, r = sqrt(1 + x * x);
-    return 4 * RL_PI * L * (2 * x / r * atan(x / r)) / (2 * RL_PI);
+    return 4 * ILF_PI * L * (2 * x / r * atan(x / r)) / (2 * ILF_PI);
 }
 
 /* Loads the room in format fmt, checks its polygons and lamp, and writes its irradiance at room_points

@@ -18,15 +18,13 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "ilf/vec.h"
 #include "lfio/lightfield.h"
 
 /* Set by the build (CMake's PROJECT_VERSION); the fallback keeps other builds compiling. */
 #ifndef ILFKIT_VERSION
 #define ILFKIT_VERSION "unknown"
 #endif
-
-/* Strict C17 does not provide M_PI. */
-#define ILF_PI 3.14159265358979323846
 
 /** Exit codes of `ilf`, shared by every subcommand. */
 enum ilf_exit {

@@ -41,10 +41,10 @@ static void concentric_disc(double a, double b, double *x, double *y)
     }
     if (fabs(sx) > fabs(sy)) {
         r = sx;
-        phi = (RL_PI / 4.0) * (sy / sx);
+        phi = (ILF_PI / 4.0) * (sy / sx);
     } else {
         r = sy;
-        phi = RL_PI / 2.0 - (RL_PI / 4.0) * (sx / sy);
+        phi = ILF_PI / 2.0 - (ILF_PI / 4.0) * (sx / sy);
     }
     *x = r * cos(phi);
     *y = r * sin(phi);
@@ -207,6 +207,6 @@ void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, 
                 m->near[cell] = (uint8_t)near;
             cnt->samples += n;
             for (int c = 0; c < 3; c++)
-                m->e_pass[cell][c] += RL_PI * acc[c] / n;
+                m->e_pass[cell][c] += ILF_PI * acc[c] / n;
         }
 }

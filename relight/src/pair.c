@@ -149,7 +149,7 @@ static int pair_measure(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
     double peak = subtended;
     if (t->npoly >= 3 && rl__convex_contains(t->poly, t->npoly, foot))
         peak = fmax(peak, subtended_from(p, frame_point(&t->m->frame, foot), &w));
-    *leaves = peak / (2.0 * RL_PI / (4.0 * m * m));
+    *leaves = peak / (2.0 * ILF_PI / (4.0 * m * m));
     return small;
 }
 

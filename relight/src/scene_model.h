@@ -19,9 +19,7 @@
 #include "common.h"
 #include "relight/scene.h"
 #include "ilf/limits.h"
-
-/* pi, for the engine's every radiance-irradiance conversion. */
-#define RL_PI 3.14159265358979323846
+#include "ilf/vec.h"
 
 /* Most vertices one polygon may have (the engine's clipping buffers are sized by it). */
 #define RL_SCENE_MAX_POLY_VERTS ILF_POLYGON_MAX_VERTICES

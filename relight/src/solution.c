@@ -115,7 +115,7 @@ rl_status rl_solution_map_rows(const rl_solution *s, size_t k, uint32_t first, u
             if (irradiance)
                 irradiance[3 * r + ch] = saturate_float(m->e_total[c][ch]);
             if (radiosity)
-                radiosity[3 * r + ch] = saturate_float(RL_PI * m->emission[ch] + m->albedo[ch] * m->e_total[c][ch]);
+                radiosity[3 * r + ch] = saturate_float(ILF_PI * m->emission[ch] + m->albedo[ch] * m->e_total[c][ch]);
         }
     }
     return RL_OK;
