@@ -27,6 +27,7 @@
 #include "commands.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
+#include "cli_limits.h"
 #include "ilf/limits.h"
 
 #define SYNTH_MAX_SPOTS ILF_SYNTH_MAX_SPOTS
@@ -562,7 +563,7 @@ static int check_work(const synth_options *o)
     double work = values * o->supersample * o->supersample * (o->spot_count > 0 ? (double)o->spot_count : 1.0);
     if (work > (double)ILF_SYNTH_MAX_EVALUATIONS) {
         cli_error("synth", "%ux%u positions, n=%u, supersample %u and %zu spot%s need %.3g evaluations, more than "
-                  "the limit of %.3g (ilf/limits.h)", (unsigned)d->nu, (unsigned)d->nv, (unsigned)d->n,
+                  "the limit of %.3g (tools/cli_limits.h)", (unsigned)d->nu, (unsigned)d->nv, (unsigned)d->n,
                   (unsigned)o->supersample, o->spot_count, o->spot_count == 1 ? "" : "s", work,
                   (double)ILF_SYNTH_MAX_EVALUATIONS);
         return 0;
