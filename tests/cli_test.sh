@@ -128,6 +128,14 @@ cp "$OUT" "$TMP/info-1thread.txt"
 expect 0 "info of the many-thread file" "$ILF" info "$RADIAL"
 check "the result does not depend on the thread count" \
     diff <(grep -v -e '^file' -e 'creator' "$TMP/info-1thread.txt") <(grep -v -e '^file' -e 'creator' "$OUT")
+# every command reads --threads by one parser: 0 (every processor) .. 1024
+expect 0 "synth with --threads 0 (every processor)" "$ILF" synth --kind radial --grid 8x8 --n 8 --cone 30 \
+    --supersample 2 --threads 0 -o "$TMP/radial-0threads.h5"
+check "synth on every processor writes the same bytes" cmp "$RADIAL" "$TMP/radial-0threads.h5"
+for cmd in synth relight irradiance capture reproject; do
+    expect 2 "$cmd refuses --threads 1025" "$ILF" $cmd --threads 1025
+    check "$cmd names the one thread range" stderr_has "must be from 0 to 1024"
+done
 
 # ------------------------------------------------------------------ info
 expect 0 "info (text)" "$ILF" info "$CONST" --stats

@@ -96,7 +96,7 @@ static void test_pool(void)
     CHECK(ilf_thread_count(ILF_MAX_THREADS * 2) == ILF_MAX_THREADS);
     ilf_team_join(NULL);
     CHECK(ilf_team_threads(NULL) == 0);
-    /* a parallel loop runs each index once, on any number of threads (0 taken as 1, more than indices),
+    /* a parallel loop runs each index once, on any number of threads (0 taken as every core, more than indices),
      * over any number of indices (none at all) */
     const unsigned loop_threads[] = {0, 1, 2, 3, 7, 64};
     const size_t sizes[] = {0, 1, 5, ITEMS};

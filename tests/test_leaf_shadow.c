@@ -28,6 +28,7 @@
 
 #include "check.h"
 #include "method.h"
+#include "transfer.h"
 #include "relight_scenes.h"
 #include "segment_meets.h"
 

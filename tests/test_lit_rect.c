@@ -26,7 +26,7 @@
 
 #include "check.h"
 #include "method.h"
-#include "scene_internal.h"
+#include "scene_model.h"
 
 static uint64_t rng_state = 0x9e3779b97f4a7c15ull;
 

@@ -892,7 +892,7 @@ static rl_solution *relight_anchored(rl_scene *s, uint32_t stride, uint32_t k, u
 /* The tilted lobe (written to lfpath) over a floor that a tilted blocker
  * shades: cells a shadow may cross take the anchors' unoccluded light times
  * the visible share of their samples' radiance, their rays in two stages
- * (views.c). Against every cell sampled at 16x the rays, that must beat
+ * (lambert.c). Against every cell sampled at 16x the rays, that must beat
  * every cell sampled on its own at the same k, keep the total, and trace
  * fewer rays (most such cells are wholly lit or wholly shaded). */
 static void check_anchored_shadow(const char *lfpath)
@@ -1052,7 +1052,7 @@ static void check_maps_ready(void)
 }
 
 /* A light field's cells that see all of it take their light bilinearly
- * between anchors (views.c), here 2 cells apart (1 m under the slab of
+ * between anchors (lambert.c), here 2 cells apart (1 m under the slab of
  * partition 4, cells of 1/32 m). A constant slab is Lambertian, so each
  * anchor is exact to float radiance and the cells must follow Lambert's
  * means to within interpolation (0.15% of the peak; a cell placed half a

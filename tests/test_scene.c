@@ -6,7 +6,7 @@
  * run time into $ILF_TEST_TMP (or /tmp) together with the scenes that use
  * them. Good scenes must load with the expected counts, defaults, normals
  * and materials, and every loaded polygon is checked here, independently of
- * the loader, against the invariants of scene_internal.h. Bad scenes are
+ * the loader, against the invariants of scene_model.h. Bad scenes are
  * one table: file, expected status, expected substring of the message; the
  * message must also name the scene file. tests/scenes/rooms holds one room
  * in every mesh format (gen_rooms.py), which must give the same polygons,
@@ -24,7 +24,7 @@
 #include "relight/engine.h"
 #include "relight/scene.h"
 #include "maps.h"
-#include "scene_internal.h"
+#include "scene_model.h"
 
 static const char *corpus; /* tests/scenes */
 static const char *datadir;
@@ -876,7 +876,7 @@ static const double room_points[] = {1, 1, 0.5, 0, 0, 1, 0.3, 0.4, 1, 1, 0, 0, 1
 static double square_irradiance(double L, double a, double h)
 {
     double x = a / h, r = sqrt(1 + x * x);
-    return 4 * RL_PI * L * (2 * x / r * atan(x / r)) / (2 * RL_PI);
+    return 4 * ILF_PI * L * (2 * x / r * atan(x / r)) / (2 * ILF_PI);
 }
 
 /* Loads the room in format fmt, checks its polygons and lamp, and writes its irradiance at room_points

@@ -13,6 +13,7 @@
 #include "ilf/atomic_file.h"
 #include "tonemap.h"
 #include "ilf/file_kind.h"
+#include "ilf/limits.h"
 
 #include <ctype.h>
 #include <dirent.h>
@@ -435,6 +436,11 @@ int cli_value_u32(const cli_parser *p, const char *text, uint32_t lo, uint32_t h
 {
     char why[160];
     return cli_parse_u32(text, lo, hi, out, why, sizeof why) || (cli_bad_value(p, text, why), 0);
+}
+
+int cli_value_threads(const cli_parser *p, const char *text, uint32_t *out)
+{
+    return cli_value_u32(p, text, 0, ILF_MAX_THREADS, out);
 }
 
 int cli_value_u32_pair(const cli_parser *p, const char *text, char sep, uint32_t lo, uint32_t hi,

@@ -18,15 +18,13 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "ilf/vec.h"
 #include "lfio/lightfield.h"
 
 /* Set by the build (CMake's PROJECT_VERSION); the fallback keeps other builds compiling. */
 #ifndef ILFKIT_VERSION
 #define ILFKIT_VERSION "unknown"
 #endif
-
-/* Strict C17 does not provide M_PI. */
-#define ILF_PI 3.14159265358979323846
 
 /** Exit codes of `ilf`, shared by every subcommand. */
 enum ilf_exit {
@@ -200,6 +198,9 @@ int cli_parse_u32_pair(const char *text, char sep, uint32_t lo, uint32_t hi, uin
 int cli_value_double(const cli_parser *p, const char *text, double *out);
 int cli_value_doubles(const cli_parser *p, const char *text, double *out, size_t count);
 int cli_value_u32(const cli_parser *p, const char *text, uint32_t lo, uint32_t hi, uint32_t *out);
+/* The one parser of every command's --threads: 0 (every processor) .. ILF_MAX_THREADS, the rule of
+ * ilf_thread_count(), which resolves it. */
+int cli_value_threads(const cli_parser *p, const char *text, uint32_t *out);
 int cli_value_u32_pair(const cli_parser *p, const char *text, char sep, uint32_t lo, uint32_t hi,
                        uint32_t out[2]);
 

@@ -82,7 +82,7 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
     if (opt == OPT_OUTPUT)
         o->output = value;
     else if (opt == OPT_THREADS)
-        return cli_value_u32(p, value, 0, 1024, &o->threads);
+        return cli_value_threads(p, value, &o->threads);
     else if (opt == OPT_QUIET)
         o->quiet = 1;
     return 1;

@@ -35,8 +35,6 @@
 #include "radmap_mesh.h"
 #include "tonemap.h"
 
-#define EXPORT_PI 3.14159265358979323846
-
 typedef enum export_format { FMT_NONE, FMT_GLB, FMT_PLY, FMT_CSV } export_format;
 
 typedef struct export_options {
@@ -158,7 +156,7 @@ static int mesh_failed(const patch_mesh *m)
 static void display_colour(const float *b, double scale, double out[3])
 {
     for (int c = 0; c < 3; c++) {
-        double v = b[c] / EXPORT_PI * scale;
+        double v = b[c] / ILF_PI * scale;
         out[c] = v < 0.0 ? 0.0 : v > 1.0 ? 1.0 : v;
     }
 }
@@ -458,7 +456,7 @@ static int display_scale(const lfio_radmap *map, const tone_fixed *tone, double 
         lfio_radmap_patch p;
         lfio_radmap_get(map, k, &p);
         for (size_t i = 0; i < 3 * (size_t)p.ncells; i++)
-            radiance[at++] = (float)(p.radiosity[i] / EXPORT_PI);
+            radiance[at++] = (float)(p.radiosity[i] / ILF_PI);
     }
     int ok = tone_percentile_scale(radiance, cells, 3, TONE_PEAK, 0.99, 1.0, scale);
     free(radiance);

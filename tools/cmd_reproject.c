@@ -97,7 +97,7 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
         o->plain = 1;
         return 1;
     case OPT_THREADS:
-        return cli_value_u32(p, value, 0, 1024, &o->threads);
+        return cli_value_threads(p, value, &o->threads);
     default:
         o->quiet = 1;
         return 1;

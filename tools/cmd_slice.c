@@ -41,6 +41,7 @@
 #include "tonemap.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
+#include "cli_limits.h"
 #include "ilf/limits.h"
 
 #define SLICE_MAX_SIZE ILF_SLICE_MAX_SIDE

@@ -27,6 +27,7 @@
 #include "commands.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
+#include "cli_limits.h"
 #include "ilf/limits.h"
 
 #define SYNTH_MAX_SPOTS ILF_SYNTH_MAX_SPOTS
@@ -94,7 +95,7 @@ static const cli_option synth_options_table[] = {
     {"depth", 0, "D", "radial: distance of p behind the slab centre (default half the diagonal)"},
     {"cone", 0, "DEG", "radial: cone half-angle a in degrees (default 20)"},
     {"spot", 0, "P:A:DEG:F[:R]", "spot: centre, axis, cone, falloff, radius (repeatable)"},
-    {"threads", 0, "T", "worker threads (default: number of processors)"},
+    {"threads", 0, "T", "worker threads, 0 = every processor (default: the processors, at most 64)"},
     {"quiet", 'q', NULL, "no settings line, progress bar or summary"},
 };
 
@@ -288,8 +289,8 @@ static int fill_slab(lfio_slab *slab, const synth_model *model, const synth_opti
     /* every position costs the same (its directions times the strata): the bar counts positions */
     cli_settings("synth", "kind %s, %ux%u positions, n %u (%llu directions), %u strata per direction, %u thread%s",
                  kind_name(o->kind), (unsigned)d->nu, (unsigned)d->nv, (unsigned)d->n, (unsigned long long)ndir,
-                 model->kind == SYNTH_CONSTANT ? 1u : o->supersample * o->supersample, (unsigned)o->threads,
-                 o->threads == 1 ? "" : "s");
+                 model->kind == SYNTH_CONSTANT ? 1u : o->supersample * o->supersample, ilf_thread_count(o->threads),
+                 ilf_thread_count(o->threads) == 1 ? "" : "s");
     cli_progress progress;
     cli_progress_start(&progress, "synth", npos);
     synth_batch batch = {.model = model, .slab = slab, .strata = o->supersample, .seed = o->seed,
@@ -489,7 +490,7 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
         return 1;
     case OPT_SUPERSAMPLE: return cli_value_u32(p, value, 1, SYNTH_MAX_SUPERSAMPLE, &o->supersample);
     case OPT_SEED: return cli_value_u32(p, value, 0, UINT32_MAX, &o->seed);
-    case OPT_THREADS: return cli_value_u32(p, value, 1, 256, &o->threads);
+    case OPT_THREADS: return cli_value_threads(p, value, &o->threads);
     case OPT_QUIET: o->quiet = 1; cli_set_quiet(1); return 1;
     case OPT_DEPTH:
         o->depth_given = 1;
@@ -562,7 +563,7 @@ static int check_work(const synth_options *o)
     double work = values * o->supersample * o->supersample * (o->spot_count > 0 ? (double)o->spot_count : 1.0);
     if (work > (double)ILF_SYNTH_MAX_EVALUATIONS) {
         cli_error("synth", "%ux%u positions, n=%u, supersample %u and %zu spot%s need %.3g evaluations, more than "
-                  "the limit of %.3g (ilf/limits.h)", (unsigned)d->nu, (unsigned)d->nv, (unsigned)d->n,
+                  "the limit of %.3g (tools/cli_limits.h)", (unsigned)d->nu, (unsigned)d->nv, (unsigned)d->n,
                   (unsigned)o->supersample, o->spot_count, o->spot_count == 1 ? "" : "s", work,
                   (double)ILF_SYNTH_MAX_EVALUATIONS);
         return 0;

@@ -24,6 +24,7 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "cli_limits.h"
 #include "ilf/limits.h"
 #include "image/image.h"
 #include "radmap_cli.h"

@@ -101,7 +101,7 @@ int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, c
     if (opt >= 0 && opt < SAMPLING_OPT_SETTINGS)
         ok = parse_setting(p, (size_t)opt, value, &o->values);
     else if (opt == SAMPLING_OPT_THREADS)
-        ok = cli_value_u32(p, value, 0, RL_MAX_THREADS, &o->threads);
+        ok = cli_value_threads(p, value, &o->threads);
     else if (opt == SAMPLING_OPT_TIME_BUDGET) {
         ok = cli_value_double(p, value, &o->time_budget);
         if (ok && !(o->time_budget >= 0))

@@ -127,6 +127,7 @@ static void loop_worker(void *p, unsigned index)
 
 void ilf_parallel_for(unsigned threads, size_t n, ilf_index_fn fn, void *arg)
 {
+    threads = ilf_thread_count(threads); /* 0 = every online core, as everywhere */
     loop l = {fn, arg, n, 0};
     atomic_init(&l.next, 0);
     ilf_parallel(n < threads ? (unsigned)(n ? n : 1) : threads, loop_worker, &l);

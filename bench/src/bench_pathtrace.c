@@ -48,9 +48,9 @@
 #include <string.h>
 
 #include "lfio/lightfield.h"
+#include "ilf/vec.h"
 #include "relight/raycast.h"
 
-#define PT_PI 3.14159265358979323846
 /* Offsets of ray origins off their surface, and of shadow rays short of their target, metres:
  * well above the single-precision rounding of scenes of a few metres, below any feature of one. */
 #define PT_EPS 1e-4
@@ -123,7 +123,7 @@ static void cosine_direction(const double n[3], uint64_t *rng, double d[3])
 {
     double t1[3], t2[3];
     frame(n, t1, t2);
-    double r = sqrt(rnd(rng)), phi = 2.0 * PT_PI * rnd(rng);
+    double r = sqrt(rnd(rng)), phi = 2.0 * ILF_PI * rnd(rng);
     double a = r * cos(phi), b = r * sin(phi), c = sqrt(fmax(0.0, 1.0 - r * r));
     for (int k = 0; k < 3; k++)
         d[k] = a * t1[k] + b * t2[k] + c * n[k];
@@ -232,7 +232,7 @@ static double light_pdf(double prob, double area, double r2, double cos_e)
 /* Adds to e L cos_x / (p_light + cos_x / pi): one sample of either strategy, weighted by the balance heuristic. */
 static void add_mis(double e[3], const double L[3], double cos_x, double p_light)
 {
-    double g = cos_x / (p_light + cos_x / PT_PI);
+    double g = cos_x / (p_light + cos_x / ILF_PI);
     for (int k = 0; k < 3; k++)
         e[k] += g * L[k];
 }

@@ -19,9 +19,6 @@
 extern "C" {
 #endif
 
-/* Strict C17 has no M_PI. */
-#define CAP__PI 3.14159265358979323846
-
 /** Sets the calling thread's message from a printf format. @return status. */
 cap_status cap__fail(cap_status status, const char *fmt, ...)
 #if defined(__GNUC__)

@@ -68,7 +68,7 @@ static void disc_coordinates(int width, int height, double px, double py, double
 
 static void equirect_direction(int width, int height, double px, double py, double d[3])
 {
-    double theta = CAP__PI * py / height, phi = CAP__PI * (1.0 - 2.0 * px / width);
+    double theta = ILF_PI * py / height, phi = ILF_PI * (1.0 - 2.0 * px / width);
     double st = sin(theta);
     d[0] = st * cos(phi);
     d[1] = st * sin(phi);
@@ -92,7 +92,7 @@ static int angular_map_direction(double a, double b, double d[3])
     double r = sqrt(a * a + b * b);
     if (r > 1.0)
         return 0;
-    double theta = CAP__PI * r, st = sin(theta);
+    double theta = ILF_PI * r, st = sin(theta);
     d[0] = cos(theta);
     d[1] = r > 0.0 ? -st * a / r : 0.0;
     d[2] = r > 0.0 ? st * b / r : 0.0;
@@ -131,7 +131,7 @@ static void mirror_ball_locate(const double u[3], double *a, double *b)
 /* Disc coordinates of unit direction u for an angular map (inverse of angular_map_direction). */
 static void angular_map_locate(const double u[3], double *a, double *b)
 {
-    double r = acos(fmax(-1.0, fmin(1.0, u[0]))) / CAP__PI;
+    double r = acos(fmax(-1.0, fmin(1.0, u[0]))) / ILF_PI;
     double side = sqrt(u[1] * u[1] + u[2] * u[2]);
     *a = side > 0.0 ? -r * u[1] / side : r;
     *b = side > 0.0 ? r * u[2] / side : 0.0;
@@ -153,8 +153,8 @@ int cap_projection_locate(cap_projection p, int width, int height, const double 
     double x, y;
     if (p == CAP_PROJECTION_EQUIRECTANGULAR) {
         double theta = acos(fmax(-1.0, fmin(1.0, u[2]))), phi = atan2(u[1], u[0]);
-        x = 0.5 * width * (1.0 - phi / CAP__PI);
-        y = height * theta / CAP__PI;
+        x = 0.5 * width * (1.0 - phi / ILF_PI);
+        y = height * theta / ILF_PI;
     } else {
         double a, b;
         if (p == CAP_PROJECTION_MIRROR_BALL)
@@ -176,7 +176,7 @@ static double disc_density(cap_projection p, double r)
         return 0.0;
     if (p == CAP_PROJECTION_MIRROR_BALL)
         return 4.0;
-    return r > 1e-12 ? CAP__PI * sin(CAP__PI * r) / r : CAP__PI * CAP__PI;
+    return r > 1e-12 ? ILF_PI * sin(ILF_PI * r) / r : ILF_PI * ILF_PI;
 }
 
 double cap__disc_density(cap_projection p, int width, int height, double px, double py)
@@ -218,7 +218,7 @@ double cap_projection_solid_angle(cap_projection p, int width, int height, int x
     if (cap_projection_check_size(p, width, height) != NULL || x < 0 || y < 0 || x >= width || y >= height)
         return 0.0;
     if (p == CAP_PROJECTION_EQUIRECTANGULAR)
-        return 2.0 * CAP__PI / width * (cos(CAP__PI * y / height) - cos(CAP__PI * (y + 1) / height));
+        return 2.0 * ILF_PI / width * (cos(ILF_PI * y / height) - cos(ILF_PI * (y + 1) / height));
     double rmin, rmax;
     pixel_radius_range(width, height, x, y, &rmin, &rmax);
     if (rmin >= 1.0)

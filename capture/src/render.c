@@ -57,10 +57,10 @@ static void sample_direction(const render_job *job, int x, int y, uint32_t a, ui
     double u1, u2;
     jitter(s->seed, x, y, a, b, &u1, &u2);
     double px = x + (a + u1) / s->strata;
-    double c0 = cos(CAP__PI * y / s->height), c1 = cos(CAP__PI * (y + 1) / s->height);
+    double c0 = cos(ILF_PI * y / s->height), c1 = cos(ILF_PI * (y + 1) / s->height);
     double cos_theta = c0 + (c1 - c0) * (b + u2) / s->strata;
     double sin_theta = sqrt(fmax(0.0, 1.0 - cos_theta * cos_theta));
-    double phi = CAP__PI * (1.0 - 2.0 * px / s->width);
+    double phi = ILF_PI * (1.0 - 2.0 * px / s->width);
     double cam[3] = {sin_theta * cos(phi), sin_theta * sin(phi), cos_theta};
     cap__mat_apply(job->R, cam, d);
 }

@@ -261,7 +261,7 @@ static void view_init(capture_view *cv, const lfio_slab *cap)
     cv->cd = lfio_slab_get_desc(cap);
     lfio_slab_to_world(cap, pole, cv->cap_e3);
     cap__normalise(cv->cap_e3);
-    cv->angle = sqrt(2.0 * CAP__PI / (4.0 * (double)cv->cd->n * cv->cd->n));
+    cv->angle = sqrt(2.0 * ILF_PI / (4.0 * (double)cv->cd->n * cv->cd->n));
 }
 
 static cap_status job_init(reproject_job *job, const lfio_slab *const *captured, size_t count,

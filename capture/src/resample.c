@@ -47,7 +47,7 @@ typedef struct resampler {
 /* @return S for an image whose largest pixel has solid angle pixel_sr, at partition level n. */
 static int choose_subdivision(double pixel_sr, uint32_t n)
 {
-    double average = sqrt(0.5 * CAP__PI) / n; /* side of an average solid angle, sqrt(2 pi / 4n^2) */
+    double average = sqrt(0.5 * ILF_PI) / n; /* side of an average solid angle, sqrt(2 pi / 4n^2) */
     double s = ceil(SUBDIVISION_TARGET * sqrt(pixel_sr) / average);
     return s < 1.0 ? 1 : s > SUBDIVISION_MAX ? SUBDIVISION_MAX : (int)s;
 }
@@ -57,24 +57,24 @@ static double largest_pixel(cap_projection p, int width, int height)
 {
     double area = 1.0 / ((double)width * height);
     if (p == CAP_PROJECTION_EQUIRECTANGULAR)
-        return 2.0 * CAP__PI * CAP__PI * area;
-    return (p == CAP_PROJECTION_MIRROR_BALL ? 16.0 : 4.0 * CAP__PI * CAP__PI) * area;
+        return 2.0 * ILF_PI * ILF_PI * area;
+    return (p == CAP_PROJECTION_MIRROR_BALL ? 16.0 : 4.0 * ILF_PI * ILF_PI) * area;
 }
 
 /* Fills the equirectangular sub-row and sub-column tables. */
 static void fill_tables(resampler *rs)
 {
     const int S = rs->S;
-    const double dphi = 2.0 * CAP__PI / ((double)rs->width * S);
+    const double dphi = 2.0 * ILF_PI / ((double)rs->width * S);
     for (int r = 0; r < rs->height * S; r++) {
-        double t0 = CAP__PI * r / ((double)rs->height * S), t1 = CAP__PI * (r + 1) / ((double)rs->height * S);
+        double t0 = ILF_PI * r / ((double)rs->height * S), t1 = ILF_PI * (r + 1) / ((double)rs->height * S);
         double tm = 0.5 * (t0 + t1);
         rs->row_cos[r] = cos(tm);
         rs->row_sin[r] = sin(tm);
         rs->row_weight[r] = dphi * (cos(t0) - cos(t1));
     }
     for (int c = 0; c < rs->width * S; c++) {
-        double phi = CAP__PI * (1.0 - 2.0 * (c + 0.5) / ((double)rs->width * S));
+        double phi = ILF_PI * (1.0 - 2.0 * (c + 0.5) / ((double)rs->width * S));
         rs->col_cos[c] = cos(phi);
         rs->col_sin[c] = sin(phi);
     }
@@ -165,8 +165,8 @@ static void bin(resampler *rs, const double d[3], double weight, const float *rg
 /* @return 1 if no direction of equirectangular pixel (x, y) can be in front (a margin around its centre). */
 static int equirect_pixel_behind(const resampler *rs, int x, int y)
 {
-    double margin = 1.5 * (CAP__PI / rs->height + CAP__PI / rs->width);
-    if (margin >= 0.5 * CAP__PI)
+    double margin = 1.5 * (ILF_PI / rs->height + ILF_PI / rs->width);
+    if (margin >= 0.5 * ILF_PI)
         return 0;
     double d[3], w[3];
     cap_projection_direction(rs->p, rs->width, rs->height, x + 0.5, y + 0.5, d);
@@ -216,8 +216,8 @@ static double pixel_cosine_integral(const resampler *rs, int x, int y, double co
 {
     if (rs->p != CAP_PROJECTION_EQUIRECTANGULAR)
         return cosine * cap_projection_solid_angle(rs->p, rs->width, rs->height, x, y);
-    double t0 = CAP__PI * y / rs->height, t1 = CAP__PI * (y + 1) / rs->height;
-    double left = CAP__PI * (1.0 - 2.0 * x / rs->width), right = CAP__PI * (1.0 - 2.0 * (x + 1) / rs->width);
+    double t0 = ILF_PI * y / rs->height, t1 = ILF_PI * (y + 1) / rs->height;
+    double left = ILF_PI * (1.0 - 2.0 * x / rs->width), right = ILF_PI * (1.0 - 2.0 * (x + 1) / rs->width);
     double sin2 = 0.5 * (t1 - t0) - 0.25 * (sin(2.0 * t1) - sin(2.0 * t0)); /* integral of sin^2 */
     double sincos = 0.5 * (sin(t1) * sin(t1) - sin(t0) * sin(t0));         /* integral of sin cos */
     double v[3] = {sin2 * (sin(left) - sin(right)), sin2 * (cos(right) - cos(left)), sincos * (left - right)};

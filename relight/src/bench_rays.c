@@ -60,7 +60,7 @@ static void random_ray(const ray_job *job, uint64_t *state, v3 *org, v3 *dir)
     v3 a0 = v3_load(v[0]), a1 = v3_load(v[t]), a2 = v3_load(v[t + 1]);
     *org = v3_add(v3_add(v3_scale(a0, 1 - su), v3_scale(a1, su * (1 - b))), v3_scale(a2, su * b));
     v3 n = v3_load(pg->normal), e1 = v3_norm(v3_sub(a1, a0)), e2 = v3_cross(n, e1);
-    double r1 = next_unit(state), phi = 2 * RL_PI * next_unit(state), sr = sqrt(r1);
+    double r1 = next_unit(state), phi = 2 * ILF_PI * next_unit(state), sr = sqrt(r1);
     *dir = v3_add(v3_scale(n, sqrt(1 - r1)), v3_add(v3_scale(e1, sr * cos(phi)), v3_scale(e2, sr * sin(phi))));
 }
 

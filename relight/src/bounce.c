@@ -28,7 +28,8 @@
 #include <stdlib.h>
 
 #include "ilf/pool.h"
-#include "method.h"
+#include "bounce.h"
+#include "pair.h"
 
 /* Maps (a, b) in [0, 1)^2 to the unit disc, area-preserving, squares to rings (Shirley and Chiu 1997). */
 static void concentric_disc(double a, double b, double *x, double *y)
@@ -40,10 +41,10 @@ static void concentric_disc(double a, double b, double *x, double *y)
     }
     if (fabs(sx) > fabs(sy)) {
         r = sx;
-        phi = (RL_PI / 4.0) * (sy / sx);
+        phi = (ILF_PI / 4.0) * (sy / sx);
     } else {
         r = sy;
-        phi = RL_PI / 2.0 - (RL_PI / 4.0) * (sx / sy);
+        phi = ILF_PI / 2.0 - (ILF_PI / 4.0) * (sx / sy);
     }
     *x = r * cos(phi);
     *y = r * sin(phi);
@@ -206,6 +207,6 @@ void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, 
                 m->near[cell] = (uint8_t)near;
             cnt->samples += n;
             for (int c = 0; c < 3; c++)
-                m->e_pass[cell][c] += RL_PI * acc[c] / n;
+                m->e_pass[cell][c] += ILF_PI * acc[c] / n;
         }
 }

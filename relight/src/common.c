@@ -1,13 +1,16 @@
 /*
- * common.c - the engine's per-thread error message and method names
+ * common.c - the engine's per-thread error message, bounded message
+ * formatting, array growth, and method names
  * (the sampling settings' table and defaults are in settings.c).
  */
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "ilf/message.h"
-#include "scene_internal.h"
+#include "common.h"
 
 static _Thread_local char errbuf[ILF_MESSAGE_BYTES];
 
@@ -23,6 +26,34 @@ rl_status rl__fail(rl_status status, const char *fmt, ...)
     ilf_message_vformat(errbuf, fmt, ap);
     va_end(ap);
     return status;
+}
+
+void rl__format(char *out, size_t cap, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int len = vsnprintf(out, cap, fmt, ap);
+    va_end(ap);
+    if (len >= 0 && (size_t)len >= cap && cap >= 4)
+        memcpy(out + cap - 4, "...", 4);
+}
+
+void *rl__grow(void *arr, size_t *cap, size_t need, size_t size)
+{
+    if (need <= *cap && arr)
+        return arr;
+    size_t n = *cap ? *cap : 16;
+    while (n < need) {
+        if (n > SIZE_MAX / 2)
+            return NULL;
+        n *= 2;
+    }
+    if (n > SIZE_MAX / size)
+        return NULL;
+    void *p = realloc(arr, n * size);
+    if (p)
+        *cap = n;
+    return p;
 }
 
 static const char *const method_names[] = {"culled", "naive", "area", "solidangle", "adaptive"};

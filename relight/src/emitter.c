@@ -15,7 +15,7 @@
 
 #include <lfio/partition.h>
 
-#include "method.h"
+#include "emitter.h"
 
 /* Fills the 2D polygon, its edge half-planes and area of e from its world vertices and frame. */
 static void emitter_finish(rl_emitter *e)

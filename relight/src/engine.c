@@ -1,6 +1,7 @@
 /*
  * engine.c - the pass scheduler of the relighting engine: run options,
- * passes, tiles, threads, and the exchange between the ranks of a job.
+ * passes, tiles, threads, and the exchange between the ranks of a job;
+ * the solutions it makes, and rl_solution_destroy().
  *
  * A run builds the radiance maps and the ray tracer, then runs pass 0 from
  * the scene's emitters (emissive polygons and light field slabs) and
@@ -919,6 +920,17 @@ static uint64_t accumulator_bytes(const rl_map *maps, size_t n)
     for (size_t m = 0; m < n; m++)
         bytes += (uint64_t)maps[m].ncells * sizeof *maps[m].e_pass * (maps[m].e_prev ? 3u : 1u);
     return bytes;
+}
+
+void rl_solution_destroy(rl_solution *s)
+{
+    if (!s)
+        return;
+    rl__maps_free(s->maps, s->nmaps);
+    rl__tracer_destroy(s->tracer);
+    free(s->polygon_map);
+    free(s->passes);
+    free(s);
 }
 
 rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *run, uint32_t passes, double span,

@@ -11,6 +11,7 @@
 #define RELIGHT_ENGINE_INTERNAL_H
 
 #include "relight/engine.h"
+#include "bounce.h"
 #include "transfer.h"
 
 struct rl_solution {

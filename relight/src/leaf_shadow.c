@@ -31,7 +31,7 @@
 #include <string.h>
 
 #include "mesh.h"
-#include "method.h"
+#include "leaf_shadow.h"
 
 /* Most polygons one (tile, leaf) may collect before its shadows count as unknown. */
 #define SHADOW_CANDIDATES 256u

@@ -426,7 +426,7 @@ int64_t rl__map_cell_at(const rl_map *m, v2 q)
 void rl__map_radiance(const rl_map *m, int64_t cell, double out[3])
 {
     for (int c = 0; c < 3; c++)
-        out[c] = cell < 0 ? 0.0 : m->albedo[c] * m->e_prev[cell][c] / RL_PI;
+        out[c] = cell < 0 ? 0.0 : m->albedo[c] * m->e_prev[cell][c] / ILF_PI;
 }
 
 int64_t rl__map_cell_near(const rl_map *m, v2 q)

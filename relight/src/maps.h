@@ -9,7 +9,7 @@
 #include <stdint.h>
 
 #include "region.h"
-#include "scene_internal.h"
+#include "scene_model.h"
 
 /* One cell (rl__map_cell()): its grid square, and whether the polygon's border cuts it. Its shape
  * (rl__map_cell_polygon()), centroid and area (rl__map_cell_centroid()) follow from these and the map, so a cell costs

@@ -41,7 +41,7 @@
  * projected onto their best-fit plane and ear clipped into triangles, each
  * of which passes the same steps before it is pooled for merging (merged
  * polygons pass them again when appended). Whatever is appended therefore
- * satisfies the polygon invariants of scene_internal.h.
+ * satisfies the polygon invariants of scene_model.h.
  */
 #include <math.h>
 #include <stdio.h>

@@ -25,7 +25,7 @@
  * its leaves in id order either way, so the two are bit-identical as long
  * as no pair descends below partition_n.
  *
- * Where leaves are the wrong tool, both hand the pair to views.c under
+ * Where leaves are the wrong tool, both hand the pair to lambert.c under
  * `descend`: a constant emitter gets Lambert's formula times visibility,
  * and so does an emitter fewer than RL_LAMBERT_LEAVES solid angles across
  * (times its weighted mean radiance); culled also hands over a pair that

@@ -14,7 +14,7 @@
 
 #include <lfio/partition.h>
 
-#include "method.h"
+#include "pair.h"
 
 /* @return the distance that single precision cannot resolve on segments
  * between the pair's tile and emitter: eight ulps of the largest recentred
@@ -149,7 +149,7 @@ static int pair_measure(const rl_transfer_ctx *ctx, const rl_pair *p, const rl_t
     double peak = subtended;
     if (t->npoly >= 3 && rl__convex_contains(t->poly, t->npoly, foot))
         peak = fmax(peak, subtended_from(p, frame_point(&t->m->frame, foot), &w));
-    *leaves = peak / (2.0 * RL_PI / (4.0 * m * m));
+    *leaves = peak / (2.0 * ILF_PI / (4.0 * m * m));
     return small;
 }
 
@@ -209,4 +209,47 @@ void rl__cell_domain(const rl_map *m, uint32_t cell, rl_origin_domain *d)
     d->square = !rl__map_cell(m, cell).clipped;
     if (!d->square)
         rl__polygon_sampler_init(&d->ps, d->poly, d->n);
+}
+
+/* Draws the direction of one sample of leaf L from origin x, informed by
+ * the emitter: when the leaf's three corner directions all reach the
+ * emitter from x, every direction of the leaf does (the view of a cone is
+ * the convex hull of its corners' views), and d is drawn over the leaf as
+ * rl__leaf_sample() does (*lp = L, lam its barycentrics); otherwise d is
+ * uniform in the solid angle of the part of the emitter the leaf sees from
+ * x (*lp = NULL, weight that solid angle), so that no sample misses. Either
+ * way the mean of w * (radiance cos V) is the leaf's light at x.
+ * @return 0 when the leaf sees nothing of the emitter from x. */
+int rl__leaf_draw(const rl_pair *p, const rl_leaf *L, v3 x, double u1, double u2, v3 *d, double *w, double lam[3],
+                  const rl_leaf **lp)
+{
+    const rl_emitter *e = p->e;
+    v3 rel = v3_sub(x, e->frame.origin);
+    double hx = v3_dot(rel, e->frame.n);
+    if (!(hx > 0))
+        return 0;
+    /* Only a constant emitter's leaves are informed. A light field's and a
+     * bounce map's stay blind: their radiance varies inside a leaf anyway,
+     * and on data/beams.json the clipping cost 1.8x the time of the direct
+     * pass for 20% less error and 3.2x the time of the bounces for 21%
+     * less, losses at equal time. */
+    int blind = e->kind != EM_CONST, inside = L->reach || blind;
+    v2 px = {v3_dot(rel, e->frame.e1), v3_dot(rel, e->frame.e2)};
+    for (int k = 0; k < 3 && inside && !blind; k++)
+        inside = rl__emitter_contains(e, (v2){px.x - hx * L->land[k].x, px.y - hx * L->land[k].y});
+    if (inside) {
+        *d = rl__leaf_sample(L, u1, u2, w, lam);
+        *lp = L;
+        return 1;
+    }
+    v3 q[RL_MAX_POLY_VERTS + 8], dir[RL_MAX_POLY_VERTS + 8];
+    double om[RL_MAX_POLY_VERTS + 8];
+    size_t nq = rl__clip_to_view(x, L->p, p->sclip, p->ns, q);
+    double total = nq >= 3 ? rl__sph_fan(q, nq, x, dir, om) : 0.0;
+    if (!(total > 0))
+        return 0;
+    *d = v3_scale(rl__sph_fan_sample(dir, om, nq, total, u1, u2), -1.0);
+    *w = total;
+    *lp = NULL;
+    return 1;
 }

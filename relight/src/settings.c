@@ -17,7 +17,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "scene_internal.h"
+#include "scene_model.h"
 
 /* The integers a JSON number (a scene file, stats.json) holds exactly: seeds are written there. */
 #define JSON_EXACT_MAX 9007199254740992.0

@@ -25,7 +25,7 @@
 #include <stdint.h>
 
 #include "region.h"
-#include "scene_internal.h"
+#include "scene_model.h"
 
 typedef struct rl_occluders rl_occluders;
 

@@ -1,6 +1,7 @@
 /*
  * solution.c - the rl_solution accessors: pass statistics, the memory the
- * accumulators held, the maps' geometry and their cells' values.
+ * accumulators held, the maps' geometry and their cells' values (engine.c,
+ * which makes solutions, also destroys them).
  *
  * A solution is immutable once rl_relight() returns it (engine.c), so
  * every accessor here only reads and may run on several threads at once.
@@ -12,17 +13,6 @@
 #include <string.h>
 
 #include "engine_internal.h"
-
-void rl_solution_destroy(rl_solution *s)
-{
-    if (!s)
-        return;
-    rl__maps_free(s->maps, s->nmaps);
-    rl__tracer_destroy(s->tracer);
-    free(s->polygon_map);
-    free(s->passes);
-    free(s);
-}
 
 uint32_t rl_solution_pass_count(const rl_solution *s)
 {
@@ -115,7 +105,7 @@ rl_status rl_solution_map_rows(const rl_solution *s, size_t k, uint32_t first, u
             if (irradiance)
                 irradiance[3 * r + ch] = saturate_float(m->e_total[c][ch]);
             if (radiosity)
-                radiosity[3 * r + ch] = saturate_float(RL_PI * m->emission[ch] + m->albedo[ch] * m->e_total[c][ch]);
+                radiosity[3 * r + ch] = saturate_float(ILF_PI * m->emission[ch] + m->albedo[ch] * m->e_total[c][ch]);
         }
     }
     return RL_OK;

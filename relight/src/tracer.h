@@ -12,7 +12,7 @@
 
 #include <stdint.h>
 
-#include "scene_internal.h"
+#include "scene_model.h"
 #include "shadow.h"
 #include "ilf/vec.h"
 

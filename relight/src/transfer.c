@@ -11,7 +11,10 @@
 #include <assert.h>
 #include <stdlib.h>
 
+#include "bounce.h"
 #include "method.h"
+#include "point_gather.h"
+#include "transfer.h"
 
 const rl_method_impl *rl__method_for(rl_method id)
 {

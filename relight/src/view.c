@@ -81,7 +81,7 @@ static void shade(const rl_solution *s, v3 org, v3 dir, float out[3])
         return;
     const rl_material *mat = &s->scene->materials[s->scene->polygons[poly].material];
     for (int c = 0; c < 3; c++)
-        out[c] = (float)(mat->emission[c] + (map >= 0 ? s->maps[map].albedo[c] * e[c] / RL_PI : 0.0));
+        out[c] = (float)(mat->emission[c] + (map >= 0 ? s->maps[map].albedo[c] * e[c] / ILF_PI : 0.0));
 }
 
 /* The irradiance on the receiving surface seen along one camera ray, -1 in every channel where none is. */
@@ -118,7 +118,7 @@ static void camera_frame(const rl_camera *cam, render_job *job)
     job->forward = v3_norm(v3_sub(v3_load(cam->look_at), v3_load(cam->position)));
     job->right = v3_norm(v3_cross(job->forward, v3_load(cam->up)));
     job->up = v3_cross(job->right, job->forward);
-    job->tan_half = tan(cam->fov_deg * RL_PI / 360.0);
+    job->tan_half = tan(cam->fov_deg * ILF_PI / 360.0);
     job->aspect = (double)cam->width / cam->height;
 }
 

@@ -1,6 +1,8 @@
 /*
- * ilf/limits.h - every user-facing limit of ilfkit in one place, each with the
- * reason for its value (after SQLite's sqliteLimit.h).
+ * ilf/limits.h - every limit on what ilfkit's files and libraries read, in
+ * one place, each with the reason for its value (after SQLite's
+ * sqliteLimit.h); the limits of the `ilf` command's own options are the
+ * tools' (tools/cli_limits.h).
  *
  * A limit here bounds what an input may ask for: a reader refuses anything
  * beyond it with an error naming the file and the limit, so a hostile or
@@ -158,29 +160,5 @@
 /* Largest emission a material may have, W sr^-1 m^-2 (relight.h's RL_MAX_EMISSION): irradiance sums of
  * such emitters stay far inside float32, the type of the radiance maps. */
 #define ILF_MAX_EMISSION 1e30
-
-/* ------------------------------------------------------------ tools */
-
-/* Pixels along either side of an `ilf slice` image: a slice shows one direction per pixel, and a
- * partition finer than 8192^2 directions is not stored. */
-#define ILF_SLICE_MAX_SIDE 8192u
-
-/* Pixels along either side of an `ilf view` image: a scene camera's limit (docs/scene.md), 16384^2 float RGB
- * being 3 GiB. */
-#define ILF_VIEW_MAX_SIDE 16384u
-
-/* Spot lights one `ilf synth` call may place (each is a command-line option). */
-#define ILF_SYNTH_MAX_SPOTS 64
-
-/* Positions along either side of a synthesised slab (`ilf synth --grid`); lfio's slab size limit
- * usually binds first. */
-#define ILF_SYNTH_MAX_GRID 65536u
-
-/* Supersamples per axis when synthesising one radiance value (`ilf synth --supersample`). */
-#define ILF_SYNTH_MAX_SUPERSAMPLE 64u
-
-/* Evaluations one `ilf synth` makes (radiance values times supersample^2 times spots, at least one): 2^40.
- * Each option is bounded above, but together they could ask for years of work; checked before any. */
-#define ILF_SYNTH_MAX_EVALUATIONS ((uint64_t)1 << 40)
 
 #endif /* ILF_LIMITS_H */

@@ -38,9 +38,9 @@ void ilf_parallel(unsigned n, ilf_worker_fn fn, void *arg);
 
 typedef void (*ilf_index_fn)(void *arg, size_t k);
 
-/* Runs fn(arg, k) for every k in [0, n), each once, the indices shared in order between up to threads
- * workers (0 and 1 both mean the calling thread alone; ilf_parallel(), so it cannot fail); fn must write
- * nothing another call reads or writes. */
+/* Runs fn(arg, k) for every k in [0, n), each once, the indices shared in order between up to
+ * ilf_thread_count(threads) workers (0 = every online core, as for every thread count; 1 = the calling
+ * thread alone; ilf_parallel(), so it cannot fail); fn must write nothing another call reads or writes. */
 void ilf_parallel_for(unsigned threads, size_t n, ilf_index_fn fn, void *arg);
 
 #endif /* ILF_POOL_H */

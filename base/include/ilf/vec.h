@@ -10,6 +10,9 @@
 
 #include <math.h>
 
+/* pi, the project's one definition (strict C17 does not provide M_PI). */
+#define ILF_PI 3.14159265358979323846
+
 typedef struct v3 { double x, y, z; } v3;
 typedef struct v2 { double x, y; } v2;
 

@@ -35,7 +35,7 @@ typedef struct rl_pass_stats {
     uint64_t solid_angles_considered; /**< (emitter, receiver, solid angle) leaves considered */
     uint64_t solid_angles_culled; /**< of those, culled without a ray */
     uint64_t pairs;               /**< (emitter, receiver tile) pairs that can exchange light */
-    uint64_t pairs_descended;     /**< pairs whose emitter subtends less than a solid angle, gathered by views */
+    uint64_t pairs_descended;     /**< pairs whose emitter subtends less than a solid angle, gathered by Lambert's formula times sampled visibility */
     uint32_t emitters;            /**< emitters in this pass */
     uint64_t refinements;         /**< adaptive: (cell, solid angle) nodes split into their children */
     double estimated_rmse;        /**< adaptive: the estimator's own RMSE over cells, W m^-2 (0 otherwise) */

@@ -1,5 +1,5 @@
 /*
- * views.c - the estimator that replaces leaves where leaves are the wrong
+ * lambert.c - the estimator that replaces leaves where leaves are the wrong
  * tool, for culled and its relatives: Lambert's formula times what sampling
  * alone can tell (rl__gather_lambert()).
  *
@@ -49,6 +49,7 @@
 
 #include "mesh.h"
 #include "method.h"
+#include "point_gather.h"
 
 /* @return the world point at the vertex mean of domain dom of map m: where a
  * cell's view of an emitter is measured. */
@@ -93,7 +94,7 @@ static uint32_t lambert_origins(const rl_pair *p, const rl_map *m, v3 centre, ui
 static uint32_t view_rays(const rl_transfer_ctx *ctx, const v3 *q, size_t nq, v3 centre)
 {
     uint32_t k = ctx->sampling->rays_per_solid_angle, n = ctx->sampling->partition_n;
-    double leaf_sr = 2.0 * RL_PI / (4.0 * n * n);
+    double leaf_sr = 2.0 * ILF_PI / (4.0 * n * n);
     v3 dir[RL_MAX_POLY_VERTS + 2];
     double om[RL_MAX_POLY_VERTS + 2];
     double leaves = ceil(rl__sph_fan(q, nq, centre, dir, om) / leaf_sr);

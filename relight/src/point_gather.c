@@ -1,5 +1,5 @@
 /*
- * points.c - culled transfer to a point receiver, from the point's own view
+ * point_gather.c - culled transfer to a point receiver, from the point's own view
  * of each emitter.
  *
  * A point x sees emitter S (clipped to x's front half-space) as a convex
@@ -30,7 +30,7 @@
 #include <lfio/partition.h>
 
 #include "sampling.h"
-#include "transfer.h"
+#include "point_gather.h"
 
 /* Levels of the walk (partition_n is at most 4096 = 2^12, plus level 1). */
 #define WALK_LEVELS 16

@@ -1,5 +1,5 @@
 /*
- * scene_internal.h - the layout of a loaded scene, shared by the loader
+ * scene_model.h - the layout of a loaded scene, shared by the loader
  * (scene.c, mesh.c) and the engine. Invariants established by rl_scene_load():
  *   - every polygon has 3 .. RL_SCENE_MAX_POLY_VERTS vertices, is planar (every vertex within
  *     1e-6 * its diameter of the plane), strictly convex (collinear vertices
@@ -16,11 +16,10 @@
 
 #include <lfio/lightfield.h>
 
+#include "common.h"
 #include "relight/scene.h"
 #include "ilf/limits.h"
-
-/* pi, for the engine's every radiance-irradiance conversion. */
-#define RL_PI 3.14159265358979323846
+#include "ilf/vec.h"
 
 /* Most vertices one polygon may have (the engine's clipping buffers are sized by it). */
 #define RL_SCENE_MAX_POLY_VERTS ILF_POLYGON_MAX_VERTICES
@@ -85,12 +84,5 @@ struct rl_scene {
     int has_camera;
     rl_camera camera;
 };
-
-/* Records a formatted message for rl_errmsg(). @return status. */
-rl_status rl__fail(rl_status status, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
 
 #endif /* RELIGHT_SCENE_INTERNAL_H */
