@@ -55,7 +55,6 @@
 
 static const double plane_tol = 1e-6; /* distances, relative to the diameter */
 static const double area_tol = 1e-12; /* areas, relative to the diameter squared */
-static const double pi = 3.14159265358979323846;
 
 /* ------------------------------------------------------------ checks */
 
@@ -204,9 +203,9 @@ static int check_convex(poly_check *c)
         }
         turning += atan2(s, v3_dot(in, out));
     }
-    if (turning > 3 * pi) {
+    if (turning > 3 * ILF_PI) {
         snprintf(c->why, sizeof c->why, "not convex (the boundary winds around %.0f times)",
-                 turning / (2 * pi));
+                 turning / (2 * ILF_PI));
         return 0;
     }
     return 1;
