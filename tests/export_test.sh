@@ -28,24 +28,6 @@ ERR=$TMP/stderr
 . "$(dirname "$0")/checks.sh"
 status=0
 
-run() {
-    "$@" >"$OUT" 2>"$ERR"
-    status=$?
-}
-expect() {
-    local code=$1 what=$2
-    shift 2
-    run "$@"
-    if [ "$status" -eq "$code" ]; then
-        passed=$((passed + 1))
-    else
-        failed=$((failed + 1))
-        echo "FAIL: $what: exit $status, expected $code"
-        sed 's/^/    stderr: /' "$ERR" | head -n 5
-    fi
-}
-stdout_has() { grep -q -e "$1" "$OUT"; }
-stderr_has() { grep -q -F -e "$1" "$ERR"; }
 py() { python3 -c "$@"; }
 
 cat >"$TMP/scene.json" <<'JSON'

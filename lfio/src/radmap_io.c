@@ -811,11 +811,10 @@ static lfio_status v2_write_dataset(const struct map_content *mc, const char *pa
     return st;
 }
 
-/* write_contents() for format 2: the root attributes, then every patch gathered and written one dataset
- * at a time. */
-static lfio_status write_contents_v2(const char *path, hid_t file, const struct map_content *c)
+/* Writes the root attributes (format, format_version, creator, scene, patch_count) of a file of the given
+ * format version. */
+static lfio_status write_root(const char *path, hid_t file, const struct map_content *c, int32_t version)
 {
-    const int32_t version = 2;
     const uint32_t count = (uint32_t)c->count;
     lfio_status st = lfio__h5_put_str_attr(path, "/", file, "format", FORMAT_NAME);
     if (st == LFIO_OK)
@@ -827,6 +826,14 @@ static lfio_status write_contents_v2(const char *path, hid_t file, const struct 
         st = lfio__h5_put_str_attr(path, "/", file, "scene", c->scene);
     if (st == LFIO_OK)
         st = lfio__h5_put_num_attr(path, "/", file, "patch_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0, &count);
+    return st;
+}
+
+/* write_contents() for format 2: the root attributes, then every patch gathered and written one dataset
+ * at a time. */
+static lfio_status write_contents_v2(const char *path, hid_t file, const struct map_content *c)
+{
+    lfio_status st = write_root(path, file, c, 2);
     if (st != LFIO_OK)
         return st;
     v2_content v;
@@ -852,18 +859,7 @@ static lfio_status write_contents(const char *path, hid_t file, const void *cont
     const struct map_content *c = content;
     if (c->format == 2)
         return write_contents_v2(path, file, c);
-    const int32_t version = FORMAT_VERSION;
-    const uint32_t count = (uint32_t)c->count;
-    lfio_status st = lfio__h5_put_str_attr(path, "/", file, "format", FORMAT_NAME);
-    if (st == LFIO_OK)
-        st = lfio__h5_put_num_attr(path, "/", file, "format_version", H5T_STD_I32LE, H5T_NATIVE_INT32, 0,
-                                   &version);
-    if (st == LFIO_OK)
-        st = lfio__h5_put_str_attr(path, "/", file, "creator", c->creator);
-    if (st == LFIO_OK)
-        st = lfio__h5_put_str_attr(path, "/", file, "scene", c->scene);
-    if (st == LFIO_OK)
-        st = lfio__h5_put_num_attr(path, "/", file, "patch_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0, &count);
+    lfio_status st = write_root(path, file, c, FORMAT_VERSION);
     if (st != LFIO_OK)
         return st;
     hid_t patches;
