@@ -102,27 +102,43 @@ static hsize_t chunk_rows(hsize_t rows, hsize_t limit)
     return c > 0 ? c : 1;
 }
 
+/* A dataset's shape and labels, as both formats' tables give them. */
+struct ds_shape {
+    const char *name;
+    int width; /* values per row; 0 for a 1-D dataset */
+    H5T_class_t cls;
+    size_t size;
+    const char *units;
+    const char *axes;
+};
+
+/* Fills *l with the layout of a dataset of shape d and rows rows, in chunks of at most chunk_limit rows,
+ * deflated at level when it holds DEFLATE_MIN_BYTES or more (level 0: never). */
+static void layout_fill(const struct ds_shape *d, hsize_t rows, hsize_t chunk_limit, int level, lfio__h5_layout *l)
+{
+    memset(l, 0, sizeof *l);
+    snprintf(l->name, sizeof l->name, "%s", d->name);
+    l->rank = d->width ? 2 : 1;
+    l->dims[0] = rows;
+    l->chunk[0] = chunk_rows(rows, chunk_limit);
+    if (d->width) {
+        l->dims[1] = (hsize_t)d->width;
+        l->chunk[1] = (hsize_t)d->width;
+    }
+    l->cls = d->cls;
+    l->size = d->size;
+    l->units = d->units;
+    l->axes = d->axes;
+    l->deflate = level > 0 && rows * (hsize_t)(d->width ? d->width : 1) * d->size >= DEFLATE_MIN_BYTES ? level : 0;
+}
+
 /* Fills *l with the layout of dataset which of a patch with nverts vertices and ncells cells. */
 static void patch_layout(enum map_ds which, uint32_t nverts, uint32_t ncells, lfio__h5_layout *l)
 {
     const struct map_dataset *m = &map_datasets[which];
-    const hsize_t rows = m->per_vertex ? nverts : ncells;
-    memset(l, 0, sizeof *l);
-    snprintf(l->name, sizeof l->name, "%s", m->name);
-    l->rank = m->width ? 2 : 1;
-    l->dims[0] = rows;
-    l->chunk[0] = chunk_rows(rows, m->per_vertex ? VERTEX_CHUNK : CELL_CHUNK);
-    if (m->width) {
-        l->dims[1] = (hsize_t)m->width;
-        l->chunk[1] = (hsize_t)m->width;
-    }
-    l->cls = m->cls;
-    l->size = m->size;
-    l->units = m->units;
-    l->axes = m->axes;
-    l->deflate = m->deflate && rows * (hsize_t)(m->width ? m->width : 1) * m->size >= DEFLATE_MIN_BYTES
-                     ? MAP_DEFLATE_LEVEL
-                     : 0;
+    const struct ds_shape d = {m->name, m->width, m->cls, m->size, m->units, m->axes};
+    layout_fill(&d, m->per_vertex ? nverts : ncells, m->per_vertex ? VERTEX_CHUNK : CELL_CHUNK,
+                m->deflate ? MAP_DEFLATE_LEVEL : 0, l);
 }
 
 /* @return the native memory type of dataset which. */
@@ -589,20 +605,8 @@ static size_t v2_row_bytes(enum v2_ds t)
 static void v2_layout(enum v2_ds t, uint64_t rows, int level, lfio__h5_layout *l)
 {
     const struct v2_dataset *m = &v2_datasets[t];
-    memset(l, 0, sizeof *l);
-    snprintf(l->name, sizeof l->name, "%s", m->name);
-    l->rank = m->width ? 2 : 1;
-    l->dims[0] = rows;
-    l->chunk[0] = chunk_rows(rows, V2_CHUNK);
-    if (m->width) {
-        l->dims[1] = (hsize_t)m->width;
-        l->chunk[1] = (hsize_t)m->width;
-    }
-    l->cls = m->cls;
-    l->size = m->size;
-    l->units = m->units;
-    l->axes = m->axes;
-    l->deflate = level > 0 && rows * v2_row_bytes(t) >= DEFLATE_MIN_BYTES ? level : 0;
+    const struct ds_shape d = {m->name, m->width, m->cls, m->size, m->units, m->axes};
+    layout_fill(&d, rows, V2_CHUNK, level, l);
 }
 
 /* @return the native memory type of format-2 dataset t. */
