@@ -317,9 +317,10 @@ static inline ts_errors ts_errors_vs_reference(const rl_solution *sol, size_t k,
 
 /* Writes a one-slab light field file: a len x len slab at the origin facing
  * +z, nu x nu positions, partition level n, radiance rgb laid out
- * [dir][j][i][3]. @return 1, or 0 (a failed check). */
-static inline int ts_write_slab(const char *path, const char *name, double len, uint32_t nu, uint32_t n,
-                                const float *rgb)
+ * [dir][j][i][3], and coverage cov in the same layout (NULL: none).
+ * @return 1, or 0 (a failed check). */
+static inline int ts_write_slab_covered(const char *path, const char *name, double len, uint32_t nu, uint32_t n,
+                                        const float *rgb, const uint8_t *cov)
 {
     lfio_slab_desc d;
     lfio_slab *slab = NULL;
@@ -337,10 +338,18 @@ static inline int ts_write_slab(const char *path, const char *name, double len, 
     ok = ok && lfio_lightfield_new(&lf) == LFIO_OK && lfio_lightfield_take_slab(lf, slab) == LFIO_OK;
     if (!ok)
         lfio_slab_destroy(slab); /* not taken */
+    ok = ok && (cov == NULL || lfio_lightfield_set_coverage(lf, 0, cov) == LFIO_OK);
     ok = ok && lfio_lightfield_write(lf, path) == LFIO_OK;
     CHECK(ok, "write %s: %s", path, lfio_errmsg());
     lfio_lightfield_destroy(lf);
     return ok;
+}
+
+/* ts_write_slab_covered() without coverage. */
+static inline int ts_write_slab(const char *path, const char *name, double len, uint32_t nu, uint32_t n,
+                                const float *rgb)
+{
+    return ts_write_slab_covered(path, name, len, nu, n, rgb, NULL);
 }
 
 #endif

@@ -90,29 +90,14 @@ static void check_rooms(const char *dir)
  * every direction, with coverage cov (NULL: none). */
 static void write_slab(const char *path, uint32_t n, const uint8_t *cov)
 {
-    lfio_slab_desc d;
-    lfio_slab *slab = NULL;
-    lfio_slab_desc_init(&d);
-    strcpy(d.name, "light");
-    d.origin[0] = d.origin[1] = -0.5;
-    d.nu = d.nv = 4;
-    d.n = n;
-    CHECK(lfio_slab_new(&d, &slab) == LFIO_OK, "new slab: %s", lfio_errmsg());
-    uint64_t nd = lfio_slab_dir_count(slab);
-    float *rgb = malloc(nd * 3 * sizeof *rgb);
-    for (uint64_t k = 0; k < 3 * nd; k++)
+    uint64_t values = 4ull * n * n * 4 * 4 * 3; /* [dir][j][i][rgb] */
+    float *rgb = malloc(values * sizeof *rgb);
+    CHECK(rgb != NULL, "out of memory");
+    for (uint64_t k = 0; rgb && k < values; k++)
         rgb[k] = 1.0f;
-    for (uint32_t j = 0; j < 4; j++)
-        for (uint32_t i = 0; i < 4; i++)
-            lfio_slab_write_position(slab, i, j, rgb);
+    if (rgb)
+        ts_write_slab_covered(path, "light", 1.0, 4, n, rgb, cov);
     free(rgb);
-    lfio_lightfield *lf = NULL;
-    lfio_lightfield_new(&lf);
-    lfio_lightfield_take_slab(lf, slab);
-    if (cov)
-        CHECK(lfio_lightfield_set_coverage(lf, 0, cov) == LFIO_OK, "coverage: %s", lfio_errmsg());
-    CHECK(lfio_lightfield_write(lf, path) == LFIO_OK, "write %s: %s", path, lfio_errmsg());
-    lfio_lightfield_destroy(lf);
 }
 
 #define FLIPPED "{\"file\": \"diag_lf.h5\", \"transform\": [[1,0,0,0],[0,-1,0,0],[0,0,-1,1],[0,0,0,1]]}"
