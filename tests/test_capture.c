@@ -888,14 +888,21 @@ static void render_loop_probes(const rl_solution *sol, const lfio_slab_desc *d)
                                       " \"pattern\": \"loop_{i}_{j}.exr\"}");
 }
 
-static void test_closed_loop(void)
+/* Loads data/capture/scene.json and relights it with its own settings; *scene and *sol stay NULL where that
+ * fails (a failed check). */
+static void relight_capture_scene(rl_scene **scene, rl_solution **sol)
 {
     char scene_path[PATH_BYTES];
     snprintf(scene_path, sizeof scene_path, "%s/capture/scene.json", data_dir);
+    CHECK(rl_scene_load(scene_path, scene) == RL_OK, "%s", rl_errmsg());
+    CHECK(*scene == NULL || rl_relight(*scene, NULL, sol) == RL_OK, "%s", rl_errmsg());
+}
+
+static void test_closed_loop(void)
+{
     rl_scene *scene = NULL;
     rl_solution *sol = NULL;
-    CHECK(rl_scene_load(scene_path, &scene) == RL_OK, "%s", rl_errmsg());
-    CHECK(scene == NULL || rl_relight(scene, NULL, &sol) == RL_OK, "%s", rl_errmsg());
+    relight_capture_scene(&scene, &sol);
     if (sol == NULL) {
         rl_scene_destroy(scene);
         return;
@@ -1426,12 +1433,9 @@ static double power_error(const double *a, const double *b, const double *areas,
  */
 static void test_lamp_planes(void)
 {
-    char scene_path[PATH_BYTES];
-    snprintf(scene_path, sizeof scene_path, "%s/capture/scene.json", data_dir);
     rl_scene *scene = NULL;
     rl_solution *sol = NULL;
-    CHECK(rl_scene_load(scene_path, &scene) == RL_OK, "%s", rl_errmsg());
-    CHECK(scene == NULL || rl_relight(scene, NULL, &sol) == RL_OK, "%s", rl_errmsg());
+    relight_capture_scene(&scene, &sol);
     if (sol != NULL)
         render_lamp_box(sol);
     rl_solution_destroy(sol);
