@@ -25,26 +25,11 @@
 
 #include "ilf/file_kind.h"
 #include "ilf/json.h"
+#include "ilf/message.h"
 
 #if CJSON_NESTING_LIMIT < ILF_JSON_MAX_DEPTH
 #error "cJSON's nesting limit is below ILF_JSON_MAX_DEPTH: its refusals would go unexplained"
 #endif
-
-/* snprintf into out (cap bytes) that marks a cut result with a trailing "...". */
-static void format_cut(char *out, size_t cap, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
-static void format_cut(char *out, size_t cap, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    int len = vsnprintf(out, cap, fmt, ap);
-    va_end(ap);
-    if (len >= 0 && (size_t)len >= cap && cap >= 4)
-        memcpy(out + cap - 4, "...", 4);
-}
 
 ilf_json_status ilf_json_fail(ilf_json_ctx *ctx, const char *elem, const char *fmt, ...)
 {
@@ -53,7 +38,7 @@ ilf_json_status ilf_json_fail(ilf_json_ctx *ctx, const char *elem, const char *f
     va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
-    format_cut(ctx->message, sizeof ctx->message, "%s: %s%s%s", ctx->file, elem, elem[0] != '\0' ? ": " : "", text);
+    ilf_format_cut(ctx->message, sizeof ctx->message, "%s: %s%s%s", ctx->file, elem, elem[0] != '\0' ? ": " : "", text);
     return ILF_JSON_ERR_INPUT;
 }
 
@@ -70,18 +55,18 @@ static ilf_json_status file_fail(ilf_json_ctx *ctx, ilf_json_status st, const ch
     va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
-    format_cut(ctx->message, sizeof ctx->message, "%s: %s", ctx->file, text);
+    ilf_format_cut(ctx->message, sizeof ctx->message, "%s: %s", ctx->file, text);
     return st;
 }
 
 void ilf_json_member_name(char out[ILF_JSON_ELEM_MAX], const char *elem, const char *key)
 {
-    format_cut(out, ILF_JSON_ELEM_MAX, "%s%s%s", elem, elem[0] != '\0' ? "." : "", key);
+    ilf_format_cut(out, ILF_JSON_ELEM_MAX, "%s%s%s", elem, elem[0] != '\0' ? "." : "", key);
 }
 
 void ilf_json_item_name(char out[ILF_JSON_ELEM_MAX], const char *elem, size_t k)
 {
-    format_cut(out, ILF_JSON_ELEM_MAX, "%s[%zu]", elem, k);
+    ilf_format_cut(out, ILF_JSON_ELEM_MAX, "%s[%zu]", elem, k);
 }
 
 /* ------------------------------------------------------------ files */
@@ -147,7 +132,7 @@ static ilf_json_status syntax_error(ilf_json_ctx *ctx, const char *text, size_t 
     while (rest < len && strchr(" \t\r\n", text[rest]))
         rest++;
     if (rest >= len) {
-        format_cut(ctx->message, sizeof ctx->message, "%s:%lu:%lu: not valid JSON: %s", ctx->file, line, col,
+        ilf_format_cut(ctx->message, sizeof ctx->message, "%s:%lu:%lu: not valid JSON: %s", ctx->file, line, col,
                    what ? what : "unexpected end of file");
         return ILF_JSON_ERR_INPUT;
     }
@@ -161,7 +146,7 @@ static ilf_json_status syntax_error(ilf_json_ctx *ctx, const char *text, size_t 
     for (size_t i = from; i < to; i++)
         near[k++] = text[i] >= 32 && text[i] < 127 ? text[i] : '?';
     near[k] = '\0';
-    format_cut(ctx->message, sizeof ctx->message, "%s:%lu:%lu: not valid JSON: %s near '%s'", ctx->file, line, col,
+    ilf_format_cut(ctx->message, sizeof ctx->message, "%s:%lu:%lu: not valid JSON: %s near '%s'", ctx->file, line, col,
                what ? what : "unexpected text", near);
     return ILF_JSON_ERR_INPUT;
 }

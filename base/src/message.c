@@ -1,9 +1,10 @@
 /*
- * message.c - ilf/message.h: formatting a library's error message.
+ * message.c - ilf/message.h: formatting a library's error message, and labels cut with "...".
  *
  * Invariants: the buffer always ends up NUL-terminated and at most
  * ILF_MESSAGE_BYTES long, holding whole UTF-8 characters only; nothing is
- * allocated (a failure path must not need memory).
+ * allocated (a failure path must not need memory). ilf_format_cut() always
+ * leaves out NUL-terminated (vsnprintf's rule).
  */
 #include "ilf/message.h"
 
@@ -38,4 +39,14 @@ size_t ilf_message_format(char *buf, const char *fmt, ...)
     size_t len = ilf_message_vformat(buf, fmt, ap);
     va_end(ap);
     return len;
+}
+
+void ilf_format_cut(char *out, size_t cap, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int len = vsnprintf(out, cap, fmt, ap);
+    va_end(ap);
+    if (len >= 0 && (size_t)len >= cap && cap >= 4)
+        memcpy(out + cap - 4, "...", 4);
 }

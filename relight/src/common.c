@@ -28,16 +28,6 @@ rl_status rl__fail(rl_status status, const char *fmt, ...)
     return status;
 }
 
-void rl__format(char *out, size_t cap, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    int len = vsnprintf(out, cap, fmt, ap);
-    va_end(ap);
-    if (len >= 0 && (size_t)len >= cap && cap >= 4)
-        memcpy(out + cap - 4, "...", 4);
-}
-
 void *rl__grow(void *arr, size_t *cap, size_t need, size_t size)
 {
     if (need <= *cap && arr)

@@ -1,26 +1,20 @@
 /*
  * common.h - the small helpers every relight file may use: the per-thread
- * error message (rl__fail(), read by rl_errmsg()), bounded formatting
- * (rl__format()) and array growth (rl__grow()), all in common.c.
+ * error message (rl__fail(), read by rl_errmsg()) and array growth
+ * (rl__grow()), both in common.c; labels are cut by base's ilf_format_cut().
  */
 #ifndef RELIGHT_COMMON_H
 #define RELIGHT_COMMON_H
 
 #include <stddef.h>
 
+#include "ilf/message.h"
 #include "relight/relight.h"
 
 /* Records a formatted message for rl_errmsg(). @return status. */
 rl_status rl__fail(rl_status status, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))
-#endif
-    ;
-
-/* snprintf into out (cap bytes) that marks a truncated result with a trailing "...". */
-void rl__format(char *out, size_t cap, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
 #endif
     ;
 

@@ -354,7 +354,7 @@ static rl_status append_vertices(rl_build *b, const v3 *pts, size_t n, v3 normal
     for (size_t i = 1; i + 1 < n; i++)
         area += 0.5 * v3_dot(v3_cross(v3_sub(pts[i], pts[0]), v3_sub(pts[i + 1], pts[0])), normal);
     poly->area = area;
-    rl__format(poly->label, sizeof poly->label, "%s", label);
+    ilf_format_cut(poly->label, sizeof poly->label, "%s", label);
     for (size_t i = 0; i < n; i++)
         v3_store(pts[i], s->vertices[s->nvertices++]);
     return RL_OK;
@@ -379,7 +379,7 @@ static rl_status append_polygon(rl_build *b, const poly_check *c, uint32_t mater
         for (size_t i = first; i <= last; i++)
             pts[m++] = kept(c, i);
         char name[sizeof ((rl_polygon *)0)->label];
-        rl__format(name, sizeof name, "%s piece %zu", label, piece);
+        ilf_format_cut(name, sizeof name, "%s piece %zu", label, piece);
         st = append_vertices(b, pts, m, c->normal, material, name);
         first = last;
     }
@@ -426,7 +426,7 @@ static rl_status append_part(rl_build *b, void *ctx, const poly_check *part, con
     (void)at;
     const append_ctx *a = ctx;
     char name[sizeof ((rl_polygon *)0)->label];
-    rl__format(name, sizeof name, "%s part %zu", a->label, t);
+    ilf_format_cut(name, sizeof name, "%s part %zu", a->label, t);
     return append_polygon(b, part, a->material, name);
 }
 
@@ -489,8 +489,8 @@ static rl_status file_material(rl_build *b, const ilf_mesh *mesh, uint32_t k, co
     if (fm->has_emissive)
         memcpy(emission, fm->emissive, sizeof emission);
     char full[256], where[320];
-    rl__format(full, sizeof full, "%s:%s", shown, fm->name);
-    rl__format(where, sizeof where, "%s (%s) material '%s'", elem, shown, fm->name);
+    ilf_format_cut(full, sizeof full, "%s:%s", shown, fm->name);
+    ilf_format_cut(where, sizeof where, "%s (%s) material '%s'", elem, shown, fm->name);
     return rl__build_material(b, where, full, albedo, emission, out);
 }
 
@@ -794,7 +794,7 @@ static rl_status emit_face(rl_build *b, size_t n, uint32_t material, const char 
     if (st != RL_OK || (!opt->flip && !opt->two_sided))
         return st;
     char back[sizeof ((rl_polygon *)0)->label];
-    rl__format(back, sizeof back, "%s%s", label, opt->two_sided ? " back" : "");
+    ilf_format_cut(back, sizeof back, "%s%s", label, opt->two_sided ? " back" : "");
     reverse_face(b, n);
     return rl__build_polygon(b, (const double (*)[3])b->face, n, material, back, RL_POLY_SPLIT);
 }
@@ -807,10 +807,10 @@ static void face_label(char *out, size_t cap, const char *elem, const char *show
     size_t len = strlen(shown); /* a long name keeps its end, where the file's own name is */
     char more[32] = "";
     if (joined > 0)
-        rl__format(more, sizeof more, " (+%u merged)", joined);
+        ilf_format_cut(more, sizeof more, " (+%u merged)", joined);
     else if (part != NO_PART)
-        rl__format(more, sizeof more, " part %u", part);
-    rl__format(out, cap, "%s (%s%s) face %zu%s", elem, len > 40 ? "..." : "", len > 40 ? shown + len - 37 : shown,
+        ilf_format_cut(more, sizeof more, " part %u", part);
+    ilf_format_cut(out, cap, "%s (%s%s) face %zu%s", elem, len > 40 ? "..." : "", len > 40 ? shown + len - 37 : shown,
                face, more);
 }
 

@@ -465,7 +465,7 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
         lf->origin[i] += lf->translate[i];
     transform_vector(lf, d->u, lf->u);
     transform_vector(lf, d->v, lf->v);
-    rl__format(lf->label, sizeof lf->label, "%s", elem);
+    ilf_format_cut(lf->label, sizeof lf->label, "%s", elem);
     return RL_OK;
 }
 

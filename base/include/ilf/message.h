@@ -7,6 +7,8 @@
  * long for the buffer is cut at the last whole UTF-8 character that fits,
  * so a cut message is still text. An argument may be the buffer itself
  * ("%s: %s", context, current message): formatting goes through a copy.
+ * Labels and element paths, which may be cut anywhere, are formatted with
+ * ilf_format_cut() instead.
  */
 #ifndef ILF_MESSAGE_H
 #define ILF_MESSAGE_H
@@ -23,6 +25,14 @@ size_t ilf_message_vformat(char *buf, const char *fmt, va_list ap);
 size_t ilf_message_format(char *buf, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* snprintf into out (cap bytes) for a label or an element path: a result too long for out ends in "..."
+ * (when cap >= 4), so a reader sees it was cut. */
+void ilf_format_cut(char *out, size_t cap, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
 #endif
     ;
 
