@@ -1,7 +1,12 @@
 #!/bin/bash
 # install_test.sh BUILD_DIR CONSUMER_SRC WORK_DIR
 # Installs the build into a fresh prefix, then builds and runs a consumer of
-# liblfio twice: through find_package(lfio) and through pkg-config. The
+# liblfio twice: through find_package(lfio) and through pkg-config; and, against
+# the prefix only, a program that computes irradiance at points of a scene
+# (librelight) and one that captures probe images into a light field (libcapture),
+# each through find_package(ilfkit COMPONENTS ...) and through pkg-config. The
+# installed headers stand alone (every include installed or standard C), and the
+# installed libraries export their public prefix only. The
 # installed ilf does not link OpenImageIO, writes a PNG and an EXR without it,
 # and finds the installed image module (LIBDIR/ilfkit/libilfkit_oiio.so) to
 # read the EXR back as a probe. Nothing runs with LD_LIBRARY_PATH: the CMake package, lfio.pc's
@@ -20,6 +25,38 @@ check test -x "$prefix/bin/ilf"
 check test -f "$prefix/include/lfio/lightfield.h"
 check test -f "$libdir/pkgconfig/lfio.pc"
 check test -f "$libdir/cmake/lfio/lfioConfig.cmake"
+for f in relight/engine.h relight/scene.h relight/reference.h capture/capture.h ilf/limits.h; do
+    check test -f "$prefix/include/$f"
+done
+check test -f "$libdir/pkgconfig/relight.pc" -a -f "$libdir/pkgconfig/capture.pc"
+check test -f "$libdir/cmake/ilfkit/ilfkitConfig.cmake"
+# Installed headers: each compiles alone, pedantic, from the prefix's include folder, and includes
+# only standard C headers or headers installed beside it (no Embree, OpenImageIO, assimp, HDF5).
+standard_c=" math.h stdarg.h stddef.h stdint.h stdio.h stdlib.h string.h "
+includes_installed() {
+    local bad=0
+    for inc in $(grep -rhoE '^#[[:space:]]*include[[:space:]]*[<"][^>"]+' "$prefix/include" | sed -E 's/.*[<"]//' | sort -u); do
+        [[ "$standard_c" == *" $inc "* ]] || test -f "$prefix/include/$inc" ||
+            { echo "installed headers include $inc, which is neither standard C nor installed"; bad=1; }
+    done
+    return $bad
+}
+check includes_installed
+header_alone() { printf '#include <%s>\nint header_alone;\n' "$1" |
+                 cc -std=c99 -pedantic -Wall -Wextra -Werror -fsyntax-only -I"$prefix/include" -x c -; }
+for h in $(cd "$prefix/include" && ls relight/*.h capture/*.h lfio/*.h ilf/*.h); do
+    check header_alone "$h"
+done
+# Exports: defined dynamic symbols are the library's public prefix (and its version node) only.
+exports_only() {  # LIBRARY PREFIX
+    local other
+    other=$(nm -D --defined-only "$1" | awk '{ print $NF }' | grep -vE "^$2[a-z]|^[A-Z]+_0\$" || true)
+    test -z "$other" || { echo "$1 exports more than $2*: $(echo $other | head -c 300)"; return 1; }
+}
+check exports_only "$libdir/liblfio.so" lfio_
+check exports_only "$libdir/librelight.so" rl_
+check exports_only "$libdir/libcapture.so" cap_
+check test "$(ldd "$libdir/libcapture.so" | grep -c OpenImageIO)" -eq 0
 # find_package
 cmake -S "$src" -B "$work/cm" -DCMAKE_PREFIX_PATH="$prefix" > "$work/cm.log" 2>&1 || cat "$work/cm.log"
 check cmake --build "$work/cm"
@@ -44,6 +81,15 @@ printf '{"plane": {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0]}, "grid":
   "pattern": "c.exr"}\n' > "$work/probe.json"
 check ilf capture "$work/probe.json" -o "$work/probe.h5" --quiet
 check test -s "$work/probe.h5"
+# relight and capture from a program: find_package(ilfkit COMPONENTS ...) (built above) and pkg-config
+check "$work/cm/consumer_irradiance_cmake" "$work/lamp_cm.json"
+check env -u ILFKIT_IMAGE_MODULE "$work/cm/consumer_capture_cmake" "$work/probe.json" "$work/capture_cm.h5"
+pc() { PKG_CONFIG_PATH="$libdir/pkgconfig" pkg-config "$@"; }
+check cc -std=c99 -o "$work/irradiance_pc" "$src/consumer_irradiance.c" $(pc --cflags --libs relight) -lm
+check "$work/irradiance_pc" "$work/lamp_pc.json"
+check cc -std=c99 -o "$work/capture_pc" "$src/consumer_capture.c" $(pc --cflags --libs capture) -lm
+check env -u ILFKIT_IMAGE_MODULE "$work/capture_pc" "$work/probe.json" "$work/capture_pc.h5"
+check ilf verify "$work/capture_pc.h5"
 # manual pages: one per command of --help, each naming every option its --help lists, and clean roff
 mandir=$prefix/share/man/man1
 check test -f "$mandir/ilf.1"
