@@ -20,6 +20,10 @@ prefix=$work/prefix
 cmake --install "$build" --prefix "$prefix" > "$work/install.log"
 pass=0 fail=0
 check() { if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAILED: $*"; fi; }
+expect_fail_with() {  # TEXT COMMAND...: COMMAND fails and its output names TEXT
+    local text=$1 out; shift
+    ! out=$("$@" 2>&1) && grep -qF -- "$text" <<<"$out"
+}
 libdir=$(find "$prefix" -name 'liblfio.so' -printf '%h\n' | head -1)
 check test -x "$prefix/bin/ilf"
 check test -f "$prefix/include/lfio/lightfield.h"
@@ -60,6 +64,11 @@ check test "$(ldd "$libdir/libcapture.so" | grep -c OpenImageIO)" -eq 0
 # find_package
 cmake -S "$src" -B "$work/cm" -DCMAKE_PREFIX_PATH="$prefix" > "$work/cm.log" 2>&1 || cat "$work/cm.log"
 check cmake --build "$work/cm"
+# the ilfkit package refuses a component it does not have
+mkdir -p "$work/nosuch"
+printf 'cmake_minimum_required(VERSION 3.18)\nproject(nosuch C)\nfind_package(ilfkit REQUIRED COMPONENTS relight nosuch)\n' \
+    > "$work/nosuch/CMakeLists.txt"
+check expect_fail_with "nosuch" cmake -S "$work/nosuch" -B "$work/nosuch/build" -DCMAKE_PREFIX_PATH="$prefix"
 # Linking must carry the way to the library: every program below runs without LD_LIBRARY_PATH
 # (find_package gives the library's full path, pkg-config's lfio.pc an rpath).
 unset LD_LIBRARY_PATH
