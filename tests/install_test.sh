@@ -9,7 +9,7 @@
 # installed libraries export their public prefix only. The
 # installed ilf does not link OpenImageIO, writes a PNG and an EXR without it,
 # and finds the installed image module (LIBDIR/ilfkit/libilfkit_oiio.so) to
-# read the EXR back as a probe. Nothing runs with LD_LIBRARY_PATH: the CMake package, lfio.pc's
+# read the EXR back as a probe. Nothing runs with LD_LIBRARY_PATH: the CMake packages, the .pc files'
 # rpath and ilf's own rpath must carry the way to the libraries. The manual pages (tools/man_pages.py)
 # are installed, one per command, each with every option of its --help, and render without warnings.
 set -eu
@@ -70,12 +70,12 @@ printf 'cmake_minimum_required(VERSION 3.18)\nproject(nosuch C)\nfind_package(il
     > "$work/nosuch/CMakeLists.txt"
 check expect_fail_with "nosuch" cmake -S "$work/nosuch" -B "$work/nosuch/build" -DCMAKE_PREFIX_PATH="$prefix"
 # Linking must carry the way to the library: every program below runs without LD_LIBRARY_PATH
-# (find_package gives the library's full path, pkg-config's lfio.pc an rpath).
+# (find_package gives the library's full path, the .pc files an rpath).
 unset LD_LIBRARY_PATH
 check "$work/cm/consumer_cmake" "$work/a.h5"
 # pkg-config
-flags=$(PKG_CONFIG_PATH="$libdir/pkgconfig" pkg-config --cflags --libs lfio)
-check cc -std=c99 -o "$work/consumer_pc" "$src/consumer.c" $flags
+pc() { PKG_CONFIG_PATH="$libdir/pkgconfig" pkg-config "$@"; }
+check cc -std=c99 -o "$work/consumer_pc" "$src/consumer.c" $(pc --cflags --libs lfio)
 check "$work/consumer_pc" "$work/b.h5"
 check "$prefix/bin/ilf" --version
 # the image module: installed, loaded by the installed ilf on its first image, never linked
@@ -93,7 +93,6 @@ check test -s "$work/probe.h5"
 # relight and capture from a program: find_package(ilfkit COMPONENTS ...) (built above) and pkg-config
 check "$work/cm/consumer_irradiance_cmake" "$work/lamp_cm.json"
 check env -u ILFKIT_IMAGE_MODULE "$work/cm/consumer_capture_cmake" "$work/probe.json" "$work/capture_cm.h5"
-pc() { PKG_CONFIG_PATH="$libdir/pkgconfig" pkg-config "$@"; }
 check cc -std=c99 -o "$work/irradiance_pc" "$src/consumer_irradiance.c" $(pc --cflags --libs relight) -lm
 check "$work/irradiance_pc" "$work/lamp_pc.json"
 check cc -std=c99 -o "$work/capture_pc" "$src/consumer_capture.c" $(pc --cflags --libs capture) -lm
