@@ -29,8 +29,8 @@ README.md, then docs/*.md in name order. Their fenced blocks follow the conventi
 
 Then docs/cli.md is held against the built `ilf --help` (check_cli_reference: commands, options,
 listed values, the help's column). Commands find `ilf` in BUILD_DIR/tools first on PATH; the build is also installed into WORK_DIR/prefix
-(cmake --install), whose bin/ comes next and whose lfio.pc is on PKG_CONFIG_PATH, so C examples build
-against an install, as a user's would. Every failure names the document, the line, the command and
+(cmake --install), whose bin/ comes next, whose pkg-config files are on PKG_CONFIG_PATH and which is
+CMAKE_PREFIX_PATH, so C examples build against an install, as a user's would. Every failure names the document, the line, the command and
 what it printed; all examples run even after one fails.
 """
 

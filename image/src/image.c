@@ -13,7 +13,10 @@
  *   2. <folder of /proc/self/exe>/../LIBDIR/ilfkit/<file>: the build tree
  *      (programs in BUILD/tools and BUILD/tests, the module in BUILD/LIBDIR/ilfkit)
  *      and a relocated install (PREFIX/bin, PREFIX/LIBDIR/ilfkit);
- *   3. the configured install location, ILFKIT_IMAGE_MODULE_INSTALLED.
+ *   3. when this code runs inside a shared library (the installed libcapture.so,
+ *      PREFIX/LIBDIR), <folder of that library>/../LIBDIR/ilfkit/<file>: a user's
+ *      program, wherever it lives, finds the module of the install it links;
+ *   4. the configured install location, ILFKIT_IMAGE_MODULE_INSTALLED.
  * Both paths come from CMake (ILFKIT_IMAGE_MODULE_RELATIVE and _INSTALLED).
  *
  * Invariants:
@@ -33,10 +36,13 @@
  *   - Every failure message is one line naming the image file; a load
  *     failure also names each module path tried and why it failed.
  */
+/* dladdr1() (GNU) tells which loaded file holds this code: the way from a shared library to the module. */
+#define _GNU_SOURCE
 #include "image/image.h"
 
 #include <ctype.h>
 #include <dlfcn.h>
+#include <link.h>
 #include <errno.h>
 #include <pthread.h>
 #include <stdarg.h>
@@ -159,7 +165,23 @@ static const img__module *open_module(const char *path)
     return table;
 }
 
-/* Writes <folder of this program>/../ILFKIT_IMAGE_MODULE_RELATIVE to out. @return 1, or 0 with the reason noted. */
+/* Writes <folder of file>/../ILFKIT_IMAGE_MODULE_RELATIVE to out. @return 1, or 0 with the reason noted. */
+static int beside(const char *file, char *out, size_t outlen)
+{
+    const char *slash = strrchr(file, '/');
+    if (slash == NULL) {
+        note_failure("no folder in %s", file);
+        return 0;
+    }
+    int len = snprintf(out, outlen, "%.*s/../%s", (int)(slash - file), file, ILFKIT_IMAGE_MODULE_RELATIVE);
+    if (len < 0 || (size_t)len >= outlen) {
+        note_failure("%s: path too long", file);
+        return 0;
+    }
+    return 1;
+}
+
+/* Writes the module's path beside this program to out. @return 1, or 0 with the reason noted. */
 static int beside_program(char *out, size_t outlen)
 {
     char exe[MODULE_PATH_BYTES];
@@ -169,20 +191,20 @@ static int beside_program(char *out, size_t outlen)
         return 0;
     }
     exe[n] = '\0';
-    char *slash = strrchr(exe, '/');
-    if (slash == NULL) {
-        note_failure("/proc/self/exe: no folder in %s", exe);
-        return 0;
-    }
-    *slash = '\0';
-    int len = snprintf(out, outlen, "%s/../%s", exe, ILFKIT_IMAGE_MODULE_RELATIVE);
-    if (len < 0 || (size_t)len >= outlen) {
-        note_failure("%s: path too long", exe);
-        return 0;
-    }
-    return 1;
+    return beside(exe, out, outlen);
 }
 
+/* Writes the module's path beside the shared library holding this code to out.
+ * @return 1, or 0 when this code is part of the program itself (already tried) or the library's path is unknown. */
+static int beside_library(char *out, size_t outlen)
+{
+    Dl_info info;
+    struct link_map *map = NULL;
+    if (dladdr1(&module_once, &info, (void **)&map, RTLD_DL_LINKMAP) == 0 || map == NULL || map->l_name == NULL ||
+        map->l_name[0] == '\0')
+        return 0; /* the main program's link map has no name */
+    return beside(map->l_name, out, outlen);
+}
 /* pthread_once routine: sets module from the first place that gives a valid table. */
 static void load_module(void)
 {
@@ -193,6 +215,8 @@ static void load_module(void)
     }
     char path[MODULE_PATH_BYTES];
     if (beside_program(path, sizeof path))
+        module = open_module(path);
+    if (module == NULL && beside_library(path, sizeof path))
         module = open_module(path);
     if (module == NULL)
         module = open_module(ILFKIT_IMAGE_MODULE_INSTALLED);

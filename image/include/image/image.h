@@ -14,7 +14,9 @@
  * is taken from $ILFKIT_IMAGE_MODULE (a full path) if that is set and not
  * empty, and then from there only; otherwise from
  * <folder of the program>/../LIBDIR/ilfkit/ (the build tree and a relocated
- * install), then from the configured install's LIBDIR/ilfkit/. A module of
+ * install), then, when this library is part of a shared library (the installed
+ * libcapture), from <folder of that library>/../LIBDIR/ilfkit/, then from the
+ * configured install's LIBDIR/ilfkit/. A module of
  * another build (a different entry table version) is refused. If no module
  * loads, every read fails with IMG_ERR_INPUT and a message naming the image,
  * each module path tried and why it failed; the process does not try again.
