@@ -17,6 +17,7 @@ pass=0 fail=0
 check() { if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAILED: $*"; fi; }
 libdir=$(find "$prefix" -name 'liblfio.so' -printf '%h\n' | head -1)
 check test -x "$prefix/bin/ilf"
+check test -x "$prefix/bin/ilf-bench"   # `ilf bench` runs it from ilf's own folder
 check test -f "$prefix/include/lfio/lightfield.h"
 check test -f "$libdir/pkgconfig/lfio.pc"
 check test -f "$libdir/cmake/lfio/lfioConfig.cmake"
