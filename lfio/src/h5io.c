@@ -42,6 +42,7 @@
 #include "chunks.h"
 #include "h5util.h"
 #include "ilf/limits.h"
+#include "ilf/options.h"
 #include "ilf/pool.h"
 #include "internal.h"
 
@@ -771,12 +772,9 @@ void lfio_read_options_init(lfio_read_options *opt)
 static lfio_status take_read_options(const char *path, const lfio_read_options *opt, lfio_read_options *o)
 {
     lfio_read_options_init(o);
-    if (opt != NULL) {
-        if (opt->size < offsetof(lfio_read_options, threads) + sizeof opt->threads || opt->size > sizeof *o)
-            return lfio__fail(LFIO_ERR_ARG, "%s: lfio_read_options.size %zu is not one this library knows", path,
-                              opt->size);
-        memcpy(o, opt, opt->size);
-    }
+    if (opt != NULL && !ilf_options_take(o, sizeof *o, opt, offsetof(lfio_read_options, threads) + sizeof opt->threads))
+        return lfio__fail(LFIO_ERR_ARG, "%s: lfio_read_options.size %zu is not one this library knows", path,
+                          opt->size);
     if (o->threads > ILF_MAX_THREADS)
         return lfio__fail(LFIO_ERR_ARG, "%s: read options out of range (threads %u, at most %u)", path, o->threads,
                           ILF_MAX_THREADS);

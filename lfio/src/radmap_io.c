@@ -41,6 +41,7 @@
 
 #include "chunks.h"
 #include "h5util.h"
+#include "ilf/options.h"
 #include "ilf/pool.h"
 #include "ilf/vec.h"
 #include "internal.h"
@@ -912,12 +913,10 @@ static lfio_status take_options(const char *path, const lfio_radmap_write_option
 {
     lfio_radmap_write_options o;
     lfio_radmap_write_options_init(&o);
-    if (opt != NULL) {
-        if (opt->size < offsetof(lfio_radmap_write_options, threads) + sizeof opt->threads || opt->size > sizeof o)
-            return lfio__fail(LFIO_ERR_ARG, "%s: lfio_radmap_write_options.size %zu is not one this library knows",
-                              path, opt->size);
-        memcpy(&o, opt, opt->size);
-    }
+    if (opt != NULL
+        && !ilf_options_take(&o, sizeof o, opt, offsetof(lfio_radmap_write_options, threads) + sizeof opt->threads))
+        return lfio__fail(LFIO_ERR_ARG, "%s: lfio_radmap_write_options.size %zu is not one this library knows", path,
+                          opt->size);
     if (o.threads > 1024 || o.deflate_level < 0 || o.deflate_level > 9 || o.format_version < 1
         || o.format_version > LFIO_RADMAP_FORMAT_VERSION)
         return lfio__fail(LFIO_ERR_ARG, "%s: write options out of range (threads <= 1024, deflate_level 0 .. 9, "

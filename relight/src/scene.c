@@ -35,6 +35,7 @@
 #include "mesh.h"
 #include "ilf/json.h"
 #include "ilf/limits.h"
+#include "ilf/options.h"
 #include "ilf/vec.h"
 
 /* Longest element path in messages. */
@@ -684,12 +685,9 @@ void rl_scene_load_options_init(rl_scene_load_options *opt)
 static rl_status take_load_options(const char *path, const rl_scene_load_options *opt, rl_scene_load_options *o)
 {
     rl_scene_load_options_init(o);
-    if (opt) {
-        if (opt->size < offsetof(rl_scene_load_options, threads) + sizeof opt->threads || opt->size > sizeof *o)
-            return rl__fail(RL_ERR_ARG, "%s: rl_scene_load_options.size %zu is not one this library knows", path,
-                            opt->size);
-        memcpy(o, opt, opt->size);
-    }
+    if (opt && !ilf_options_take(o, sizeof *o, opt, offsetof(rl_scene_load_options, threads) + sizeof opt->threads))
+        return rl__fail(RL_ERR_ARG, "%s: rl_scene_load_options.size %zu is not one this library knows", path,
+                        opt->size);
     if (o->threads > ILF_MAX_THREADS)
         return rl__fail(RL_ERR_ARG, "%s: load options out of range (threads %u, at most %u)", path, o->threads,
                         ILF_MAX_THREADS);
