@@ -145,6 +145,16 @@ check "--scaling fits both series" grep -q '"time_exponent"' "$TMP/scaling/scali
 code=$?
 check "a sweep without -o is bad usage (got $code)" [ "$code" -eq 2 ]
 
+# `ilf bench` is the program ilf-bench beside ilf: the same help by either name; an ilf without it beside
+# says so and fails (exit 1).
+check "ilf-bench --help is ilf bench --help" cmp -s <("$ILF" bench --help) <("$(dirname "$ILF")/ilf-bench" --help)
+mkdir -p "$TMP/alone"
+cp "$ILF" "$TMP/alone/ilf"
+"$TMP/alone/ilf" bench --help >/dev/null 2>"$TMP/alone.err"
+code=$?
+check "ilf without ilf-bench beside it fails (got $code)" [ "$code" -eq 1 ]
+check "and names the program it looked for" grep -q "ilf bench: cannot run $TMP/alone/ilf-bench: No such file" "$TMP/alone.err"
+
 if [ "$failed" -gt 0 ]; then
     for f in run1.err run2.err rays.out scaling.out; do
         sed "s/^/    $f: /" "$TMP/$f" | head -n 10

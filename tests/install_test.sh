@@ -26,6 +26,7 @@ expect_fail_with() {  # TEXT COMMAND...: COMMAND fails and its output names TEXT
 }
 libdir=$(find "$prefix" -name 'liblfio.so' -printf '%h\n' | head -1)
 check test -x "$prefix/bin/ilf"
+check test -x "$prefix/bin/ilf-bench"   # `ilf bench` runs it from ilf's own folder
 check test -f "$prefix/include/lfio/lightfield.h"
 check test -f "$libdir/pkgconfig/lfio.pc"
 check test -f "$libdir/cmake/lfio/lfioConfig.cmake"

@@ -42,6 +42,7 @@
  *     relit light it costs.
  * Measured errors are printed; the last line is "N passed, M failed".
  */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -545,6 +546,84 @@ static void test_planes_manifest(void)
           "scales inherited and overridden: %g %g %g, element '%s'", pa.scale, pb0.scale, pb1.scale, pb1.element);
     CHECK(cap_manifest_get_position(m, 2, 0, 0, &pa) == CAP_ERR_ARG, "no plane 2");
     cap_manifest_destroy(m);
+}
+
+/* @return 1 if a and b hold the same three doubles, bit for bit in value. */
+static int same3(const double a[3], const double b[3])
+{
+    return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+}
+
+/*
+ * cap_manifest_write(): manifests of one plane and of two, with numbers that need 17 digits (1/3), 15
+ * (0.1), an exponent (1e-7) and patterns that need escaping (a quote, a backslash), read back by
+ * cap_manifest_load() as written (every value equal); bad specs are refused by name; a write into a folder
+ * that does not exist, or under a regular file, fails with CAP_ERR_OUTPUT naming the path and the
+ * system's reason, leaving nothing there.
+ */
+static void test_manifest_write(void)
+{
+    lfio_slab_desc a, b;
+    lfio_slab_desc_init(&a);
+    lfio_slab_desc_init(&b);
+    snprintf(a.name, sizeof a.name, "lamp.a");
+    snprintf(b.name, sizeof b.name, "lamp-b_2");
+    const double ao[3] = {0.1, -1.0 / 3, 1e-7}, au[3] = {1.0 / 3, 0, 0}, av[3] = {0, -0.7, 0};
+    const double bo[3] = {-2.5, 12345.678, 3}, bu[3] = {0, 0.3, 0}, bv[3] = {0, 0, -1.1};
+    memcpy(a.origin, ao, sizeof ao), memcpy(a.u, au, sizeof au), memcpy(a.v, av, sizeof av);
+    memcpy(b.origin, bo, sizeof bo), memcpy(b.u, bu, sizeof bu), memcpy(b.v, bv, sizeof bv);
+    a.nu = 2, a.nv = 1, b.nu = 1, b.nv = 2;
+    const cap_manifest_plane planes[2] = {{&a, "q\"a\\_{i}_{j}.exr"}, {&b, "b_{i}_{j}.exr"}};
+    const char *files[] = {"q\"a\\_0_0.exr", "q\"a\\_1_0.exr", "b_0_0.exr", "b_0_1.exr"};
+    for (size_t k = 0; k < 4; k++)
+        write_text(tmp_path(files[k]), "");
+    for (size_t nplanes = 1; nplanes <= 2; nplanes++) {
+        const cap_manifest_spec spec = {8, nplanes == 1 ? LFIO_UNITS_RELATIVE : LFIO_UNITS_RADIANCE,
+                                        CAP_PROJECTION_MIRROR_BALL, CAP_COLOUR_SRGB, nplanes, planes};
+        const char *path = tmp_path(nplanes == 1 ? "written1.json" : "written2.json");
+        CHECK(cap_manifest_write(path, &spec) == CAP_OK, "write %zu planes: %s", nplanes, cap_error_message());
+        cap_manifest *m = NULL;
+        CHECK(cap_manifest_load(path, &m) == CAP_OK, "read back %zu planes: %s", nplanes, cap_error_message());
+        CHECK(cap_manifest_plane_count(m) == nplanes && cap_manifest_image_count(m) == 2 * nplanes,
+              "%zu planes read back: %zu planes, %llu images", nplanes, cap_manifest_plane_count(m),
+              (unsigned long long)cap_manifest_image_count(m));
+        for (size_t k = 0; m != NULL && k < nplanes; k++) {
+            const lfio_slab_desc *want = planes[k].desc, *got = cap_manifest_get_desc(m, k);
+            CHECK(got && strcmp(got->name, want->name) == 0 && same3(got->origin, want->origin) &&
+                      same3(got->u, want->u) && same3(got->v, want->v) && got->nu == want->nu &&
+                      got->nv == want->nv && got->n == spec.n && got->units == spec.units,
+                  "plane %zu of %zu read back as written", k, nplanes);
+            cap_position_info pos;
+            uint32_t i = want->nu - 1, j = want->nv - 1;
+            CHECK(cap_manifest_get_position(m, k, i, j, &pos) == CAP_OK && pos.projection == spec.projection &&
+                      pos.colour_space == spec.colour_space && pos.image_count == 1 && pos.scale == 1 &&
+                      strcmp(pos.files[0], tmp_path(files[2 * k + 1])) == 0,
+                  "plane %zu position %u,%u: file '%s'", k, i, j, pos.image_count ? pos.files[0] : "");
+        }
+        cap_manifest_destroy(m);
+    }
+    cap_manifest_spec bad = {8, LFIO_UNITS_RADIANCE, CAP_PROJECTION_EQUIRECTANGULAR, CAP_COLOUR_LINEAR, 0, planes};
+    const char *never = tmp_path("never.json");
+    CHECK(cap_manifest_write(never, &bad) == CAP_ERR_ARG && strstr(cap_error_message(), "1 to"), "no planes: %s",
+          cap_error_message());
+    bad.nplanes = 1, bad.n = 0;
+    CHECK(cap_manifest_write(never, &bad) == CAP_ERR_ARG && strstr(cap_error_message(), "n 0"), "n 0: %s",
+          cap_error_message());
+    bad.n = 8, bad.projection = (cap_projection)7;
+    CHECK(cap_manifest_write(never, &bad) == CAP_ERR_ARG, "unknown projection: %s", cap_error_message());
+    CHECK(cap_manifest_write(NULL, &bad) == CAP_ERR_ARG && cap_manifest_write(never, NULL) == CAP_ERR_ARG, "NULL");
+    struct stat sb;
+    CHECK(stat(never, &sb) != 0 && errno == ENOENT, "refused specs wrote nothing");
+    const cap_manifest_spec good = {8, LFIO_UNITS_RADIANCE, CAP_PROJECTION_EQUIRECTANGULAR, CAP_COLOUR_LINEAR, 1,
+                                    planes};
+    const char *nowhere = tmp_path("no_such_folder/manifest.json");
+    CHECK(cap_manifest_write(nowhere, &good) == CAP_ERR_OUTPUT && strstr(cap_error_message(), nowhere) &&
+              strstr(cap_error_message(), strerror(ENOENT)),
+          "a folder that does not exist: %s", cap_error_message());
+    const char *under_file = tmp_path("written1.json/manifest.json");
+    CHECK(cap_manifest_write(under_file, &good) == CAP_ERR_OUTPUT && strstr(cap_error_message(), under_file) &&
+              strstr(cap_error_message(), strerror(ENOTDIR)),
+          "a folder that is a regular file: %s", cap_error_message());
 }
 
 static void test_manifest_errors(void)
@@ -1721,6 +1800,7 @@ int main(int argc, char **argv)
     test_repairs();
     test_brackets();
     test_manifest_errors();
+    test_manifest_write();
     test_capture_errors();
     test_sample_bound();
     test_real_probe();

@@ -20,6 +20,7 @@
 #include <fcntl.h>
 #include <math.h>
 #include <signal.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
@@ -636,6 +637,15 @@ static hid_t storage(const hsize_t *chunk, const char *pipeline)
     return dcpl;
 }
 
+/* Reads path whole with lfio_lightfield_read_with() on threads threads. @return its status. */
+static lfio_status read_on_threads(const char *path, unsigned threads, lfio_lightfield **out)
+{
+    lfio_read_options opt;
+    lfio_read_options_init(&opt);
+    opt.threads = threads;
+    return lfio_lightfield_read_with(path, &opt, out);
+}
+
 /* Radiance stored otherwise than lfio writes it reads the same values, on one thread and on three: lfio
  * inflates chunks itself where the storage is its own (other chunk shapes too, partial in every
  * dimension), HDF5 elsewhere (no shuffle, big-endian, contiguous, chunks never written, which read as
@@ -675,9 +685,8 @@ static void test_other_storage(const char *good)
                          units);
         H5Pclose(dcpl);
         for (unsigned threads = 1; threads <= 3; threads += 2) {
-            lfio_lightfield_set_read_threads(threads);
             lfio_lightfield *back = NULL;
-            lfio_status st = lfio_lightfield_read(p, &back);
+            lfio_status st = read_on_threads(p, threads, &back);
             CHECK(st == LFIO_OK, "%s, %u threads: %s", cases[c].name, threads, lfio_errmsg());
             const float *got = back ? lfio_slab_radiance(lfio_lightfield_slab(back, 1)) : NULL;
             size_t wrong = 0, kept = cases[c].written == dims[0] ? count : half;
@@ -745,9 +754,8 @@ static void test_other_storage(const char *good)
         H5Dclose(d);
         H5Fclose(f);
         for (unsigned threads = 1; threads <= 3; threads += 2) {
-            lfio_lightfield_set_read_threads(threads);
             lfio_lightfield *back = NULL;
-            lfio_status st = lfio_lightfield_read(p, &back);
+            lfio_status st = read_on_threads(p, threads, &back);
             CHECK(st == forgeries[c].want && back == NULL && strstr(lfio_errmsg(), "/slabs/1/radiance") &&
                       strstr(lfio_errmsg(), forgeries[c].message),
                   "forged chunk (%s), %u threads: %s, '%s'", forgeries[c].name, threads, lfio_status_name(st),
@@ -776,8 +784,56 @@ static void test_other_storage(const char *good)
     }
     free(forged);
     free(zeros);
-    lfio_lightfield_set_read_threads(0);
     lfio_lightfield_destroy(ref);
+}
+
+/* lfio_read_options: reads on 1 and 3 threads, whole and through a reader, give the file's values, the
+ * same as the default read; threads past the limit, and sizes this lfio does not know, are refused by name
+ * before the file is opened; a size holding only the first field takes the defaults for the rest. */
+static void test_read_options(const char *good)
+{
+    lfio_lightfield *want = NULL;
+    CHECK(lfio_lightfield_read(good, &want) == LFIO_OK, "default read: %s", lfio_errmsg());
+    for (unsigned threads = 1; want && threads <= 3; threads += 2) {
+        lfio_lightfield *back = NULL;
+        CHECK(read_on_threads(good, threads, &back) == LFIO_OK, "read on %u threads: %s", threads, lfio_errmsg());
+        for (size_t k = 0; back && k < lfio_lightfield_slab_count(want); k++)
+            check_slab_equal(lfio_lightfield_slab(want, k), lfio_lightfield_slab(back, k), "read_with");
+        lfio_lightfield_destroy(back);
+        lfio_read_options opt;
+        lfio_read_options_init(&opt);
+        opt.threads = threads;
+        lfio_reader *r = NULL;
+        CHECK(lfio_reader_open_with(good, &opt, &r) == LFIO_OK, "reader_open_with: %s", lfio_errmsg());
+        for (size_t k = 0; r && k < lfio_lightfield_slab_count(want); k++) {
+            lfio_slab *s = NULL;
+            CHECK(lfio_reader_read_slab(r, k, &s) == LFIO_OK, "reader on %u threads: %s", threads, lfio_errmsg());
+            if (s)
+                check_slab_equal(lfio_lightfield_slab(want, k), s, "reader_open_with");
+            lfio_slab_destroy(s);
+        }
+        lfio_reader_close(r);
+    }
+    lfio_lightfield_destroy(want);
+    lfio_read_options opt;
+    lfio_read_options_init(&opt);
+    CHECK(opt.size == sizeof opt && opt.threads == 0, "defaults: size %zu, threads %u", opt.size, opt.threads);
+    opt.threads = 1025; /* one past the header's "at most 1024" */
+    lfio_lightfield *lf = NULL;
+    lfio_reader *r = NULL;
+    CHECK(lfio_lightfield_read_with(good, &opt, &lf) == LFIO_ERR_ARG && lf == NULL &&
+              strstr(lfio_errmsg(), "threads 1025"), "too many threads: %s", lfio_errmsg());
+    CHECK(lfio_reader_open_with(good, &opt, &r) == LFIO_ERR_ARG && r == NULL, "reader, too many threads: %s",
+          lfio_errmsg());
+    opt.threads = 2;
+    opt.size = sizeof opt + 8;
+    CHECK(lfio_lightfield_read_with(good, &opt, &lf) == LFIO_ERR_ARG && strstr(lfio_errmsg(), "lfio_read_options.size"),
+          "unknown size: %s", lfio_errmsg());
+    opt.size = sizeof opt.size;
+    CHECK(lfio_lightfield_read_with(good, &opt, &lf) == LFIO_ERR_ARG, "size without threads: %s", lfio_errmsg());
+    opt.size = offsetof(lfio_read_options, threads) + sizeof opt.threads;
+    CHECK(lfio_lightfield_read_with(good, &opt, &lf) == LFIO_OK, "size of the first fields: %s", lfio_errmsg());
+    lfio_lightfield_destroy(lf);
 }
 
 /* Every documented way a file can be bad. small: a one-slab file (n = 1, 3 x 1 positions). */
@@ -1163,6 +1219,7 @@ int main(void)
     lfio_lightfield *lf = make_lightfield(1);
     test_round_trip(lf, good);
     test_reader(lf, good);
+    test_read_options(good);
     test_atomic_write(lf, good);
     lfio_lightfield_destroy(lf);
 

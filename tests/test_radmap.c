@@ -125,11 +125,26 @@ static long quiet_stop(void)
     return bytes;
 }
 
-/* Writes count patches to path, checking success and silence. */
-static void write_ok(const char *path, const lfio_radmap_patch *patches, size_t count)
+/* A describe function over an array that fails at patch fail_at (SIZE_MAX: never). */
+struct describer {
+    const lfio_radmap_patch *patches;
+    size_t fail_at, asked;
+};
+
+/* lfio_radmap_write_with()'s describe over an array (struct describer above). */
+static lfio_status describe_some(void *user, size_t k, lfio_radmap_patch *out);
+
+/* Writes count patches to path, checking success and silence: with lfio_radmap_write() for threads 0 (the
+ * default), else with lfio_radmap_write_with() compressing on that many threads. */
+static void write_ok(const char *path, const lfio_radmap_patch *patches, size_t count, unsigned threads)
 {
+    lfio_radmap_write_options opt;
+    lfio_radmap_write_options_init(&opt);
+    opt.threads = threads;
     quiet_start();
-    lfio_status st = lfio_radmap_write(path, "test_radmap", "scenes/test.json", patches, count);
+    lfio_status st = threads == 0 ? lfio_radmap_write(path, "test_radmap", "scenes/test.json", patches, count)
+                                  : lfio_radmap_write_with(path, "test_radmap", "scenes/test.json", count, describe_some,
+                                                           NULL, &(struct describer){patches, SIZE_MAX, 0}, &opt);
     long printed = quiet_stop();
     CHECK(st == LFIO_OK, "write %s: %s", path, lfio_errmsg());
     CHECK(printed == 0, "write printed %ld bytes", printed);
@@ -137,10 +152,11 @@ static void write_ok(const char *path, const lfio_radmap_patch *patches, size_t 
 
 /* ------------------------------------------------------------------- tests */
 
-/* Writes patches, reads them back and compares everything. */
-static void test_round_trip(const lfio_radmap_patch *patches, size_t count, const char *path)
+/* Writes patches (compressed on threads threads; 0: lfio_radmap_write()), reads them back and compares
+ * everything. */
+static void test_round_trip(const lfio_radmap_patch *patches, size_t count, const char *path, unsigned threads)
 {
-    write_ok(path, patches, count);
+    write_ok(path, patches, count, threads);
     CHECK(sweep_tmpdir(1) == 0, "temporaries left after a good write");
     lfio_radmap *map = NULL;
     quiet_start();
@@ -166,11 +182,6 @@ static void test_round_trip(const lfio_radmap_patch *patches, size_t count, cons
     CHECK(lfio_radmap_count(NULL) == 0 && strcmp(lfio_radmap_creator(NULL), "") == 0, "NULL accessors");
 }
 
-/* A describe function over an array that fails at patch fail_at (SIZE_MAX: never). */
-struct describer {
-    const lfio_radmap_patch *patches;
-    size_t fail_at, asked;
-};
 
 static lfio_status describe_some(void *user, size_t k, lfio_radmap_patch *out)
 {
@@ -276,8 +287,10 @@ static lfio_status rows_copied(void *user, size_t k, uint32_t first, uint32_t co
     return LFIO_OK;
 }
 
-/* Writes patches through lfio_radmap_write_rows() into path. @return its status; *s its record. */
-static lfio_status write_sliced(const char *path, const lfio_radmap_patch *patches, size_t count, struct slicer *s)
+/* Writes patches through lfio_radmap_write_rows() into path (threads 0), or through lfio_radmap_write_with()
+ * compressing on threads threads. @return its status; *s its record. */
+static lfio_status write_sliced(const char *path, const lfio_radmap_patch *patches, size_t count, struct slicer *s,
+                               unsigned threads)
 {
     const size_t n = LFIO_RADMAP_ROWS_MAX;
     s->patches = patches;
@@ -286,9 +299,14 @@ static lfio_status write_sliced(const char *path, const lfio_radmap_patch *patch
     s->centre = malloc(3 * n * sizeof *s->centre);
     s->irradiance = malloc(3 * n * sizeof *s->irradiance);
     s->radiosity = malloc(3 * n * sizeof *s->radiosity);
+    lfio_radmap_write_options opt;
+    lfio_radmap_write_options_init(&opt);
+    opt.threads = threads;
     quiet_start();
-    lfio_status st = lfio_radmap_write_rows(path, "test_radmap", "scenes/test.json", count, describe_bare,
-                                            rows_copied, s);
+    lfio_status st = threads == 0 ? lfio_radmap_write_rows(path, "test_radmap", "scenes/test.json", count,
+                                                           describe_bare, rows_copied, s)
+                                  : lfio_radmap_write_with(path, "test_radmap", "scenes/test.json", count,
+                                                           describe_bare, rows_copied, s, &opt);
     long printed = quiet_stop();
     CHECK(printed == 0, "write_rows printed %ld bytes", printed);
     free(s->ij);
@@ -317,9 +335,8 @@ static void test_write_rows(const lfio_radmap_patch *patches, size_t count, cons
     char path[512];
     tmp_path(path, sizeof path, "rows.h5");
     for (unsigned threads = 1; threads <= 3; threads += 2) {
-        lfio_radmap_set_threads(threads);
         struct slicer s = {.bad_patch = SIZE_MAX, .fail_patch = SIZE_MAX};
-        lfio_status st = write_sliced(path, all, count + 1, &s);
+        lfio_status st = write_sliced(path, all, count + 1, &s, threads);
         CHECK(st == LFIO_OK, "write_rows on %u threads: %s", threads, lfio_errmsg());
         CHECK(s.next == big->ncells && s.max_count == LFIO_RADMAP_ROWS_MAX && s.calls == slices,
               "write_rows asked %zu times, at most %u cells, ending at %u", s.calls, s.max_count, s.next);
@@ -333,18 +350,17 @@ static void test_write_rows(const lfio_radmap_patch *patches, size_t count, cons
         }
         lfio_radmap_destroy(map);
     }
-    lfio_radmap_set_threads(0);
     size_t a_size = 0;
     unsigned char *a = read_whole(path, &a_size);
     const uint32_t bad = LFIO_RADMAP_ROWS_MAX + 1234;
     struct slicer s = {.bad_patch = count, .bad_cell = bad, .fail_patch = SIZE_MAX};
-    lfio_status st = write_sliced(path, all, count + 1, &s);
+    lfio_status st = write_sliced(path, all, count + 1, &s, 0);
     char want[64];
     snprintf(want, sizeof want, "irradiance of cell %u is nan", bad);
     CHECK(st == LFIO_ERR_ARG && strstr(lfio_errmsg(), want) && strstr(lfio_errmsg(), big->label),
           "a bad value in a later slice: %s: %s", lfio_status_name(st), lfio_errmsg());
     struct slicer f = {.bad_patch = SIZE_MAX, .fail_patch = count, .fail_first = LFIO_RADMAP_ROWS_MAX};
-    st = write_sliced(path, all, count + 1, &f);
+    st = write_sliced(path, all, count + 1, &f, 0);
     /* the second slice fails: lfio asks for no third */
     CHECK(st == LFIO_ERR_NOMEM && f.next == 2 * LFIO_RADMAP_ROWS_MAX, "a failing rows: %s after cell %u",
           lfio_status_name(st), f.next);
@@ -389,7 +405,7 @@ static void test_write_fails_midway(const lfio_radmap_patch *patches, size_t cou
     CHECK(sweep_tmpdir(1) == 0, "temporaries left after a write stopped part-way");
     free(before);
     free(after);
-    write_ok(existing, patches, count);
+    write_ok(existing, patches, count, 0);
 }
 
 /* Expects writing p (one patch) to be refused with LFIO_ERR_ARG, a message containing needle, and no file. */
@@ -791,17 +807,14 @@ int main(void)
     lfio_radmap_patch patches[4] = {t[0].p, t[1].p, t[2].p, t[3].p};
 
     char good[512], empty[512], lonely[512];
-    test_round_trip(patches, 3, tmp_path(good, sizeof good, "good.h5"));
+    test_round_trip(patches, 3, tmp_path(good, sizeof good, "good.h5"), 0);
     /* the chunks compressed by lfio on one thread and on several (a slice's chunks, one a dataset, three at once):
      * HDF5 checks each chunk's checksum as it reads them back */
-    lfio_radmap_set_threads(1);
-    test_round_trip(patches, 4, good);
-    lfio_radmap_set_threads(3);
-    test_round_trip(patches, 4, good);
-    lfio_radmap_set_threads(0);
-    test_round_trip(patches, 3, good); /* replaces an existing file */
-    test_round_trip(NULL, 0, tmp_path(empty, sizeof empty, "no_patches.h5"));
-    test_round_trip(&patches[1], 1, tmp_path(lonely, sizeof lonely, "empty_patch.h5"));
+    test_round_trip(patches, 4, good, 1);
+    test_round_trip(patches, 4, good, 3);
+    test_round_trip(patches, 3, good, 0); /* replaces an existing file */
+    test_round_trip(NULL, 0, tmp_path(empty, sizeof empty, "no_patches.h5"), 0);
+    test_round_trip(&patches[1], 1, tmp_path(lonely, sizeof lonely, "empty_patch.h5"), 0);
     test_write_each(patches, 3);
     struct test_patch big;
     make_patch(&big, "polygons[9] big", 9, 2.0, 0.5, 0.0065, 0);

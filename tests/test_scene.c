@@ -977,6 +977,44 @@ static rl_scene *load_obj(const char *name, const char *obj, const char *entry_e
 }
 
 /*
+ * rl_scene_load_with(): a scene's light fields read on 1 and on 3 threads hold the same radiance as with the
+ * defaults; threads past the limit and a size the library does not know are refused by name.
+ */
+static void test_load_options(void)
+{
+    char path[2048];
+    join(path, sizeof path, tmpdir, "lf_default.json");
+    rl_scene *want = load(tmpdir, "lf_default.json");
+    for (unsigned threads = 1; want && threads <= 3; threads += 2) {
+        rl_scene_load_options opt;
+        rl_scene_load_options_init(&opt);
+        opt.threads = threads;
+        rl_scene *s = NULL;
+        CHECK(rl_scene_load_with(path, &opt, &s) == RL_OK && s, "load on %u threads: %s", threads, rl_errmsg());
+        for (size_t k = 0; s && k < lfio_lightfield_slab_count(want->lightfields[0].lf); k++) {
+            const lfio_slab *a = lfio_lightfield_slab(want->lightfields[0].lf, k);
+            const lfio_slab *b = lfio_lightfield_slab(s->lightfields[0].lf, k);
+            size_t bytes = (size_t)lfio_slab_desc_bytes(lfio_slab_get_desc(a));
+            CHECK(b && memcmp(lfio_slab_radiance(a), lfio_slab_radiance(b), bytes) == 0,
+                  "slab %zu on %u threads: the same radiance", k, threads);
+        }
+        rl_scene_destroy(s);
+    }
+    rl_scene_destroy(want);
+    rl_scene_load_options opt;
+    rl_scene_load_options_init(&opt);
+    CHECK(opt.size == sizeof opt && opt.threads == 0, "load defaults");
+    opt.threads = 1025;
+    rl_scene *s = NULL;
+    CHECK(rl_scene_load_with(path, &opt, &s) == RL_ERR_ARG && s == NULL && strstr(rl_errmsg(), "threads 1025"),
+          "too many threads: %s", rl_errmsg());
+    opt.threads = 1;
+    opt.size = sizeof opt + 8;
+    CHECK(rl_scene_load_with(path, &opt, &s) == RL_ERR_ARG && s == NULL &&
+              strstr(rl_errmsg(), "rl_scene_load_options.size"), "unknown size: %s", rl_errmsg());
+}
+
+/*
  * Merging: a hexagon written as a fan of four triangles comes back as the
  * hexagon; a coplanar neighbour of another material, one bent out of the
  * plane, two coplanar triangles that only touch at a corner, and an L of
@@ -1189,6 +1227,7 @@ int main(int argc, char **argv)
     test_meshes();
     test_bad();
     test_lightfields();
+    test_load_options();
     test_set_sampling();
     test_settings_table();
     test_run_options();

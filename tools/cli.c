@@ -28,6 +28,10 @@
 #include <time.h>
 #include <unistd.h>
 
+#ifdef __SANITIZE_ADDRESS__
+#include <sanitizer/lsan_interface.h>
+#endif
+
 /* --------------------------------------------------------------- errors */
 
 /* Who the messages come from: "ilf", or "ilf-mpi" and a rank (cli_set_identity()). */
@@ -534,6 +538,20 @@ int cli_stdout_finish(const char *sub, int code)
         return code;
     cli_error(sub, "cannot write the standard output: %s", errno != 0 ? strerror(errno) : "write error");
     return code == ILF_EXIT_OK ? ILF_EXIT_FAILED : code;
+}
+
+int cli_program_run(const char *sub, int (*run)(int argc, char **argv), int argc, char **argv)
+{
+    cli_interrupts_install(); /* an interrupted command says so, and what it kept */
+    /* results on stdout are outputs too: one that cannot be written (a full disk, /dev/full) fails the run */
+    int code = cli_stdout_finish(sub, run(argc, argv));
+#ifdef __SANITIZE_ADDRESS__
+    /* Sanitizer builds look for leaks here, while the libraries' thread pools
+     * are idle: at exit their static destructors stop those threads while
+     * LeakSanitizer walks them, which crashed its tracer in CI. */
+    __lsan_do_leak_check();
+#endif
+    return code;
 }
 
 long long cli_file_size(const char *path)

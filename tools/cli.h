@@ -241,6 +241,14 @@ int cli_output_folder_check(const char *sub, const char *dir, const char *const 
  */
 int cli_stdout_finish(const char *sub, int code);
 
+/**
+ * Runs command run(argc, argv) as a program's main does (ilf's for its commands, ilf-bench's for the
+ * benchmark): with the interruption handlers installed (cli_interrupts_install()), standard output flushed
+ * after (cli_stdout_finish()), and, in sanitizer builds, the leak check done while the thread pools are idle.
+ * @return its exit code.
+ */
+int cli_program_run(const char *sub, int (*run)(int argc, char **argv), int argc, char **argv);
+
 /** Size of a file in bytes, or -1 if it cannot be examined. */
 long long cli_file_size(const char *path);
 

@@ -19,7 +19,6 @@
  * leaves DIR as it was (removing the folders it created); probes use the identity orientation (camera forward
  * +x, up +z) and the jitter seed is the scene's (or --seed's) seed.
  */
-#include <cjson/cJSON.h>
 #include <dirent.h>
 #include <errno.h>
 #include <inttypes.h>
@@ -30,11 +29,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "capture/projection.h"
+#include "capture/capture.h"
 #include "cli.h"
 #include "commands.h"
 #include "image/image.h"
-#include "jsonout.h"
 #include "output_set.h"
 #include "relight/engine.h"
 #include "relight_cli.h"
@@ -455,63 +453,27 @@ static void probe_pattern(const probes_options *o, size_t k, char out[64])
         snprintf(out, 64, "probe_%zu_{i}_{j}.exr", k);
 }
 
-/* Adds plane k's keys (plane, grid, slab, pattern) to obj. @return 1, or 0 when memory runs out. */
-static int add_plane_keys(const probes_options *o, size_t k, cJSON *obj)
-{
-    const lfio_slab_desc *d = &o->planes[k];
-    char pattern[64];
-    probe_pattern(o, k, pattern);
-    cJSON *plane = cJSON_AddObjectToObject(obj, "plane");
-    cJSON *grid = cJSON_AddObjectToObject(obj, "grid");
-    return plane != NULL && grid != NULL && json_add_doubles(plane, "origin", d->origin, 3) &&
-           json_add_doubles(plane, "u", d->u, 3) && json_add_doubles(plane, "v", d->v, 3) &&
-           cJSON_AddNumberToObject(grid, "nu", d->nu) && cJSON_AddNumberToObject(grid, "nv", d->nv) &&
-           cJSON_AddStringToObject(obj, "slab", d->name) && cJSON_AddStringToObject(obj, "pattern", pattern);
-}
-
-/* The manifest `ilf capture` reads back (docs/capture.md): the one-plane form, or "planes" for several.
- * @return it, or NULL when memory runs out. */
-static cJSON *manifest_json(const probes_options *o)
-{
-    cJSON *root = cJSON_CreateObject();
-    int ok = root != NULL && cJSON_AddNumberToObject(root, "n", o->n) &&
-             cJSON_AddStringToObject(root, "units", "radiance") &&
-             cJSON_AddStringToObject(root, "projection", "equirectangular") &&
-             cJSON_AddStringToObject(root, "colour_space", "linear");
-    if (ok && o->nplanes == 1) {
-        ok = add_plane_keys(o, 0, root);
-    } else if (ok) {
-        cJSON *list = cJSON_AddArrayToObject(root, "planes");
-        ok = list != NULL;
-        for (size_t k = 0; ok && k < o->nplanes; k++) {
-            cJSON *item = cJSON_CreateObject();
-            ok = item != NULL && cJSON_AddItemToArray(list, item) && add_plane_keys(o, k, item);
-        }
-    }
-    if (!ok) {
-        cJSON_Delete(root);
-        return NULL;
-    }
-    return root;
-}
-
+/* Writes the manifest `ilf capture` reads back (docs/capture.md) through capture's writer: the one-plane form,
+ * or "planes" for several; radiance as rendered, equirectangular, linear. @return an exit code. */
 static int write_manifest(const probes_files *f)
 {
     const probes_options *o = f->o;
-    char path[PATH_BYTES], err[1024];
+    char path[PATH_BYTES], patterns[MAX_PLANES][64];
     if (!output_path(f, MANIFEST_NAME, path))
         return ILF_EXIT_FAILED;
-    cJSON *root = manifest_json(o);
-    int code = ILF_EXIT_OK;
-    if (root == NULL) {
-        cli_error("render-probes", "out of memory while building the manifest");
-        code = ILF_EXIT_FAILED;
-    } else if (!json_write_file(path, root, err, sizeof err)) {
-        cli_error("render-probes", "%s", err);
-        code = ILF_EXIT_FAILED;
+    cap_manifest_plane planes[MAX_PLANES];
+    for (size_t k = 0; k < o->nplanes; k++) {
+        probe_pattern(o, k, patterns[k]);
+        planes[k] = (cap_manifest_plane){&o->planes[k], patterns[k]};
     }
-    cJSON_Delete(root);
-    return code;
+    const cap_manifest_spec spec = {o->n, LFIO_UNITS_RADIANCE, CAP_PROJECTION_EQUIRECTANGULAR, CAP_COLOUR_LINEAR,
+                                    o->nplanes, planes};
+    cap_status st = cap_manifest_write(path, &spec);
+    if (st != CAP_OK) {
+        cli_error("render-probes", "%s", cap_error_message());
+        return ILF_EXIT_FAILED;
+    }
+    return ILF_EXIT_OK;
 }
 
 /* ------------------------------------------------------------ rendering */

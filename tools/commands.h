@@ -17,7 +17,6 @@ int ilf_cmd_irradiance(int argc, char **argv);
 int ilf_cmd_capture(int argc, char **argv);
 int ilf_cmd_render_probes(int argc, char **argv);
 int ilf_cmd_reproject(int argc, char **argv);
-int ilf_cmd_bench(int argc, char **argv);
 int ilf_cmd_export(int argc, char **argv);
 int ilf_cmd_view(int argc, char **argv);
 

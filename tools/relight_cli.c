@@ -151,8 +151,10 @@ int relight_scene_open(const char *sub, const char *path, const sampling_overrid
     *out = NULL;
     rl_scene *scene = NULL;
     /* the scene's light fields inflate on the threads the run will use */
-    lfio_lightfield_set_read_threads(threads_asked(o));
-    rl_status st = rl_scene_load(path, &scene);
+    rl_scene_load_options lo;
+    rl_scene_load_options_init(&lo);
+    lo.threads = threads_asked(o);
+    rl_status st = rl_scene_load_with(path, &lo, &scene);
     if (st != RL_OK) {
         /* The loader names the file in its messages; a bare errno text gets the path added. */
         char line[1024];

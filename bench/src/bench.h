@@ -1,5 +1,6 @@
 /*
- * bench.h - the parts of `ilf bench` (cmd_bench.c) and what they share:
+ * bench.h - the parts of `ilf bench`, the program ilf-bench (ilf_bench.c, its
+ * entry point; cmd_bench.c, the command), and what they share:
  *
  *   bench_util.c     text buffers, paths, one-level folders, atomic text files
  *   bench_run.c      one measured job in a forked child: a relighting with
@@ -27,6 +28,9 @@
 
 #include "relight/engine.h"
 #include "relight_cli.h"
+
+/** `ilf bench`, as ilf's commands have the shape of main: argv[0] is "bench". @return an exit code (cli.h). */
+int ilf_cmd_bench(int argc, char **argv);
 
 #define BENCH_SUB "bench"
 #define BENCH_CREATOR "ilf bench (ilfkit " ILFKIT_VERSION ")"

@@ -25,7 +25,6 @@
 
 #include "bench.h"
 #include "cli.h"
-#include "commands.h"
 #include "jsonout.h"
 
 /* Knob values of the sweeps: full, then --quick. */

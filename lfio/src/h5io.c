@@ -34,13 +34,15 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include <math.h>
-#include <stdatomic.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "chunks.h"
 #include "h5util.h"
+#include "ilf/limits.h"
+#include "ilf/options.h"
 #include "ilf/pool.h"
 #include "internal.h"
 
@@ -495,6 +497,7 @@ struct lfio_reader {
     hid_t *coverage;          /* nslabs open coverage datasets, shapes checked; -1 where a slab has none */
     double *fraction;         /* nslabs coverage_fraction attributes, in [0, 1]; NaN where a slab has none */
     lfio__h5_vetted **vetted; /* nslabs maps of the radiance chunks partial reads have vetted (or NULL) */
+    unsigned threads;         /* lfio_read_options.threads, checked: whole reads inflate chunks on these */
 };
 
 /* Reads and checks the root attributes into r (version, creator, slab count). */
@@ -756,12 +759,38 @@ static void reader_free(lfio_reader *r)
     free(r);
 }
 
-/* lfio_reader_open() without silencing HDF5: the body shared with lfio_lightfield_read() and lfio_verify(). */
-static lfio_status reader_open_impl(const char *path, lfio_reader **out)
+void lfio_read_options_init(lfio_read_options *opt)
+{
+    if (opt == NULL)
+        return;
+    memset(opt, 0, sizeof *opt);
+    opt->size = sizeof *opt;
+}
+
+/* Reads the caller's options (NULL: the defaults) into *o, the part of them their size holds. @return LFIO_OK,
+ * or LFIO_ERR_ARG naming the problem. */
+static lfio_status take_read_options(const char *path, const lfio_read_options *opt, lfio_read_options *o)
+{
+    lfio_read_options_init(o);
+    if (opt != NULL && !ilf_options_take(o, sizeof *o, opt, offsetof(lfio_read_options, threads) + sizeof opt->threads))
+        return lfio__fail(LFIO_ERR_ARG, "%s: lfio_read_options.size %zu is not one this library knows", path,
+                          opt->size);
+    if (o->threads > ILF_MAX_THREADS)
+        return lfio__fail(LFIO_ERR_ARG, "%s: read options out of range (threads %u, at most %u)", path, o->threads,
+                          ILF_MAX_THREADS);
+    return LFIO_OK;
+}
+
+/* lfio_reader_open_with() without silencing HDF5: the body shared with lfio_lightfield_read_with() and
+ * lfio_verify(). */
+static lfio_status reader_open_impl(const char *path, const lfio_read_options *opt, lfio_reader **out)
 {
     *out = NULL;
+    lfio_read_options o;
+    lfio_status st = take_read_options(path, opt, &o);
     hid_t file;
-    lfio_status st = lfio__h5_open_read(path, &file);
+    if (st == LFIO_OK)
+        st = lfio__h5_open_read(path, &file);
     if (st != LFIO_OK)
         return st;
     lfio_reader *r = calloc(1, sizeof *r);
@@ -772,6 +801,7 @@ static lfio_status reader_open_impl(const char *path, lfio_reader **out)
     }
     strcpy(r->path, path);
     r->file = file;
+    r->threads = o.threads;
     st = read_root(r);
     /* nslabs <= MAX_SLABS here, so these allocations are bounded. */
     if (st == LFIO_OK && ((r->desc = calloc(r->nslabs, sizeof *r->desc)) == NULL
@@ -808,15 +838,6 @@ static lfio_status check_slab_arg(const lfio_reader *r, size_t k, const void *bu
         return lfio__fail(LFIO_ERR_ARG, "%s: %s: slab %zu out of range (%zu slabs)", r->path, fn, k,
                           r->nslabs);
     return LFIO_OK;
-}
-
-/* The threads a whole read decompresses a slab's chunks on (lfio_lightfield_set_read_threads()); atomic, so
- * that setting it while another thread reads is no data race (that read takes either value). */
-static _Atomic unsigned read_threads = 0;
-
-void lfio_lightfield_set_read_threads(unsigned threads)
-{
-    atomic_store_explicit(&read_threads, threads, memory_order_relaxed);
 }
 
 /* Where decoded radiance chunks go (place_chunk()): the dataset's values, its shape and chunk shape, and
@@ -874,8 +895,8 @@ static int stored_as_lfio(hid_t d, const hsize_t *dims, hsize_t *chunk, hsize_t 
  * pipeline on lfio's own threads, when it is stored as lfio writes it (stored_as_lfio()): HDF5 only hands
  * over the stored chunks (H5Dread_chunk), whose inflating is most of a read. @return 1 with *st the read's
  * status (reported); 0 when it is stored otherwise, nothing read or reported (HDF5 then reads it). */
-static int read_radiance_direct(const char *path, const char *obj, hid_t d, const hsize_t *dims, float *values,
-                                lfio_status *st)
+static int read_radiance_direct(const char *path, const char *obj, hid_t d, const hsize_t *dims, unsigned threads,
+                                float *values, lfio_status *st)
 {
     chunk_places places = {values, {dims[0], dims[1], dims[2], dims[3]}, {0}, NULL};
     hsize_t n = 0;
@@ -928,7 +949,7 @@ static int read_radiance_direct(const char *path, const char *obj, hid_t d, cons
     }
     places.offset = offset;
     size_t bad = 0;
-    int rc = *st == LFIO_OK ? lfio__chunks_unfilter(c, (size_t)n, ilf_thread_count(atomic_load(&read_threads)),
+    int rc = *st == LFIO_OK ? lfio__chunks_unfilter(c, (size_t)n, ilf_thread_count(threads),
                                                     place_chunk, &places, &bad)
                             : LFIO__STORED_OK;
     if (rc == LFIO__STORED_CHECKSUM)
@@ -960,7 +981,7 @@ static lfio_status read_slab_impl(lfio_reader *r, size_t k, lfio_slab **out)
     struct ds_spec sp;
     ds_spec_make(&r->desc[k], DS_RADIANCE, 0, &sp);
     const hsize_t zero[4] = {0, 0, 0, 0};
-    if (!read_radiance_direct(r->path, obj, r->radiance[k], sp.lay.dims, s->radiance, &st))
+    if (!read_radiance_direct(r->path, obj, r->radiance[k], sp.lay.dims, r->threads, s->radiance, &st))
         st = lfio__h5_xfer(r->path, obj, r->radiance[k], 0, H5T_NATIVE_FLOAT, 4, zero, sp.lay.dims, s->radiance);
     if (st == LFIO_OK)
         st = check_radiance(LFIO_ERR_FORMAT, r->path, k, s);
@@ -993,7 +1014,7 @@ static lfio_status read_coverage_impl(lfio_reader *r, size_t k, uint8_t *buf)
 }
 
 /* Opens path and checks all its metadata (see reader_open_impl()), silently. */
-lfio_status lfio_reader_open(const char *path, lfio_reader **out)
+lfio_status lfio_reader_open_with(const char *path, const lfio_read_options *opt, lfio_reader **out)
 {
     if (out == NULL)
         return lfio__fail(LFIO_ERR_ARG, "lfio_reader_open: NULL argument");
@@ -1002,9 +1023,14 @@ lfio_status lfio_reader_open(const char *path, lfio_reader **out)
         return lfio__fail(LFIO_ERR_ARG, "lfio_reader_open: NULL or empty path");
     lfio__h5_quiet q;
     lfio__h5_quiet_begin(&q);
-    lfio_status st = reader_open_impl(path, out);
+    lfio_status st = reader_open_impl(path, opt, out);
     lfio__h5_quiet_end(&q);
     return st;
+}
+
+lfio_status lfio_reader_open(const char *path, lfio_reader **out)
+{
+    return lfio_reader_open_with(path, NULL, out);
 }
 
 /* Closes the file and frees the reader; NULL is a no-op. */
@@ -1151,11 +1177,11 @@ static lfio_status read_coverage_into(lfio_reader *r, size_t k, lfio_lightfield 
 }
 
 /* lfio_lightfield_read() without silencing HDF5. */
-static lfio_status lightfield_read_impl(const char *path, lfio_lightfield **out)
+static lfio_status lightfield_read_impl(const char *path, const lfio_read_options *opt, lfio_lightfield **out)
 {
     lfio_reader *r = NULL;
     lfio_lightfield *lf = NULL;
-    lfio_status st = reader_open_impl(path, &r);
+    lfio_status st = reader_open_impl(path, opt, &r);
     if (st == LFIO_OK && lfio_lightfield_new(&lf) != LFIO_OK)
         st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
     if (st == LFIO_OK && lfio_lightfield_set_creator(lf, r->creator) != LFIO_OK)
@@ -1181,7 +1207,7 @@ static lfio_status lightfield_read_impl(const char *path, lfio_lightfield **out)
 }
 
 /* Reads every slab of path into a new light field, silently. */
-lfio_status lfio_lightfield_read(const char *path, lfio_lightfield **out)
+lfio_status lfio_lightfield_read_with(const char *path, const lfio_read_options *opt, lfio_lightfield **out)
 {
     if (out == NULL)
         return lfio__fail(LFIO_ERR_ARG, "lfio_lightfield_read: NULL argument");
@@ -1190,9 +1216,14 @@ lfio_status lfio_lightfield_read(const char *path, lfio_lightfield **out)
         return lfio__fail(LFIO_ERR_ARG, "lfio_lightfield_read: NULL or empty path");
     lfio__h5_quiet q;
     lfio__h5_quiet_begin(&q);
-    lfio_status st = lightfield_read_impl(path, out);
+    lfio_status st = lightfield_read_impl(path, opt, out);
     lfio__h5_quiet_end(&q);
     return st;
+}
+
+lfio_status lfio_lightfield_read(const char *path, lfio_lightfield **out)
+{
+    return lfio_lightfield_read_with(path, NULL, out);
 }
 
 /* ---------------------------------------------------------------- verifying */
@@ -1308,7 +1339,7 @@ lfio_status lfio_verify(const char *path, lfio_verify_report *report)
         lfio__h5_quiet q;
         lfio__h5_quiet_begin(&q);
         lfio_reader *r = NULL;
-        lfio_status st = reader_open_impl(path, &r);
+        lfio_status st = reader_open_impl(path, NULL, &r);
         if (st != LFIO_OK)
             note(&v, st);
         for (size_t k = 0; r && k < r->nslabs; k++)

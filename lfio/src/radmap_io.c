@@ -34,7 +34,6 @@
  *     with light field files through h5util.h.
  */
 #include <math.h>
-#include <stdatomic.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -42,6 +41,7 @@
 
 #include "chunks.h"
 #include "h5util.h"
+#include "ilf/options.h"
 #include "ilf/pool.h"
 #include "ilf/vec.h"
 #include "internal.h"
@@ -297,7 +297,7 @@ struct map_content {
                       * ranks's; format 2: v2_gather()) */
     int serial;      /* written by lfio_radmap_write_rows() (or _each()), not through MPI-IO (even with one rank) */
     int format;      /* the format version written: 1 or 2 */
-    unsigned threads; /* format 2: threads compressing chunks (0: every core) */
+    unsigned threads; /* threads compressing chunks in a serial write (0: every core) */
     int level;       /* format 2: zlib level of datasets of 1 KiB or more, 0 for none */
 };
 
@@ -435,15 +435,6 @@ static lfio_status store_chunks(const patch_write *w, const lfio__chunk *c, cons
     return LFIO_OK;
 }
 
-/* The threads a serial write compresses chunks on (lfio_radmap_set_threads()); atomic, so that setting it
- * while another thread writes is no data race (that write takes either value). */
-static _Atomic unsigned write_threads = 0;
-
-void lfio_radmap_set_threads(unsigned threads)
-{
-    atomic_store_explicit(&write_threads, threads, memory_order_relaxed);
-}
-
 /* Points q at cells [first, first + count) of patch k, described as p: from the caller's rows function
  * (lfio_radmap_write_rows()), else within p's own arrays; and checks them. @return LFIO_OK, rows's
  * status, or LFIO_ERR_ARG naming the patch and the problem. */
@@ -504,7 +495,7 @@ static lfio_status write_patch(const struct map_content *mc, const char *path, h
     chunk_place *at = cap ? malloc(cap * sizeof *at) : NULL;
     if (cap && (c == NULL || at == NULL))
         w.st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, w.obj);
-    const unsigned threads = ilf_thread_count(atomic_load_explicit(&write_threads, memory_order_relaxed));
+    const unsigned threads = ilf_thread_count(mc->threads);
     uint32_t first = 0;
     while (w.st == LFIO_OK) {
         const uint32_t count = p->ncells - first < step ? p->ncells - first : step;
@@ -911,7 +902,7 @@ void lfio_radmap_write_options_init(lfio_radmap_write_options *opt)
         return;
     memset(opt, 0, sizeof *opt);
     opt->size = sizeof *opt;
-    opt->threads = atomic_load_explicit(&write_threads, memory_order_relaxed);
+    opt->threads = 0;
     opt->deflate_level = MAP_DEFLATE_LEVEL;
     opt->format_version = LFIO_RADMAP_FORMAT_VERSION;
 }
@@ -922,12 +913,10 @@ static lfio_status take_options(const char *path, const lfio_radmap_write_option
 {
     lfio_radmap_write_options o;
     lfio_radmap_write_options_init(&o);
-    if (opt != NULL) {
-        if (opt->size < offsetof(lfio_radmap_write_options, threads) + sizeof opt->threads || opt->size > sizeof o)
-            return lfio__fail(LFIO_ERR_ARG, "%s: lfio_radmap_write_options.size %zu is not one this library knows",
-                              path, opt->size);
-        memcpy(&o, opt, opt->size);
-    }
+    if (opt != NULL
+        && !ilf_options_take(&o, sizeof o, opt, offsetof(lfio_radmap_write_options, threads) + sizeof opt->threads))
+        return lfio__fail(LFIO_ERR_ARG, "%s: lfio_radmap_write_options.size %zu is not one this library knows", path,
+                          opt->size);
     if (o.threads > 1024 || o.deflate_level < 0 || o.deflate_level > 9 || o.format_version < 1
         || o.format_version > LFIO_RADMAP_FORMAT_VERSION)
         return lfio__fail(LFIO_ERR_ARG, "%s: write options out of range (threads <= 1024, deflate_level 0 .. 9, "

@@ -32,6 +32,7 @@ typedef struct rl_build {
     rl_scene *scene;       /* under construction, owned by the caller */
     const char *file;      /* the scene file as the caller named it, for messages */
     char dir[1024];        /* its folder with a trailing '/', or "" */
+    unsigned read_threads; /* threads its light fields' radiance inflates on (rl_scene_load_options.threads) */
     size_t vertex_cap, polygon_cap, material_cap, lightfield_cap;
     uint32_t *names;       /* open addressing: material index + 1, 0 = empty slot */
     size_t names_cap;      /* 0, or a power of two > 2 * nmaterials */

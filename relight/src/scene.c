@@ -24,6 +24,7 @@
 #include <float.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -34,6 +35,7 @@
 #include "mesh.h"
 #include "ilf/json.h"
 #include "ilf/limits.h"
+#include "ilf/options.h"
 #include "ilf/vec.h"
 
 /* Longest element path in messages. */
@@ -439,7 +441,10 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
     if (same) {
         lf->lf = same->lf;
     } else {
-        lfio_status ls = lfio_lightfield_read(lf->file, &lf->lf);
+        lfio_read_options ro;
+        lfio_read_options_init(&ro);
+        ro.threads = b->read_threads;
+        lfio_status ls = lfio_lightfield_read_with(lf->file, &ro, &lf->lf);
         if (ls == LFIO_ERR_NOMEM)
             return rl__fail(RL_ERR_NOMEM, "%s: %s: %s", b->file, elem, lfio_errmsg());
         if (ls != LFIO_OK && made_by && access(lf->file, F_OK) != 0 && errno == ENOENT)
@@ -667,15 +672,46 @@ static rl_status build_init(rl_build *b, rl_scene *s, const char *path)
     return RL_OK;
 }
 
+void rl_scene_load_options_init(rl_scene_load_options *opt)
+{
+    if (!opt)
+        return;
+    memset(opt, 0, sizeof *opt);
+    opt->size = sizeof *opt;
+}
+
+/* Reads the caller's options (NULL: the defaults) into *o, the part of them their size holds. @return RL_OK,
+ * or RL_ERR_ARG naming the problem. */
+static rl_status take_load_options(const char *path, const rl_scene_load_options *opt, rl_scene_load_options *o)
+{
+    rl_scene_load_options_init(o);
+    if (opt && !ilf_options_take(o, sizeof *o, opt, offsetof(rl_scene_load_options, threads) + sizeof opt->threads))
+        return rl__fail(RL_ERR_ARG, "%s: rl_scene_load_options.size %zu is not one this library knows", path,
+                        opt->size);
+    if (o->threads > ILF_MAX_THREADS)
+        return rl__fail(RL_ERR_ARG, "%s: load options out of range (threads %u, at most %u)", path, o->threads,
+                        ILF_MAX_THREADS);
+    return RL_OK;
+}
+
 rl_status rl_scene_load(const char *path, rl_scene **out)
+{
+    return rl_scene_load_with(path, NULL, out);
+}
+
+rl_status rl_scene_load_with(const char *path, const rl_scene_load_options *opt, rl_scene **out)
 {
     if (out)
         *out = NULL;
     if (!path || !out)
         return rl__fail(RL_ERR_ARG, "rl_scene_load: path and out must not be NULL");
+    rl_scene_load_options o;
+    rl_status st = take_load_options(path, opt, &o);
+    if (st != RL_OK)
+        return st;
     ilf_json *root = NULL;
     ilf_json_ctx jc = {.file = path};
-    rl_status st = json_result(&jc, ilf_json_load(&jc, ILF_SCENE_MAX_BYTES, &root));
+    st = json_result(&jc, ilf_json_load(&jc, ILF_SCENE_MAX_BYTES, &root));
     if (st != RL_OK)
         return st;
 
@@ -686,6 +722,7 @@ rl_status rl_scene_load(const char *path, rl_scene **out)
         st = rl__fail(RL_ERR_NOMEM, "%s: out of memory", path);
     if (st == RL_OK)
         st = build_init(&b, s, path);
+    b.read_threads = o.threads;
     if (st == RL_OK)
         st = read_scene(&b, root);
     build_release(&b);

@@ -137,6 +137,39 @@ typedef struct cap_position_info {
 cap_status cap_manifest_get_position(const cap_manifest *m, size_t plane, uint32_t i, uint32_t j,
                                      cap_position_info *out);
 
+/** One plane of the manifest cap_manifest_write() writes: one image a grid position, named by a pattern. */
+typedef struct cap_manifest_plane {
+    const lfio_slab_desc *desc; /**< its slab's name, plane (origin, u, v) and grid (nu, nv); the rest is not written */
+    const char *pattern;        /**< image file names, relative to the manifest's folder: {i} and {j} replaced by
+                                 *   the position (docs/capture.md) */
+} cap_manifest_plane;
+
+/** What cap_manifest_write() writes: the settings every plane shares, then the planes. */
+typedef struct cap_manifest_spec {
+    uint32_t n;                       /**< partition level of every slab, 1 .. LFIO_SLAB_MAX_N */
+    lfio_units units;                 /**< "radiance" or "relative" */
+    cap_projection projection;
+    cap_colour_space colour_space;
+    size_t nplanes;                   /**< 1 (the one-plane form: its keys at the top level) .. CAP_PLANES_MAX
+                                       *   (under "planes") */
+    const cap_manifest_plane *planes; /**< [nplanes] */
+} cap_manifest_spec;
+
+/**
+ * Writes the manifest spec describes to path (docs/capture.md, the pattern
+ * form: no orientation, scale or exposures, so identity, 1 and one image a
+ * position) atomically: a temporary beside path renamed over it once
+ * complete, so path holds the old file or the new one, never a part.
+ * Formatted JSON, tab-indented, ending with a newline; numbers in their
+ * shortest form of 15 or 17 significant digits that reads back equal, whole
+ * numbers as integers. Only what spec holds is checked (not the images, nor
+ * the plane's geometry): cap_manifest_load() checks the rest when it reads it.
+ * @return CAP_OK; CAP_ERR_ARG for NULL pointers or a value out of range (the
+ * message names it); CAP_ERR_OUTPUT with the message naming path and the
+ * system's reason; CAP_ERR_NOMEM. On failure path is as it was.
+ */
+cap_status cap_manifest_write(const char *path, const cap_manifest_spec *spec);
+
 /** Options of a capture; all zero means: one thread per processor, no progress. */
 typedef struct cap_capture_options {
     unsigned threads;         /**< worker threads, 0 = one per processor; the result does not depend on it */

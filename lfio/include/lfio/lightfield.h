@@ -361,24 +361,38 @@ const char *lfio_lightfield_creator(const lfio_lightfield *lf);
 lfio_status lfio_lightfield_write(const lfio_lightfield *lf, const char *path);
 
 /**
+ * How a read is done (not what it reads: the values are the same whatever
+ * the options). Set size to sizeof(lfio_read_options)
+ * (lfio_read_options_init() does), so that a later lfio with more fields
+ * still takes it; fields past size take their defaults.
+ */
+typedef struct lfio_read_options {
+    size_t size;       /**< sizeof(lfio_read_options) as the caller was compiled */
+    unsigned threads;  /**< threads inflating a slab's radiance chunks in whole reads: 0 every online core (the
+                        *   default), 1 the calling thread alone, at most 1024. Files stored as lfio writes them
+                        *   are inflated by lfio itself, on these threads; others, and every file on big-endian
+                        *   machines, through HDF5 on one. */
+} lfio_read_options;
+
+/** Fills *opt with the defaults: threads 0 (every online core). */
+void lfio_read_options_init(lfio_read_options *opt);
+
+/**
  * Reads a whole file, checking format, shapes, limits and checksums before
- * and while allocating, and rebuilds each slab's mask from its radiance.
+ * and while allocating, and rebuilds each slab's mask from its radiance;
+ * with the default options (lfio_lightfield_read_with() takes others).
  * @return LFIO_OK and *out, owned by the caller; LFIO_ERR_NOTFOUND, LFIO_ERR_IO,
  * LFIO_ERR_FORMAT, LFIO_ERR_CHECKSUM or LFIO_ERR_NOMEM with *out = NULL.
  */
 lfio_status lfio_lightfield_read(const char *path, lfio_lightfield **out);
 
 /**
- * Sets how many threads whole reads of radiance (lfio_lightfield_read(),
- * lfio_reader_read_slab()) may decompress its chunks on: 0 (the default) for
- * every online core, 1 for the calling thread alone (at most 1024). Files
- * stored as lfio writes them are inflated by lfio itself, on those threads;
- * others, and big-endian machines, through HDF5 on one. The values are the
- * same whatever the count. Safe to call from any thread; a read already
- * under way may take the old value or the new.
- * @return nothing.
+ * Reads a whole file as lfio_lightfield_read() does, as opt says (NULL: the
+ * defaults of lfio_read_options_init()).
+ * @return as lfio_lightfield_read(); LFIO_ERR_ARG for options out of range
+ * or of a size this library does not know.
  */
-void lfio_lightfield_set_read_threads(unsigned threads);
+lfio_status lfio_lightfield_read_with(const char *path, const lfio_read_options *opt, lfio_lightfield **out);
 
 /* --------------------------------------------------------------- coverage */
 
@@ -436,10 +450,19 @@ double lfio_coverage_share(const lfio_slab_desc *desc, const uint8_t *coverage, 
 typedef struct lfio_reader lfio_reader;
 
 /**
- * Opens a file and validates its metadata (not yet the radiance).
+ * Opens a file and validates its metadata (not yet the radiance); its whole
+ * reads (lfio_reader_read_slab()) take the default options.
  * @return LFIO_OK and *out; an error as lfio_lightfield_read() with *out = NULL.
  */
 lfio_status lfio_reader_open(const char *path, lfio_reader **out);
+
+/**
+ * Opens a file as lfio_reader_open() does; its reads are done as opt says
+ * (NULL: the defaults; opt is copied).
+ * @return as lfio_reader_open(); LFIO_ERR_ARG for options out of range or of
+ * a size this library does not know.
+ */
+lfio_status lfio_reader_open_with(const char *path, const lfio_read_options *opt, lfio_reader **out);
 
 /** Closes the file. NULL is a no-op. */
 void lfio_reader_close(lfio_reader *r);

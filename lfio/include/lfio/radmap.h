@@ -87,22 +87,9 @@ typedef struct lfio_radmap_patch {
 typedef struct lfio_radmap lfio_radmap;
 
 /**
- * Sets how many threads the serial radiance-map writers that take no options
- * (lfio_radmap_write(), lfio_radmap_write_each(), lfio_radmap_write_rows())
- * may use to compress chunks, and the default threads of
- * lfio_radmap_write_options_init(): 0 (the default) for every online core, 1
- * for the calling thread alone (at most 1024). The chunks' bytes are the
- * same whatever the count. MPI writes and big-endian machines compress
- * through HDF5 on one thread and ignore it. Safe to call from any thread; a
- * write already under way may take the old value or the new. A caller that
- * owns its write passes lfio_radmap_write_options instead.
- */
-void lfio_radmap_set_threads(unsigned threads);
-
-/**
  * Writes count patches (count may be 0) to path atomically, as
- * lfio_lightfield_write() does, in the newest format (see
- * lfio_radmap_write_with() for the others). creator names the program (NULL: "lfio
+ * lfio_lightfield_write() does, with the default options of
+ * lfio_radmap_write_options_init() (lfio_radmap_write_with() takes others). creator names the program (NULL: "lfio
  * VERSION"), scene the scene file it relit (NULL: ""). Every patch is checked
  * as the reader checks it, so a written file always reads back.
  * @return LFIO_OK; LFIO_ERR_ARG (the message names the patch and problem); LFIO_ERR_IO; LFIO_ERR_NOMEM.
@@ -171,12 +158,14 @@ lfio_status lfio_radmap_write_rows(const char *path, const char *creator, const 
  */
 typedef struct lfio_radmap_write_options {
     size_t size;         /**< sizeof(lfio_radmap_write_options) as the caller was compiled */
-    unsigned threads;    /**< threads compressing chunks in a serial write: 0 every core (at most 1024) */
+    unsigned threads;    /**< threads compressing chunks in a serial write: 0 every core (at most 1024); the chunks'
+                          *   bytes are the same whatever the count; MPI writes and big-endian machines compress
+                          *   through HDF5 on one thread and ignore it */
     int deflate_level;   /**< zlib level, 0 (no compression) .. 9, of datasets of 1 KiB or more (format 2; default 1) */
     int format_version;  /**< 1 or 2 (LFIO_RADMAP_FORMAT_VERSION, the default): format 1 only for older readers */
 } lfio_radmap_write_options;
 
-/** Fills *opt with the defaults: threads as lfio_radmap_set_threads() last set, level 1, the newest format. */
+/** Fills *opt with the defaults: threads 0 (every online core), level 1, the newest format. */
 void lfio_radmap_write_options_init(lfio_radmap_write_options *opt);
 
 /**

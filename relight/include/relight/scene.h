@@ -30,6 +30,27 @@ typedef struct rl_scene rl_scene;
  */
 rl_status rl_scene_load(const char *path, rl_scene **out);
 
+/**
+ * How a scene is loaded (not what it holds: the scene is the same whatever
+ * these say). Set size to sizeof(rl_scene_load_options)
+ * (rl_scene_load_options_init() does), so that a later library with more
+ * fields still takes it; fields past size take their defaults.
+ */
+typedef struct rl_scene_load_options {
+    size_t size;       /**< sizeof(rl_scene_load_options) as the caller was compiled */
+    unsigned threads;  /**< threads inflating its light fields' radiance (lfio_read_options.threads): 0 every
+                        *   online core (the default), at most 1024 */
+} rl_scene_load_options;
+
+/** Fills *opt with the defaults: threads 0 (every online core). */
+void rl_scene_load_options_init(rl_scene_load_options *opt);
+
+/**
+ * Reads and validates a scene file as rl_scene_load() does, as opt says (NULL: the defaults).
+ * @return as rl_scene_load(); RL_ERR_ARG for options out of range or of a size this library does not know.
+ */
+rl_status rl_scene_load_with(const char *path, const rl_scene_load_options *opt, rl_scene **out);
+
 /** Releases a scene and the light fields it loaded. NULL is a no-op. */
 void rl_scene_destroy(rl_scene *s);
 
