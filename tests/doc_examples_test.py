@@ -11,7 +11,8 @@ README.md, then docs/*.md in name order. Their fenced blocks follow the conventi
                           a copy of data/), with bash; each must exit 0, or N when its comment says
                           "exit status N". State does not carry from line to line (no cd, no variables).
   ```python               run with this test's python3 (h5py and numpy) from the scratch folder, after the python blocks before it
-                          in the same document (as one session: a later block uses an earlier one's imports)
+                          in the same document (as one session: a later block uses an earlier one's imports),
+                          with the installed package ilfkit on PYTHONPATH when the build has it
   ```sh illustration      shown, not run (a build, a cluster, a long benchmark: say why beside it)
   ```output [rtol=R]      what the last command of the sh block just before printed (stdout and stderr);
                           a line "..." stands for any number of lines; numbers agree within relative
@@ -202,6 +203,11 @@ class Run:
                                             self.env.get("PATH", "/usr/bin:/bin")])
         self.env["PKG_CONFIG_PATH"] = os.path.join(libdir, "pkgconfig")
         self.env["CMAKE_PREFIX_PATH"] = prefix
+        # docs/python.md imports the package ilfkit as a user would, from the install
+        package = next((d for d, _, files in os.walk(prefix) if os.path.basename(d) == "ilfkit" and "__init__.py" in files),
+                       None)
+        if package is not None:
+            self.env["PYTHONPATH"] = os.path.dirname(package)
 
     def fail(self, block, line, what, command=None, output=None):
         text = "%s:%d: %s" % (block.doc, line, what)
