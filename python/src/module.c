@@ -15,7 +15,10 @@ PyObject *ilfpy__error;
 
 PyObject *ilfpy__raise(const char *status, const char *message)
 {
-    PyObject *e = PyObject_CallFunction(ilfpy__error, "s", message);
+    /* a message naming a file holds its path's bytes: decoded as os.fsdecode() would, never refused */
+    PyObject *text = PyUnicode_DecodeUTF8(message, (Py_ssize_t)strlen(message), "surrogateescape");
+    PyObject *e = text != NULL ? PyObject_CallOneArg(ilfpy__error, text) : NULL;
+    Py_XDECREF(text);
     if (e == NULL)
         return NULL;
     PyObject *st = PyUnicode_FromString(status);
@@ -133,7 +136,7 @@ static int add_error(PyObject *m)
     ilfpy__error = PyErr_NewExceptionWithDoc(
         "ilfkit.Error",
         "A failure reported by ilfkit's libraries: the message names the file, object and problem; the "
-        "attribute status names the library's status ('not found', 'bad format', 'invalid input', ...).",
+        "attribute status names the library's status ('not found', 'invalid file format', 'invalid input', ...).",
         PyExc_RuntimeError, NULL);
     if (ilfpy__error == NULL)
         return -1;

@@ -12,7 +12,7 @@
  */
 #include "ilfpy.h"
 
-#include <stdlib.h>
+#include <stdio.h>
 #include <string.h>
 
 #include <lfio/lightfield.h>
@@ -42,7 +42,8 @@ static int set_setting(rl_sampling *s, size_t k, PyObject *value)
     double v = PyFloat_AsDouble(value);
     if (v == -1.0 && PyErr_Occurred())
         return -1;
-    if ((set->type != RL_SETTING_REAL && v != (double)(int64_t)v) || !rl_sampling_setting_allows(k, v, 0) ||
+    /* the bounds of values written as text: integers a double holds exactly, as a scene file's */
+    if (!rl_sampling_setting_allows(k, v, 1) || (set->type != RL_SETTING_REAL && v != (double)(int64_t)v) ||
         !rl_sampling_set(s, k, v)) {
         PyErr_Format(PyExc_ValueError, "sampling setting '%s': %R is not %s", set->key, value, rule);
         return -1;
@@ -117,11 +118,14 @@ static PyObject *raise_relight(rl_status st, const char *path)
     const char *name = (unsigned)st < sizeof names / sizeof names[0] ? names[st] : "error";
     if (strstr(msg, path) != NULL)
         return ilfpy__raise(name, msg);
-    PyObject *text = PyUnicode_FromFormat("%s: %s", path, msg[0] != '\0' ? msg : "cannot load the scene");
+    msg = msg[0] != '\0' ? msg : "cannot load the scene";
+    size_t size = strlen(path) + strlen(msg) + 3;
+    char *text = PyMem_Malloc(size);
     if (text == NULL)
-        return NULL;
-    ilfpy__raise(name, PyUnicode_AsUTF8(text));
-    Py_DECREF(text);
+        return PyErr_NoMemory();
+    snprintf(text, size, "%s: %s", path, msg);
+    ilfpy__raise(name, text);
+    PyMem_Free(text);
     return NULL;
 }
 
@@ -232,11 +236,10 @@ static PyObject *relight(PyObject *self, PyObject *args)
     if (load_and_run(PyBytes_AS_STRING(path), settings, &call) == 0) {
         PyObject *maps = solution_list(call.solution, rl_solution_map_count(call.solution), solution_map);
         PyObject *passes = maps ? solution_list(call.solution, rl_solution_pass_count(call.solution), pass_at) : NULL;
-        out = passes ? Py_BuildValue("{s:N,s:N}", "maps", maps, "passes", passes) : NULL;
-        if (out == NULL) {
+        if (passes != NULL)
+            out = Py_BuildValue("{s:N,s:N}", "maps", maps, "passes", passes); /* takes both, even on failure */
+        else
             Py_XDECREF(maps);
-            Py_XDECREF(passes);
-        }
         engine_call_free(&call);
     }
     Py_DECREF(path);
