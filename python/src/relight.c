@@ -95,6 +95,7 @@ static rl_status run_engine(engine_call *call)
     rl_run_options run;
     rl_run_options_default(&run);
     run.threads = call->threads;
+    run.time_budget = rl_scene_time_budget(call->scene); /* as `ilf relight` without --time-budget */
     if (call->points != NULL)
         return rl_irradiance(call->scene, &run, call->points, call->count, call->irradiance, NULL);
     return rl_relight(call->scene, &run, &call->solution);
@@ -136,6 +137,10 @@ static PyObject *raise_relight(rl_status st, const char *path)
  */
 static int load_and_run(const char *path, PyObject *settings, engine_call *call)
 {
+    /* a setting out of its range is refused before a large scene is loaded for nothing */
+    rl_sampling_default(&call->sampling);
+    if (apply_settings(&call->sampling, settings) < 0)
+        return -1;
     rl_status st;
     Py_BEGIN_ALLOW_THREADS
     lfio_lightfield_set_read_threads(call->threads);

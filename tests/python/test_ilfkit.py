@@ -183,6 +183,8 @@ def test_relight_maps_match_the_command(scene, tmp_path):
 def test_relight_settings_are_checked(scene):
     with pytest.raises(ValueError, match="partition_n"):
         ilfkit.relight(scene, partition_n=6)
+    with pytest.raises(ValueError, match="rays_per_solid_angle"):  # refused before the scene is even opened
+        ilfkit.irradiance(scene + ".missing", [0, 0, 0], [0, 0, 1], rays=0)
     with pytest.raises(ValueError, match="'bogus' is not a sampling setting"):
         ilfkit.relight(scene, bogus=1)
     with pytest.raises(ValueError, match="method"):
