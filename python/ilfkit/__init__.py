@@ -94,7 +94,8 @@ class Slab:
     (partition level n, in the slab frame e1 = u/|u|, e2 = v/|v|, e3 = e1 x e2).
 
     Attributes: name, origin, u, v (NumPy (3,) arrays, metres, world frame), nu, nv, n, units
-    ("radiance" for W sr^-1 m^-2 or "relative"), mask_threshold, partition (Partition(n)) and
+    ("radiance" for W sr^-1 m^-2 or "relative"), mask_threshold, frame (the rows e1, e2, e3),
+    partition (Partition(n), whose directions are in the slab frame: to_world() turns them) and
     radiance, a read-only float32 array of shape (4 n^2, nv, nu, 3): radiance[d, j, i] is the r g b of
     direction id d at position (i, j). It is a view of the light field's memory, not a copy.
     """
@@ -108,6 +109,18 @@ class Slab:
         self.units, self.mask_threshold = desc["units"], desc["mask_threshold"]
         self.partition = Partition(self.n)
         self.radiance = lightfield.slab_radiance(k)
+        e1, e2 = self.u / _np.linalg.norm(self.u), self.v / _np.linalg.norm(self.v)
+        self.frame = _np.array([e1, e2, _np.cross(e1, e2)])
+
+    def to_world(self, local):
+        """@return slab-frame directions (3,) or (N, 3) in the world frame: x e1 + y e2 + z e3, with
+        frame = [e1, e2, e3] as rows (e3 the slab's front)."""
+        return _np.asarray(local, dtype=_np.float64) @ self.frame
+
+    def directions(self):
+        """@return the world-frame unit directions of the stored ids 0 .. 4 n^2 - 1, shape (4 n^2, 3): row d is
+        the centroid direction of radiance[d]."""
+        return self.to_world(self.partition.direction(_np.arange(self.partition.hemisphere_count)))
 
     def position(self, i, j):
         """@return the world centre of position (i, j): origin + (i+0.5)/nu u + (j+0.5)/nv v."""

@@ -95,17 +95,21 @@ def test_radiance_view_is_read_only_and_outlives_its_light_field(constant_field)
     np.testing.assert_allclose(radiance[:, 1, 2], np.broadcast_to([0.25, 0.5, 2], (64, 3)), rtol=1e-6)
 
 
-def test_spot_light_field_against_slice(tmp_path):
-    """A non-constant field: the array's direction d at position (i, j) is the sample the C reader gives."""
+def test_spot_light_field_against_lookups(tmp_path):
+    """A non-constant field on a turned slab (front along -y): the array's direction d at position (i, j) is the
+    sample lfio's nearest lookup gives in the world direction of d."""
     path = str(tmp_path / "spot.h5")
-    ilf("synth", "--kind", "spot", "--spot", "0,0,-0.5:0,0,1:30:2", "--grid", "4x4", "--n", "4", "-o", path)
+    ilf("synth", "--kind", "spot", "--spot", "0,1,0:0,-1,0:30:2", "--grid", "4x4", "--n", "4", "--origin", "-0.5,0,-0.5",
+        "--u", "1,0,0", "--v", "0,0,1", "-o", path)
     s = ilfkit.open(path)[0]
-    d = int(s.partition.index([0.1, 0.05, 1]))
-    i, j = 1, 2
-    assert s.radiance[d].max() > 0
-    w = s.partition.direction(d)  # slab frame = world frame for this slab
-    sample = s.radiance_at((i + 0.5) / 4, (j + 0.5) / 4, w, interpolate=False)
-    np.testing.assert_array_equal(sample, s.radiance[d, j, i])
+    np.testing.assert_allclose(s.frame, [[1, 0, 0], [0, 0, 1], [0, -1, 0]], atol=1e-15)
+    world = s.directions()
+    assert world.shape == (64, 3) and (world[:, 1] < 0).all()  # the front hemisphere faces -y
+    lit = np.argwhere(s.radiance.max(axis=3) > 0)
+    assert len(lit) > 0 and len(lit) < s.radiance[..., 0].size  # a spot: some samples lit, not all
+    for d, j, i in lit[:: max(1, len(lit) // 20)]:
+        sample = s.radiance_at((i + 0.5) / 4, (j + 0.5) / 4, world[d], interpolate=False)
+        np.testing.assert_array_equal(sample, s.radiance[d, j, i])
 
 
 # ------------------------------------------------------------------ the partition
