@@ -12,7 +12,7 @@ OUT_DIR=${OUT_DIR:-out}
 JOBS=${JOBS:-$(nproc)}
 
 PACKAGES="cmake make gcc g++ pkg-config libhdf5-dev hdf5-tools libembree-dev libopenexr-dev
-libopenimageio-dev libpng-dev libcjson-dev libassimp-dev python3 python3-h5py python3-numpy clang gnuplot-nox"
+libopenimageio-dev libpng-dev libcjson-dev libassimp-dev python3 python3-h5py python3-numpy python3-dev python3-pytest clang gnuplot-nox"
 
 install_missing() {
     missing=""

@@ -11,7 +11,9 @@ README.md, then docs/*.md in name order. Their fenced blocks follow the conventi
                           a copy of data/), with bash; each must exit 0, or N when its comment says
                           "exit status N". State does not carry from line to line (no cd, no variables).
   ```python               run with this test's python3 (h5py and numpy) from the scratch folder, after the python blocks before it
-                          in the same document (as one session: a later block uses an earlier one's imports)
+                          in the same document (as one session: a later block uses an earlier one's imports),
+                          with the installed package ilfkit on PYTHONPATH (skipped, and said so, when a block
+                          needs it and the build has no Python module)
   ```sh illustration      shown, not run (a build, a cluster, a long benchmark: say why beside it)
   ```output [rtol=R]      what the last command of the sh block just before printed (stdout and stderr);
                           a line "..." stands for any number of lines; numbers agree within relative
@@ -181,6 +183,9 @@ def key_differences(doc, real, optional, where="", out=None):
     return out
 
 
+IMPORTS_ILFKIT = re.compile(r"^\s*(?:import|from)\s+ilfkit\b", re.M)
+
+
 class Run:
     def __init__(self, src, build, work, cmake):
         self.src, self.build, self.work = src, build, work
@@ -202,6 +207,12 @@ class Run:
                                             self.env.get("PATH", "/usr/bin:/bin")])
         self.env["PKG_CONFIG_PATH"] = os.path.join(libdir, "pkgconfig")
         self.env["CMAKE_PREFIX_PATH"] = prefix
+        # docs/python.md imports the package ilfkit as a user would, from the install
+        package = next((d for d, _, files in os.walk(prefix) if os.path.basename(d) == "ilfkit" and "__init__.py" in files),
+                       None)
+        if package is not None:
+            self.env["PYTHONPATH"] = os.path.dirname(package)
+        self.has_ilfkit, self.skipped = package is not None, []
 
     def fail(self, block, line, what, command=None, output=None):
         text = "%s:%d: %s" % (block.doc, line, what)
@@ -267,8 +278,12 @@ class Run:
 
     def run_python(self, block, session):
         """Runs the block after the document's earlier python blocks (session), as one script."""
-        self.count += 1
         script = "\n".join(session + block.body) + "\n"
+        if not self.has_ilfkit and IMPORTS_ILFKIT.search(script):
+            self.skipped.append("%s:%d" % (block.doc, block.line))  # a build without the Python module
+            session += block.body
+            return
+        self.count += 1
         started = time.monotonic()
         try:
             p = subprocess.run([sys.executable, "-c", script], cwd=self.scratch, env=self.env, stdout=subprocess.PIPE,
@@ -364,6 +379,9 @@ def main():
                                                                        sum(t[0] for t in run.times)))
     for seconds, where, command in sorted(run.times, reverse=True)[:5]:
         print("  %6.1f s  %s: %s" % (seconds, where, command))
+    if run.skipped:
+        print("%d python blocks skipped, the build having no Python module ilfkit: %s" % (len(run.skipped),
+                                                                                          " ".join(run.skipped)))
     for f in run.failures:
         print("FAILED " + f + "\n")
     print("%d failures" % len(run.failures))

@@ -119,5 +119,15 @@ for cmd in $commands; do
     check renders_clean "$mandir/ilf-$cmd.1"
     check page_names "$mandir/ilf.1" "ilf-$cmd"   # in its SEE ALSO
 done
+# the Python package ilfkit (when the build has it): imported from the prefix alone, by Debian's python3,
+# with no environment but PATH and PYTHONPATH; its module finds the installed liblfio through its rpath
+if [ -d "$build/python/ilfkit" ]; then
+    pydir=$(find "$prefix" -name '_ilfkit*.so' -printf '%h\n' | head -1)
+    check test -n "$pydir" -a -f "$pydir/__init__.py"
+    check env -i PATH=/usr/bin:/bin PYTHONPATH="$(dirname "${pydir:-.}")" /usr/bin/python3 -c "import ilfkit
+s = ilfkit.open('$work/c.h5')[0]
+assert abs(float(s.radiance.max()) - 1) < 1e-6, s.radiance.max()
+assert ilfkit.__file__.startswith('$prefix/'), ilfkit.__file__"
+fi
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0
