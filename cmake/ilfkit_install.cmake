@@ -54,6 +54,7 @@ function(ilfkit_add_shared_twin name prefix description)
   target_link_libraries(${name}_shared PRIVATE ${name}_objects PUBLIC lfio::lfio)
   target_include_directories(${name}_shared INTERFACE
     $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/base/include>  # ilf/limits.h, installed beside the headers
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   set_target_properties(${name}_shared PROPERTIES
     OUTPUT_NAME ${name} EXPORT_NAME ${name}
