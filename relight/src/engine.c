@@ -64,9 +64,29 @@ rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__r
                         o.threads);
     if (!(o.time_budget >= 0) || !isfinite(o.time_budget))
         return rl__fail(RL_ERR_ARG, "%s: time_budget must be finite and >= 0, got %g", call, o.time_budget);
-    *run = (rl__run){ilf_thread_count(o.threads), o.progress, o.progress_user, o.time_budget, o.maps_ready,
-                     o.maps_ready_user, NULL, NULL, NULL};
+    memset(run, 0, sizeof *run);
+    run->threads = ilf_thread_count(o.threads);
+    run->progress = o.progress, run->user = o.progress_user;
+    run->time_budget = o.time_budget;
+    run->maps_ready = o.maps_ready, run->maps_ready_user = o.maps_ready_user;
     return RL_OK;
+}
+
+rl_status rl__job_resolve(const rl_scene *scene, const rl_job *job, rl__run *run)
+{
+    rl_job own;
+    if (!job) {
+        rl_job_default(scene, &own);
+        job = &own;
+    }
+    rl_status st = rl_job_check(job);
+    if (st == RL_OK)
+        st = rl__run_resolve("rl_job: run", &job->run, run);
+    if (st == RL_OK) {
+        run->sampling = job->sampling;
+        run->cell_size = job->cell_size;
+    }
+    return st;
 }
 
 /* ------------------------------------------------------------ parallel work */
@@ -588,9 +608,9 @@ static rl_sampling pass_sampling(const rl_sampling *s, uint32_t p)
  * before the pass runs: a culled or adaptive pass is taken to test a quarter of an emitter's 4n^2 solid
  * angles; cells are the receivers' area over the cell's (the maps are not built yet). */
 
-double rl__pass_work(const rl_scene *scene, uint32_t pass, double cells, double emitters)
+double rl__pass_work(const rl_sampling *job, uint32_t pass, double cells, double emitters)
 {
-    rl_sampling s = pass_sampling(&scene->sampling, pass);
+    rl_sampling s = pass_sampling(job, pass);
     if (pass > 0 && s.bounce_rays > 0)
         return cells * s.bounce_rays; /* first hits: the emitters are read where the rays land */
     double per_pair = s.method == RL_METHOD_AREA || s.method == RL_METHOD_SOLIDANGLE
@@ -599,11 +619,11 @@ double rl__pass_work(const rl_scene *scene, uint32_t pass, double cells, double 
     return cells * emitters * per_pair;
 }
 
-/* @return the expected cells of the scene's receivers at factor times the scene's cell size, and their
- * count in *receivers. */
-static double receiver_cells(const rl_scene *scene, double factor, size_t *receivers)
+/* @return the expected cells of the scene's receivers at cells of side `side` (m), and their count in
+ * *receivers. */
+static double receiver_cells(const rl_scene *scene, double side, size_t *receivers)
 {
-    double cells = 0.0, side = scene->cell_size * factor;
+    double cells = 0.0;
     *receivers = 0;
     for (size_t k = 0; k < scene->npolygons; k++) {
         const float *al = scene->materials[scene->polygons[k].material].albedo;
@@ -621,18 +641,19 @@ static uint32_t bounce_factor(const rl_sampling *s)
     return s->bounce_cell_factor ? s->bounce_cell_factor : s->bounce_rays > 0 ? 4 : 2;
 }
 
-double rl__solve_work(const rl_scene *scene, uint32_t passes, double *per_pass)
+double rl__solve_work(const rl_scene *scene, const rl__run *run, uint32_t passes, double *per_pass)
 {
     size_t receivers = 0, ne = 0;
     for (size_t k = 0; k < scene->npolygons; k++)
         ne += positive3(scene->materials[scene->polygons[k].material].emission);
     ne += scene->nlightfields;
-    double total = 0.0, fine = receiver_cells(scene, 1.0, &receivers);
-    double coarse = passes > 1 ? receiver_cells(scene, bounce_factor(&scene->sampling), &receivers) : fine;
+    double total = 0.0, fine = receiver_cells(scene, run->cell_size, &receivers);
+    double coarse =
+        passes > 1 ? receiver_cells(scene, run->cell_size * bounce_factor(&run->sampling), &receivers) : fine;
     for (uint32_t p = 0; p < passes; p++) {
         /* a bounce pass's emitters are the lit receivers: at most all of them */
-        double w = p == 0 ? rl__pass_work(scene, 0, fine, (double)ne)
-                          : rl__pass_work(scene, p, coarse, (double)receivers);
+        double w = p == 0 ? rl__pass_work(&run->sampling, 0, fine, (double)ne)
+                          : rl__pass_work(&run->sampling, p, coarse, (double)receivers);
         if (per_pass)
             per_pass[p] = w;
         total += w;
@@ -675,7 +696,7 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
         for (size_t m = 0; m < nmaps; m++)
             memset(job.sets[set][m].e_pass, 0,
                    (job.sets[set][m].ncells ? job.sets[set][m].ncells : 1) * sizeof *job.sets[set][m].e_pass);
-    rl_sampling sampling = pass_sampling(&scene->sampling, gather_level_pass);
+    rl_sampling sampling = pass_sampling(&run->sampling, gather_level_pass);
     make_ctx(scene, tracer, run, pass, &sampling, e, ne, &job.ctx);
     /* a bounce pass of rl__solve() with bounce_rays gathers by first hits, which read each polygon's glow */
     rl_glow *glow = NULL;
@@ -941,7 +962,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     if (!s)
         return rl__fail(RL_ERR_NOMEM, "out of memory");
     s->scene = scene;
-    rl_status st = rl__maps_build(scene, run->threads, &s->maps, &s->nmaps);
+    rl_status st = rl__maps_build(scene, run->cell_size, run->sampling.bounces > 0, run->threads, &s->maps, &s->nmaps);
     if (st == RL_OK)
         st = rl__tracer_new(scene, run->threads, &s->tracer);
     s->polygon_map = malloc((scene->npolygons + 1) * sizeof *s->polygon_map);
@@ -969,13 +990,13 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     size_t ncoarse = 0;
     /* by default 4 for the first-hit gather, which gathers the cells near occluders on their own; 2 for
      * the methods' own, which interpolates everywhere (as before the first-hit gather's flags) */
-    uint32_t factor = bounce_factor(&scene->sampling);
+    uint32_t factor = bounce_factor(&run->sampling);
     if (passes > 1 && factor > 1)
-        st = rl__maps_build_sized(scene, scene->cell_size * factor, run->threads, &coarse, &ncoarse);
+        st = rl__maps_build_sized(scene, run->cell_size * factor, run->threads, &coarse, &ncoarse);
     assert(!coarse || ncoarse == s->nmaps); /* one map per receiving polygon, in order, at any cell size */
     s->accumulator_bytes = accumulator_bytes(s->maps, s->nmaps) + accumulator_bytes(coarse, ncoarse);
     refine rf = {0};
-    if (st == RL_OK && coarse && scene->sampling.bounce_rays > 0 && refine_new(coarse, ncoarse, s->maps, &rf) != 0)
+    if (st == RL_OK && coarse && run->sampling.bounce_rays > 0 && refine_new(coarse, ncoarse, s->maps, &rf) != 0)
         st = rl__fail(RL_ERR_NOMEM, "out of memory for the bounce cells");
     /* per-tile CPU times of the last pass: bounce passes after the first repeat its tiles and emitters */
     double *measured = NULL;
@@ -989,7 +1010,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     double *work = st == RL_OK ? calloc(passes + 1, sizeof *work) : NULL;
     if (st == RL_OK && !work)
         st = rl__fail(RL_ERR_NOMEM, "out of memory for the maps' passes");
-    double all_work = work ? rl__solve_work(scene, passes, work) : 0.0, work_before = 0.0;
+    double all_work = work ? rl__solve_work(scene, run, passes, work) : 0.0, work_before = 0.0;
     int told = 0, telling = 0; /* the caller was told of every map; of some, maybe */
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
         /* Cells near occluders are gathered on their own besides the larger cells once marked, unless the
@@ -1069,23 +1090,22 @@ const rl_cluster *rl__check_cluster(const rl_cluster *cl, rl_status *st)
     return cl && cl->ranks > 1 ? cl : NULL;
 }
 
-rl_status rl_relight_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_run_options *options,
-                             rl_solution **out)
+rl_status rl_relight_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_job *job, rl_solution **out)
 {
     if (!scene || !out)
         return rl__fail(RL_ERR_ARG, "rl_relight: NULL argument");
     *out = NULL;
     rl__run run;
-    rl_status st = rl__run_resolve("rl_relight", options, &run);
+    rl_status st = rl__job_resolve(scene, job, &run);
     const rl_cluster *cl = st == RL_OK ? rl__check_cluster(cluster, &st) : NULL;
     if (st == RL_OK)
-        st = rl__solve(scene, cl, &run, scene->sampling.bounces + 1, 1.0, out);
+        st = rl__solve(scene, cl, &run, run.sampling.bounces + 1, 1.0, out);
     if (st == RL_OK && run.progress)
         run.progress(run.user, 1.0);
     return st;
 }
 
-rl_status rl_relight(const rl_scene *scene, const rl_run_options *options, rl_solution **out)
+rl_status rl_relight(const rl_scene *scene, const rl_job *job, rl_solution **out)
 {
-    return rl_relight_cluster(scene, NULL, options, out);
+    return rl_relight_cluster(scene, NULL, job, out);
 }

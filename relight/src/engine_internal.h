@@ -1,6 +1,6 @@
 /*
  * engine_internal.h - what the engine's files share: the solution object,
- * the run options once checked, and the pass runner that solutions (engine.c)
+ * the job and run options once checked, and the pass runner that solutions (engine.c)
  * and point queries (query.c) are both made by.
  *
  * Invariants: a solution's maps, tracer and polygon_map are built together
@@ -26,8 +26,11 @@ struct rl_solution {
     uint64_t accumulator_bytes; /* the maps' irradiance arrays at their most (before rl__map_settle()) */
 };
 
-/* A call's run options, checked, with the thread count resolved. */
+/* A call's run options, checked, with the thread count resolved; for the calls that solve, also the
+ * job's sampling and cell size (rl__job_resolve()). */
 typedef struct rl__run {
+    rl_sampling sampling;    /* what to compute (rl__job_resolve(); zero for calls that only render or trace) */
+    double cell_size;        /* the radiance maps' cell size, metres (likewise) */
     unsigned threads;        /* >= 1: ilf_thread_count(options->threads) */
     rl_progress_fn progress; /* or NULL */
     void *user;
@@ -48,21 +51,26 @@ typedef struct rl__run {
  * @return RL_OK, or RL_ERR_ARG naming the field out of range. */
 rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__run *run);
 
+/* Checks job (NULL: rl_job_default(scene)) with rl_job_check() and resolves it into *run: its sampling, cell
+ * size and run options. @return RL_OK, or RL_ERR_ARG naming the field. */
+rl_status rl__job_resolve(const rl_scene *scene, const rl_job *job, rl__run *run);
+
 /* @return the cluster to run with, NULL for one process; checks it, RL_ERR_ARG in *st. */
 const rl_cluster *rl__check_cluster(const rl_cluster *cl, rl_status *st);
 
-/* Solves the scene's maps with `passes` passes (may be 0), reporting progress over [0, span) of the run.
+/* Solves the scene's maps as run's job says with `passes` passes (may be 0), reporting progress over
+ * [0, span) of the run.
  * @return RL_OK and *out (rl_solution_destroy), or an error. */
 rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *run, uint32_t passes, double span,
                     rl_solution **out);
 
-/* @return the expected work of pass `pass` (rays; the sampling that pass uses) gathering on `cells` cells
- * from `emitters` emitters: the weight of its share of a run's progress. */
-double rl__pass_work(const rl_scene *scene, uint32_t pass, double cells, double emitters);
+/* @return the expected work of pass `pass` of a job with sampling s (rays; the sampling that pass uses)
+ * gathering on `cells` cells from `emitters` emitters: the weight of its share of a run's progress. */
+double rl__pass_work(const rl_sampling *s, uint32_t pass, double cells, double emitters);
 
-/* @return the expected work of rl__solve() with `passes` passes, each pass's in per_pass[0 .. passes) unless
- * per_pass is NULL. */
-double rl__solve_work(const rl_scene *scene, uint32_t passes, double *per_pass);
+/* @return the expected work of rl__solve() of run's job with `passes` passes, each pass's in
+ * per_pass[0 .. passes) unless per_pass is NULL. */
+double rl__solve_work(const rl_scene *scene, const rl__run *run, uint32_t passes, double *per_pass);
 
 /* Casts the camera's rays through the centres of an nx x ny grid over its image (the scene has a camera):
  * *hits of them meet a surface, *back of those its back face. */

@@ -510,7 +510,7 @@ static rl_status read_radiance_maps(rl_build *b, const ilf_json *j)
 }
 
 /* Reads "sampling": every setting of the table (settings.c), in its order, and the time budget, which
- * the file may still hold as a suggested run option (rl_scene_time_budget()). */
+ * the file may still hold as a suggested run option: all three are the job the file suggests (rl_job_default()). */
 static rl_status read_sampling(rl_build *b, const ilf_json *j)
 {
     enum { MAX_KEYS = 32 };
@@ -655,7 +655,7 @@ static rl_status build_init(rl_build *b, rl_scene *s, const char *path)
         return rl__fail(RL_ERR_INPUT, "%.100s...: the path is too long", path);
     memcpy(b->dir, path, dirlen);
     memcpy(s->path, path, strlen(path) + 1);
-    s->cell_size = 0.05;
+    s->cell_size = RL_DEFAULT_CELL_SIZE;
     rl_sampling_default(&s->sampling);
     b->face = malloc(n * sizeof *b->face);
     b->keep = malloc(n * sizeof *b->keep);
@@ -715,39 +715,6 @@ void rl_scene_destroy(rl_scene *s)
     free(s);
 }
 
-const rl_sampling *rl_scene_sampling(const rl_scene *s)
-{
-    return s ? &s->sampling : NULL;
-}
-
-double rl_scene_time_budget(const rl_scene *s)
-{
-    return s ? s->time_budget : 0.0;
-}
-
-rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
-{
-    if (!s || !x)
-        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: scene and sampling must not be NULL");
-    for (size_t k = 0; k < rl_sampling_setting_count(); k++) {
-        const rl_setting_info *set = rl_sampling_setting(k);
-        double value = 0;
-        char rule[128];
-        rl_sampling_get(x, k, &value);
-        if (rl_sampling_setting_allows(k, value, 0))
-            continue;
-        if (set->type == RL_SETTING_METHOD)
-            return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: method %d is not a method", (int)x->method);
-        if (set->type == RL_SETTING_REAL)
-            return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: %s must be %s, got %g", set->key,
-                            rl_sampling_setting_rule(k, rule, sizeof rule), value);
-        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: %s must be %s, got %.0f", set->key,
-                        rl_sampling_setting_rule(k, rule, sizeof rule), value);
-    }
-    s->sampling = *x;
-    return RL_OK;
-}
-
 size_t rl_scene_polygon_count(const rl_scene *s)
 {
     return s ? s->npolygons : 0;
@@ -767,11 +734,6 @@ uint64_t rl_scene_lightfield_bytes(const rl_scene *s)
             bytes += lfio_slab_desc_bytes(lfio_slab_get_desc(lfio_lightfield_slab(lf, j)));
     }
     return bytes;
-}
-
-double rl_scene_cell_size(const rl_scene *s)
-{
-    return s ? s->cell_size : 0;
 }
 
 int rl_scene_has_camera(const rl_scene *s)

@@ -9,7 +9,9 @@
  *   - every light field emitter holds its loaded file and a borrowed slab,
  *     and its transform is a similarity (rotation times uniform scale > 0,
  *     plus translation), so directions map by the rotation alone;
- *   - cell_size > 0 and finite; sampling passes rl_scene_set_sampling()'s checks.
+ *   - cell_size > 0 and finite; sampling passes rl_job_check()'s checks.
+ * cell_size, sampling and time_budget are the job the file suggests: only rl_job_default() reads them,
+ * never the engine, which takes its job with each call.
  */
 #ifndef RELIGHT_SCENE_INTERNAL_H
 #define RELIGHT_SCENE_INTERNAL_H
@@ -78,9 +80,9 @@ struct rl_scene {
     size_t npolygons;
     rl_lightfield *lightfields;
     size_t nlightfields;
-    double cell_size;
-    rl_sampling sampling;
-    double time_budget; /* the file's sampling.time_budget: a suggested run option, seconds, >= 0 */
+    double cell_size;     /* the file's radiance_maps.cell_size, metres (suggested) */
+    rl_sampling sampling; /* the file's sampling settings (suggested) */
+    double time_budget;   /* the file's sampling.time_budget: a suggested run option, seconds, >= 0 */
     int has_camera;
     rl_camera camera;
 };

@@ -1,0 +1,68 @@
+/*
+ * job.c - the job (relight/engine.h's rl_job): what to compute (sampling
+ * settings, cell size) and how (run options), apart from the scene. A scene
+ * file suggests a job (its "sampling" and "radiance_maps" sections and
+ * sampling.time_budget); rl_job_default() hands that suggestion out and the
+ * engine reads only the job it is given, never the scene's suggestion.
+ *
+ * Invariants: rl_job_check() accepts exactly the jobs the engine runs, with
+ * the bounds of settings.c's table (not its text bounds), so a checked job
+ * never reaches the engine out of range.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "engine_internal.h"
+#include "scene_model.h"
+
+void rl_job_default(const rl_scene *scene, rl_job *job)
+{
+    if (!job)
+        return;
+    memset(job, 0, sizeof *job);
+    job->size = sizeof *job;
+    rl_run_options_default(&job->run);
+    if (scene) {
+        job->sampling = scene->sampling;
+        job->cell_size = scene->cell_size;
+        job->run.time_budget = scene->time_budget;
+    } else {
+        rl_sampling_default(&job->sampling);
+        job->cell_size = RL_DEFAULT_CELL_SIZE;
+    }
+}
+
+/* Checks the sampling settings against the table's bounds. @return RL_OK or RL_ERR_ARG naming the field. */
+static rl_status check_sampling(const rl_sampling *s)
+{
+    for (size_t k = 0; k < rl_sampling_setting_count(); k++) {
+        const rl_setting_info *set = rl_sampling_setting(k);
+        double value = 0;
+        char rule[128];
+        rl_sampling_get(s, k, &value);
+        if (rl_sampling_setting_allows(k, value, 0))
+            continue;
+        if (set->type == RL_SETTING_METHOD)
+            return rl__fail(RL_ERR_ARG, "rl_job: sampling.method %d is not a method", (int)s->method);
+        if (set->type == RL_SETTING_REAL)
+            return rl__fail(RL_ERR_ARG, "rl_job: sampling.%s must be %s, got %g", set->key,
+                            rl_sampling_setting_rule(k, rule, sizeof rule), value);
+        return rl__fail(RL_ERR_ARG, "rl_job: sampling.%s must be %s, got %.0f", set->key,
+                        rl_sampling_setting_rule(k, rule, sizeof rule), value);
+    }
+    return RL_OK;
+}
+
+rl_status rl_job_check(const rl_job *job)
+{
+    if (!job)
+        return rl__fail(RL_ERR_ARG, "rl_job: NULL job");
+    if (job->size != sizeof *job)
+        return rl__fail(RL_ERR_ARG, "rl_job: size must be sizeof(rl_job) = %zu (set by rl_job_default()), got %zu",
+                        sizeof *job, job->size);
+    if (!(job->cell_size > 0) || !isfinite(job->cell_size))
+        return rl__fail(RL_ERR_ARG, "rl_job: cell_size must be finite and > 0 metres, got %g", job->cell_size);
+    rl__run run;
+    rl_status st = check_sampling(&job->sampling);
+    return st == RL_OK ? rl__run_resolve("rl_job: run", &job->run, &run) : st;
+}
