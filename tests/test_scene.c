@@ -23,6 +23,7 @@
 #include "check.h"
 #include "relight/engine.h"
 #include "relight/scene.h"
+#include "emitter.h" /* rl__slab_tables_new(): a run's light field tables */
 #include "maps.h"
 #include "scene_model.h"
 
@@ -548,9 +549,11 @@ static void test_lightfields(void)
               "three emitters from one file, two of them one slab");
         CHECK(l[0].owns_lf && !l[1].owns_lf && !l[2].owns_lf && l[1].lf == l[0].lf && l[2].lf == l[0].lf,
               "the file is read once and shared");
-        CHECK(l[0].owns_support && !l[1].owns_support && l[1].support == l[0].support && l[2].owns_support &&
-                  l[2].support != l[0].support,
+        rl_slab_tables *t = rl__slab_tables_new(s); /* a run's: the scene holds none */
+        CHECK(t && t[0].owned && !t[1].owned && t[1].support == t[0].support && t[2].owned &&
+                  t[2].support != t[0].support,
               "a slab's support table is shared, another slab's is its own");
+        rl__slab_tables_destroy(t, rl_scene_lightfield_count(s));
         CHECK(rl_scene_lightfield_bytes(s) == file_bytes, "three emitters of one file hold its radiance once: %llu",
               (unsigned long long)rl_scene_lightfield_bytes(s));
         rl_scene_destroy(s);

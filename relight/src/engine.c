@@ -554,7 +554,7 @@ static int positive3(const float v[3])
 }
 
 /* Builds the emitters of the scene itself (pass 0). @return the array (count in *n) or NULL. */
-rl_emitter *rl__primary_emitters(const rl_scene *scene, size_t extra, size_t *n)
+rl_emitter *rl__primary_emitters(const rl_scene *scene, const rl_slab_tables *tables, size_t extra, size_t *n)
 {
     size_t count = scene->nlightfields;
     for (size_t k = 0; k < scene->npolygons; k++)
@@ -567,7 +567,7 @@ rl_emitter *rl__primary_emitters(const rl_scene *scene, size_t extra, size_t *n)
         if (positive3(scene->materials[scene->polygons[k].material].emission))
             rl__emitter_from_polygon(scene, (uint32_t)k, NULL, &e[m++]);
     for (size_t k = 0; k < scene->nlightfields; k++)
-        rl__emitter_from_lightfield(&scene->lightfields[k], &e[m++]);
+        rl__emitter_from_lightfield(&scene->lightfields[k], &tables[k], &e[m++]);
     *n = m;
     return e;
 }
@@ -949,6 +949,7 @@ void rl_solution_destroy(rl_solution *s)
         return;
     rl__maps_free(s->maps, s->nmaps);
     rl__tracer_destroy(s->tracer);
+    rl__slab_tables_destroy(s->slab_tables, s->scene->nlightfields);
     free(s->polygon_map);
     free(s->passes);
     free(s);
@@ -965,6 +966,8 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     rl_status st = rl__maps_build(scene, run->cell_size, run->sampling.bounces > 0, run->threads, &s->maps, &s->nmaps);
     if (st == RL_OK)
         st = rl__tracer_new(scene, run->threads, &s->tracer);
+    if (st == RL_OK && (s->slab_tables = rl__slab_tables_new(scene)) == NULL)
+        st = rl__fail(RL_ERR_NOMEM, "out of memory for the light fields' tables");
     s->polygon_map = malloc((scene->npolygons + 1) * sizeof *s->polygon_map);
     s->passes = calloc(passes + 1, sizeof *s->passes);
     if (st == RL_OK && (!s->polygon_map || !s->passes))
@@ -980,7 +983,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     size_t ne = 0;
     /* room for one bounce emitter per map only when bounce passes follow (an emitter is about 5 KB:
      * 14.5 MB for the classroom's 3,031 maps) */
-    rl_emitter *e = rl__primary_emitters(scene, passes > 1 ? s->nmaps : 0, &ne);
+    rl_emitter *e = rl__primary_emitters(scene, s->slab_tables, passes > 1 ? s->nmaps : 0, &ne);
     if (!e) {
         rl_solution_destroy(s);
         return rl__fail(RL_ERR_NOMEM, "out of memory for emitters");

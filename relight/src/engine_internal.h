@@ -3,8 +3,9 @@
  * the job and run options once checked, and the pass runner that solutions (engine.c)
  * and point queries (query.c) are both made by.
  *
- * Invariants: a solution's maps, tracer and polygon_map are built together
- * and never change after rl__solve() returns, except the `flat` shading
+ * Invariants: a solution's maps, tracer, light field tables and polygon_map
+ * are built together by rl__solve(), for its job, from a scene it only
+ * reads, and never change after it returns, except the `flat` shading
  * switch; everything here is internal to librelight (rl__ prefix).
  */
 #ifndef RELIGHT_ENGINE_INTERNAL_H
@@ -20,6 +21,7 @@ struct rl_solution {
     size_t nmaps;
     int32_t *polygon_map; /* scene polygon -> map index, or -1 */
     rl_tracer *tracer;
+    rl_slab_tables *slab_tables; /* [scene->nlightfields]: where each light field's slab is lit */
     rl_pass_stats *passes;
     uint32_t npasses;
     int flat; /* shade each cell's own value instead of interpolating between cells */
@@ -76,9 +78,9 @@ double rl__solve_work(const rl_scene *scene, const rl__run *run, uint32_t passes
  * *hits of them meet a surface, *back of those its back face. */
 void rl__view_faces(const rl_solution *s, uint32_t nx, uint32_t ny, uint64_t *hits, uint64_t *back);
 
-/* Builds the emitters of the scene itself (pass 0), with room for `extra` more.
- * @return the array (count in *n) or NULL when out of memory. */
-rl_emitter *rl__primary_emitters(const rl_scene *scene, size_t extra, size_t *n);
+/* Builds the emitters of the scene itself (pass 0), its light fields reading `tables` (a solution's), with
+ * room for `extra` more. @return the array (count in *n) or NULL when out of memory. */
+rl_emitter *rl__primary_emitters(const rl_scene *scene, const rl_slab_tables *tables, size_t extra, size_t *n);
 
 /* Appends to e (room assumed) one emitter per map that re-emits light (e_prev nonzero). @return the new count. */
 size_t rl__append_bounce_emitters(const rl_scene *scene, const rl_map *maps, size_t nmaps, rl_emitter *e, size_t n);

@@ -73,7 +73,7 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
     run.maps_ready = NULL; /* these maps are the query's own */
     st = rl__solve(scene, cl, &run, bounces, share, &sol);
     size_t ne = 0;
-    rl_emitter *e = st == RL_OK ? rl__primary_emitters(scene, bounces > 0 ? sol->nmaps : 0, &ne) : NULL;
+    rl_emitter *e = st == RL_OK ? rl__primary_emitters(scene, sol->slab_tables, bounces > 0 ? sol->nmaps : 0, &ne) : NULL;
     if (st == RL_OK && !e)
         st = rl__fail(RL_ERR_NOMEM, "out of memory for emitters");
     /* the solved maps re-emit their total: rl__solve() settled them, e_prev naming e_total */

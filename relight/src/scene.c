@@ -29,7 +29,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "emitter.h"
+#include "scene_model.h"
 #include "build.h"
 #include "mesh.h"
 #include "ilf/json.h"
@@ -389,13 +389,11 @@ static rl_status pick_slab(const rl_build *b, const ilf_json *sj, const char *el
     return st;
 }
 
-/* @return the first entry of s->lightfields before lf that names file (when
- * not NULL) or uses slab (when not NULL), or NULL. */
-static const rl_lightfield *earlier_lightfield(const rl_scene *s, const rl_lightfield *lf, const char *file,
-                                               const lfio_slab *slab)
+/* @return the first entry of s->lightfields before lf that names file, or NULL. */
+static const rl_lightfield *earlier_lightfield(const rl_scene *s, const rl_lightfield *lf, const char *file)
 {
     for (const rl_lightfield *k = s->lightfields; k < lf; k++)
-        if ((file && strcmp(k->file, file) == 0) || (slab && k->slab == slab))
+        if (strcmp(k->file, file) == 0)
             return k;
     return NULL;
 }
@@ -435,7 +433,7 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
         return st;
 
     /* a file placed several times (lamps of one kind) is read once */
-    const rl_lightfield *same = earlier_lightfield(b->scene, lf, lf->file, NULL);
+    const rl_lightfield *same = earlier_lightfield(b->scene, lf, lf->file);
     if (same) {
         lf->lf = same->lf;
     } else {
@@ -453,13 +451,6 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
         return st;
     const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
     lf->nu = d->nu, lf->nv = d->nv, lf->n = d->n;
-    if ((same = earlier_lightfield(b->scene, lf, NULL, lf->slab)) != NULL) {
-        rl__lightfield_tables_share(lf, same);
-    } else {
-        if (rl__lightfield_tables_make(lf) != 0)
-            return rl__fail(RL_ERR_NOMEM, "%s: %s: out of memory", b->file, elem);
-        lf->owns_support = 1;
-    }
     transform_vector(lf, d->origin, lf->origin);
     for (int i = 0; i < 3; i++)
         lf->origin[i] += lf->translate[i];
@@ -705,8 +696,6 @@ void rl_scene_destroy(rl_scene *s)
     for (size_t k = 0; k < s->nlightfields; k++) {
         if (s->lightfields[k].owns_lf)
             lfio_lightfield_destroy(s->lightfields[k].lf);
-        if (s->lightfields[k].owns_support)
-            rl__lightfield_tables_free(&s->lightfields[k]);
     }
     free(s->lightfields);
     free(s->materials);
