@@ -13,6 +13,7 @@
 #include <dirent.h>
 #include <inttypes.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -784,6 +785,67 @@ static void check_lightfield_blocker(void)
     rl_scene_destroy(s);
 }
 
+/* One relighting of a shared scene on a thread of its own. */
+typedef struct job_thread {
+    const rl_scene *scene;
+    rl_job job;
+    rl_solution *sol;
+    rl_status st;
+} job_thread;
+
+static void *run_job_thread(void *arg)
+{
+    job_thread *t = arg;
+    t->st = rl_relight(t->scene, &t->job, &t->sol);
+    return NULL;
+}
+
+/* A scene is only read by the engine: two jobs on it at once, of different methods and cell sizes (so
+ * different maps, and each run its own light field tables), give bit for bit what each gives alone, and
+ * the scene's suggested job is unchanged after them. */
+static void check_concurrent_jobs(const rl_scene *s)
+{
+    job_thread t[2] = {{.scene = s}, {.scene = s}};
+    rl_job file;
+    rl_job_default(s, &file);
+    set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 2);
+    t[0].job = job;
+    set_sampling(s, RL_METHOD_AREA, 16, 2, 64, 2);
+    t[1].job = job;
+    t[1].job.cell_size = file.cell_size / 2;
+    rl_solution *alone[2] = {NULL, NULL};
+    for (int k = 0; k < 2; k++)
+        CHECK(rl_relight(s, &t[k].job, &alone[k]) == RL_OK, "job %d alone: %s", k, rl_errmsg());
+    pthread_t th[2];
+    int started[2];
+    for (int k = 0; k < 2; k++)
+        started[k] = pthread_create(&th[k], NULL, run_job_thread, &t[k]) == 0;
+    for (int k = 0; k < 2; k++) {
+        if (started[k])
+            pthread_join(th[k], NULL);
+        CHECK(started[k] && t[k].st == RL_OK, "job %d at once: status %d", k, (int)t[k].st);
+    }
+    long total[2] = {0, 0};
+    for (int k = 0; k < 2; k++)
+        if (alone[k] && t[k].sol)
+            CHECK(ts_differing(alone[k], t[k].sol, &total[k]) == 0 && total[k] > 0,
+                  "job %d: the run beside another differs from the run alone", k);
+    if (alone[0] && alone[1]) {
+        rl_map_info a, b;
+        CHECK(rl_solution_map_info(alone[0], 0, &a) == RL_OK && rl_solution_map_info(alone[1], 0, &b) == RL_OK &&
+                  a.cell_size == file.cell_size && b.cell_size == file.cell_size / 2 && b.ncells > a.ncells,
+              "each job's cell size: %g and %g", a.cell_size, b.cell_size);
+    }
+    rl_job after;
+    rl_job_default(s, &after);
+    CHECK(memcmp(&after.sampling, &file.sampling, sizeof file.sampling) == 0 && after.cell_size == file.cell_size,
+          "the scene's job unchanged by the runs");
+    for (int k = 0; k < 2; k++) {
+        rl_solution_destroy(alone[k]);
+        rl_solution_destroy(t[k].sol);
+    }
+}
+
 /* A constant light field is a diffuse emitter; a sparse one is culled by its mask. */
 static void check_lightfield(void)
 {
@@ -827,6 +889,8 @@ static void check_lightfield(void)
         if (!s)
             return;
         samples[sparse] = check_culled_naive(s, sparse ? "sparse light field" : "masked light field");
+        if (sparse)
+            check_concurrent_jobs(s);
         rl_scene_destroy(s);
     }
     check_shared_directions(path, lfpath);
