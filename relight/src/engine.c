@@ -680,28 +680,31 @@ static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, const rl__r
     ctx->deadline = run->time_budget > 0 ? ilf_clock_wall() + run->time_budget : 0.0;
 }
 
-rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_cluster *cl, const rl__run *run,
-                       uint32_t pass, uint32_t gather_level_pass, rl_map *maps, size_t nmaps, rl_map *with,
-                       const rl_emitter *e, size_t ne, double base, double span, double **measured, rl_pass_stats *st)
+rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st)
 {
-    assert(!(with && cl)); /* the ranks exchange the tiles of one set of maps */
+    const rl_scene *scene = in->scene;
+    const rl_cluster *cl = in->cl;
+    const rl__run *run = in->run;
+    rl_map *maps = in->maps;
+    size_t nmaps = in->nmaps, ne = in->ne;
+    assert(!(in->with && cl)); /* the ranks exchange the tiles of one set of maps */
     double w0 = ilf_clock_wall(), c0 = ilf_clock_process_cpu();
     memset(st, 0, sizeof *st);
     st->emitters = (uint32_t)ne;
     pass_job job;
     memset(&job, 0, sizeof job);
-    job.sets[0] = maps, job.sets[1] = with;
-    size_t nsets = with ? 2 : 1;
+    job.sets[0] = maps, job.sets[1] = in->with;
+    size_t nsets = in->with ? 2 : 1;
     for (size_t set = 0; set < nsets; set++)
         for (size_t m = 0; m < nmaps; m++)
             memset(job.sets[set][m].e_pass, 0,
                    (job.sets[set][m].ncells ? job.sets[set][m].ncells : 1) * sizeof *job.sets[set][m].e_pass);
-    rl_sampling sampling = pass_sampling(&run->sampling, gather_level_pass);
-    make_ctx(scene, tracer, run, pass, &sampling, e, ne, &job.ctx);
+    rl_sampling sampling = pass_sampling(&run->sampling, in->gather_level_pass);
+    make_ctx(scene, in->tracer, run, in->pass, &sampling, in->e, ne, &job.ctx);
     /* a bounce pass of rl__solve() with bounce_rays gathers by first hits, which read each polygon's glow */
     rl_glow *glow = NULL;
-    if (gather_level_pass > 0 && sampling.bounce_rays > 0) {
-        if (rl__glow_new(scene, e, ne, run->threads, &glow) != RL_OK)
+    if (in->gather_level_pass > 0 && sampling.bounce_rays > 0) {
+        if (rl__glow_new(scene, in->e, ne, run->threads, &glow) != RL_OK)
             return rl__fail(RL_ERR_NOMEM, "out of memory for the bounce pass");
         job.ctx.glow = glow;
     }
@@ -728,7 +731,7 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
         rl__glow_free(glow, scene->npolygons);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
     }
-    int rc = ne > 0 ? run_job(&job, run->threads, run, base, span) : 0;
+    int rc = ne > 0 ? run_job(&job, run->threads, run, in->base, in->span) : 0;
     if (telling)
         tell_end(&job, rc);
     if (job.counters)
@@ -747,7 +750,7 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
     rl__glow_free(glow, scene->npolygons);
     share_free(&sh);
     if (rc != 0)
-        return rl__fail(rc == -2 ? RL_ERR_IO : RL_ERR_NOMEM, "pass %u: %s", pass, why);
+        return rl__fail(rc == -2 ? RL_ERR_IO : RL_ERR_NOMEM, "pass %u: %s", in->pass, why);
     size_t cells = 0;
     for (size_t m = 0; m < nmaps; m++)
         cells += maps[m].ncells;
@@ -917,8 +920,9 @@ static rl_status refine_pass(const rl_scene *scene, rl_solution *s, const rl_clu
         return rl__fail(RL_ERR_IO, "pass %u: the exchange of bounce cell flags between ranks failed", p);
     if (rf->marked == 0)
         return RL_OK;
-    return rl__run_pass(scene, s->tracer, cl, run, p, p, s->maps, s->nmaps, NULL, e, ne, base, span, &rf->measured,
-                        more);
+    rl__pass in = {.scene = scene, .tracer = s->tracer, .cl = cl, .run = run, .pass = p, .gather_level_pass = p,
+                   .maps = s->maps, .nmaps = s->nmaps, .e = e, .ne = ne, .base = base, .span = span};
+    return rl__run_pass(&in, &rf->measured, more);
 }
 
 /* Adds the statistics of a pass's refinement (refine_pass()) to the pass's, to. */
@@ -1048,9 +1052,11 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
             last_run->finish_user = &pe;
             telling = 1;
         }
-        st = rl__run_pass(scene, s->tracer, cl, &gather_run, p, p, gather_coarse ? coarse : s->maps,
-                          gather_coarse ? ncoarse : s->nmaps, together ? s->maps : NULL, e, ne, base, part, &measured,
-                          &s->passes[p]);
+        rl__pass in = {.scene = scene, .tracer = s->tracer, .cl = cl, .run = &gather_run, .pass = p,
+                       .gather_level_pass = p, .maps = gather_coarse ? coarse : s->maps,
+                       .nmaps = gather_coarse ? ncoarse : s->nmaps, .with = together ? s->maps : NULL, .e = e,
+                       .ne = ne, .base = base, .span = part};
+        st = rl__run_pass(&in, &measured, &s->passes[p]);
         if (st == RL_OK && together)
             s->passes[p].cells_direct = rf.marked;
         if (st == RL_OK && apart) {

@@ -85,15 +85,28 @@ rl_emitter *rl__primary_emitters(const rl_scene *scene, const rl_slab_tables *ta
 /* Appends to e (room assumed) one emitter per map that re-emits light (e_prev nonzero). @return the new count. */
 size_t rl__append_bounce_emitters(const rl_scene *scene, const rl_map *maps, size_t nmaps, rl_emitter *e, size_t n);
 
-/* Runs one pass over maps with emitters e; gather_level_pass chooses the partition level (0: partition_n,
- * else the bounce level) and, > 0 with sampling.bounce_rays > 0, the first-hit gather from the maps the
- * emitters re-emit (bounce.c) for every polygon's map. with: NULL, or nmaps more maps gathered in the
- * same job (one process only, cl NULL), map m's tiles of both lying together, so that a reporting run
- * finishes map m once both have. base and span place it within the run's progress. With several ranks,
- * *measured holds the previous pass's per-tile CPU times (NULL: none) and receives this pass's.
- * @return RL_OK or an error. */
-rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_cluster *cl, const rl__run *run,
-                       uint32_t pass, uint32_t gather_level_pass, rl_map *maps, size_t nmaps, rl_map *with,
-                       const rl_emitter *e, size_t ne, double base, double span, double **measured, rl_pass_stats *st);
+/* What one pass gathers, from what, and where it stands in its run (rl__run_pass()). */
+typedef struct rl__pass {
+    const rl_scene *scene;
+    const rl_tracer *tracer;
+    const rl_cluster *cl;       /* the ranks sharing the pass, NULL for one process */
+    const rl__run *run;         /* its job and run options */
+    uint32_t pass;              /* its index in the run: keys its samples */
+    uint32_t gather_level_pass; /* the partition level: 0 partition_n, else the bounce level; > 0 with
+                                   sampling.bounce_rays > 0, the first-hit gather from the maps the emitters
+                                   re-emit (bounce.c) for every polygon's map */
+    rl_map *maps;               /* the receivers: nmaps maps (or points) */
+    size_t nmaps;
+    rl_map *with;               /* NULL, or nmaps more maps gathered in the same job (one process only, cl
+                                   NULL), map m's tiles of both lying together, so that a reporting run
+                                   finishes map m once both have */
+    const rl_emitter *e;        /* the ne emitters */
+    size_t ne;
+    double base, span;          /* its place within the run's progress */
+} rl__pass;
+
+/* Runs one pass. With several ranks, *measured holds the previous pass's per-tile CPU times (NULL: none)
+ * and receives this pass's; st receives its statistics. @return RL_OK or an error. */
+rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st);
 
 #endif /* RELIGHT_ENGINE_INTERNAL_H */

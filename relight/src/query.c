@@ -81,9 +81,12 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
         ne = rl__append_bounce_emitters(scene, sol->maps, sol->nmaps, e, ne);
     rl_pass_stats local;
     double *measured = NULL;
+    /* the points' pass comes after the solve's passes, and gathers at partition_n */
+    rl__pass in = {.scene = scene, .tracer = st == RL_OK ? sol->tracer : NULL, .cl = cl, .run = &run,
+                   .pass = bounces, .gather_level_pass = 0, .maps = pts, .nmaps = count, .e = e, .ne = ne,
+                   .base = share, .span = 1.0 - share};
     if (st == RL_OK)
-        st = rl__run_pass(scene, sol->tracer, cl, &run, bounces, 0, pts, count, NULL, e, ne, share, 1.0 - share,
-                          &measured, stats ? stats : &local);
+        st = rl__run_pass(&in, &measured, stats ? stats : &local);
     free(measured);
     for (size_t k = 0; st == RL_OK && k < count; k++)
         for (int c = 0; c < 3; c++)
