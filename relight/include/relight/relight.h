@@ -32,6 +32,10 @@
 extern "C" {
 #endif
 
+/** The version of this API, raised by every change that breaks a caller (CHANGELOG.md): 2, where what to
+ * compute and how is a job (rl_job, relight/engine.h) passed with each call, apart from the scene. */
+#define RL_API_VERSION 2
+
 /** Result of a fallible call. */
 typedef enum rl_status {
     RL_OK = 0,
