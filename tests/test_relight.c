@@ -30,21 +30,11 @@ static char tmpdir[512];
 
 static int no_descent; /* set by the random-scene test */
 
-/* The job of every call: the scene's suggestion as the last set_sampling() changed it. */
-static rl_job job;
-
-/* Makes the job of the calls on scene s that follow: its file's, with method, level, rays, samples and
- * threads. */
+/* Makes ts_job the job of the calls on scene s that follow: its file's, with method, level, rays, samples
+ * and threads, and descent unless no_descent. */
 static void set_sampling(const rl_scene *s, rl_method m, uint32_t n, uint32_t k, uint32_t samples, uint32_t threads)
 {
-    rl_job_default(s, &job);
-    job.sampling.descend = !no_descent;
-    job.sampling.method = m;
-    job.sampling.partition_n = n;
-    job.sampling.rays_per_solid_angle = k;
-    job.sampling.samples_per_cell = samples;
-    job.run.threads = threads;
-    CHECK(rl_job_check(&job) == RL_OK, "set_sampling: %s", rl_errmsg());
+    ts_set_sampling(s, m, n, k, samples, !no_descent, threads);
 }
 
 /* The cells of map k: count, irradiance copy (caller frees), and centres. */
@@ -122,7 +112,7 @@ static void check_unoccluded(void)
     for (int m = 0; m < 5; m++) {
         set_sampling(s, methods[m], 32, 4, 128, 0);
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, &job, &sol) == RL_OK, "%s: %s", rl_method_name(methods[m]), rl_errmsg());
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "%s: %s", rl_method_name(methods[m]), rl_errmsg());
         if (!sol)
             continue;
         long k = ts_map_of(sol, 1);
@@ -150,7 +140,7 @@ static void check_unoccluded(void)
     set_sampling(s, RL_METHOD_CULLED, 32, 4, 128, 0);
     no_descent = 0;
     rl_solution *plain = NULL;
-    CHECK(rl_relight(s, &job, &plain) == RL_OK, "plain: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &plain) == RL_OK, "plain: %s", rl_errmsg());
     if (plain) {
         rl_pass_stats st;
         rl_solution_pass_stats(plain, 0, &st);
@@ -164,7 +154,7 @@ static void check_unoccluded(void)
     for (int q = 0; q < 3; q++) {
         set_sampling(s, RL_METHOD_CULLED, 16, ks[q], 64, 0);
         rl_solution *sol = NULL;
-        rl_relight(s, &job, &sol);
+        rl_relight(s, &ts_job, &sol);
         double rmse, mx;
         errors_vs_reference(sol, (size_t)ts_map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
         printf("culled n=16 k=%-2u: RMSE %.4f%%\n", ks[q], 100 * rmse);
@@ -178,7 +168,7 @@ static void check_unoccluded(void)
     for (int q = 0; q < 3; q++) {
         set_sampling(s, RL_METHOD_AREA, 16, 1, ns[q], 0);
         rl_solution *sol = NULL;
-        rl_relight(s, &job, &sol);
+        rl_relight(s, &ts_job, &sol);
         double rmse, mx;
         errors_vs_reference(sol, (size_t)ts_map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
         printf("area samples=%-4u: RMSE %.4f%%\n", ns[q], 100 * rmse);
@@ -191,7 +181,7 @@ static void check_unoccluded(void)
     for (int m = 0; m < 4; m++) {
         set_sampling(s, methods[m], 32, 16, 4096, 0);
         double out[12];
-        CHECK(rl_irradiance(s, &job, &pts[0][0], 4, out, NULL) == RL_OK, "irradiance: %s", rl_errmsg());
+        CHECK(rl_irradiance(s, &ts_job, &pts[0][0], 4, out, NULL) == RL_OK, "irradiance: %s", rl_errmsg());
         for (int q = 0; q < 4; q++) {
             double nrm[3] = {pts[q][3], pts[q][4], pts[q][5]}, l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
             for (int c = 0; c < 3; c++)
@@ -243,11 +233,11 @@ static void check_back_to_back(void)
         double ceiling[3] = {NAN, NAN, NAN};
         for (int k = 0; k < 3; k++) {
             set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 2);
-            job.sampling.bounce_rays = k == 1 ? 0 : 256;
-            job.sampling.bounce_cell_factor = k == 2 ? 0 : 1;
-            CHECK(rl_job_check(&job) == RL_OK, "set_sampling: %s", rl_errmsg());
+            ts_job.sampling.bounce_rays = k == 1 ? 0 : 256;
+            ts_job.sampling.bounce_cell_factor = k == 2 ? 0 : 1;
+            CHECK(rl_job_check(&ts_job) == RL_OK, "set_sampling: %s", rl_errmsg());
             rl_solution *sol = NULL;
-            CHECK(rl_relight(s, &job, &sol) == RL_OK, "back to back: %s", rl_errmsg());
+            CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "back to back: %s", rl_errmsg());
             if (sol)
                 ceiling[k] = map_mean(sol, ts_map_of(sol, 0));
             rl_solution_destroy(sol);
@@ -293,12 +283,12 @@ static void check_contact_bounce(void)
     rl_pass_stats bounce = {0};
     for (int b = 0; b < 2; b++) {
         set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 2);
-        job.sampling.bounces = (uint32_t)b;
-        job.sampling.bounce_cell_factor = 4;
-        job.sampling.bounce_rays = 64;
-        CHECK(rl_job_check(&job) == RL_OK, "set_sampling: %s", rl_errmsg());
+        ts_job.sampling.bounces = (uint32_t)b;
+        ts_job.sampling.bounce_cell_factor = 4;
+        ts_job.sampling.bounce_rays = 64;
+        CHECK(rl_job_check(&ts_job) == RL_OK, "set_sampling: %s", rl_errmsg());
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, &job, &sol) == RL_OK, "contact: %s", rl_errmsg());
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "contact: %s", rl_errmsg());
         if (!sol) {
             rl_scene_destroy(s);
             if (b == 1)
@@ -358,13 +348,13 @@ static void check_narrow_wall(void)
         if (!s)
             return;
         set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 2);
-        job.sampling.bounces = 1;
-        job.sampling.bounce_cell_factor = 4;
-        job.sampling.bounce_rays = 64;
-        CHECK(rl_job_check(&job) == RL_OK, "set_sampling: %s", rl_errmsg());
+        ts_job.sampling.bounces = 1;
+        ts_job.sampling.bounce_cell_factor = 4;
+        ts_job.sampling.bounce_rays = 64;
+        CHECK(rl_job_check(&ts_job) == RL_OK, "set_sampling: %s", rl_errmsg());
         rl_solution *sol = NULL;
         rl_pass_stats bounce = {0};
-        CHECK(rl_relight(s, &job, &sol) == RL_OK, "narrow wall: %s", rl_errmsg());
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "narrow wall: %s", rl_errmsg());
         if (sol)
             CHECK(rl_solution_pass_stats(sol, 1, &bounce) == RL_OK, "pass stats: %s", rl_errmsg());
         /* the low wall: 6 rows of 40 cells */
@@ -399,13 +389,13 @@ static void check_identities(uint32_t bounce_rays)
         return;
     rl_solution *sol[4] = {NULL};
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 1);
-    rl_relight(s, &job, &sol[0]);
+    rl_relight(s, &ts_job, &sol[0]);
     set_sampling(s, RL_METHOD_NAIVE, 16, 2, 16, 2);
-    rl_relight(s, &job, &sol[1]);
+    rl_relight(s, &ts_job, &sol[1]);
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 3);
-    rl_relight(s, &job, &sol[2]);
+    rl_relight(s, &ts_job, &sol[2]);
     set_sampling(s, RL_METHOD_AREA, 16, 2, 16, 1);
-    rl_relight(s, &job, &sol[3]);
+    rl_relight(s, &ts_job, &sol[3]);
     if (sol[0] && sol[1] && sol[2] && sol[3]) {
         /* the bounce pass gathers by solid angles (the direct one from this
          * constant emitter by Lambert's formula, the same code for both), or
@@ -474,9 +464,9 @@ static void check_identities(uint32_t bounce_rays)
     rl_solution *ad[2] = {NULL, NULL};
     for (int k = 0; k < 2; k++) {
         set_sampling(s, RL_METHOD_ADAPTIVE, 16, 4, 16, k + 1);
-        job.sampling.target_error = 0.02;
-        job.sampling.bounces = 0;
-        rl_relight(s, &job, &ad[k]);
+        ts_job.sampling.target_error = 0.02;
+        ts_job.sampling.bounces = 0;
+        rl_relight(s, &ts_job, &ad[k]);
     }
     if (ad[0] && ad[1]) {
         rl_pass_stats st;
@@ -561,13 +551,13 @@ static uint64_t check_culled_naive(rl_scene *s, const char *what)
     rl_solution *a = NULL, *b = NULL, *c = NULL;
     uint64_t samples = 0;
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 0);
-    rl_relight(s, &job, &a);
+    rl_relight(s, &ts_job, &a);
     set_sampling(s, RL_METHOD_NAIVE, 16, 2, 16, 0);
-    rl_relight(s, &job, &b);
+    rl_relight(s, &ts_job, &b);
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 0);
-    job.sampling.zero_culling = 0;
-    CHECK(rl_job_check(&job) == RL_OK, "zero_culling 0: %s", rl_errmsg());
-    rl_relight(s, &job, &c);
+    ts_job.sampling.zero_culling = 0;
+    CHECK(rl_job_check(&ts_job) == RL_OK, "zero_culling 0: %s", rl_errmsg());
+    rl_relight(s, &ts_job, &c);
     long total;
     if (a && c) {
         CHECK(ts_differing(a, c, &total) == 0, "%s: zero culling changes nothing", what);
@@ -641,9 +631,9 @@ static void check_shared_directions(const char *path, const char *lfpath)
         return;
     rl_solution *a = NULL, *b = NULL;
     set_sampling(s, RL_METHOD_CULLED, 32, 4, 16, 0);
-    CHECK(rl_relight(s, &job, &a) == RL_OK, "lobe, culled: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &a) == RL_OK, "lobe, culled: %s", rl_errmsg());
     set_sampling(s, RL_METHOD_AREA, 32, 4, 16384, 0);
-    CHECK(rl_relight(s, &job, &b) == RL_OK, "lobe, area: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &b) == RL_OK, "lobe, area: %s", rl_errmsg());
     if (a && b) {
         ts_cells ca = ts_cells_get(a, 0), cb = ts_cells_get(b, 0);
         double peak = 0, sq = 0, sum_a = 0, sum_b = 0;
@@ -737,9 +727,9 @@ static void check_lightfield_blocker(void)
         return;
     rl_solution *a = NULL, *b = NULL;
     set_sampling(s, RL_METHOD_CULLED, 32, 8, 16, 0);
-    CHECK(rl_relight(s, &job, &a) == RL_OK, "blocked light field, culled: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &a) == RL_OK, "blocked light field, culled: %s", rl_errmsg());
     set_sampling(s, RL_METHOD_NAIVE, 32, 8, 16, 0);
-    CHECK(rl_relight(s, &job, &b) == RL_OK, "blocked light field, naive: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &b) == RL_OK, "blocked light field, naive: %s", rl_errmsg());
     long total;
     if (a && b)
         CHECK(ts_differing(a, b, &total) == 0, "blocked light field: culled == naive");
@@ -809,9 +799,9 @@ static void check_concurrent_jobs(const rl_scene *s)
     rl_job file;
     rl_job_default(s, &file);
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 2);
-    t[0].job = job;
+    t[0].job = ts_job;
     set_sampling(s, RL_METHOD_AREA, 16, 2, 64, 2);
-    t[1].job = job;
+    t[1].job = ts_job;
     t[1].job.cell_size = file.cell_size / 2;
     rl_solution *alone[2] = {NULL, NULL};
     for (int k = 0; k < 2; k++)
@@ -868,7 +858,7 @@ static void check_lightfield(void)
     for (int m = 0; m < 2; m++) {
         set_sampling(s, methods[m], 32, 4, 256, 0);
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, &job, &sol) == RL_OK, "light field relight: %s", rl_errmsg());
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "light field relight: %s", rl_errmsg());
         if (!sol)
             continue;
         double rmse, mx;
@@ -933,10 +923,10 @@ static double cells_rmse(const rl_solution *a, const rl_solution *b, double *sum
 static rl_solution *relight_anchored(rl_scene *s, uint32_t stride, uint32_t k, unsigned threads, uint64_t *samples)
 {
     set_sampling(s, RL_METHOD_CULLED, 8, k, 16, threads);
-    job.sampling.anchor_stride = stride;
-    CHECK(rl_job_check(&job) == RL_OK, "anchor_stride %u: %s", stride, rl_errmsg());
+    ts_job.sampling.anchor_stride = stride;
+    CHECK(rl_job_check(&ts_job) == RL_OK, "anchor_stride %u: %s", stride, rl_errmsg());
     rl_solution *sol = NULL;
-    CHECK(rl_relight(s, &job, &sol) == RL_OK, "anchors %u, k %u: %s", stride, k, rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "anchors %u, k %u: %s", stride, k, rl_errmsg());
     rl_pass_stats st = {0};
     if (sol)
         rl_solution_pass_stats(sol, 0, &st);
@@ -1075,15 +1065,15 @@ static void check_maps_ready(void)
          * and all be told at once) */
         uint32_t bounces = trial < 3 ? (uint32_t)trial : (uint32_t)trial - 2, threads = trial < 3 ? 1 : 4;
         set_sampling(s, RL_METHOD_CULLED, 8, 2, 16, threads);
-        job.sampling.bounces = bounces;
-        CHECK(rl_job_check(&job) == RL_OK, "maps_ready: %s", rl_errmsg());
+        ts_job.sampling.bounces = bounces;
+        CHECK(rl_job_check(&ts_job) == RL_OK, "maps_ready: %s", rl_errmsg());
         told_maps t;
         memset(&t, 0, sizeof t);
-        job.run.maps_ready = on_maps_ready;
-        job.run.maps_ready_user = &t;
+        ts_job.run.maps_ready = on_maps_ready;
+        ts_job.run.maps_ready_user = &t;
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, &job, &sol) == RL_OK, "maps_ready: %s", rl_errmsg());
-        job.run.maps_ready = NULL;
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "maps_ready: %s", rl_errmsg());
+        ts_job.run.maps_ready = NULL;
         if (sol && bounces == 0)
             check_map_rows(sol);
         size_t n = sol ? rl_solution_map_count(sol) : 0, same = 0;
@@ -1233,7 +1223,7 @@ static void check_slab_edge_on(void)
             double l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
             for (int c = 0; c < 3; c++)
                 nrm[c] /= l;
-            CHECK(rl_irradiance(s, &job, pts[q], 1, out, NULL) == RL_OK, "edge-on: %s", rl_errmsg());
+            CHECK(rl_irradiance(s, &ts_job, pts[q], 1, out, NULL) == RL_OK, "edge-on: %s", rl_errmsg());
             double ref = rl_reference_polygon_irradiance(&em.v[0][0], 4, pts[q], nrm, 2.0);
             printf("extreme slab_edge_on[%d]          %-10s: %.6g vs %.6g (rel %.2g)\n", q, rl_method_name(methods[m]),
                    out[0], ref, fabs(out[0] - ref) / ref);
@@ -1311,7 +1301,7 @@ static void extreme_points(const char *name, const tpoly *em, const double (*pts
         double out[3 * EXTREME_POINTS];
         for (int i = 0; i < 3 * EXTREME_POINTS; i++)
             out[i] = NAN;
-        CHECK(rl_irradiance(s, &job, &pts[0][0], EXTREME_POINTS, out, NULL) == RL_OK, "%s: %s", name,
+        CHECK(rl_irradiance(s, &ts_job, &pts[0][0], EXTREME_POINTS, out, NULL) == RL_OK, "%s: %s", name,
               rl_errmsg());
         double se = 0, worst = 0;
         int bad = 0;
@@ -1415,7 +1405,7 @@ static void extreme_map(const char *name, const tpoly *em, const tpoly *rcv, con
     for (int m = 0; m < 5; m++) {
         set_sampling(s, methods[m], 32, 4, 128, 0);
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, &job, &sol) == RL_OK, "%s: %s", name, rl_errmsg());
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "%s: %s", name, rl_errmsg());
         if (!sol)
             continue;
         long total;
@@ -1516,7 +1506,7 @@ static void check_shading(void)
         return;
     set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 0);
     rl_solution *sol = NULL;
-    CHECK(rl_relight(s, &job, &sol) == RL_OK, "shading: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "shading: %s", rl_errmsg());
     if (sol) {
         ts_cells c = ts_cells_get(sol, (size_t)ts_map_of(sol, 1));
         double *centre = malloc(3 * sizeof(double) * (c.n + 1));
@@ -1581,9 +1571,9 @@ static void check_random_scenes(int count)
         rl_solution *a = NULL, *b = NULL;
         no_descent = sc % 2; /* half the scenes with the paper's plain method: every pair comparable */
         set_sampling(s, RL_METHOD_CULLED, 8, 1, 16, 0);
-        rl_relight(s, &job, &a);
+        rl_relight(s, &ts_job, &a);
         set_sampling(s, RL_METHOD_NAIVE, 8, 1, 16, 0);
-        rl_relight(s, &job, &b);
+        rl_relight(s, &ts_job, &b);
         uint64_t descended = 0;
         for (uint32_t q = 0; a && q < rl_solution_pass_count(a); q++) {
             rl_pass_stats st;

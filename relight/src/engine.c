@@ -1,7 +1,7 @@
 /*
- * engine.c - the pass scheduler of the relighting engine: run options,
- * passes, tiles, threads, and the exchange between the ranks of a job;
- * the solutions it makes, and rl_solution_destroy().
+ * engine.c - the pass scheduler of the relighting engine: passes, tiles,
+ * threads, and the exchange between the ranks of a job; the solutions it
+ * makes, and rl_solution_destroy().
  *
  * A run builds the radiance maps and the ray tracer, then runs pass 0 from
  * the scene's emitters (emissive polygons and light field slabs) and
@@ -44,50 +44,6 @@
 
 /* How often the calling thread reports progress while a team works, seconds. */
 #define PROGRESS_PERIOD 0.02
-
-/* ------------------------------------------------------------ run options */
-
-void rl_run_options_default(rl_run_options *o)
-{
-    if (o)
-        *o = (rl_run_options){0, NULL, NULL, 0.0, NULL, NULL};
-}
-
-rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__run *run)
-{
-    rl_run_options o;
-    rl_run_options_default(&o);
-    if (options)
-        o = *options;
-    if (o.threads > RL_MAX_THREADS)
-        return rl__fail(RL_ERR_ARG, "%s: threads must be an integer in 0..%u, got %u", call, RL_MAX_THREADS,
-                        o.threads);
-    if (!(o.time_budget >= 0) || !isfinite(o.time_budget))
-        return rl__fail(RL_ERR_ARG, "%s: time_budget must be finite and >= 0, got %g", call, o.time_budget);
-    memset(run, 0, sizeof *run);
-    run->threads = ilf_thread_count(o.threads);
-    run->progress = o.progress, run->user = o.progress_user;
-    run->time_budget = o.time_budget;
-    run->maps_ready = o.maps_ready, run->maps_ready_user = o.maps_ready_user;
-    return RL_OK;
-}
-
-rl_status rl__job_resolve(const rl_scene *scene, const rl_job *job, rl__run *run)
-{
-    rl_job own;
-    if (!job) {
-        rl_job_default(scene, &own);
-        job = &own;
-    }
-    rl_status st = rl_job_check(job);
-    if (st == RL_OK)
-        st = rl__run_resolve("rl_job: run", &job->run, run);
-    if (st == RL_OK) {
-        run->sampling = job->sampling;
-        run->cell_size = job->cell_size;
-    }
-    return st;
-}
 
 /* ------------------------------------------------------------ parallel work */
 

@@ -1,7 +1,7 @@
 /*
- * engine_internal.h - what the engine's files share: the solution object,
- * the job and run options once checked, and the pass runner that solutions (engine.c)
- * and point queries (query.c) are both made by.
+ * engine_internal.h - what the engine's files share: the solution object
+ * and the pass runner that solutions (engine.c) and point queries (query.c)
+ * are both made by; a call's job and run options, resolved, are job_internal.h's.
  *
  * Invariants: a solution's maps, tracer, light field tables and polygon_map
  * are built together by rl__solve(), for its job, from a scene it only
@@ -13,6 +13,7 @@
 
 #include "relight/engine.h"
 #include "bounce.h"
+#include "job_internal.h"
 #include "transfer.h"
 
 struct rl_solution {
@@ -27,35 +28,6 @@ struct rl_solution {
     int flat; /* shade each cell's own value instead of interpolating between cells */
     uint64_t accumulator_bytes; /* the maps' irradiance arrays at their most (before rl__map_settle()) */
 };
-
-/* A call's run options, checked, with the thread count resolved; for the calls that solve, also the
- * job's sampling and cell size (rl__job_resolve()). */
-typedef struct rl__run {
-    rl_sampling sampling;    /* what to compute (rl__job_resolve(); zero for calls that only render or trace) */
-    double cell_size;        /* the radiance maps' cell size, metres (likewise) */
-    unsigned threads;        /* >= 1: ilf_thread_count(options->threads) */
-    rl_progress_fn progress; /* or NULL */
-    void *user;
-    double time_budget;      /* seconds, 0 = none */
-    rl_maps_ready_fn maps_ready; /* or NULL */
-    void *maps_ready_user;
-    const rl_solution *reporting; /* set by rl__solve() for a run whose maps are final once finish() has run on
-                                     them (told to maps_ready as they are) */
-    /* with reporting: called with each map index once its tiles have finished, from the worker that
-     * finished the last one (a map with nothing to gather has an empty tile; only a pass without emitters
-     * calls it from the calling thread), before the map is told of; it completes the map (NULL: nothing to
-     * complete) */
-    void (*finish)(void *user, size_t map);
-    void *finish_user;
-} rl__run;
-
-/* Checks options (NULL: the defaults) and resolves them into *run; `call` names the caller in messages.
- * @return RL_OK, or RL_ERR_ARG naming the field out of range. */
-rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__run *run);
-
-/* Checks job (NULL: rl_job_default(scene)) with rl_job_check() and resolves it into *run: its sampling, cell
- * size and run options. @return RL_OK, or RL_ERR_ARG naming the field. */
-rl_status rl__job_resolve(const rl_scene *scene, const rl_job *job, rl__run *run);
 
 /* @return the cluster to run with, NULL for one process; checks it, RL_ERR_ARG in *st. */
 const rl_cluster *rl__check_cluster(const rl_cluster *cl, rl_status *st);

@@ -1,9 +1,12 @@
 /*
- * job.c - the job (relight/engine.h's rl_job): what to compute (sampling
+ * job.c - the job (relight/job.h's rl_job): what to compute (sampling
  * settings, cell size) and how (run options), apart from the scene. A scene
  * file suggests a job (its "sampling" and "radiance_maps" sections and
  * sampling.time_budget); rl_job_default() hands that suggestion out and the
  * engine reads only the job it is given, never the scene's suggestion.
+ *
+ * The run options alone, and a job whole, are resolved here for the engine
+ * (job_internal.h's rl__run).
  *
  * Invariants: rl_job_check() accepts exactly the jobs the engine runs, with
  * the bounds of settings.c's table (not its text bounds), so a checked job
@@ -12,8 +15,51 @@
 #include <math.h>
 #include <string.h>
 
-#include "engine_internal.h"
+#include "ilf/pool.h"
+#include "job_internal.h"
 #include "scene_model.h"
+
+void rl_run_options_default(rl_run_options *o)
+{
+    if (o)
+        *o = (rl_run_options){0, NULL, NULL, 0.0, NULL, NULL};
+}
+
+rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__run *run)
+{
+    rl_run_options o;
+    rl_run_options_default(&o);
+    if (options)
+        o = *options;
+    if (o.threads > RL_MAX_THREADS)
+        return rl__fail(RL_ERR_ARG, "%s: threads must be an integer in 0..%u, got %u", call, RL_MAX_THREADS,
+                        o.threads);
+    if (!(o.time_budget >= 0) || !isfinite(o.time_budget))
+        return rl__fail(RL_ERR_ARG, "%s: time_budget must be finite and >= 0, got %g", call, o.time_budget);
+    memset(run, 0, sizeof *run);
+    run->threads = ilf_thread_count(o.threads);
+    run->progress = o.progress, run->user = o.progress_user;
+    run->time_budget = o.time_budget;
+    run->maps_ready = o.maps_ready, run->maps_ready_user = o.maps_ready_user;
+    return RL_OK;
+}
+
+rl_status rl__job_resolve(const rl_scene *scene, const rl_job *job, rl__run *run)
+{
+    rl_job own;
+    if (!job) {
+        rl_job_default(scene, &own);
+        job = &own;
+    }
+    rl_status st = rl_job_check(job);
+    if (st == RL_OK)
+        st = rl__run_resolve("rl_job: run", &job->run, run);
+    if (st == RL_OK) {
+        run->sampling = job->sampling;
+        run->cell_size = job->cell_size;
+    }
+    return st;
+}
 
 void rl_job_default(const rl_scene *scene, rl_job *job)
 {

@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 /** The version of this API, raised by every change that breaks a caller (CHANGELOG.md): 2, where what to
- * compute and how is a job (rl_job, relight/engine.h) passed with each call, apart from the scene. */
+ * compute and how is a job (rl_job, relight/job.h) passed with each call, apart from the scene. */
 #define RL_API_VERSION 2
 
 /** Result of a fallible call. */
@@ -69,7 +69,7 @@ int rl_method_parse(const char *name, rl_method *m);
  * such emitters stay far inside float32, the type of the radiance maps. */
 #define RL_MAX_EMISSION ILF_MAX_EMISSION
 
-/** Sampling settings (scene key "sampling"): what to compute, part of a job (rl_job in relight/engine.h,
+/** Sampling settings (scene key "sampling"): what to compute, part of a job (rl_job in relight/job.h,
  * with the cell size). How a call runs (threads, progress, time budget) is not among them: rl_run_options. */
 typedef struct rl_sampling {
     rl_method method;              /**< default culled */

@@ -4,7 +4,7 @@
  * A scene is what is: materials, planar convex polygons (from the file's
  * "polygons" and from mesh files read with assimp), light field slabs that
  * act as emitters and an optional camera. What to compute and how is a job
- * (relight/engine.h's rl_job); the file's "sampling" and "radiance_maps"
+ * (relight/job.h's rl_job); the file's "sampling" and "radiance_maps"
  * sections are only the job it suggests, handed out by rl_job_default().
  * Loading validates everything and reports the first problem with the file
  * and the element ("beams.json: polygons[3]: not planar"). A loaded scene
