@@ -63,7 +63,7 @@ int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, c
 int relight_scene_open(const char *sub, const char *path, const sampling_overrides *o, rl_scene **out, rl_job *job);
 
 /**
- * Fills *job with the job scene's file suggests (rl_job_default()), each
+ * Fills *job with the job that scene's file suggests (rl_job_default()), each
  * sampling setting given in o replacing the file's, and the run options:
  * --threads when given, else 0 (every core), or this rank's share of the
  * cores in a job of several ranks; --time-budget when given, else the file's

@@ -175,10 +175,10 @@ static rl_solution *timed_relight(const rl_scene *scene, const rl_job *job, cons
         cli_progress_start(&bar, label, CLI_PROGRESS_STEPS);
     rl_solution *sol = NULL;
     double wall0 = cli_clock_seconds(CLOCK_MONOTONIC), cpu0 = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
-    rl_job run = *job;
-    run.run.progress = label != NULL ? cli_progress_fraction : NULL;
-    run.run.progress_user = &bar;
-    rl_status st = rl_relight(scene, &run, &sol);
+    rl_job shown = *job; /* with the bar */
+    shown.run.progress = label != NULL ? cli_progress_fraction : NULL;
+    shown.run.progress_user = &bar;
+    rl_status st = rl_relight(scene, &shown, &sol);
     r->wall_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - wall0;
     r->cpu_seconds = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
     if (label != NULL)
