@@ -117,29 +117,29 @@ static inline rl_scene *ts_load(const char *path)
     return st == RL_OK ? s : NULL;
 }
 
-/* Sets method, level, rays per solid angle, samples per cell, descent and threads (0: every core). */
-/* The run options of ts_relight(): the threads of the last ts_set_sampling(). */
-static rl_run_options ts_run;
+/* The job of ts_relight() and of the calls that follow ts_set_sampling(). */
+static rl_job ts_job;
 
-static inline void ts_set_sampling(rl_scene *s, rl_method m, uint32_t n, uint32_t k, uint32_t samples,
+/* Makes ts_job the job scene s's file suggests with method, level, rays per solid angle, samples per cell,
+ * descent and threads (0: every core). */
+static inline void ts_set_sampling(const rl_scene *s, rl_method m, uint32_t n, uint32_t k, uint32_t samples,
                                    uint32_t descend, uint32_t threads)
 {
-    rl_sampling smp = *rl_scene_sampling(s);
-    smp.method = m;
-    smp.partition_n = n;
-    smp.rays_per_solid_angle = k;
-    smp.samples_per_cell = samples;
-    smp.descend = descend;
-    rl_run_options_default(&ts_run);
-    ts_run.threads = threads;
-    CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
+    rl_job_default(s, &ts_job);
+    ts_job.sampling.method = m;
+    ts_job.sampling.partition_n = n;
+    ts_job.sampling.rays_per_solid_angle = k;
+    ts_job.sampling.samples_per_cell = samples;
+    ts_job.sampling.descend = descend;
+    ts_job.run.threads = threads;
+    CHECK(rl_job_check(&ts_job) == RL_OK, "set_sampling: %s", rl_errmsg());
 }
 
-/* Relights s with its current settings. @return the solution, or NULL (a failed check). */
+/* Relights s with ts_job (ts_set_sampling() on s). @return the solution, or NULL (a failed check). */
 static inline rl_solution *ts_relight(const rl_scene *s, const char *what)
 {
     rl_solution *sol = NULL;
-    rl_status st = rl_relight(s, &ts_run, &sol);
+    rl_status st = rl_relight(s, &ts_job, &sol);
     CHECK(st == RL_OK, "%s: relight: %s", what, rl_errmsg());
     return st == RL_OK ? sol : NULL;
 }

@@ -55,11 +55,11 @@ static void check_room(const char *dir, const char *name, const rl_diagnostic_ki
         if (at >= 0)
             CHECK(strstr(d[at].text, name) != NULL, "%s: the finding does not name the scene: %s", name, d[at].text);
     }
-    rl_run_options ro;
-    rl_run_options_default(&ro);
-    ro.threads = 2;
+    rl_job job;
+    rl_job_default(s, &job);
+    job.run.threads = 2;
     rl_solution *sol = NULL;
-    CHECK(rl_relight(s, &ro, &sol) == RL_OK, "%s: %s", name, rl_errmsg());
+    CHECK(rl_relight(s, &job, &sol) == RL_OK, "%s: %s", name, rl_errmsg());
     n = rl_solution_diagnose(sol, d, MAX);
     CHECK(n == nsol, "%s: %zu solution findings, expected %zu (first: %s)", name, n, nsol, n ? d[0].text : "none");
     for (size_t k = 0; k < nsol; k++) {
@@ -205,26 +205,26 @@ static void check_progress(const char *dir)
     rl_scene *s = ts_load(path);
     if (!s)
         return;
-    rl_sampling smp = *rl_scene_sampling(s);
-    smp.method = RL_METHOD_AREA;
-    smp.samples_per_cell = 256;
-    smp.bounces = 1;
-    smp.bounce_rays = 16;
-    smp.bounce_cell_factor = 4;
-    CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "sampling: %s", rl_errmsg());
+    rl_job job;
+    rl_job_default(s, &job);
+    job.sampling.method = RL_METHOD_AREA;
+    job.sampling.samples_per_cell = 256;
+    job.sampling.bounces = 1;
+    job.sampling.bounce_rays = 16;
+    job.sampling.bounce_cell_factor = 4;
+    rl__run run;
+    CHECK(rl__job_resolve(s, &job, &run) == RL_OK, "job: %s", rl_errmsg());
     double per_pass[2] = {0, 0};
-    double total = rl__solve_work(s, 2, per_pass);
+    double total = rl__solve_work(s, &run, 2, per_pass);
     /* room: 6 walls, 1 emitter; per cell 256 rays against 16 rays per larger cell of 16 cells */
     CHECK(total > 0 && fabs(per_pass[0] / total - 256.0 / (256.0 + 1.0)) < 0.01,
           "the direct pass's share %g, expected about %g", per_pass[0] / total, 256.0 / 257.0);
     progress_log log = {0, 0, 0};
-    rl_run_options ro;
-    rl_run_options_default(&ro);
-    ro.threads = 2;
-    ro.progress = log_progress;
-    ro.progress_user = &log;
+    job.run.threads = 2;
+    job.run.progress = log_progress;
+    job.run.progress_user = &log;
     rl_solution *sol = NULL;
-    CHECK(rl_relight(s, &ro, &sol) == RL_OK, "relight: %s", rl_errmsg());
+    CHECK(rl_relight(s, &job, &sol) == RL_OK, "relight: %s", rl_errmsg());
     CHECK(log.calls > 0 && log.last == 1.0 && log.backwards == 0, "progress: %d calls, last %g, %d backwards",
           log.calls, log.last, log.backwards);
     rl_solution_destroy(sol);

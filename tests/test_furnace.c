@@ -143,19 +143,19 @@ static void run(const char *name, rl_scene *s, rl_method m, uint32_t bounces, ui
         exact += PI * LE * pow(RHO, b);
     double means[3], mean = 0, rms = 0;
     long cells = 0;
-    const uint64_t seed = rl_scene_sampling(s)->seed; /* restored below: later runs start from it */
     for (int k = 0; k < seeds; k++) {
-        rl_sampling smp = *rl_scene_sampling(s);
-        smp.method = m;
-        smp.partition_n = adaptive ? 8 : 16;
-        smp.rays_per_solid_angle = 4;
-        smp.samples_per_cell = 64;
-        smp.bounces = bounces;
-        smp.bounce_rays = bounce_rays;
-        smp.seed = seed + (uint64_t)k;
-        CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
+        rl_job job;
+        rl_job_default(s, &job);
+        job.sampling.method = m;
+        job.sampling.partition_n = adaptive ? 8 : 16;
+        job.sampling.rays_per_solid_angle = 4;
+        job.sampling.samples_per_cell = 64;
+        job.sampling.bounces = bounces;
+        job.sampling.bounce_rays = bounce_rays;
+        job.sampling.seed += (uint64_t)k;
+        CHECK(rl_job_check(&job) == RL_OK, "job: %s", rl_errmsg());
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, NULL, &sol) == RL_OK, "%s relight: %s", name, rl_errmsg());
+        CHECK(rl_relight(s, &job, &sol) == RL_OK, "%s relight: %s", name, rl_errmsg());
         if (!sol)
             return;
         furnace_result r = judge(sol, exact);
@@ -165,9 +165,6 @@ static void run(const char *name, rl_scene *s, rl_method m, uint32_t bounces, ui
         rms = fmax(rms, r.rms);
         cells = r.cells;
     }
-    rl_sampling restore = *rl_scene_sampling(s);
-    restore.seed = seed;
-    CHECK(rl_scene_set_sampling(s, &restore) == RL_OK, "set_sampling: %s", rl_errmsg());
     double noise = rms / sqrt((double)cells * seeds);
     if (seeds > 1) {
         double sq = 0;

@@ -3,6 +3,7 @@
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
 #include "lfio/radmap.h"
+#include "relight/job.h"
 #include "relight/engine.h"
 #include "relight/raycast.h"
 #include "relight/reference.h"

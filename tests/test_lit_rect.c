@@ -91,9 +91,9 @@ static void random_rotation(double rot[3][3])
     memcpy(rot, r, sizeof r);
 }
 
-/* Places slab in lf scaled by scale, with a random rotation and translation, with its support tables as the
- * scene loader makes them. */
-static void place(rl_lightfield *lf, const lfio_slab *slab, double scale)
+/* Places slab in lf scaled by scale, with a random rotation and translation, and builds its tables into tab
+ * as a run makes them. */
+static void place(rl_lightfield *lf, rl_slab_tables *tab, const lfio_slab *slab, double scale)
 {
     memset(lf, 0, sizeof *lf);
     lf->slab = slab;
@@ -110,7 +110,8 @@ static void place(rl_lightfield *lf, const lfio_slab *slab, double scale)
         }
     }
     lf->nu = d->nu, lf->nv = d->nv, lf->n = d->n;
-    CHECK(rl__lightfield_tables_make(lf) == 0, "tables");
+    memset(tab, 0, sizeof *tab);
+    CHECK(rl__slab_tables_make(lf, tab) == 0, "tables");
 }
 
 /* @return a random point of the convex hull of the n points p (weights skewed at times to reach corners). */
@@ -154,9 +155,10 @@ static void check_slab(uint32_t n, uint32_t nu, uint32_t nv, double cone_deg, do
 {
     lfio_slab *slab = lamp_slab_new(n, nu, nv, cone_deg);
     rl_lightfield lf;
-    place(&lf, slab, scale);
+    rl_slab_tables tab;
+    place(&lf, &tab, slab, scale);
     rl_emitter e;
-    rl__emitter_from_lightfield(&lf, &e);
+    rl__emitter_from_lightfield(&lf, &tab, &e);
     for (int r = 0; r < receivers; r++) {
         /* the receiver: 1 to 8 points around a centre given in the slab's frame */
         double size = pow(10.0, -3.0 + 2.7 * rnd()), h = rnd() < 0.1 ? size * (rnd() - 0.5) : pow(10.0, -2.0 + 2.5 * rnd());
@@ -215,7 +217,7 @@ static void check_slab(uint32_t n, uint32_t nu, uint32_t nv, double cone_deg, do
                       q.x, q.y, rect[0], rect[1], rect[2], rect[3]);
         }
     }
-    rl__lightfield_tables_free(&lf);
+    rl__slab_tables_free(&tab);
     lfio_slab_destroy(slab);
 }
 
@@ -231,15 +233,16 @@ static void check_no_tables(void)
         d.n++;
     CHECK(lfio_slab_new(&d, &slab) == LFIO_OK, "new slab: %s", lfio_errmsg());
     rl_lightfield lf;
-    place(&lf, slab, 1.0);
-    CHECK(lf.cone_support == NULL && lf.lit_words == 0, "no tables of squares at n = %u", d.n);
+    rl_slab_tables tab;
+    place(&lf, &tab, slab, 1.0);
+    CHECK(tab.cone_support == NULL && tab.lit_words == 0, "no tables of squares at n = %u", d.n);
     rl_emitter e;
-    rl__emitter_from_lightfield(&lf, &e);
+    rl__emitter_from_lightfield(&lf, &tab, &e);
     v3 x = v3_add(frame_point(&e.frame, (v2){0.5, 0.5}), e.frame.n);
     double rect[4];
     CHECK(rl__emitter_lit_rect(&e, &x, 1, e.poly2, e.nverts, rect) == 0, "no bound without tables");
     CHECK(!rl__emitter_dark_at(&e, (v2){0.5, 0.5}, 0.0, 0.0, 1.0), "nothing dark without bits");
-    rl__lightfield_tables_free(&lf);
+    rl__slab_tables_free(&tab);
     lfio_slab_destroy(slab);
 }
 

@@ -134,17 +134,17 @@ static void check_engine_against_reference(const char *path, const char *what, d
 {
     rl_scene *s = ts_load(path);
     bench_pt *pt = s ? pt_new(s) : NULL;
-    rl_run_options ro;
-    rl_run_options_default(&ro);
+    rl_job job;
+    rl_job_default(s, &job);
     rl_solution *sol = NULL;
-    CHECK(s && rl_relight(s, &ro, &sol) == RL_OK, "%s: relight: %s", what, rl_errmsg());
+    CHECK(s && rl_relight(s, &job, &sol) == RL_OK, "%s: relight: %s", what, rl_errmsg());
     if (!pt || !sol) {
         rl_solution_destroy(sol);
         bench_pt_destroy(pt);
         rl_scene_destroy(s);
         return;
     }
-    uint32_t bounces = rl_scene_sampling(s)->bounces;
+    uint32_t bounces = job.sampling.bounces;
     double sum_d2 = 0, sum_se2 = 0, sum_ref = 0;
     long cells = 0;
     for (size_t m = 0; m < rl_solution_map_count(sol); m++) {

@@ -13,6 +13,7 @@
 #include <dirent.h>
 #include <inttypes.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,21 +30,11 @@ static char tmpdir[512];
 
 static int no_descent; /* set by the random-scene test */
 
-/* The run options of every call: the threads of the last set_sampling(). */
-static rl_run_options run_opts;
-
-/* Sets method, level, rays on a scene, and the threads of the calls that follow. */
-static void set_sampling(rl_scene *s, rl_method m, uint32_t n, uint32_t k, uint32_t samples, uint32_t threads)
+/* Makes ts_job the job of the calls on scene s that follow: its file's, with method, level, rays, samples
+ * and threads, and descent unless no_descent. */
+static void set_sampling(const rl_scene *s, rl_method m, uint32_t n, uint32_t k, uint32_t samples, uint32_t threads)
 {
-    rl_sampling smp = *rl_scene_sampling(s);
-    smp.descend = !no_descent;
-    smp.method = m;
-    smp.partition_n = n;
-    smp.rays_per_solid_angle = k;
-    smp.samples_per_cell = samples;
-    rl_run_options_default(&run_opts);
-    run_opts.threads = threads;
-    CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
+    ts_set_sampling(s, m, n, k, samples, !no_descent, threads);
 }
 
 /* The cells of map k: count, irradiance copy (caller frees), and centres. */
@@ -121,7 +112,7 @@ static void check_unoccluded(void)
     for (int m = 0; m < 5; m++) {
         set_sampling(s, methods[m], 32, 4, 128, 0);
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "%s: %s", rl_method_name(methods[m]), rl_errmsg());
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "%s: %s", rl_method_name(methods[m]), rl_errmsg());
         if (!sol)
             continue;
         long k = ts_map_of(sol, 1);
@@ -149,7 +140,7 @@ static void check_unoccluded(void)
     set_sampling(s, RL_METHOD_CULLED, 32, 4, 128, 0);
     no_descent = 0;
     rl_solution *plain = NULL;
-    CHECK(rl_relight(s, &run_opts, &plain) == RL_OK, "plain: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &plain) == RL_OK, "plain: %s", rl_errmsg());
     if (plain) {
         rl_pass_stats st;
         rl_solution_pass_stats(plain, 0, &st);
@@ -163,7 +154,7 @@ static void check_unoccluded(void)
     for (int q = 0; q < 3; q++) {
         set_sampling(s, RL_METHOD_CULLED, 16, ks[q], 64, 0);
         rl_solution *sol = NULL;
-        rl_relight(s, &run_opts, &sol);
+        rl_relight(s, &ts_job, &sol);
         double rmse, mx;
         errors_vs_reference(sol, (size_t)ts_map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
         printf("culled n=16 k=%-2u: RMSE %.4f%%\n", ks[q], 100 * rmse);
@@ -177,7 +168,7 @@ static void check_unoccluded(void)
     for (int q = 0; q < 3; q++) {
         set_sampling(s, RL_METHOD_AREA, 16, 1, ns[q], 0);
         rl_solution *sol = NULL;
-        rl_relight(s, &run_opts, &sol);
+        rl_relight(s, &ts_job, &sol);
         double rmse, mx;
         errors_vs_reference(sol, (size_t)ts_map_of(sol, 1), &p[0], 2.0, &rmse, &mx);
         printf("area samples=%-4u: RMSE %.4f%%\n", ns[q], 100 * rmse);
@@ -190,7 +181,7 @@ static void check_unoccluded(void)
     for (int m = 0; m < 4; m++) {
         set_sampling(s, methods[m], 32, 16, 4096, 0);
         double out[12];
-        CHECK(rl_irradiance(s, &run_opts, &pts[0][0], 4, out, NULL) == RL_OK, "irradiance: %s", rl_errmsg());
+        CHECK(rl_irradiance(s, &ts_job, &pts[0][0], 4, out, NULL) == RL_OK, "irradiance: %s", rl_errmsg());
         for (int q = 0; q < 4; q++) {
             double nrm[3] = {pts[q][3], pts[q][4], pts[q][5]}, l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
             for (int c = 0; c < 3; c++)
@@ -242,12 +233,11 @@ static void check_back_to_back(void)
         double ceiling[3] = {NAN, NAN, NAN};
         for (int k = 0; k < 3; k++) {
             set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 2);
-            rl_sampling smp = *rl_scene_sampling(s);
-            smp.bounce_rays = k == 1 ? 0 : 256;
-            smp.bounce_cell_factor = k == 2 ? 0 : 1;
-            CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
+            ts_job.sampling.bounce_rays = k == 1 ? 0 : 256;
+            ts_job.sampling.bounce_cell_factor = k == 2 ? 0 : 1;
+            CHECK(rl_job_check(&ts_job) == RL_OK, "set_sampling: %s", rl_errmsg());
             rl_solution *sol = NULL;
-            CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "back to back: %s", rl_errmsg());
+            CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "back to back: %s", rl_errmsg());
             if (sol)
                 ceiling[k] = map_mean(sol, ts_map_of(sol, 0));
             rl_solution_destroy(sol);
@@ -293,13 +283,12 @@ static void check_contact_bounce(void)
     rl_pass_stats bounce = {0};
     for (int b = 0; b < 2; b++) {
         set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 2);
-        rl_sampling smp = *rl_scene_sampling(s);
-        smp.bounces = (uint32_t)b;
-        smp.bounce_cell_factor = 4;
-        smp.bounce_rays = 64;
-        CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
+        ts_job.sampling.bounces = (uint32_t)b;
+        ts_job.sampling.bounce_cell_factor = 4;
+        ts_job.sampling.bounce_rays = 64;
+        CHECK(rl_job_check(&ts_job) == RL_OK, "set_sampling: %s", rl_errmsg());
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "contact: %s", rl_errmsg());
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "contact: %s", rl_errmsg());
         if (!sol) {
             rl_scene_destroy(s);
             if (b == 1)
@@ -359,14 +348,13 @@ static void check_narrow_wall(void)
         if (!s)
             return;
         set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 2);
-        rl_sampling smp = *rl_scene_sampling(s);
-        smp.bounces = 1;
-        smp.bounce_cell_factor = 4;
-        smp.bounce_rays = 64;
-        CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "set_sampling: %s", rl_errmsg());
+        ts_job.sampling.bounces = 1;
+        ts_job.sampling.bounce_cell_factor = 4;
+        ts_job.sampling.bounce_rays = 64;
+        CHECK(rl_job_check(&ts_job) == RL_OK, "set_sampling: %s", rl_errmsg());
         rl_solution *sol = NULL;
         rl_pass_stats bounce = {0};
-        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "narrow wall: %s", rl_errmsg());
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "narrow wall: %s", rl_errmsg());
         if (sol)
             CHECK(rl_solution_pass_stats(sol, 1, &bounce) == RL_OK, "pass stats: %s", rl_errmsg());
         /* the low wall: 6 rows of 40 cells */
@@ -401,13 +389,13 @@ static void check_identities(uint32_t bounce_rays)
         return;
     rl_solution *sol[4] = {NULL};
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 1);
-    rl_relight(s, &run_opts, &sol[0]);
+    rl_relight(s, &ts_job, &sol[0]);
     set_sampling(s, RL_METHOD_NAIVE, 16, 2, 16, 2);
-    rl_relight(s, &run_opts, &sol[1]);
+    rl_relight(s, &ts_job, &sol[1]);
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 3);
-    rl_relight(s, &run_opts, &sol[2]);
+    rl_relight(s, &ts_job, &sol[2]);
     set_sampling(s, RL_METHOD_AREA, 16, 2, 16, 1);
-    rl_relight(s, &run_opts, &sol[3]);
+    rl_relight(s, &ts_job, &sol[3]);
     if (sol[0] && sol[1] && sol[2] && sol[3]) {
         /* the bounce pass gathers by solid angles (the direct one from this
          * constant emitter by Lambert's formula, the same code for both), or
@@ -476,11 +464,9 @@ static void check_identities(uint32_t bounce_rays)
     rl_solution *ad[2] = {NULL, NULL};
     for (int k = 0; k < 2; k++) {
         set_sampling(s, RL_METHOD_ADAPTIVE, 16, 4, 16, k + 1);
-        rl_sampling smp = *rl_scene_sampling(s);
-        smp.target_error = 0.02;
-        smp.bounces = 0;
-        rl_scene_set_sampling(s, &smp);
-        rl_relight(s, &run_opts, &ad[k]);
+        ts_job.sampling.target_error = 0.02;
+        ts_job.sampling.bounces = 0;
+        rl_relight(s, &ts_job, &ad[k]);
     }
     if (ad[0] && ad[1]) {
         rl_pass_stats st;
@@ -565,16 +551,13 @@ static uint64_t check_culled_naive(rl_scene *s, const char *what)
     rl_solution *a = NULL, *b = NULL, *c = NULL;
     uint64_t samples = 0;
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 0);
-    rl_relight(s, &run_opts, &a);
+    rl_relight(s, &ts_job, &a);
     set_sampling(s, RL_METHOD_NAIVE, 16, 2, 16, 0);
-    rl_relight(s, &run_opts, &b);
+    rl_relight(s, &ts_job, &b);
     set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 0);
-    rl_sampling smp = *rl_scene_sampling(s);
-    smp.zero_culling = 0;
-    CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "zero_culling 0: %s", rl_errmsg());
-    rl_relight(s, &run_opts, &c);
-    smp.zero_culling = 1;
-    rl_scene_set_sampling(s, &smp);
+    ts_job.sampling.zero_culling = 0;
+    CHECK(rl_job_check(&ts_job) == RL_OK, "zero_culling 0: %s", rl_errmsg());
+    rl_relight(s, &ts_job, &c);
     long total;
     if (a && c) {
         CHECK(ts_differing(a, c, &total) == 0, "%s: zero culling changes nothing", what);
@@ -648,9 +631,9 @@ static void check_shared_directions(const char *path, const char *lfpath)
         return;
     rl_solution *a = NULL, *b = NULL;
     set_sampling(s, RL_METHOD_CULLED, 32, 4, 16, 0);
-    CHECK(rl_relight(s, &run_opts, &a) == RL_OK, "lobe, culled: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &a) == RL_OK, "lobe, culled: %s", rl_errmsg());
     set_sampling(s, RL_METHOD_AREA, 32, 4, 16384, 0);
-    CHECK(rl_relight(s, &run_opts, &b) == RL_OK, "lobe, area: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &b) == RL_OK, "lobe, area: %s", rl_errmsg());
     if (a && b) {
         ts_cells ca = ts_cells_get(a, 0), cb = ts_cells_get(b, 0);
         double peak = 0, sq = 0, sum_a = 0, sum_b = 0;
@@ -744,9 +727,9 @@ static void check_lightfield_blocker(void)
         return;
     rl_solution *a = NULL, *b = NULL;
     set_sampling(s, RL_METHOD_CULLED, 32, 8, 16, 0);
-    CHECK(rl_relight(s, &run_opts, &a) == RL_OK, "blocked light field, culled: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &a) == RL_OK, "blocked light field, culled: %s", rl_errmsg());
     set_sampling(s, RL_METHOD_NAIVE, 32, 8, 16, 0);
-    CHECK(rl_relight(s, &run_opts, &b) == RL_OK, "blocked light field, naive: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &b) == RL_OK, "blocked light field, naive: %s", rl_errmsg());
     long total;
     if (a && b)
         CHECK(ts_differing(a, b, &total) == 0, "blocked light field: culled == naive");
@@ -792,6 +775,67 @@ static void check_lightfield_blocker(void)
     rl_scene_destroy(s);
 }
 
+/* One relighting of a shared scene on a thread of its own. */
+typedef struct job_thread {
+    const rl_scene *scene;
+    rl_job job;
+    rl_solution *sol;
+    rl_status st;
+} job_thread;
+
+static void *run_job_thread(void *arg)
+{
+    job_thread *t = arg;
+    t->st = rl_relight(t->scene, &t->job, &t->sol);
+    return NULL;
+}
+
+/* A scene is only read by the engine: two jobs on it at once, of different methods and cell sizes (so
+ * different maps, and each run its own light field tables), give bit for bit what each gives alone, and
+ * the scene's suggested job is unchanged after them. */
+static void check_concurrent_jobs(const rl_scene *s)
+{
+    job_thread t[2] = {{.scene = s}, {.scene = s}};
+    rl_job file;
+    rl_job_default(s, &file);
+    set_sampling(s, RL_METHOD_CULLED, 16, 2, 16, 2);
+    t[0].job = ts_job;
+    set_sampling(s, RL_METHOD_AREA, 16, 2, 64, 2);
+    t[1].job = ts_job;
+    t[1].job.cell_size = file.cell_size / 2;
+    rl_solution *alone[2] = {NULL, NULL};
+    for (int k = 0; k < 2; k++)
+        CHECK(rl_relight(s, &t[k].job, &alone[k]) == RL_OK, "job %d alone: %s", k, rl_errmsg());
+    pthread_t th[2];
+    int started[2];
+    for (int k = 0; k < 2; k++)
+        started[k] = pthread_create(&th[k], NULL, run_job_thread, &t[k]) == 0;
+    for (int k = 0; k < 2; k++) {
+        if (started[k])
+            pthread_join(th[k], NULL);
+        CHECK(started[k] && t[k].st == RL_OK, "job %d at once: status %d", k, (int)t[k].st);
+    }
+    long total[2] = {0, 0};
+    for (int k = 0; k < 2; k++)
+        if (alone[k] && t[k].sol)
+            CHECK(ts_differing(alone[k], t[k].sol, &total[k]) == 0 && total[k] > 0,
+                  "job %d: the run beside another differs from the run alone", k);
+    if (alone[0] && alone[1]) {
+        rl_map_info a, b;
+        CHECK(rl_solution_map_info(alone[0], 0, &a) == RL_OK && rl_solution_map_info(alone[1], 0, &b) == RL_OK &&
+                  a.cell_size == file.cell_size && b.cell_size == file.cell_size / 2 && b.ncells > a.ncells,
+              "each job's cell size: %g and %g", a.cell_size, b.cell_size);
+    }
+    rl_job after;
+    rl_job_default(s, &after);
+    CHECK(memcmp(&after.sampling, &file.sampling, sizeof file.sampling) == 0 && after.cell_size == file.cell_size,
+          "the scene's job unchanged by the runs");
+    for (int k = 0; k < 2; k++) {
+        rl_solution_destroy(alone[k]);
+        rl_solution_destroy(t[k].sol);
+    }
+}
+
 /* A constant light field is a diffuse emitter; a sparse one is culled by its mask. */
 static void check_lightfield(void)
 {
@@ -814,7 +858,7 @@ static void check_lightfield(void)
     for (int m = 0; m < 2; m++) {
         set_sampling(s, methods[m], 32, 4, 256, 0);
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "light field relight: %s", rl_errmsg());
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "light field relight: %s", rl_errmsg());
         if (!sol)
             continue;
         double rmse, mx;
@@ -835,6 +879,8 @@ static void check_lightfield(void)
         if (!s)
             return;
         samples[sparse] = check_culled_naive(s, sparse ? "sparse light field" : "masked light field");
+        if (sparse)
+            check_concurrent_jobs(s);
         rl_scene_destroy(s);
     }
     check_shared_directions(path, lfpath);
@@ -877,11 +923,10 @@ static double cells_rmse(const rl_solution *a, const rl_solution *b, double *sum
 static rl_solution *relight_anchored(rl_scene *s, uint32_t stride, uint32_t k, unsigned threads, uint64_t *samples)
 {
     set_sampling(s, RL_METHOD_CULLED, 8, k, 16, threads);
-    rl_sampling smp = *rl_scene_sampling(s);
-    smp.anchor_stride = stride;
-    CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "anchor_stride %u: %s", stride, rl_errmsg());
+    ts_job.sampling.anchor_stride = stride;
+    CHECK(rl_job_check(&ts_job) == RL_OK, "anchor_stride %u: %s", stride, rl_errmsg());
     rl_solution *sol = NULL;
-    CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "anchors %u, k %u: %s", stride, k, rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "anchors %u, k %u: %s", stride, k, rl_errmsg());
     rl_pass_stats st = {0};
     if (sol)
         rl_solution_pass_stats(sol, 0, &st);
@@ -1020,16 +1065,15 @@ static void check_maps_ready(void)
          * and all be told at once) */
         uint32_t bounces = trial < 3 ? (uint32_t)trial : (uint32_t)trial - 2, threads = trial < 3 ? 1 : 4;
         set_sampling(s, RL_METHOD_CULLED, 8, 2, 16, threads);
-        rl_sampling smp = *rl_scene_sampling(s);
-        smp.bounces = bounces;
-        CHECK(rl_scene_set_sampling(s, &smp) == RL_OK, "maps_ready: %s", rl_errmsg());
+        ts_job.sampling.bounces = bounces;
+        CHECK(rl_job_check(&ts_job) == RL_OK, "maps_ready: %s", rl_errmsg());
         told_maps t;
         memset(&t, 0, sizeof t);
-        run_opts.maps_ready = on_maps_ready;
-        run_opts.maps_ready_user = &t;
+        ts_job.run.maps_ready = on_maps_ready;
+        ts_job.run.maps_ready_user = &t;
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "maps_ready: %s", rl_errmsg());
-        run_opts.maps_ready = NULL;
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "maps_ready: %s", rl_errmsg());
+        ts_job.run.maps_ready = NULL;
         if (sol && bounces == 0)
             check_map_rows(sol);
         size_t n = sol ? rl_solution_map_count(sol) : 0, same = 0;
@@ -1179,7 +1223,7 @@ static void check_slab_edge_on(void)
             double l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
             for (int c = 0; c < 3; c++)
                 nrm[c] /= l;
-            CHECK(rl_irradiance(s, &run_opts, pts[q], 1, out, NULL) == RL_OK, "edge-on: %s", rl_errmsg());
+            CHECK(rl_irradiance(s, &ts_job, pts[q], 1, out, NULL) == RL_OK, "edge-on: %s", rl_errmsg());
             double ref = rl_reference_polygon_irradiance(&em.v[0][0], 4, pts[q], nrm, 2.0);
             printf("extreme slab_edge_on[%d]          %-10s: %.6g vs %.6g (rel %.2g)\n", q, rl_method_name(methods[m]),
                    out[0], ref, fabs(out[0] - ref) / ref);
@@ -1257,7 +1301,7 @@ static void extreme_points(const char *name, const tpoly *em, const double (*pts
         double out[3 * EXTREME_POINTS];
         for (int i = 0; i < 3 * EXTREME_POINTS; i++)
             out[i] = NAN;
-        CHECK(rl_irradiance(s, &run_opts, &pts[0][0], EXTREME_POINTS, out, NULL) == RL_OK, "%s: %s", name,
+        CHECK(rl_irradiance(s, &ts_job, &pts[0][0], EXTREME_POINTS, out, NULL) == RL_OK, "%s: %s", name,
               rl_errmsg());
         double se = 0, worst = 0;
         int bad = 0;
@@ -1361,7 +1405,7 @@ static void extreme_map(const char *name, const tpoly *em, const tpoly *rcv, con
     for (int m = 0; m < 5; m++) {
         set_sampling(s, methods[m], 32, 4, 128, 0);
         rl_solution *sol = NULL;
-        CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "%s: %s", name, rl_errmsg());
+        CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "%s: %s", name, rl_errmsg());
         if (!sol)
             continue;
         long total;
@@ -1462,7 +1506,7 @@ static void check_shading(void)
         return;
     set_sampling(s, RL_METHOD_CULLED, 16, 4, 64, 0);
     rl_solution *sol = NULL;
-    CHECK(rl_relight(s, &run_opts, &sol) == RL_OK, "shading: %s", rl_errmsg());
+    CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "shading: %s", rl_errmsg());
     if (sol) {
         ts_cells c = ts_cells_get(sol, (size_t)ts_map_of(sol, 1));
         double *centre = malloc(3 * sizeof(double) * (c.n + 1));
@@ -1527,9 +1571,9 @@ static void check_random_scenes(int count)
         rl_solution *a = NULL, *b = NULL;
         no_descent = sc % 2; /* half the scenes with the paper's plain method: every pair comparable */
         set_sampling(s, RL_METHOD_CULLED, 8, 1, 16, 0);
-        rl_relight(s, &run_opts, &a);
+        rl_relight(s, &ts_job, &a);
         set_sampling(s, RL_METHOD_NAIVE, 8, 1, 16, 0);
-        rl_relight(s, &run_opts, &b);
+        rl_relight(s, &ts_job, &b);
         uint64_t descended = 0;
         for (uint32_t q = 0; a && q < rl_solution_pass_count(a); q++) {
             rl_pass_stats st;
@@ -1599,7 +1643,9 @@ static void check_one_thread(void)
     if (!s)
         return;
     unsigned before = task_count(), most = 0;
-    rl_run_options one = {.threads = 1, .progress = count_tasks, .progress_user = &most};
+    rl_job one;
+    rl_job_default(s, &one);
+    one.run = (rl_run_options){.threads = 1, .progress = count_tasks, .progress_user = &most};
     rl_solution *sol = NULL;
     CHECK(rl_relight(s, &one, &sol) == RL_OK, "one thread: %s", rl_errmsg());
     if (before > 0) {
@@ -1608,7 +1654,7 @@ static void check_one_thread(void)
               before);
     }
     rl_ray_bench rb;
-    CHECK(rl_bench_rays(s, &one, 1000, &rb) == RL_OK && rb.rays >= 1000, "bench on one thread: %s", rl_errmsg());
+    CHECK(rl_bench_rays(s, &one.run, 1000, &rb) == RL_OK && rb.rays >= 1000, "bench on one thread: %s", rl_errmsg());
     CHECK(task_count() == 0 || task_count() <= before + 1, "threads left after a one-thread bench: %u", task_count());
     rl_solution_destroy(sol);
     rl_scene_destroy(s);

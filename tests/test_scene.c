@@ -23,6 +23,7 @@
 #include "check.h"
 #include "relight/engine.h"
 #include "relight/scene.h"
+#include "emitter.h" /* rl__slab_tables_new(): a run's light field tables */
 #include "maps.h"
 #include "scene_model.h"
 
@@ -112,10 +113,12 @@ static void test_minimal(void)
         return;
     rl_sampling def;
     rl_sampling_default(&def);
-    const rl_sampling *got = rl_scene_sampling(s);
+    rl_job job;
+    rl_job_default(s, &job);
+    const rl_sampling *got = &job.sampling;
     CHECK(rl_scene_polygon_count(s) == 1, "polygons %zu", rl_scene_polygon_count(s));
     CHECK(rl_scene_lightfield_count(s) == 0 && rl_scene_lightfield_bytes(s) == 0, "light fields");
-    CHECK(rl_scene_cell_size(s) == 0.05, "default cell size %g", rl_scene_cell_size(s));
+    CHECK(job.cell_size == 0.05 && job.cell_size == RL_DEFAULT_CELL_SIZE, "default cell size %g", job.cell_size);
     CHECK(!rl_scene_has_camera(s), "no camera");
     CHECK(got->method == RL_METHOD_CULLED && got->partition_n == 32 && got->rays_per_solid_angle == 4 &&
               got->samples_per_cell == def.samples_per_cell && got->bounces == 0 && got->seed == 1,
@@ -135,9 +138,11 @@ static void test_full(void)
     rl_scene *s = load(corpus, "good_full.json");
     if (!s)
         return;
-    const rl_sampling *g = rl_scene_sampling(s);
+    rl_job job;
+    rl_job_default(s, &job);
+    const rl_sampling *g = &job.sampling;
     CHECK(rl_scene_polygon_count(s) == 3, "polygons %zu", rl_scene_polygon_count(s));
-    CHECK(rl_scene_cell_size(s) == 0.1, "cell size");
+    CHECK(job.cell_size == 0.1, "cell size");
     CHECK(g->method == RL_METHOD_NAIVE && g->partition_n == 16 && g->rays_per_solid_angle == 8 &&
               g->samples_per_cell == 32 && g->bounces == 3 && g->seed == 42,
           "sampling read");
@@ -386,8 +391,8 @@ static void test_settings_table(void)
 
 static void write_text(const char *name, const char *text);
 
-/* Threads and the time budget are run options, checked by each call that runs the engine (they were
- * sampling settings, checked by rl_scene_set_sampling); a scene file's time budget is only a suggestion. */
+/* Threads and the time budget are run options, checked by each call that runs the engine; a scene file's
+ * time budget is only a suggestion, handed out by rl_job_default(). */
 static void test_run_options(void)
 {
     rl_run_options def;
@@ -401,8 +406,10 @@ static void test_run_options(void)
     rl_scene *s = load(tmpdir, "budget.json");
     if (!s)
         return;
-    CHECK(rl_scene_time_budget(s) == 2.5 && rl_scene_time_budget(NULL) == 0, "scene time budget %g",
-          rl_scene_time_budget(s));
+    rl_job job, none;
+    rl_job_default(s, &job);
+    rl_job_default(NULL, &none);
+    CHECK(job.run.time_budget == 2.5 && none.run.time_budget == 0, "scene time budget %g", job.run.time_budget);
     const struct {
         const char *field;
         rl_run_options value;
@@ -416,18 +423,20 @@ static void test_run_options(void)
         rl_solution *sol = (rl_solution *)&def;
         rl_ray_bench rb;
         double pt[6] = {0.5, 0.2, 1, 0, 0, -1}, e[3];
-        CHECK(rl_relight(s, &bad[k].value, &sol) == RL_ERR_ARG && sol == NULL, "bad %s accepted", bad[k].field);
+        rl_job b = job;
+        b.run = bad[k].value;
+        CHECK(rl_relight(s, &b, &sol) == RL_ERR_ARG && sol == NULL, "bad %s accepted", bad[k].field);
         CHECK(strstr(rl_errmsg(), bad[k].field) != NULL, "message '%s' names %s", rl_errmsg(), bad[k].field);
-        CHECK(rl_irradiance(s, &bad[k].value, pt, 1, e, NULL) == RL_ERR_ARG, "irradiance: bad %s accepted",
-              bad[k].field);
+        CHECK(rl_irradiance(s, &b, pt, 1, e, NULL) == RL_ERR_ARG, "irradiance: bad %s accepted", bad[k].field);
         CHECK(rl_bench_rays(s, &bad[k].value, 10, &rb) == RL_ERR_ARG, "bench: bad %s accepted", bad[k].field);
     }
-    rl_run_options one = {.threads = 1};
+    rl_job one = job;
+    one.run = (rl_run_options){.threads = 1};
     rl_solution *sol = NULL;
     CHECK(rl_relight(s, &one, &sol) == RL_OK && sol != NULL, "one thread: %s", rl_errmsg());
     CHECK(sol == NULL || rl_solution_render(sol, NULL, (float[3]){0}) == RL_ERR_ARG, "render without a camera");
     rl_solution_destroy(sol);
-    CHECK(rl_relight(s, NULL, &sol) == RL_OK && sol != NULL, "NULL options: %s", rl_errmsg());
+    CHECK(rl_relight(s, NULL, &sol) == RL_OK && sol != NULL, "NULL job: %s", rl_errmsg());
     rl_solution_destroy(sol);
     rl_scene_destroy(s);
 }
@@ -540,9 +549,11 @@ static void test_lightfields(void)
               "three emitters from one file, two of them one slab");
         CHECK(l[0].owns_lf && !l[1].owns_lf && !l[2].owns_lf && l[1].lf == l[0].lf && l[2].lf == l[0].lf,
               "the file is read once and shared");
-        CHECK(l[0].owns_support && !l[1].owns_support && l[1].support == l[0].support && l[2].owns_support &&
-                  l[2].support != l[0].support,
+        rl_slab_tables *t = rl__slab_tables_new(s); /* a run's: the scene holds none */
+        CHECK(t && t[0].owned && !t[1].owned && t[1].support == t[0].support && t[2].owned &&
+                  t[2].support != t[0].support,
               "a slab's support table is shared, another slab's is its own");
+        rl__slab_tables_destroy(t, rl_scene_lightfield_count(s));
         CHECK(rl_scene_lightfield_bytes(s) == file_bytes, "three emitters of one file hold its radiance once: %llu",
               (unsigned long long)rl_scene_lightfield_bytes(s));
         rl_scene_destroy(s);
@@ -564,17 +575,22 @@ static void test_lightfields(void)
 
 /* ---------------------------------------------------------- the settings */
 
-static void test_set_sampling(void)
+/* A job is checked as a whole by rl_job_check() and by every call that solves; the scene it runs on is only
+ * read, so its file's suggestion stays what it was. */
+static void test_job_check(void)
 {
     rl_scene *s = load(corpus, "good_minimal.json");
     if (!s)
         return;
+    rl_job job, file;
+    rl_job_default(s, &file);
+    job = file;
     rl_sampling x;
     rl_sampling_default(&x);
     x.method = RL_METHOD_AREA, x.partition_n = 4096, x.rays_per_solid_angle = 65536;
     x.seed = UINT64_MAX;
-    CHECK(rl_scene_set_sampling(s, &x) == RL_OK, "valid settings: %s", rl_errmsg());
-    CHECK(memcmp(rl_scene_sampling(s), &x, sizeof x) == 0, "settings replaced");
+    job.sampling = x;
+    CHECK(job.size == sizeof job && rl_job_check(&job) == RL_OK, "valid settings: %s", rl_errmsg());
     const struct {
         const char *field;
         rl_sampling value;
@@ -592,18 +608,44 @@ static void test_set_sampling(void)
         {"method", {.method = (rl_method)7, .partition_n = 1, .rays_per_solid_angle = 1, .samples_per_cell = 1, .target_error = 0.05}},
     };
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
-        CHECK(rl_scene_set_sampling(s, &bad[k].value) == RL_ERR_ARG, "bad %s accepted", bad[k].field);
+        rl_job b = job;
+        b.sampling = bad[k].value;
+        CHECK(rl_job_check(&b) == RL_ERR_ARG, "bad %s accepted", bad[k].field);
         CHECK(strstr(rl_errmsg(), bad[k].field) != NULL, "message '%s' names %s", rl_errmsg(), bad[k].field);
-        CHECK(memcmp(rl_scene_sampling(s), &x, sizeof x) == 0, "settings kept after a bad %s", bad[k].field);
+        rl_solution *sol = (rl_solution *)&b;
+        CHECK(rl_relight(s, &b, &sol) == RL_ERR_ARG && sol == NULL, "relight: bad %s accepted", bad[k].field);
     }
-    CHECK(rl_scene_set_sampling(s, NULL) == RL_ERR_ARG && rl_scene_set_sampling(NULL, &x) == RL_ERR_ARG, "NULL");
+    const struct {
+        const char *field;
+        size_t size;
+        double cell_size;
+    } bad_job[] = {
+        {"cell_size", sizeof job, 0}, {"cell_size", sizeof job, -0.1}, {"cell_size", sizeof job, INFINITY},
+        {"cell_size", sizeof job, NAN}, {"size", 0, 0.1}, {"size", sizeof job + 8, 0.1},
+    };
+    for (size_t k = 0; k < sizeof bad_job / sizeof bad_job[0]; k++) {
+        rl_job b = job;
+        b.size = bad_job[k].size, b.cell_size = bad_job[k].cell_size;
+        CHECK(rl_job_check(&b) == RL_ERR_ARG, "bad %s accepted", bad_job[k].field);
+        CHECK(strstr(rl_errmsg(), bad_job[k].field) != NULL, "message '%s' names %s", rl_errmsg(), bad_job[k].field);
+    }
+    CHECK(rl_job_check(NULL) == RL_ERR_ARG, "NULL job");
+    rl_job again;
+    rl_job_default(s, &again);
+    CHECK(memcmp(&again.sampling, &file.sampling, sizeof x) == 0 && again.cell_size == file.cell_size,
+          "the scene's suggestion kept");
+    rl_job_default(s, NULL);
     rl_scene_destroy(s);
 
     rl_scene *none = (rl_scene *)&x;
     CHECK(rl_scene_load(NULL, &none) == RL_ERR_ARG && none == NULL, "NULL path");
     CHECK(rl_scene_load("x.json", NULL) == RL_ERR_ARG, "NULL out");
     rl_scene_destroy(NULL);
-    CHECK(rl_scene_polygon_count(NULL) == 0 && rl_scene_sampling(NULL) == NULL, "NULL scene accessors");
+    rl_job def;
+    rl_job_default(NULL, &def);
+    CHECK(rl_scene_polygon_count(NULL) == 0, "NULL scene accessors");
+    rl_sampling_default(&x);
+    CHECK(memcmp(&def.sampling, &x, sizeof x) == 0 && def.cell_size == RL_DEFAULT_CELL_SIZE, "a NULL scene's job");
 }
 
 /* ----------------------------------------------------------- data scenes */
@@ -697,7 +739,7 @@ static void test_interpolation(void)
     rl_scene *s = load(tmpdir, "interp.json");
     rl_map *fine = NULL, *coarse = NULL;
     size_t nf = 0, nc = 0;
-    if (!s || rl__maps_build(s, 3, &fine, &nf) != RL_OK || rl__maps_build_sized(s, 0.2, 1, &coarse, &nc) != RL_OK) {
+    if (!s || rl__maps_build(s, s->cell_size, s->sampling.bounces > 0, 3, &fine, &nf) != RL_OK || rl__maps_build_sized(s, 0.2, 1, &coarse, &nc) != RL_OK) {
         CHECK(0, "maps: %s", rl_errmsg());
         rl__maps_free(fine, nf);
         rl_scene_destroy(s);
@@ -707,7 +749,7 @@ static void test_interpolation(void)
     /* cells clipped on three threads are those of one */
     rl_map *one = NULL;
     size_t none = 0;
-    CHECK(rl__maps_build(s, 1, &one, &none) == RL_OK && none == nf, "maps on one thread: %s", rl_errmsg());
+    CHECK(rl__maps_build(s, s->cell_size, s->sampling.bounces > 0, 1, &one, &none) == RL_OK && none == nf, "maps on one thread: %s", rl_errmsg());
     for (size_t m = 0; one && m < none && m < nf; m++) {
         int same = one[m].ncells == fine[m].ncells && one[m].nu == fine[m].nu && one[m].nv == fine[m].nv;
         for (uint32_t k = 0; same && k < one[m].ncells; k++) {
@@ -777,7 +819,7 @@ static void test_mark_direct(void)
     rl_scene *s = load(tmpdir, "mark.json");
     rl_map *fine = NULL, *coarse = NULL;
     size_t nf = 0, nc = 0;
-    if (!s || rl__maps_build(s, 1, &fine, &nf) != RL_OK || rl__maps_build_sized(s, 0.2, 2, &coarse, &nc) != RL_OK ||
+    if (!s || rl__maps_build(s, s->cell_size, s->sampling.bounces > 0, 1, &fine, &nf) != RL_OK || rl__maps_build_sized(s, 0.2, 2, &coarse, &nc) != RL_OK ||
         nf != 1 || nc != 1) {
         CHECK(0, "maps: %s", rl_errmsg());
         rl__maps_free(fine, nf);
@@ -852,7 +894,7 @@ static void test_cell_budget(void)
     for (unsigned threads = 1; s && threads <= 2; threads++) {
         rl_map *maps = NULL;
         size_t n = 7;
-        rl_status st = rl__maps_build(s, threads, &maps, &n);
+        rl_status st = rl__maps_build(s, s->cell_size, s->sampling.bounces > 0, threads, &maps, &n);
         CHECK(st == RL_ERR_INPUT && maps == NULL && n == 0, "budget, %u threads: status %d, %zu maps", threads,
               (int)st, n);
         CHECK(strstr(rl_errmsg(), "polygons[1]: more than 67108864 radiance cells") != NULL,
@@ -902,17 +944,16 @@ static int room_measure(const char *fmt, double e[3 * ROOM_POINTS], float *img)
               "%s: polygon %zu (%s) has %u vertices and area %g", fmt, i, p->label, p->count, p->area);
     }
     check_invariants(s, name);
-    rl_run_options opt;
-    rl_run_options_default(&opt);
+    rl_job job;
+    rl_job_default(s, &job);
     rl_solution *sol = NULL;
-    int ok = rl_irradiance(s, &opt, room_points, ROOM_POINTS, e, NULL) == RL_OK &&
-             rl_relight(s, &opt, &sol) == RL_OK && rl_solution_render(sol, &opt, img) == RL_OK;
+    int ok = rl_irradiance(s, &job, room_points, ROOM_POINTS, e, NULL) == RL_OK &&
+             rl_relight(s, &job, &sol) == RL_OK && rl_solution_render(sol, &job.run, img) == RL_OK;
     CHECK(ok, "%s: %s", fmt, rl_errmsg());
     /* direct light alone under the lamp's centre: Lambert's formula for a 0.8 m square 1.4 m above */
-    rl_sampling direct = *rl_scene_sampling(s);
-    direct.bounces = 0;
+    job.sampling.bounces = 0;
     double d[3] = {0, 0, 0}, exact = square_irradiance(20, 0.4, 1.4);
-    ok = ok && rl_scene_set_sampling(s, &direct) == RL_OK && rl_irradiance(s, &opt, room_points, 1, d, NULL) == RL_OK;
+    ok = ok && rl_irradiance(s, &job, room_points, 1, d, NULL) == RL_OK;
     CHECK(ok && fabs(d[0] / exact - 1) < 1e-6, "%s: direct light %.7g W m^-2 under the lamp, %.7g expected", fmt,
           d[0], exact);
     rl_solution_destroy(sol);
@@ -987,7 +1028,7 @@ static void test_load_options(void)
     rl_scene *want = load(tmpdir, "lf_default.json");
     for (unsigned threads = 1; want && threads <= 3; threads += 2) {
         rl_scene_load_options opt;
-        rl_scene_load_options_init(&opt);
+        rl_scene_load_options_default(&opt);
         opt.threads = threads;
         rl_scene *s = NULL;
         CHECK(rl_scene_load_with(path, &opt, &s) == RL_OK && s, "load on %u threads: %s", threads, rl_errmsg());
@@ -1002,7 +1043,7 @@ static void test_load_options(void)
     }
     rl_scene_destroy(want);
     rl_scene_load_options opt;
-    rl_scene_load_options_init(&opt);
+    rl_scene_load_options_default(&opt);
     CHECK(opt.size == sizeof opt && opt.threads == 0, "load defaults");
     opt.threads = 1025;
     rl_scene *s = NULL;
@@ -1059,9 +1100,7 @@ static void test_mesh_merge(void)
 static double lamp_side(const rl_scene *s, double z, double sign)
 {
     double p[6] = {0.5, 0.5, z, 0, 0, sign}, e[3];
-    rl_run_options opt;
-    rl_run_options_default(&opt);
-    rl_status st = rl_irradiance(s, &opt, p, 1, e, NULL);
+    rl_status st = rl_irradiance(s, NULL, p, 1, e, NULL); /* the job the scene file suggests */
     CHECK(st == RL_OK, "irradiance: %s", rl_errmsg());
     return st == RL_OK ? e[0] : -1;
 }
@@ -1077,10 +1116,8 @@ static void two_sided_view(rl_scene *s)
         rl_camera *c = &s->camera;
         *c = (rl_camera){{0.5, 0.5, z}, {0.5, 0.5, 0}, {0, 1, 0}, 30, N, N};
         s->has_camera = 1;
-        rl_run_options opt;
-        rl_run_options_default(&opt);
         rl_solution *sol = NULL;
-        int ok = rl_relight(s, &opt, &sol) == RL_OK && rl_solution_render(sol, &opt, img) == RL_OK;
+        int ok = rl_relight(s, NULL, &sol) == RL_OK && rl_solution_render(sol, NULL, img) == RL_OK;
         CHECK(ok, "two-sided view: %s", rl_errmsg());
         size_t lit = 0;
         for (size_t k = 0; ok && k < N * N * 3; k++)
@@ -1228,7 +1265,7 @@ int main(int argc, char **argv)
     test_bad();
     test_lightfields();
     test_load_options();
-    test_set_sampling();
+    test_job_check();
     test_settings_table();
     test_run_options();
     test_data();

@@ -113,7 +113,7 @@ static void check_radiance_range(void)
     rl_solution *one = culled_equals_naive(s1, "radiance 1", 16, 2);
     ts_set_sampling(s1, RL_METHOD_CULLED, 32, 8, 16, 1, 0);
     double pt1[6];
-    CHECK(rl_irradiance(s1, &ts_run, &pts[0][0], 2, pt1, NULL) == RL_OK, "points: %s", rl_errmsg());
+    CHECK(rl_irradiance(s1, &ts_job, &pts[0][0], 2, pt1, NULL) == RL_OK, "points: %s", rl_errmsg());
     if (!one) {
         rl_scene_destroy(s1);
         return;
@@ -145,7 +145,7 @@ static void check_radiance_range(void)
         rl_solution *sol = culled_equals_naive(s, name, 16, 2);
         ts_set_sampling(s, RL_METHOD_CULLED, 32, 8, 16, 1, 0);
         double pt[6] = {NAN, NAN, NAN, NAN, NAN, NAN};
-        CHECK(rl_irradiance(s, &ts_run, &pts[0][0], 2, pt, NULL) == RL_OK, "%s points: %s", name, rl_errmsg());
+        CHECK(rl_irradiance(s, &ts_job, &pts[0][0], 2, pt, NULL) == RL_OK, "%s points: %s", name, rl_errmsg());
         if (sol) {
             ts_cells c = ts_cells_get(sol, (size_t)ts_map_of(sol, 1));
             double worst = 0; /* largest relative deviation from the scaled radiance-1 result */
@@ -211,7 +211,7 @@ static void check_radiance_range(void)
     rl_solution *sol = culled_equals_naive(s, "radiance RL_MAX_EMISSION", 8, 1);
     ts_set_sampling(s, RL_METHOD_CULLED, 16, 4, 16, 1, 0);
     double pt[6] = {NAN, NAN, NAN, NAN, NAN, NAN};
-    CHECK(rl_irradiance(s, &ts_run, &pts[0][0], 2, pt, NULL) == RL_OK, "FLT_MAX points: %s", rl_errmsg());
+    CHECK(rl_irradiance(s, &ts_job, &pts[0][0], 2, pt, NULL) == RL_OK, "FLT_MAX points: %s", rl_errmsg());
     double ref = rl_reference_polygon_irradiance(&big[0].v[0][0], 4, pts[0], (double[3]){0, 0, 1}, RL_MAX_EMISSION);
     printf("radiance 1e30 (20 m emitter)      : point %.6g W/m2 vs Lambert %.6g (rel %.2g)\n", pt[0], ref,
            fabs(pt[0] - ref) / ref);
@@ -357,7 +357,7 @@ static void check_mixed_scales(void)
     const double pt[2][6] = {{20, 0, 0, 0, 0, 1}, {20.0005, 0.0002, 0, 0, 0, 1}};
     ts_set_sampling(s, RL_METHOD_CULLED, 32, 16, 16, 1, 0);
     double out[6] = {NAN, NAN, NAN, NAN, NAN, NAN};
-    CHECK(rl_irradiance(s, &ts_run, &pt[0][0], 2, out, NULL) == RL_OK, "mixed scales points: %s", rl_errmsg());
+    CHECK(rl_irradiance(s, &ts_job, &pt[0][0], 2, out, NULL) == RL_OK, "mixed scales points: %s", rl_errmsg());
     for (int q = 0; q < 2; q++) {
         double up[3] = {0, 0, 1}, ref = ts_reference_point(em, 2, pt[q], up);
         double tiny_part = rl_reference_polygon_irradiance(&p[3].v[0][0], 4, pt[q], up, 1e6);
@@ -576,7 +576,7 @@ static void sliver_emitter(const tpoly *lamp, const tpoly *floor)
     const double pts[2][6] = {{0, 0, 0, 0, 0, 1}, {0.3, 0.2, 0, 0, 0, 1}};
     ts_set_sampling(s, RL_METHOD_CULLED, 32, 16, 16, 1, 0);
     double out[6] = {NAN, NAN, NAN, NAN, NAN, NAN};
-    CHECK(rl_irradiance(s, &ts_run, &pts[0][0], 2, out, NULL) == RL_OK, "sliver points: %s", rl_errmsg());
+    CHECK(rl_irradiance(s, &ts_job, &pts[0][0], 2, out, NULL) == RL_OK, "sliver points: %s", rl_errmsg());
     for (int q = 0; q < 2; q++) {
         double up[3] = {0, 0, 1}, ref = ts_reference_point(&em, 1, pts[q], up);
         printf("sliver emitter (aspect 1.01e-6)    culled point %d  : %.6g vs Lambert %.6g (rel %.2g)\n", q,

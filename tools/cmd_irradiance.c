@@ -140,7 +140,8 @@ static void print_point(const double *rgb, int lux)
 }
 
 /* Computes and prints the irradiance of every point. @return an exit code. */
-static int print_irradiance(const rl_scene *scene, const irradiance_options *o, const point_list *points)
+static int print_irradiance(const rl_scene *scene, const rl_job *given, const irradiance_options *o,
+                            const point_list *points)
 {
     if (points->count == 0)
         return ILF_EXIT_OK;
@@ -149,14 +150,13 @@ static int print_irradiance(const rl_scene *scene, const irradiance_options *o, 
         cli_error("irradiance", "out of memory for %zu points", points->count);
         return ILF_EXIT_FAILED;
     }
-    rl_run_options ro;
-    relight_run_options(&o->sampling, scene, &ro);
-    relight_print_settings("irradiance", scene, &ro);
+    rl_job job = *given;
+    relight_print_settings("irradiance", &job);
     cli_progress bar;
     cli_progress_start(&bar, "irradiance", CLI_PROGRESS_STEPS);
-    ro.progress = bar.enabled ? cli_progress_fraction : NULL;
-    ro.progress_user = &bar;
-    rl_status st = rl_irradiance_cluster(scene, job_cluster(), &ro, points->values, points->count, rgb, NULL);
+    job.run.progress = bar.enabled ? cli_progress_fraction : NULL;
+    job.run.progress_user = &bar;
+    rl_status st = rl_irradiance_cluster(scene, job_cluster(), &job, points->values, points->count, rgb, NULL);
     cli_progress_finish(&bar);
     /* the other ranks may be waiting in an exchange this rank will not reach: end the job */
     int code = st == RL_OK ? ILF_EXIT_OK : job_fail(relight_failure("irradiance", st));
@@ -180,8 +180,9 @@ int ilf_cmd_irradiance(int argc, char **argv)
         return code;
     point_list points = {NULL, 0, 0};
     rl_scene *scene = NULL;
+    rl_job job;
     cli_set_quiet(o.quiet || job_rank() != 0);
-    code = job_agree(relight_scene_open("irradiance", o.scene, &o.sampling, &scene));
+    code = job_agree(relight_scene_open("irradiance", o.scene, &o.sampling, &scene, &job));
     if (code == ILF_EXIT_OK && job_rank() == 0)
         relight_warn_scene(scene, 0);
     /* rank 0 alone reads the points (standard input reaches it only) and shares them */
@@ -191,7 +192,7 @@ int ilf_cmd_irradiance(int argc, char **argv)
     if (code == ILF_EXIT_OK && job_ranks() > 1)
         code = job_agree(share_points(&points));
     if (code == ILF_EXIT_OK)
-        code = print_irradiance(scene, &o, &points);
+        code = print_irradiance(scene, &job, &o, &points);
     points_free(&points);
     rl_scene_destroy(scene);
     return code;

@@ -125,7 +125,7 @@ typedef struct relight_run {
     const relight_options *o;
     rl_scene *scene;
     rl_solution *solution;
-    rl_run_options run_options;       /* threads and time budget of the engine's calls (no progress) */
+    rl_job job;                       /* what the engine computes, and how: threads, time budget (no progress) */
     double wall_seconds, cpu_seconds; /* of the engine, on this rank */
     double write_seconds;              /* writing radiance.h5, after the engine when written beside it */
     size_t maps;
@@ -342,10 +342,10 @@ static int relight(relight_run *run)
     if (show)
         cli_progress_start(&bar, "relight", CLI_PROGRESS_STEPS);
     double wall0 = cli_clock_seconds(CLOCK_MONOTONIC), cpu0 = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
-    rl_run_options ro = run->run_options;
-    ro.progress = show ? cli_progress_fraction : NULL;
-    ro.progress_user = &bar;
-    rl_status st = rl_relight_cluster(run->scene, job_cluster(), &ro, &run->solution);
+    rl_job job = run->job;
+    job.run.progress = show ? cli_progress_fraction : NULL;
+    job.run.progress_user = &bar;
+    rl_status st = rl_relight_cluster(run->scene, job_cluster(), &job, &run->solution);
     run->wall_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - wall0;
     run->cpu_seconds = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
     if (show)
@@ -591,7 +591,7 @@ static lfio_status radiance_write(relight_run *run, const rl_solution *solution,
     lfio_radmap_write_options_init(&opt);
     /* lfio gathers every map before it compresses anything, so the chunks are compressed once the last map
      * is final, on the threads the engine used */
-    opt.threads = relight_threads_used(&run->run_options);
+    opt.threads = relight_threads_used(&run->job.run);
     lfio_status st = job_radmap_write(run->staged[OUT_RADIANCE], RELIGHT_CREATOR, run->o->scene, n, describe_map,
                                       map_rows, &arrays, &opt);
     *cells = arrays.cells;
@@ -667,10 +667,10 @@ static int writer_start(map_writer *w, relight_run *run)
         pthread_mutex_destroy(&w->lock);
         return 0;
     }
-    run->run_options.maps_ready = writer_told;
-    run->run_options.maps_ready_user = w;
+    run->job.run.maps_ready = writer_told;
+    run->job.run.maps_ready_user = w;
     if (pthread_create(&w->thread, NULL, writer_main, w) != 0) {
-        run->run_options.maps_ready = NULL;
+        run->job.run.maps_ready = NULL;
         pthread_cond_destroy(&w->moved);
         pthread_mutex_destroy(&w->lock);
         return 0;
@@ -687,7 +687,7 @@ static int writer_finish(map_writer *w, int code, double engine_end)
     pthread_cond_destroy(&w->moved);
     pthread_mutex_destroy(&w->lock);
     relight_run *run = w->run;
-    run->run_options.maps_ready = NULL;
+    run->job.run.maps_ready = NULL;
     if (code != ILF_EXIT_OK)
         return code;
     if (w->held[0] != '\0')
@@ -716,7 +716,7 @@ static int write_view_image(relight_run *run, int k, int width, int height, cons
 static int write_falsecolor(relight_run *run, int width, int height, float *work)
 {
     const size_t count = (size_t)width * (size_t)height;
-    rl_status rs = rl_solution_render_irradiance(run->solution, &run->run_options, work);
+    rl_status rs = rl_solution_render_irradiance(run->solution, &run->job.run, work);
     if (rs != RL_OK)
         return relight_failure("relight", rs);
     /* lux in place, into the first count floats: pixel k's value is read before it is overwritten */
@@ -755,7 +755,7 @@ static int write_view(relight_run *run)
     }
     rl_status rs = rl_solution_set_smooth(run->solution, !run->o->flat_view);
     if (rs == RL_OK)
-        rs = rl_solution_render(run->solution, &run->run_options, pixels);
+        rs = rl_solution_render(run->solution, &run->job.run, pixels);
     int code = rs == RL_OK ? ILF_EXIT_OK : relight_failure("relight", rs);
     char what[160];
     snprintf(what, sizeof what, "%dx%d, radiance in W sr^-1 m^-2", width, height);
@@ -883,7 +883,7 @@ static cJSON *memory_json(const run_memory *mem)
  * memory runs out. */
 static cJSON *stats_json(const relight_run *run, const run_memory *mem)
 {
-    const rl_sampling *s = rl_scene_sampling(run->scene);
+    const rl_sampling *s = &run->job.sampling;
     cJSON *root = cJSON_CreateObject();
     if (root == NULL)
         return NULL;
@@ -894,7 +894,7 @@ static cJSON *stats_json(const relight_run *run, const run_memory *mem)
     int ok = settings != NULL && cJSON_AddItemToObject(root, "settings", settings);
     if (settings != NULL && !ok)
         cJSON_Delete(settings);
-    add_count(root, "threads", relight_threads_used(&run->run_options));
+    add_count(root, "threads", relight_threads_used(&run->job.run));
     cJSON_AddNumberToObject(root, "wall_seconds", run->wall_seconds);
     cJSON_AddNumberToObject(root, "cpu_seconds", run->cpu_seconds);
     add_count(root, "maps", run->maps);
@@ -964,9 +964,9 @@ static void print_run(const relight_run *run)
     if (run->o->quiet)
         return;
     char what[256];
-    unsigned threads = relight_threads_used(&run->run_options);
+    unsigned threads = relight_threads_used(&run->job.run);
     printf("relit %s: %s, %u thread%s: %.3f s wall, %.3f s cpu\n", run->o->scene,
-           relight_describe(rl_scene_sampling(run->scene), what, sizeof what), threads, threads == 1 ? "" : "s",
+           relight_describe(&run->job.sampling, what, sizeof what), threads, threads == 1 ? "" : "s",
            run->wall_seconds, run->cpu_seconds);
     if (job_ranks() > 1)
         printf("job of %d ranks, each with the threads above; times are rank 0's, pass counts and cpu summed\n",
@@ -992,11 +992,9 @@ int ilf_cmd_relight(int argc, char **argv)
     code = job_agree(job_rank() == 0 ? cli_output_folder_check("relight", o.output, output_names, OUT_COUNT)
                                      : ILF_EXIT_OK);
     if (code == ILF_EXIT_OK)
-        code = job_agree(relight_scene_open("relight", o.scene, &o.sampling, &run.scene));
-    if (code == ILF_EXIT_OK)
-        relight_run_options(&o.sampling, run.scene, &run.run_options);
+        code = job_agree(relight_scene_open("relight", o.scene, &o.sampling, &run.scene, &run.job));
     if (code == ILF_EXIT_OK && job_rank() == 0) {
-        relight_print_settings("relight", run.scene, &run.run_options);
+        relight_print_settings("relight", &run.job);
         relight_warn_scene(run.scene, !o.no_view);
     }
     if (code == ILF_EXIT_OK)

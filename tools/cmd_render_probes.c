@@ -484,19 +484,18 @@ static int trace(void *user, const double org[3], const double dir[3], float rgb
     return rl_solution_trace(user, org, dir, rgb) == RL_OK;
 }
 
-static int relight(const probes_options *o, const rl_scene *scene, rl_solution **sol)
+static int relight(const probes_options *o, const rl_scene *scene, const rl_job *given, rl_solution **sol)
 {
     cli_progress bar;
-    rl_run_options ro;
-    relight_run_options(&o->sampling, scene, &ro);
+    rl_job job = *given;
     cli_set_quiet(o->quiet);
-    relight_print_settings("render-probes", scene, &ro);
+    relight_print_settings("render-probes", &job);
     relight_warn_scene(scene, 0);
     if (!o->quiet)
         cli_progress_start(&bar, "relight", CLI_PROGRESS_STEPS);
-    ro.progress = o->quiet ? NULL : cli_progress_fraction;
-    ro.progress_user = &bar;
-    rl_status st = rl_relight(scene, &ro, sol);
+    job.run.progress = o->quiet ? NULL : cli_progress_fraction;
+    job.run.progress_user = &bar;
+    rl_status st = rl_relight(scene, &job, sol);
     if (!o->quiet)
         cli_progress_finish(&bar);
     if (st == RL_OK)
@@ -526,13 +525,11 @@ static int render_probe(const probes_files *f, const rl_solution *sol, const cap
     return ILF_EXIT_OK;
 }
 
-static int render_all(const probes_files *f, const rl_scene *scene, const rl_solution *sol)
+static int render_all(const probes_files *f, const rl_job *job, const rl_solution *sol)
 {
     const probes_options *o = f->o;
-    const rl_sampling *rs = rl_scene_sampling(scene);
-    rl_run_options ro;
-    relight_run_options(&o->sampling, scene, &ro);
-    cap_probe_settings s = {(int)o->size[0], (int)o->size[1], o->strata, rs->seed, ro.threads, NULL, NULL};
+    cap_probe_settings s = {(int)o->size[0], (int)o->size[1], o->strata, job->sampling.seed, job->run.threads,
+                            NULL, NULL};
     float *pixels = malloc((size_t)s.width * s.height * 3 * sizeof *pixels);
     if (pixels == NULL) {
         cli_error("render-probes", "out of memory for a %dx%d probe", s.width, s.height);
@@ -545,8 +542,8 @@ static int render_all(const probes_files *f, const rl_scene *scene, const rl_sol
     else
         snprintf(grid, sizeof grid, "%zu planes, %" PRIu64, o->nplanes, probe_count(o));
     cli_settings("render-probes", "%s probes of %dx%d pixels, %" PRIu32 " directions per pixel, %u thread%s", grid,
-                 s.width, s.height, o->strata * o->strata, relight_threads_used(&ro),
-                 relight_threads_used(&ro) == 1 ? "" : "s");
+                 s.width, s.height, o->strata * o->strata, relight_threads_used(&job->run),
+                 relight_threads_used(&job->run) == 1 ? "" : "s");
     cli_progress bar;
     if (!o->quiet)
         cli_progress_start(&bar, "probes", probe_count(o));
@@ -572,19 +569,20 @@ int ilf_cmd_render_probes(int argc, char **argv)
     if (code >= 0)
         return code;
     rl_scene *scene = NULL;
+    rl_job job;
     rl_solution *sol = NULL;
     probes_files files = {.o = &o};
     static const char *const names[] = {MANIFEST_NAME};
     /* DIR before anything is read or computed */
     code = cli_output_folder_check("render-probes", o.output, names, 1);
     if (code == ILF_EXIT_OK)
-        code = relight_scene_open("render-probes", o.scene, &o.sampling, &scene);
+        code = relight_scene_open("render-probes", o.scene, &o.sampling, &scene, &job);
     if (code == ILF_EXIT_OK && !files_open(&files))
         code = ILF_EXIT_FAILED;
     if (code == ILF_EXIT_OK)
-        code = relight(&o, scene, &sol);
+        code = relight(&o, scene, &job, &sol);
     if (code == ILF_EXIT_OK)
-        code = render_all(&files, scene, sol);
+        code = render_all(&files, &job, sol);
     if (code == ILF_EXIT_OK)
         code = write_manifest(&files);
     if (code == ILF_EXIT_OK)

@@ -1,13 +1,13 @@
 /*
- * relight_cli.c - the sampling options, scene loading, failure reporting and
- * pass statistics shared by `ilf relight` and `ilf irradiance` (see
- * relight_cli.h).
+ * relight_cli.c - the sampling options, scene loading and jobs, failure
+ * reporting and pass statistics shared by `ilf relight` and `ilf irradiance`
+ * (see relight_cli.h).
  *
  * Invariants: option values are parsed strictly (cli.c's parsers), with the
  * bounds of relight's one table of sampling settings (rl_sampling_setting),
- * which also names the options and gives their help; overrides are applied in one
- * rl_scene_set_sampling() call after loading, so the scene's own values
- * stay for every field not given.
+ * which also names the options and gives their help; overrides are applied to
+ * the job the scene file suggests (rl_job_default()), so the file's own
+ * values stay for every field not given, and the scene is never changed.
  */
 #include "relight_cli.h"
 #include "job.h"
@@ -146,13 +146,24 @@ static unsigned threads_asked(const sampling_overrides *o)
     return threads == 0 && job_ranks() > 1 ? job_threads_per_rank() : threads;
 }
 
-int relight_scene_open(const char *sub, const char *path, const sampling_overrides *o, rl_scene **out)
+void relight_job(const sampling_overrides *o, const rl_scene *scene, rl_job *job)
+{
+    rl_job_default(scene, job);
+    unsigned given = o != NULL ? o->given : 0u;
+    if (o != NULL)
+        job->sampling = merged_sampling(&job->sampling, o);
+    job->run.threads = threads_asked(o);
+    if (given & (1u << SAMPLING_OPT_TIME_BUDGET))
+        job->run.time_budget = o->time_budget;
+}
+
+int relight_scene_open(const char *sub, const char *path, const sampling_overrides *o, rl_scene **out, rl_job *job)
 {
     *out = NULL;
     rl_scene *scene = NULL;
     /* the scene's light fields inflate on the threads the run will use */
     rl_scene_load_options lo;
-    rl_scene_load_options_init(&lo);
+    rl_scene_load_options_default(&lo);
     lo.threads = threads_asked(o);
     rl_status st = rl_scene_load_with(path, &lo, &scene);
     if (st != RL_OK) {
@@ -165,8 +176,8 @@ int relight_scene_open(const char *sub, const char *path, const sampling_overrid
             cli_error(sub, "%s", msg);
         return st == RL_ERR_NOMEM ? ILF_EXIT_FAILED : ILF_EXIT_USAGE;
     }
-    rl_sampling s = merged_sampling(rl_scene_sampling(scene), o);
-    st = rl_scene_set_sampling(scene, &s);
+    relight_job(o, scene, job);
+    st = rl_job_check(job);
     if (st != RL_OK) {
         int code = relight_failure(sub, st);
         rl_scene_destroy(scene);
@@ -174,14 +185,6 @@ int relight_scene_open(const char *sub, const char *path, const sampling_overrid
     }
     *out = scene;
     return ILF_EXIT_OK;
-}
-
-void relight_run_options(const sampling_overrides *o, const rl_scene *scene, rl_run_options *out)
-{
-    rl_run_options_default(out);
-    unsigned given = o != NULL ? o->given : 0u;
-    out->threads = threads_asked(o);
-    out->time_budget = (given & (1u << SAMPLING_OPT_TIME_BUDGET)) ? o->time_budget : rl_scene_time_budget(scene);
 }
 
 unsigned relight_threads_used(const rl_run_options *ro)
@@ -224,11 +227,11 @@ const char *relight_describe(const rl_sampling *s, char *buf, size_t size)
     return buf;
 }
 
-void relight_print_settings(const char *sub, const rl_scene *scene, const rl_run_options *ro)
+void relight_print_settings(const char *sub, const rl_job *job)
 {
     char what[256];
-    unsigned threads = relight_threads_used(ro);
-    cli_settings(sub, "%s, %u thread%s", relight_describe(rl_scene_sampling(scene), what, sizeof what), threads,
+    unsigned threads = relight_threads_used(&job->run);
+    cli_settings(sub, "%s, %u thread%s", relight_describe(&job->sampling, what, sizeof what), threads,
                  threads == 1 ? "" : "s");
 }
 

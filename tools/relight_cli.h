@@ -1,14 +1,15 @@
 /*
  * relight_cli.h - what `ilf relight` and `ilf irradiance` share: the
- * sampling options that override a scene's settings, loading a scene with
- * them, turning relight library failures into messages and exit codes, and
- * describing a pass's statistics.
+ * sampling options that override the job a scene file suggests, loading a
+ * scene and making its job with them, turning relight library failures into
+ * messages and exit codes, and describing a pass's statistics.
  *
  * Invariants: an option given on the command line replaces exactly that
- * field of the scene's sampling settings (or that run option) and nothing
- * else; every value is range-checked when parsed, against the same table of
- * settings the scene loader reads, and rl_scene_set_sampling() checks the
- * whole again, so a bad value is always bad usage (exit 2), never a crash.
+ * field of the job's sampling settings (or that run option) and nothing
+ * else; the scene itself is never changed. Every value is range-checked when
+ * parsed, against the same table of settings the scene loader reads, and
+ * rl_job_check() checks the whole job again, so a bad value is always bad
+ * usage (exit 2), never a crash.
  */
 #ifndef ILF_RELIGHT_CLI_H
 #define ILF_RELIGHT_CLI_H
@@ -54,19 +55,21 @@ typedef struct sampling_overrides {
 int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, const char *value);
 
 /**
- * Loads scene path and applies the overrides to its sampling settings.
- * @return ILF_EXIT_OK and *out (the caller destroys it); an exit code after
- * reporting, with *out = NULL.
+ * Loads scene path and makes its job with the overrides (relight_job()),
+ * checked by rl_job_check().
+ * @return ILF_EXIT_OK, *out (the caller destroys it) and *job; an exit code
+ * after reporting, with *out = NULL.
  */
-int relight_scene_open(const char *sub, const char *path, const sampling_overrides *o, rl_scene **out);
+int relight_scene_open(const char *sub, const char *path, const sampling_overrides *o, rl_scene **out, rl_job *job);
 
 /**
- * Fills *out with the run options of a call on scene: --threads when given,
- * else 0 (every core), or this rank's share of the cores in a job of several
- * ranks; --time-budget when given, else the scene's suggestion
- * (rl_scene_time_budget()); no progress callback. o may be NULL (nothing given).
+ * Fills *job with the job that scene's file suggests (rl_job_default()), each
+ * sampling setting given in o replacing the file's, and the run options:
+ * --threads when given, else 0 (every core), or this rank's share of the
+ * cores in a job of several ranks; --time-budget when given, else the file's
+ * suggestion; no progress callback. o may be NULL (nothing given).
  */
-void relight_run_options(const sampling_overrides *o, const rl_scene *scene, rl_run_options *out);
+void relight_job(const sampling_overrides *o, const rl_scene *scene, rl_job *job);
 
 /** @return the worker threads a call with options ro uses: 0 means every core, as in the engine. */
 unsigned relight_threads_used(const rl_run_options *ro);
@@ -89,9 +92,9 @@ const char *relight_failure_text(char *buf, size_t size);
  */
 const char *relight_describe(const rl_sampling *s, char *buf, size_t size);
 
-/** Prints the settings line of a run on scene with options ro (cli_settings()): what it does and on how many
- * threads, before it starts. */
-void relight_print_settings(const char *sub, const rl_scene *scene, const rl_run_options *ro);
+/** Prints the settings line of a run of job (cli_settings()): what it does and on how many threads, before
+ * it starts. */
+void relight_print_settings(const char *sub, const rl_job *job);
 
 /** Warns (cli_warn()) of every finding of rl_scene_diagnose(scene), leaving out the missing camera unless
  * want_view. */

@@ -46,6 +46,8 @@ typedef struct bench_config {
     const char *output;             /**< DIR; NULL only for --rays without -o */
     char cache[BENCH_PATH_MAX];     /**< folder of cached references */
     sampling_overrides sampling;    /**< threads and bounces (bounces given as 0 unless --bounces) */
+    rl_job job;                     /**< the scene's job with those overrides (relight_job()), once it is open;
+                                         bench_scaling() does not use it */
     rl_method methods[BENCH_MAX_METHODS];
     size_t nmethods;
     uint32_t reference_samples;     /**< per (cell, emitter) of each reference run; pathtrace: paths per cell */
@@ -160,8 +162,9 @@ int bench_fork(bench_job_fn job, void *arg, bench_result *out);
 typedef struct bench_relight_job {
     rl_scene *scene;                 /**< the inherited scene, or NULL to load scene_path in the child */
     const char *scene_path;
-    const sampling_overrides *overrides; /**< applied when the child loads the scene, and its run options
-                                          (relight_run_options()); NULL: none given */
+    const sampling_overrides *overrides; /**< applied to the scene's job, with its run options (relight_job());
+                                          NULL: none given */
+    double cell_size;                /**< > 0: the job's cell size instead of the scene file's (metres) */
     bench_setting setting;
     const bench_reference *ref;      /**< NULL: no error metrics */
     const char *image_path;          /**< camera view of |error| / peak, float32 [height][width]; NULL: none */
@@ -169,11 +172,11 @@ typedef struct bench_relight_job {
 } bench_relight_job;
 
 /**
- * In a child: applies setting s to the scene's sampling and relights it as ro
- * says (its progress replaced by a bar labelled label; NULL: none), timing
- * it and summing every pass's counters into r. @return the solution, or NULL with r->message.
+ * In a child: relights scene with job, setting s applied to its sampling (its
+ * progress replaced by a bar labelled label; NULL: none), timing it and
+ * summing every pass's counters into r. @return the solution, or NULL with r->message.
  */
-rl_solution *bench_relight_timed(rl_scene *scene, const rl_run_options *ro, const bench_setting *s, const char *label,
+rl_solution *bench_relight_timed(const rl_scene *scene, const rl_job *job, const bench_setting *s, const char *label,
                                  bench_result *r);
 
 /** bench_job_fn of a bench_relight_job. */

@@ -67,14 +67,14 @@ static void trace_cell(void *arg, size_t k)
 }
 
 /* Runs the engine cheaply for the layout of the maps. @return the solution, or NULL with the reason in r. */
-static rl_solution *layout(rl_scene *scene, const rl_run_options *ro, bench_result *r)
+static rl_solution *layout(const rl_scene *scene, const rl_job *given, bench_result *r)
 {
-    rl_sampling s = *rl_scene_sampling(scene);
-    s.method = RL_METHOD_AREA;
-    s.samples_per_cell = 1;
-    s.bounces = 0;
+    rl_job job = *given;
+    job.sampling.method = RL_METHOD_AREA;
+    job.sampling.samples_per_cell = 1;
+    job.sampling.bounces = 0;
     rl_solution *sol = NULL;
-    if (rl_scene_set_sampling(scene, &s) != RL_OK || rl_relight(scene, ro, &sol) != RL_OK) {
+    if (rl_relight(scene, &job, &sol) != RL_OK) {
         char line[sizeof r->message];
         snprintf(r->message, sizeof r->message, "layout of the maps: %s", cli_one_line(rl_errmsg(), line, sizeof line));
         return NULL;
@@ -138,10 +138,8 @@ static int write_cache(const pt_job *job, const rl_solution *sol, const pt_cell 
 static void pathtrace_child(void *arg, bench_result *out)
 {
     pt_job *job = arg;
-    job->bounces = rl_scene_sampling(job->scene)->bounces;
-    rl_run_options ro;
-    relight_run_options(&job->cfg->sampling, job->scene, &ro);
-    rl_solution *sol = layout(job->scene, &ro, out);
+    job->bounces = job->cfg->job.sampling.bounces;
+    rl_solution *sol = layout(job->scene, &job->cfg->job, out);
     if (sol == NULL)
         return;
     size_t total = 0;
@@ -161,7 +159,7 @@ static void pathtrace_child(void *arg, bench_result *out)
     if (ok) {
         job->pt = pt;
         double wall0 = cli_clock_seconds(CLOCK_MONOTONIC), cpu0 = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
-        ilf_parallel_for(relight_threads_used(&ro), count, trace_cell, job);
+        ilf_parallel_for(relight_threads_used(&job->cfg->job.run), count, trace_cell, job);
         out->wall_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - wall0;
         out->cpu_seconds = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
         ok = write_cache(job, sol, job->cells, count, total, out);
@@ -244,8 +242,8 @@ int bench_reference_pathtrace(const bench_config *cfg, rl_scene *scene, bench_re
     r->seeds[0] = PT_SEED;
     char settings[256], hex[17], name[64];
     snprintf(settings, sizeof settings, "method=pathtrace 1 cell_size=%.17g paths=%" PRIu32 " cells=%" PRIu32
-             " bounces=%" PRIu32, rl_scene_cell_size(scene), cfg->reference_samples, cfg->reference_cells,
-             rl_scene_sampling(scene)->bounces);
+             " bounces=%" PRIu32, cfg->job.cell_size, cfg->reference_samples, cfg->reference_cells,
+             cfg->job.sampling.bounces);
     uint64_t key;
     if (!bench_reference_key(cfg, settings, &key) || !bench_make_folder(cfg->cache))
         return ILF_EXIT_USAGE;
@@ -258,7 +256,7 @@ int bench_reference_pathtrace(const bench_config *cfg, rl_scene *scene, bench_re
         if (!cfg->quiet)
             printf("reference: computing: pathtrace, %" PRIu32 " cells, %" PRIu32 " paths per cell, %" PRIu32
                    " bounces (not in the cache)\n", cfg->reference_cells, cfg->reference_samples,
-                   rl_scene_sampling(scene)->bounces);
+                   cfg->job.sampling.bounces);
         pt_job job = {scene, cfg, r->path, hex, NULL, NULL, 0};
         bench_result res;
         if (!bench_fork(pathtrace_child, &job, &res) || !res.ok) {

@@ -133,16 +133,16 @@ int bench_reference_key(const bench_config *cfg, const char *settings, uint64_t 
 }
 
 /* Computes the cache key of the scene's solidangle reference with the given settings. @return 1, or 0 after reporting. */
-static int reference_key(const bench_config *cfg, const rl_scene *scene, uint64_t *key)
+static int reference_key(const bench_config *cfg, uint64_t *key)
 {
-    const rl_sampling *s = rl_scene_sampling(scene);
+    const rl_sampling *s = &cfg->job.sampling;
     char settings[512];
     snprintf(settings, sizeof settings,
              "cell_size=%.17g method=solidangle samples=%" PRIu32 " seeds=%" PRIu64 ",%" PRIu64
              " bounces=%" PRIu32 " bounce_partition_n=%" PRIu32 " bounce_cell_factor=%" PRIu32 " bounce_rays=%" PRIu32
              " partition_n=%" PRIu32
              " descend=%" PRIu32,
-             rl_scene_cell_size(scene), cfg->reference_samples, REFERENCE_SEEDS[0], REFERENCE_SEEDS[1], s->bounces,
+             cfg->job.cell_size, cfg->reference_samples, REFERENCE_SEEDS[0], REFERENCE_SEEDS[1], s->bounces,
              s->bounce_partition_n, s->bounce_cell_factor, reference_bounce_rays(cfg, s), s->partition_n,
              s->descend);
     return bench_reference_key(cfg, settings, key);
@@ -284,7 +284,7 @@ static int write_sidecar(const reference_job *job, bench_result *r)
              cJSON_AddStringToObject(root, "method", "solidangle") &&
              cJSON_AddNumberToObject(root, "samples_per_cell", job->cfg->reference_samples) &&
              json_add_doubles(root, "seeds", seeds, 2) &&
-             cJSON_AddNumberToObject(root, "bounces", rl_scene_sampling(job->scene)->bounces) &&
+             cJSON_AddNumberToObject(root, "bounces", job->cfg->job.sampling.bounces) &&
              cJSON_AddNumberToObject(root, "maps", (double)r->maps) &&
              cJSON_AddNumberToObject(root, "cells", (double)r->cells) &&
              cJSON_AddNumberToObject(root, "error_estimate_rmse", r->ref_error) &&
@@ -301,19 +301,13 @@ static int write_sidecar(const reference_job *job, bench_result *r)
 /* Runs the reference once with seed, adding its time to r. @return the solution, or NULL (r says why). */
 static rl_solution *reference_run(const reference_job *job, uint64_t seed, const char *label, bench_result *r)
 {
-    rl_sampling s = *rl_scene_sampling(job->scene);
-    s.seed = seed;
-    s.bounce_rays = reference_bounce_rays(job->cfg, &s);
+    rl_job rj = job->cfg->job;
+    rj.sampling.seed = seed;
+    rj.sampling.bounce_rays = reference_bounce_rays(job->cfg, &rj.sampling);
     bench_result run;
     memset(&run, 0, sizeof run);
     bench_setting setting = {.method = RL_METHOD_SOLIDANGLE, .samples = job->cfg->reference_samples};
-    rl_solution *sol = NULL;
-    rl_run_options ro;
-    relight_run_options(&job->cfg->sampling, job->scene, &ro);
-    if (rl_scene_set_sampling(job->scene, &s) == RL_OK)
-        sol = bench_relight_timed(job->scene, &ro, &setting, job->cfg->quiet ? NULL : label, &run);
-    else
-        snprintf(run.message, sizeof run.message, "cannot set the reference seed");
+    rl_solution *sol = bench_relight_timed(job->scene, &rj, &setting, job->cfg->quiet ? NULL : label, &run);
     r->wall_seconds += run.wall_seconds;
     r->cpu_seconds += run.cpu_seconds;
     r->rays_cast += run.rays_cast;
@@ -443,7 +437,7 @@ int bench_reference_obtain(const bench_config *cfg, rl_scene *scene, bench_refer
     memset(r, 0, sizeof *r);
     r->method = "solidangle";
     uint64_t key;
-    if (!reference_key(cfg, scene, &key) || !bench_make_folder(cfg->cache))
+    if (!reference_key(cfg, &key) || !bench_make_folder(cfg->cache))
         return ILF_EXIT_USAGE;
     char hex[17], name[64], json[BENCH_PATH_MAX];
     snprintf(hex, sizeof hex, "%016" PRIx64, key);

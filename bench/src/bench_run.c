@@ -146,10 +146,10 @@ static void engine_failed(bench_result *r, const char *what)
     snprintf(r->message, sizeof r->message, "%s: %s", what, cli_one_line(rl_errmsg(), line, sizeof line));
 }
 
-/* Applies setting s to the scene's sampling. @return 1, or 0 with the reason in r. */
-static int apply_setting(rl_scene *scene, const bench_setting *s, bench_result *r)
+/* Applies setting s to the job's sampling. @return 1, or 0 with the reason in r. */
+static int apply_setting(rl_job *job, const bench_setting *s, bench_result *r)
 {
-    rl_sampling smp = *rl_scene_sampling(scene);
+    rl_sampling smp = job->sampling;
     smp.method = s->method;
     if (s->partition_n > 0)
         smp.partition_n = s->partition_n;
@@ -159,7 +159,8 @@ static int apply_setting(rl_scene *scene, const bench_setting *s, bench_result *
         smp.samples_per_cell = s->samples;
     if (s->target_error > 0)
         smp.target_error = s->target_error;
-    if (rl_scene_set_sampling(scene, &smp) != RL_OK) {
+    job->sampling = smp;
+    if (rl_job_check(job) != RL_OK) {
         engine_failed(r, "invalid settings");
         return 0;
     }
@@ -167,17 +168,17 @@ static int apply_setting(rl_scene *scene, const bench_setting *s, bench_result *
 }
 
 /* Relights scene, timing it and summing every pass's counters into r. @return the solution, or NULL (r says why). */
-static rl_solution *timed_relight(const rl_scene *scene, const rl_run_options *ro, const char *label, bench_result *r)
+static rl_solution *timed_relight(const rl_scene *scene, const rl_job *job, const char *label, bench_result *r)
 {
     cli_progress bar;
     if (label != NULL)
         cli_progress_start(&bar, label, CLI_PROGRESS_STEPS);
     rl_solution *sol = NULL;
     double wall0 = cli_clock_seconds(CLOCK_MONOTONIC), cpu0 = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
-    rl_run_options run = *ro;
-    run.progress = label != NULL ? cli_progress_fraction : NULL;
-    run.progress_user = &bar;
-    rl_status st = rl_relight(scene, &run, &sol);
+    rl_job shown = *job; /* with the bar */
+    shown.run.progress = label != NULL ? cli_progress_fraction : NULL;
+    shown.run.progress_user = &bar;
+    rl_status st = rl_relight(scene, &shown, &sol);
     r->wall_seconds = cli_clock_seconds(CLOCK_MONOTONIC) - wall0;
     r->cpu_seconds = cli_clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
     if (label != NULL)
@@ -312,26 +313,30 @@ static uint64_t solution_cells(const rl_solution *sol)
     return cells;
 }
 
-rl_solution *bench_relight_timed(rl_scene *scene, const rl_run_options *ro, const bench_setting *s, const char *label,
+rl_solution *bench_relight_timed(const rl_scene *scene, const rl_job *job, const bench_setting *s, const char *label,
                                  bench_result *r)
 {
-    return apply_setting(scene, s, r) ? timed_relight(scene, ro, label, r) : NULL;
+    rl_job set = *job;
+    return apply_setting(&set, s, r) ? timed_relight(scene, &set, label, r) : NULL;
 }
 
 void bench_relight_child(void *arg, bench_result *out)
 {
     bench_relight_job *job = arg;
     rl_scene *scene = job->scene;
-    if (scene == NULL && relight_scene_open(BENCH_SUB, job->scene_path, job->overrides, &scene) != ILF_EXIT_OK) {
+    rl_job rj;
+    if (scene != NULL) {
+        relight_job(job->overrides, scene, &rj);
+    } else if (relight_scene_open(BENCH_SUB, job->scene_path, job->overrides, &scene, &rj) != ILF_EXIT_OK) {
         snprintf(out->message, sizeof out->message, "cannot load %s", job->scene_path);
         return;
     }
-    rl_run_options ro;
-    relight_run_options(job->overrides, scene, &ro);
-    rl_solution *sol = bench_relight_timed(scene, &ro, &job->setting, job->label, out);
+    if (job->cell_size > 0)
+        rj.cell_size = job->cell_size;
+    rl_solution *sol = bench_relight_timed(scene, &rj, &job->setting, job->label, out);
     if (sol != NULL) {
         out->cells = solution_cells(sol);
-        out->ok = job->ref == NULL || compare(sol, job, scene, &ro, out);
+        out->ok = job->ref == NULL || compare(sol, job, scene, &rj.run, out);
     }
     rl_solution_destroy(sol);
     if (job->scene == NULL)

@@ -6,10 +6,8 @@
  * its own child that loads its own scene, so its peak memory covers the
  * scene, the light fields, the maps and the engine's working memory.
  *
- * A cell size is changed through a copy of the scene file written to DIR
- * (DIR/.scaling-scene.json), with "radiance_maps"."cell_size" replaced and
- * every mesh and light field file name made absolute, so the copy loads the
- * same files from its new folder; the copy is removed after its run.
+ * A run's cell size and partition level are fields of its job
+ * (bench_relight_job.cell_size and its setting): the scene file is only read.
  * Exponents are least-squares fits of log time (and log memory) on log
  * cells and on log n. Outputs: scaling.csv, scaling.json, and the plots
  * scaling_cells.png and scaling_n.png (bench_plot.c).
@@ -19,8 +17,6 @@
  * nominal cost ratio (cells: 1 / factor^2; n: n^2), predicts more than
  * --time-limit.
  */
-#define _DEFAULT_SOURCE /* realpath */
-
 #include <cjson/cJSON.h>
 #include <inttypes.h>
 #include <math.h>
@@ -36,7 +32,6 @@ static const double CELL_FACTORS[] = {2.0, 1.41, 1.0, 0.71, 0.5};
 static const uint32_t PARTITION_NS[] = {8, 16, 32, 64};
 #define NFACTORS (sizeof CELL_FACTORS / sizeof CELL_FACTORS[0])
 #define NPARTITIONS (sizeof PARTITION_NS / sizeof PARTITION_NS[0])
-#define COPY_NAME ".scaling-scene.json"
 
 /* One run of a series. */
 typedef struct scaling_point {
@@ -51,72 +46,15 @@ typedef struct scaling_point {
 /* What the whole mode works with. */
 typedef struct scaling_run {
     const bench_config *cfg;
-    double cell_size;      /* the scene's */
-    uint32_t partition_n;  /* the scene's */
-    cJSON *scene_json;     /* the scene file, parsed, for the copies */
+    double cell_size;      /* the job's: the scene file's */
+    uint32_t partition_n;  /* the job's: the scene file's or --partition-n */
     scaling_point cells[NFACTORS], ns[NPARTITIONS];
 } scaling_run;
 
-/* ------------------------------------------------------------ the scene copy */
-
-/* Makes every "file" in array section of root absolute, as seen from the original scene. @return 1, or 0 after reporting. */
-static int absolute_files(cJSON *root, const char *scene, const char *section)
-{
-    cJSON *item;
-    cJSON_ArrayForEach(item, cJSON_GetObjectItemCaseSensitive(root, section))
-    {
-        cJSON *file = cJSON_GetObjectItemCaseSensitive(item, "file");
-        char beside[BENCH_PATH_MAX], *full;
-        if (!cJSON_IsString(file))
-            continue;
-        if (!bench_resolve_beside(beside, scene, file->valuestring) || (full = realpath(beside, NULL)) == NULL) {
-            cli_error(BENCH_SUB, "%s: cannot find %s", scene, file->valuestring);
-            return 0;
-        }
-        cJSON *abs = cJSON_CreateString(full);
-        free(full);
-        if (abs == NULL || !cJSON_ReplaceItemInObjectCaseSensitive(item, "file", abs)) {
-            cJSON_Delete(abs);
-            cli_error(BENCH_SUB, "out of memory");
-            return 0;
-        }
-    }
-    return 1;
-}
-
-/* Sets root's radiance_maps.cell_size. @return 1, or 0 when memory runs out. */
-static int set_cell_size(cJSON *root, double cell_size)
-{
-    cJSON *maps = cJSON_GetObjectItemCaseSensitive(root, "radiance_maps");
-    if (maps == NULL && (maps = cJSON_AddObjectToObject(root, "radiance_maps")) == NULL)
-        return 0;
-    cJSON *value = cJSON_CreateNumber(cell_size);
-    if (value == NULL)
-        return 0;
-    if (cJSON_GetObjectItemCaseSensitive(maps, "cell_size") != NULL)
-        return cJSON_ReplaceItemInObjectCaseSensitive(maps, "cell_size", value);
-    return cJSON_AddItemToObject(maps, "cell_size", value);
-}
-
-/* Writes the scene with cell size cs to path. @return 1, or 0 after reporting. */
-static int write_copy(const scaling_run *run, double cs, const char *path)
-{
-    char err[BENCH_PATH_MAX + 256];
-    if (!set_cell_size(run->scene_json, cs)) {
-        cli_error(BENCH_SUB, "out of memory");
-        return 0;
-    }
-    if (!json_write_file(path, run->scene_json, err, sizeof err)) {
-        cli_error(BENCH_SUB, "%s", err);
-        return 0;
-    }
-    return 1;
-}
-
 /* ------------------------------------------------------------ running */
 
-/* Runs point p of a series with the scene file scene_path, unless the previous run predicts too long. */
-static void run_point(const scaling_run *run, scaling_point *p, const scaling_point *prev, const char *scene_path)
+/* Runs point p of a series (its cell size and partition level), unless the previous run predicts too long. */
+static void run_point(const scaling_run *run, scaling_point *p, const scaling_point *prev)
 {
     const bench_config *cfg = run->cfg;
     char label[96];
@@ -128,8 +66,9 @@ static void run_point(const scaling_run *run, scaling_point *p, const scaling_po
             printf("%s: skipped (predicted %.0f s > %.0f s)\n", label, p->predicted, cfg->time_limit);
         return;
     }
-    bench_relight_job job = {.scene_path = scene_path,
+    bench_relight_job job = {.scene_path = cfg->scene,
                              .overrides = &cfg->sampling,
+                             .cell_size = p->cell_size,
                              .setting = {.method = RL_METHOD_CULLED, .partition_n = p->partition_n, .cost = p->cost},
                              .label = cfg->quiet ? NULL : label};
     p->ran = 1;
@@ -144,28 +83,22 @@ static void run_point(const scaling_run *run, scaling_point *p, const scaling_po
         printf("%s: failed: %s\n", label, p->result.message);
 }
 
-/* Runs the cell-size series through copies of the scene. @return 1, or 0 after reporting a failure. */
+/* Runs the cell-size series. @return 1, or 0 when a run failed. */
 static int run_cells(scaling_run *run)
 {
-    char copy[BENCH_PATH_MAX];
-    if (!bench_path(copy, run->cfg->output, COPY_NAME))
-        return 0;
     int ok = 1;
     for (size_t k = 0; k < NFACTORS; k++) {
         scaling_point *p = &run->cells[k];
         p->cell_size = run->cell_size * CELL_FACTORS[k];
         p->partition_n = run->partition_n;
         p->cost = 1.0 / (CELL_FACTORS[k] * CELL_FACTORS[k]);
-        if (!write_copy(run, p->cell_size, copy))
-            return 0;
-        run_point(run, p, k > 0 ? &run->cells[k - 1] : NULL, copy);
-        remove(copy);
+        run_point(run, p, k > 0 ? &run->cells[k - 1] : NULL);
         ok = ok && (!p->ran || p->result.ok);
     }
     return ok;
 }
 
-/* Runs the partition series on the scene itself. @return 1, or 0 when a run failed. */
+/* Runs the partition series at the job's cell size. @return 1, or 0 when a run failed. */
 static int run_partitions(scaling_run *run)
 {
     int ok = 1;
@@ -174,7 +107,7 @@ static int run_partitions(scaling_run *run)
         p->cell_size = run->cell_size;
         p->partition_n = PARTITION_NS[k];
         p->cost = (double)PARTITION_NS[k] * PARTITION_NS[k];
-        run_point(run, p, k > 0 ? &run->ns[k - 1] : NULL, run->cfg->scene);
+        run_point(run, p, k > 0 ? &run->ns[k - 1] : NULL);
         ok = ok && (!p->ran || p->result.ok);
     }
     return ok;
@@ -276,27 +209,18 @@ static int write_outputs(const scaling_run *run)
 
 /* ------------------------------------------------------------ entry */
 
-/* Reads the scene's cell size and partition level (loading it here and releasing it before any fork)
- * and parses its file for the copies. @return an exit code. */
+/* Reads the job's cell size and partition level (loading the scene here and releasing it before any
+ * fork). @return an exit code. */
 static int prepare(scaling_run *run)
 {
     rl_scene *scene = NULL;
-    int code = relight_scene_open(BENCH_SUB, run->cfg->scene, &run->cfg->sampling, &scene);
+    rl_job job;
+    int code = relight_scene_open(BENCH_SUB, run->cfg->scene, &run->cfg->sampling, &scene, &job);
     if (code != ILF_EXIT_OK)
         return code;
-    run->cell_size = rl_scene_cell_size(scene);
-    run->partition_n = rl_scene_sampling(scene)->partition_n;
+    run->cell_size = job.cell_size;
+    run->partition_n = job.sampling.partition_n;
     rl_scene_destroy(scene);
-    char *text = bench_read_text(run->cfg->scene);
-    run->scene_json = text != NULL ? cJSON_Parse(text) : NULL;
-    free(text);
-    if (run->scene_json == NULL) {
-        cli_error(BENCH_SUB, "%s: cannot read the scene again to copy it", run->cfg->scene);
-        return ILF_EXIT_USAGE;
-    }
-    if (!absolute_files(run->scene_json, run->cfg->scene, "meshes") ||
-        !absolute_files(run->scene_json, run->cfg->scene, "lightfields"))
-        return ILF_EXIT_USAGE;
     return bench_make_folder(run->cfg->output) ? ILF_EXIT_OK : ILF_EXIT_FAILED;
 }
 
@@ -312,6 +236,5 @@ int bench_scaling(const bench_config *cfg)
         ok = write_outputs(&run) && ok;
         code = ok ? ILF_EXIT_OK : ILF_EXIT_FAILED;
     }
-    cJSON_Delete(run.scene_json);
     return code;
 }

@@ -299,10 +299,10 @@ static size_t build_settings(const bench_config *cfg, bench_setting *out)
     return count;
 }
 
-/* @return the scene's own sampling settings as the one setting of --scene-settings. */
-static bench_setting scene_setting(const rl_scene *scene)
+/* @return the job's sampling settings (the scene file's, with --bounces) as the one setting of --scene-settings. */
+static bench_setting scene_setting(const rl_job *job)
 {
-    const rl_sampling *smp = rl_scene_sampling(scene);
+    const rl_sampling *smp = &job->sampling;
     return (bench_setting){.method = smp->method, .partition_n = smp->partition_n, .rays = smp->rays_per_solid_angle,
                            .samples = smp->samples_per_cell, .target_error = smp->target_error, .cost = 1.0};
 }
@@ -310,11 +310,9 @@ static bench_setting scene_setting(const rl_scene *scene)
 /* ------------------------------------------------------------ the sweep */
 
 /* @return the worker threads a run uses: --threads, or every processor for 0 (the engine's rule). */
-static unsigned threads_used(const bench_config *cfg, const rl_scene *scene)
+static unsigned threads_used(const bench_config *cfg)
 {
-    rl_run_options ro;
-    relight_run_options(&cfg->sampling, scene, &ro);
-    return relight_threads_used(&ro);
+    return relight_threads_used(&cfg->job.run);
 }
 
 /* @return the slot of method m in --methods. */
@@ -411,8 +409,7 @@ static int run_entry(bench_sweep *s, rl_scene *scene, size_t i)
 /* Measures the ray ceiling in a child into s->ceiling (a failure is noted, not fatal). */
 static void measure_ceiling(bench_sweep *s, const rl_scene *scene)
 {
-    bench_rays_job job = {scene, s->cfg->quick ? SWEEP_CEILING_RAYS_QUICK : SWEEP_CEILING_RAYS, {0}};
-    relight_run_options(&s->cfg->sampling, scene, &job.run);
+    bench_rays_job job = {scene, s->cfg->quick ? SWEEP_CEILING_RAYS_QUICK : SWEEP_CEILING_RAYS, s->cfg->job.run};
     bench_fork(bench_rays_child, &job, &s->ceiling);
     if (!s->cfg->quiet && s->ceiling.ok)
         printf("ray ceiling: %" PRIu64 " rays, %.3g rays/s, %.3g rays per cpu second\n", s->ceiling.rays_cast,
@@ -427,15 +424,15 @@ static int sweep(const bench_config *cfg, rl_scene *scene)
     static bench_entry entries[MAX_SETTINGS];
     size_t count = cfg->scene_settings ? 1 : build_settings(cfg, settings);
     if (cfg->scene_settings)
-        settings[0] = scene_setting(scene);
+        settings[0] = scene_setting(&cfg->job);
     if (count == 0)
         return ILF_EXIT_USAGE;
     bench_reference ref;
     int code = bench_reference_obtain(cfg, scene, &ref);
     if (code != ILF_EXIT_OK)
         return code;
-    bench_sweep s = {.cfg = cfg, .ref = &ref, .entries = entries, .count = count, .threads = threads_used(cfg, scene),
-                     .bounces = rl_scene_sampling(scene)->bounces};
+    bench_sweep s = {.cfg = cfg, .ref = &ref, .entries = entries, .count = count, .threads = threads_used(cfg),
+                     .bounces = cfg->job.sampling.bounces};
     cli_settings(BENCH_SUB, "sweep of %zu settings over %zu method%s, %" PRIu32 " bounce%s, time limit %.0f s per run, "
                  "%u thread%s", count, cfg->nmethods, cfg->nmethods == 1 ? "" : "s", s.bounces,
                  s.bounces == 1 ? "" : "s", cfg->time_limit, s.threads, s.threads == 1 ? "" : "s");
@@ -493,16 +490,15 @@ static int rays_mode(const bench_config *cfg, rl_scene *scene)
 {
     if (cfg->output != NULL && !bench_make_folder(cfg->output))
         return ILF_EXIT_FAILED;
-    bench_rays_job job = {scene, cfg->rays_count, {0}};
-    relight_run_options(&cfg->sampling, scene, &job.run);
+    bench_rays_job job = {scene, cfg->rays_count, cfg->job.run};
     cli_settings(BENCH_SUB, "ray benchmark, %" PRIu64 " rays, %u thread%s", cfg->rays_count,
-                 threads_used(cfg, scene), threads_used(cfg, scene) == 1 ? "" : "s");
+                 threads_used(cfg), threads_used(cfg) == 1 ? "" : "s");
     bench_result r;
     if (!bench_fork(bench_rays_child, &job, &r) || !r.ok) {
         cli_error(BENCH_SUB, "%s", r.message);
         return ILF_EXIT_FAILED;
     }
-    unsigned threads = threads_used(cfg, scene);
+    unsigned threads = threads_used(cfg);
     if (!cfg->quiet)
         printf("rays: %" PRIu64 " in %.3f s wall, %.3f s cpu, %u thread%s: %.4g rays/s, %.4g rays per cpu second, "
                "%.1f%% blocked\n",
@@ -539,9 +535,9 @@ int ilf_cmd_bench(int argc, char **argv)
     if (mode == MODE_SCALING)
         return bench_scaling(&cfg);
     rl_scene *scene = NULL;
-    code = relight_scene_open(BENCH_SUB, cfg.scene, &cfg.sampling, &scene);
+    code = relight_scene_open(BENCH_SUB, cfg.scene, &cfg.sampling, &scene, &cfg.job);
     if (code == ILF_EXIT_OK && cfg.scene_settings) { /* the one method swept is the scene's */
-        cfg.methods[0] = rl_scene_sampling(scene)->method;
+        cfg.methods[0] = cfg.job.sampling.method;
         cfg.nmethods = 1;
     }
     if (code == ILF_EXIT_OK && mode == MODE_RAYS)

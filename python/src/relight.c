@@ -74,6 +74,7 @@ static int apply_settings(rl_sampling *s, PyObject *settings)
 /* One run: the settings over the scene's own, what to compute, and what it gave. */
 typedef struct engine_call {
     rl_sampling sampling;  /* the scene's settings with the caller's applied */
+    rl_job job;            /* the job the scene suggests, with sampling and threads the caller's */
     unsigned threads;      /* 0: every core */
     const double *points;  /* irradiance: [count][6] x y z nx ny nz; NULL: relight */
     size_t count;
@@ -89,16 +90,12 @@ typedef struct engine_call {
  */
 static rl_status run_engine(engine_call *call)
 {
-    rl_status st = rl_scene_set_sampling(call->scene, &call->sampling);
-    if (st != RL_OK)
-        return st;
-    rl_run_options run;
-    rl_run_options_default(&run);
-    run.threads = call->threads;
-    run.time_budget = rl_scene_time_budget(call->scene); /* as `ilf relight` without --time-budget */
+    rl_job_default(call->scene, &call->job); /* cell size and time budget as the file says, as `ilf relight` */
+    call->job.sampling = call->sampling;
+    call->job.run.threads = call->threads;
     if (call->points != NULL)
-        return rl_irradiance(call->scene, &run, call->points, call->count, call->irradiance, NULL);
-    return rl_relight(call->scene, &run, &call->solution);
+        return rl_irradiance(call->scene, &call->job, call->points, call->count, call->irradiance, NULL);
+    return rl_relight(call->scene, &call->job, &call->solution);
 }
 
 /* Frees what call holds: the solution, then the scene it reads. */
@@ -143,12 +140,16 @@ static int load_and_run(const char *path, PyObject *settings, engine_call *call)
         return -1;
     rl_status st;
     Py_BEGIN_ALLOW_THREADS
-    lfio_lightfield_set_read_threads(call->threads);
-    st = rl_scene_load(path, &call->scene);
+    rl_scene_load_options load;
+    rl_scene_load_options_default(&load);
+    load.threads = call->threads;
+    st = rl_scene_load_with(path, &load, &call->scene);
     Py_END_ALLOW_THREADS
     if (st != RL_OK)
         return raise_relight(st, path), -1;
-    call->sampling = *rl_scene_sampling(call->scene);
+    rl_job suggested;
+    rl_job_default(call->scene, &suggested);
+    call->sampling = suggested.sampling;
     if (apply_settings(&call->sampling, settings) < 0) {
         engine_call_free(call);
         return -1;

@@ -49,12 +49,13 @@ void rl__emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *m
     emitter_finish(e);
 }
 
-void rl__emitter_from_lightfield(const rl_lightfield *lf, rl_emitter *e)
+void rl__emitter_from_lightfield(const rl_lightfield *lf, const rl_slab_tables *tab, rl_emitter *e)
 {
     memset(e, 0, sizeof *e);
     e->kind = EM_SLAB;
     e->polygon = -1;
     e->lf = lf;
+    e->tab = tab;
     v3 o = v3_load(lf->origin), u = v3_load(lf->u), v = v3_load(lf->v);
     e->len_u = v3_len(u);
     e->len_v = v3_len(v);
@@ -158,7 +159,7 @@ static void square_directions(uint32_t n, uint64_t ndir, uint32_t ia, uint32_t i
 
 /* What square_directions() visits for: one square's box and bits, from the per-direction ones. */
 typedef struct square_union {
-    const rl_lightfield *lf;
+    const rl_slab_tables *t;
     const uint64_t *dir_bits;
     uint32_t *box;
     uint64_t *bits;
@@ -167,34 +168,34 @@ typedef struct square_union {
 static void square_add(void *ctx, uint64_t id)
 {
     square_union *u = ctx;
-    rl__box_union(u->box, u->lf->support[id]);
-    for (uint32_t w = 0; w < u->lf->lit_words; w++)
-        u->bits[w] |= u->dir_bits[id * u->lf->lit_words + w];
+    rl__box_union(u->box, u->t->support[id]);
+    for (uint32_t w = 0; w < u->t->lit_words; w++)
+        u->bits[w] |= u->dir_bits[id * u->t->lit_words + w];
 }
 
-int rl__lightfield_tables_make(rl_lightfield *lf)
+int rl__slab_tables_make(const rl_lightfield *lf, rl_slab_tables *t)
 {
     const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
     uint64_t ndir = lfio_slab_dir_count(lf->slab), npos = (uint64_t)d->nu * d->nv, side = 2 * (uint64_t)d->n;
     /* the squares' tables only while they stay small (the finest partitions would take gigabytes): 16 bytes
      * of box a square, a word of bits a square and a direction (as many) per 64 positions */
     uint64_t words = (npos + 63) / 64, squares = side * side * 16 <= RL_CONE_MAX_BYTES ? side * side : 0;
-    lf->support = malloc((ndir + squares) * sizeof *lf->support);
-    if (lf->support == NULL)
+    t->support = malloc((ndir + squares) * sizeof *t->support);
+    if (t->support == NULL)
         return -1;
-    lfio_slab_support(lf->slab, lf->support);
-    lf->cone_support = squares ? lf->support + ndir : NULL;
-    lf->cone_bits = NULL;
+    lfio_slab_support(lf->slab, t->support);
+    t->cone_support = squares ? t->support + ndir : NULL;
+    t->cone_bits = NULL;
     /* lit positions per square, for slabs of up to RL_LIT_MAX_POSITIONS positions (a word per 64) */
     int bits = squares && npos <= RL_LIT_MAX_POSITIONS && squares * words * 8 <= RL_CONE_MAX_BYTES;
-    lf->lit_words = bits ? (uint32_t)words : 0;
+    t->lit_words = bits ? (uint32_t)words : 0;
     uint64_t *dir_bits = NULL;
-    if (lf->lit_words) {
-        lf->cone_bits = calloc(side * side * lf->lit_words, sizeof *lf->cone_bits);
-        dir_bits = calloc(ndir * lf->lit_words, sizeof *dir_bits);
-        if (lf->cone_bits == NULL || dir_bits == NULL) {
+    if (t->lit_words) {
+        t->cone_bits = calloc(side * side * t->lit_words, sizeof *t->cone_bits);
+        dir_bits = calloc(ndir * t->lit_words, sizeof *dir_bits);
+        if (t->cone_bits == NULL || dir_bits == NULL) {
             free(dir_bits);
-            rl__lightfield_tables_free(lf);
+            rl__slab_tables_free(t);
             return -1;
         }
         const float *rad = lfio_slab_radiance(lf->slab);
@@ -202,16 +203,16 @@ int rl__lightfield_tables_make(rl_lightfield *lf)
             for (uint64_t q = 0; q < npos; q++) {
                 const float *v = rad + (k * npos + q) * 3;
                 if (v[0] != 0.0f || v[1] != 0.0f || v[2] != 0.0f)
-                    dir_bits[k * lf->lit_words + q / 64] |= (uint64_t)1 << (q % 64);
+                    dir_bits[k * t->lit_words + q / 64] |= (uint64_t)1 << (q % 64);
             }
     }
     for (uint32_t ib = 0; ib < side && squares; ib++)
         for (uint32_t ia = 0; ia < side; ia++) {
             size_t sq = (size_t)ib * side + ia;
-            uint32_t *box = lf->cone_support[sq];
+            uint32_t *box = t->cone_support[sq];
             box[0] = box[2] = UINT32_MAX;
             box[1] = box[3] = 0;
-            square_union u = {lf, dir_bits, box, lf->lit_words ? lf->cone_bits + sq * lf->lit_words : NULL};
+            square_union u = {t, dir_bits, box, t->lit_words ? t->cone_bits + sq * t->lit_words : NULL};
             square_directions(d->n, ndir, ia, ib, square_add, &u);
             if (box[0] == UINT32_MAX)
                 box[0] = 1, box[1] = 0;
@@ -220,21 +221,42 @@ int rl__lightfield_tables_make(rl_lightfield *lf)
     return 0;
 }
 
-void rl__lightfield_tables_share(rl_lightfield *lf, const rl_lightfield *from)
+void rl__slab_tables_free(rl_slab_tables *t)
 {
-    lf->support = from->support;
-    lf->cone_support = from->cone_support;
-    lf->cone_bits = from->cone_bits;
-    lf->lit_words = from->lit_words;
+    free(t->support);
+    free(t->cone_bits);
+    t->support = t->cone_support = NULL;
+    t->cone_bits = NULL;
+    t->lit_words = 0;
 }
 
-void rl__lightfield_tables_free(rl_lightfield *lf)
+rl_slab_tables *rl__slab_tables_new(const rl_scene *scene)
 {
-    free(lf->support);
-    free(lf->cone_bits);
-    lf->support = lf->cone_support = NULL;
-    lf->cone_bits = NULL;
-    lf->lit_words = 0;
+    size_t n = scene->nlightfields;
+    rl_slab_tables *tables = calloc(n ? n : 1, sizeof *tables);
+    for (size_t k = 0; tables && k < n; k++) {
+        size_t first = 0;
+        while (scene->lightfields[first].slab != scene->lightfields[k].slab)
+            first++;
+        if (first < k) {
+            tables[k] = tables[first]; /* borrowed: an earlier emitter places the same slab */
+            tables[k].owned = 0;
+        } else if (rl__slab_tables_make(&scene->lightfields[k], &tables[k]) == 0) {
+            tables[k].owned = 1;
+        } else {
+            rl__slab_tables_destroy(tables, k);
+            tables = NULL;
+        }
+    }
+    return tables;
+}
+
+void rl__slab_tables_destroy(rl_slab_tables *tables, size_t n)
+{
+    for (size_t k = 0; tables && k < n; k++)
+        if (tables[k].owned)
+            rl__slab_tables_free(&tables[k]);
+    free(tables);
 }
 
 void rl__emitter_support_rect(const rl_emitter *e, const uint32_t b[4], double r[4])
@@ -263,9 +285,9 @@ static uint32_t diamond_square(double a, uint32_t n)
 
 int rl__emitter_lit_rect(const rl_emitter *e, const v3 *x, uint32_t nx, const v2 *y, uint32_t ny, double r[4])
 {
-    const rl_lightfield *lf = e->lf;
-    uint32_t n = lf->n;
-    if (lf->cone_support == NULL)
+    const rl_slab_tables *tab = e->tab;
+    uint32_t n = e->lf->n;
+    if (tab->cone_support == NULL)
         return 0;
     /* the box of the cone's image on the diamond: its extreme rays' images, and where the cone crosses
      * l0 = 0 or l1 = 0 (the image bends there), the range of the other coordinate on that plane, which
@@ -306,7 +328,7 @@ int rl__emitter_lit_rect(const rl_emitter *e, const v3 *x, uint32_t nx, const v2
     uint32_t box[4] = {UINT32_MAX, 0, UINT32_MAX, 0};
     for (uint32_t ib = ib0; ib <= ib1; ib++)
         for (uint32_t ia = ia0; ia <= ia1; ia++)
-            rl__box_union(box, lf->cone_support[(size_t)ib * 2 * n + ia]);
+            rl__box_union(box, tab->cone_support[(size_t)ib * 2 * n + ia]);
     if (box[0] == UINT32_MAX)
         return -1;
     rl__emitter_support_rect(e, box, r);

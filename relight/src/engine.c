@@ -1,7 +1,7 @@
 /*
- * engine.c - the pass scheduler of the relighting engine: run options,
- * passes, tiles, threads, and the exchange between the ranks of a job;
- * the solutions it makes, and rl_solution_destroy().
+ * engine.c - the pass scheduler of the relighting engine: passes, tiles,
+ * threads, and the exchange between the ranks of a job; the solutions it
+ * makes, and rl_solution_destroy().
  *
  * A run builds the radiance maps and the ray tracer, then runs pass 0 from
  * the scene's emitters (emissive polygons and light field slabs) and
@@ -44,30 +44,6 @@
 
 /* How often the calling thread reports progress while a team works, seconds. */
 #define PROGRESS_PERIOD 0.02
-
-/* ------------------------------------------------------------ run options */
-
-void rl_run_options_default(rl_run_options *o)
-{
-    if (o)
-        *o = (rl_run_options){0, NULL, NULL, 0.0, NULL, NULL};
-}
-
-rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__run *run)
-{
-    rl_run_options o;
-    rl_run_options_default(&o);
-    if (options)
-        o = *options;
-    if (o.threads > RL_MAX_THREADS)
-        return rl__fail(RL_ERR_ARG, "%s: threads must be an integer in 0..%u, got %u", call, RL_MAX_THREADS,
-                        o.threads);
-    if (!(o.time_budget >= 0) || !isfinite(o.time_budget))
-        return rl__fail(RL_ERR_ARG, "%s: time_budget must be finite and >= 0, got %g", call, o.time_budget);
-    *run = (rl__run){ilf_thread_count(o.threads), o.progress, o.progress_user, o.time_budget, o.maps_ready,
-                     o.maps_ready_user, NULL, NULL, NULL};
-    return RL_OK;
-}
 
 /* ------------------------------------------------------------ parallel work */
 
@@ -534,7 +510,7 @@ static int positive3(const float v[3])
 }
 
 /* Builds the emitters of the scene itself (pass 0). @return the array (count in *n) or NULL. */
-rl_emitter *rl__primary_emitters(const rl_scene *scene, size_t extra, size_t *n)
+rl_emitter *rl__primary_emitters(const rl_scene *scene, const rl_slab_tables *tables, size_t extra, size_t *n)
 {
     size_t count = scene->nlightfields;
     for (size_t k = 0; k < scene->npolygons; k++)
@@ -547,7 +523,7 @@ rl_emitter *rl__primary_emitters(const rl_scene *scene, size_t extra, size_t *n)
         if (positive3(scene->materials[scene->polygons[k].material].emission))
             rl__emitter_from_polygon(scene, (uint32_t)k, NULL, &e[m++]);
     for (size_t k = 0; k < scene->nlightfields; k++)
-        rl__emitter_from_lightfield(&scene->lightfields[k], &e[m++]);
+        rl__emitter_from_lightfield(&scene->lightfields[k], &tables[k], &e[m++]);
     *n = m;
     return e;
 }
@@ -588,9 +564,9 @@ static rl_sampling pass_sampling(const rl_sampling *s, uint32_t p)
  * before the pass runs: a culled or adaptive pass is taken to test a quarter of an emitter's 4n^2 solid
  * angles; cells are the receivers' area over the cell's (the maps are not built yet). */
 
-double rl__pass_work(const rl_scene *scene, uint32_t pass, double cells, double emitters)
+double rl__pass_work(const rl_sampling *job, uint32_t pass, double cells, double emitters)
 {
-    rl_sampling s = pass_sampling(&scene->sampling, pass);
+    rl_sampling s = pass_sampling(job, pass);
     if (pass > 0 && s.bounce_rays > 0)
         return cells * s.bounce_rays; /* first hits: the emitters are read where the rays land */
     double per_pair = s.method == RL_METHOD_AREA || s.method == RL_METHOD_SOLIDANGLE
@@ -599,11 +575,11 @@ double rl__pass_work(const rl_scene *scene, uint32_t pass, double cells, double 
     return cells * emitters * per_pair;
 }
 
-/* @return the expected cells of the scene's receivers at factor times the scene's cell size, and their
- * count in *receivers. */
-static double receiver_cells(const rl_scene *scene, double factor, size_t *receivers)
+/* @return the expected cells of the scene's receivers at cells of side `side` (m), and their count in
+ * *receivers. */
+static double receiver_cells(const rl_scene *scene, double side, size_t *receivers)
 {
-    double cells = 0.0, side = scene->cell_size * factor;
+    double cells = 0.0;
     *receivers = 0;
     for (size_t k = 0; k < scene->npolygons; k++) {
         const float *al = scene->materials[scene->polygons[k].material].albedo;
@@ -621,18 +597,19 @@ static uint32_t bounce_factor(const rl_sampling *s)
     return s->bounce_cell_factor ? s->bounce_cell_factor : s->bounce_rays > 0 ? 4 : 2;
 }
 
-double rl__solve_work(const rl_scene *scene, uint32_t passes, double *per_pass)
+double rl__solve_work(const rl_scene *scene, const rl__run *run, uint32_t passes, double *per_pass)
 {
     size_t receivers = 0, ne = 0;
     for (size_t k = 0; k < scene->npolygons; k++)
         ne += positive3(scene->materials[scene->polygons[k].material].emission);
     ne += scene->nlightfields;
-    double total = 0.0, fine = receiver_cells(scene, 1.0, &receivers);
-    double coarse = passes > 1 ? receiver_cells(scene, bounce_factor(&scene->sampling), &receivers) : fine;
+    double total = 0.0, fine = receiver_cells(scene, run->cell_size, &receivers);
+    double coarse =
+        passes > 1 ? receiver_cells(scene, run->cell_size * bounce_factor(&run->sampling), &receivers) : fine;
     for (uint32_t p = 0; p < passes; p++) {
         /* a bounce pass's emitters are the lit receivers: at most all of them */
-        double w = p == 0 ? rl__pass_work(scene, 0, fine, (double)ne)
-                          : rl__pass_work(scene, p, coarse, (double)receivers);
+        double w = p == 0 ? rl__pass_work(&run->sampling, 0, fine, (double)ne)
+                          : rl__pass_work(&run->sampling, p, coarse, (double)receivers);
         if (per_pass)
             per_pass[p] = w;
         total += w;
@@ -659,28 +636,31 @@ static void make_ctx(const rl_scene *scene, const rl_tracer *tracer, const rl__r
     ctx->deadline = run->time_budget > 0 ? ilf_clock_wall() + run->time_budget : 0.0;
 }
 
-rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_cluster *cl, const rl__run *run,
-                       uint32_t pass, uint32_t gather_level_pass, rl_map *maps, size_t nmaps, rl_map *with,
-                       const rl_emitter *e, size_t ne, double base, double span, double **measured, rl_pass_stats *st)
+rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st)
 {
-    assert(!(with && cl)); /* the ranks exchange the tiles of one set of maps */
+    const rl_scene *scene = in->scene;
+    const rl_cluster *cl = in->cl;
+    const rl__run *run = in->run;
+    rl_map *maps = in->maps;
+    size_t nmaps = in->nmaps, ne = in->ne;
+    assert(!(in->with && cl)); /* the ranks exchange the tiles of one set of maps */
     double w0 = ilf_clock_wall(), c0 = ilf_clock_process_cpu();
     memset(st, 0, sizeof *st);
     st->emitters = (uint32_t)ne;
     pass_job job;
     memset(&job, 0, sizeof job);
-    job.sets[0] = maps, job.sets[1] = with;
-    size_t nsets = with ? 2 : 1;
+    job.sets[0] = maps, job.sets[1] = in->with;
+    size_t nsets = in->with ? 2 : 1;
     for (size_t set = 0; set < nsets; set++)
         for (size_t m = 0; m < nmaps; m++)
             memset(job.sets[set][m].e_pass, 0,
                    (job.sets[set][m].ncells ? job.sets[set][m].ncells : 1) * sizeof *job.sets[set][m].e_pass);
-    rl_sampling sampling = pass_sampling(&scene->sampling, gather_level_pass);
-    make_ctx(scene, tracer, run, pass, &sampling, e, ne, &job.ctx);
+    rl_sampling sampling = pass_sampling(&run->sampling, in->gather_level_pass);
+    make_ctx(scene, in->tracer, run, in->pass, &sampling, in->e, ne, &job.ctx);
     /* a bounce pass of rl__solve() with bounce_rays gathers by first hits, which read each polygon's glow */
     rl_glow *glow = NULL;
-    if (gather_level_pass > 0 && sampling.bounce_rays > 0) {
-        if (rl__glow_new(scene, e, ne, run->threads, &glow) != RL_OK)
+    if (in->gather_level_pass > 0 && sampling.bounce_rays > 0) {
+        if (rl__glow_new(scene, in->e, ne, run->threads, &glow) != RL_OK)
             return rl__fail(RL_ERR_NOMEM, "out of memory for the bounce pass");
         job.ctx.glow = glow;
     }
@@ -707,7 +687,7 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
         rl__glow_free(glow, scene->npolygons);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
     }
-    int rc = ne > 0 ? run_job(&job, run->threads, run, base, span) : 0;
+    int rc = ne > 0 ? run_job(&job, run->threads, run, in->base, in->span) : 0;
     if (telling)
         tell_end(&job, rc);
     if (job.counters)
@@ -726,7 +706,7 @@ rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_
     rl__glow_free(glow, scene->npolygons);
     share_free(&sh);
     if (rc != 0)
-        return rl__fail(rc == -2 ? RL_ERR_IO : RL_ERR_NOMEM, "pass %u: %s", pass, why);
+        return rl__fail(rc == -2 ? RL_ERR_IO : RL_ERR_NOMEM, "pass %u: %s", in->pass, why);
     size_t cells = 0;
     for (size_t m = 0; m < nmaps; m++)
         cells += maps[m].ncells;
@@ -896,8 +876,9 @@ static rl_status refine_pass(const rl_scene *scene, rl_solution *s, const rl_clu
         return rl__fail(RL_ERR_IO, "pass %u: the exchange of bounce cell flags between ranks failed", p);
     if (rf->marked == 0)
         return RL_OK;
-    return rl__run_pass(scene, s->tracer, cl, run, p, p, s->maps, s->nmaps, NULL, e, ne, base, span, &rf->measured,
-                        more);
+    rl__pass in = {.scene = scene, .tracer = s->tracer, .cl = cl, .run = run, .pass = p, .gather_level_pass = p,
+                   .maps = s->maps, .nmaps = s->nmaps, .e = e, .ne = ne, .base = base, .span = span};
+    return rl__run_pass(&in, &rf->measured, more);
 }
 
 /* Adds the statistics of a pass's refinement (refine_pass()) to the pass's, to. */
@@ -928,6 +909,7 @@ void rl_solution_destroy(rl_solution *s)
         return;
     rl__maps_free(s->maps, s->nmaps);
     rl__tracer_destroy(s->tracer);
+    rl__slab_tables_destroy(s->slab_tables, s->scene->nlightfields);
     free(s->polygon_map);
     free(s->passes);
     free(s);
@@ -941,9 +923,11 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     if (!s)
         return rl__fail(RL_ERR_NOMEM, "out of memory");
     s->scene = scene;
-    rl_status st = rl__maps_build(scene, run->threads, &s->maps, &s->nmaps);
+    rl_status st = rl__maps_build(scene, run->cell_size, run->sampling.bounces > 0, run->threads, &s->maps, &s->nmaps);
     if (st == RL_OK)
         st = rl__tracer_new(scene, run->threads, &s->tracer);
+    if (st == RL_OK && (s->slab_tables = rl__slab_tables_new(scene)) == NULL)
+        st = rl__fail(RL_ERR_NOMEM, "out of memory for the light fields' tables");
     s->polygon_map = malloc((scene->npolygons + 1) * sizeof *s->polygon_map);
     s->passes = calloc(passes + 1, sizeof *s->passes);
     if (st == RL_OK && (!s->polygon_map || !s->passes))
@@ -959,7 +943,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     size_t ne = 0;
     /* room for one bounce emitter per map only when bounce passes follow (an emitter is about 5 KB:
      * 14.5 MB for the classroom's 3,031 maps) */
-    rl_emitter *e = rl__primary_emitters(scene, passes > 1 ? s->nmaps : 0, &ne);
+    rl_emitter *e = rl__primary_emitters(scene, s->slab_tables, passes > 1 ? s->nmaps : 0, &ne);
     if (!e) {
         rl_solution_destroy(s);
         return rl__fail(RL_ERR_NOMEM, "out of memory for emitters");
@@ -969,13 +953,13 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     size_t ncoarse = 0;
     /* by default 4 for the first-hit gather, which gathers the cells near occluders on their own; 2 for
      * the methods' own, which interpolates everywhere (as before the first-hit gather's flags) */
-    uint32_t factor = bounce_factor(&scene->sampling);
+    uint32_t factor = bounce_factor(&run->sampling);
     if (passes > 1 && factor > 1)
-        st = rl__maps_build_sized(scene, scene->cell_size * factor, run->threads, &coarse, &ncoarse);
+        st = rl__maps_build_sized(scene, run->cell_size * factor, run->threads, &coarse, &ncoarse);
     assert(!coarse || ncoarse == s->nmaps); /* one map per receiving polygon, in order, at any cell size */
     s->accumulator_bytes = accumulator_bytes(s->maps, s->nmaps) + accumulator_bytes(coarse, ncoarse);
     refine rf = {0};
-    if (st == RL_OK && coarse && scene->sampling.bounce_rays > 0 && refine_new(coarse, ncoarse, s->maps, &rf) != 0)
+    if (st == RL_OK && coarse && run->sampling.bounce_rays > 0 && refine_new(coarse, ncoarse, s->maps, &rf) != 0)
         st = rl__fail(RL_ERR_NOMEM, "out of memory for the bounce cells");
     /* per-tile CPU times of the last pass: bounce passes after the first repeat its tiles and emitters */
     double *measured = NULL;
@@ -989,7 +973,7 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
     double *work = st == RL_OK ? calloc(passes + 1, sizeof *work) : NULL;
     if (st == RL_OK && !work)
         st = rl__fail(RL_ERR_NOMEM, "out of memory for the maps' passes");
-    double all_work = work ? rl__solve_work(scene, passes, work) : 0.0, work_before = 0.0;
+    double all_work = work ? rl__solve_work(scene, run, passes, work) : 0.0, work_before = 0.0;
     int told = 0, telling = 0; /* the caller was told of every map; of some, maybe */
     for (uint32_t p = 0; p < passes && st == RL_OK; p++) {
         /* Cells near occluders are gathered on their own besides the larger cells once marked, unless the
@@ -1024,9 +1008,11 @@ rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *
             last_run->finish_user = &pe;
             telling = 1;
         }
-        st = rl__run_pass(scene, s->tracer, cl, &gather_run, p, p, gather_coarse ? coarse : s->maps,
-                          gather_coarse ? ncoarse : s->nmaps, together ? s->maps : NULL, e, ne, base, part, &measured,
-                          &s->passes[p]);
+        rl__pass in = {.scene = scene, .tracer = s->tracer, .cl = cl, .run = &gather_run, .pass = p,
+                       .gather_level_pass = p, .maps = gather_coarse ? coarse : s->maps,
+                       .nmaps = gather_coarse ? ncoarse : s->nmaps, .with = together ? s->maps : NULL, .e = e,
+                       .ne = ne, .base = base, .span = part};
+        st = rl__run_pass(&in, &measured, &s->passes[p]);
         if (st == RL_OK && together)
             s->passes[p].cells_direct = rf.marked;
         if (st == RL_OK && apart) {
@@ -1069,23 +1055,22 @@ const rl_cluster *rl__check_cluster(const rl_cluster *cl, rl_status *st)
     return cl && cl->ranks > 1 ? cl : NULL;
 }
 
-rl_status rl_relight_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_run_options *options,
-                             rl_solution **out)
+rl_status rl_relight_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_job *job, rl_solution **out)
 {
     if (!scene || !out)
         return rl__fail(RL_ERR_ARG, "rl_relight: NULL argument");
     *out = NULL;
     rl__run run;
-    rl_status st = rl__run_resolve("rl_relight", options, &run);
+    rl_status st = rl__job_resolve(scene, job, &run);
     const rl_cluster *cl = st == RL_OK ? rl__check_cluster(cluster, &st) : NULL;
     if (st == RL_OK)
-        st = rl__solve(scene, cl, &run, scene->sampling.bounces + 1, 1.0, out);
+        st = rl__solve(scene, cl, &run, run.sampling.bounces + 1, 1.0, out);
     if (st == RL_OK && run.progress)
         run.progress(run.user, 1.0);
     return st;
 }
 
-rl_status rl_relight(const rl_scene *scene, const rl_run_options *options, rl_solution **out)
+rl_status rl_relight(const rl_scene *scene, const rl_job *job, rl_solution **out)
 {
-    return rl_relight_cluster(scene, NULL, options, out);
+    return rl_relight_cluster(scene, NULL, job, out);
 }

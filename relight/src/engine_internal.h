@@ -1,10 +1,11 @@
 /*
- * engine_internal.h - what the engine's files share: the solution object,
- * the run options once checked, and the pass runner that solutions (engine.c)
- * and point queries (query.c) are both made by.
+ * engine_internal.h - what the engine's files share: the solution object
+ * and the pass runner that solutions (engine.c) and point queries (query.c)
+ * are both made by; a call's job and run options, resolved, are job_internal.h's.
  *
- * Invariants: a solution's maps, tracer and polygon_map are built together
- * and never change after rl__solve() returns, except the `flat` shading
+ * Invariants: a solution's maps, tracer, light field tables and polygon_map
+ * are built together by rl__solve(), for its job, from a scene it only
+ * reads, and never change after it returns, except the `flat` shading
  * switch; everything here is internal to librelight (rl__ prefix).
  */
 #ifndef RELIGHT_ENGINE_INTERNAL_H
@@ -12,6 +13,7 @@
 
 #include "relight/engine.h"
 #include "bounce.h"
+#include "job_internal.h"
 #include "transfer.h"
 
 struct rl_solution {
@@ -20,70 +22,63 @@ struct rl_solution {
     size_t nmaps;
     int32_t *polygon_map; /* scene polygon -> map index, or -1 */
     rl_tracer *tracer;
+    rl_slab_tables *slab_tables; /* [scene->nlightfields]: where each light field's slab is lit */
     rl_pass_stats *passes;
     uint32_t npasses;
     int flat; /* shade each cell's own value instead of interpolating between cells */
     uint64_t accumulator_bytes; /* the maps' irradiance arrays at their most (before rl__map_settle()) */
 };
 
-/* A call's run options, checked, with the thread count resolved. */
-typedef struct rl__run {
-    unsigned threads;        /* >= 1: ilf_thread_count(options->threads) */
-    rl_progress_fn progress; /* or NULL */
-    void *user;
-    double time_budget;      /* seconds, 0 = none */
-    rl_maps_ready_fn maps_ready; /* or NULL */
-    void *maps_ready_user;
-    const rl_solution *reporting; /* set by rl__solve() for a run whose maps are final once finish() has run on
-                                     them (told to maps_ready as they are) */
-    /* with reporting: called with each map index once its tiles have finished, from the worker that
-     * finished the last one (a map with nothing to gather has an empty tile; only a pass without emitters
-     * calls it from the calling thread), before the map is told of; it completes the map (NULL: nothing to
-     * complete) */
-    void (*finish)(void *user, size_t map);
-    void *finish_user;
-} rl__run;
-
-/* Checks options (NULL: the defaults) and resolves them into *run; `call` names the caller in messages.
- * @return RL_OK, or RL_ERR_ARG naming the field out of range. */
-rl_status rl__run_resolve(const char *call, const rl_run_options *options, rl__run *run);
-
 /* @return the cluster to run with, NULL for one process; checks it, RL_ERR_ARG in *st. */
 const rl_cluster *rl__check_cluster(const rl_cluster *cl, rl_status *st);
 
-/* Solves the scene's maps with `passes` passes (may be 0), reporting progress over [0, span) of the run.
+/* Solves the scene's maps as run's job says with `passes` passes (may be 0), reporting progress over
+ * [0, span) of the run.
  * @return RL_OK and *out (rl_solution_destroy), or an error. */
 rl_status rl__solve(const rl_scene *scene, const rl_cluster *cl, const rl__run *run, uint32_t passes, double span,
                     rl_solution **out);
 
-/* @return the expected work of pass `pass` (rays; the sampling that pass uses) gathering on `cells` cells
- * from `emitters` emitters: the weight of its share of a run's progress. */
-double rl__pass_work(const rl_scene *scene, uint32_t pass, double cells, double emitters);
+/* @return the expected work of pass `pass` of a job with sampling s (rays; the sampling that pass uses)
+ * gathering on `cells` cells from `emitters` emitters: the weight of its share of a run's progress. */
+double rl__pass_work(const rl_sampling *s, uint32_t pass, double cells, double emitters);
 
-/* @return the expected work of rl__solve() with `passes` passes, each pass's in per_pass[0 .. passes) unless
- * per_pass is NULL. */
-double rl__solve_work(const rl_scene *scene, uint32_t passes, double *per_pass);
+/* @return the expected work of rl__solve() of run's job with `passes` passes, each pass's in
+ * per_pass[0 .. passes) unless per_pass is NULL. */
+double rl__solve_work(const rl_scene *scene, const rl__run *run, uint32_t passes, double *per_pass);
 
 /* Casts the camera's rays through the centres of an nx x ny grid over its image (the scene has a camera):
  * *hits of them meet a surface, *back of those its back face. */
 void rl__view_faces(const rl_solution *s, uint32_t nx, uint32_t ny, uint64_t *hits, uint64_t *back);
 
-/* Builds the emitters of the scene itself (pass 0), with room for `extra` more.
- * @return the array (count in *n) or NULL when out of memory. */
-rl_emitter *rl__primary_emitters(const rl_scene *scene, size_t extra, size_t *n);
+/* Builds the emitters of the scene itself (pass 0), its light fields reading `tables` (a solution's), with
+ * room for `extra` more. @return the array (count in *n) or NULL when out of memory. */
+rl_emitter *rl__primary_emitters(const rl_scene *scene, const rl_slab_tables *tables, size_t extra, size_t *n);
 
 /* Appends to e (room assumed) one emitter per map that re-emits light (e_prev nonzero). @return the new count. */
 size_t rl__append_bounce_emitters(const rl_scene *scene, const rl_map *maps, size_t nmaps, rl_emitter *e, size_t n);
 
-/* Runs one pass over maps with emitters e; gather_level_pass chooses the partition level (0: partition_n,
- * else the bounce level) and, > 0 with sampling.bounce_rays > 0, the first-hit gather from the maps the
- * emitters re-emit (bounce.c) for every polygon's map. with: NULL, or nmaps more maps gathered in the
- * same job (one process only, cl NULL), map m's tiles of both lying together, so that a reporting run
- * finishes map m once both have. base and span place it within the run's progress. With several ranks,
- * *measured holds the previous pass's per-tile CPU times (NULL: none) and receives this pass's.
- * @return RL_OK or an error. */
-rl_status rl__run_pass(const rl_scene *scene, const rl_tracer *tracer, const rl_cluster *cl, const rl__run *run,
-                       uint32_t pass, uint32_t gather_level_pass, rl_map *maps, size_t nmaps, rl_map *with,
-                       const rl_emitter *e, size_t ne, double base, double span, double **measured, rl_pass_stats *st);
+/* What one pass gathers, from what, and where it stands in its run (rl__run_pass()). */
+typedef struct rl__pass {
+    const rl_scene *scene;
+    const rl_tracer *tracer;
+    const rl_cluster *cl;       /* the ranks sharing the pass, NULL for one process */
+    const rl__run *run;         /* its job and run options */
+    uint32_t pass;              /* its index in the run: keys its samples */
+    uint32_t gather_level_pass; /* the partition level: 0 partition_n, else the bounce level; > 0 with
+                                   sampling.bounce_rays > 0, the first-hit gather from the maps the emitters
+                                   re-emit (bounce.c) for every polygon's map */
+    rl_map *maps;               /* the receivers: nmaps maps (or points) */
+    size_t nmaps;
+    rl_map *with;               /* NULL, or nmaps more maps gathered in the same job (one process only, cl
+                                   NULL), map m's tiles of both lying together, so that a reporting run
+                                   finishes map m once both have */
+    const rl_emitter *e;        /* the ne emitters */
+    size_t ne;
+    double base, span;          /* its place within the run's progress */
+} rl__pass;
+
+/* Runs one pass. With several ranks, *measured holds the previous pass's per-tile CPU times (NULL: none)
+ * and receives this pass's; st receives its statistics. @return RL_OK or an error. */
+rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st);
 
 #endif /* RELIGHT_ENGINE_INTERNAL_H */

@@ -102,7 +102,7 @@ static int support_box(const rl_emitter *e, const rl_leaf *L, uint32_t b[4])
     uint64_t ndir = lfio_slab_dir_count(e->lf->slab);
     b[0] = UINT32_MAX, b[1] = 0, b[2] = UINT32_MAX, b[3] = 0;
     for (int k = 0; k < 4; k++)
-        rl__box_union(b, e->lf->support[L->ids[k] < ndir ? L->ids[k] : L->ids[0]]);
+        rl__box_union(b, e->tab->support[L->ids[k] < ndir ? L->ids[k] : L->ids[0]]);
     return b[0] != UINT32_MAX;
 }
 

@@ -204,9 +204,10 @@ static rl_status map_accumulators(rl_map *m, int re_emits)
 static rl_status build(const rl_scene *scene, double cell, int re_emit, unsigned threads, rl_map **maps,
                        size_t *count);
 
-rl_status rl__maps_build(const rl_scene *scene, unsigned threads, rl_map **maps, size_t *count)
+rl_status rl__maps_build(const rl_scene *scene, double cell, int re_emit, unsigned threads, rl_map **maps,
+                         size_t *count)
 {
-    return build(scene, scene->cell_size, scene->sampling.bounces > 0, threads, maps, count);
+    return build(scene, cell, re_emit, threads, maps, count);
 }
 
 rl_status rl__maps_build_sized(const rl_scene *scene, double cell, unsigned threads, rl_map **maps, size_t *count)

@@ -50,13 +50,14 @@ typedef struct rl_map {
     const uint8_t *subset;
 } rl_map;
 
-/* Builds the maps of every receiving polygon (albedo > 0 in some channel), clipping their cells on up to
- * threads threads. @return RL_OK and *maps (count in *count); RL_ERR_NOMEM or RL_ERR_INPUT (too many
- * cells). */
-rl_status rl__maps_build(const rl_scene *scene, unsigned threads, rl_map **maps, size_t *count);
+/* Builds the maps of every receiving polygon (albedo > 0 in some channel) with cells of side cell (m, the
+ * job's cell size), clipping their cells on up to threads threads; re_emit: they re-emit in bounce passes
+ * (room for e_prev and e_total apart from e_pass). @return RL_OK and *maps (count in *count); RL_ERR_NOMEM
+ * or RL_ERR_INPUT (too many cells). */
+rl_status rl__maps_build(const rl_scene *scene, double cell, int re_emit, unsigned threads, rl_map **maps,
+                         size_t *count);
 
-/* As rl__maps_build(), with cells of side cell (m) instead of the scene's, for receivers that never
- * re-emit (no e_prev): the coarse grids of bounce passes. */
+/* As rl__maps_build(), for receivers that never re-emit (no e_prev): the coarse grids of bounce passes. */
 rl_status rl__maps_build_sized(const rl_scene *scene, double cell, unsigned threads, rl_map **maps, size_t *count);
 
 /* Gives in out the value of a field known per cell of m (values[cell]) at

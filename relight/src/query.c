@@ -36,13 +36,13 @@ static rl_status point_maps(const double *points, size_t count, rl_map **out)
     return RL_OK;
 }
 
-rl_status rl_irradiance(const rl_scene *scene, const rl_run_options *options, const double *points, size_t count,
-                        double *out, rl_pass_stats *stats)
+rl_status rl_irradiance(const rl_scene *scene, const rl_job *job, const double *points, size_t count, double *out,
+                        rl_pass_stats *stats)
 {
-    return rl_irradiance_cluster(scene, NULL, options, points, count, out, stats);
+    return rl_irradiance_cluster(scene, NULL, job, points, count, out, stats);
 }
 
-rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_run_options *options,
+rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_job *job,
                                 const double *points, size_t count, double *out, rl_pass_stats *stats)
 {
     if (!scene || (count > 0 && (!points || !out)))
@@ -50,7 +50,7 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
     rl_map *pts = NULL;
     rl_solution *sol = NULL;
     rl__run run;
-    rl_status st = rl__run_resolve("rl_irradiance", options, &run);
+    rl_status st = rl__job_resolve(scene, job, &run);
     const rl_cluster *cl = st == RL_OK ? rl__check_cluster(cluster, &st) : NULL;
     if (st != RL_OK)
         return st;
@@ -59,21 +59,21 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
         return st;
     /* Light reflected by the scene: solve `bounces` passes and let every lit
      * map re-emit the irradiance summed over them. */
-    uint32_t bounces = scene->sampling.bounces;
+    uint32_t bounces = run.sampling.bounces;
     /* the solve's share of the progress, by its expected work against the points' pass (engine.c) */
-    double solve = rl__solve_work(scene, bounces, NULL), receivers = 0.0, primary = 0.0;
+    double solve = rl__solve_work(scene, &run, bounces, NULL), receivers = 0.0, primary = 0.0;
     for (size_t k = 0; k < scene->npolygons; k++) {
         const rl_material *mat = &scene->materials[scene->polygons[k].material];
         receivers += mat->albedo[0] > 0 || mat->albedo[1] > 0 || mat->albedo[2] > 0;
         primary += mat->emission[0] > 0 || mat->emission[1] > 0 || mat->emission[2] > 0;
     }
     primary += (double)scene->nlightfields;
-    double points_work = rl__pass_work(scene, 0, (double)count, primary + (bounces > 0 ? receivers : 0.0));
+    double points_work = rl__pass_work(&run.sampling, 0, (double)count, primary + (bounces > 0 ? receivers : 0.0));
     double share = solve + points_work > 0 ? solve / (solve + points_work) : 0.0;
     run.maps_ready = NULL; /* these maps are the query's own */
     st = rl__solve(scene, cl, &run, bounces, share, &sol);
     size_t ne = 0;
-    rl_emitter *e = st == RL_OK ? rl__primary_emitters(scene, bounces > 0 ? sol->nmaps : 0, &ne) : NULL;
+    rl_emitter *e = st == RL_OK ? rl__primary_emitters(scene, sol->slab_tables, bounces > 0 ? sol->nmaps : 0, &ne) : NULL;
     if (st == RL_OK && !e)
         st = rl__fail(RL_ERR_NOMEM, "out of memory for emitters");
     /* the solved maps re-emit their total: rl__solve() settled them, e_prev naming e_total */
@@ -81,9 +81,12 @@ rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster
         ne = rl__append_bounce_emitters(scene, sol->maps, sol->nmaps, e, ne);
     rl_pass_stats local;
     double *measured = NULL;
+    /* the points' pass comes after the solve's passes, and gathers at partition_n */
+    rl__pass in = {.scene = scene, .tracer = st == RL_OK ? sol->tracer : NULL, .cl = cl, .run = &run,
+                   .pass = bounces, .gather_level_pass = 0, .maps = pts, .nmaps = count, .e = e, .ne = ne,
+                   .base = share, .span = 1.0 - share};
     if (st == RL_OK)
-        st = rl__run_pass(scene, sol->tracer, cl, &run, bounces, 0, pts, count, NULL, e, ne, share, 1.0 - share,
-                          &measured, stats ? stats : &local);
+        st = rl__run_pass(&in, &measured, stats ? stats : &local);
     free(measured);
     for (size_t k = 0; st == RL_OK && k < count; k++)
         for (int c = 0; c < 3; c++)

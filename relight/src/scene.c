@@ -30,7 +30,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "emitter.h"
+#include "scene_model.h"
 #include "build.h"
 #include "mesh.h"
 #include "ilf/json.h"
@@ -391,13 +391,11 @@ static rl_status pick_slab(const rl_build *b, const ilf_json *sj, const char *el
     return st;
 }
 
-/* @return the first entry of s->lightfields before lf that names file (when
- * not NULL) or uses slab (when not NULL), or NULL. */
-static const rl_lightfield *earlier_lightfield(const rl_scene *s, const rl_lightfield *lf, const char *file,
-                                               const lfio_slab *slab)
+/* @return the first entry of s->lightfields before lf that names file, or NULL. */
+static const rl_lightfield *earlier_lightfield(const rl_scene *s, const rl_lightfield *lf, const char *file)
 {
     for (const rl_lightfield *k = s->lightfields; k < lf; k++)
-        if ((file && strcmp(k->file, file) == 0) || (slab && k->slab == slab))
+        if (strcmp(k->file, file) == 0)
             return k;
     return NULL;
 }
@@ -437,7 +435,7 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
         return st;
 
     /* a file placed several times (lamps of one kind) is read once */
-    const rl_lightfield *same = earlier_lightfield(b->scene, lf, lf->file, NULL);
+    const rl_lightfield *same = earlier_lightfield(b->scene, lf, lf->file);
     if (same) {
         lf->lf = same->lf;
     } else {
@@ -458,13 +456,6 @@ static rl_status read_lightfield(rl_build *b, const ilf_json *j, const char *ele
         return st;
     const lfio_slab_desc *d = lfio_slab_get_desc(lf->slab);
     lf->nu = d->nu, lf->nv = d->nv, lf->n = d->n;
-    if ((same = earlier_lightfield(b->scene, lf, NULL, lf->slab)) != NULL) {
-        rl__lightfield_tables_share(lf, same);
-    } else {
-        if (rl__lightfield_tables_make(lf) != 0)
-            return rl__fail(RL_ERR_NOMEM, "%s: %s: out of memory", b->file, elem);
-        lf->owns_support = 1;
-    }
     transform_vector(lf, d->origin, lf->origin);
     for (int i = 0; i < 3; i++)
         lf->origin[i] += lf->translate[i];
@@ -515,7 +506,7 @@ static rl_status read_radiance_maps(rl_build *b, const ilf_json *j)
 }
 
 /* Reads "sampling": every setting of the table (settings.c), in its order, and the time budget, which
- * the file may still hold as a suggested run option (rl_scene_time_budget()). */
+ * the file may still hold as a suggested run option: all three are the job the file suggests (rl_job_default()). */
 static rl_status read_sampling(rl_build *b, const ilf_json *j)
 {
     enum { MAX_KEYS = 32 };
@@ -660,7 +651,7 @@ static rl_status build_init(rl_build *b, rl_scene *s, const char *path)
         return rl__fail(RL_ERR_INPUT, "%.100s...: the path is too long", path);
     memcpy(b->dir, path, dirlen);
     memcpy(s->path, path, strlen(path) + 1);
-    s->cell_size = 0.05;
+    s->cell_size = RL_DEFAULT_CELL_SIZE;
     rl_sampling_default(&s->sampling);
     b->face = malloc(n * sizeof *b->face);
     b->keep = malloc(n * sizeof *b->keep);
@@ -672,7 +663,7 @@ static rl_status build_init(rl_build *b, rl_scene *s, const char *path)
     return RL_OK;
 }
 
-void rl_scene_load_options_init(rl_scene_load_options *opt)
+void rl_scene_load_options_default(rl_scene_load_options *opt)
 {
     if (!opt)
         return;
@@ -684,7 +675,7 @@ void rl_scene_load_options_init(rl_scene_load_options *opt)
  * or RL_ERR_ARG naming the problem. */
 static rl_status take_load_options(const char *path, const rl_scene_load_options *opt, rl_scene_load_options *o)
 {
-    rl_scene_load_options_init(o);
+    rl_scene_load_options_default(o);
     if (opt && !ilf_options_take(o, sizeof *o, opt, offsetof(rl_scene_load_options, threads) + sizeof opt->threads))
         return rl__fail(RL_ERR_ARG, "%s: rl_scene_load_options.size %zu is not one this library knows", path,
                         opt->size);
@@ -742,47 +733,12 @@ void rl_scene_destroy(rl_scene *s)
     for (size_t k = 0; k < s->nlightfields; k++) {
         if (s->lightfields[k].owns_lf)
             lfio_lightfield_destroy(s->lightfields[k].lf);
-        if (s->lightfields[k].owns_support)
-            rl__lightfield_tables_free(&s->lightfields[k]);
     }
     free(s->lightfields);
     free(s->materials);
     free(s->vertices);
     free(s->polygons);
     free(s);
-}
-
-const rl_sampling *rl_scene_sampling(const rl_scene *s)
-{
-    return s ? &s->sampling : NULL;
-}
-
-double rl_scene_time_budget(const rl_scene *s)
-{
-    return s ? s->time_budget : 0.0;
-}
-
-rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *x)
-{
-    if (!s || !x)
-        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: scene and sampling must not be NULL");
-    for (size_t k = 0; k < rl_sampling_setting_count(); k++) {
-        const rl_setting_info *set = rl_sampling_setting(k);
-        double value = 0;
-        char rule[128];
-        rl_sampling_get(x, k, &value);
-        if (rl_sampling_setting_allows(k, value, 0))
-            continue;
-        if (set->type == RL_SETTING_METHOD)
-            return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: method %d is not a method", (int)x->method);
-        if (set->type == RL_SETTING_REAL)
-            return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: %s must be %s, got %g", set->key,
-                            rl_sampling_setting_rule(k, rule, sizeof rule), value);
-        return rl__fail(RL_ERR_ARG, "rl_scene_set_sampling: %s must be %s, got %.0f", set->key,
-                        rl_sampling_setting_rule(k, rule, sizeof rule), value);
-    }
-    s->sampling = *x;
-    return RL_OK;
 }
 
 size_t rl_scene_polygon_count(const rl_scene *s)
@@ -804,11 +760,6 @@ uint64_t rl_scene_lightfield_bytes(const rl_scene *s)
             bytes += lfio_slab_desc_bytes(lfio_slab_get_desc(lfio_lightfield_slab(lf, j)));
     }
     return bytes;
-}
-
-double rl_scene_cell_size(const rl_scene *s)
-{
-    return s ? s->cell_size : 0;
 }
 
 int rl_scene_has_camera(const rl_scene *s)

@@ -9,7 +9,9 @@
  *   - every light field emitter holds its loaded file and a borrowed slab,
  *     and its transform is a similarity (rotation times uniform scale > 0,
  *     plus translation), so directions map by the rotation alone;
- *   - cell_size > 0 and finite; sampling passes rl_scene_set_sampling()'s checks.
+ *   - cell_size > 0 and finite; sampling passes rl_job_check()'s checks.
+ * cell_size, sampling and time_budget are the job the file suggests: only rl_job_default() reads them,
+ * never the engine, which takes its job with each call.
  */
 #ifndef RELIGHT_SCENE_INTERNAL_H
 #define RELIGHT_SCENE_INTERNAL_H
@@ -43,23 +45,14 @@ typedef struct rl_lightfield {
     char file[1024];        /* as resolved against the scene's folder */
     lfio_lightfield *lf;    /* owned when owns_lf, else borrowed from an earlier entry naming the same file */
     const lfio_slab *slab;  /* borrowed from lf */
-    int owns_lf, owns_support; /* entries naming the same file (slab) share one copy: the first owns it */
+    int owns_lf;            /* entries naming the same file share one copy: the first owns it */
     double rot[3][3];       /* rotation part of the transform (orthonormal, det +1) */
     double scale;           /* uniform scale of the transform, > 0 */
     double translate[3];
     double origin[3], u[3], v[3]; /* the slab rectangle placed in the scene */
     char label[96];         /* e.g. "lightfields[0]" */
-    /* Per stored direction of the slab, the box of positions [i0, i1] x
-     * [j0, j1] holding all its nonzero radiance (i0 > i1: none). Owned.
-     * The engine shrinks each solid angle's emitter to it. Owned when owns_support. */
-    uint32_t (*support)[4];
-    /* Per square of the slab's direction diamond, the box of positions its directions read with
-     * their interpolation neighbours, and (lit_words > 0) their bits, lit_words a square
-     * (rl__lightfield_tables_make()). cone_support is in support's allocation. */
-    uint32_t (*cone_support)[4];
-    uint64_t *cone_bits;
-    uint32_t lit_words;
-    uint32_t nu, nv, n; /* the slab's positions and partition level */
+    uint32_t nu, nv, n; /* the slab's positions and partition level (where it is lit: the engine's
+                         * rl_slab_tables, built for each run) */
 } rl_lightfield;
 
 typedef struct rl_camera {
@@ -78,9 +71,9 @@ struct rl_scene {
     size_t npolygons;
     rl_lightfield *lightfields;
     size_t nlightfields;
-    double cell_size;
-    rl_sampling sampling;
-    double time_budget; /* the file's sampling.time_budget: a suggested run option, seconds, >= 0 */
+    double cell_size;     /* the file's radiance_maps.cell_size, metres (suggested) */
+    rl_sampling sampling; /* the file's sampling settings (suggested) */
+    double time_budget;   /* the file's sampling.time_budget: a suggested run option, seconds, >= 0 */
     int has_camera;
     rl_camera camera;
 };

@@ -7,7 +7,7 @@
  * Invariants: the table's rows are in the scene file's key order and cover
  * every field of rl_sampling; rl_sampling_default() is built from the
  * defaults here, so the defaults, the loader (scene.c), the setter
- * (rl_scene_set_sampling) and the command line (tools/relight_cli.c) cannot
+ * (rl_job_check) and the command line (tools/relight_cli.c) cannot
  * disagree. Bounds are doubles, exact for every integer a bound names
  * (all at most 2^53).
  */

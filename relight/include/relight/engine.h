@@ -2,18 +2,19 @@
  * engine.h - running the relighting engine on a loaded scene: radiance maps
  * by passes (direct, then `bounces` diffuse passes), irradiance at points,
  * the camera's view and the ray tracer's benchmark. Conventions as in
- * relight/relight.h. What to compute comes from the scene (its sampling
- * settings); how to run it (threads, progress, time budget) comes with each
- * call, as rl_run_options. A solution and its scene are only read by the
- * calls here, except rl_solution_set_smooth().
+ * relight/relight.h. A scene is what is (relight/scene.h); what to compute
+ * (sampling settings, cell size) and how (threads, progress, time budget)
+ * come with each solving call, as an rl_job (relight/job.h), whose defaults
+ * the scene file suggests; the calls that only read a solution or trace rays
+ * take the "how" alone, as rl_run_options. A solution and its scene are only
+ * read by the calls here, except rl_solution_set_smooth().
  *
  * This header is valid C99 and C++.
  */
 #ifndef RELIGHT_ENGINE_H
 #define RELIGHT_ENGINE_H
 
-#include "relight/scene.h"
-#include "ilf/limits.h"
+#include "relight/job.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -44,60 +45,10 @@ typedef struct rl_pass_stats {
                                        (near an occluder, or on a narrow polygon) instead of interpolated */
 } rl_pass_stats;
 
-/** Progress callback: done in [0, 1] over the whole run, never decreasing. Called from the calling thread only. */
-typedef void (*rl_progress_fn)(void *user, double done);
-
-/** Most worker threads a run may ask for (the cap of ilfkit's one thread pool). */
-#define RL_MAX_THREADS ILF_MAX_THREADS
-
-/** A solved scene: radiance maps of every receiving polygon. Opaque. */
-typedef struct rl_solution rl_solution;
-
-/**
- * Told that maps [0, ready) of the solution being computed hold their final
- * values: from then on they may be read with rl_solution_map_info(),
- * rl_solution_map_cells() and rl_solution_map_rows(), from any thread, while the run goes on (no other
- * call on solution is allowed before rl_relight() returns it). Called from
- * one of the engine's threads, with ready increasing, the last time with
- * the map count, and only if the run succeeds that far. A run on one
- * process reports maps as its last pass finishes them (in order: its work
- * goes map by map; a map with bounces is finished once the last of its
- * cells gathered in that pass are); a run across processes reports them
- * all at its end. It must return
- * quickly and call nothing of the engine's but those accessors. If the
- * run then fails, it is called once more with solution NULL and ready 0
- * before the solution is freed: that call must return only once nothing
- * reads the solution any more.
- */
-typedef void (*rl_maps_ready_fn)(void *user, const rl_solution *solution, size_t ready);
-
-/**
- * How to run one call, apart from what to compute: the scene's sampling
- * settings decide the result; these decide only how it is reached. Passed
- * by pointer to every call that runs the engine; NULL means
- * rl_run_options_default(). The call copies what it needs and keeps no
- * pointer to the options.
- */
-typedef struct rl_run_options {
-    uint32_t threads;        /**< worker threads, 0 (default) = every core; at most RL_MAX_THREADS.
-                                  The ray tracer's own threads (building its hierarchy) follow the same
-                                  count. Results do not depend on it. */
-    rl_progress_fn progress; /**< called with the fraction done; NULL (default): none */
-    void *progress_user;     /**< passed to progress */
-    double time_budget;      /**< adaptive method: seconds after which no solid angle is refined further
-                                  (the result then depends on timing); 0 (default) = none; finite, >= 0.
-                                  A scene file may suggest one: rl_scene_time_budget() */
-    rl_maps_ready_fn maps_ready; /**< rl_relight() only: told as maps are finished; NULL (default): not */
-    void *maps_ready_user;       /**< passed to maps_ready */
-} rl_run_options;
-
-/** Fills *o with the defaults: every core, no progress, no time budget. NULL is a no-op. */
-void rl_run_options_default(rl_run_options *o);
-
 /**
  * The processes of one job (the ranks of an MPI job, docs/cluster.md), as the
  * engine sees them: it never calls MPI itself. Every rank loads the same
- * scene and makes the same calls; the work of each pass (tiles of cells, or
+ * scene and makes the same calls with the same job (its run options aside); the work of each pass (tiles of cells, or
  * points) is dealt out to the ranks by expected cost (the same deal on every rank), and after
  * the pass the callbacks make every rank's maps whole. The results are bit
  * for bit those of one process, whatever ranks and threads. The callbacks are
@@ -119,12 +70,15 @@ typedef struct rl_cluster {
 } rl_cluster;
 
 /**
- * Relights a scene with its sampling settings, run as options say (NULL:
- * defaults). The scene must outlive the solution. Several calls may run at once on the same scene (it is only read).
- * @return RL_OK and *out, owned by the caller; RL_ERR_ARG (NULL scene or out, options out of range,
- * naming the field); RL_ERR_NOMEM, RL_ERR_INPUT, RL_ERR_INTERNAL.
+ * Relights a scene as job says (NULL: rl_job_default(scene)). The scene must
+ * outlive the solution; the job need not outlive the call. Several calls may
+ * run at once on the same scene, with the same or different jobs (the scene
+ * is only read). The tables the engine derives from the scene (light field
+ * supports, maps, ray tracer) belong to the solution.
+ * @return RL_OK and *out, owned by the caller; RL_ERR_ARG (NULL scene or out, a job that fails
+ * rl_job_check(), naming the field); RL_ERR_NOMEM, RL_ERR_INPUT, RL_ERR_INTERNAL.
  */
-rl_status rl_relight(const rl_scene *scene, const rl_run_options *options, rl_solution **out);
+rl_status rl_relight(const rl_scene *scene, const rl_job *job, rl_solution **out);
 
 /**
  * rl_relight() as rank cluster->rank of a job (NULL: one process, as
@@ -132,7 +86,7 @@ rl_status rl_relight(const rl_scene *scene, const rl_run_options *options, rl_so
  * are summed over ranks, except wall_seconds (this rank's).
  * @return as rl_relight(); RL_ERR_ARG for a cluster with rank >= ranks; RL_ERR_IO when an exchange fails.
  */
-rl_status rl_relight_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_run_options *options,
+rl_status rl_relight_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_job *job,
                              rl_solution **out);
 
 /** Releases a solution. NULL is a no-op. */
@@ -262,13 +216,15 @@ rl_status rl_bench_rays(const rl_scene *scene, const rl_run_options *options, ui
  * Irradiance at points, as Radiance's rtrace -I: points[6*i..] = x y z nx ny nz
  * (normal need not be unit, must be nonzero); out[3*i..] = r g b in W m^-2.
  * Each point is a receiver of zero area facing its normal; with bounces > 0
- * the light reflected by the solved radiance maps is included. Run as
- * options say (NULL: defaults); progress covers the bounce passes and the
- * points. stats (may be NULL) receives the points' pass.
- * @return RL_OK; RL_ERR_ARG (a point or normal not finite or zero, with its index; options out of range);
- * RL_ERR_NOMEM; RL_ERR_INTERNAL.
+ * the light reflected by the solved radiance maps (at the job's cell size)
+ * is included. Computed and run as job says (NULL: rl_job_default(scene));
+ * progress covers the bounce passes and the points; job->run.maps_ready is
+ * not used. stats (may be NULL) receives the points' pass. Thread-safe as
+ * rl_relight().
+ * @return RL_OK; RL_ERR_ARG (NULL scene, or NULL points or out with count > 0; a point or normal not
+ * finite or zero, with its index; a job that fails rl_job_check()); RL_ERR_NOMEM; RL_ERR_INTERNAL.
  */
-rl_status rl_irradiance(const rl_scene *scene, const rl_run_options *options, const double *points, size_t count,
+rl_status rl_irradiance(const rl_scene *scene, const rl_job *job, const double *points, size_t count,
                         double *out, rl_pass_stats *stats);
 
 /**
@@ -276,7 +232,7 @@ rl_status rl_irradiance(const rl_scene *scene, const rl_run_options *options, co
  * rank passes the same points and ends with every point's answer.
  * @return as rl_irradiance(); RL_ERR_ARG for a cluster with rank >= ranks; RL_ERR_IO when an exchange fails.
  */
-rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_run_options *options,
+rl_status rl_irradiance_cluster(const rl_scene *scene, const rl_cluster *cluster, const rl_job *job,
                                 const double *points, size_t count, double *out, rl_pass_stats *stats);
 
 /* ------------------------------------------------------------ diagnostics */

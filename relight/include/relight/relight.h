@@ -32,6 +32,10 @@
 extern "C" {
 #endif
 
+/** The version of this API, raised by every change that breaks a caller (CHANGELOG.md): 2, where what to
+ * compute and how is a job (rl_job, relight/job.h) passed with each call, apart from the scene. */
+#define RL_API_VERSION 2
+
 /** Result of a fallible call. */
 typedef enum rl_status {
     RL_OK = 0,
@@ -65,8 +69,8 @@ int rl_method_parse(const char *name, rl_method *m);
  * such emitters stay far inside float32, the type of the radiance maps. */
 #define RL_MAX_EMISSION ILF_MAX_EMISSION
 
-/** Sampling settings (scene key "sampling"): what to compute. How a call runs (threads, progress,
- * time budget) is not among them: see rl_run_options in relight/engine.h. */
+/** Sampling settings (scene key "sampling"): what to compute, part of a job (rl_job in relight/job.h,
+ * with the cell size). How a call runs (threads, progress, time budget) is not among them: rl_run_options. */
 typedef struct rl_sampling {
     rl_method method;              /**< default culled */
     uint32_t partition_n;          /**< partition level, a power of two, default 32 (4096 solid angles per hemisphere) */
@@ -121,13 +125,13 @@ enum {
     RL_SETTING_POW2 = 1,       /**< an integer that is also a power of two (or 0, where lo is 0) */
     RL_SETTING_LO_OPEN = 2,    /**< lo itself is not allowed (a real in (lo, hi]) */
     RL_SETTING_TEXT_BOUNDS = 4 /**< the bounds hold for values written as text (scene files, command
-                                    lines), not for rl_scene_set_sampling(): the integers a JSON
+                                    lines), not for rl_job_check(): the integers a JSON
                                     number holds exactly */
 };
 
 /**
  * One sampling setting, as every reader of settings sees it: the scene
- * loader's "sampling" object, rl_scene_set_sampling()'s checks, the
+ * loader's "sampling" object, rl_job_check()'s checks, the
  * command line's options and their --help all come from this one table.
  */
 typedef struct rl_setting_info {

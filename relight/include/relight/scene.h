@@ -1,13 +1,14 @@
 /*
  * scene.h - scenes for the relighting engine, read from JSON (docs/scene.md).
  *
- * A scene holds materials, planar convex polygons (from the file's
+ * A scene is what is: materials, planar convex polygons (from the file's
  * "polygons" and from mesh files read with assimp), light field slabs that
- * act as emitters, the radiance-map cell size, sampling settings and an
- * optional camera. Loading validates everything and reports the first
- * problem with the file and the element ("beams.json: polygons[3]: not planar").
- * A loaded scene is immutable apart from its sampling settings and may be
- * read from several threads.
+ * act as emitters and an optional camera. What to compute and how is a job
+ * (relight/job.h's rl_job); the file's "sampling" and "radiance_maps"
+ * sections are only the job it suggests, handed out by rl_job_default().
+ * Loading validates everything and reports the first problem with the file
+ * and the element ("beams.json: polygons[3]: not planar"). A loaded scene
+ * never changes and may be read from several threads, by several runs at once.
  *
  * This header is valid C99 and C++.
  */
@@ -19,6 +20,9 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/** The radiance-map cell size, metres, that a scene file without radiance_maps.cell_size suggests. */
+#define RL_DEFAULT_CELL_SIZE 0.05
 
 /** A loaded scene. Opaque. */
 typedef struct rl_scene rl_scene;
@@ -33,7 +37,7 @@ rl_status rl_scene_load(const char *path, rl_scene **out);
 /**
  * How a scene is loaded (not what it holds: the scene is the same whatever
  * these say). Set size to sizeof(rl_scene_load_options)
- * (rl_scene_load_options_init() does), so that a later library with more
+ * (rl_scene_load_options_default() does), so that a later library with more
  * fields still takes it; fields past size take their defaults.
  */
 typedef struct rl_scene_load_options {
@@ -43,7 +47,7 @@ typedef struct rl_scene_load_options {
 } rl_scene_load_options;
 
 /** Fills *opt with the defaults: threads 0 (every online core). */
-void rl_scene_load_options_init(rl_scene_load_options *opt);
+void rl_scene_load_options_default(rl_scene_load_options *opt);
 
 /**
  * Reads and validates a scene file as rl_scene_load() does, as opt says (NULL: the defaults).
@@ -54,16 +58,6 @@ rl_status rl_scene_load_with(const char *path, const rl_scene_load_options *opt,
 /** Releases a scene and the light fields it loaded. NULL is a no-op. */
 void rl_scene_destroy(rl_scene *s);
 
-/** @return the scene's sampling settings (borrowed). */
-const rl_sampling *rl_scene_sampling(const rl_scene *s);
-
-/** @return the time budget the scene file suggests (its "sampling.time_budget", seconds; 0 = none, also
- * for NULL): a default for rl_run_options.time_budget, which the engine itself never reads from the scene. */
-double rl_scene_time_budget(const rl_scene *s);
-
-/** Replaces the sampling settings. @return RL_OK or RL_ERR_ARG (partition_n not a power of two in 1..4096, k = 0, ...). */
-rl_status rl_scene_set_sampling(rl_scene *s, const rl_sampling *sampling);
-
 /** @return the number of polygons (after meshes are expanded). */
 size_t rl_scene_polygon_count(const rl_scene *s);
 
@@ -73,9 +67,6 @@ size_t rl_scene_lightfield_count(const rl_scene *s);
 /** @return the bytes of radiance the light fields hold in memory, every slab of each file counted once
  * (lfio_slab_desc_bytes()); 0 without light fields. */
 uint64_t rl_scene_lightfield_bytes(const rl_scene *s);
-
-/** @return the radiance-map cell size in metres. */
-double rl_scene_cell_size(const rl_scene *s);
 
 /** @return 1 if the scene has a camera. */
 int rl_scene_has_camera(const rl_scene *s);
