@@ -238,10 +238,10 @@ static int parse_arguments(view_options *o, int argc, char **argv)
         cli_error("view", "%s", problem);
         return ILF_EXIT_USAGE;
     }
-    /* no options at all still asks for the two the camera cannot do without */
-    return camera_resolve("view", &o->camera_given, NULL, &o->cam) == 1 ? -1
-           : o->camera_given.given == 0 ? (cli_error("view", "--position X,Y,Z is required"), ILF_EXIT_USAGE)
-                                        : ILF_EXIT_USAGE;
+    int made = camera_resolve("view", &o->camera_given, NULL, &o->cam);
+    if (made == 0) /* no camera option at all: the view still needs the two it cannot do without */
+        cli_error("view", "--position X,Y,Z is required");
+    return made == 1 ? -1 : ILF_EXIT_USAGE;
 }
 
 /* Exposes rgb for a PNG. @return the scale used, or a negative value when memory runs out. */
