@@ -281,32 +281,67 @@ static void gather_total(const lfio_radmap *map, int stats, map_summary *total)
     stats_finish(&total->radiosity, total->cell_area);
 }
 
-int ilf_info_radmap(const char *path, const lfio_radmap *map, int json, int stats)
+/* Prints text with two tabs after each newline: a map's object as cJSON_Print indents an element of the
+ * root's "maps" array. */
+static void print_indented(const char *text)
 {
-    stats = stats && lfio_radmap_has_cells(map);
-    map_summary total;
-    gather_total(map, stats, &total);
-    cJSON *root = json ? file_json(path, map, &total, stats) : NULL;
-    cJSON *maps = cJSON_GetObjectItem(root, "maps");
-    int ok = !json || root != NULL;
-    if (!json)
-        print_file_text(path, map, &total, stats);
+    for (const char *c = text; *c != '\0'; c++) {
+        putchar(*c);
+        if (*c == '\n')
+            fputs("\t\t", stdout);
+    }
+}
+
+/* Prints the JSON report a map at a time, so that it holds one map's objects whatever the file holds: the
+ * root's keys as cJSON_Print gives them with "maps" empty (its last key, so the last '[' of that text), then
+ * each map's object indented as an element of that array: the text cJSON_Print gives of the whole tree. Out
+ * of memory part-way, the text printed so far is cut off and the exit code says so. @return an exit code. */
+static int print_json(const char *path, const lfio_radmap *map, const map_summary *total, int stats)
+{
+    cJSON *root = file_json(path, map, total, stats);
+    char *head = root != NULL ? cJSON_Print(root) : NULL;
+    cJSON_Delete(root);
+    const char *open = head != NULL ? strrchr(head, '[') : NULL;
+    int ok = open != NULL;
+    if (ok)
+        fwrite(head, 1, (size_t)(open - head) + 1, stdout);
+    cJSON_free(head);
     for (size_t k = 0; ok && k < lfio_radmap_count(map); k++) {
         lfio_radmap_patch p;
         map_summary m;
         lfio_radmap_get(map, k, &p);
         summarise(&p, stats, &m);
-        if (!json) {
-            print_map_text(k, &m, stats);
-            continue;
-        }
         cJSON *o = map_json(&m, stats);
-        ok = o != NULL && cJSON_AddItemToArray(maps, o);
-        if (!ok)
-            cJSON_Delete(o);
+        char *text = o != NULL ? cJSON_Print(o) : NULL;
+        cJSON_Delete(o);
+        ok = text != NULL;
+        if (ok) {
+            fputs(k > 0 ? ", " : "", stdout);
+            print_indented(text);
+        }
+        cJSON_free(text);
     }
-    int code = !ok ? (cli_error("info", "out of memory while building JSON"), ILF_EXIT_FAILED)
-                   : json ? json_print("info", root) : ILF_EXIT_OK;
-    cJSON_Delete(root);
-    return code;
+    if (ok)
+        fputs("]\n}\n", stdout);
+    else
+        cli_error("info", "out of memory while building JSON");
+    return ok ? ILF_EXIT_OK : ILF_EXIT_FAILED;
+}
+
+int ilf_info_radmap(const char *path, const lfio_radmap *map, int json, int stats)
+{
+    stats = stats && lfio_radmap_has_cells(map);
+    map_summary total;
+    gather_total(map, stats, &total);
+    if (json)
+        return print_json(path, map, &total, stats);
+    print_file_text(path, map, &total, stats);
+    for (size_t k = 0; k < lfio_radmap_count(map); k++) {
+        lfio_radmap_patch p;
+        map_summary m;
+        lfio_radmap_get(map, k, &p);
+        summarise(&p, stats, &m);
+        print_map_text(k, &m, stats);
+    }
+    return ILF_EXIT_OK;
 }
