@@ -3,8 +3,9 @@
 # radiance map (radiance.h5), `ilf export` to glTF binary, PLY and CSV (the
 # glTF checked by the Khronos validator, npm's gltf-validator, when node can
 # load it; required when CI=true), `ilf view` of a radiance map, `ilf slice
-# --envmap` (read back by a standard-library .hdr decoder), and their error
-# paths.
+# --envmap` (read back by a standard-library .hdr decoder), the camera
+# options of `ilf relight` on a scene without a camera and a constant light
+# field seen straight on by `ilf view --scene`, and their error paths.
 #
 # Usage: bash export_test.sh ILF_BINARY TMPDIR
 #
@@ -304,6 +305,57 @@ expect 2 "view of a damaged radiance.h5" "$ILF" view "$TMP/damaged.h5" -o "$TMP/
     --look-at 0,0,0
 expect 2 "view of a light field" "$ILF" view "$TMP/down.h5" -o "$TMP/never.png" --position 1,1,1 --look-at 0,0,0
 check "no output is left by failed views" bash -c "! compgen -G '$TMP/never*' >/dev/null"
+
+# ------------------------------------------------------------------ camera options, light fields in views
+# A constant light field (2 W sr^-1 m^-2, 1 m at z = 0, emitting up) over a glowing floor 1 m below it, in a
+# scene without a camera: the camera options of relight make the view; view --scene sees the slab too.
+mkdir -p "$TMP/lfview"
+expect 0 "synth a constant light field" "$ILF" synth --kind constant --radiance 2,2,2 --grid 4x4 --n 2 \
+    --supersample 1 -o "$TMP/lfview/const.h5" -q
+cat >"$TMP/lfview/scene.json" <<'JSON'
+{
+  "materials": {"glow": {"albedo": [0.5, 0.5, 0.5], "emission": [0.25, 0.5, 0.75]}},
+  "polygons": [{"material": "glow", "vertices": [[-4, -4, -1], [4, -4, -1], [4, 4, -1], [-4, 4, -1]]}],
+  "lightfields": [{"file": "const.h5"}],
+  "radiance_maps": {"cell_size": 1},
+  "sampling": {"method": "culled", "partition_n": 2, "rays_per_solid_angle": 1}
+}
+JSON
+CAM=(--position 0,0,2 --look-at 0,0,0 --up 0,1,0 --fov 90 --size 40x40)
+expect 0 "relight a scene without a camera, the camera options making one" "$ILF" relight \
+    "$TMP/lfview/scene.json" -o "$TMP/lfview/relit" --threads 2 "${CAM[@]}"
+check "the view is written at --size" stdout_has "view.exr: 40x40"
+check "no warning that the scene has no camera" bash -c "! grep -q 'no camera' '$ERR'"
+expect 2 "relight with --look-at alone on a scene without a camera" "$ILF" relight "$TMP/lfview/scene.json" \
+    -o "$TMP/lfview/never" --look-at 0,0,0
+check "it says what is missing" stderr_has "--position X,Y,Z is required"
+expect 2 "relight with camera options and --no-view" "$ILF" relight "$TMP/lfview/scene.json" \
+    -o "$TMP/lfview/never" --no-view --position 0,0,2 --look-at 0,0,0
+expect 2 "relight with a degenerate camera" "$ILF" relight "$TMP/lfview/scene.json" -o "$TMP/lfview/never" \
+    --up 0,0,1 --position 0,0,2 --look-at 0,0,0
+check "it says why" stderr_has "up must not be zero or parallel"
+check "no output folder is left by refused relights" bash -c "[ ! -e '$TMP/lfview/never' ]"
+expect 0 "view the constant slab straight on, with --scene" "$ILF" view "$TMP/lfview/relit/radiance.h5" \
+    --scene "$TMP/lfview/scene.json" -o "$TMP/lfview/with.hdr" "${CAM[@]}"
+check "view --scene counts the light fields" stdout_has "40x40, 1 maps, 1 light fields"
+expect 0 "and without" "$ILF" view "$TMP/lfview/relit/radiance.h5" -o "$TMP/lfview/without.hdr" "${CAM[@]}"
+check "inside the slab its constant, around it the floor; without --scene the floor throughout" py "$HDR"'
+import sys
+glow = [0.25, 0.5, 0.75]
+# within one step of the RGBE encoding (8-bit mantissas): test_relight holds the float values to 1e-5
+near = lambda px, want: all(abs(g - w) <= w / 128 for g, w in zip(px, want))
+with_slab, without = read_hdr(sys.argv[1]), read_hdr(sys.argv[2])
+# at the slab plane a pixel is 0.1 m: pixels 15 .. 24 lie inside [-0.5, 0.5], 0 .. 13 and 26 .. 39 outside
+for y in range(40):
+    for x in range(40):
+        inside = 15 <= x <= 24 and 15 <= y <= 24
+        outside = x <= 13 or x >= 26 or y <= 13 or y >= 26
+        if inside:
+            assert near(with_slab[y][x], [2.0, 2.0, 2.0]), (x, y, with_slab[y][x])
+        if outside:
+            assert near(with_slab[y][x], glow), (x, y, with_slab[y][x])
+        assert near(without[y][x], glow), (x, y, without[y][x])
+' "$TMP/lfview/with.hdr" "$TMP/lfview/without.hdr"
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -143,7 +143,8 @@ run_case() {
         "${expect[@]}" "$out" "$ILF" relight "$(wrap lightfield "$path" "$n")" -o "$out" --quiet
         ;;
     verify) "${expect[@]}" - "$ILF" verify "$path" ;;
-    radmap)
+    radmap | radmaphead)
+        [ "$kind" = radmaphead ] && "${expect[@]}" - "$ILF" info "$path"
         "${expect[@]}" - "$ILF" info "$path" --stats
         "${expect[@]}" - "$ILF" verify "$path"
         "${expect[@]}" "$out.glb" "$ILF" export "$path" -o "$out.glb"

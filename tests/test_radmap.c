@@ -581,11 +581,12 @@ static int flip_chunk_byte(const char *path, const char *dset)
 }
 
 /* Expects reading path to fail with want, naming the file (and needle), output NULL, nothing printed. */
-static void expect_bad(const char *path, lfio_status want, const char *needle, const char *what)
+static void expect_refused_by(lfio_status (*read)(const char *, lfio_radmap **), const char *path, lfio_status want,
+                              const char *needle, const char *what)
 {
     lfio_radmap *map = (lfio_radmap *)1;
     quiet_start();
-    lfio_status st = lfio_radmap_read(path, &map);
+    lfio_status st = read(path, &map);
     long printed = quiet_stop();
     const char *msg = lfio_errmsg();
     const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
@@ -596,6 +597,19 @@ static void expect_bad(const char *path, lfio_status want, const char *needle, c
     CHECK(printed == 0, "%s: %ld bytes printed on stderr", what, printed);
     if (st == LFIO_OK)
         lfio_radmap_destroy(map);
+}
+
+/* The whole read refuses path with status want and a message naming it and holding needle. */
+static void expect_bad(const char *path, lfio_status want, const char *needle, const char *what)
+{
+    expect_refused_by(lfio_radmap_read, path, want, needle, what);
+}
+
+/* Both readers refuse path so: a problem of the tables, offsets or dataset shapes, which the headers show. */
+static void expect_bad_headers(const char *path, lfio_status want, const char *needle, const char *what)
+{
+    expect_refused_by(lfio_radmap_read, path, want, needle, what);
+    expect_refused_by(lfio_radmap_read_headers, path, want, needle, what);
 }
 
 /* Every documented way a format-1 file can be bad; good has patches 0 (cells), 1 (no cells), 2 (many cells). */
@@ -689,27 +703,31 @@ static void test_bad_files_v2(const char *good)
     const uint32_t four = 4;
     edit_attr(copy_to(p, sizeof p, good, "v2_count4.h5"), "/", "patch_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0,
               &four);
-    expect_bad(p, LFIO_ERR_FORMAT, "/patches/label", "format 2: patch_count 4 with three patches");
+    expect_bad_headers(p, LFIO_ERR_FORMAT, "/patches/label", "format 2: patch_count 4 with three patches");
     /* patch 1 claims patch 2's first cell: patch 2 then ends past the cells stored */
     edit_element(copy_to(p, sizeof p, good, "v2_offset_late.h5"), "/patches/cell_offset", 2, 0, 13);
     edit_element(p, "/patches/cell_offset", 3, 0, 40013);
-    expect_bad(p, LFIO_ERR_FORMAT, "/patches/cell_ij: dims mismatch", "format 2: cell offsets past the cells");
+    expect_bad_headers(p, LFIO_ERR_FORMAT, "/patches/cell_ij: dims mismatch", "format 2: cell offsets past the cells");
     edit_element(copy_to(p, sizeof p, good, "v2_offset_back.h5"), "/patches/cell_offset", 2, 0, 5);
-    expect_bad(p, LFIO_ERR_FORMAT, "/patches/cell_offset: offset 2 decreases", "format 2: decreasing offsets");
+    expect_bad_headers(p, LFIO_ERR_FORMAT, "/patches/cell_offset: offset 2 decreases", "format 2: decreasing offsets");
     edit_element(copy_to(p, sizeof p, good, "v2_offset_start.h5"), "/patches/vertex_offset", 0, 0, 1);
-    expect_bad(p, LFIO_ERR_FORMAT, "/patches/vertex_offset: must start at 0", "format 2: offsets not from 0");
+    expect_bad_headers(p, LFIO_ERR_FORMAT, "/patches/vertex_offset: must start at 0", "format 2: offsets not from 0");
     edit_element(copy_to(p, sizeof p, good, "v2_small_grid.h5"), "/patches/nv", 0, 0, 1);
-    expect_bad(p, LFIO_ERR_FORMAT, "patch 0: 12 cells in a grid", "format 2: more cells than nu*nv");
+    expect_bad_headers(p, LFIO_ERR_FORMAT, "patch 0: 12 cells in a grid", "format 2: more cells than nu*nv");
     edit_element(copy_to(p, sizeof p, good, "v2_nan.h5"), "/patches/irradiance", 12 + 5, 1, NAN);
     expect_bad(p, LFIO_ERR_FORMAT, "patch 2: irradiance of cell 5", "format 2: NaN irradiance");
+    lfio_radmap *map = NULL;
+    CHECK(lfio_radmap_read_headers(p, &map) == LFIO_OK && lfio_radmap_cell_count(map) == 40012,
+          "format 2: the headers of a file with a NaN irradiance read (no value is read): %s", lfio_errmsg());
+    lfio_radmap_destroy(map);
     edit_element(copy_to(p, sizeof p, good, "v2_albedo.h5"), "/patches/albedo", 1, 2, 1.5);
-    expect_bad(p, LFIO_ERR_FORMAT, "patch 1: albedo", "format 2: albedo above 1");
+    expect_bad_headers(p, LFIO_ERR_FORMAT, "patch 1: albedo", "format 2: albedo above 1");
     edit_element(copy_to(p, sizeof p, good, "v2_label.h5"), "/patches/label", 0, 0, 0);
-    expect_bad(p, LFIO_ERR_FORMAT, "NUL-terminated labels", "format 2: a label split in two");
+    expect_bad_headers(p, LFIO_ERR_FORMAT, "NUL-terminated labels", "format 2: a label split in two");
     const hsize_t rgb[2] = {40012, 3};
     edit_replace_dataset(copy_to(p, sizeof p, good, "v2_units.h5"), "/patches/radiosity", H5T_IEEE_F32LE, 2, rgb, 1.0,
                          "W sr^-1 m^-2", "cell:rgb");
-    expect_bad(p, LFIO_ERR_FORMAT, "units", "format 2: radiosity in radiance units");
+    expect_bad_headers(p, LFIO_ERR_FORMAT, "units", "format 2: radiosity in radiance units");
 }
 
 /* Writes count patches to path in format version `format` through lfio_radmap_write_with(). */
@@ -720,6 +738,49 @@ static lfio_status write_format(const char *path, const lfio_radmap_patch *patch
     opt.format_version = format;
     return lfio_radmap_write_with(path, "test_radmap", "scenes/test.json", count, describe_some,
                                   NULL, &(struct describer){patches, SIZE_MAX, 0}, &opt);
+}
+
+/* lfio_radmap_read_headers() of a file of each format: the patches' descriptions and vertices as written,
+ * their cell counts, no cell array. */
+static void test_read_headers(const lfio_radmap_patch *patches, size_t count)
+{
+    uint64_t cells = 0;
+    for (size_t k = 0; k < count; k++)
+        cells += patches[k].ncells;
+    for (int format = 1; format <= 2; format++) {
+        char path[512], name[32];
+        snprintf(name, sizeof name, "headers%d.h5", format);
+        CHECK(write_format(tmp_path(path, sizeof path, name), patches, count, format) == LFIO_OK, "write %s: %s",
+              name, lfio_errmsg());
+        lfio_radmap *map = NULL;
+        quiet_start();
+        lfio_status st = lfio_radmap_read_headers(path, &map);
+        long printed = quiet_stop();
+        CHECK(st == LFIO_OK && printed == 0, "read the headers of %s: %s", name, lfio_errmsg());
+        if (map == NULL)
+            continue;
+        CHECK(!lfio_radmap_has_cells(map) && lfio_radmap_cell_count(map) == cells &&
+                  lfio_radmap_format_version(map) == format && lfio_radmap_count(map) == count &&
+                  strcmp(lfio_radmap_scene(map), "scenes/test.json") == 0,
+              "%s: %llu cells, format %d", name, (unsigned long long)lfio_radmap_cell_count(map),
+              lfio_radmap_format_version(map));
+        for (size_t k = 0; k < count && k < lfio_radmap_count(map); k++) {
+            lfio_radmap_patch back, bare = patches[k];
+            CHECK(lfio_radmap_get(map, k, &back) == LFIO_OK, "get %zu", k);
+            CHECK(back.cell_ij == NULL && back.cell_area == NULL && back.cell_centre == NULL &&
+                      back.irradiance == NULL && back.radiosity == NULL,
+                  "%s: patch %zu has cell arrays", name, k);
+            CHECK(back.ncells == patches[k].ncells, "%s: patch %zu: %u cells, wrote %u", name, k, back.ncells,
+                  patches[k].ncells);
+            bare.ncells = back.ncells = 0; /* everything but the cells, which were not read */
+            check_patch_equal(&bare, &back, patches[k].label);
+        }
+        lfio_radmap_destroy(map);
+        CHECK(lfio_radmap_read(path, &map) == LFIO_OK && lfio_radmap_has_cells(map) &&
+                  lfio_radmap_cell_count(map) == cells, "%s read whole holds its cells", name);
+        lfio_radmap_destroy(map);
+    }
+    CHECK(!lfio_radmap_has_cells(NULL) && lfio_radmap_cell_count(NULL) == 0, "NULL accessors");
 }
 
 /* @return the format version of the file at path as lfio reads it, or -1 if it does not read. */
@@ -827,6 +888,7 @@ int main(void)
     test_write_fails_midway(patches, 4, stopped, 96 * 1024);
     test_writer_refusals(&t[0], good);
     test_formats(patches, 4);
+    test_read_headers(patches, 4);
     test_bad_files_v2(good);
     char good1[512];
     CHECK(write_format(tmp_path(good1, sizeof good1, "good1.h5"), patches, 3, 1) == LFIO_OK, "write format 1: %s",

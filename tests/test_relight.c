@@ -1547,6 +1547,89 @@ static void check_shading(void)
     rl_scene_destroy(s);
 }
 
+/* A camera's view through rl_solution_render_camera(): a constant light field slab (2 W sr^-1 m^-2, 1 m at z = 0,
+ * facing up) seen straight on from above shows its constant inside its rectangle and the glowing floor 1 m below
+ * outside it; from below (its back) it is not seen; the scene-camera shorthand renders the same camera bit for
+ * bit; rl_camera_check() refuses what a scene file may not hold. */
+static void check_camera_views(void)
+{
+    char lfpath[600], path[600], rest[1024];
+    snprintf(lfpath, sizeof lfpath, "%s/view_lf.h5", tmpdir);
+    write_lightfield(lfpath, 2.0f, 180, 4, 0);
+    snprintf(path, sizeof path, "%s/view_lf.json", tmpdir);
+    tpoly floor = ts_rect_z("glow", -4, -4, 4, 4, -1.0, 1);
+    snprintf(rest, sizeof rest,
+             "\"radiance_maps\": {\"cell_size\": 0.5}, \"lightfields\": [{\"file\": \"view_lf.h5\"}], "
+             "\"camera\": {\"position\": [0, 0, 2], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0], \"fov_deg\": 90, "
+             "\"width\": 40, \"height\": 40}");
+    ts_write_scene(path, "{\"glow\": {\"albedo\": [0.5,0.5,0.5], \"emission\": [0.25,0.5,0.75]}}", &floor, 1, rest);
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    set_sampling(s, RL_METHOD_CULLED, 4, 1, 1, 0);
+    rl_solution *sol = NULL;
+    CHECK(rl_relight(s, &ts_job, &sol) == RL_OK, "camera views: %s", rl_errmsg());
+    rl_camera cam;
+    CHECK(rl_scene_camera(s, &cam) && cam.width == 40 && cam.fov_deg == 90, "the scene's camera");
+    float *a = calloc(40 * 40 * 3, sizeof *a), *b = calloc(40 * 40 * 3, sizeof *b);
+    if (sol && a && b) {
+        CHECK(rl_solution_render_camera(sol, &cam, &ts_job.run, a) == RL_OK, "render_camera: %s", rl_errmsg());
+        CHECK(rl_solution_render(sol, &ts_job.run, b) == RL_OK, "render: %s", rl_errmsg());
+        CHECK(memcmp(a, b, 40 * 40 * 3 * sizeof *a) == 0, "the scene camera's render is render_camera's");
+        /* at the slab's plane a pixel is 0.1 m: pixels 15 .. 24 lie inside [-0.5, 0.5], 0 .. 13 and 26 .. 39
+         * outside */
+        const float glow[3] = {0.25f, 0.5f, 0.75f};
+        long inside = 0, outside = 0, in_ok = 0, out_ok = 0;
+        for (int y = 0; y < 40; y++)
+            for (int x = 0; x < 40; x++) {
+                const float *px = a + 3 * (40 * y + x);
+                int in = x >= 15 && x <= 24 && y >= 15 && y <= 24;
+                int out = x <= 13 || x >= 26 || y <= 13 || y >= 26;
+                int slab = 1, lit = 1;
+                for (int c = 0; c < 3; c++) {
+                    slab &= fabsf(px[c] - 2.0f) <= 1e-5f;
+                    lit &= px[c] == glow[c];
+                }
+                inside += in;
+                in_ok += in && slab;
+                outside += out;
+                out_ok += out && lit;
+            }
+        CHECK(inside == 100 && in_ok == inside, "the slab seen straight on: %ld of %ld pixels its constant", in_ok,
+              inside);
+        CHECK(out_ok == outside, "around it the floor: %ld of %ld pixels", out_ok, outside);
+        /* a camera moved, the scene's unchanged */
+        rl_camera low = cam;
+        low.position[2] = -0.5;
+        low.look_at[2] = 1.0;
+        CHECK(rl_solution_render_camera(sol, &low, &ts_job.run, b) == RL_OK, "render from below: %s", rl_errmsg());
+        CHECK(b[3 * (40 * 20 + 20)] == 0.0f, "the back of the slab is not seen (%g)", b[3 * (40 * 20 + 20)]);
+        rl_camera again;
+        CHECK(rl_scene_camera(s, &again) && memcmp(&again, &cam, sizeof cam) == 0, "the scene's camera is unchanged");
+        float rgb[3] = {-1, -1, -1};
+        const double org[3] = {0.1, 0.2, 3}, down[3] = {0, 0, -2};
+        CHECK(rl_scene_trace_lightfields(s, org, down, INFINITY, rgb) && fabsf(rgb[1] - 2.0f) <= 1e-5f,
+              "trace_lightfields finds the slab: %g", rgb[1]);
+        CHECK(!rl_scene_trace_lightfields(s, org, down, 2.5, rgb), "nor beyond t_max");
+        rl_camera bad = cam;
+        bad.up[0] = 0, bad.up[1] = 0, bad.up[2] = 1;
+        CHECK(rl_camera_check(&bad) == RL_ERR_ARG && strstr(rl_errmsg(), "up must not"), "up along the view: %s",
+              rl_errmsg());
+        CHECK(rl_solution_render_camera(sol, &bad, &ts_job.run, a) == RL_ERR_ARG, "render refuses a bad camera");
+        bad = cam, bad.width = 0;
+        CHECK(rl_camera_check(&bad) == RL_ERR_ARG, "width 0");
+        bad = cam, bad.fov_deg = 180;
+        CHECK(rl_camera_check(&bad) == RL_ERR_ARG, "fov 180");
+        bad = cam, bad.look_at[2] = 2;
+        CHECK(rl_camera_check(&bad) == RL_ERR_ARG, "look_at at the position");
+        CHECK(rl_camera_check(&cam) == RL_OK && rl_camera_check(NULL) == RL_ERR_ARG, "check a good camera, NULL");
+    }
+    free(a);
+    free(b);
+    rl_solution_destroy(sol);
+    rl_scene_destroy(s);
+}
+
 /* A fixed generator for the random scenes. */
 /* Random scenes of arbitrarily oriented quads: culled must equal naive bit for
  * bit whenever no pair descends (the sharpest test that culling is conservative). */
@@ -1673,6 +1756,7 @@ int main(int argc, char **argv)
         check_one_thread(); /* first, before any other run has started threads */
         check_unoccluded();
         check_shading();
+        check_camera_views();
         check_identities(0);
         check_identities(64);
         check_back_to_back();

@@ -13,10 +13,6 @@
  * partition finer than 8192^2 directions is not stored. */
 #define ILF_SLICE_MAX_SIDE 8192u
 
-/* Pixels along either side of an `ilf view` image: a scene camera's limit (docs/scene.md), 16384^2 float RGB
- * being 3 GiB. */
-#define ILF_VIEW_MAX_SIDE 16384u
-
 /* Spot lights one `ilf synth` call may place (each is a command-line option). */
 #define ILF_SYNTH_MAX_SPOTS 64
 

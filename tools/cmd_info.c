@@ -5,10 +5,11 @@
  * --stats also its radiance statistics, zero-radiance mask occupancy and the
  * covered share when the slab has a coverage dataset; with --irradiance the
  * irradiance at one position centre. A radiance-map file (radiance.h5, as
- * `ilf relight` writes) is described by info_radmap.c instead.
+ * `ilf relight` writes) is described by radmap_cli.c instead.
  *
  * Invariants: without --stats or --irradiance only the file's headers are
- * read (no slab is decompressed), so info answers at once on any file; with
+ * read (no slab is decompressed, no radiance map's cell), so info answers
+ * at once on any file; with
  * them slabs are read one at a time (the memory needed is one slab, not the
  * file); the same slab_report feeds the text and the JSON output, so they
  * cannot disagree; the JSON schema is the one documented in docs/cli.md.
@@ -413,7 +414,7 @@ static int describe_radmap(const info_options *o)
     char lf_msg[1024], msg[1024];
     snprintf(lf_msg, sizeof lf_msg, "%s", lfio_errmsg());
     lfio_radmap *map = NULL;
-    lfio_status st = ilf_radmap_try(o->path, lf_msg, &map, msg, sizeof msg);
+    lfio_status st = ilf_radmap_try(o->path, lf_msg, o->want_stats, &map, msg, sizeof msg);
     if (st != LFIO_OK)
         return cli_lfio_failure_msg("info", st, CLI_INPUT, o->path, msg);
     int code = ILF_EXIT_OK;

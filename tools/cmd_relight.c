@@ -4,8 +4,9 @@
  *
  *   radiance.h5  every receiving polygon's radiance map (lfio/radmap.h)
  *   stats.json   settings, times, per-pass counters and memory (docs/cli.md)
- *   view.exr     the scene camera's view, raw radiance   } only when the
- *   view.png     the same, tone mapped and sRGB-encoded  } scene has a camera
+ *   view.exr     the camera's view, raw radiance         } only when the scene
+ *   view.png     the same, tone mapped and sRGB-encoded  } has a camera or the
+ *                                                          camera options make one
  *   falsecolor.png  with --falsecolor: the view's illuminance in false colour,
  *                with a legend (falsecolor.h)
  *
@@ -22,7 +23,9 @@
  * output that cannot be placed, an interruption) leaves DIR as it found it,
  * removing the staging folder and any folder it created;
  * stdout carries the summary (nothing with --quiet), stderr errors and the
- * progress bar (only on a terminal, never with --quiet).
+ * progress bar (only on a terminal, never with --quiet). The view's camera
+ * is the scene's with the camera options (camera_cli.h) in place of its
+ * parts, passed to the render calls: the scene is never changed.
  *
  * As a rank of `ilf-mpi` (job.h), every rank loads the scene and runs the
  * engine on its share of the work; rank 0 alone creates DIR and the staging
@@ -44,6 +47,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "camera_cli.h"
 #include "cli.h"
 #include "commands.h"
 #include "falsecolor.h"
@@ -74,16 +78,18 @@ typedef struct relight_options {
     tone_fixed tone; /* view.png's scale: --exposure or --scale, else automatic */
     int falsecolor;  /* write falsecolor.png */
     double falsecolor_max; /* its top, lux; 0: automatic */
+    camera_overrides camera; /* --position ... --size: the view's camera over the scene's */
 } relight_options;
 
 /* Options after the shared sampling ones, whose ids come first (relight_cli.h). */
 enum relight_option_id {
     OPT_OUTPUT = SAMPLING_OPT_COUNT, OPT_QUIET, OPT_NO_VIEW, OPT_FLAT_VIEW, OPT_EXPOSURE, OPT_SCALE, OPT_FALSECOLOR,
-    OPT_FALSECOLOR_MAX
+    OPT_FALSECOLOR_MAX, OPT_CAMERA, OPT_COUNT = OPT_CAMERA + CAMERA_OPT_COUNT
 };
 
-/* The sampling options' entries are filled by relight_options_fill() before parsing. */
-static cli_option relight_options_table[] = {
+/* The sampling options' entries are filled by relight_options_fill(), the camera's by camera_options_fill(),
+ * before parsing. */
+static cli_option relight_options_table[OPT_COUNT] = {
     [OPT_OUTPUT] = {"output", 'o', "DIR", "folder for radiance.h5, stats.json and view.exr/png (required; created)"},
     [OPT_QUIET] = {"quiet", 'q', NULL, "nothing on stdout; no settings line, progress bar or warnings (still in stats.json)"},
     [OPT_NO_VIEW] = {"no-view", 0, NULL, "write no view.exr/png even when the scene has a camera"},
@@ -99,20 +105,25 @@ static const cli_usage relight_usage = {
     "relight",
     "SCENE -o DIR [--method M] [--threads N] [--seed S] [--partition-n N] [--rays K]\n"
     "                   [--samples N] [--bounces B] [--no-view] [--flat-view] [--quiet]\n"
-    "                   [--exposure EV | --scale W] [--falsecolor [--falsecolor-max LUX]]",
+    "                   [--exposure EV | --scale W] [--falsecolor [--falsecolor-max LUX]]\n"
+    "                   [--position X,Y,Z] [--look-at X,Y,Z] [--up X,Y,Z] [--fov DEG] [--size WxH]",
     "Relights the scene (docs/scene.md) and writes to DIR: radiance.h5, the irradiance\n"
     "and radiosity of every receiving polygon's cells (docs/format.md); stats.json, the\n"
     "settings, times and per-pass counters (docs/cli.md); and, when the scene has a\n"
-    "camera, view.exr (radiance) and view.png (exposed so that the 90th percentile of\n"
-    "the lit pixels' luminance shows as 0.8, unless --exposure or --scale fixes it;\n"
-    "sRGB), and with --falsecolor falsecolor.png (illuminance in lux, with a legend).\n"
-    "Sampling options replace the scene's own settings. stderr gets the settings\n"
-    "used, a progress bar and warnings (no emitter, walls facing away, dark cells,\n"
-    "back faces, partial light field coverage, no camera), also kept in stats.json.",
+    "camera or the camera options make one, view.exr (radiance) and view.png (exposed\n"
+    "so that the 90th percentile of the lit pixels' luminance shows as 0.8, unless\n"
+    "--exposure or --scale fixes it; sRGB), and with --falsecolor falsecolor.png\n"
+    "(illuminance in lux, with a legend). Sampling options replace the scene's own\n"
+    "settings; camera options replace those parts of the scene's camera for the view\n"
+    "(for a scene without one, --position and --look-at make one). stderr gets the\n"
+    "settings used, a progress bar and warnings (no emitter, walls facing away, dark\n"
+    "cells, back faces, partial light field coverage, no camera), also kept in\n"
+    "stats.json.",
     "ilf relight data/beams_diffuse.json -o out/beams\n"
     "ilf relight data/classroom.json -o out/classroom --partition-n 16 --rays 2 --bounces 1\n"
     "ilf relight data/beams_diffuse.json -o out/naive --method naive --threads 4 --quiet\n"
-    "ilf relight data/beams_diffuse.json -o out/beams --scale 5 --falsecolor --falsecolor-max 2000",
+    "ilf relight data/beams_diffuse.json -o out/beams --scale 5 --falsecolor --falsecolor-max 2000\n"
+    "ilf relight data/beams_diffuse.json -o out/corner --position 4.5,0.5,2.5 --look-at 2.5,2.5,1 --fov 70",
 };
 
 /* The outputs, in the order they are written and renamed into place. */
@@ -137,6 +148,8 @@ typedef struct relight_run {
     char *aside[OUT_COUNT];      /* where an earlier run's file of that name waits, in the staging folder */
     int written[OUT_COUNT];      /* staged and complete */
     char report[OUT_COUNT][192]; /* what each holds, printed once they are in place */
+    int has_camera;              /* camera is the view's: the scene's, with the camera options */
+    rl_camera camera;
 } relight_run;
 
 /* ------------------------------------------------------------ options */
@@ -145,6 +158,8 @@ typedef struct relight_run {
 static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
 {
     relight_options *o = ctx;
+    if (opt >= OPT_CAMERA && opt < OPT_CAMERA + CAMERA_OPT_COUNT)
+        return camera_option_apply(p, &o->camera, opt - OPT_CAMERA, value);
     if (opt == OPT_OUTPUT)
         o->output = value;
     else if (opt == OPT_QUIET)
@@ -174,9 +189,8 @@ static int parse_arguments(relight_options *o, int argc, char **argv)
 {
     if (!relight_options_fill("relight", relight_options_table))
         return ILF_EXIT_FAILED;
-    int code = cli_parse(&relight_usage, relight_options_table,
-                         sizeof relight_options_table / sizeof relight_options_table[0], argc, argv, &o->scene,
-                         apply_option, o);
+    camera_options_fill(relight_options_table + OPT_CAMERA, 1);
+    int code = cli_parse(&relight_usage, relight_options_table, OPT_COUNT, argc, argv, &o->scene, apply_option, o);
     if (code != -1)
         return code;
     const char *problem = NULL;
@@ -186,6 +200,8 @@ static int parse_arguments(relight_options *o, int argc, char **argv)
         problem = "-o DIR is required";
     else if (o->falsecolor && o->no_view)
         problem = "--falsecolor shows the view: it cannot be given with --no-view";
+    else if (o->camera.given != 0 && o->no_view)
+        problem = "the camera options are for the view: they cannot be given with --no-view";
     if (problem != NULL) {
         cli_error("relight", "%s", problem);
         return ILF_EXIT_USAGE;
@@ -716,7 +732,7 @@ static int write_view_image(relight_run *run, int k, int width, int height, cons
 static int write_falsecolor(relight_run *run, int width, int height, float *work)
 {
     const size_t count = (size_t)width * (size_t)height;
-    rl_status rs = rl_solution_render_irradiance(run->solution, &run->job.run, work);
+    rl_status rs = rl_solution_render_irradiance_camera(run->solution, &run->camera, &run->job.run, work);
     if (rs != RL_OK)
         return relight_failure("relight", rs);
     /* lux in place, into the first count floats: pixel k's value is read before it is overwritten */
@@ -744,9 +760,7 @@ static int write_falsecolor(relight_run *run, int width, int height, float *work
  * asked. @return an exit code. */
 static int write_view(relight_run *run)
 {
-    uint32_t w = 0, h = 0;
-    rl_scene_camera_size(run->scene, &w, &h);
-    int width = (int)w, height = (int)h;
+    int width = (int)run->camera.width, height = (int)run->camera.height;
     const size_t count = (size_t)width * (size_t)height;
     float *pixels = malloc(count * 3 * sizeof *pixels);
     if (pixels == NULL) {
@@ -755,7 +769,7 @@ static int write_view(relight_run *run)
     }
     rl_status rs = rl_solution_set_smooth(run->solution, !run->o->flat_view);
     if (rs == RL_OK)
-        rs = rl_solution_render(run->solution, &run->job.run, pixels);
+        rs = rl_solution_render_camera(run->solution, &run->camera, &run->job.run, pixels);
     int code = rs == RL_OK ? ILF_EXIT_OK : relight_failure("relight", rs);
     char what[160];
     snprintf(what, sizeof what, "%dx%d, radiance in W sr^-1 m^-2", width, height);
@@ -958,6 +972,17 @@ static int write_stats(relight_run *run)
 
 /* ------------------------------------------------------------ main */
 
+/* Makes the view's camera: the scene's with the camera options over it (the scene itself is not changed).
+ * @return an exit code. */
+static int view_camera(relight_run *run)
+{
+    rl_camera scene_camera;
+    int has = rl_scene_camera(run->scene, &scene_camera);
+    int made = camera_resolve("relight", &run->o->camera, has ? &scene_camera : NULL, &run->camera);
+    run->has_camera = made == 1;
+    return made < 0 ? ILF_EXIT_USAGE : ILF_EXIT_OK;
+}
+
 /* Prints the run's summary and every pass's statistics (not with --quiet). */
 static void print_run(const relight_run *run)
 {
@@ -993,9 +1018,13 @@ int ilf_cmd_relight(int argc, char **argv)
                                      : ILF_EXIT_OK);
     if (code == ILF_EXIT_OK)
         code = job_agree(relight_scene_open("relight", o.scene, &o.sampling, &run.scene, &run.job));
+    if (code == ILF_EXIT_OK)
+        code = job_agree(view_camera(&run));
+    /* the scene's camera is not the view's when options change it: its findings are left out */
+    const int scene_view = !o.no_view && o.camera.given == 0;
     if (code == ILF_EXIT_OK && job_rank() == 0) {
         relight_print_settings("relight", &run.job);
-        relight_warn_scene(run.scene, !o.no_view);
+        relight_warn_scene(run.scene, scene_view);
     }
     if (code == ILF_EXIT_OK)
         code = stage_open_job(&run);
@@ -1004,9 +1033,9 @@ int ilf_cmd_relight(int argc, char **argv)
     if (code == ILF_EXIT_OK)
         code = relight(&run);
     double engine_end = cli_clock_seconds(CLOCK_MONOTONIC);
-    int rank0 = job_rank() == 0, view = rank0 && rl_scene_has_camera(run.scene) && !o.no_view;
+    int rank0 = job_rank() == 0, view = rank0 && run.has_camera && !o.no_view;
     if (code == ILF_EXIT_OK && rank0)
-        relight_warn_solution(run.solution, !o.no_view);
+        relight_warn_solution(run.solution, scene_view);
     if (code == ILF_EXIT_OK)
         print_run(&run);
     if (beside)

@@ -1,17 +1,19 @@
 /*
  * cmd_view.c - `ilf view RADIANCE.h5 -o OUT.png|.exr|.hdr --position X,Y,Z
- * --look-at X,Y,Z [--up X,Y,Z] [--fov DEG] [--size WxH]`: a camera's view of
- * a relit scene from its radiance map alone, without relighting: each pixel
- * casts one ray through its centre against every map's polygon and shows
- * the nearest surface's radiance, radiosity / pi of the cell it hits (flat
- * cells; emission is in the radiosity), black for the back of a surface
- * (as relight's view draws it) and for nothing hit.
+ * --look-at X,Y,Z [--up X,Y,Z] [--fov DEG] [--size WxH] [--scene SCENE]`: a
+ * camera's view of a relit scene from its radiance map alone, without
+ * relighting: each pixel casts one ray through its centre against every
+ * map's polygon and shows the nearest surface's radiance, radiosity / pi of
+ * the cell it hits (flat cells; emission is in the radiosity), black for the
+ * back of a surface (as relight's view draws it) and for nothing hit. With
+ * --scene, the scene's light field slabs are seen too, where a ray crosses
+ * one from its emitting side before any surface (rl_scene_trace_lightfields).
  *
- * The camera is relight's (docs/scene.md, "camera"): vertical field of
- * view, up projected to be orthogonal to the view direction, row 0 at the
- * top. EXR and HDR get raw radiance; PNG is exposed as relight's view.png
- * (90th percentile of the lit pixels' luminance shown as 0.8, unless
- * --exposure or --scale fixes it) and sRGB-encoded.
+ * The camera is relight's (relight/camera.h, docs/scene.md "camera"), made
+ * by the camera options shared with `ilf relight` (camera_cli.h), its rays
+ * rl_camera_ray()'s. EXR and HDR get raw radiance; PNG is exposed as
+ * relight's view.png (90th percentile of the lit pixels' luminance shown as
+ * 0.8, unless --exposure or --scale fixes it) and sRGB-encoded.
  *
  * Invariants: the radiance map is read only through lfio's public reader;
  * the intersector is a brute-force loop over the maps (no Embree outside
@@ -22,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "camera_cli.h"
 #include "cli.h"
 #include "commands.h"
 #include "cli_limits.h"
@@ -29,6 +32,7 @@
 #include "image/image.h"
 #include "radmap_cli.h"
 #include "radmap_mesh.h"
+#include "relight_cli.h"
 #include "tonemap.h"
 
 /* relight's view.png exposure (cmd_relight.c), so that the two agree on the same camera. */
@@ -36,36 +40,38 @@
 #define VIEW_TARGET 0.8
 
 typedef struct view_options {
-    const char *path, *output;
-    double position[3], look_at[3], up[3];
-    int has_position, has_look_at;
-    double fov_deg;
-    uint32_t size[2];
+    const char *path, *output, *scene;
+    camera_overrides camera_given;
+    rl_camera cam; /* made from camera_given */
     tone_fixed tone;
 } view_options;
 
-enum view_option_id { OPT_OUTPUT, OPT_POSITION, OPT_LOOK_AT, OPT_UP, OPT_FOV, OPT_SIZE, OPT_EXPOSURE, OPT_SCALE };
+/* The camera options take CAMERA_OPT_COUNT ids from OPT_CAMERA. */
+enum view_option_id { OPT_OUTPUT, OPT_CAMERA, OPT_EXPOSURE = OPT_CAMERA + CAMERA_OPT_COUNT, OPT_SCALE, OPT_SCENE,
+                      OPT_COUNT };
 
-static const cli_option view_options_table[] = {
-    {"output", 'o', "OUT.png|OUT.exr|OUT.hdr", "image to write (required): EXR or HDR radiance, PNG exposed"},
-    {"position", 0, "X,Y,Z", "camera position, metres (required)"},
-    {"look-at", 0, "X,Y,Z", "point the camera looks at (required)"},
-    {"up", 0, "X,Y,Z", "up direction (default 0,0,1)"},
-    {"fov", 0, "DEG", "vertical field of view, degrees, between 0 and 180 (default 45)"},
-    {"size", 0, "WxH", "image size in pixels (default 640x480)"},
-    {"exposure", 0, "EV", "PNG: radiance times 2^EV (default: 90th percentile of luminance -> 0.8)"},
-    {"scale", 0, "W", "PNG: radiance W (W sr^-1 m^-2) shows as white"},
+/* The camera's entries are filled by camera_options_fill() before parsing. */
+static cli_option view_options_table[OPT_COUNT] = {
+    [OPT_OUTPUT] = {"output", 'o', "OUT.png|OUT.exr|OUT.hdr", "image to write (required): EXR or HDR radiance, PNG exposed"},
+    [OPT_EXPOSURE] = {"exposure", 0, "EV", "PNG: radiance times 2^EV (default: 90th percentile of luminance -> 0.8)"},
+    [OPT_SCALE] = {"scale", 0, "W", "PNG: radiance W (W sr^-1 m^-2) shows as white"},
+    [OPT_SCENE] = {"scene", 0, "SCENE.json", "the relit scene: its light field slabs are seen too (default: none)"},
 };
 
 static const cli_usage view_usage = {
     "view",
     "RADIANCE.h5 -o OUT.png|OUT.exr|OUT.hdr --position X,Y,Z --look-at X,Y,Z\n"
-    "                [--up X,Y,Z] [--fov DEG] [--size WxH] [--exposure EV | --scale W]",
+    "                [--up X,Y,Z] [--fov DEG] [--size WxH] [--exposure EV | --scale W]\n"
+    "                [--scene SCENE.json]",
     "Renders a camera's view of a relit scene from its radiance-map file (radiance.h5\n"
     "of 'ilf relight') without relighting: each pixel shows the radiance (radiosity /\n"
     "pi) of the cell its ray meets first, flat per cell; the back of a surface and\n"
     "empty space are black. The camera is as in a scene file: vertical --fov, --up\n"
-    "made orthogonal to the view direction. Cost: pixels x maps ray-polygon tests.",
+    "made orthogonal to the view direction. Cost: pixels x maps ray-polygon tests.\n"
+    "With --scene (the scene relit; radiance.h5 names it, as given to 'ilf relight',\n"
+    "but is not followed on its own), a ray that crosses one of its light field slabs\n"
+    "from the emitting side before any surface shows the slab's radiance toward the\n"
+    "camera, as 'ilf relight' draws it.",
     "ilf view out/radiance.h5 -o corner.png --position 4,4,1.6 --look-at 2,2,1\n"
     "ilf view out/radiance.h5 -o wide.exr --position 2,-2,1.5 --look-at 2,2,1 --fov 80 --size 320x240",
 };
@@ -155,8 +161,9 @@ static int64_t cell_at(const target *t, double u, double v)
     return lo < p->ncells && t->keys[lo].grid == want ? (int64_t)t->keys[lo].cell : -1;
 }
 
-/* Shades the first surface along the ray org + s dir, s > 0: radiance of its cell, black for a back face. */
-static void trace(const target *t, size_t count, const double org[3], const double dir[3], float out[3])
+/* Shades the first surface along the ray org + s dir, s > 0 (dir unit): radiance of its cell, black for a back
+ * face. @return the distance to that surface, INFINITY for none. */
+static double trace(const target *t, size_t count, const double org[3], const double dir[3], float out[3])
 {
     double best = INFINITY, bu = 0, bv = 0;
     const target *hit = NULL;
@@ -181,60 +188,24 @@ static void trace(const target *t, size_t count, const double org[3], const doub
     int64_t c = hit != NULL && front ? cell_at(hit, bu, bv) : -1;
     for (int i = 0; c >= 0 && i < 3; i++)
         out[i] = (float)(hit->p.radiosity[3 * (size_t)c + i] / ILF_PI);
+    return best;
 }
 
 /* ------------------------------------------------------------ camera */
 
-typedef struct camera {
-    double forward[3], right[3], up[3], tan_half, aspect;
-} camera;
-
-static void normalise(double v[3])
+/* Renders the view of o's camera: the maps t, and the light field slabs of scene (NULL: none) crossed before
+ * them. */
+static void render(const target *t, size_t count, const rl_scene *scene, const view_options *o, float *rgb)
 {
-    double len = sqrt(dot3(v, v));
-    for (int i = 0; i < 3; i++)
-        v[i] /= len;
-}
-
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* Sets the camera's frame as relight does. @return 1, or 0 after reporting a degenerate camera. */
-static int camera_make(const view_options *o, camera *cam)
-{
-    for (int i = 0; i < 3; i++)
-        cam->forward[i] = o->look_at[i] - o->position[i];
-    if (dot3(cam->forward, cam->forward) == 0.0) {
-        cli_error("view", "--look-at must differ from --position");
-        return 0;
-    }
-    normalise(cam->forward);
-    cross3(cam->forward, o->up, cam->right);
-    if (!(sqrt(dot3(cam->right, cam->right)) > 1e-9 * sqrt(dot3(o->up, o->up)))) {
-        cli_error("view", "--up must not be zero or parallel to the view direction");
-        return 0;
-    }
-    normalise(cam->right);
-    cross3(cam->right, cam->forward, cam->up);
-    cam->tan_half = tan(o->fov_deg * ILF_PI / 360.0);
-    cam->aspect = (double)o->size[0] / o->size[1];
-    return 1;
-}
-
-static void render(const target *t, size_t count, const view_options *o, const camera *cam, float *rgb)
-{
-    for (uint32_t y = 0; y < o->size[1]; y++)
-        for (uint32_t x = 0; x < o->size[0]; x++) {
-            double sx = (2.0 * (x + 0.5) / o->size[0] - 1.0) * cam->tan_half * cam->aspect;
-            double sy = (1.0 - 2.0 * (y + 0.5) / o->size[1]) * cam->tan_half, d[3];
-            for (int i = 0; i < 3; i++)
-                d[i] = cam->forward[i] + sx * cam->right[i] + sy * cam->up[i];
-            normalise(d);
-            trace(t, count, o->position, d, rgb + 3 * ((size_t)y * o->size[0] + x));
+    const rl_camera *cam = &o->cam;
+    for (uint32_t y = 0; y < cam->height; y++)
+        for (uint32_t x = 0; x < cam->width; x++) {
+            double d[3];
+            float *px = rgb + 3 * ((size_t)y * cam->width + x);
+            rl_camera_ray(cam, (x + 0.5) / cam->width, (y + 0.5) / cam->height, d);
+            double surface = trace(t, count, cam->position, d, px);
+            if (scene != NULL)
+                rl_scene_trace_lightfields(scene, cam->position, d, surface, px);
         }
 }
 
@@ -243,20 +214,11 @@ static void render(const target *t, size_t count, const view_options *o, const c
 static int apply_option(const cli_parser *p, int opt, const char *value, void *ctx)
 {
     view_options *o = ctx;
+    if (opt >= OPT_CAMERA && opt < OPT_CAMERA + CAMERA_OPT_COUNT)
+        return camera_option_apply(p, &o->camera_given, opt - OPT_CAMERA, value);
     switch (opt) {
     case OPT_OUTPUT: return cli_single_path("view", &o->output, value);
-    case OPT_POSITION: o->has_position = 1; return cli_value_doubles(p, value, o->position, 3);
-    case OPT_LOOK_AT: o->has_look_at = 1; return cli_value_doubles(p, value, o->look_at, 3);
-    case OPT_UP: return cli_value_doubles(p, value, o->up, 3);
-    case OPT_FOV:
-        if (!cli_value_double(p, value, &o->fov_deg))
-            return 0;
-        if (!(o->fov_deg > 0.0 && o->fov_deg < 180.0)) {
-            cli_bad_value(p, value, "must lie strictly between 0 and 180 degrees");
-            return 0;
-        }
-        return 1;
-    case OPT_SIZE: return cli_value_u32_pair(p, value, 'x', 1, ILF_VIEW_MAX_SIDE, o->size);
+    case OPT_SCENE: return cli_single_path("view", &o->scene, value);
     case OPT_EXPOSURE: return cli_value_tone(p, value, 1, &o->tone);
     default: return cli_value_tone(p, value, 0, &o->tone);
     }
@@ -264,22 +226,22 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
 
 static int parse_arguments(view_options *o, int argc, char **argv)
 {
-    int code = cli_parse(&view_usage, view_options_table, sizeof view_options_table / sizeof view_options_table[0],
-                         argc, argv, &o->path, apply_option, o);
+    camera_options_fill(view_options_table + OPT_CAMERA, 0);
+    int code = cli_parse(&view_usage, view_options_table, OPT_COUNT, argc, argv, &o->path, apply_option, o);
     if (code != -1)
         return code;
     const char *problem = o->path == NULL        ? "no file given (see 'ilf view --help')"
                           : o->output == NULL    ? "-o OUT.png|OUT.exr|OUT.hdr is required"
-                          : !o->has_position     ? "--position X,Y,Z is required"
-                          : !o->has_look_at      ? "--look-at X,Y,Z is required"
                           : img_guess_format(o->output) == IMG_FORMAT_UNKNOWN ? "the output must end in .png, .exr or .hdr"
                                                                                : NULL;
     if (problem != NULL) {
         cli_error("view", "%s", problem);
         return ILF_EXIT_USAGE;
     }
-    camera cam;
-    return camera_make(o, &cam) ? -1 : ILF_EXIT_USAGE;
+    int made = camera_resolve("view", &o->camera_given, NULL, &o->cam);
+    if (made == 0) /* no camera option at all: the view still needs the two it cannot do without */
+        cli_error("view", "--position X,Y,Z is required");
+    return made == 1 ? -1 : ILF_EXIT_USAGE;
 }
 
 /* Exposes rgb for a PNG. @return the scale used, or a negative value when memory runs out. */
@@ -295,22 +257,21 @@ static double expose(float *rgb, size_t count, const view_options *o)
     return scale;
 }
 
-static int view_map(const lfio_radmap *map, const view_options *o)
+static int view_map(const lfio_radmap *map, const rl_scene *scene, const view_options *o)
 {
-    camera cam;
-    camera_make(o, &cam);
-    size_t count = (size_t)o->size[0] * o->size[1];
+    const unsigned width = o->cam.width, height = o->cam.height;
+    size_t count = (size_t)width * height;
     float *rgb = calloc(3 * count, sizeof(float));
     target *t = rgb != NULL ? targets_make(map) : NULL;
-    double scale = t != NULL ? (render(t, lfio_radmap_count(map), o, &cam, rgb), expose(rgb, count, o)) : -1.0;
+    double scale = t != NULL ? (render(t, lfio_radmap_count(map), scene, o, rgb), expose(rgb, count, o)) : -1.0;
     targets_free(t, lfio_radmap_count(map));
     int code = ILF_EXIT_OK;
     char err[512];
     if (scale < 0.0) {
-        cli_error("view", "out of memory for a %ux%u view", (unsigned)o->size[0], (unsigned)o->size[1]);
+        cli_error("view", "out of memory for a %ux%u view", width, height);
         code = ILF_EXIT_FAILED;
     } else {
-        img_status st = img_write(o->output, (int)o->size[0], (int)o->size[1], 3, rgb, err, sizeof err);
+        img_status st = img_write(o->output, (int)width, (int)height, 3, rgb, err, sizeof err);
         if (st != IMG_OK) {
             cli_error("view", "%s", err);
             code = st == IMG_ERR_ARG ? ILF_EXIT_USAGE : ILF_EXIT_FAILED;
@@ -318,8 +279,9 @@ static int view_map(const lfio_radmap *map, const view_options *o)
     }
     if (code == ILF_EXIT_OK) {
         char how[96];
-        printf("wrote %s: %ux%u, %zu maps, ", o->output, (unsigned)o->size[0], (unsigned)o->size[1],
-               lfio_radmap_count(map));
+        printf("wrote %s: %ux%u, %zu maps, ", o->output, width, height, lfio_radmap_count(map));
+        if (scene != NULL)
+            printf("%zu light fields, ", rl_scene_lightfield_count(scene));
         if (img_guess_format(o->output) == IMG_FORMAT_PNG)
             printf("scale %.6g (%s)\n", scale,
                    tone_fixed_describe(&o->tone, "auto: 90th percentile of luminance -> 0.8", how, sizeof how));
@@ -332,18 +294,23 @@ static int view_map(const lfio_radmap *map, const view_options *o)
 
 int ilf_cmd_view(int argc, char **argv)
 {
-    view_options o = {.up = {0, 0, 1}, .fov_deg = 45.0, .size = {640, 480}};
+    view_options o = {0};
     int code = parse_arguments(&o, argc, argv);
     if (code >= 0)
         return code;
     lfio_radmap *map = NULL;
     code = ilf_radmap_open("view", o.path, &map);
-    if (code != ILF_EXIT_OK)
-        return code;
-    cli_output_watch(o.output);
-    code = cli_output_check("view", o.output);
+    rl_scene *scene = NULL;
+    rl_job job; /* unused: the view needs the scene's light fields, not a run */
+    if (code == ILF_EXIT_OK && o.scene != NULL)
+        code = relight_scene_open("view", o.scene, &(sampling_overrides){0}, &scene, &job);
+    if (code == ILF_EXIT_OK) {
+        cli_output_watch(o.output);
+        code = cli_output_check("view", o.output);
+    }
     if (code == ILF_EXIT_OK)
-        code = view_map(map, &o);
+        code = view_map(map, scene, &o);
+    rl_scene_destroy(scene);
     lfio_radmap_destroy(map);
     return code;
 }

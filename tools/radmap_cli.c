@@ -6,10 +6,13 @@
  *
  * Invariants: only lfio's public radiance-map reader touches the file; the
  * same map_summary feeds the text and the JSON output; statistics are
- * weighted by cell area, as a cell's value is the mean over its area.
+ * weighted by cell area, as a cell's value is the mean over its area; a
+ * map's area is its polygon's, which the headers give, so that `ilf info`
+ * need not read a cell (lfio_radmap_read_headers()).
  */
 #include <cjson/cJSON.h>
 #include <float.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -21,9 +24,10 @@
  * reader's refusal quotes when it found one. */
 #define RADMAP_FORMAT_NAME "ilfkit-radiance-maps"
 
-lfio_status ilf_radmap_try(const char *path, const char *lf_msg, lfio_radmap **out, char *msg, size_t msg_size)
+lfio_status ilf_radmap_try(const char *path, const char *lf_msg, int whole, lfio_radmap **out, char *msg,
+                           size_t msg_size)
 {
-    lfio_status st = lfio_radmap_read(path, out);
+    lfio_status st = whole ? lfio_radmap_read(path, out) : lfio_radmap_read_headers(path, out);
     if (st == LFIO_OK)
         return LFIO_OK;
     /* A file that fails the radiance-map reader otherwise than on its format is a damaged radiance map. One
@@ -86,25 +90,44 @@ static void stats_finish(rgb_stats *s, double area)
 /* What info reports about one map. */
 typedef struct map_summary {
     lfio_radmap_patch p;
-    double area;
+    double area;        /* the polygon's, from its vertices: the headers give it */
+    double cell_area;   /* the sum of its cells' areas, the statistics' weight (with stats) */
     rgb_stats irradiance, radiosity;
 } map_summary;
 
+/* @return the area of p's planar polygon, m^2: half the length of the sum of its fan's cross products. */
+static double polygon_area(const lfio_radmap_patch *p)
+{
+    const double *v = p->vertices;
+    double sum[3] = {0, 0, 0};
+    for (uint32_t k = 1; k + 1 < p->nverts; k++) {
+        double a[3], b[3];
+        for (int i = 0; i < 3; i++) {
+            a[i] = v[3 * k + i] - v[i];
+            b[i] = v[3 * (k + 1) + i] - v[i];
+        }
+        sum[0] += a[1] * b[2] - a[2] * b[1];
+        sum[1] += a[2] * b[0] - a[0] * b[2];
+        sum[2] += a[0] * b[1] - a[1] * b[0];
+    }
+    return 0.5 * sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+}
+
+/* Summarises p; with stats (its cells read) the area-weighted statistics too. */
 static void summarise(const lfio_radmap_patch *p, int stats, map_summary *m)
 {
     m->p = *p;
-    m->area = 0.0;
+    m->area = polygon_area(p);
+    m->cell_area = 0.0;
     stats_init(&m->irradiance);
     stats_init(&m->radiosity);
-    for (uint32_t c = 0; c < p->ncells; c++) {
-        m->area += p->cell_area[c];
-        if (stats) {
-            stats_add(&m->irradiance, p->irradiance + 3 * (size_t)c, p->cell_area[c]);
-            stats_add(&m->radiosity, p->radiosity + 3 * (size_t)c, p->cell_area[c]);
-        }
+    for (uint32_t c = 0; stats && c < p->ncells; c++) {
+        m->cell_area += p->cell_area[c];
+        stats_add(&m->irradiance, p->irradiance + 3 * (size_t)c, p->cell_area[c]);
+        stats_add(&m->radiosity, p->radiosity + 3 * (size_t)c, p->cell_area[c]);
     }
-    stats_finish(&m->irradiance, m->area);
-    stats_finish(&m->radiosity, m->area);
+    stats_finish(&m->irradiance, m->cell_area);
+    stats_finish(&m->radiosity, m->cell_area);
 }
 
 /* Adds map m into the whole file's totals t (its sums still sums). */
@@ -112,6 +135,7 @@ static void total_add(map_summary *t, const map_summary *m)
 {
     t->p.ncells += m->p.ncells;
     t->area += m->area;
+    t->cell_area += m->cell_area;
     rgb_stats *ts[2] = {&t->irradiance, &t->radiosity};
     const rgb_stats *ms[2] = {&m->irradiance, &m->radiosity};
     for (int q = 0; q < 2; q++)
@@ -120,7 +144,7 @@ static void total_add(map_summary *t, const map_summary *m)
                 ts[q]->min[c] = ms[q]->min[c] < ts[q]->min[c] ? ms[q]->min[c] : ts[q]->min[c];
                 ts[q]->max[c] = ms[q]->max[c] > ts[q]->max[c] ? ms[q]->max[c] : ts[q]->max[c];
             }
-            ts[q]->sum[c] += ms[q]->sum[c] * m->area;
+            ts[q]->sum[c] += ms[q]->sum[c] * m->cell_area;
         }
 }
 
@@ -253,35 +277,71 @@ static void gather_total(const lfio_radmap *map, int stats, map_summary *total)
         summarise(&p, stats, &m);
         total_add(total, &m);
     }
-    stats_finish(&total->irradiance, total->area);
-    stats_finish(&total->radiosity, total->area);
+    stats_finish(&total->irradiance, total->cell_area);
+    stats_finish(&total->radiosity, total->cell_area);
 }
 
-int ilf_info_radmap(const char *path, const lfio_radmap *map, int json, int stats)
+/* Prints text with two tabs after each newline: a map's object as cJSON_Print indents an element of the
+ * root's "maps" array. */
+static void print_indented(const char *text)
 {
-    map_summary total;
-    gather_total(map, stats, &total);
-    cJSON *root = json ? file_json(path, map, &total, stats) : NULL;
-    cJSON *maps = cJSON_GetObjectItem(root, "maps");
-    int ok = !json || root != NULL;
-    if (!json)
-        print_file_text(path, map, &total, stats);
+    for (const char *c = text; *c != '\0'; c++) {
+        putchar(*c);
+        if (*c == '\n')
+            fputs("\t\t", stdout);
+    }
+}
+
+/* Prints the JSON report a map at a time, so that it holds one map's objects whatever the file holds: the
+ * root's keys as cJSON_Print gives them with "maps" empty (its last key, so the last '[' of that text), then
+ * each map's object indented as an element of that array: the text cJSON_Print gives of the whole tree. Out
+ * of memory part-way, the text printed so far is cut off and the exit code says so. @return an exit code. */
+static int print_json(const char *path, const lfio_radmap *map, const map_summary *total, int stats)
+{
+    cJSON *root = file_json(path, map, total, stats);
+    char *head = root != NULL ? cJSON_Print(root) : NULL;
+    cJSON_Delete(root);
+    const char *open = head != NULL ? strrchr(head, '[') : NULL;
+    int ok = open != NULL;
+    if (ok)
+        fwrite(head, 1, (size_t)(open - head) + 1, stdout);
+    cJSON_free(head);
     for (size_t k = 0; ok && k < lfio_radmap_count(map); k++) {
         lfio_radmap_patch p;
         map_summary m;
         lfio_radmap_get(map, k, &p);
         summarise(&p, stats, &m);
-        if (!json) {
-            print_map_text(k, &m, stats);
-            continue;
-        }
         cJSON *o = map_json(&m, stats);
-        ok = o != NULL && cJSON_AddItemToArray(maps, o);
-        if (!ok)
-            cJSON_Delete(o);
+        char *text = o != NULL ? cJSON_Print(o) : NULL;
+        cJSON_Delete(o);
+        ok = text != NULL;
+        if (ok) {
+            fputs(k > 0 ? ", " : "", stdout);
+            print_indented(text);
+        }
+        cJSON_free(text);
     }
-    int code = !ok ? (cli_error("info", "out of memory while building JSON"), ILF_EXIT_FAILED)
-                   : json ? json_print("info", root) : ILF_EXIT_OK;
-    cJSON_Delete(root);
-    return code;
+    if (ok)
+        fputs("]\n}\n", stdout);
+    else
+        cli_error("info", "out of memory while building JSON");
+    return ok ? ILF_EXIT_OK : ILF_EXIT_FAILED;
+}
+
+int ilf_info_radmap(const char *path, const lfio_radmap *map, int json, int stats)
+{
+    stats = stats && lfio_radmap_has_cells(map);
+    map_summary total;
+    gather_total(map, stats, &total);
+    if (json)
+        return print_json(path, map, &total, stats);
+    print_file_text(path, map, &total, stats);
+    for (size_t k = 0; k < lfio_radmap_count(map); k++) {
+        lfio_radmap_patch p;
+        map_summary m;
+        lfio_radmap_get(map, k, &p);
+        summarise(&p, stats, &m);
+        print_map_text(k, &m, stats);
+    }
+    return ILF_EXIT_OK;
 }

@@ -27,6 +27,10 @@
  *     vertex and cell counts are bounded (per patch and, for cells, over the
  *     file) and every dataset's type and shape are checked before any array
  *     is allocated.
+ *   - A read of the headers (lfio_radmap_read_headers()) makes every check a
+ *     whole read makes short of reading the cell datasets: their storage and
+ *     shape are checked, their values not, and the patches' cell arrays are
+ *     NULL. Its memory is the patch tables and the vertices.
  *   - HDF5 is called from the calling thread alone: the threads of a serial
  *     write (chunks.h) only filter chunks while it makes a patch's objects.
  *   - Every public entry point silences HDF5 for its whole duration; the
@@ -281,6 +285,25 @@ static int check_patch_arrays(const lfio_radmap_patch *p, uint32_t first, char *
 static int check_patch(const lfio_radmap_patch *p, char *why, size_t why_size)
 {
     return check_patch_scalars(p, why, why_size) && check_patch_arrays(p, 0, why, why_size);
+}
+
+/* Checks what lfio_radmap_read_headers() holds of patch p: its scalars and its vertices (present and
+ * finite; its cell arrays are not read). @return 1, or 0 with a reason in why. */
+static int check_patch_header(const lfio_radmap_patch *p, char *why, size_t why_size)
+{
+    if (!check_patch_scalars(p, why, why_size))
+        return 0;
+    if (p->vertices == NULL || !all_finite(p->vertices, 3 * (size_t)p->nverts)) {
+        snprintf(why, why_size, "vertices are missing or not finite");
+        return 0;
+    }
+    return 1;
+}
+
+/* Checks patch p as read whole, or only its headers (headers set). */
+static int check_patch_read(const lfio_radmap_patch *p, int headers, char *why, size_t why_size)
+{
+    return headers ? check_patch_header(p, why, why_size) : check_patch(p, why, why_size);
 }
 
 /* ----------------------------------------------------------------- writing */
@@ -1015,6 +1038,7 @@ struct lfio_radmap {
     struct map_patch *patches;
     uint64_t cells;           /* over all patches read, <= LFIO_RADMAP_MAX_CELLS */
     int format;               /* the file's format_version */
+    int headers;              /* read by lfio_radmap_read_headers(): no cell array was read (all NULL) */
     unsigned char *whole[V2_COUNT]; /* format 2: each dataset's array, which the patches point into */
 };
 
@@ -1153,8 +1177,9 @@ static lfio_status read_patch_counts(const char *path, const char *obj, hid_t g,
     return LFIO_OK;
 }
 
-/* Checks every dataset of patch group g against its layout, then reads each into a new array of mp. */
-static lfio_status read_patch_data(const char *path, const char *obj, hid_t g, struct map_patch *mp)
+/* Checks every dataset of patch group g against its layout, then reads each into a new array of mp; with
+ * headers, only the vertices (the cell datasets checked, not read). */
+static lfio_status read_patch_data(const char *path, const char *obj, hid_t g, struct map_patch *mp, int headers)
 {
     lfio_radmap_patch *p = &mp->pub;
     lfio__h5_layout lay[MAP_DS_COUNT];
@@ -1167,7 +1192,8 @@ static lfio_status read_patch_data(const char *path, const char *obj, hid_t g, s
         if (st == LFIO_OK)
             st = lfio__h5_check_dataset(path, obj, g, &lay[t], source, -1, &dset[t]);
     }
-    for (int t = 0; st == LFIO_OK && t < MAP_DS_COUNT; t++) {
+    /* the vertices come first in map_datasets[], the cell datasets after them */
+    for (int t = 0; st == LFIO_OK && t < (headers ? MAP_CELL_IJ : MAP_DS_COUNT); t++) {
         const size_t bytes = value_count((enum map_ds)t, p) * map_datasets[t].size;
         char dobj[128];
         snprintf(dobj, sizeof dobj, "%.63s/%s", obj, map_datasets[t].name);
@@ -1215,10 +1241,10 @@ static lfio_status read_patch(const char *path, hid_t patches, size_t k, lfio_ra
     if (st == LFIO_OK)
         st = read_patch_counts(path, obj, g, map, &mp->pub);
     if (st == LFIO_OK)
-        st = read_patch_data(path, obj, g, mp);
+        st = read_patch_data(path, obj, g, mp, map->headers);
     lfio__h5_close(g);
     char why[256];
-    if (st == LFIO_OK && !check_patch(&mp->pub, why, sizeof why))
+    if (st == LFIO_OK && !check_patch_read(&mp->pub, map->headers, why, sizeof why))
         st = lfio__fail(LFIO_ERR_FORMAT, "%s: %s: %s", path, obj, why);
     if (st == LFIO_OK)
         map->cells += mp->pub.ncells;
@@ -1228,10 +1254,14 @@ static lfio_status read_patch(const char *path, hid_t patches, size_t k, lfio_ra
 /* ------------------------------------------------------- format 2: reading */
 
 /* Opens format-2 dataset t of group g, checks it against its layout for rows rows (source: where rows came
- * from, for messages), and reads it whole into a new array *out (NULL when empty). */
+ * from, for messages), and reads it whole into a new array *out (NULL when empty); out NULL: checks only. */
 static lfio_status v2_read_dataset(const char *path, hid_t g, enum v2_ds t, uint64_t rows, const char *source,
                                    unsigned char **out)
 {
+    unsigned char *none = NULL;
+    const int read = out != NULL;
+    if (!read)
+        out = &none;
     lfio__h5_layout l;
     v2_layout(t, rows, 0, &l);
     char dobj[64];
@@ -1239,11 +1269,11 @@ static lfio_status v2_read_dataset(const char *path, hid_t g, enum v2_ds t, uint
     hid_t d = -1;
     *out = NULL;
     lfio_status st = lfio__h5_check_dataset(path, "/patches", g, &l, source, -1, &d);
-    const size_t bytes = (size_t)rows * v2_row_bytes(t);
+    const size_t bytes = read ? (size_t)rows * v2_row_bytes(t) : 0;
     if (st == LFIO_OK && bytes > 0 && (*out = malloc(bytes)) == NULL)
         st = lfio__fail(LFIO_ERR_NOMEM, "%s: %s: out of memory", path, dobj);
     const hsize_t zero[2] = {0, 0};
-    if (st == LFIO_OK)
+    if (st == LFIO_OK && read)
         st = lfio__h5_xfer(path, dobj, d, 0, v2_memory_type(t), l.rank, zero, l.dims, *out);
     lfio__h5_close(d);
     return st;
@@ -1312,7 +1342,7 @@ static lfio_status v2_make_patch(const char *path, lfio_radmap *map, size_t k, c
     p->irradiance = w[V2_IRRADIANCE] ? (const float *)w[V2_IRRADIANCE] + 3 * c0 : NULL;
     p->radiosity = w[V2_RADIOSITY] ? (const float *)w[V2_RADIOSITY] + 3 * c0 : NULL;
     char why[256];
-    if (!check_patch(p, why, sizeof why))
+    if (!check_patch_read(p, map->headers, why, sizeof why))
         return lfio__fail(LFIO_ERR_FORMAT, "%s: /patches: patch %zu: %s", path, k, why);
     map->cells += p->ncells;
     return LFIO_OK;
@@ -1337,7 +1367,8 @@ static lfio_status read_patches_v2(const char *path, hid_t g, lfio_radmap *map, 
         const enum v2_rows r = v2_datasets[t].rows;
         if (r == ROWS_VERTEX || r == ROWS_CELL)
             st = v2_read_dataset(path, g, (enum v2_ds)t, r == ROWS_VERTEX ? vertices : cells,
-                                 r == ROWS_VERTEX ? "vertex_offset" : "cell_offset", &map->whole[t]);
+                                 r == ROWS_VERTEX ? "vertex_offset" : "cell_offset",
+                                 r == ROWS_CELL && map->headers ? NULL : &map->whole[t]);
     }
     if (st == LFIO_OK && count > 0 && (map->patches = calloc(count, sizeof *map->patches)) == NULL)
         st = lfio__fail(LFIO_ERR_NOMEM, "%s: /patches: out of memory", path);
@@ -1350,12 +1381,14 @@ static lfio_status read_patches_v2(const char *path, hid_t g, lfio_radmap *map, 
     return st;
 }
 
-/* lfio_radmap_read() without silencing HDF5. */
-static lfio_status radmap_read_impl(const char *path, lfio_radmap **out)
+/* lfio_radmap_read() (lfio_radmap_read_headers() with headers set) without silencing HDF5. */
+static lfio_status radmap_read_impl(const char *path, int headers, lfio_radmap **out)
 {
     hid_t file = -1, patches = -1;
     size_t count = 0;
     lfio_radmap *map = calloc(1, sizeof *map);
+    if (map != NULL)
+        map->headers = headers;
     lfio_status st = map ? lfio__h5_open_read(path, &file) : lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
     if (st == LFIO_OK)
         st = read_root(path, file, map, &count);
@@ -1374,19 +1407,29 @@ static lfio_status radmap_read_impl(const char *path, lfio_radmap **out)
     return st;
 }
 
-/* Reads path whole (see radmap_read_impl()), silently. */
-lfio_status lfio_radmap_read(const char *path, lfio_radmap **out)
+/* Reads path whole or its headers (see radmap_read_impl()), silently; call names the entry point. */
+static lfio_status radmap_read(const char *call, const char *path, int headers, lfio_radmap **out)
 {
     if (out == NULL)
-        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_read: NULL argument");
+        return lfio__fail(LFIO_ERR_ARG, "%s: NULL argument", call);
     *out = NULL;
     if (path == NULL || path[0] == '\0')
-        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_read: NULL or empty path");
+        return lfio__fail(LFIO_ERR_ARG, "%s: NULL or empty path", call);
     lfio__h5_quiet q;
     lfio__h5_quiet_begin(&q);
-    lfio_status st = radmap_read_impl(path, out);
+    lfio_status st = radmap_read_impl(path, headers, out);
     lfio__h5_quiet_end(&q);
     return st;
+}
+
+lfio_status lfio_radmap_read(const char *path, lfio_radmap **out)
+{
+    return radmap_read("lfio_radmap_read", path, 0, out);
+}
+
+lfio_status lfio_radmap_read_headers(const char *path, lfio_radmap **out)
+{
+    return radmap_read("lfio_radmap_read_headers", path, 1, out);
 }
 
 /* Frees map; NULL is a no-op. */
@@ -1428,4 +1471,16 @@ const char *lfio_radmap_scene(const lfio_radmap *map)
 int lfio_radmap_format_version(const lfio_radmap *map)
 {
     return map ? map->format : 0;
+}
+
+/* @return 1 if map holds its cell arrays; 0 for headers only or NULL. */
+int lfio_radmap_has_cells(const lfio_radmap *map)
+{
+    return map ? !map->headers : 0;
+}
+
+/* @return the stored cells over every patch; 0 for NULL. */
+uint64_t lfio_radmap_cell_count(const lfio_radmap *map)
+{
+    return map ? map->cells : 0;
 }

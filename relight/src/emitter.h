@@ -50,7 +50,8 @@ typedef struct rl_emitter {
 /* Sets up emitter e from scene polygon k (EM_CONST, or EM_MAP when map is given). */
 void rl__emitter_from_polygon(const rl_scene *scene, uint32_t k, const rl_map *map, rl_emitter *e);
 
-/* Sets up emitter e from light field lf, with tab the tables of its slab (borrowed; they outlive e). */
+/* Sets up emitter e from light field lf, with tab the tables of its slab (borrowed; they outlive e), or NULL:
+ * then e gives radiance (rl__emitter_radiance_at) but culls nothing. */
 void rl__emitter_from_lightfield(const rl_lightfield *lf, const rl_slab_tables *tab, rl_emitter *e);
 
 /* Radiance leaving emitter e at frame point q in propagation direction d (unit), W sr^-1 m^-2. */
@@ -120,14 +121,15 @@ int rl__emitter_lit_rect(const rl_emitter *e, const v3 *x, uint32_t nx, const v2
  * along propagation direction l = (l0, l1, l2) in its frame (l2 > 0): no tap
  * that lfio's bilinear interpolation takes there is lit along any direction
  * mixed in l's square of the diamond (rl__slab_tables_make()). It
- * cannot tell when the slab has no bits, or when l lies within rounding of a
+ * cannot tell when the slab has no bits (or e has no tables: a view's emitter,
+ * which reads radiance without culling), or when l lies within rounding of a
  * square's side.
  * @return 1 if dark, 0 if it may be lit. */
 static inline int rl__emitter_dark_at(const rl_emitter *e, v2 q, double l0, double l1, double l2)
 {
     const rl_lightfield *lf = e->lf;
     const rl_slab_tables *tab = e->tab;
-    if (tab->lit_words == 0)
+    if (tab == NULL || tab->lit_words == 0)
         return 0;
     double inv = (double)lf->n / (fabs(l0) + fabs(l1) + l2), ga = l0 * inv + lf->n, gb = l1 * inv + lf->n;
     if (!(ga >= 0.0 && gb >= 0.0 && ga < 2.0 * lf->n && gb < 2.0 * lf->n))

@@ -49,7 +49,7 @@ typedef struct int_limit {
     int pow2; /* also a power of two */
 } int_limit;
 
-static const int_limit lim_pixels = {1, 16384, 0};
+static const int_limit lim_pixels = {1, ILF_CAMERA_MAX_SIDE, 0};
 static const int_limit lim_index = {0, UINT32_MAX, 0};
 
 /* ----------------------------------------------------------- messages */
@@ -552,18 +552,6 @@ static rl_status read_sampling(rl_build *b, const ilf_json *j)
     return st;
 }
 
-/* @return NULL if the camera's view is well defined, else the problem. */
-static const char *camera_problem(const rl_camera *c)
-{
-    v3 view = v3_sub(v3_load(c->look_at), v3_load(c->position)), up = v3_load(c->up);
-    double lv = v3_len(view), ls = v3_len(v3_cross(view, up));
-    if (!(lv > 0 && isfinite(lv)))
-        return "position and look_at must be distinct points";
-    if (!(ls > 1e-9 * lv * v3_len(up)) || !isfinite(ls))
-        return "up must not be zero or parallel to the view direction";
-    return NULL;
-}
-
 /* Reads "camera": position, look_at, up, fov_deg, width, height. */
 static rl_status read_camera(rl_build *b, const ilf_json *j)
 {
@@ -593,8 +581,8 @@ static rl_status read_camera(rl_build *b, const ilf_json *j)
         if (v && (st = json_integer(b, v, elem, &lim_pixels, &value)) == RL_OK)
             *sizes[k] = (uint32_t)value;
     }
-    const char *why = st == RL_OK ? camera_problem(c) : NULL;
-    if (why)
+    char why[160];
+    if (st == RL_OK && rl__camera_problem(c, why, sizeof why))
         st = rl__build_fail(b, "camera", "%s", why);
     if (st == RL_OK)
         b->scene->has_camera = 1;

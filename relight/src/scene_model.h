@@ -19,6 +19,7 @@
 #include <lfio/lightfield.h>
 
 #include "common.h"
+#include "relight/camera.h"
 #include "relight/scene.h"
 #include "ilf/limits.h"
 #include "ilf/vec.h"
@@ -55,11 +56,9 @@ typedef struct rl_lightfield {
                          * rl_slab_tables, built for each run) */
 } rl_lightfield;
 
-typedef struct rl_camera {
-    double position[3], look_at[3], up[3];
-    double fov_deg;         /* vertical field of view */
-    uint32_t width, height; /* pixels */
-} rl_camera;
+/* The scene's camera is a public value (relight/camera.h). Checks it (camera.c): @return 0, or 1 with the problem
+ * in why (size bytes). */
+int rl__camera_problem(const rl_camera *c, char *why, size_t size);
 
 struct rl_scene {
     char path[1024];

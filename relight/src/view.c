@@ -1,42 +1,52 @@
 /*
- * view.c - what the camera sees of a solution: the first surface along a
- * ray (pick), its shading from the radiance maps (shade, rl_solution_trace)
- * and the camera's image (rl_solution_render, rl_solution_render_irradiance,
- * rl_solution_render_cells), and
- * how much of what the camera sees is the back of a surface (rl__view_faces).
+ * view.c - what a camera sees of a solution: the first surface along a
+ * ray (pick), its shading from the radiance maps, or the light field slab
+ * crossed before it (shade, rl_solution_trace), a camera's image
+ * (rl_solution_render_camera, rl_solution_render_irradiance_camera,
+ * rl_solution_render_cells_camera, and their scene-camera shorthands), and
+ * how much of what the scene's camera sees is the back of a surface
+ * (rl__view_faces).
  *
- * Invariants: rendering only reads the solution; each image row is written
- * by the one worker that took it from an atomic counter, and a pixel's value
- * depends on nothing but its ray, so the image does not depend on the thread
- * count. Shading interpolates within one polygon's map only (rl__map_sample).
+ * Invariants: rendering only reads the solution and the camera it is given
+ * (the scene is never changed); each image row is written by the one worker
+ * that took it from an atomic counter, and a pixel's value depends on
+ * nothing but its ray, so the image does not depend on the thread count.
+ * Shading interpolates within one polygon's map only (rl__map_sample). A
+ * slab is seen from its emitting side only, with the radiance the engine
+ * reads from it (rl__emitter_radiance_at); irradiance and cell renders look
+ * through slabs, which are not surfaces.
  */
 #include <math.h>
 #include <stdatomic.h>
 #include <string.h>
 
+#include "emitter.h"
 #include "engine_internal.h"
 #include "ilf/pool.h"
 
 typedef struct render_job {
     const rl_solution *s;
+    const rl_camera *cam;
     float *rgb;                 /* radiance per pixel (irradiance with irradiance set), or NULL */
     int irradiance;             /* rgb gets the irradiance of the receiving surface seen, -1 where none */
     int32_t *map_ids, *cell_ids; /* what each pixel sees, or NULL */
-    v3 forward, right, up;
-    double tan_half, aspect;
     atomic_uint next_row;
 } render_job;
 
 /* Finds the front face first hit along a ray: its polygon, map and cell
- * (map or cell -1 when the polygon does not receive). @return 1, or 0 for
- * no hit or a back face. */
-static int pick(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, int32_t *map, int64_t *cell, v2 *at)
+ * (map or cell -1 when the polygon does not receive), and in *t_first the
+ * distance to the first surface, front or back (INFINITY: none). @return 1,
+ * or 0 for no hit or a back face. */
+static int pick(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, int32_t *map, int64_t *cell, v2 *at,
+                double *t_first)
 {
     double t;
     *map = -1;
     *cell = -1;
+    *t_first = INFINITY;
     if (!rl__tracer_hit(s->tracer, org, dir, 0.0, INFINITY, poly, &t))
         return 0;
+    *t_first = t;
     /* the back of a one-sided surface, unless a polygon lies back to back with it (a two-sided mesh, a
      * panel modelled as two faces), whose front the ray meets at the same distance up to rounding */
     if (v3_dot(dir, v3_load(s->scene->polygons[*poly].normal)) >= 0 &&
@@ -51,15 +61,15 @@ static int pick(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, int32_t *m
 }
 
 /* Finds the first front face along a ray and the irradiance on it (W m^-2, flat or interpolated as the
- * solution says) into e, zero where it does not receive. @return the face's polygon's map (-1: it does not
- * receive, or the ray meets no front face: then *poly is UINT32_MAX). */
-static int32_t surface_irradiance(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, double e[3])
+ * solution says) into e, zero where it does not receive; *t_first as pick() gives it. @return the face's
+ * polygon's map (-1: it does not receive, or the ray meets no front face: then *poly is UINT32_MAX). */
+static int32_t surface_irradiance(const rl_solution *s, v3 org, v3 dir, uint32_t *poly, double e[3], double *t_first)
 {
     int32_t map;
     int64_t cell;
     v2 at;
     e[0] = e[1] = e[2] = 0.0;
-    if (!pick(s, org, dir, poly, &map, &cell, &at)) {
+    if (!pick(s, org, dir, poly, &map, &cell, &at, t_first)) {
         *poly = UINT32_MAX;
         return -1;
     }
@@ -70,13 +80,77 @@ static int32_t surface_irradiance(const rl_solution *s, v3 org, v3 dir, uint32_t
     return cell >= 0 ? map : -1;
 }
 
-/* Shades the first surface along one camera ray: emission plus albedo * E / pi. */
+/* Finds the nearest light field slab the ray org + t dir (dir unit) crosses from its emitting side (against
+ * its front normal) at 0 < t < t_max, inside its rectangle. @return its index in the scene, or -1; *q the
+ * point crossed in the slab's frame (metres along u and v, as its emitter's frame gives them). */
+static long slab_crossed(const rl_scene *scene, v3 org, v3 dir, double t_max, v2 *q)
+{
+    long best = -1;
+    for (size_t k = 0; k < scene->nlightfields; k++) {
+        const rl_lightfield *lf = &scene->lightfields[k];
+        v3 o = v3_load(lf->origin), u = v3_load(lf->u), v = v3_load(lf->v);
+        double len_u = v3_len(u), len_v = v3_len(v);
+        v3 e1 = v3_scale(u, 1.0 / len_u), e2 = v3_scale(v, 1.0 / len_v), n = v3_cross(e1, e2);
+        double facing = v3_dot(dir, n);
+        if (!(facing < 0.0))
+            continue;
+        double t = v3_dot(v3_sub(o, org), n) / facing;
+        if (!(t > 0.0 && t < t_max))
+            continue;
+        v3 r = v3_sub(v3_madd(org, dir, t), o);
+        double x = v3_dot(r, e1), y = v3_dot(r, e2);
+        if (!(x >= 0.0 && x <= len_u && y >= 0.0 && y <= len_v))
+            continue;
+        best = (long)k;
+        t_max = t;
+        *q = (v2){x, y};
+    }
+    return best;
+}
+
+/* The radiance light field k of the scene sends from its point q (slab frame, metres) back along the camera
+ * ray dir: what the engine gathers from it (rl__emitter_radiance_at). */
+static void slab_radiance(const rl_scene *scene, long k, v2 q, v3 dir, float out[3])
+{
+    rl_emitter e;
+    double rgb[3];
+    rl__emitter_from_lightfield(&scene->lightfields[k], NULL, &e); /* no run's tables: nothing culled */
+    rl__emitter_radiance_at(&e, q, v3_scale(dir, -1.0), rgb);
+    for (int c = 0; c < 3; c++)
+        out[c] = (float)rgb[c];
+}
+
+int rl_scene_trace_lightfields(const rl_scene *s, const double org[3], const double dir[3], double t_max,
+                               float rgb[3])
+{
+    if (s == NULL || org == NULL || dir == NULL || rgb == NULL || isnan(t_max))
+        return 0;
+    v3 o = v3_load(org), d = v3_load(dir);
+    double len = v3_len(d);
+    if (!isfinite(v3_maxabs(o)) || !isfinite(len) || !(len > 0))
+        return 0;
+    d = v3_scale(d, 1.0 / len);
+    v2 q;
+    long k = slab_crossed(s, o, d, t_max, &q);
+    if (k >= 0)
+        slab_radiance(s, k, q, d, rgb);
+    return k >= 0;
+}
+
+/* Shades one camera ray: the light field slab it crosses before any surface, else the first surface,
+ * emission plus albedo * E / pi (0 for a back face or nothing). */
 static void shade(const rl_solution *s, v3 org, v3 dir, float out[3])
 {
     uint32_t poly;
-    double e[3];
-    int32_t map = surface_irradiance(s, org, dir, &poly, e);
+    double e[3], t_first;
+    int32_t map = surface_irradiance(s, org, dir, &poly, e, &t_first);
+    v2 q;
+    long slab = s->scene->nlightfields > 0 ? slab_crossed(s->scene, org, dir, t_first, &q) : -1;
     out[0] = out[1] = out[2] = 0.0f;
+    if (slab >= 0) {
+        slab_radiance(s->scene, slab, q, dir, out);
+        return;
+    }
     if (poly == UINT32_MAX)
         return;
     const rl_material *mat = &s->scene->materials[s->scene->polygons[poly].material];
@@ -88,8 +162,8 @@ static void shade(const rl_solution *s, v3 org, v3 dir, float out[3])
 static void irradiance_seen(const rl_solution *s, v3 org, v3 dir, float out[3])
 {
     uint32_t poly;
-    double e[3];
-    int receives = surface_irradiance(s, org, dir, &poly, e) >= 0;
+    double e[3], t_first;
+    int receives = surface_irradiance(s, org, dir, &poly, e, &t_first) >= 0;
     for (int c = 0; c < 3; c++)
         out[c] = receives ? (float)e[c] : -1.0f;
 }
@@ -112,34 +186,23 @@ rl_status rl_solution_trace(const rl_solution *s, const double org[3], const dou
     return RL_OK;
 }
 
-/* Sets job's camera frame from the scene's camera. */
-static void camera_frame(const rl_camera *cam, render_job *job)
+/* @return the unit direction of camera cam's ray through the centre of pixel (x, y) of an nx x ny grid over
+ * its image. */
+static v3 pixel_ray(const rl_camera *cam, uint32_t x, uint32_t y, uint32_t nx, uint32_t ny)
 {
-    job->forward = v3_norm(v3_sub(v3_load(cam->look_at), v3_load(cam->position)));
-    job->right = v3_norm(v3_cross(job->forward, v3_load(cam->up)));
-    job->up = v3_cross(job->right, job->forward);
-    job->tan_half = tan(cam->fov_deg * ILF_PI / 360.0);
-    job->aspect = (double)cam->width / cam->height;
-}
-
-/* @return the unit direction of the camera ray through the point (fx, fy) of the image, [0, 1] from the left
- * and from the top. */
-static v3 camera_ray(const render_job *job, double fx, double fy)
-{
-    double sx = (2.0 * fx - 1.0) * job->tan_half * job->aspect, sy = (1.0 - 2.0 * fy) * job->tan_half;
-    return v3_norm(v3_add(job->forward, v3_add(v3_scale(job->right, sx), v3_scale(job->up, sy))));
+    double d[3];
+    rl_camera_ray(cam, (x + 0.5) / nx, (y + 0.5) / ny, d);
+    return v3_load(d);
 }
 
 void rl__view_faces(const rl_solution *s, uint32_t nx, uint32_t ny, uint64_t *hits, uint64_t *back)
 {
-    render_job job;
     const rl_camera *cam = &s->scene->camera;
-    camera_frame(cam, &job);
     *hits = *back = 0;
     rl__tracer_thread_init();
     for (uint32_t y = 0; y < ny; y++)
         for (uint32_t x = 0; x < nx; x++) {
-            v3 d = camera_ray(&job, (x + 0.5) / nx, (y + 0.5) / ny);
+            v3 d = pixel_ray(cam, x, y, nx, ny);
             uint32_t poly;
             double t;
             if (!rl__tracer_hit(s->tracer, v3_load(cam->position), d, 0.0, INFINITY, &poly, &t))
@@ -154,14 +217,14 @@ static void render_worker(void *p, unsigned index)
 {
     (void)index; /* rows are shared through the counter */
     render_job *job = p;
-    const rl_camera *cam = &job->s->scene->camera;
+    const rl_camera *cam = job->cam;
     rl__tracer_thread_init();
     for (;;) {
         unsigned y = atomic_fetch_add(&job->next_row, 1);
         if (y >= cam->height)
             break;
         for (unsigned x = 0; x < cam->width; x++) {
-            v3 d = camera_ray(job, (x + 0.5) / cam->width, (y + 0.5) / cam->height);
+            v3 d = pixel_ray(cam, x, y, cam->width, cam->height);
             size_t px = (size_t)y * cam->width + x;
             if (job->rgb && job->irradiance)
                 irradiance_seen(job->s, v3_load(cam->position), d, job->rgb + 3 * px);
@@ -172,7 +235,8 @@ static void render_worker(void *p, unsigned index)
                 int32_t map;
                 int64_t cell;
                 v2 at;
-                pick(job->s, v3_load(cam->position), d, &poly, &map, &cell, &at);
+                double t_first;
+                pick(job->s, v3_load(cam->position), d, &poly, &map, &cell, &at, &t_first);
                 job->map_ids[px] = cell >= 0 ? map : -1;
                 job->cell_ids[px] = cell >= 0 ? (int32_t)cell : -1;
             }
@@ -180,43 +244,74 @@ static void render_worker(void *p, unsigned index)
     }
 }
 
-/* Runs a render job over the camera's rows on the options' threads. */
-static rl_status render(const char *call, const rl_solution *s, const rl_run_options *options, float *rgb,
-                        int irradiance, int32_t *map_ids, int32_t *cell_ids)
+/* Runs a render job over camera cam's rows on the options' threads. */
+static rl_status render(const char *call, const rl_solution *s, const rl_camera *cam, const rl_run_options *options,
+                        float *rgb, int irradiance, int32_t *map_ids, int32_t *cell_ids)
 {
-    if (!s || (!rgb && !map_ids) || (map_ids && !cell_ids))
+    if (!s || !cam || (!rgb && !map_ids) || (map_ids && !cell_ids))
         return rl__fail(RL_ERR_ARG, "%s: NULL argument", call);
     rl__run run;
     rl_status st = rl__run_resolve(call, options, &run);
     if (st != RL_OK)
         return st;
-    const rl_camera *cam = &s->scene->camera;
-    if (!s->scene->has_camera)
-        return rl__fail(RL_ERR_ARG, "%s: the scene has no camera", s->scene->path);
+    char why[160];
+    if (rl__camera_problem(cam, why, sizeof why))
+        return rl__fail(RL_ERR_ARG, "%s: camera: %s", call, why);
     render_job job;
     job.s = s;
+    job.cam = cam;
     job.rgb = rgb;
     job.irradiance = irradiance;
     job.map_ids = map_ids;
     job.cell_ids = cell_ids;
-    camera_frame(cam, &job);
     atomic_init(&job.next_row, 0);
     ilf_parallel(run.threads, render_worker, &job);
     return RL_OK;
 }
 
+/* @return the scene's camera of s, or NULL after failing (RL_ERR_ARG) for a NULL s or a scene without one. */
+static const rl_camera *scene_camera(const char *call, const rl_solution *s)
+{
+    if (s == NULL)
+        return rl__fail(RL_ERR_ARG, "%s: NULL argument", call), NULL;
+    if (!s->scene->has_camera)
+        return rl__fail(RL_ERR_ARG, "%s: the scene has no camera", s->scene->path), NULL;
+    return &s->scene->camera;
+}
+
+rl_status rl_solution_render_camera(const rl_solution *s, const rl_camera *cam, const rl_run_options *options,
+                                    float *rgb)
+{
+    return render("rl_solution_render_camera", s, cam, options, rgb, 0, NULL, NULL);
+}
+
 rl_status rl_solution_render(const rl_solution *s, const rl_run_options *options, float *rgb)
 {
-    return render("rl_solution_render", s, options, rgb, 0, NULL, NULL);
+    const rl_camera *cam = scene_camera("rl_solution_render", s);
+    return cam ? render("rl_solution_render", s, cam, options, rgb, 0, NULL, NULL) : RL_ERR_ARG;
+}
+
+rl_status rl_solution_render_irradiance_camera(const rl_solution *s, const rl_camera *cam,
+                                               const rl_run_options *options, float *rgb)
+{
+    return render("rl_solution_render_irradiance_camera", s, cam, options, rgb, 1, NULL, NULL);
 }
 
 rl_status rl_solution_render_irradiance(const rl_solution *s, const rl_run_options *options, float *rgb)
 {
-    return render("rl_solution_render_irradiance", s, options, rgb, 1, NULL, NULL);
+    const rl_camera *cam = scene_camera("rl_solution_render_irradiance", s);
+    return cam ? render("rl_solution_render_irradiance", s, cam, options, rgb, 1, NULL, NULL) : RL_ERR_ARG;
+}
+
+rl_status rl_solution_render_cells_camera(const rl_solution *s, const rl_camera *cam, const rl_run_options *options,
+                                          int32_t *map_ids, int32_t *cell_ids)
+{
+    return render("rl_solution_render_cells_camera", s, cam, options, NULL, 0, map_ids, cell_ids);
 }
 
 rl_status rl_solution_render_cells(const rl_solution *s, const rl_run_options *options, int32_t *map_ids,
                                    int32_t *cell_ids)
 {
-    return render("rl_solution_render_cells", s, options, NULL, 0, map_ids, cell_ids);
+    const rl_camera *cam = scene_camera("rl_solution_render_cells", s);
+    return cam ? render("rl_solution_render_cells", s, cam, options, NULL, 0, map_ids, cell_ids) : RL_ERR_ARG;
 }

@@ -249,6 +249,17 @@ def radiance_maps(out, base):
     edited(d, base, "radiosity_negative.h5", poke("radiosity", (1, 2), -1.0))
     edited(d, base, "cell_outside.h5", poke("cell_ij", (0, 0), 1000000))
     edited(d, base, "vertex_inf.h5", poke("vertices", (0, 0), np.inf))
+    with h5py.File(base, "r") as f:
+        if f.attrs["format_version"] < 2:
+            return
+
+    def cell_offset_start(f):
+        """Patch 0's cells said to start at 1: a table the header read checks before it sizes anything by it."""
+        f["patches/cell_offset"][0] = 1
+    edited(d, base, "cell_offset_start.h5", cell_offset_start)
+    # irradiance one cell shorter than cell_offset says: the shape a header read checks without reading it
+    edited(d, base, "irradiance_short.h5",
+           lambda f: replace_dataset(f["patches"], "irradiance", f["patches/irradiance"][:-1]))
 
 
 def edited(d, base, name, edit, libver=None):

@@ -30,6 +30,10 @@
  * view ilf makes, small enough that width * height * 4 channels of float stays addressable. */
 #define ILF_IMAGE_MAX_SIDE 65536
 
+/* Pixels along either side of a camera's image (a scene's "camera", relight/camera.h, `ilf view`): 16384^2
+ * pixels of float RGB are 3 GiB, the most a view should ask of a workstation. */
+#define ILF_CAMERA_MAX_SIDE 16384u
+
 /* Samples (width * height * channels) of one image read: 8 GiB of float. A corrupt or hostile header
  * cannot make the reader allocate more than this, whatever sides it claims. */
 #define ILF_IMAGE_MAX_SAMPLES (1LL << 31)

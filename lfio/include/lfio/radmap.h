@@ -188,6 +188,17 @@ lfio_status lfio_radmap_write_with(const char *path, const char *creator, const 
  */
 lfio_status lfio_radmap_read(const char *path, lfio_radmap **out);
 
+/**
+ * Reads a file's headers: its root attributes and every patch's description
+ * and vertices, with the checks of lfio_radmap_read() short of the cell
+ * datasets, whose storage and shape are checked but whose values are not
+ * read. The patches' ncells is the stored count and their cell arrays
+ * (cell_ij, cell_area, cell_centre, irradiance, radiosity) are NULL. Its
+ * time and memory grow with the patches and vertices, not with the cells:
+ * what a description of the file needs (`ilf info`).
+ * @return as lfio_radmap_read().
+ */
+lfio_status lfio_radmap_read_headers(const char *path, lfio_radmap **out);
 /** Releases a radiance map. NULL is a no-op. */
 void lfio_radmap_destroy(lfio_radmap *map);
 
@@ -205,6 +216,10 @@ const char *lfio_radmap_scene(const lfio_radmap *map);
 
 /** @return the format_version of the file map was read from (1 or 2); 0 for NULL. */
 int lfio_radmap_format_version(const lfio_radmap *map);
+/** @return 1 if map holds its cells (lfio_radmap_read()); 0 if only its headers (lfio_radmap_read_headers()) or NULL. */
+int lfio_radmap_has_cells(const lfio_radmap *map);
+/** @return the cells stored over every patch; 0 for NULL. */
+uint64_t lfio_radmap_cell_count(const lfio_radmap *map);
 
 #ifdef __cplusplus
 }

@@ -14,6 +14,7 @@
 #ifndef RELIGHT_ENGINE_H
 #define RELIGHT_ENGINE_H
 
+#include "relight/camera.h"
 #include "relight/job.h"
 
 #ifdef __cplusplus
@@ -152,41 +153,69 @@ rl_status rl_solution_map_rows(const rl_solution *s, size_t k, uint32_t first, u
 rl_status rl_solution_set_smooth(rl_solution *s, int smooth);
 
 /**
- * Gives the radiance (W sr^-1 m^-2) arriving at org from the first surface
- * along the ray org + t*dir, t > 0 (dir need not be unit): emission plus
- * albedo * irradiance / pi at the point hit (rl_solution_set_smooth()); 0 for
- * a back face or no hit.
- * Light field slabs are not surfaces and are not seen. Thread-safe.
+ * Gives the radiance (W sr^-1 m^-2) arriving at org along the ray org + t*dir,
+ * t > 0 (dir need not be unit), from the nearer of the first surface and the
+ * first light field slab it crosses from the slab's emitting side. A surface
+ * gives emission plus albedo * irradiance / pi at the point hit
+ * (rl_solution_set_smooth()), 0 for a back face; a slab gives the light
+ * field's radiance at the point crossed in the direction of the ray,
+ * interpolated as the engine reads it (lfio_slab_radiance_interp()), and 0
+ * where its mask or coverage holds nothing; neither: 0. Thread-safe.
  * @return RL_OK; RL_ERR_ARG if org or dir is not finite or dir is zero.
  */
 rl_status rl_solution_trace(const rl_solution *s, const double org[3], const double dir[3], float rgb[3]);
 
 /**
- * Renders the scene camera's view: width*height*3 floats (rl_scene_camera_size()),
- * rows top to bottom, radiance (W sr^-1 m^-2) of the first surface seen:
- * emission plus albedo * irradiance / pi at the point seen
- * (rl_solution_set_smooth()); back faces and the background are 0. Runs on
- * options->threads threads (NULL: defaults); progress and time_budget are
- * not used. The result does not depend on the thread count.
- * @return RL_OK; RL_ERR_ARG if s or rgb is NULL, the scene has no camera, or options are out of range.
+ * Finds the nearest light field slab of the scene that the ray org + t*dir
+ * (dir need not be unit) crosses from its emitting side at 0 < t < t_max
+ * (metres along the unit direction; INFINITY: any), and gives the radiance
+ * it sends back along the ray, as rl_solution_trace() sees it: for a
+ * caller with its own surfaces (`ilf view`). Thread-safe.
+ * @return 1 and rgb; 0 (rgb untouched) when the ray crosses no slab so, or
+ * an argument is NULL or not finite.
  */
+int rl_scene_trace_lightfields(const rl_scene *s, const double org[3], const double dir[3], double t_max,
+                               float rgb[3]);
+
+/**
+ * Renders a camera's view (the scene is not changed): cam->width * cam->height * 3
+ * floats, rows top to bottom, the radiance rl_solution_trace() gives along each
+ * pixel's centre ray: surfaces (back faces and the background 0) and light
+ * field slabs seen from their emitting side. Runs on options->threads threads
+ * (NULL: defaults); progress and time_budget are not used. The result does
+ * not depend on the thread count.
+ * @return RL_OK; RL_ERR_ARG if an argument is NULL, cam fails rl_camera_check(), or options are out of range.
+ */
+rl_status rl_solution_render_camera(const rl_solution *s, const rl_camera *cam, const rl_run_options *options,
+                                    float *rgb);
+
+/** rl_solution_render_camera() through the scene's camera. @return as that; RL_ERR_ARG if the scene has none. */
 rl_status rl_solution_render(const rl_solution *s, const rl_run_options *options, float *rgb);
 
 /**
- * Renders the irradiance (W m^-2, r g b, as rl_solution_render() would read it: smooth or flat) on the
- * receiving surface each pixel of the camera sees, into rgb ([height][width][3], row 0 at the top): what a
- * false-colour image of illuminance shows. Pixels that see no receiving front face get -1 in every channel.
- * @return as rl_solution_render().
+ * Renders the irradiance (W m^-2, r g b, as rl_solution_render_camera() would read it: smooth or flat) on the
+ * receiving surface each pixel of cam sees, into rgb ([height][width][3], row 0 at the top): what a
+ * false-colour image of illuminance shows. Pixels that see no receiving front face get -1 in every channel;
+ * light field slabs are not surfaces and are looked through.
+ * @return as rl_solution_render_camera().
  */
+rl_status rl_solution_render_irradiance_camera(const rl_solution *s, const rl_camera *cam,
+                                               const rl_run_options *options, float *rgb);
+
+/** rl_solution_render_irradiance_camera() through the scene's camera. @return as rl_solution_render(). */
 rl_status rl_solution_render_irradiance(const rl_solution *s, const rl_run_options *options, float *rgb);
 
 /**
- * Renders which cell each camera pixel sees: map_ids and cell_ids get
+ * Renders which cell each pixel of cam sees: map_ids and cell_ids get
  * width*height entries, rows top to bottom; -1 where the pixel sees no
- * map (background, back face, a surface that does not receive). Options as
- * in rl_solution_render().
- * @return RL_OK; RL_ERR_ARG if an output is NULL, the scene has no camera, or options are out of range.
+ * map (background, back face, a surface that does not receive); light
+ * field slabs are looked through. Options as in rl_solution_render_camera().
+ * @return RL_OK; RL_ERR_ARG if an output is NULL, cam fails rl_camera_check(), or options are out of range.
  */
+rl_status rl_solution_render_cells_camera(const rl_solution *s, const rl_camera *cam, const rl_run_options *options,
+                                          int32_t *map_ids, int32_t *cell_ids);
+
+/** rl_solution_render_cells_camera() through the scene's camera. @return as that; RL_ERR_ARG if the scene has none. */
 rl_status rl_solution_render_cells(const rl_solution *s, const rl_run_options *options, int32_t *map_ids,
                                    int32_t *cell_ids);
 
