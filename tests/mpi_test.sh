@@ -8,7 +8,8 @@
 #     ilf-mpi --threads T` for (K, T) = (1, 2), (2, 1), (2, 2), (3, 1): every
 #     radiance.h5 must hold the same values (h5diff, exact; and the same bytes
 #     in every array of format 2) and every
-#     view.exr the same bytes; the same for adaptive at K = 3. Point queries
+#     view.exr the same bytes; the same for adaptive at K = 3, and for 2 ranks
+#     of 2 and 1 threads (tiles claimed as ranks become free). Point queries
 #     with a bounce, from a file and from standard input, K = 1, 2, 3: the
 #     same lines as `ilf irradiance`.
 # (b) Faults. The job must exit non-zero with the failing rank's message and
@@ -107,6 +108,11 @@ check "stats.json of a 2-rank run names 2 ranks and an exchange per pass, two fo
 "$ilf" relight scene.json -o ref_adaptive --threads 1 --quiet --method adaptive --no-view --bounces 1
 "${mpirun[@]}" -n 3 "$ilf_mpi" relight scene.json -o adaptive3 --threads 1 --quiet --method adaptive --no-view --bounces 1
 check "adaptive: 3 ranks give the maps of one process" h5diff -q ref_adaptive/radiance.h5 adaptive3/radiance.h5
+# Ranks of unequal speed (2 threads and 1) claim unequal shares of the tiles as each becomes free: the
+# maps must not depend on who claimed which.
+"${mpirun[@]}" -n 1 "$ilf_mpi" relight scene.json -o uneven --threads 2 --quiet : \
+    -n 1 "$ilf_mpi" relight scene.json -o uneven --threads 1 --quiet
+check "relight: ranks of 2 and 1 threads give the maps and view of one process" same_maps uneven
 
 python3 - > points.txt <<'EOF'
 import random
