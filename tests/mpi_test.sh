@@ -105,6 +105,10 @@ check "h5diff sees a different seed (the comparison can fail)" \
 # a bounce pass exchanges twice when it gathers some cells on their own (near an occluder) after the larger ones
 check "stats.json of a 2-rank run names 2 ranks and an exchange per pass, two for a bounce pass with cells of its own" \
     python3 -c "import json; d = json.load(open('k2t1/stats.json')); assert d['ranks'] == 2 and len(d['exchanges']) == 1 + sum(1 + (p['cells_direct'] > 0) for p in d['passes'][1:]) > 3 and all(x['bytes'] > 0 for x in d['exchanges']), d"
+# tiles are claimed as ranks become free (dealt up front, stats.json would say 0 claimed): rank 0 claims
+# some of every pass's tiles
+check "stats.json of 2 and 3 ranks: rank 0 claimed tiles in every pass" \
+    python3 -c "import json; a, b = (json.load(open(p + '/stats.json')) for p in ('k2t1', 'k3t1')); assert all(x['tiles_claimed'] > 0 for x in a['exchanges'] + b['exchanges']), (a, b)"
 "$ilf" relight scene.json -o ref_adaptive --threads 1 --quiet --method adaptive --no-view --bounces 1
 "${mpirun[@]}" -n 3 "$ilf_mpi" relight scene.json -o adaptive3 --threads 1 --quiet --method adaptive --no-view --bounces 1
 check "adaptive: 3 ranks give the maps of one process" h5diff -q ref_adaptive/radiance.h5 adaptive3/radiance.h5

@@ -50,6 +50,7 @@ static MPI_Win claims = MPI_WIN_NULL; /* two uint64_t slots on rank 0: the count
 static uint64_t claim_round = 0;      /* passes whose tiles this rank has claimed */
 static int claiming = 0;              /* this rank claimed tiles since the last exchange */
 static double claim_wait = 0.0;       /* waited for the others after claiming, not yet logged */
+static uint64_t claimed = 0;          /* tiles this rank claimed since the last exchange logged */
 
 /* @return monotonic time in seconds. */
 static double seconds(void)
@@ -121,7 +122,8 @@ static int allgather(void *user, double *values, const uint64_t *counts, const u
     double moved = seconds() - t1;
     ok = ok && MPI_Allreduce(&waited, &longest, 1, MPI_DOUBLE, MPI_MAX, job_comm) == MPI_SUCCESS;
     if (ok && exchange_count < MAX_EXCHANGES)
-        exchanges[exchange_count++] = (job_exchange){longest, moved, (unsigned long long)bytes};
+        exchanges[exchange_count++] = (job_exchange){longest, moved, (unsigned long long)bytes, claimed};
+    claimed = 0;
     free(n);
     free(at);
     return ok ? 0 : -1;
@@ -161,6 +163,7 @@ static uint64_t next(void *user, uint64_t n)
     if (MPI_Fetch_and_op(&one, &got, MPI_UINT64_T, 0, claim_round % 2, MPI_SUM, claims) != MPI_SUCCESS ||
         MPI_Win_flush(0, claims) != MPI_SUCCESS)
         return n;
+    claimed += got < n;
     return got < n ? got : n;
 }
 
