@@ -239,10 +239,10 @@ static int run_job(pass_job *job, unsigned n, const rl__run *run, double base, d
      * did not start run at join too, so the wait is for the others. A rank that claims its tiles does
      * about 1/ranks of the cells: its share stands for the job's progress. */
     unsigned unstarted = n - ilf_team_threads(team);
-    double share = job->claim ? (double)job->claim->ranks : 1.0;
+    double ranks = job->claim ? (double)job->claim->ranks : 1.0;
     while (run->progress && ilf_team_threads(team) > 0 && atomic_load(&job->working) > unstarted &&
            !atomic_load(&job->failed)) {
-        double f = share * (double)atomic_load(&job->done_cells) / (double)(job->total_cells ? job->total_cells : 1);
+        double f = ranks * (double)atomic_load(&job->done_cells) / (double)(job->total_cells ? job->total_cells : 1);
         run->progress(run->user, base + span * (f < 1.0 ? f : 1.0));
         ilf_clock_sleep(PROGRESS_PERIOD);
     }
