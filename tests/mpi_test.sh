@@ -1,14 +1,17 @@
 #!/usr/bin/env bash
 # mpi_test.sh - `ilf-mpi` (the MPI build, docs/cluster.md) against `ilf`.
 #
-# Usage: bash mpi_test.sh BUILD_DIR DATA_DIR TMPDIR [FAILALLOC_SO]
+# Usage: bash mpi_test.sh BUILD_DIR DATA_DIR TMPDIR [SLOWCLOCK_SO|-] [FAILALLOC_SO]
 #
 # (a) Identity. 'beams' (its light field and a diffuse lamp added, 0.15 m
 #     cells, 2 bounces) relit by `ilf --threads 1` and by `mpirun -n K
 #     ilf-mpi --threads T` for (K, T) = (1, 2), (2, 1), (2, 2), (3, 1): every
 #     radiance.h5 must hold the same values (h5diff, exact; and the same bytes
 #     in every array of format 2) and every
-#     view.exr the same bytes; the same for adaptive at K = 3. Point queries
+#     view.exr the same bytes; the same for adaptive at K = 3, and for 2 ranks
+#     of 2 and 1 threads (tiles claimed as ranks become free); with one rank
+#     slowed by 0.25 s a tile (SLOWCLOCK_SO preloaded on it), the other claims
+#     most of the tiles. Point queries
 #     with a bounce, from a file and from standard input, K = 1, 2, 3: the
 #     same lines as `ilf irradiance`.
 # (b) Faults. The job must exit non-zero with the failing rank's message and
@@ -20,13 +23,15 @@
 set -u
 
 if [ $# -lt 3 ]; then
-    echo "usage: bash mpi_test.sh BUILD_DIR DATA_DIR TMPDIR [FAILALLOC_SO]" >&2
+    echo "usage: bash mpi_test.sh BUILD_DIR DATA_DIR TMPDIR [SLOWCLOCK_SO|-] [FAILALLOC_SO]" >&2
     exit 2
 fi
 build=$(cd "$1" && pwd)
 data=$(cd "$2" && pwd)
 tmp=$3
-failalloc=${4:-}
+slowclock=${4:-}
+[ "$slowclock" = "-" ] && slowclock=""
+failalloc=${5:-}
 ilf=$build/tools/ilf
 ilf_mpi=$build/tools/ilf-mpi
 . "$(dirname "$0")/checks.sh"
@@ -59,6 +64,7 @@ EOF
 # ------------------------------------------------------------------ (a) identity
 
 "$ilf" relight scene.json -o ref --threads 1 --quiet
+"$ilf" relight scene.json -o ref_direct --threads 1 --quiet --no-view --bounces 0
 check "ilf relight makes the reference" test -s ref/radiance.h5 -a -s ref/view.exr
 
 same_image() { # A B: two EXR files with the same bytes but for the capDate stamp that OpenEXR writes
@@ -104,9 +110,32 @@ check "h5diff sees a different seed (the comparison can fail)" \
 # a bounce pass exchanges twice when it gathers some cells on their own (near an occluder) after the larger ones
 check "stats.json of a 2-rank run names 2 ranks and an exchange per pass, two for a bounce pass with cells of its own" \
     python3 -c "import json; d = json.load(open('k2t1/stats.json')); assert d['ranks'] == 2 and len(d['exchanges']) == 1 + sum(1 + (p['cells_direct'] > 0) for p in d['passes'][1:]) > 3 and all(x['bytes'] > 0 for x in d['exchanges']), d"
+# tiles are claimed as ranks become free (dealt up front, stats.json would say 0 claimed): rank 0 claims
+# some of every pass's tiles
+check "stats.json of 2 and 3 ranks: rank 0 claimed tiles in every pass" \
+    python3 -c "import json; a, b = (json.load(open(p + '/stats.json')) for p in ('k2t1', 'k3t1')); assert all(x['tiles_claimed'] > 0 for x in a['exchanges'] + b['exchanges']), (a, b)"
 "$ilf" relight scene.json -o ref_adaptive --threads 1 --quiet --method adaptive --no-view --bounces 1
 "${mpirun[@]}" -n 3 "$ilf_mpi" relight scene.json -o adaptive3 --threads 1 --quiet --method adaptive --no-view --bounces 1
 check "adaptive: 3 ranks give the maps of one process" h5diff -q ref_adaptive/radiance.h5 adaptive3/radiance.h5
+# Ranks of unequal speed (2 threads and 1) claim unequal shares of the tiles as each becomes free: the
+# maps must not depend on who claimed which.
+"${mpirun[@]}" -n 1 "$ilf_mpi" relight scene.json -o uneven --threads 2 --quiet : \
+    -n 1 "$ilf_mpi" relight scene.json -o uneven --threads 1 --quiet
+check "relight: ranks of 2 and 1 threads give the maps and view of one process" same_maps uneven
+if [ -n "$slowclock" ]; then
+    # One rank slowed by 0.5 s a tile (two readings of its thread clock): the other claims most of the direct
+    # pass's tiles, whichever rank is slow. Dealt up front, each would do its share, slow or not.
+    for slow in 0 1; do
+        ctx0=(-n 1) ctx1=(-n 1)
+        [ "$slow" -eq 0 ] && ctx0+=(-x LD_PRELOAD="$slowclock" -x ILFKIT_SLOW_CLOCK=0.25)
+        [ "$slow" -eq 1 ] && ctx1+=(-x LD_PRELOAD="$slowclock" -x ILFKIT_SLOW_CLOCK=0.25)
+        "${mpirun[@]}" "${ctx0[@]}" "$ilf_mpi" relight scene.json -o "slow$slow" --threads 1 --quiet --no-view --bounces 0 : \
+            "${ctx1[@]}" "$ilf_mpi" relight scene.json -o "slow$slow" --threads 1 --quiet --no-view --bounces 0
+        check "relight with rank $slow slowed: the maps of one process" h5diff -q ref_direct/radiance.h5 "slow$slow/radiance.h5"
+    done
+    check "rank 0 claims at least 3 times the tiles when rank 1 is the slow one as when it is slow itself" \
+        python3 -c "import json; f, s = (json.load(open(p + '/stats.json'))['exchanges'][0]['tiles_claimed'] for p in ('slow1', 'slow0')); assert f >= 3 * s and s > 0, (f, s)"
+fi
 
 python3 - > points.txt <<'EOF'
 import random

@@ -1,7 +1,8 @@
 /*
  * test_relight.c - the relighting engine against closed-form answers, and
  * its promises: culled and naive are bit-identical, results do not depend
- * on the thread count, and errors shrink as samples grow.
+ * on the thread count nor on the ranks of a job (simulated by threads, each
+ * claiming tiles as it becomes free), and errors shrink as samples grow.
  *
  * Scenes are written as JSON into the test's temporary folder, so each
  * test states its geometry in full. The reference is Lambert's formula for
@@ -14,6 +15,7 @@
 #include <inttypes.h>
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -1743,6 +1745,169 @@ static void check_one_thread(void)
     rl_scene_destroy(s);
 }
 
+/* ------------------------------------------------------------ ranks simulated by threads */
+
+#define SIM_RANKS 3
+
+/* What the simulated ranks of a job share: a barrier, each rank's buffer during an exchange, and the
+ * two slots of the count of claims (as tools/job_mpi.c keeps them on rank 0). */
+typedef struct sim_job {
+    pthread_barrier_t barrier;
+    double *buffer[SIM_RANKS];
+    atomic_uint_fast64_t count[2];
+    int honest; /* 0: each rank counts its claims on its own, so every rank claims every tile */
+} sim_job;
+
+/* One simulated rank: its rl_cluster, its claims and its run. */
+typedef struct sim_rank {
+    sim_job *job;
+    uint32_t rank;
+    rl_cluster cl;
+    int claiming;          /* claimed since the last exchange */
+    uint64_t round, own;   /* passes claimed; the dishonest count */
+    uint64_t claimed, offered; /* tiles claimed; tiles of the passes claimed from */
+    const rl_scene *scene;
+    rl_solution *sol;
+    rl_status st;
+} sim_rank;
+
+/* rl_cluster.allgather: each rank copies every other rank's block from that rank's buffer. */
+static int sim_allgather(void *user, double *values, const uint64_t *counts, const uint64_t *offsets)
+{
+    sim_rank *r = user;
+    r->claiming = 0;
+    r->job->buffer[r->rank] = values;
+    pthread_barrier_wait(&r->job->barrier);
+    for (uint32_t q = 0; q < SIM_RANKS; q++)
+        if (q != r->rank && counts[q] > 0)
+            memcpy(values + offsets[q], r->job->buffer[q] + offsets[q], counts[q] * sizeof *values);
+    pthread_barrier_wait(&r->job->barrier);
+    return 0;
+}
+
+/* rl_cluster.sum: every rank adds the ranks' values in rank order, so all get the same sums. */
+static int sim_sum(void *user, double *values, size_t n)
+{
+    sim_rank *r = user;
+    r->claiming = 0;
+    double *sums = calloc(n ? n : 1, sizeof *sums);
+    r->job->buffer[r->rank] = values;
+    pthread_barrier_wait(&r->job->barrier);
+    for (uint32_t q = 0; sums && q < SIM_RANKS; q++)
+        for (size_t k = 0; k < n; k++)
+            sums[k] += r->job->buffer[q][k];
+    pthread_barrier_wait(&r->job->barrier);
+    if (sums)
+        memcpy(values, sums, n * sizeof *values);
+    free(sums);
+    return sums ? 0 : -1;
+}
+
+/* rl_cluster.next: the job's count, the slot of the pass; rank 0 resets the other slot as it starts a pass. */
+static uint64_t sim_next(void *user, uint64_t n)
+{
+    sim_rank *r = user;
+    if (!r->claiming) {
+        r->claiming = 1;
+        r->round++;
+        r->own = 0;
+        r->offered += n;
+        if (r->rank == 0)
+            atomic_store(&r->job->count[(r->round + 1) % 2], 0);
+    }
+    uint64_t t = r->job->honest ? atomic_fetch_add(&r->job->count[r->round % 2], 1) : r->own++;
+    r->claimed += t < n;
+    return t < n ? t : n;
+}
+
+static void *sim_run(void *arg)
+{
+    sim_rank *r = arg;
+    rl_job job = ts_job; /* set_sampling()'s job, read only while the ranks run */
+    job.run.threads = 1 + r->rank % 2; /* ranks of 1 and 2 threads */
+    r->st = rl_relight_cluster(r->scene, &r->cl, &job, &r->sol);
+    return NULL;
+}
+
+/* Runs scene s on SIM_RANKS ranks simulated by threads (honest: one count of claims for the job).
+ * @return 1 when every rank ran. */
+static int sim_relight(const rl_scene *s, int honest, sim_rank *ranks)
+{
+    sim_job job;
+    memset(&job, 0, sizeof job);
+    job.honest = honest;
+    atomic_init(&job.count[0], 0);
+    atomic_init(&job.count[1], 0);
+    pthread_barrier_init(&job.barrier, NULL, SIM_RANKS);
+    pthread_t th[SIM_RANKS];
+    int started = 0;
+    for (uint32_t q = 0; q < SIM_RANKS; q++) {
+        ranks[q] = (sim_rank){.job = &job, .rank = q, .scene = s, .st = RL_ERR_INTERNAL};
+        ranks[q].cl = (rl_cluster){q, SIM_RANKS, sim_allgather, sim_sum, sim_next, &ranks[q]};
+    }
+    for (uint32_t q = 0; q < SIM_RANKS; q++)
+        started += pthread_create(&th[q], NULL, sim_run, &ranks[q]) == 0;
+    CHECK(started == SIM_RANKS, "cluster: %d of %d rank threads started", started, SIM_RANKS);
+    if (started != SIM_RANKS)
+        exit(check_report()); /* the started ranks wait for the others at the barrier */
+    for (uint32_t q = 0; q < SIM_RANKS; q++)
+        pthread_join(th[q], NULL);
+    pthread_barrier_destroy(&job.barrier);
+    return 1;
+}
+
+/* Tiles claimed as ranks become free (rl_cluster.next): 3 ranks of 1 and 2 threads give the maps of one
+ * process bit for bit, claiming every tile of every pass once between them; a count that lets every rank
+ * claim every tile is caught (RL_ERR_IO on every rank), not written. */
+static void check_cluster(void)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/cluster.json", tmpdir);
+    tpoly p[] = {
+        ts_rect_z("light", -0.4, -0.4, 0.4, 0.4, 2.0, 0),
+        ts_rect_z("grey", -2, -2, 2, 2, 0.0, 1),
+        ts_rect_z("grey", -2, -2, 2, 2, 2.2, 0),
+        ts_rect_z("grey", -0.5, -0.3, 0.3, 0.5, 1.0, 0),
+        ts_rect_z("grey", -0.5, -0.3, 0.3, 0.5, 1.0, 1),
+        {"grey", 4, {{-2, -2, 0}, {-2, 2, 0}, {-2, 2, 2.2}, {-2, -2, 2.2}}},
+    };
+    ts_write_scene(path, MATS, p, 6, "\"radiance_maps\": {\"cell_size\": 0.05}, \"sampling\": {\"bounces\": 2}");
+    rl_scene *s = ts_load(path);
+    if (!s)
+        return;
+    set_sampling(s, RL_METHOD_CULLED, 8, 2, 16, 1);
+    rl_solution *ref = NULL;
+    CHECK(rl_relight(s, &ts_job, &ref) == RL_OK, "cluster: reference: %s", rl_errmsg());
+    sim_rank ranks[SIM_RANKS];
+    if (ref && sim_relight(s, 1, ranks)) {
+        uint64_t claimed = 0;
+        for (uint32_t q = 0; q < SIM_RANKS; q++) {
+            long total = 0;
+            CHECK(ranks[q].st == RL_OK, "cluster: rank %u failed: %d", q, (int)ranks[q].st);
+            CHECK(ranks[q].sol && ts_differing(ref, ranks[q].sol, &total) == 0 && total > 0,
+                  "cluster: rank %u's maps differ from one process's", q);
+            CHECK(ranks[q].offered == ranks[0].offered && ranks[q].claimed > 0,
+                  "cluster: rank %u claimed %llu of %llu", q, (unsigned long long)ranks[q].claimed,
+                  (unsigned long long)ranks[q].offered);
+            claimed += ranks[q].claimed;
+            rl_solution_destroy(ranks[q].sol);
+        }
+        printf("cluster: %d ranks claimed %llu tiles in all, %llu, %llu and %llu each\n", SIM_RANKS,
+               (unsigned long long)claimed, (unsigned long long)ranks[0].claimed,
+               (unsigned long long)ranks[1].claimed, (unsigned long long)ranks[2].claimed);
+        CHECK(claimed == ranks[0].offered && claimed > 3 * SIM_RANKS, "cluster: %llu tiles claimed of %llu",
+              (unsigned long long)claimed, (unsigned long long)ranks[0].offered);
+    }
+    if (ref && sim_relight(s, 0, ranks))
+        for (uint32_t q = 0; q < SIM_RANKS; q++) {
+            CHECK(ranks[q].st == RL_ERR_IO && ranks[q].sol == NULL,
+                  "cluster: every tile claimed by every rank: rank %u returned %d", q, (int)ranks[q].st);
+            rl_solution_destroy(ranks[q].sol);
+        }
+    rl_solution_destroy(ref);
+    rl_scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     const char *t = getenv("ILF_TEST_TMP");
@@ -1765,6 +1930,7 @@ int main(int argc, char **argv)
         check_lightfield();
         check_lightfield_anchors();
         check_maps_ready();
+        check_cluster();
     }
     return check_report();
 }

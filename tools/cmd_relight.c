@@ -933,6 +933,7 @@ static cJSON *stats_json(const relight_run *run, const run_memory *mem)
         add_count(x, "bytes", log[k].bytes);
         cJSON_AddNumberToObject(x, "wait_seconds", log[k].wait_seconds);
         cJSON_AddNumberToObject(x, "move_seconds", log[k].move_seconds);
+        add_count(x, "tiles_claimed", log[k].tiles_claimed);
     }
     cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");
     for (size_t k = 0; warnings != NULL && k < cli_warning_count(); k++)

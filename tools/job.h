@@ -66,6 +66,7 @@ typedef struct job_exchange {
     double wait_seconds; /**< the longest any rank waited for the slowest to finish the pass */
     double move_seconds; /**< moving the data, on this rank */
     unsigned long long bytes; /**< gathered onto each rank */
+    unsigned long long tiles_claimed; /**< tiles this rank claimed in the pass (0: tiles dealt up front) */
 } job_exchange;
 
 /** @return the exchanges so far (at most 64 are kept), in order, in *log; 0 in a job of one. */

@@ -5,7 +5,8 @@
 #ifndef ILF_JOB_MPI_H
 #define ILF_JOB_MPI_H
 
-/** Initialises MPI (funnelled threads) over MPI_COMM_WORLD. @return 1, or 0 if MPI could not start. */
+/** Initialises MPI (serialised threads: the engine's workers claim tiles) over MPI_COMM_WORLD, and the count of
+ * claims of a job of several ranks. @return 1, or 0 if MPI could not start. */
 int job_mpi_start(int *argc, char ***argv);
 
 /** Collective: agrees on the job's exit code (the largest), prints what this rank still holds and

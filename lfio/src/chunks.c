@@ -46,6 +46,17 @@ uint32_t lfio__fletcher32(const unsigned char *p, size_t n)
     return (b << 16) | a;
 }
 
+/* Shuffles present values of elem bytes from raw into elem byte planes of count bytes each: byte k of
+ * value i to plane k, place i. Called with elem a constant, the compiler unrolls the inner loop for it
+ * (with elem a variable, the shuffle was an eighth of a 1.3 M-cell write's instructions). */
+static inline void shuffle(const unsigned char *restrict raw, size_t present, size_t count, size_t elem,
+                           unsigned char *restrict planes)
+{
+    for (size_t i = 0; i < present; i++)
+        for (size_t k = 0; k < elem; k++)
+            planes[k * count + i] = raw[i * elem + k];
+}
+
 /* Filters one chunk into c->out, with scratch for the shuffled values (c->chunk_bytes). @return 0 or -1. */
 static int filter_one(lfio__chunk *c, unsigned char *scratch)
 {
@@ -53,9 +64,12 @@ static int filter_one(lfio__chunk *c, unsigned char *scratch)
     size_t count = c->chunk_bytes / c->elem, present = c->raw_bytes / c->elem;
     for (size_t k = 0; present < count && k < c->elem; k++) /* the zeros past the end, in each byte plane */
         memset(scratch + k * count + present, 0, count - present);
-    for (size_t i = 0; i < present; i++)
-        for (size_t k = 0; k < c->elem; k++)
-            scratch[k * count + i] = c->raw[i * c->elem + k];
+    if (c->elem == 4)
+        shuffle(c->raw, present, count, 4, scratch);
+    else if (c->elem == 8)
+        shuffle(c->raw, present, count, 8, scratch);
+    else
+        shuffle(c->raw, present, count, c->elem, scratch);
     size_t most = lfio__chunks_stored_most(c->chunk_bytes); /* zlib's bound and the checksum */
     uLongf packed = (uLongf)(most - 4);
     c->out = malloc(most);

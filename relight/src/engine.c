@@ -13,7 +13,9 @@
  * the tile, in an order fixed by the tile alone. So the output does not
  * depend on the number of threads or on scheduling. In a job of several
  * processes (rl_cluster), the tiles are dealt to the ranks by expected
- * cost (deal_tiles), and after each pass the ranks exchange their tiles'
+ * cost (deal_tiles), or claimed by the ranks from one count as they become
+ * free (rl_cluster.next; share_owners() then tells every rank who did which),
+ * and after each pass the ranks exchange their tiles'
  * values: since a tile's values do not depend on who computed them, every
  * rank then holds what one process would. The solution's accessors are in
  * solution.c, the camera view in view.c, point queries in query.c and the
@@ -64,6 +66,12 @@ typedef struct pass_job {
     atomic_int failed;
     rl_counters *counters; /* one per worker */
     double *seconds;       /* [nitems]: each tile's CPU time, or NULL */
+    /* tiles claimed from the job as this rank becomes free (rl_cluster.next), or NULL: items taken in turn */
+    const rl_cluster *claim;
+    const size_t *claim_order; /* [nitems]: the item the job's claim t stands for */
+    uint8_t *claimed;          /* [nitems]: 1 for the items this rank claimed */
+    pthread_mutex_t claim_lock; /* one claim at a time (rl_cluster.next) */
+    atomic_uint working;        /* workers that have not finished */
     /* maps told ready as their last tile finishes (rl__run.reporting), or left NULL */
     const rl__run *run;
     atomic_uint *left;     /* [nmaps]: tiles of each map not finished yet, plus 1 until the map is completed
@@ -134,6 +142,24 @@ static void tell_end(pass_job *job, int rc)
 
 static uint32_t tile_work(const rl_map *maps, const work_item *w);
 
+/* Takes the next item of job for a worker: the next in turn, or the one claimed from the ranks' job.
+ * @return 1 and *k, or 0 when none is left. */
+static int take_item(pass_job *job, size_t *k)
+{
+    if (!job->claim) {
+        *k = atomic_fetch_add(&job->next, 1);
+        return *k < job->nitems;
+    }
+    pthread_mutex_lock(&job->claim_lock);
+    uint64_t t = job->claim->next(job->claim->user, job->nitems);
+    pthread_mutex_unlock(&job->claim_lock);
+    if (t >= job->nitems)
+        return 0;
+    *k = job->claim_order[t];
+    job->claimed[*k] = 1;
+    return 1;
+}
+
 /* Worker `index` of a pass: takes tiles until none are left. */
 static void worker(void *p, unsigned index)
 {
@@ -141,8 +167,8 @@ static void worker(void *p, unsigned index)
     rl_scratch scratch = {0};
     rl__tracer_thread_init();
     for (;;) {
-        size_t k = atomic_fetch_add(&job->next, 1);
-        if (k >= job->nitems || atomic_load(&job->failed))
+        size_t k = 0;
+        if (!take_item(job, &k) || atomic_load(&job->failed))
             break;
         const work_item *w = &job->items[k];
         uint32_t cells = tile_work(job->sets[w->set], w);
@@ -161,6 +187,7 @@ static void worker(void *p, unsigned index)
         atomic_fetch_add(&job->done, 1);
     }
     rl__scratch_free(&scratch);
+    atomic_fetch_sub(&job->working, 1);
 }
 
 /* Runs job on a team of n workers, reporting progress from the calling thread while they work.
@@ -174,6 +201,7 @@ static int run_job(pass_job *job, unsigned n, const rl__run *run, double base, d
     atomic_init(&job->done, 0);
     atomic_init(&job->done_cells, 0);
     atomic_init(&job->failed, 0);
+    atomic_init(&job->working, n);
     job->total_cells = 0;
     for (size_t k = 0; k < job->nitems; k++)
         job->total_cells += tile_work(job->sets[job->items[k].set], &job->items[k]);
@@ -183,11 +211,15 @@ static int run_job(pass_job *job, unsigned n, const rl__run *run, double base, d
         job->counters = NULL;
         return -1;
     }
-    /* Without a started thread the work runs at join: nothing to wait for here. */
-    while (run->progress && ilf_team_threads(team) > 0 && atomic_load(&job->done) < job->nitems &&
+    /* Without a started thread the work runs at join: nothing to wait for here. Workers whose thread
+     * did not start run at join too, so the wait is for the others. A rank that claims its tiles does
+     * about 1/ranks of the cells: its share stands for the job's progress. */
+    unsigned unstarted = n - ilf_team_threads(team);
+    double ranks = job->claim ? (double)job->claim->ranks : 1.0;
+    while (run->progress && ilf_team_threads(team) > 0 && atomic_load(&job->working) > unstarted &&
            !atomic_load(&job->failed)) {
-        run->progress(run->user, base + span * (double)atomic_load(&job->done_cells) /
-                                            (double)(job->total_cells ? job->total_cells : 1));
+        double f = ranks * (double)atomic_load(&job->done_cells) / (double)(job->total_cells ? job->total_cells : 1);
+        run->progress(run->user, base + span * (f < 1.0 ? f : 1.0));
         ilf_clock_sleep(PROGRESS_PERIOD);
     }
     ilf_team_join(team);
@@ -335,23 +367,33 @@ static int dearest_first(const void *a, const void *b)
 }
 
 
-/* Deals the n tiles of a pass to the ranks by expected cost, dearest first, each to the rank with
- * the least so far (longest processing time first): the measured CPU seconds of the same tiles in
- * the previous pass when given (bounce passes repeat their tiles), else their cells. Equal costs are
- * ordered by a fixed hash of the tile's index, so that the many tiles of the same size are mixed:
- * taken in list order, a rank would get every box's top, lit, face. Every rank computes the same
- * deal. @return owner[n] (malloc'd), or NULL when out of memory. */
-static uint32_t *deal_tiles(const rl_cluster *cl, const rl_map *maps, const work_item *items, size_t n,
-                            const double *measured)
+/* Orders the n tiles of a pass by expected cost, dearest first: the measured CPU seconds of the same
+ * tiles in the previous pass when given (bounce passes repeat their tiles), else their cells. Equal
+ * costs are ordered by a fixed hash of the tile's index, so that the many tiles of the same size are
+ * mixed: taken in list order, a rank would get every box's top, lit, face. Every rank computes the same
+ * order. @return the order (malloc'd), or NULL when out of memory. */
+static dealt *dearest_order(const rl_map *maps, const work_item *items, size_t n, const double *measured)
 {
-    uint32_t *owner = malloc((n ? n : 1) * sizeof *owner);
     dealt *order = malloc((n ? n : 1) * sizeof *order);
-    double *load = calloc(cl->ranks, sizeof *load);
-    if (owner && order && load) {
+    if (order) {
         for (size_t k = 0; k < n; k++)
             order[k] = (dealt){measured ? measured[k] : tile_work(maps, &items[k]) + TILE_SETUP_CELLS,
                                ilf_hash_mix(0x9e3779b97f4a7c15u, k), k};
         qsort(order, n, sizeof *order, dearest_first);
+    }
+    return order;
+}
+
+/* Deals the n tiles of a pass to the ranks up front in dearest_order(), each to the rank with the
+ * least so far (longest processing time first). Every rank computes the same deal.
+ * @return owner[n] (malloc'd), or NULL when out of memory. */
+static uint32_t *deal_tiles(const rl_cluster *cl, const rl_map *maps, const work_item *items, size_t n,
+                            const double *measured)
+{
+    uint32_t *owner = malloc((n ? n : 1) * sizeof *owner);
+    dealt *order = dearest_order(maps, items, n, measured);
+    double *load = calloc(cl->ranks, sizeof *load);
+    if (owner && order && load) {
         for (size_t k = 0; k < n; k++) {
             uint32_t least = 0;
             for (uint32_t r = 1; r < cl->ranks; r++)
@@ -423,13 +465,16 @@ static int exchange_tiles(const rl_cluster *cl, const uint32_t *owners, rl_map *
     return rc;
 }
 
-/* This rank's share of a pass's tiles. */
+/* This rank's share of a pass's tiles: dealt up front (mine, index), or claimed as the rank becomes
+ * free (rl_cluster.next: order, claimed; every tile is then "mine" until the pass tells whose it was). */
 typedef struct share {
-    uint32_t *owner;  /* [n]: each tile's rank */
+    uint32_t *owner;  /* [n]: each tile's rank (claimed tiles: once the pass is over) */
     work_item *mine;  /* this rank's tiles, in list order */
     size_t *index;    /* [nmine]: their places in the list */
     double *seconds;  /* [nmine]: the CPU time each took */
     size_t nmine;
+    size_t *order;    /* claimed: [n], the tile the job's claim t stands for */
+    uint8_t *claimed; /* claimed: [n], 1 for the tiles this rank claimed */
 } share;
 
 /* Frees a share's arrays. */
@@ -439,14 +484,61 @@ static void share_free(share *sh)
     free(sh->mine);
     free(sh->index);
     free(sh->seconds);
+    free(sh->order);
+    free(sh->claimed);
 }
 
-/* Deals the n tiles of items (by measured costs when given) and keeps this rank's. @return 0 or -1 (out of
- * memory). */
+/* Readies the n tiles of items to be claimed as the rank becomes free, dearest first (by measured costs
+ * when given), all the ranks claiming from one count (rl_cluster.next). @return 0 or -1 (out of memory). */
+static int share_claims(const rl_map *maps, const work_item *items, size_t n, const double *measured, share *sh)
+{
+    dealt *order = dearest_order(maps, items, n, measured);
+    sh->owner = malloc((n ? n : 1) * sizeof *sh->owner);
+    sh->mine = malloc((n ? n : 1) * sizeof *sh->mine);
+    sh->index = malloc((n ? n : 1) * sizeof *sh->index);
+    sh->seconds = calloc(n ? n : 1, sizeof *sh->seconds);
+    sh->order = malloc((n ? n : 1) * sizeof *sh->order);
+    sh->claimed = calloc(n ? n : 1, sizeof *sh->claimed);
+    int ok = order && sh->owner && sh->mine && sh->index && sh->seconds && sh->order && sh->claimed;
+    for (size_t k = 0; ok && k < n; k++)
+        sh->order[k] = order[k].tile, sh->index[k] = k, sh->mine[k] = items[k];
+    sh->nmine = n;
+    free(order);
+    if (!ok)
+        share_free(sh);
+    return ok ? 0 : -1;
+}
+
+/* After a pass of claimed tiles: tells every rank whose each tile was, by a sum over the ranks of, per
+ * tile, the claims (1 or 0) and the claimer's rank + 1 (or 0): small integers, so the sums are exact
+ * whatever their order, and a tile claimed by no rank or by two is caught. @return 0, -1 (out of
+ * memory) or -2 (the exchange failed, or the claims did not share the tiles out). */
+static int share_owners(const rl_cluster *cl, share *sh, size_t n)
+{
+    double *v = malloc((n ? 2 * n : 1) * sizeof *v);
+    if (!v)
+        return -1;
+    for (size_t k = 0; k < n; k++)
+        v[2 * k] = sh->claimed[k], v[2 * k + 1] = sh->claimed[k] ? cl->rank + 1.0 : 0.0;
+    int rc = cl->sum(cl->user, v, 2 * n) == 0 ? 0 : -2;
+    for (size_t k = 0; rc == 0 && k < n; k++) {
+        if (v[2 * k] != 1.0 || !(v[2 * k + 1] >= 1.0 && v[2 * k + 1] <= cl->ranks))
+            rc = -2;
+        else
+            sh->owner[k] = (uint32_t)v[2 * k + 1] - 1;
+    }
+    free(v);
+    return rc;
+}
+
+/* Deals the n tiles of items (by measured costs when given) and keeps this rank's: up front, or to be
+ * claimed when the cluster claims. @return 0 or -1 (out of memory). */
 static int share_deal(const rl_cluster *cl, const rl_map *maps, const work_item *items, size_t n,
                       const double *measured, share *sh)
 {
     memset(sh, 0, sizeof *sh);
+    if (cl->next)
+        return share_claims(maps, items, n, measured, sh);
     sh->owner = deal_tiles(cl, maps, items, n, measured);
     sh->mine = malloc((n ? n : 1) * sizeof *sh->mine);
     sh->index = malloc((n ? n : 1) * sizeof *sh->index);
@@ -682,7 +774,11 @@ rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st)
     job.items = cl ? sh.mine : all;
     job.nitems = cl ? sh.nmine : nall;
     job.seconds = cl ? sh.seconds : NULL;
-    if (telling && tell_begin(&job, run, nmaps, ne) != 0) {
+    if (cl && cl->next)
+        job.claim = cl, job.claim_order = sh.order, job.claimed = sh.claimed;
+    if ((telling && tell_begin(&job, run, nmaps, ne) != 0) ||
+        (job.claim && pthread_mutex_init(&job.claim_lock, NULL) != 0)) {
+        share_free(&sh);
         free(all);
         rl__glow_free(glow, scene->npolygons);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
@@ -690,12 +786,16 @@ rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st)
     int rc = ne > 0 ? run_job(&job, run->threads, run, in->base, in->span) : 0;
     if (telling)
         tell_end(&job, rc);
+    if (job.claim)
+        pthread_mutex_destroy(&job.claim_lock);
     if (job.counters)
         sum_counters(job.counters, run->threads, st);
     free(job.counters);
     st->cpu_seconds = ilf_clock_process_cpu() - c0;
     const char *why = "out of memory";
     /* A failed rank leaves now: the others wait in the exchange until the job is ended (engine.h). */
+    if (rc == 0 && cl && cl->next && ne > 0 && (rc = share_owners(cl, &sh, nall)) == -2)
+        why = "the exchange of claimed tiles between ranks failed";
     if (rc == 0 && cl && ne > 0 && exchange_tiles(cl, sh.owner, maps, all, nall, &why) != 0)
         rc = -2;
     if (rc == 0 && cl && ne > 0 && share_measure(cl, &sh, nall, measured) != 0)

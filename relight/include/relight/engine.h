@@ -49,11 +49,12 @@ typedef struct rl_pass_stats {
 /**
  * The processes of one job (the ranks of an MPI job, docs/cluster.md), as the
  * engine sees them: it never calls MPI itself. Every rank loads the same
- * scene and makes the same calls with the same job (its run options aside); the work of each pass (tiles of cells, or
- * points) is dealt out to the ranks by expected cost (the same deal on every rank), and after
+ * scene and makes the same calls with the same job (its run options aside); the work of each pass (tiles
+ * of cells, or points) is dealt out to the ranks, up front by expected cost (the same deal on every rank) or,
+ * with a `next` callback, as each rank becomes free, and after
  * the pass the callbacks make every rank's maps whole. The results are bit
- * for bit those of one process, whatever ranks and threads. The callbacks are
- * called from the calling thread, by every rank in the same order; when one
+ * for bit those of one process, whatever ranks and threads. The callbacks but
+ * `next` are called from the calling thread, by every rank in the same order; when one
  * fails (returns nonzero) the run fails with RL_ERR_IO. A rank whose run
  * fails otherwise (out of memory) returns without entering the next
  * exchange: the caller must then end the whole job (MPI_Abort), since the
@@ -67,7 +68,14 @@ typedef struct rl_cluster {
     int (*allgather)(void *user, double *values, const uint64_t *counts, const uint64_t *offsets);
     /** Replaces each of the n values by its sum over the ranks. @return 0, or nonzero on failure. */
     int (*sum)(void *user, double *values, size_t n);
-    void *user;     /**< passed to both */
+    /** NULL: the tiles of a pass are dealt up front, by expected cost. Else they are dealt as ranks become
+     * free: next claims the next of the n tiles of the current pass for this rank and returns its place,
+     * 0, 1, ... over the whole job, each place once, then n or more once all are claimed. The count starts
+     * again at 0 for the next pass: every rank makes a call of sum or allgather (with the others) between
+     * its last claim of one pass and its first of the next. Called from the engine's worker threads, one
+     * at a time. */
+    uint64_t (*next)(void *user, uint64_t n);
+    void *user;     /**< passed to all three */
 } rl_cluster;
 
 /**
