@@ -1,6 +1,6 @@
 /*
  * ilfpy.h - what the files of the C extension _ilfkit share: the Python and
- * NumPy headers (NumPy's C API table is defined in module.c, declared here for
+ * NumPy headers (NumPy's C API table is defined in py_module.c, declared here for
  * the others), the one exception type, and the conversion of a radiance map
  * to Python objects.
  *

@@ -1,5 +1,5 @@
 /*
- * lightfield.c - light field files and the sphere partition in Python: the
+ * py_lightfield.c - light field files and the sphere partition in Python: the
  * type _ilfkit.LightField (an lfio_lightfield read whole, its slabs'
  * descriptions, radiance as read-only NumPy views, and point queries) and
  * the partition's lookups over arrays of directions or ids.

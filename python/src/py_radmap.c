@@ -1,5 +1,5 @@
 /*
- * radmap.c - reading a radiance-map file (radiance.h5, lfio/radmap.h) into
+ * py_radmap.c - reading a radiance-map file (radiance.h5, lfio/radmap.h) into
  * Python: its creator, scene and format, and each patch as the dict
  * ilfpy__map_dict() makes (arrays copied, so nothing outlives the lfio
  * object, which is freed before returning). The read runs without the GIL.

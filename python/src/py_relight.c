@@ -1,5 +1,5 @@
 /*
- * relight.c - the relighting engine in Python: relight(scene, settings,
+ * py_relight.c - the relighting engine in Python: relight(scene, settings,
  * threads), which solves a scene file and returns its radiance maps, and
  * irradiance(scene, points, settings, threads), the irradiance at points.
  * Settings are the scene's "sampling" keys (relight/relight.h's table),

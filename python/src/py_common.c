@@ -1,10 +1,9 @@
 /*
- * module.c - the C extension _ilfkit, which the package ilfkit wraps: its
- * initialisation (NumPy's C API, the exception ilfkit.Error, the functions
- * of lightfield.c, relight.c and radmap.c), and the helpers they share
- * (ilfpy.h). Conventions of the whole module are in ilfpy.h.
+ * py_common.c - what the files of the C extension _ilfkit share (ilfpy.h):
+ * the exception ilfkit.Error raised with a library's message, arrays and
+ * tuples copied out of C memory, and a radiance map as a dict. Conventions of
+ * the whole module are in ilfpy.h.
  */
-#define ILFPY_DEFINE_ARRAY_API
 #include "ilfpy.h"
 
 #include <string.h>
@@ -112,53 +111,4 @@ PyObject *ilfpy__map_dict(const lfio_radmap_patch *p)
     if (d != NULL && (put_geometry(d, p) < 0 || put_cells(d, p) < 0))
         Py_CLEAR(d);
     return d;
-}
-
-static PyObject *version(PyObject *self, PyObject *args)
-{
-    (void)self;
-    (void)args;
-    return PyUnicode_FromString(lfio_version());
-}
-
-static PyMethodDef module_methods[] = {
-    {"version", version, METH_NOARGS, "version() -> str: the version of the lfio library the module runs on."},
-    {NULL, NULL, 0, NULL}};
-
-static struct PyModuleDef module_def = {
-    PyModuleDef_HEAD_INIT, "_ilfkit",
-    "The C extension of ilfkit: light fields (lfio), relighting (relight) and radiance maps. Use the package "
-    "ilfkit, which wraps it.",
-    -1, module_methods, NULL, NULL, NULL, NULL};
-
-static int add_error(PyObject *m)
-{
-    ilfpy__error = PyErr_NewExceptionWithDoc(
-        "ilfkit.Error",
-        "A failure reported by ilfkit's libraries: the message names the file, object and problem; the "
-        "attribute status names the library's status ('not found', 'invalid file format', 'invalid input', ...).",
-        PyExc_RuntimeError, NULL);
-    if (ilfpy__error == NULL)
-        return -1;
-    Py_INCREF(ilfpy__error);
-    if (PyModule_AddObject(m, "Error", ilfpy__error) < 0) {
-        Py_DECREF(ilfpy__error);
-        return -1;
-    }
-    return 0;
-}
-
-PyMODINIT_FUNC PyInit__ilfkit(void)
-{
-    import_array();
-    PyObject *m = PyModule_Create(&module_def);
-    if (m == NULL)
-        return NULL;
-    if (add_error(m) < 0 || ilfpy__lightfield_add_type(m) < 0 ||
-        PyModule_AddFunctions(m, ilfpy__lightfield_methods) < 0 ||
-        PyModule_AddFunctions(m, ilfpy__relight_methods) < 0 || PyModule_AddFunctions(m, ilfpy__radmap_methods) < 0) {
-        Py_DECREF(m);
-        return NULL;
-    }
-    return m;
 }
