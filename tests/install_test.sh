@@ -36,8 +36,15 @@ done
 check test -f "$libdir/pkgconfig/relight.pc" -a -f "$libdir/pkgconfig/capture.pc"
 check test -f "$libdir/cmake/ilfkit/ilfkitConfig.cmake"
 # Installed headers: each compiles alone, pedantic, from the prefix's include folder, and includes
-# only standard C headers or headers installed beside it (no Embree, OpenImageIO, assimp, HDF5).
+# only standard C headers or headers installed beside it (no Embree, OpenImageIO, assimp, HDF5). An MPI
+# build also installs lfio/radmap_mpi.h, which names MPI_Comm: it alone may include mpi.h, and compiles
+# with MPI's include flags.
 standard_c=" math.h stdarg.h stddef.h stdint.h stdio.h stdlib.h string.h "
+mpi_flags=""
+if test -f "$prefix/include/lfio/radmap_mpi.h"; then
+    standard_c="$standard_c mpi.h "
+    mpi_flags=$(mpicc --showme:compile 2>/dev/null || pkg-config --cflags ompi-c 2>/dev/null || true)
+fi
 includes_installed() {
     local bad=0
     for inc in $(grep -rhoE '^#[[:space:]]*include[[:space:]]*[<"][^>"]+' "$prefix/include" | sed -E 's/.*[<"]//' | sort -u); do
@@ -48,7 +55,7 @@ includes_installed() {
 }
 check includes_installed
 header_alone() { printf '#include <%s>\nint header_alone;\n' "$1" |
-                 cc -std=c99 -pedantic -Wall -Wextra -Werror -fsyntax-only -I"$prefix/include" -x c -; }
+                 cc -std=c99 -pedantic -Wall -Wextra -Werror -fsyntax-only -I"$prefix/include" $mpi_flags -x c -; }
 for h in $(cd "$prefix/include" && ls relight/*.h capture/*.h lfio/*.h ilf/*.h); do
     check header_alone "$h"
 done

@@ -693,7 +693,7 @@ static void test_bad_files(const char *good)
 }
 
 /* Every way a format-2 file can be bad that format 1 cannot: good has patches 0 (12 cells), 1 (none) and
- * 2 (40000), so its cells 12 .. 40011 are patch 2's. The storage checks are test_h5io's. */
+ * 2 (40000), so its cells 12 .. 40011 are patch 2's. The storage checks are test_lightfield_io's. */
 static void test_bad_files_v2(const char *good)
 {
     char p[512];

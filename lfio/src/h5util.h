@@ -1,6 +1,6 @@
 /*
  * h5util.h - the HDF5 plumbing lfio's file formats share (light field files
- * in h5io.c, radiance-map files in radmap_io.c): silencing HDF5 and turning
+ * in lightfield_io.c, radiance-map files in radmap_io.c): silencing HDF5 and turning
  * its error stack into lfio messages, typed and bounded attributes, dataset
  * layouts created and checked from one description, hyperslab transfers,
  * and the atomic file writer (through h5stream.c's driver).

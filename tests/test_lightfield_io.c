@@ -1,5 +1,5 @@
 /*
- * test_h5io.c - light field files (lfio/src/h5io.c): round trips, partial
+ * test_lightfield_io.c - light field files (lfio/src/lightfield_io.c): round trips, partial
  * reads, atomic writes, every documented failure of reading, and lfio_verify;
  * and the storage checks light field and radiance-map readers share
  * (lfio/src/h5util.c): links, forged chunks.
@@ -11,7 +11,7 @@
  * error printer stays on in this program, and stderr is captured around
  * each lfio call to prove lfio silences it.
  *
- * Files go to $ILF_TEST_TMP/h5io (or /tmp/h5io).
+ * Files go to $ILF_TEST_TMP/lightfield_io (or /tmp/lightfield_io).
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -205,7 +205,7 @@ static lfio_lightfield *make_lightfield(int fine)
     const double tu[3] = {1, 1, 0}, tv[3] = {0, 0, 2};
     lfio_lightfield *lf = NULL;
     CHECK(lfio_lightfield_new(&lf) == LFIO_OK, "lightfield_new");
-    lfio_lightfield_set_creator(lf, "test_h5io");
+    lfio_lightfield_set_creator(lf, "test_lightfield_io");
     lfio_slab *slabs[] = {
         random_slab("one", 1, 1, 1, ex, ey, LFIO_UNITS_RADIANCE, 0.0f),
         random_slab("three", 3, 17, 33, tu, tv, LFIO_UNITS_RELATIVE, 0.25f),
@@ -395,7 +395,7 @@ static void test_round_trip(const lfio_lightfield *lf, const char *path)
     CHECK(st == LFIO_OK && back, "read %s: %s", path, lfio_errmsg());
     if (!back)
         return;
-    CHECK(strcmp(lfio_lightfield_creator(back), "test_h5io") == 0, "creator '%s'", lfio_lightfield_creator(back));
+    CHECK(strcmp(lfio_lightfield_creator(back), "test_lightfield_io") == 0, "creator '%s'", lfio_lightfield_creator(back));
     CHECK(lfio_lightfield_slab_count(back) == lfio_lightfield_slab_count(lf), "slab count");
     for (size_t k = 0; k < lfio_lightfield_slab_count(lf); k++)
         check_slab_equal(lfio_lightfield_slab(lf, k), lfio_lightfield_slab(back, k),
@@ -419,7 +419,7 @@ static void test_reader(const lfio_lightfield *lf, const char *path)
     if (!r)
         return;
     CHECK(lfio_reader_format_version(r) == 1, "format version %d", lfio_reader_format_version(r));
-    CHECK(strcmp(lfio_reader_creator(r), "test_h5io") == 0, "reader creator");
+    CHECK(strcmp(lfio_reader_creator(r), "test_lightfield_io") == 0, "reader creator");
     CHECK(lfio_reader_slab_count(r) == lfio_lightfield_slab_count(lf), "reader slab count");
     CHECK(lfio_reader_slab_desc(r, lfio_reader_slab_count(r)) == NULL, "desc out of range");
     for (size_t k = 0; k < lfio_lightfield_slab_count(lf); k++) {
@@ -1149,7 +1149,7 @@ static void test_radmap_storage(int format)
     struct test_patch t;
     make_patch(&t, "polygons[0]", 0, 2.0, 0.0, 0.01, 0); /* 40,000 cells */
     char good[512], p[512];
-    CHECK(lfio_radmap_write_with(tmp_path(good, sizeof good, "map.h5"), "test_h5io", NULL, 1, describe_one, NULL,
+    CHECK(lfio_radmap_write_with(tmp_path(good, sizeof good, "map.h5"), "test_lightfield_io", NULL, 1, describe_one, NULL,
                                  &t.p, &opt) == LFIO_OK,
           "write a radiance map (format %d): %s", format, lfio_errmsg());
     lfio_radmap *map = NULL;
@@ -1204,7 +1204,7 @@ static void test_radmap_storage(int format)
 int main(void)
 {
     const char *base = getenv("ILF_TEST_TMP");
-    snprintf(tmpdir, sizeof tmpdir, "%s/h5io", base && *base ? base : "/tmp");
+    snprintf(tmpdir, sizeof tmpdir, "%s/lightfield_io", base && *base ? base : "/tmp");
     mkdir(base && *base ? base : "/tmp", 0755);
     if (mkdir(tmpdir, 0755) != 0 && errno != EEXIST) {
         fprintf(stderr, "cannot create %s: %s\n", tmpdir, strerror(errno));
@@ -1231,7 +1231,7 @@ int main(void)
     lfio_lightfield *one = NULL;
     const double ex[3] = {1, 0, 0}, ey[3] = {0, 1, 0};
     lfio_lightfield_new(&one);
-    lfio_lightfield_set_creator(one, "test_h5io");
+    lfio_lightfield_set_creator(one, "test_lightfield_io");
     lfio_lightfield_take_slab(one, random_slab("small", 1, 3, 1, ex, ey, LFIO_UNITS_RADIANCE, 0.0f));
     test_round_trip(one, small);
     lfio_lightfield_destroy(one);

@@ -1,5 +1,5 @@
 /*
- * h5io.c - light field files: the atomic HDF5 writer, the validating reader
+ * lightfield_io.c - light field files: the atomic HDF5 writer, the validating reader
  * with partial reads, and lfio_verify() (format version 1, docs/format.md).
  *
  * The HDF5 plumbing it shares with radmap_io.c (error translation,
