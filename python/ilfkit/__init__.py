@@ -26,7 +26,7 @@ __all__ = ["Error", "LightField", "Slab", "Partition", "Map", "Solution", "Radia
 
 
 def lfio_version():
-    """@return the version of the lfio library the module runs on, for example "0.1.0"."""
+    """@return the version of the lfio library the module runs on, for example "0.2.0"."""
     return _ilfkit.version()
 
 

@@ -24,9 +24,9 @@ extern "C" {
 #endif
 
 #define LFIO_VERSION_MAJOR 0
-#define LFIO_VERSION_MINOR 1
+#define LFIO_VERSION_MINOR 2
 #define LFIO_VERSION_PATCH 0
-#define LFIO_VERSION_STRING "0.1.0"
+#define LFIO_VERSION_STRING "0.2.0"
 
 /** Result of a fallible call. */
 typedef enum lfio_status {
@@ -48,7 +48,7 @@ const char *lfio_status_name(lfio_status s);
  */
 const char *lfio_errmsg(void);
 
-/** @return the library's version string, for example "0.1.0". */
+/** @return the library's version string, for example "0.2.0". */
 const char *lfio_version(void);
 
 #ifdef __cplusplus
