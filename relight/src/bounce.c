@@ -190,6 +190,22 @@ static void count_cell_error(uint32_t n, const double acc[3], double acc2, rl_co
     cnt->cell_error[mean > 0 ? rl__cell_error_bin(sqrt(var / n) / mean) : 0]++;
 }
 
+/* Directions a tile works out once for all its cells: every cell of a map draws the same sequence, so
+ * ray k's direction is the same in each; beyond these the rays' directions are worked out per cell. */
+#define RL_SHARED_DIRECTIONS 1024
+
+/* Sets d to the direction of ray k of the sequence of key in frame f, and *cz to its cosine to the normal:
+ * the direction, where the light varies most, takes the sequence's best-spread pair of dimensions (bases
+ * 2 and 3); cosine-weighted: a uniform point of the unit disc (concentric map, which keeps strata
+ * compact) lifted onto the hemisphere. */
+static void ray_direction(const lds_key *key, uint32_t k, const rl_frame *f, v3 *d, double *cz)
+{
+    double dx, dy;
+    concentric_disc(rl__lds_coord(key, k, 0), rl__lds_coord(key, k, 1), &dx, &dy);
+    *cz = sqrt(fmax(0.0, 1.0 - dx * dx - dy * dy));
+    *d = v3_madd(v3_madd(v3_scale(f->n, *cz), f->e1, dx), f->e2, dy);
+}
+
 void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
                      rl_counters *cnt)
 {
@@ -201,6 +217,11 @@ void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, 
      * map), each from its own place: the estimate's error then changes smoothly from cell to cell as its
      * rays' hits move, instead of jumping between independent draws (mottling) */
     const lds_key key = rl__lds_make(rl__pair_key(ctx, UINT32_MAX, map_index));
+    v3 shared_d[RL_SHARED_DIRECTIONS];
+    double shared_cz[RL_SHARED_DIRECTIONS];
+    uint32_t nshared = n < RL_SHARED_DIRECTIONS ? n : RL_SHARED_DIRECTIONS;
+    for (uint32_t k = 0; k < nshared; k++)
+        ray_direction(&key, k, f, &shared_d[k], &shared_cz[k]);
     for (uint32_t j = row0; j < row1; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
             int32_t cell = rl__map_grid_cell(m, i, j);
@@ -215,16 +236,13 @@ void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, 
                 v3 x[RL_RAY_PACKET], d[RL_RAY_PACKET];
                 double tnear[RL_RAY_PACKET];
                 for (size_t k = 0; k < np; k++) {
-                    double u[4];
-                    rl__lds4(&key, s0 + (uint32_t)k, u);
-                    /* the direction, where the light varies most, takes the sequence's best-spread pair
-                     * of dimensions (bases 2 and 3); cosine-weighted: a uniform point of the unit disc
-                     * (concentric map, which keeps strata compact) lifted onto the hemisphere */
-                    double dx, dy;
-                    concentric_disc(u[0], u[1], &dx, &dy);
-                    double cz = sqrt(fmax(0.0, 1.0 - dx * dx - dy * dy));
-                    d[k] = v3_madd(v3_madd(v3_scale(f->n, cz), f->e1, dx), f->e2, dy);
-                    x[k] = rl__domain_point(m, &dom, u[2], u[3]);
+                    uint32_t s = s0 + (uint32_t)k;
+                    double cz;
+                    if (s < nshared)
+                        d[k] = shared_d[s], cz = shared_cz[s];
+                    else
+                        ray_direction(&key, s, f, &d[k], &cz);
+                    x[k] = rl__domain_point(m, &dom, rl__lds_coord(&key, s, 2), rl__lds_coord(&key, s, 3));
                     tnear[k] = ctx->eps / fmax(cz, 1e-3);
                 }
                 trace_packet(ctx, m, np, x, d, tnear, acc, &acc2, &near, cnt);
