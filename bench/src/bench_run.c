@@ -213,8 +213,9 @@ static size_t second_differences(const uint32_t *ij, const double *y, size_t n, 
         grid[(size_t)ij[2 * c + 1] * nu + ij[2 * c]] = (int32_t)c;
     for (size_t c = 0; c < n; c++) {
         uint32_t i = ij[2 * c], j = ij[2 * c + 1];
-        int32_t along[2][2] = {{i > 0 ? grid[(size_t)j * nu + i - 1] : -1, i + 1 < nu ? grid[(size_t)j * nu + i + 1] : -1},
-                               {j > 0 ? grid[(size_t)(j - 1) * nu + i] : -1, j + 1 < nv ? grid[(size_t)(j + 1) * nu + i] : -1}};
+        size_t at = (size_t)j * nu + i;
+        int32_t along[2][2] = {{i > 0 ? grid[at - 1] : -1, i + 1 < nu ? grid[at + 1] : -1},
+                               {j > 0 ? grid[at - nu] : -1, j + 1 < nv ? grid[at + nu] : -1}};
         for (int a = 0; a < 2 && y[c] > 0.0; a++)
             if (along[a][0] >= 0 && along[a][1] >= 0)
                 d[k++] = fabs(y[c] - 0.5 * (y[along[a][0]] + y[along[a][1]])) / y[c];

@@ -43,7 +43,7 @@ typedef struct rl_counters {
     uint64_t pairs_descended;   /* pairs sampled at a finer level than partition_n */
     uint64_t refinements;       /* adaptive: nodes split into their children */
     double variance;            /* adaptive: summed variance of the cells' estimates, (W m^-2)^2 */
-    uint64_t cell_error[RL_CELL_ERROR_BINS]; /* cells by their estimate's relative standard error (rl__cell_error_bin()) */
+    uint64_t cell_error[RL_CELL_ERROR_BINS]; /* cells by relative standard error (rl__cell_error_bin()) */
     int budget_reached;         /* adaptive: the time budget stopped a refinement */
 } rl_counters;
 
