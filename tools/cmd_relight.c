@@ -826,6 +826,15 @@ static cJSON *pass_json(uint32_t k, const rl_pass_stats *s)
     add_count(p, "cells_direct", s->cells_direct);
     cJSON_AddNumberToObject(p, "estimated_rmse", s->estimated_rmse);
     cJSON_AddBoolToObject(p, "budget_reached", s->budget_reached != 0);
+    cJSON *e = cJSON_AddObjectToObject(p, "cell_error");
+    if (e == NULL) {
+        cJSON_Delete(p);
+        return NULL;
+    }
+    add_count(e, "cells", s->cell_error_cells);
+    cJSON_AddNumberToObject(e, "median", s->cell_error_median);
+    cJSON_AddNumberToObject(e, "p95", s->cell_error_p95);
+    cJSON_AddNumberToObject(e, "max", s->cell_error_max);
     return p;
 }
 

@@ -122,6 +122,9 @@ typedef struct bench_result {
     uint64_t solid_angles_considered, solid_angles_culled;
     uint64_t maps, cells;
     double rmse, rel_rmse, snr_db;   /**< of Y against the reference; NaN without one */
+    double mottling;                 /**< median over lit cells of |Y - mean of its two neighbours| / Y, along
+                                          rows and columns of each map: the cell-to-cell noise a view shows,
+                                          which a shadow's few edge cells hardly move; NaN without cells */
     double ref_error;                /**< reference job: RMSE(a - b) / 2 */
     double ref_mean, ref_peak;       /**< reference job: mean and largest Y of the mean */
     double peak_mib;                 /**< the child's peak resident memory (parent fills it in) */
@@ -261,7 +264,8 @@ int bench_fit_power(const double *x, const double *y, size_t n, double *a, doubl
  */
 int bench_plot(const char *dir, const char *name, const bench_text *script, int quiet);
 
-/** Plots error against wall time, log-log, with each method's Pareto front: error_vs_time. @return 1 or 0. */
+/** Plots error against wall time, log-log, with each method's Pareto front: error_vs_time; and the mottling
+ * (bench_result.mottling) of the same runs: mottling_vs_time. @return 1 or 0. */
 int bench_plot_error_vs_time(const bench_sweep *s);
 
 /**

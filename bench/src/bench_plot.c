@@ -133,7 +133,8 @@ static void gp_open(bench_text *t, const char *name, int width, int height)
 
 /* ------------------------------------------------------------ error against time */
 
-/* Appends datablock $NAME with one "time error 'label'" line per usable run of method m (front only if asked). */
+/* Appends datablock $NAME with one "time error mottling 'label'" line per usable run of method m (front only if
+ * asked). */
 static void gp_method_block(bench_text *t, const bench_sweep *s, rl_method m, int front_only, const char *suffix)
 {
     /* Front points in time order: insertion order is by cost, so sort by time here. */
@@ -155,43 +156,51 @@ static void gp_method_block(bench_text *t, const bench_sweep *s, rl_method m, in
         char label[64];
         bench_setting_label(&e->setting, label, sizeof label);
         const char *knobs = strchr(label, ' ');
-        bench_printf(t, "%.6g %.6g \"%s\"\n", e->result.wall_seconds, e->result.rmse, knobs != NULL ? knobs + 1 : "");
+        bench_printf(t, "%.6g %.6g %.6g \"%s\"\n", e->result.wall_seconds, e->result.rmse, e->result.mottling,
+                     knobs != NULL ? knobs + 1 : "");
     }
     bench_printf(t, "EOD\n");
 }
 
-int bench_plot_error_vs_time(const bench_sweep *s)
+/* Plots every method's runs, column `column` of gp_method_block()'s lines against time, into NAME.png, with
+ * the reference's error as a dashed line when ref_line. @return 1, or 0 (said on stderr). */
+static int plot_vs_time(const bench_sweep *s, const char *name, const char *ylabel, int column, int ref_line)
 {
     bench_text t = {0};
     const bench_config *cfg = s->cfg;
-    gp_open(&t, "error_vs_time", 1100, 750);
+    gp_open(&t, name, 1100, 750);
     bench_printf(&t, "set title ");
     gp_string(&t, cfg->scene);
-    bench_printf(&t, " noenhanced\nset logscale xy\nset xlabel 'wall time (s)'\n"
-                     "set ylabel 'RMSE of irradiance luminance Y (W m^{-2})'\n"
-                     "set grid xtics ytics mxtics mytics lc rgb '#e0e0e0'\nset key outside right top\n");
+    bench_printf(&t, " noenhanced\nset logscale xy\nset xlabel 'wall time (s)'\nset ylabel '%s'\n"
+                     "set grid xtics ytics mxtics mytics lc rgb '#e0e0e0'\nset key outside right top\n", ylabel);
     for (size_t m = 0; m < cfg->nmethods; m++) {
         gp_method_block(&t, s, cfg->methods[m], 0, "");
         gp_method_block(&t, s, cfg->methods[m], 1, "_front");
     }
-    if (s->ref->error > 0)
+    if (ref_line && s->ref->error > 0)
         bench_printf(&t, "set arrow from graph 0, first %.6g to graph 1, first %.6g nohead dt 2 lc rgb '#808080'\n",
                      s->ref->error, s->ref->error);
     bench_printf(&t, "plot ");
     for (size_t m = 0; m < cfg->nmethods; m++) {
-        const char *name = rl_method_name(cfg->methods[m]), *colour = METHOD_COLOURS[m];
-        bench_printf(&t, "%s$%s using 1:2 with points pt 7 ps 1.4 lc rgb '%s' title '%s', \\\n", m ? ", " : "",
-                     name, colour, name);
-        bench_printf(&t, "  $%s_front using 1:2 with lines lw 2 lc rgb '%s' notitle, \\\n", name, colour);
-        bench_printf(&t, "  $%s using 1:2:3 with labels offset 0.6,0.7 font ',8' tc rgb '%s' noenhanced notitle", name,
-                     colour);
+        const char *method = rl_method_name(cfg->methods[m]), *colour = METHOD_COLOURS[m];
+        bench_printf(&t, "%s$%s using 1:%d with points pt 7 ps 1.4 lc rgb '%s' title '%s', \\\n", m ? ", " : "",
+                     method, column, colour, method);
+        bench_printf(&t, "  $%s_front using 1:%d with lines lw 2 lc rgb '%s' notitle, \\\n", method, column, colour);
+        bench_printf(&t, "  $%s using 1:%d:4 with labels offset 0.6,0.7 font ',8' tc rgb '%s' noenhanced notitle",
+                     method, column, colour);
     }
-    if (s->ref->error > 0) /* a line across the whole graph, and its entry in the key */
+    if (ref_line && s->ref->error > 0) /* a line across the whole graph, and its entry in the key */
         bench_printf(&t, ", \\\n  NaN with lines dt 2 lc rgb '#808080' title 'reference error estimate'");
     bench_printf(&t, "\n");
-    int ok = bench_plot(cfg->output, "error_vs_time", &t, cfg->quiet);
+    int ok = bench_plot(cfg->output, name, &t, cfg->quiet);
     bench_text_free(&t);
     return ok;
+}
+
+int bench_plot_error_vs_time(const bench_sweep *s)
+{
+    return plot_vs_time(s, "error_vs_time", "RMSE of irradiance luminance Y (W m^{-2})", 2, 1) &&
+           plot_vs_time(s, "mottling_vs_time", "mottling: median |Y - mean of 2 neighbours| / Y", 3, 0);
 }
 
 /* ------------------------------------------------------------ error images */

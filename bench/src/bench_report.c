@@ -253,7 +253,7 @@ static void for_each_pair(const bench_sweep *s, void (*visit)(void *user, rl_met
 static const char CSV_HEADER[] =
     "method,partition_n,rays_per_solid_angle,samples_per_cell,target_error,bounces,threads,wall_seconds,cpu_seconds,"
     "samples,rays_cast,rays_kept,solid_angles_considered,solid_angles_culled,cells,peak_mib,rays_per_cpu_second,"
-    "rmse,rel_rmse,snr_db,pareto,ref_error_rmse,ref_adequate\n";
+    "rmse,rel_rmse,snr_db,pareto,ref_error_rmse,ref_adequate,mottling\n";
 
 /* Appends one CSV row for a usable entry. */
 static void csv_row(bench_text *t, const bench_sweep *s, const bench_entry *e)
@@ -266,8 +266,8 @@ static void csv_row(bench_text *t, const bench_sweep *s, const bench_entry *e)
     bench_printf(t, "%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%.2f,%.6g,", r->samples,
                  r->rays_cast, r->rays_kept, r->solid_angles_considered, r->solid_angles_culled, r->cells, r->peak_mib,
                  rays_per_cpu_second(r));
-    bench_printf(t, "%.9g,%.9g,%.4f,%d,%.9g,%d\n", r->rmse, r->rel_rmse, r->snr_db, e->on_front, s->ref->error,
-                 resolved(s, e));
+    bench_printf(t, "%.9g,%.9g,%.4f,%d,%.9g,%d,%.6g\n", r->rmse, r->rel_rmse, r->snr_db, e->on_front, s->ref->error,
+                 resolved(s, e), r->mottling);
 }
 
 /* Writes DIR/bench.csv. @return 1, or 0 after reporting. */
@@ -332,6 +332,7 @@ static cJSON *entry_json(const bench_sweep *s, const bench_entry *e)
     add_number(j, "fraction_of_ray_ceiling", of_ceiling(s, r));
     add_number(j, "rmse", r->rmse);
     add_number(j, "rel_rmse", r->rel_rmse);
+    add_number(j, "mottling", r->mottling);
     add_number(j, "snr_db", r->snr_db);
     cJSON_AddBoolToObject(j, "pareto", e->on_front);
     return j;
@@ -524,18 +525,18 @@ static void md_ceiling(bench_text *t, const bench_sweep *s)
 static void md_runs(bench_text *t, const bench_sweep *s)
 {
     bench_printf(t, "## Runs\n\n| setting | wall s | cpu s | rays cast | rays kept | rays / cpu s | of ceiling | "
-                    "peak MiB | RMSE | rel. RMSE | SNR dB | front |\n"
-                    "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n");
+                    "peak MiB | RMSE | rel. RMSE | SNR dB | mottling | front |\n"
+                    "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n");
     for (size_t i = 0; i < s->count; i++) {
         const bench_entry *e = &s->entries[i];
         const bench_result *r = &e->result;
         char label[64];
         if (!usable(e))
             continue;
-        bench_printf(t, "| %s | %.3f | %.3f | %" PRIu64 " | %" PRIu64 " | %.3g | %.0f%% | %.1f | %.4g | %.3g%% | %.2f | %s |\n",
+        bench_printf(t, "| %s | %.3f | %.3f | %" PRIu64 " | %" PRIu64 " | %.3g | %.0f%% | %.1f | %.4g | %.3g%% | %.2f | %.3g%% | %s |\n",
                      bench_setting_label(&e->setting, label, sizeof label), r->wall_seconds, r->cpu_seconds,
                      r->rays_cast, r->rays_kept, rays_per_cpu_second(r), 100.0 * of_ceiling(s, r), r->peak_mib,
-                     r->rmse, 100.0 * r->rel_rmse, r->snr_db, e->on_front ? "yes" : resolved(s, e) ? "" : "unresolved");
+                     r->rmse, 100.0 * r->rel_rmse, r->snr_db, 100.0 * r->mottling, e->on_front ? "yes" : resolved(s, e) ? "" : "unresolved");
     }
     bench_printf(t, "\n");
     for (size_t i = 0; i < s->count; i++) {

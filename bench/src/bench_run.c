@@ -80,7 +80,7 @@ static size_t read_record(int fd, void *data, size_t size)
 static void result_init(bench_result *r)
 {
     memset(r, 0, sizeof *r);
-    r->rmse = r->rel_rmse = r->snr_db = NAN;
+    r->rmse = r->rel_rmse = r->snr_db = r->mottling = NAN;
     r->ref_error = r->ref_mean = r->ref_peak = NAN;
 }
 
@@ -201,8 +201,45 @@ static rl_solution *timed_relight(const rl_scene *scene, const rl_job *job, cons
     return sol;
 }
 
+/* Appends to d (room for two a cell) the relative second differences |y - (left + right) / 2| / y of
+ * the n cells of a map of grid nu x nv, cells at ij ([n][2]), along rows and columns, for each lit cell
+ * with both neighbours. grid is scratch of nu * nv entries. @return the number appended. */
+static size_t second_differences(const uint32_t *ij, const double *y, size_t n, uint32_t nu, uint32_t nv,
+                                 int32_t *grid, double *d)
+{
+    size_t k = 0;
+    for (size_t g = 0; g < (size_t)nu * nv; g++)
+        grid[g] = -1;
+    for (size_t c = 0; c < n; c++)
+        grid[(size_t)ij[2 * c + 1] * nu + ij[2 * c]] = (int32_t)c;
+    for (size_t c = 0; c < n; c++) {
+        uint32_t i = ij[2 * c], j = ij[2 * c + 1];
+        size_t at = (size_t)j * nu + i;
+        int32_t along[2][2] = {{i > 0 ? grid[at - 1] : -1, i + 1 < nu ? grid[at + 1] : -1},
+                               {j > 0 ? grid[at - nu] : -1, j + 1 < nv ? grid[at + nu] : -1}};
+        for (int a = 0; a < 2 && y[c] > 0.0; a++)
+            if (along[a][0] >= 0 && along[a][1] >= 0)
+                d[k++] = fabs(y[c] - 0.5 * (y[along[a][0]] + y[along[a][1]])) / y[c];
+    }
+    return k;
+}
+
+/* @return the order of two doubles (qsort()). */
+static int by_value(const void *a, const void *b)
+{
+    double x = *(const double *)a, z = *(const double *)b;
+    return (x > z) - (x < z);
+}
+
+/* Sets r->mottling from the relative second differences d[0, n) (sorted here). */
+static void set_mottling(double *d, size_t n, bench_result *r)
+{
+    qsort(d, n, sizeof *d, by_value);
+    r->mottling = n == 0 ? NAN : n % 2 ? d[n / 2] : 0.5 * (d[n / 2 - 1] + d[n / 2]);
+}
+
 /* Fills y (ref->cells entries) with the luminance of every cell's irradiance, checking that the
- * maps match the reference's. @return 1, or 0 with the reason in r. */
+ * maps match the reference's, and sets r's mottling. @return 1, or 0 with the reason in r. */
 static int solution_luminance(const rl_solution *sol, const bench_reference *ref, double *y, bench_result *r)
 {
     if (rl_solution_map_count(sol) != ref->maps) {
@@ -211,7 +248,13 @@ static int solution_luminance(const rl_solution *sol, const bench_reference *ref
         return 0;
     }
     float *rgb = NULL;
-    int ok = 1;
+    uint32_t *ij = NULL;
+    int32_t *grid = NULL;
+    double *d = malloc(2 * (ref->cells ? ref->cells : 1) * sizeof *d);
+    size_t nd = 0;
+    int ok = d != NULL;
+    if (!ok)
+        snprintf(r->message, sizeof r->message, "out of memory for %zu cells", ref->cells);
     for (size_t m = 0; ok && m < ref->maps; m++) {
         rl_map_info info;
         size_t n = ref->offset[m + 1] - ref->offset[m];
@@ -221,16 +264,27 @@ static int solution_luminance(const rl_solution *sol, const bench_reference *ref
             break;
         }
         float *grown = realloc(rgb, 3 * (n ? n : 1) * sizeof *rgb);
-        ok = grown != NULL && rl_solution_map_cells(sol, m, NULL, NULL, NULL, grown, NULL) == RL_OK;
         rgb = grown != NULL ? grown : rgb;
+        uint32_t *grown_ij = realloc(ij, 2 * (n ? n : 1) * sizeof *ij);
+        ij = grown_ij != NULL ? grown_ij : ij;
+        int32_t *grown_grid = realloc(grid, ((size_t)info.nu * info.nv + 1) * sizeof *grid);
+        grid = grown_grid != NULL ? grown_grid : grid;
+        ok = grown != NULL && grown_ij != NULL && grown_grid != NULL &&
+             rl_solution_map_cells(sol, m, ij, NULL, NULL, rgb, NULL) == RL_OK;
         if (!ok) {
             snprintf(r->message, sizeof r->message, "cannot read the cells of map %zu", m);
             break;
         }
         for (size_t c = 0; c < n; c++)
             y[ref->offset[m] + c] = bench_luminance(rgb + 3 * c);
+        nd += second_differences(ij, y + ref->offset[m], n, info.nu, info.nv, grid, d + nd);
     }
+    if (ok)
+        set_mottling(d, nd, r);
     free(rgb);
+    free(ij);
+    free(grid);
+    free(d);
     return ok;
 }
 

@@ -230,6 +230,8 @@ static int run_job(pass_job *job, unsigned n, const rl__run *run, double base, d
 static void sum_counters(const rl_counters *c, unsigned n, rl_pass_stats *st)
 {
     for (unsigned k = 0; k < n; k++) {
+        for (unsigned b = 0; b < RL_CELL_ERROR_BINS; b++)
+            st->cell_error_histogram[b] += c[k].cell_error[b];
         st->samples += c[k].samples;
         st->rays_cast += c[k].rays_cast;
         st->rays_kept += c[k].rays_kept;
@@ -572,9 +574,38 @@ static int share_measure(const rl_cluster *cl, const share *sh, size_t n, double
     return -1;
 }
 
+/* Sets st's summary of the cells' relative standard errors from their histogram (rl__cell_error_bin()). */
+static void summarise_cell_errors(rl_pass_stats *st)
+{
+    const uint64_t *hist = st->cell_error_histogram;
+    uint64_t total = 0, below = 0;
+    for (unsigned b = 0; b < RL_CELL_ERROR_BINS; b++)
+        total += hist[b];
+    st->cell_error_cells = total;
+    st->cell_error_median = st->cell_error_p95 = st->cell_error_max = 0.0;
+    for (unsigned b = 0; b < RL_CELL_ERROR_BINS && total > 0; b++) {
+        if (hist[b] == 0)
+            continue;
+        double v = b == 0 ? 0.0 : rl__cell_error_of_bin(b); /* the first bin holds the cells of no error */
+        if (below < 0.5 * (double)total && (double)(below + hist[b]) >= 0.5 * (double)total)
+            st->cell_error_median = v;
+        if (below < 0.95 * (double)total && (double)(below + hist[b]) >= 0.95 * (double)total)
+            st->cell_error_p95 = v;
+        st->cell_error_max = v;
+        below += hist[b];
+    }
+}
+
 /* Sums the pass statistics over ranks (wall time stays this rank's). @return 0 or -1. */
 static int sum_stats(const rl_cluster *cl, rl_pass_stats *st)
 {
+    double hist[RL_CELL_ERROR_BINS];
+    for (unsigned b = 0; b < RL_CELL_ERROR_BINS; b++)
+        hist[b] = (double)st->cell_error_histogram[b];
+    if (cl->sum(cl->user, hist, RL_CELL_ERROR_BINS) != 0)
+        return -1;
+    for (unsigned b = 0; b < RL_CELL_ERROR_BINS; b++)
+        st->cell_error_histogram[b] = (uint64_t)hist[b];
     double v[] = {(double)st->samples, (double)st->rays_cast, (double)st->rays_kept,
                   (double)st->solid_angles_considered, (double)st->solid_angles_culled, (double)st->pairs,
                   (double)st->pairs_descended, (double)st->refinements, (double)st->rays_free,
@@ -811,6 +842,7 @@ rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st)
     for (size_t m = 0; m < nmaps; m++)
         cells += maps[m].ncells;
     st->estimated_rmse = cells ? sqrt(st->estimated_rmse / (double)cells) : 0.0;
+    summarise_cell_errors(st);
     st->wall_seconds = ilf_clock_wall() - w0;
     return RL_OK;
 }
@@ -989,6 +1021,9 @@ static void add_refined(rl_pass_stats *to, const rl_pass_stats *more, const refi
     to->samples += more->samples;
     to->rays_cast += more->rays_cast;
     to->rays_kept += more->rays_kept;
+    for (unsigned b = 0; b < RL_CELL_ERROR_BINS; b++)
+        to->cell_error_histogram[b] += more->cell_error_histogram[b];
+    summarise_cell_errors(to);
     if (rf->marked > 0)
         to->cells_direct = rf->marked;
 }

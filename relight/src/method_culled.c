@@ -14,7 +14,9 @@
  * from a low-discrepancy sequence keyed by (seed, pass, emitter, receiver,
  * cell, level, leaf), except that a light field's leaf nested in its slab
  * draws its k directions once from its own key (rl__leaf_share()) and each
- * cell only its origins. Those shared directions' rays are parallel, so
+ * cell only its origins, at the same places in every cell (the leaf's key
+ * again): neighbouring cells then read the slab at points one cell apart,
+ * and their errors change smoothly from cell to cell instead of mottling. Those shared directions' rays are parallel, so
  * their visibility comes from the occluders' shadows along each direction
  * on the tile (leaf_shadow.c) rather than from Embree, wherever the shadows
  * can be worked out; both methods build them from the whole tile, so they
@@ -160,11 +162,13 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
     uint32_t k = ctx->sampling->rays_per_solid_angle;
     if (L->nshared > 0 && L->nshared == k) {
         /* The leaf's shared directions (coordinates 0 and 1 of its own
-         * sequence) with origins from coordinates 2 and 3 of the cell's, so
-         * that each cell's k pairs are the points of a shifted 4-D sequence
-         * as before: the same two coordinates for both would tie each
+         * sequence) with origins from coordinates 2 and 3 of the same
+         * sequence, so that each cell's k pairs are the points of a shifted
+         * 4-D sequence: the same two coordinates for both would tie each
          * direction to its origin, and a cell's error would stop falling
-         * with k. A light field's leaf is blind (rl__leaf_draw() draws over
+         * with k. Every cell takes the same origins within itself (one key
+         * per leaf, not per cell): the demo's walls, lit directly, mottled
+         * half as much again with a key per cell (docs/accuracy.md). A light field's leaf is blind (rl__leaf_draw() draws over
          * all of it whatever the origin), which is what lets cells share
          * its directions; shoot_shared() counts and drops what lands
          * behind or beside the emitter, as the draw would have. A whole
@@ -174,7 +178,7 @@ static double gather_cell(const rl_transfer_ctx *ctx, const rl_pair *p, const rl
         v2 corner = {m->u0 + c.i * m->cell, m->v0 + c.j * m->cell};
         if (!square)
             rl__cell_domain(m, cell, &dom);
-        lds_key key = rl__lds_make_last2(ilf_hash_mix(L->key, cell));
+        lds_key key = rl__lds_make_last2(L->key); /* the same origins in every cell (above) */
         cnt->samples += k;
         for (uint32_t i = 0; i < k; i++) {
             double a = rl__lds_coord(&key, i, 2), b = rl__lds_coord(&key, i, 3);

@@ -10,10 +10,26 @@
 #ifndef RELIGHT_PASS_H
 #define RELIGHT_PASS_H
 
+#include <math.h>
+
 #include "emitter.h"
 #include "ilf/hash.h"
+#include "relight/engine.h"
 #include "shadow.h"
 #include "tracer.h"
+
+/* @return the bin of relative standard error r >= 0. */
+static inline unsigned rl__cell_error_bin(double r)
+{
+    double x = r > 0 ? (log10(r) - RL_CELL_ERROR_LOG0) * RL_CELL_ERROR_PER_DECADE : 0.0;
+    return x <= 0 ? 0u : x >= RL_CELL_ERROR_BINS - 1 ? RL_CELL_ERROR_BINS - 1 : (unsigned)x;
+}
+
+/* @return the relative standard error at the middle of bin b (in log10). */
+static inline double rl__cell_error_of_bin(unsigned b)
+{
+    return pow(10.0, RL_CELL_ERROR_LOG0 + (b + 0.5) / RL_CELL_ERROR_PER_DECADE);
+}
 
 /* Work counters of one pass; summed over threads. */
 typedef struct rl_counters {
@@ -27,6 +43,7 @@ typedef struct rl_counters {
     uint64_t pairs_descended;   /* pairs sampled at a finer level than partition_n */
     uint64_t refinements;       /* adaptive: nodes split into their children */
     double variance;            /* adaptive: summed variance of the cells' estimates, (W m^-2)^2 */
+    uint64_t cell_error[RL_CELL_ERROR_BINS]; /* cells by relative standard error (rl__cell_error_bin()) */
     int budget_reached;         /* adaptive: the time budget stopped a refinement */
 } rl_counters;
 

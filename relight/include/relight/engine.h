@@ -21,6 +21,18 @@
 extern "C" {
 #endif
 
+/**
+ * The histogram of a pass's cells by the standard error of their estimates relative to their values
+ * (rl_pass_stats.cell_error_histogram): RL_CELL_ERROR_BINS bins spaced evenly in log10, bin b holding
+ * the errors in [10^(RL_CELL_ERROR_LOG0 + b / RL_CELL_ERROR_PER_DECADE), the next bin's start), about 2.3%
+ * wide; bin 0 also holds everything below (the cells of no error) and the last bin everything above.
+ * A histogram rather than a value per cell so that threads, ranks and a pass's two gathers merge by
+ * summing, at no memory per cell.
+ */
+#define RL_CELL_ERROR_BINS 500
+#define RL_CELL_ERROR_PER_DECADE 100
+#define RL_CELL_ERROR_LOG0 (-4.0)
+
 /** What one pass did. Times in seconds; counts summed over threads. */
 typedef struct rl_pass_stats {
     double wall_seconds;          /**< elapsed time of the pass */
@@ -44,6 +56,14 @@ typedef struct rl_pass_stats {
     int budget_reached;           /**< adaptive: 1 if the time budget stopped refinement */
     uint64_t cells_direct;        /**< a first-hit bounce pass on larger cells: cells gathered on their own
                                        (near an occluder, or on a narrow polygon) instead of interpolated */
+    uint64_t cell_error_cells;    /**< cells whose estimate carries a standard error from its own samples (a
+                                       first-hit bounce pass: every cell it gathers; 0 for other passes) */
+    double cell_error_median;     /**< of those cells, the median of the standard error relative to the cell's
+                                       value (luminance), to about 1% of itself (a bin's middle); 0 when none */
+    double cell_error_p95;        /**< and its 95th percentile */
+    double cell_error_max;        /**< and its largest value (a cell with samples and nothing met counts 0) */
+    uint64_t cell_error_histogram[RL_CELL_ERROR_BINS]; /**< those cells by their relative standard error
+                                                            (RL_CELL_ERROR_BINS), from which the three come */
 } rl_pass_stats;
 
 /**
