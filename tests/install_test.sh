@@ -129,13 +129,15 @@ for cmd in $commands; do
     check page_names "$mandir/ilf.1" "ilf-$cmd"   # in its SEE ALSO
 done
 # the Python package ilfkit (when the build has it): imported from the prefix alone, by Debian's python3,
-# with no environment but PATH and PYTHONPATH; its module finds the installed liblfio through its rpath
+# with no environment but PATH and PYTHONPATH; its module finds the installed liblfio through its rpath,
+# and librelight.so finds the mesh module of the install it belongs to
 if [ -d "$build/python/ilfkit" ]; then
     pydir=$(find "$prefix" -name '_ilfkit*.so' -printf '%h\n' | head -1)
     check test -n "$pydir" -a -f "$pydir/__init__.py"
     check env -i PATH=/usr/bin:/bin PYTHONPATH="$(dirname "${pydir:-.}")" /usr/bin/python3 -c "import ilfkit
 s = ilfkit.open('$work/c.h5')[0]
 assert abs(float(s.radiance.max()) - 1) < 1e-6, s.radiance.max()
+assert len(ilfkit.relight('$work/floor.json').maps) == 1  # the mesh module found beside librelight.so
 assert ilfkit.__file__.startswith('$prefix/'), ilfkit.__file__"
 fi
 echo "$pass passed, $fail failed"
