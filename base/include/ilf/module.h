@@ -49,12 +49,14 @@ typedef struct ilf_module {
 } ilf_module;
 
 /* A module's initialiser: ilf_module m = ILF_MODULE_INIT(env, relative, installed, entry, version); */
-#define ILF_MODULE_INIT(env, relative, installed, entry, version) {(env), (relative), (installed), (entry), (version), 0, NULL, ""}
+#define ILF_MODULE_INIT(env, relative, installed, entry, version)                                                   \
+    {(env), (relative), (installed), (entry), (version), 0, NULL, ""}
 
 /* Loads m on its first call (thread-safe). @return m's table, or NULL: then ilf_module_failure(m) says why. */
 const void *ilf_module_get(ilf_module *m);
 
-/* @return the text of m's failed load (every path tried and why), "" if it loaded or was not tried. */
+/* @return the text of m's failed load (every path tried and why), "" if it loaded; to be read after
+ * ilf_module_get() returned NULL (the text never changes after that). */
 const char *ilf_module_failure(const ilf_module *m);
 
 #endif /* ILF_MODULE_H */
