@@ -551,6 +551,16 @@ expect 2 "irradiance of a missing scene" "$ILF" irradiance "$TMP/no-scene.json" 
 check "irradiance names the missing scene" stderr_has "no-scene.json"
 expect 2 "relight an invalid scene" "$ILF" relight "$SRC/tests/scenes/bad_nonconvex.json" -o "$RELIT/never"
 check "the invalid scene is named" stderr_has "bad_nonconvex.json"
+# a scene with a mesh when the mesh module (LIBDIR/ilfkit/libilfkit_assimp.so) cannot be loaded: bad input,
+# naming the scene, the mesh file and the module path tried; the same scene relights with the module
+expect 2 "relight a mesh scene without the mesh module" env ILFKIT_MESH_MODULE="$TMP/no-such/libilfkit_assimp.so" \
+    "$ILF" relight "$SRC/tests/scenes/good_mesh_lshape.json" -o "$RELIT/never" --quiet
+check "the missing module's message names the scene" stderr_has "good_mesh_lshape.json"
+check "the missing module's message names the mesh" stderr_has "lshape.obj"
+check "the missing module's message names the path tried" stderr_has "$TMP/no-such/libilfkit_assimp.so"
+check "the missing module's message says what is missing" stderr_has "mesh support is not available"
+expect 0 "relight the same mesh scene with the module" "$ILF" relight "$SRC/tests/scenes/good_mesh_lshape.json" \
+    -o "$RELIT/lshape" --quiet
 expect 2 "relight a file that is not a scene" "$ILF" relight "$TEXT" -o "$RELIT/never"
 expect 2 "relight without -o" "$ILF" relight "$SQUARE"
 expect 2 "relight --partition-n 3" "$ILF" relight "$SQUARE" -o "$RELIT/never" --partition-n 3

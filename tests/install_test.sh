@@ -9,7 +9,8 @@
 # installed libraries export their public prefix only. The
 # installed ilf does not link OpenImageIO, writes a PNG and an EXR without it,
 # and finds the installed image module (LIBDIR/ilfkit/libilfkit_oiio.so) to
-# read the EXR back as a probe. Nothing runs with LD_LIBRARY_PATH: the CMake packages, the .pc files'
+# read the EXR back as a probe; it does not link assimp either, and finds the installed mesh module
+# (LIBDIR/ilfkit/libilfkit_assimp.so) to relight a scene with an OBJ mesh. Nothing runs with LD_LIBRARY_PATH: the CMake packages, the .pc files'
 # rpath and ilf's own rpath must carry the way to the libraries. The manual pages (tools/man_pages.py)
 # are installed, one per command, each with every option of its --help, and render without warnings.
 set -eu
@@ -89,7 +90,7 @@ check "$prefix/bin/ilf" --version
 # the image module: installed, loaded by the installed ilf on its first image, never linked
 check test -f "$libdir/ilfkit/libilfkit_oiio.so"
 check test "$(ldd "$prefix/bin/ilf" | grep -c OpenImageIO)" -eq 0
-ilf() { env -u ILFKIT_IMAGE_MODULE "$prefix/bin/ilf" "$@" >>"$work/ilf.log" 2>&1; }
+ilf() { env -u ILFKIT_IMAGE_MODULE -u ILFKIT_MESH_MODULE "$prefix/bin/ilf" "$@" >>"$work/ilf.log" 2>&1; }
 check ilf synth --kind constant --grid 2x2 --n 2 -o "$work/c.h5"
 check ilf slice "$work/c.h5" --toward 0,0,1 -o "$work/c.png"
 check ilf slice "$work/c.h5" --position 0,0 --layout latlong -o "$work/c.exr"
@@ -98,6 +99,14 @@ printf '{"plane": {"origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0]}, "grid":
   "pattern": "c.exr"}\n' > "$work/probe.json"
 check ilf capture "$work/probe.json" -o "$work/probe.h5" --quiet
 check test -s "$work/probe.h5"
+# the mesh module: installed beside the image module, loaded by the installed ilf on a scene's first mesh
+check test -f "$libdir/ilfkit/libilfkit_assimp.so"
+check test "$(ldd "$prefix/bin/ilf" | grep -c assimp)" -eq 0
+check test "$(ldd "$libdir/librelight.so" | grep -c assimp)" -eq 0
+printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n' > "$work/floor.obj"
+printf '{"materials": {"grey": {}}, "meshes": [{"file": "floor.obj", "material": "grey"}]}\n' > "$work/floor.json"
+check ilf relight "$work/floor.json" -o "$work/floor" --quiet
+check grep -q "floor.obj" <("$prefix/bin/ilf" info "$work/floor/radiance.h5")
 # relight and capture from a program: find_package(ilfkit COMPONENTS ...) (built above) and pkg-config
 check "$work/cm/consumer_irradiance_cmake" "$work/lamp_cm.json"
 check env -u ILFKIT_IMAGE_MODULE "$work/cm/consumer_capture_cmake" "$work/probe.json" "$work/capture_cm.h5"
@@ -127,13 +136,15 @@ for cmd in $commands; do
     check page_names "$mandir/ilf.1" "ilf-$cmd"   # in its SEE ALSO
 done
 # the Python package ilfkit (when the build has it): imported from the prefix alone, by Debian's python3,
-# with no environment but PATH and PYTHONPATH; its module finds the installed liblfio through its rpath
+# with no environment but PATH and PYTHONPATH; its module finds the installed liblfio through its rpath,
+# and librelight.so finds the mesh module of the install it belongs to
 if [ -d "$build/python/ilfkit" ]; then
     pydir=$(find "$prefix" -name '_ilfkit*.so' -printf '%h\n' | head -1)
     check test -n "$pydir" -a -f "$pydir/__init__.py"
     check env -i PATH=/usr/bin:/bin PYTHONPATH="$(dirname "${pydir:-.}")" /usr/bin/python3 -c "import ilfkit
 s = ilfkit.open('$work/c.h5')[0]
 assert abs(float(s.radiance.max()) - 1) < 1e-6, s.radiance.max()
+assert len(ilfkit.relight('$work/floor.json').maps) == 1  # the mesh module found beside librelight.so
 assert ilfkit.__file__.startswith('$prefix/'), ilfkit.__file__"
 fi
 echo "$pass passed, $fail failed"

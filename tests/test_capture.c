@@ -755,20 +755,6 @@ static void test_sample_bound(void)
 
 /* ------------------------------------------------------------ the image module */
 
-/* @return 1 if a line of /proc/self/maps contains name, 0 if none does, -1 if the maps cannot be read. */
-static int mapped(const char *name)
-{
-    FILE *f = fopen("/proc/self/maps", "r");
-    if (f == NULL)
-        return -1;
-    char line[PATH_BYTES + 128];
-    int found = 0;
-    while (!found && fgets(line, sizeof line, f) != NULL)
-        found = strstr(line, name) != NULL;
-    fclose(f);
-    return found;
-}
-
 /* @return whether text contains every one of the NULL-terminated list of parts. */
 static int names_all(const char *text, const char *const *parts)
 {
@@ -811,7 +797,7 @@ static void expect_unavailable(const char *module_path, const char *why)
     cap_manifest_destroy(m);
     CHECK(img_write(tmp_path("unavailable.tif"), 1, 1, 3, px, err, sizeof err) == IMG_ERR_ARG,
           "a bad extension is still a bad argument: %s", err);
-    CHECK(mapped("libOpenImageIO") == 0, "no OpenImageIO mapped after a failed load");
+    CHECK(check_mapped("libOpenImageIO") == 0, "no OpenImageIO mapped after a failed load");
 }
 
 /* Runs expect_unavailable(module_path, why) in a child process whose module is pinned to
@@ -842,21 +828,21 @@ static void test_unavailable_module(void)
 /* Must be this process's first image call. */
 static void test_lazy_module(void)
 {
-    CHECK(mapped("libOpenImageIO") == 0, "OpenImageIO is not mapped before the first image call");
-    CHECK(mapped("libilfkit_oiio") == 0, "the image module is not mapped before the first image call");
+    CHECK(check_mapped("libOpenImageIO") == 0, "OpenImageIO is not mapped before the first image call");
+    CHECK(check_mapped("libilfkit_oiio") == 0, "the image module is not mapped before the first image call");
     img_image img = {1, 1, 1, NULL, 0, 8};
     img_free(&img);
     CHECK(img_guess_format("a/b.Exr") == IMG_FORMAT_EXR && img_guess_format("b.PNG") ==
           IMG_FORMAT_PNG && img_guess_format("b.exr/c") == IMG_FORMAT_UNKNOWN,
           "formats by extension");
-    CHECK(mapped("libOpenImageIO") == 0, "guessing formats and freeing images load nothing");
+    CHECK(check_mapped("libOpenImageIO") == 0, "guessing formats and freeing images load nothing");
     const float px[2 * 2 * 3] = {0, 0.5f, 1, 2, 3, 4, -1, 1e6f, 0.25f, 7, 8, 9};
     char err[512];
     CHECK(img_write(tmp_path("lazy.exr"), 2, 2, 3, px, err, sizeof err) == IMG_OK, "%s", err);
-    CHECK(mapped("libilfkit_oiio") == 0 && mapped("libOpenImageIO") == 0, "a write loads nothing of OpenImageIO");
+    CHECK(check_mapped("libilfkit_oiio") == 0 && check_mapped("libOpenImageIO") == 0, "a write loads nothing of OpenImageIO");
     CHECK(img_read(tmp_path("lazy.exr"), &img, err, sizeof err) == IMG_OK, "%s", err);
-    CHECK(mapped("libilfkit_oiio") == 1, "the image module is mapped after the first read");
-    CHECK(mapped("libOpenImageIO") == 1, "OpenImageIO is mapped after the first read");
+    CHECK(check_mapped("libilfkit_oiio") == 1, "the image module is mapped after the first read");
+    CHECK(check_mapped("libOpenImageIO") == 1, "OpenImageIO is mapped after the first read");
     CHECK(img.width == 2 && img.height == 2 && img.channels == 3 && !img.integer && img.bits == 32 &&
               memcmp(img.pixels, px, sizeof px) == 0,
           "32-bit float EXR read back exactly");

@@ -56,20 +56,6 @@ static const char *tmp_path(const char *name)
     return b;
 }
 
-/* @return 1 if a line of /proc/self/maps contains name, 0 if none does, -1 if the maps cannot be read. */
-static int mapped(const char *name)
-{
-    FILE *f = fopen("/proc/self/maps", "r");
-    if (f == NULL)
-        return -1;
-    char line[PATH_BYTES + 128];
-    int found = 0;
-    while (!found && fgets(line, sizeof line, f) != NULL)
-        found = strstr(line, name) != NULL;
-    fclose(f);
-    return found;
-}
-
 /* @return how many entries of tmp_dir are temporaries under base's atomic-writer rule. */
 static int temporaries_left(void)
 {
@@ -106,7 +92,7 @@ static void test_nothing_loaded(void)
               img_read(tmp_path("x.exr"), NULL, err, sizeof err) == IMG_ERR_ARG,
           "NULL path or image");
     CHECK(img_srgb_encode(0.5) > 0.0f, "sRGB needs no module");
-    CHECK(mapped("libilfkit_oiio") == 0 && mapped("libOpenImageIO") == 0,
+    CHECK(check_mapped("libilfkit_oiio") == 0 && check_mapped("libOpenImageIO") == 0,
           "argument errors, names, formats and sRGB load nothing");
 }
 
@@ -134,10 +120,10 @@ static void test_writes(void)
     const char *png = tmp_path("two.png");
     remove(png);
     CHECK(img_write(png, 2, 1, 4, rgba, err, sizeof err) == IMG_OK, "%s", err);
-    CHECK(mapped("libilfkit_oiio") == 0, "a write needs no module");
+    CHECK(check_mapped("libilfkit_oiio") == 0, "a write needs no module");
     img_image img;
     CHECK(img_read(png, &img, err, sizeof err) == IMG_OK, "%s", err);
-    CHECK(mapped("libilfkit_oiio") == 1, "the module is mapped after the first read");
+    CHECK(check_mapped("libilfkit_oiio") == 1, "the module is mapped after the first read");
     if (img.pixels != NULL) {
         CHECK(img.width == 2 && img.height == 1 && img.channels == 4 && img.integer == 1 && img.bits == 8,
               "PNG: 2x1x4, 8-bit integers (%dx%dx%d, %d bits)", img.width, img.height, img.channels, img.bits);

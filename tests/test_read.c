@@ -3,11 +3,16 @@
  * (ilf/json.h) where its two predecessors differed (byte order mark, nesting
  * depth, repeated keys, empty files, NUL bytes, integers, one message format)
  * and the mesh importer (ilf/mesh.h: the soup of a small OBJ, the formats
- * and pre-checks refused with the file named).
+ * and pre-checks refused with the file named; the mesh module, and with it
+ * assimp, mapped only by the first import that passes the checks; a
+ * missing module refused as bad input naming the mesh and the path tried,
+ * in a child process, since the module loads once per process).
  */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "check.h"
 #include "ilf/json.h"
@@ -110,24 +115,41 @@ static void test_json_values(void)
     ilf_json_free(NULL);
 }
 
+/* Imports an OBJ quad in a child process whose mesh module is pinned to a missing file: refused as bad
+ * input, naming the mesh, the module path tried, and what is missing; nothing of assimp mapped. */
+static void test_mesh_without_module(void)
+{
+    const char *obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n";
+    char path[640], module[640];
+    snprintf(path, sizeof path, "%s", put("tri.obj", obj, strlen(obj)));
+    snprintf(module, sizeof module, "%s/no-such/libilfkit_assimp.so", folder);
+    fflush(stdout);
+    fflush(stderr);
+    long failed_before = check_failed;
+    pid_t pid = fork();
+    if (pid == 0) {
+        setenv("ILFKIT_MESH_MODULE", module, 1);
+        ilf_mesh *m = NULL;
+        char why[1024] = "";
+        CHECK(ilf_mesh_import(path, &m, why, sizeof why) == ILF_MESH_ERR_INPUT && m == NULL,
+              "a missing module is bad input: %s", why);
+        CHECK(strstr(why, path) && strstr(why, module) && strstr(why, "mesh support is not available"),
+              "the message names the mesh, the module tried and what is missing: %s", why);
+        CHECK(check_mapped("libassimp") == 0, "no assimp mapped after a failed load");
+        _exit(check_failed > failed_before ? 1 : 0);
+    }
+    int status = -1;
+    CHECK(pid > 0 && waitpid(pid, &status, 0) == pid && WIFEXITED(status) && WEXITSTATUS(status) == 0,
+          "the child without a mesh module passed its checks (wait status %d)", status);
+}
+
+/* Must be this process's first import. */
 static void test_mesh(void)
 {
-    const char *obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nl 1 3\n";
-    const char *path = put("quad.obj", obj, strlen(obj));
     ilf_mesh *m = NULL;
-    char why[256] = "";
-    CHECK(ilf_mesh_import(path, &m, why, sizeof why) == ILF_MESH_OK && m != NULL, "quad.obj: %s", why);
-    if (m) {
-        CHECK(m->nfaces >= 1 && m->faces[0].count == 4, "one quad first: %zu faces", m->nfaces);
-        for (size_t k = 0; k < m->nindices; k++)
-            CHECK(m->indices[k] < m->nvertices, "index %zu in range", k);
-        const double *c = m->vertices[m->indices[m->faces[0].first + 2]];
-        CHECK(c[0] == 1 && c[1] == 1 && c[2] == 0, "the third corner");
-    }
-    ilf_mesh_destroy(m);
-    ilf_mesh_destroy(NULL);
+    char why[1024] = "";
     const char *ply = "ply\nformat ascii 1.0\nelement vertex 1000000000\nproperty float x\nend_header\n";
-    path = put("huge.ply", ply, strlen(ply));
+    const char *path = put("huge.ply", ply, strlen(ply));
     CHECK(ilf_mesh_import(path, &m, why, sizeof why) == ILF_MESH_ERR_INPUT && m == NULL &&
               strstr(why, "huge.ply") && strstr(why, "declares 1000000000 'vertex' elements"), "PLY check: %s", why);
     path = put("x.dae", "<COLLADA/>", 10);
@@ -137,6 +159,22 @@ static void test_mesh(void)
     CHECK(ilf_mesh_import(path, &m, why, sizeof why) == ILF_MESH_ERR_INPUT && strstr(why, "the file is empty"),
           "empty: %s", why);
     CHECK(ilf_mesh_format_supported("a/B.GLB") && !ilf_mesh_format_supported("a.b/noext"), "extensions");
+    CHECK(check_mapped("libilfkit_assimp") == 0 && check_mapped("libassimp") == 0,
+          "files refused by the pre-checks load no mesh module");
+    const char *obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nl 1 3\n";
+    path = put("quad.obj", obj, strlen(obj));
+    CHECK(ilf_mesh_import(path, &m, why, sizeof why) == ILF_MESH_OK && m != NULL, "quad.obj: %s", why);
+    CHECK(check_mapped("libilfkit_assimp") == 1 && check_mapped("libassimp") == 1,
+          "the mesh module and assimp are mapped after the first import");
+    if (m) {
+        CHECK(m->nfaces >= 1 && m->faces[0].count == 4, "one quad first: %zu faces", m->nfaces);
+        for (size_t k = 0; k < m->nindices; k++)
+            CHECK(m->indices[k] < m->nvertices, "index %zu in range", k);
+        const double *c = m->vertices[m->indices[m->faces[0].first + 2]];
+        CHECK(c[0] == 1 && c[1] == 1 && c[2] == 0, "the third corner");
+    }
+    ilf_mesh_destroy(m);
+    ilf_mesh_destroy(NULL);
 }
 
 int main(int argc, char **argv)
@@ -144,6 +182,7 @@ int main(int argc, char **argv)
     snprintf(folder, sizeof folder, "%s", argc > 1 ? argv[1] : ".");
     test_json_files();
     test_json_values();
+    test_mesh_without_module();
     test_mesh();
     return check_report();
 }

@@ -6,26 +6,16 @@
  * module.h), loaded on the first read or header read. Programs that never read an image
  * therefore never map OpenImageIO.
  *
- * Where the module is looked for, once per process (pthread_once), loaded
- * with dlopen(RTLD_NOW | RTLD_LOCAL) and never unloaded:
- *   1. $ILFKIT_IMAGE_MODULE, a full path, when set and not empty: then the
- *      only place tried, so that a test or a user can pin the module;
- *   2. <folder of /proc/self/exe>/../LIBDIR/ilfkit/<file>: the build tree
- *      (programs in BUILD/tools and BUILD/tests, the module in BUILD/LIBDIR/ilfkit)
- *      and a relocated install (PREFIX/bin, PREFIX/LIBDIR/ilfkit);
- *   3. when this code runs inside a shared library (the installed libcapture.so,
- *      PREFIX/LIBDIR), <folder of that library>/../LIBDIR/ilfkit/<file>: a user's
- *      program, wherever it lives, finds the module of the install it links;
- *   4. the configured install location, ILFKIT_IMAGE_MODULE_INSTALLED.
- * Both paths come from CMake (ILFKIT_IMAGE_MODULE_RELATIVE and _INSTALLED).
+ * Where the module is looked for (ILFKIT_IMAGE_MODULE pins it; the build
+ * tree, beside a shared library, the install location) and how it is loaded
+ * once: base's one module loader, ilf/module.h. Both paths come from CMake
+ * (ILFKIT_IMAGE_MODULE_RELATIVE and _INSTALLED).
  *
  * Invariants:
  *   - guess_format, free and write never load the module; argument errors
  *     are reported without loading it.
- *   - After the once-only load, the module pointer and the load failure text
- *     are read-only, so concurrent calls need no lock.
  *   - A module whose table version differs from IMG__MODULE_VERSION is
- *     refused (and stays mapped, unused: it may have run initialisers).
+ *     refused (ilf/module.h).
  *   - A write either leaves a complete image at the path (renamed from a
  *     flushed temporary in the same folder, so the rename is atomic) or leaves
  *     the path as it was and no temporary behind. The temporary keeps the
@@ -36,15 +26,10 @@
  *   - Every failure message is one line naming the image file; a load
  *     failure also names each module path tried and why it failed.
  */
-/* dladdr1() (GNU) tells which loaded file holds this code: the way from a shared library to the module. */
-#define _GNU_SOURCE
 #include "image/image.h"
 
 #include <ctype.h>
-#include <dlfcn.h>
-#include <link.h>
 #include <errno.h>
-#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -55,6 +40,7 @@
 #include "ilf/atomic_file.h"
 #include "ilf/file_kind.h"
 #include "ilf/limits.h"
+#include "ilf/module.h"
 #include "module.h"
 #include "writers.h"
 
@@ -66,7 +52,6 @@
 #endif
 
 #define MESSAGE_BYTES ILF_MESSAGE_BYTES
-#define MODULE_PATH_BYTES 4096
 
 /* ------------------------------------------------------------ messages */
 
@@ -107,128 +92,18 @@ const char *img_status_name(img_status s)
 
 /* ------------------------------------------------------------ the module */
 
-static pthread_once_t module_once = PTHREAD_ONCE_INIT;
-static const img__module *module;      /* NULL until loaded, or if loading failed */
-static char load_failure[2 * MESSAGE_BYTES]; /* "path: reason; path: reason" when module is NULL */
-
-/* Appends "; " (unless first) and the formatted text to load_failure, truncating. */
-static void note_failure(const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 1, 2)))
-#endif
-    ;
-
-static void note_failure(const char *fmt, ...)
-{
-    size_t used = strlen(load_failure);
-    if (used > 0 && used + 2 < sizeof load_failure) {
-        memcpy(load_failure + used, "; ", 3);
-        used += 2;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(load_failure + used, sizeof load_failure - used, fmt, ap);
-    va_end(ap);
-}
-
-/* @return dlerror()'s text, or fallback when it has none. */
-static const char *dl_reason(const char *fallback)
-{
-    const char *reason = dlerror();
-    return reason != NULL ? reason : fallback;
-}
-
-/* Opens path and checks its table. @return the table, or NULL with the reason noted. */
-static const img__module *open_module(const char *path)
-{
-    void *handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (handle == NULL) {
-        note_failure("%s", dl_reason(path));
-        return NULL;
-    }
-    dlerror();
-    void *symbol = dlsym(handle, IMG__MODULE_ENTRY);
-    if (symbol == NULL) {
-        note_failure("%s", dl_reason(path));
-        return NULL;
-    }
-    /* POSIX guarantees that dlsym's object pointer converts to a function pointer. */
-    img__module_entry_fn entry;
-    _Static_assert(sizeof entry == sizeof symbol, "function and object pointers differ in size");
-    memcpy(&entry, &symbol, sizeof entry);
-    const img__module *table = entry();
-    if (table == NULL || table->version != IMG__MODULE_VERSION) {
-        note_failure("%s: module version %u, this program needs %u", path, table != NULL ? table->version : 0u,
-                     IMG__MODULE_VERSION);
-        return NULL;
-    }
-    return table;
-}
-
-/* Writes <folder of file>/../ILFKIT_IMAGE_MODULE_RELATIVE to out. @return 1, or 0 with the reason noted. */
-static int beside(const char *file, char *out, size_t outlen)
-{
-    const char *slash = strrchr(file, '/');
-    if (slash == NULL) {
-        note_failure("no folder in %s", file);
-        return 0;
-    }
-    int len = snprintf(out, outlen, "%.*s/../%s", (int)(slash - file), file, ILFKIT_IMAGE_MODULE_RELATIVE);
-    if (len < 0 || (size_t)len >= outlen) {
-        note_failure("%s: path too long", file);
-        return 0;
-    }
-    return 1;
-}
-
-/* Writes the module's path beside this program to out. @return 1, or 0 with the reason noted. */
-static int beside_program(char *out, size_t outlen)
-{
-    char exe[MODULE_PATH_BYTES];
-    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    if (n <= 0 || (size_t)n >= sizeof exe - 1) {
-        note_failure("/proc/self/exe: %s", n < 0 ? strerror(errno) : "path too long");
-        return 0;
-    }
-    exe[n] = '\0';
-    return beside(exe, out, outlen);
-}
-
-/* Writes the module's path beside the shared library holding this code to out.
- * @return 1, or 0 when this code is part of the program itself (already tried) or the library's path is unknown. */
-static int beside_library(char *out, size_t outlen)
-{
-    Dl_info info;
-    struct link_map *map = NULL;
-    if (dladdr1(&module_once, &info, (void **)&map, RTLD_DL_LINKMAP) == 0 || map == NULL || map->l_name == NULL ||
-        map->l_name[0] == '\0')
-        return 0; /* the main program's link map has no name */
-    return beside(map->l_name, out, outlen);
-}
-/* pthread_once routine: sets module from the first place that gives a valid table. */
-static void load_module(void)
-{
-    const char *pinned = getenv("ILFKIT_IMAGE_MODULE");
-    if (pinned != NULL && pinned[0] != '\0') {
-        module = open_module(pinned);
-        return;
-    }
-    char path[MODULE_PATH_BYTES];
-    if (beside_program(path, sizeof path))
-        module = open_module(path);
-    if (module == NULL && beside_library(path, sizeof path))
-        module = open_module(path);
-    if (module == NULL)
-        module = open_module(ILFKIT_IMAGE_MODULE_INSTALLED);
-}
+/* Found and loaded by base's module loader (ilf/module.h), once per process. */
+static ilf_module module = ILF_MODULE_INIT("ILFKIT_IMAGE_MODULE", ILFKIT_IMAGE_MODULE_RELATIVE,
+                                           ILFKIT_IMAGE_MODULE_INSTALLED, IMG__MODULE_ENTRY, IMG__MODULE_VERSION);
 
 /* @return the loaded module, or NULL (and a message naming path, to be read) if it cannot be loaded. */
 static const img__module *need_module(const char *path, char *err, size_t errlen)
 {
-    pthread_once(&module_once, load_module);
-    if (module == NULL)
-        fail(IMG_ERR_INPUT, err, errlen, "%s: cannot read: image support is not available (%s)", path, load_failure);
-    return module;
+    const img__module *table = ilf_module_get(&module);
+    if (table == NULL)
+        fail(IMG_ERR_INPUT, err, errlen, "%s: cannot read: image support is not available (%s)", path,
+             ilf_module_failure(&module));
+    return table;
 }
 
 /* ------------------------------------------------------------ names and formats */

@@ -3,6 +3,11 @@
  * fuzz_file.h): one folder per process, made by mkdtemp() under $TMPDIR (or
  * /tmp) on the first call, holding one file per name; both are removed by an
  * atexit() handler, so a run leaves nothing behind unless it crashes.
+ * The first call also pins the mesh module (ilf/module.h) to the one this
+ * build made, FUZZ_MESH_MODULE, unless ILFKIT_MESH_MODULE is set: the
+ * targets live in BUILD/tests/fuzz, where the loader's place beside the
+ * program (BUILD/LIBDIR/ilfkit is one folder up from BUILD/tests) misses,
+ * and every mesh would otherwise be refused before assimp reads it.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -12,6 +17,10 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+
+#ifndef FUZZ_MESH_MODULE
+#error "FUZZ_MESH_MODULE (the path of the build's mesh module) must be defined"
+#endif
 
 static char folder[4096];
 static char path[4096 + 64];
@@ -35,6 +44,7 @@ static void make_folder(void)
         abort();
     }
     atexit(remove_folder);
+    setenv("ILFKIT_MESH_MODULE", FUZZ_MESH_MODULE, 0);
 }
 
 const char *fuzz_file_write(const char *name, const uint8_t *data, size_t size)

@@ -1,9 +1,18 @@
 /*
  * ilf/mesh.h - the one mesh importer of ilfkit: scene meshes (relight) and
  * capture's proxies read mesh files through it, with the same formats and the
- * same pre-checks. It is the only code that includes assimp (a wall test
+ * same pre-checks. It is the only code that reads with assimp (a wall test
  * checks it); what it returns is a plain polygon soup that each caller turns
  * into its own objects (scene polygons, proxy rectangles).
+ *
+ * assimp is loaded lazily: the pre-checks run without it, and the first
+ * import that passes them loads the mesh module libilfkit_assimp.so (the
+ * only file of ilfkit that includes assimp) through base's module loader
+ * (ilf/module.h: $ILFKIT_MESH_MODULE, a full path, pins it; otherwise beside
+ * the program, beside the shared library holding this code, the install
+ * location), once, thread-safely; programs that import no mesh never map
+ * assimp. If the module cannot be loaded, every import past the pre-checks
+ * fails with ILF_MESH_ERR_INPUT naming the mesh and every module path tried.
  *
  * Formats: OBJ, PLY, glTF, GLB, STL, FBX and 3DS, chosen by the file's
  * extension (any case). Each is in the hostile-input corpus, and each reader
@@ -88,7 +97,8 @@ typedef struct ilf_mesh {
  * "cannot open 'PATH': No such file or directory", "'PATH' is not a regular
  * file", "cannot read 'PATH': the file is empty", "cannot read 'PATH': mesh
  * format not supported (...)", "cannot read 'PATH': <pre-check or assimp's
- * message>", "'PATH' holds no complete mesh".
+ * message>", "'PATH' holds no complete mesh", "cannot read 'PATH': mesh
+ * support is not available (<each module path tried: why>)".
  * @return ILF_MESH_OK and *out (ilf_mesh_destroy it); else *out = NULL and why.
  */
 ilf_mesh_status ilf_mesh_import(const char *path, ilf_mesh **out, char *why, size_t why_size);

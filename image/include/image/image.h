@@ -8,7 +8,8 @@
  * OpenImageIO is loaded lazily: image/src/image.c implements these functions
  * and, on the first img_read() or img_header_read() of the process, loads the image
  * module libilfkit_oiio.so (image/src/oiio_module.cpp, the only file of ilfkit
- * that includes OpenImageIO headers) with dlopen(), once, thread-safely;
+ * that includes OpenImageIO headers) with dlopen() through base's module
+ * loader (ilf/module.h), once, thread-safely;
  * programs that never read an image never map OpenImageIO. Writing needs no
  * module (image/src/writers.c). The module
  * is taken from $ILFKIT_IMAGE_MODULE (a full path) if that is set and not
