@@ -146,6 +146,11 @@ s = ilfkit.open('$work/c.h5')[0]
 assert abs(float(s.radiance.max()) - 1) < 1e-6, s.radiance.max()
 assert len(ilfkit.relight('$work/floor.json').maps) == 1  # the mesh module found beside librelight.so
 assert ilfkit.__file__.startswith('$prefix/'), ilfkit.__file__"
+    # and its tests pass against the install alone: the installed package, the installed ilf as their reference
+    if /usr/bin/python3 -c 'import pytest' 2>/dev/null; then
+        check env -i PATH=/usr/bin:/bin PYTHONPATH="$(dirname "${pydir:-.}")" ILF="$prefix/bin/ilf" PYTHONDONTWRITEBYTECODE=1 \
+            /usr/bin/python3 -m pytest -q -p no:cacheprovider --basetemp="$work/pytest" "$src/../python"
+    fi
 fi
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0
