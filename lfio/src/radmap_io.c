@@ -33,7 +33,11 @@
  *     NULL. Its memory is the patch tables and the vertices.
  *   - HDF5 is called from the calling thread alone: the threads of a serial
  *     write (chunks.h) only filter chunks while it makes a patch's objects.
- *   - Every public entry point silences HDF5 for its whole duration; the
+ *   - lfio_radmap_headers (the last section) reads a format-2 file's
+ *     headers in blocks of bounded size, with the checks of the headers
+ *     read: the file-wide ones when it opens, each patch's when it is got.
+ *   - Every public entry point silences HDF5 for its whole duration (or,
+ *     lfio_radmap_headers_get(), for each HDF5 read it makes); the
  *     HDF5 plumbing (errors, attributes, layouts, atomic writes) is shared
  *     with light field files through h5util.h.
  */
@@ -1532,15 +1536,20 @@ struct lfio_radmap_headers {
     uint64_t vfirst, vcount, vcap;
 };
 
-/* Reads rows [first, first + rows) of open dataset t of h into buf. */
+/* Reads rows [first, first + rows) of open dataset t of h into buf, HDF5 silenced: the only HDF5 call of
+ * lfio_radmap_headers_get(), which then costs nothing of HDF5 for a patch already in memory. */
 static lfio_status hdr_read_rows(lfio_radmap_headers *h, enum v2_ds t, uint64_t first, uint64_t rows, void *buf)
 {
     char dobj[64];
     snprintf(dobj, sizeof dobj, "/patches/%s", v2_datasets[t].name);
     const int rank = v2_datasets[t].width ? 2 : 1;
     const hsize_t start[2] = {first, 0}, n[2] = {rows, (hsize_t)v2_datasets[t].width};
-    return lfio__h5_read_vetted(h->path, dobj, h->d[t], v2_memory_type(t), rank, start, n, buf,
-                                (lfio__h5_vetted *)h->vetted[t]);
+    lfio__h5_quiet q;
+    lfio__h5_quiet_begin(&q);
+    lfio_status st = lfio__h5_read_vetted(h->path, dobj, h->d[t], v2_memory_type(t), rank, start, n, buf,
+                                          (lfio__h5_vetted *)h->vetted[t]);
+    lfio__h5_quiet_end(&q);
+    return st;
 }
 
 /* Opens and checks dataset t of h's group for rows rows (source: where rows came from); keep: left open. */
@@ -1835,13 +1844,7 @@ lfio_status lfio_radmap_headers_get(lfio_radmap_headers *h, size_t k, lfio_radma
         return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_headers_get: NULL argument");
     if (k >= h->count)
         return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_headers_get: patch %zu out of range (%zu patches)", k, h->count);
-    if (h->meta->format == 1)
-        return lfio_radmap_get(h->meta, k, out);
-    lfio__h5_quiet q;
-    lfio__h5_quiet_begin(&q);
-    lfio_status st = hdr_get_v2(h, k, out);
-    lfio__h5_quiet_end(&q);
-    return st;
+    return h->meta->format == 1 ? lfio_radmap_get(h->meta, k, out) : hdr_get_v2(h, k, out);
 }
 
 size_t lfio_radmap_headers_count(const lfio_radmap_headers *h)
