@@ -419,7 +419,7 @@ static int describe_radmap(const info_options *o)
 {
     char lf_msg[1024], msg[1024];
     snprintf(lf_msg, sizeof lf_msg, "%s", lfio_errmsg());
-    ilf_radmap_info in = {o->path, NULL, NULL, o->json, o->want_stats, o->all_maps};
+    ilf_radmap_info in = {o->path, lf_msg, NULL, NULL, o->json, o->want_stats, o->all_maps};
     lfio_radmap *map = NULL;
     lfio_status st = o->want_stats ? ilf_radmap_try(o->path, lf_msg, &map, msg, sizeof msg)
                                    : ilf_radmap_try_headers(o->path, lf_msg, &in.headers, msg, sizeof msg);

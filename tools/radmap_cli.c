@@ -367,15 +367,18 @@ static lfio_status print_map_json(const ilf_radmap_info *in, size_t k, int stats
     return st;
 }
 
-/* Reports a failure st part-way through the report (its text so far printed): the message lfio set, or
- * cJSON's lack of memory. @return the exit code. */
+/* Reports a failure st of reading a map: lfio's message with the light field reader's as ilf_radmap_try() gives
+ * them (a map that does not read is reported as a file that failed to open would be), or cJSON's lack of
+ * memory. @return the exit code. */
 static int info_failure(const ilf_radmap_info *in, lfio_status st)
 {
     if (st == LFIO_ERR_NOMEM) {
         cli_error("info", "out of memory while building the report");
         return ILF_EXIT_FAILED;
     }
-    return cli_lfio_failure("info", st, CLI_INPUT, in->path);
+    char msg[2048];
+    try_message(st, in->lf_msg, msg, sizeof msg);
+    return cli_lfio_failure_msg("info", st, CLI_INPUT, in->path, msg);
 }
 
 /* Prints the JSON report a map at a time, so that it holds one map's objects whatever the file holds: the

@@ -38,6 +38,7 @@ int ilf_radmap_open(const char *sub, const char *path, lfio_radmap **out);
 /** What `ilf info` describes of a radiance map, and how. */
 typedef struct ilf_radmap_info {
     const char *path;
+    const char *lf_msg;            /**< the light field reader's message on path, for failures (ilf_radmap_try()) */
     const lfio_radmap *map;        /**< the file read whole (for --stats), or NULL */
     lfio_radmap_headers *headers;  /**< else its headers, read a block at a time */
     int json;                      /**< JSON (every map) instead of text */
