@@ -22,11 +22,14 @@
  *     irradiance and radiosity [ncells][3].
  *   - Every pointer in lfio_radmap_patch is borrowed: lfio_radmap_write()
  *     only reads through them during the call; lfio_radmap_get() points
- *     them into the reader's object, valid until lfio_radmap_destroy().
+ *     them into the reader's object, valid until lfio_radmap_destroy();
+ *     lfio_radmap_headers_get() into the header reader's, valid until its
+ *     next call or lfio_radmap_headers_close().
  *   - Status codes and messages as in lfio/lfio.h.
  *
  * Thread safety: a radiance map is read-only once read and may be queried
- * from any number of threads.
+ * from any number of threads; a header reader (lfio_radmap_headers) is used
+ * by one thread at a time.
  *
  * This header is valid C99 and C++.
  */
