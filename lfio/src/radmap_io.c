@@ -1699,6 +1699,12 @@ lfio_status lfio_radmap_headers_open(const char *path, lfio_radmap_headers **out
     if (path == NULL || path[0] == '\0')
         return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_headers_open: NULL or empty path");
     lfio_radmap_headers *h = calloc(1, sizeof *h);
+    if (h != NULL) {
+        h->file = h->g = -1;
+        for (int t = 0; t < V2_COUNT; t++)
+            h->d[t] = -1;
+        h->block = h->label_block = SIZE_MAX;
+    }
     if (h == NULL || (h->path = malloc(strlen(path) + 1)) == NULL ||
         (h->meta = calloc(1, sizeof *h->meta)) == NULL) {
         lfio_radmap_headers_close(h);
@@ -1706,10 +1712,6 @@ lfio_status lfio_radmap_headers_open(const char *path, lfio_radmap_headers **out
     }
     memcpy(h->path, path, strlen(path) + 1);
     h->meta->headers = 1;
-    h->file = h->g = -1;
-    for (int t = 0; t < V2_COUNT; t++)
-        h->d[t] = -1;
-    h->block = h->label_block = SIZE_MAX;
     lfio__h5_quiet q;
     lfio__h5_quiet_begin(&q);
     lfio_status st = hdr_open(h);
