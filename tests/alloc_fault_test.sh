@@ -5,7 +5,8 @@
 #
 # Usage: bash alloc_fault_test.sh ILF_BINARY FAILALLOC_SO SOURCE_DIR TMPDIR
 #
-# The runs: writing a light field (synth), reading one (info, verify),
+# The runs: writing a light field (synth), reading one (info, verify), a
+# radiance map's headers (info),
 # loading a scene with a mesh and a light field and relighting it with one
 # bounce and a view, and with direct light alone, a capture of a 2x2 probe grid, a depth correction, and
 # point queries. Each is first run untouched to count its allocations M (by
@@ -54,6 +55,7 @@ cd "$WORK" || exit 1
 "$ILF" synth --kind spot --grid 4x4 --n 4 -o slab.h5 --spot 0,0,-1:0,0,1:30:2 -q >/dev/null 2>&1 ||
     "$ILF" synth --kind spot --grid 4x4 --n 4 -o slab.h5 --spot 0,0,-1:0,0,1:30:2 >/dev/null
 "$ILF" capture probes/manifest.json -o captured.h5 --threads 1 -q >/dev/null
+"$ILF" relight room.json -o relit --bounces 0 --no-view --threads 1 -q >/dev/null
 
 # run N LOG COUNT COMMAND...: runs COMMAND in the current folder with allocation N failing (0: none),
 # its output in LOG and the shim's "COUNT FIRED" in COUNT.
@@ -141,6 +143,7 @@ walk() {
 walk "write a light field" out.h5 "$ILF" synth --kind radial --grid 4x4 --n 4 -o out.h5
 walk "read a light field (info)" - "$ILF" info captured.h5 --stats
 walk "read a light field (verify)" - "$ILF" verify slab.h5
+walk "read a radiance map's headers (info)" - "$ILF" info relit/radiance.h5 --maps
 walk "capture a probe grid" cap.h5 "$ILF" capture probes/manifest.json -o cap.h5 --threads 1 -q
 walk "depth correction" lamp.h5 "$ILF" reproject captured.h5 --proxy proxy.json -o lamp.h5 --threads 1 -q
 # radiance.h5 is written beside the engine, which may fail while the writer waits: with a bounce (its maps

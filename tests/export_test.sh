@@ -86,6 +86,49 @@ printf 'not hdf5\n' >"$TMP/text.h5"
 expect 2 "info on a text file" "$ILF" info "$TMP/text.h5"
 check "a file that is neither keeps the light field message" stderr_has "not an HDF5 file"
 
+# A file of more maps than info details (10) and than lfio_radmap_headers holds at once (4096): 71 x 71 floor
+# tiles of 1 m, one cell each, under a lamp. The text report is the summary, 10 maps and a line counting the
+# rest; --maps and --json give every map, in order across the blocks.
+python3 -c '
+import json, sys
+polys = [{"material": "lamp", "vertices": [[0, 0, 5], [0, 1, 5], [1, 1, 5], [1, 0, 5]]}]
+polys += [{"material": "floor", "vertices": [[i, j, 0], [i + 1, j, 0], [i + 1, j + 1, 0], [i, j + 1, 0]]}
+          for i in range(71) for j in range(71)]
+json.dump({"materials": {"lamp": {"albedo": [0, 0, 0], "emission": [10, 10, 10]}, "floor": {"albedo": [0.5, 0.5, 0.5]}},
+           "polygons": polys, "radiance_maps": {"cell_size": 1.0},
+           "sampling": {"partition_n": 2, "rays_per_solid_angle": 1, "bounces": 0}}, open(sys.argv[1], "w"))
+' "$TMP/tiles.json"
+MANY=$TMP/tiles/radiance.h5
+expect 0 "relight 5041 tiles" "$ILF" relight "$TMP/tiles.json" -o "$TMP/tiles" --no-view --threads 2 -q
+expect 0 "info on 5041 maps" "$ILF" info "$MANY"
+check "info counts every map and cell" stdout_has "^maps: *5041$"
+check "info sums every map's area" stdout_has "^cells: *5041, 5041 m^2$"
+check "info details the first 10 maps, in order" py '
+import re, sys
+maps = re.findall(r"^map (\d+): (\S+) ", sys.stdin.read(), re.M)
+assert maps == [(str(k), "polygons[%d]" % (k + 1)) for k in range(10)], maps
+' <"$OUT"
+check "info counts the maps it leaves out" stdout_has "^\.\.\. and 5031 more maps: ilf info --maps lists them$"
+expect 0 "info --maps on 5041 maps" "$ILF" info "$MANY" --maps
+check "info --maps details every map, in order" py '
+import re, sys
+text = sys.stdin.read()
+maps = re.findall(r"^map (\d+): (\S+) \(polygon (\d+)\)$", text, re.M)
+assert maps == [(str(k), "polygons[%d]" % (k + 1), str(k + 1)) for k in range(5041)], len(maps)
+assert len(re.findall(r"^  grid: +1x1 cells of 1 m, 1 stored, 1 m\^2$", text, re.M)) == 5041
+assert "more maps" not in text
+' <"$OUT"
+expect 0 "info --json on 5041 maps" "$ILF" info "$MANY" --json
+check "info --json lists every map, in order" py '
+import json, sys
+d = json.load(sys.stdin)
+assert [m["label"] for m in d["maps"]] == ["polygons[%d]" % (k + 1) for k in range(5041)]
+assert d["cells"] == 5041 and abs(sum(m["area"] for m in d["maps"]) - 5041) < 1e-6, d["cells"]
+' <"$OUT"
+"$ILF" synth --kind constant --grid 2x2 --n 2 -o "$TMP/field.h5" -q
+expect 2 "info --maps on a light field" "$ILF" info "$TMP/field.h5" --maps
+check "info says --maps is for radiance maps" stderr_has "--maps is for radiance-map files"
+
 # ------------------------------------------------------------------ export
 expect 0 "export CSV" "$ILF" export "$RAD" -o "$TMP/cells.csv"
 check "CSV: one row per cell, areas and irradiance as info says" py '

@@ -1,7 +1,8 @@
 /*
  * test_radmap.c - radiance-map files (lfio/radmap.h, lfio/src/radmap_io.c):
  * round trips (with an empty patch, an empty file and a patch spanning
- * several chunks), writes a slice of cells at a time, the writer's refusals, atomic writes, and every way a
+ * several chunks), the headers read whole and a block at a time
+ * (lfio_radmap_headers), writes a slice of cells at a time, the writer's refusals, atomic writes, and every way a
  * file can be bad.
  *
  * Bad files are made by writing a good file with lfio and changing one
@@ -605,11 +606,28 @@ static void expect_bad(const char *path, lfio_status want, const char *needle, c
     expect_refused_by(lfio_radmap_read, path, want, needle, what);
 }
 
-/* Both readers refuse path so: a problem of the tables, offsets or dataset shapes, which the headers show. */
+/* Opens path with lfio_radmap_headers_open() and gets every patch, as `ilf info` does. @return the first
+ * failure's status, or LFIO_OK; *out is always NULL (for expect_refused_by()). */
+static lfio_status read_by_blocks(const char *path, lfio_radmap **out)
+{
+    *out = NULL;
+    lfio_radmap_headers *h = NULL;
+    lfio_status st = lfio_radmap_headers_open(path, &h);
+    CHECK(st == LFIO_OK || h == NULL, "%s: a failed open leaves its handle NULL", path);
+    lfio_radmap_patch p;
+    for (size_t k = 0; st == LFIO_OK && k < lfio_radmap_headers_count(h); k++)
+        st = lfio_radmap_headers_get(h, k, &p);
+    lfio_radmap_headers_close(h);
+    return st;
+}
+
+/* The three header readers refuse path so: a problem of the tables, offsets or dataset shapes, which the
+ * headers show. */
 static void expect_bad_headers(const char *path, lfio_status want, const char *needle, const char *what)
 {
     expect_refused_by(lfio_radmap_read, path, want, needle, what);
     expect_refused_by(lfio_radmap_read_headers, path, want, needle, what);
+    expect_refused_by(read_by_blocks, path, want, needle, what);
 }
 
 /* Every documented way a format-1 file can be bad; good has patches 0 (cells), 1 (no cells), 2 (many cells). */
@@ -783,6 +801,94 @@ static void test_read_headers(const lfio_radmap_patch *patches, size_t count)
     CHECK(!lfio_radmap_has_cells(NULL) && lfio_radmap_cell_count(NULL) == 0, "NULL accessors");
 }
 
+/* A describe function giving count patches, each a copy of one of two with its own label and polygon index:
+ * files of more patches than lfio_radmap_headers holds at once. */
+struct many {
+    const lfio_radmap_patch *two;
+    char label[32];
+};
+
+static lfio_status describe_many(void *user, size_t k, lfio_radmap_patch *out)
+{
+    struct many *m = user;
+    *out = m->two[k % 2];
+    snprintf(m->label, sizeof m->label, "tile %zu", k);
+    out->label = m->label;
+    out->polygon = (uint32_t)(k * 3);
+    return LFIO_OK;
+}
+
+/* Patch k of h agrees with patch k of map (both of the headers): same description, no cell arrays. */
+static void check_handle_patch(lfio_radmap_headers *h, const lfio_radmap *map, size_t k, const char *what)
+{
+    lfio_radmap_patch a, b;
+    CHECK(lfio_radmap_get(map, k, &a) == LFIO_OK, "%s: get %zu", what, k);
+    lfio_status st = lfio_radmap_headers_get(h, k, &b);
+    CHECK(st == LFIO_OK, "%s: lfio_radmap_headers_get %zu: %s", what, k, lfio_errmsg());
+    if (st != LFIO_OK)
+        return;
+    CHECK(b.cell_ij == NULL && b.cell_area == NULL && b.irradiance == NULL && b.ncells == a.ncells,
+          "%s: patch %zu: cells", what, k);
+    a.ncells = b.ncells = 0;
+    char name[96];
+    snprintf(name, sizeof name, "%s patch %zu", what, k);
+    check_patch_equal(&a, &b, name);
+}
+
+/* lfio_radmap_headers reads what lfio_radmap_read_headers() reads, in order and out of order, across its blocks
+ * of patches (a file of 2.2 blocks) and of labels, in either format; its arguments are checked. */
+static void test_headers_reader(const lfio_radmap_patch *patches, size_t count_small)
+{
+    const size_t count = 2 * LFIO_RADMAP_HEADERS_BLOCK + 777;
+    char path[512];
+    CHECK(lfio_radmap_write_each(tmp_path(path, sizeof path, "many.h5"), "test_radmap", "many.json", count,
+                                 describe_many, &(struct many){patches, ""}) == LFIO_OK,
+          "write %zu patches: %s", count, lfio_errmsg());
+    for (int format = 2; format >= 1; format--) {
+        const char *file = format == 2 ? path : "headers1.h5";
+        char p1[512];
+        if (format == 1)
+            tmp_path(p1, sizeof p1, file), file = p1;
+        lfio_radmap *map = NULL;
+        lfio_radmap_headers *h = NULL;
+        CHECK(lfio_radmap_read_headers(file, &map) == LFIO_OK, "read the headers of %s", file);
+        quiet_start();
+        lfio_status st = lfio_radmap_headers_open(file, &h);
+        long printed = quiet_stop();
+        CHECK(st == LFIO_OK && printed == 0, "lfio_radmap_headers_open %s: %s", file, lfio_errmsg());
+        if (map == NULL || h == NULL) {
+            lfio_radmap_destroy(map);
+            lfio_radmap_headers_close(h);
+            continue;
+        }
+        const size_t n = lfio_radmap_count(map);
+        CHECK(n == (format == 2 ? count : count_small) && lfio_radmap_headers_count(h) == n &&
+                  lfio_radmap_headers_cell_count(h) == lfio_radmap_cell_count(map) &&
+                  lfio_radmap_headers_format_version(h) == format &&
+                  strcmp(lfio_radmap_headers_creator(h), lfio_radmap_creator(map)) == 0 &&
+                  strcmp(lfio_radmap_headers_scene(h), lfio_radmap_scene(map)) == 0,
+              "%s: the handle's file description", file);
+        for (size_t k = 0; k < n; k++)
+            check_handle_patch(h, map, k, file);
+        const size_t jumps[] = {n - 1, 0, n / 2, LFIO_RADMAP_HEADERS_BLOCK % n, 1 % n, n - 1};
+        for (size_t j = 0; j < sizeof jumps / sizeof jumps[0]; j++)
+            check_handle_patch(h, map, jumps[j], file);
+        lfio_radmap_patch p;
+        CHECK(lfio_radmap_headers_get(h, n, &p) == LFIO_ERR_ARG && lfio_radmap_headers_get(NULL, 0, &p) == LFIO_ERR_ARG
+                  && lfio_radmap_headers_get(h, 0, NULL) == LFIO_ERR_ARG,
+              "%s: get out of range or with NULL", file);
+        lfio_radmap_destroy(map);
+        lfio_radmap_headers_close(h);
+    }
+    lfio_radmap_headers *h = (lfio_radmap_headers *)1;
+    CHECK(lfio_radmap_headers_open(NULL, &h) == LFIO_ERR_ARG && h == NULL && lfio_radmap_headers_open(path, NULL)
+              == LFIO_ERR_ARG, "open with NULL");
+    CHECK(lfio_radmap_headers_count(NULL) == 0 && lfio_radmap_headers_cell_count(NULL) == 0 &&
+              lfio_radmap_headers_format_version(NULL) == 0 && strcmp(lfio_radmap_headers_creator(NULL), "") == 0 &&
+              strcmp(lfio_radmap_headers_scene(NULL), "") == 0, "NULL accessors of the handle");
+    lfio_radmap_headers_close(NULL);
+}
+
 /* @return the format version of the file at path as lfio reads it, or -1 if it does not read. */
 static int read_format(const char *path)
 {
@@ -889,6 +995,7 @@ int main(void)
     test_writer_refusals(&t[0], good);
     test_formats(patches, 4);
     test_read_headers(patches, 4);
+    test_headers_reader(patches, 4);
     test_bad_files_v2(good);
     char good1[512];
     CHECK(write_format(tmp_path(good1, sizeof good1, "good1.h5"), patches, 3, 1) == LFIO_OK, "write format 1: %s",

@@ -1,5 +1,5 @@
 /*
- * cmd_info.c - `ilf info FILE [--json] [--slab NAME|INDEX] [--stats] [--irradiance I,J]`:
+ * cmd_info.c - `ilf info FILE [--json] [--slab NAME|INDEX] [--stats] [--irradiance I,J] [--maps]`:
  * describes a light field file: its format version, creator and size, and for
  * each slab its geometry, sampling, units and stored coverage_fraction; with
  * --stats also its radiance statistics, zero-radiance mask occupancy and the
@@ -35,6 +35,7 @@ typedef struct info_options {
     int json;
     int want_irradiance;
     int want_stats;       /* --stats: read every slab's data */
+    int all_maps;         /* --maps: a radiance map's every map in the text report */
     uint32_t position[2]; /* (i, j) for --irradiance */
 } info_options;
 
@@ -56,18 +57,19 @@ typedef struct slab_report {
     uint64_t covered, samples;
 } slab_report;
 
-enum info_option_id { OPT_JSON, OPT_SLAB, OPT_STATS, OPT_IRRADIANCE };
+enum info_option_id { OPT_JSON, OPT_SLAB, OPT_STATS, OPT_IRRADIANCE, OPT_MAPS };
 
 static const cli_option info_options_table[] = {
     {"json", 0, NULL, "print JSON (schema in docs/cli.md) instead of text"},
     {"slab", 0, "NAME|INDEX", "describe only this slab (default: every slab)"},
     {"stats", 0, NULL, "also read the data: radiance statistics, mask, coverage (default: headers only)"},
     {"irradiance", 0, "I,J", "also report the irradiance at the centre of position (I,J)"},
+    {"maps", 0, NULL, "radiance map: list every map's details (default: the first 10)"},
 };
 
 static const cli_usage info_usage = {
     "info",
-    "FILE [--json] [--slab NAME|INDEX] [--stats] [--irradiance I,J]",
+    "FILE [--json] [--slab NAME|INDEX] [--stats] [--irradiance I,J] [--maps]",
     "Describes a light field file from its headers alone: format version, creator,\n"
     "file size and, per slab, name, origin, u, v, grid, partition level n, directions,\n"
     "units, mask threshold and the stored coverage_fraction. --stats reads the data\n"
@@ -77,8 +79,9 @@ static const cli_usage info_usage = {
     "--irradiance I,J adds the irradiance at s=(I+0.5)/nu, t=(J+0.5)/nv on a surface\n"
     "facing -e3 (lfio_slab_irradiance).\n"
     "A radiance-map file (radiance.h5 of 'ilf relight') is described too: creator,\n"
-    "scene, maps, cells, and per map its label, vertices, grid and cell count; with\n"
-    "--stats the irradiance and radiosity min/max/area-weighted mean.",
+    "scene, maps, cells, and per map its label, vertices, grid and cell count (the\n"
+    "first 10 maps, every map with --maps or --json); with --stats the irradiance\n"
+    "and radiosity min/max/area-weighted mean.",
     "ilf info data/beams_lightfield.h5\n"
     "ilf info data/beams_lightfield.h5 --stats\n"
     "ilf info data/beams_lightfield.h5 --json --irradiance 8,8 | python3 -m json.tool\n"
@@ -335,6 +338,8 @@ static int apply_option(const cli_parser *p, int opt, const char *value, void *c
         o->slab = value;
     else if (opt == OPT_STATS)
         o->want_stats = 1;
+    else if (opt == OPT_MAPS)
+        o->all_maps = 1;
     else
         return o->want_irradiance = cli_value_u32_pair(p, value, ',', 0, UINT32_MAX, o->position);
     return 1;
@@ -408,23 +413,28 @@ static int describe_file(lfio_reader *r, const info_options *o)
     return code;
 }
 
-/* A file lfio's light field reader refused as not one: a radiance map, or the light field reader's message. */
+/* A file lfio's light field reader refused as not one: a radiance map (its headers, or read whole for
+ * --stats), or the light field reader's message. */
 static int describe_radmap(const info_options *o)
 {
     char lf_msg[1024], msg[1024];
     snprintf(lf_msg, sizeof lf_msg, "%s", lfio_errmsg());
+    ilf_radmap_info in = {o->path, lf_msg, NULL, NULL, o->json, o->want_stats, o->all_maps};
     lfio_radmap *map = NULL;
-    lfio_status st = ilf_radmap_try(o->path, lf_msg, o->want_stats, &map, msg, sizeof msg);
+    lfio_status st = o->want_stats ? ilf_radmap_try(o->path, lf_msg, &map, msg, sizeof msg)
+                                   : ilf_radmap_try_headers(o->path, lf_msg, &in.headers, msg, sizeof msg);
     if (st != LFIO_OK)
         return cli_lfio_failure_msg("info", st, CLI_INPUT, o->path, msg);
+    in.map = map;
     int code = ILF_EXIT_OK;
     if (o->slab != NULL || o->want_irradiance) {
         cli_error("info", "%s: a radiance map has no slabs: --slab and --irradiance are for light fields", o->path);
         code = ILF_EXIT_USAGE;
     } else {
-        code = ilf_info_radmap(o->path, map, o->json, o->want_stats);
+        code = ilf_info_radmap(&in);
     }
     lfio_radmap_destroy(map);
+    lfio_radmap_headers_close(in.headers);
     return code;
 }
 
@@ -440,6 +450,11 @@ int ilf_cmd_info(int argc, char **argv)
         return describe_radmap(&o);
     if (st != LFIO_OK)
         return cli_lfio_failure("info", st, CLI_INPUT, o.path);
+    if (o.all_maps) {
+        cli_error("info", "%s: a light field has no radiance maps: --maps is for radiance-map files", o.path);
+        lfio_reader_close(r);
+        return ILF_EXIT_USAGE;
+    }
     code = describe_file(r, &o);
     lfio_reader_close(r);
     return code;

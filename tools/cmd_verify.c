@@ -43,7 +43,7 @@ static lfio_status verify_radmap(const char *path, lfio_verify_report *report)
     char lf_msg[sizeof report->first];
     snprintf(lf_msg, sizeof lf_msg, "%s", report->first[0] != '\0' ? report->first : lfio_errmsg());
     lfio_radmap *map = NULL;
-    lfio_status st = ilf_radmap_try(path, lf_msg, 1, &map, report->first, sizeof report->first);
+    lfio_status st = ilf_radmap_try(path, lf_msg, &map, report->first, sizeof report->first);
     lfio_radmap_destroy(map);
     if (st != LFIO_OK && st != LFIO_ERR_FORMAT)
         report->problems = 1;

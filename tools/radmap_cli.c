@@ -8,7 +8,10 @@
  * same map_summary feeds the text and the JSON output; statistics are
  * weighted by cell area, as a cell's value is the mean over its area; a
  * map's area is its polygon's, which the headers give, so that `ilf info`
- * need not read a cell (lfio_radmap_read_headers()).
+ * need not read a cell (lfio_radmap_headers_open()); the report reads the
+ * maps one at a time, twice (the totals, then the maps printed), never
+ * holding more than one, and checks every map before printing anything;
+ * the text report details the first INFO_MAPS_SHOWN maps unless --maps.
  */
 #include <cjson/cJSON.h>
 #include <float.h>
@@ -24,12 +27,10 @@
  * reader's refusal quotes when it found one. */
 #define RADMAP_FORMAT_NAME "ilfkit-radiance-maps"
 
-lfio_status ilf_radmap_try(const char *path, const char *lf_msg, int whole, lfio_radmap **out, char *msg,
-                           size_t msg_size)
+/* Sets msg to what to report of a failure st of the radiance-map reader on a file the light field reader
+ * refused with LFIO_ERR_FORMAT and lf_msg. */
+static void try_message(lfio_status st, const char *lf_msg, char *msg, size_t msg_size)
 {
-    lfio_status st = whole ? lfio_radmap_read(path, out) : lfio_radmap_read_headers(path, out);
-    if (st == LFIO_OK)
-        return LFIO_OK;
     /* A file that fails the radiance-map reader otherwise than on its format is a damaged radiance map. One
      * whose format attribute names radiance maps gets both readers' word: it may be a damaged radiance map or
      * a light field whose attribute is wrong. Anything else is reported as a light field, the kind most
@@ -41,6 +42,22 @@ lfio_status ilf_radmap_try(const char *path, const char *lf_msg, int whole, lfio
                  lfio_errmsg(), lf_msg);
     else
         snprintf(msg, msg_size, "%s", lf_msg);
+}
+
+lfio_status ilf_radmap_try(const char *path, const char *lf_msg, lfio_radmap **out, char *msg, size_t msg_size)
+{
+    lfio_status st = lfio_radmap_read(path, out);
+    if (st != LFIO_OK)
+        try_message(st, lf_msg, msg, msg_size);
+    return st;
+}
+
+lfio_status ilf_radmap_try_headers(const char *path, const char *lf_msg, lfio_radmap_headers **out, char *msg,
+                                   size_t msg_size)
+{
+    lfio_status st = lfio_radmap_headers_open(path, out);
+    if (st != LFIO_OK)
+        try_message(st, lf_msg, msg, msg_size);
     return st;
 }
 
@@ -224,15 +241,51 @@ static cJSON *map_json(const map_summary *m, int stats)
 
 /* ------------------------------------------------------------ info */
 
-static cJSON *file_json(const char *path, const lfio_radmap *map, const map_summary *total, int stats)
+/* Maps the text report details unless asked for all (--maps): enough to show what a file holds, few enough that
+ * the report's time and length stay bounded whatever the number of maps. */
+#define INFO_MAPS_SHOWN 10u
+
+/* The report's source: the file read whole (with stats), else its headers a block at a time. */
+static size_t src_count(const ilf_radmap_info *in)
 {
+    return in->map != NULL ? lfio_radmap_count(in->map) : lfio_radmap_headers_count(in->headers);
+}
+
+static const char *src_creator(const ilf_radmap_info *in)
+{
+    return in->map != NULL ? lfio_radmap_creator(in->map) : lfio_radmap_headers_creator(in->headers);
+}
+
+static const char *src_scene(const ilf_radmap_info *in)
+{
+    return in->map != NULL ? lfio_radmap_scene(in->map) : lfio_radmap_headers_scene(in->headers);
+}
+
+static int src_format_version(const ilf_radmap_info *in)
+{
+    return in->map != NULL ? lfio_radmap_format_version(in->map) : lfio_radmap_headers_format_version(in->headers);
+}
+
+/* Summarises map k of in's source into *m; its pointers are valid until the next call. */
+static lfio_status src_summarise(const ilf_radmap_info *in, size_t k, int stats, map_summary *m)
+{
+    lfio_radmap_patch p;
+    lfio_status st = in->map != NULL ? lfio_radmap_get(in->map, k, &p) : lfio_radmap_headers_get(in->headers, k, &p);
+    if (st == LFIO_OK)
+        summarise(&p, stats, m);
+    return st;
+}
+
+static cJSON *file_json(const ilf_radmap_info *in, const map_summary *total, int stats)
+{
+    const char *path = in->path;
     cJSON *root = cJSON_CreateObject();
     if (root == NULL)
         return NULL;
     int ok = cJSON_AddStringToObject(root, "file", path) && cJSON_AddStringToObject(root, "kind", "radiance map") &&
-             cJSON_AddNumberToObject(root, "format_version", lfio_radmap_format_version(map)) &&
-             cJSON_AddStringToObject(root, "creator", lfio_radmap_creator(map)) &&
-             cJSON_AddStringToObject(root, "scene", lfio_radmap_scene(map)) &&
+             cJSON_AddNumberToObject(root, "format_version", src_format_version(in)) &&
+             cJSON_AddStringToObject(root, "creator", src_creator(in)) &&
+             cJSON_AddStringToObject(root, "scene", src_scene(in)) &&
              cJSON_AddNumberToObject(root, "file_bytes", (double)cli_file_size(path)) &&
              cJSON_AddNumberToObject(root, "cells", total->p.ncells) &&
              cJSON_AddNumberToObject(root, "area", total->area);
@@ -246,17 +299,18 @@ static cJSON *file_json(const char *path, const lfio_radmap *map, const map_summ
     return root;
 }
 
-static void print_file_text(const char *path, const lfio_radmap *map, const map_summary *total, int stats)
+static void print_file_text(const ilf_radmap_info *in, const map_summary *total, int stats)
 {
+    const char *path = in->path;
     char size[32];
     long long bytes = cli_file_size(path);
     printf("file:             %s\n", path);
     printf("kind:             radiance map\n");
-    printf("format version:   %d\n", lfio_radmap_format_version(map));
-    printf("creator:          %s\n", lfio_radmap_creator(map));
-    printf("scene:            %s\n", lfio_radmap_scene(map));
+    printf("format version:   %d\n", src_format_version(in));
+    printf("creator:          %s\n", src_creator(in));
+    printf("scene:            %s\n", src_scene(in));
     printf("file size:        %s (%lld bytes)\n", cli_format_bytes(bytes, size, sizeof size), bytes);
-    printf("maps:             %zu\n", lfio_radmap_count(map));
+    printf("maps:             %zu\n", src_count(in));
     printf("cells:            %u, %.9g m^2\n", (unsigned)total->p.ncells, total->area);
     if (stats) {
         print_stats_text("irradiance", &total->irradiance);
@@ -264,21 +318,23 @@ static void print_file_text(const char *path, const lfio_radmap *map, const map_
     }
 }
 
-/* Sums every map into *total. */
-static void gather_total(const lfio_radmap *map, int stats, map_summary *total)
+/* Sums every map into *total, checking each as it is read: a damaged map fails here, before anything is
+ * printed. */
+static lfio_status gather_total(const ilf_radmap_info *in, int stats, map_summary *total)
 {
     memset(total, 0, sizeof *total);
     stats_init(&total->irradiance);
     stats_init(&total->radiosity);
-    for (size_t k = 0; k < lfio_radmap_count(map); k++) {
-        lfio_radmap_patch p;
+    lfio_status st = LFIO_OK;
+    for (size_t k = 0; st == LFIO_OK && k < src_count(in); k++) {
         map_summary m;
-        lfio_radmap_get(map, k, &p);
-        summarise(&p, stats, &m);
-        total_add(total, &m);
+        st = src_summarise(in, k, stats, &m);
+        if (st == LFIO_OK)
+            total_add(total, &m);
     }
     stats_finish(&total->irradiance, total->cell_area);
     stats_finish(&total->radiosity, total->cell_area);
+    return st;
 }
 
 /* Prints text with two tabs after each newline: a map's object as cJSON_Print indents an element of the
@@ -292,56 +348,86 @@ static void print_indented(const char *text)
     }
 }
 
+/* Prints map k's object as an element of the root's "maps" array. @return an lfio status (LFIO_ERR_NOMEM
+ * when cJSON runs out of memory, reported by the caller). */
+static lfio_status print_map_json(const ilf_radmap_info *in, size_t k, int stats)
+{
+    map_summary m;
+    lfio_status st = src_summarise(in, k, stats, &m);
+    cJSON *o = st == LFIO_OK ? map_json(&m, stats) : NULL;
+    char *text = o != NULL ? cJSON_Print(o) : NULL;
+    cJSON_Delete(o);
+    if (st == LFIO_OK && text == NULL)
+        st = LFIO_ERR_NOMEM;
+    if (text != NULL) {
+        fputs(k > 0 ? ", " : "", stdout);
+        print_indented(text);
+    }
+    cJSON_free(text);
+    return st;
+}
+
+/* Reports a failure st of reading a map: lfio's message with the light field reader's as ilf_radmap_try() gives
+ * them (a map that does not read is reported as a file that failed to open would be), or cJSON's lack of
+ * memory. @return the exit code. */
+static int info_failure(const ilf_radmap_info *in, lfio_status st)
+{
+    if (st == LFIO_ERR_NOMEM) {
+        cli_error("info", "out of memory while building the report");
+        return ILF_EXIT_FAILED;
+    }
+    char msg[2048];
+    try_message(st, in->lf_msg, msg, sizeof msg);
+    return cli_lfio_failure_msg("info", st, CLI_INPUT, in->path, msg);
+}
+
 /* Prints the JSON report a map at a time, so that it holds one map's objects whatever the file holds: the
  * root's keys as cJSON_Print gives them with "maps" empty (its last key, so the last '[' of that text), then
- * each map's object indented as an element of that array: the text cJSON_Print gives of the whole tree. Out
- * of memory part-way, the text printed so far is cut off and the exit code says so. @return an exit code. */
-static int print_json(const char *path, const lfio_radmap *map, const map_summary *total, int stats)
+ * each map's object indented as an element of that array: the text cJSON_Print gives of the whole tree. Failing
+ * part-way, the text printed so far is cut off and the exit code says so. @return an exit code. */
+static int print_json(const ilf_radmap_info *in, const map_summary *total, int stats)
 {
-    cJSON *root = file_json(path, map, total, stats);
+    cJSON *root = file_json(in, total, stats);
     char *head = root != NULL ? cJSON_Print(root) : NULL;
     cJSON_Delete(root);
     const char *open = head != NULL ? strrchr(head, '[') : NULL;
-    int ok = open != NULL;
-    if (ok)
+    lfio_status st = open != NULL ? LFIO_OK : LFIO_ERR_NOMEM;
+    if (st == LFIO_OK)
         fwrite(head, 1, (size_t)(open - head) + 1, stdout);
     cJSON_free(head);
-    for (size_t k = 0; ok && k < lfio_radmap_count(map); k++) {
-        lfio_radmap_patch p;
-        map_summary m;
-        lfio_radmap_get(map, k, &p);
-        summarise(&p, stats, &m);
-        cJSON *o = map_json(&m, stats);
-        char *text = o != NULL ? cJSON_Print(o) : NULL;
-        cJSON_Delete(o);
-        ok = text != NULL;
-        if (ok) {
-            fputs(k > 0 ? ", " : "", stdout);
-            print_indented(text);
-        }
-        cJSON_free(text);
-    }
-    if (ok)
-        fputs("]\n}\n", stdout);
-    else
-        cli_error("info", "out of memory while building JSON");
-    return ok ? ILF_EXIT_OK : ILF_EXIT_FAILED;
+    for (size_t k = 0; st == LFIO_OK && k < src_count(in); k++)
+        st = print_map_json(in, k, stats);
+    if (st != LFIO_OK)
+        return info_failure(in, st);
+    fputs("]\n}\n", stdout);
+    return ILF_EXIT_OK;
 }
 
-int ilf_info_radmap(const char *path, const lfio_radmap *map, int json, int stats)
+/* Prints the text report: the file's summary, then the first INFO_MAPS_SHOWN maps (every map with all_maps)
+ * and a line counting the rest. @return an exit code. */
+static int print_text(const ilf_radmap_info *in, const map_summary *total, int stats)
 {
-    stats = stats && lfio_radmap_has_cells(map);
-    map_summary total;
-    gather_total(map, stats, &total);
-    if (json)
-        return print_json(path, map, &total, stats);
-    print_file_text(path, map, &total, stats);
-    for (size_t k = 0; k < lfio_radmap_count(map); k++) {
-        lfio_radmap_patch p;
+    print_file_text(in, total, stats);
+    const size_t count = src_count(in);
+    const size_t shown = in->all_maps || count < INFO_MAPS_SHOWN ? count : INFO_MAPS_SHOWN;
+    for (size_t k = 0; k < shown; k++) {
         map_summary m;
-        lfio_radmap_get(map, k, &p);
-        summarise(&p, stats, &m);
+        lfio_status st = src_summarise(in, k, stats, &m);
+        if (st != LFIO_OK)
+            return info_failure(in, st);
         print_map_text(k, &m, stats);
     }
+    if (shown < count)
+        printf("\n... and %zu more maps: ilf info --maps lists them\n", count - shown);
     return ILF_EXIT_OK;
+}
+
+int ilf_info_radmap(const ilf_radmap_info *in)
+{
+    const int stats = in->stats && in->map != NULL && lfio_radmap_has_cells(in->map);
+    map_summary total;
+    lfio_status st = gather_total(in, stats, &total);
+    if (st != LFIO_OK)
+        return info_failure(in, st);
+    return in->json ? print_json(in, &total, stats) : print_text(in, &total, stats);
 }

@@ -33,7 +33,11 @@
  *     NULL. Its memory is the patch tables and the vertices.
  *   - HDF5 is called from the calling thread alone: the threads of a serial
  *     write (chunks.h) only filter chunks while it makes a patch's objects.
- *   - Every public entry point silences HDF5 for its whole duration; the
+ *   - lfio_radmap_headers (the last section) reads a format-2 file's
+ *     headers in blocks of bounded size, with the checks of the headers
+ *     read: the file-wide ones when it opens, each patch's when it is got.
+ *   - Every public entry point silences HDF5 for its whole duration (or,
+ *     lfio_radmap_headers_get(), for each HDF5 read it makes); the
  *     HDF5 plumbing (errors, attributes, layouts, atomic writes) is shared
  *     with light field files through h5util.h.
  */
@@ -1311,6 +1315,29 @@ static lfio_status v2_read_labels(const char *path, hid_t g, lfio_radmap *map, s
     return st;
 }
 
+/* Fills the description of row i of format-2 tables w (label, scalars, counts from the offsets), its arrays
+ * NULL. */
+static void v2_fill_scalars(unsigned char *const *w, size_t i, const char *label, lfio_radmap_patch *p)
+{
+    const uint32_t *voff = (const uint32_t *)w[V2_VERTEX_OFFSET], *coff = (const uint32_t *)w[V2_CELL_OFFSET];
+    memset(p, 0, sizeof *p);
+    p->label = label;
+    p->polygon = ((const uint32_t *)w[V2_POLYGON])[i];
+    p->nu = ((const uint32_t *)w[V2_NU])[i];
+    p->nv = ((const uint32_t *)w[V2_NV])[i];
+    memcpy(p->origin, w[V2_ORIGIN] + 24 * i, 24);
+    memcpy(p->e1, w[V2_E1] + 24 * i, 24);
+    memcpy(p->e2, w[V2_E2] + 24 * i, 24);
+    memcpy(p->normal, w[V2_NORMAL] + 24 * i, 24);
+    memcpy(&p->cell_size, w[V2_CELL_SIZE] + 8 * i, 8);
+    memcpy(&p->u0, w[V2_U0] + 8 * i, 8);
+    memcpy(&p->v0, w[V2_V0] + 8 * i, 8);
+    memcpy(p->albedo, w[V2_ALBEDO] + 12 * i, 12);
+    memcpy(p->emission, w[V2_EMISSION] + 12 * i, 12);
+    p->nverts = voff[i + 1] - voff[i];
+    p->ncells = coff[i + 1] - coff[i];
+}
+
 /* Points patch k of map (format 2, its arrays read) into the whole arrays and checks it. */
 static lfio_status v2_make_patch(const char *path, lfio_radmap *map, size_t k, const char *label)
 {
@@ -1319,21 +1346,7 @@ static lfio_status v2_make_patch(const char *path, lfio_radmap *map, size_t k, c
     unsigned char *const *w = map->whole;
     const uint32_t *voff = (const uint32_t *)w[V2_VERTEX_OFFSET], *coff = (const uint32_t *)w[V2_CELL_OFFSET];
     memset(mp, 0, sizeof *mp);
-    p->label = label;
-    p->polygon = ((const uint32_t *)w[V2_POLYGON])[k];
-    p->nu = ((const uint32_t *)w[V2_NU])[k];
-    p->nv = ((const uint32_t *)w[V2_NV])[k];
-    memcpy(p->origin, w[V2_ORIGIN] + 24 * k, 24);
-    memcpy(p->e1, w[V2_E1] + 24 * k, 24);
-    memcpy(p->e2, w[V2_E2] + 24 * k, 24);
-    memcpy(p->normal, w[V2_NORMAL] + 24 * k, 24);
-    memcpy(&p->cell_size, w[V2_CELL_SIZE] + 8 * k, 8);
-    memcpy(&p->u0, w[V2_U0] + 8 * k, 8);
-    memcpy(&p->v0, w[V2_V0] + 8 * k, 8);
-    memcpy(p->albedo, w[V2_ALBEDO] + 12 * k, 12);
-    memcpy(p->emission, w[V2_EMISSION] + 12 * k, 12);
-    p->nverts = voff[k + 1] - voff[k];
-    p->ncells = coff[k + 1] - coff[k];
+    v2_fill_scalars(w, k, label, p);
     const size_t v0 = voff[k], c0 = coff[k];
     p->vertices = w[V2_VERTICES] ? (const double *)w[V2_VERTICES] + 3 * v0 : NULL;
     p->cell_ij = w[V2_CELL_IJ] ? (const uint32_t *)w[V2_CELL_IJ] + 2 * c0 : NULL;
@@ -1483,4 +1496,380 @@ int lfio_radmap_has_cells(const lfio_radmap *map)
 uint64_t lfio_radmap_cell_count(const lfio_radmap *map)
 {
     return map ? map->cells : 0;
+}
+
+/* ------------------------------------------- format 2: headers a block at a time */
+
+/*
+ * lfio_radmap_headers: a format-2 file's tables read LFIO_RADMAP_HEADERS_BLOCK patches at a time, the
+ * datasets kept open (HDF5 caches their decompressed chunks, and the vetted maps mean each chunk is
+ * inflated by lfio once). Opening makes every file-wide check of the whole read (root attributes, every
+ * dataset's storage and shape, the offset tables, the labels) in passes of bounded memory, recording where
+ * each block's labels start; each patch is checked as the whole read checks its headers when it is got.
+ * A format-1 file is read whole by lfio_radmap_read_headers() instead (its patches are groups anyway).
+ */
+
+/* Vertices a handle reads at once (a chunk's, 384 KiB), unless one patch has more (LFIO_RADMAP_MAX_VERTS at most,
+ * 1.5 MiB). */
+#define HDR_VERT_WINDOW ((uint64_t)V2_CHUNK)
+/* Labels a handle holds at once: at most 1 MiB however long they are. */
+#define HDR_LABEL_BLOCK 256u
+/* Bytes of labels read at once while opening. */
+#define HDR_LABEL_WINDOW 65536u
+
+struct lfio_radmap_headers {
+    char *path;
+    lfio_radmap *meta;       /* root attributes and cell count; format 1: the whole headers */
+    size_t count;            /* patches */
+    hid_t file, g;
+    hid_t d[V2_COUNT];       /* open tables and vertices; -1 otherwise */
+    unsigned char *vetted[V2_COUNT];
+    uint64_t *label_start;   /* byte where label block b's first label starts, b = 0 .. label blocks */
+    uint64_t label_bytes;
+    size_t block;            /* the block of LFIO_RADMAP_HEADERS_BLOCK patches loaded, SIZE_MAX for none */
+    size_t k0, n;            /* its first patch and size */
+    unsigned char *tab[V2_COUNT]; /* the block's rows of each table (offsets: n + 1 rows) */
+    size_t label_block;      /* the block of HDR_LABEL_BLOCK labels loaded, SIZE_MAX for none */
+    char *labels;            /* its labels, NUL-terminated one after another */
+    const char *label[HDR_LABEL_BLOCK];
+    double *verts;           /* vertices [vfirst, vfirst + vcount) of the file */
+    uint64_t vfirst, vcount, vcap;
+};
+
+/* Reads rows [first, first + rows) of open dataset t of h into buf, HDF5 silenced: the only HDF5 call of
+ * lfio_radmap_headers_get(), which then costs nothing of HDF5 for a patch already in memory. */
+static lfio_status hdr_read_rows(lfio_radmap_headers *h, enum v2_ds t, uint64_t first, uint64_t rows, void *buf)
+{
+    char dobj[64];
+    snprintf(dobj, sizeof dobj, "/patches/%s", v2_datasets[t].name);
+    const int rank = v2_datasets[t].width ? 2 : 1;
+    const hsize_t start[2] = {first, 0}, n[2] = {rows, (hsize_t)v2_datasets[t].width};
+    lfio__h5_quiet q;
+    lfio__h5_quiet_begin(&q);
+    lfio_status st = lfio__h5_read_vetted(h->path, dobj, h->d[t], v2_memory_type(t), rank, start, n, buf,
+                                          (lfio__h5_vetted *)h->vetted[t]);
+    lfio__h5_quiet_end(&q);
+    return st;
+}
+
+/* Opens and checks dataset t of h's group for rows rows (source: where rows came from); keep: left open. */
+static lfio_status hdr_open_dataset(lfio_radmap_headers *h, enum v2_ds t, uint64_t rows, const char *source,
+                                    int keep)
+{
+    lfio__h5_layout l;
+    v2_layout(t, rows, 0, &l);
+    /* Read in order, a dataset needs one decompressed chunk cached, the one its next block falls in: HDF5's
+     * default cache (1 MiB) would hold two or three of them for every open dataset. */
+    hid_t dapl = keep ? H5Pcreate(H5P_DATASET_ACCESS) : -1;
+    if (dapl >= 0)
+        H5Pset_chunk_cache(dapl, 0, 0, 1.0);
+    lfio_status st = lfio__h5_check_dataset(h->path, "/patches", h->g, &l, source, dapl, &h->d[t]);
+    lfio__h5_close(dapl);
+    const size_t bytes = st == LFIO_OK ? lfio__h5_vetted_bytes(h->d[t]) : 0;
+    if (bytes > 0 && (h->vetted[t] = calloc(1, bytes)) == NULL)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: /patches/%s: out of memory", h->path, v2_datasets[t].name);
+    if (!keep || st != LFIO_OK) {
+        lfio__h5_close(h->d[t]);
+        h->d[t] = -1;
+    }
+    return st;
+}
+
+/* Checks offsets table t a block at a time, as v2_check_offsets() does. @return LFIO_OK and *total. */
+static lfio_status hdr_scan_offsets(lfio_radmap_headers *h, enum v2_ds t, uint64_t limit, uint64_t *total)
+{
+    uint32_t *off = (uint32_t *)h->tab[t], prev = 0;
+    lfio_status st = LFIO_OK;
+    for (size_t k0 = 0; st == LFIO_OK && k0 <= h->count; k0 += LFIO_RADMAP_HEADERS_BLOCK) {
+        const size_t n = h->count + 1 - k0 < LFIO_RADMAP_HEADERS_BLOCK ? h->count + 1 - k0 : LFIO_RADMAP_HEADERS_BLOCK;
+        st = hdr_read_rows(h, t, k0, n, off);
+        for (size_t i = 0; st == LFIO_OK && i < n; i++) {
+            if (k0 + i == 0 && off[0] != 0)
+                st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/%s: must start at 0 and end at most at %llu",
+                                h->path, v2_datasets[t].name, (unsigned long long)limit);
+            else if (off[i] < prev)
+                st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/%s: offset %zu decreases", h->path,
+                                v2_datasets[t].name, k0 + i);
+            prev = off[i];
+        }
+    }
+    if (st == LFIO_OK && prev > limit)
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/%s: must start at 0 and end at most at %llu", h->path,
+                        v2_datasets[t].name, (unsigned long long)limit);
+    *total = prev;
+    return st;
+}
+
+/* Reads the labels a window at a time: counts them, bounds each, records where each block's first starts. */
+static lfio_status hdr_scan_labels(lfio_radmap_headers *h)
+{
+    const size_t blocks = h->count / HDR_LABEL_BLOCK + 1;
+    unsigned char *buf = malloc(HDR_LABEL_WINDOW);
+    h->label_start = calloc(blocks + 1, sizeof *h->label_start);
+    if (buf == NULL || h->label_start == NULL) {
+        free(buf);
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: /patches/label: out of memory", h->path);
+    }
+    lfio_status st = LFIO_OK;
+    size_t nul = 0;
+    uint64_t label_begin = 0;
+    for (uint64_t b0 = 0; st == LFIO_OK && b0 < h->label_bytes; b0 += HDR_LABEL_WINDOW) {
+        const uint64_t n = h->label_bytes - b0 < HDR_LABEL_WINDOW ? h->label_bytes - b0 : HDR_LABEL_WINDOW;
+        st = hdr_read_rows(h, V2_LABEL, b0, n, buf);
+        for (uint64_t i = 0; st == LFIO_OK && i < n; i++) {
+            if (b0 + i - label_begin > LFIO_RADMAP_TEXT_MAX)
+                st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches: patch %zu: label is missing or longer than %u bytes",
+                                h->path, nul, LFIO_RADMAP_TEXT_MAX);
+            if (buf[i] != '\0')
+                continue;
+            label_begin = b0 + i + 1;
+            if (++nul % HDR_LABEL_BLOCK == 0 && nul / HDR_LABEL_BLOCK <= blocks)
+                h->label_start[nul / HDR_LABEL_BLOCK] = label_begin;
+        }
+    }
+    free(buf);
+    if (st == LFIO_OK && (nul != h->count || label_begin != h->label_bytes))
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/label: expected %zu NUL-terminated labels", h->path, h->count);
+    return st;
+}
+
+/* Opens format-2 group g of h (h->count patches): every dataset checked, the tables and vertices left open. */
+static lfio_status hdr_open_v2(lfio_radmap_headers *h)
+{
+    h->label_bytes = first_axis_length(h->path, "/patches/label", h->g, "label");
+    lfio_status st = LFIO_OK;
+    if (h->label_bytes > (uint64_t)h->count * (LFIO_RADMAP_TEXT_MAX + 1))
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/label: %llu bytes for %zu labels of at most %u bytes", h->path,
+                        (unsigned long long)h->label_bytes, h->count, LFIO_RADMAP_TEXT_MAX);
+    if (st == LFIO_OK)
+        st = hdr_open_dataset(h, V2_LABEL, h->label_bytes, "its own length", 1);
+    if (st == LFIO_OK)
+        st = hdr_scan_labels(h);
+    for (int t = 0; st == LFIO_OK && t < V2_COUNT; t++) {
+        const enum v2_rows r = v2_datasets[t].rows;
+        if (r != ROWS_PATCH && r != ROWS_OFFSET)
+            continue;
+        st = hdr_open_dataset(h, (enum v2_ds)t, h->count + (r == ROWS_OFFSET), "patch_count", 1);
+        const size_t bytes = (LFIO_RADMAP_HEADERS_BLOCK + 1) * v2_row_bytes((enum v2_ds)t);
+        if (st == LFIO_OK && (h->tab[t] = malloc(bytes)) == NULL)
+            st = lfio__fail(LFIO_ERR_NOMEM, "%s: /patches: out of memory", h->path);
+    }
+    uint64_t vertices = 0, cells = 0;
+    if (st == LFIO_OK)
+        st = hdr_scan_offsets(h, V2_VERTEX_OFFSET, LFIO_RADMAP_MAX_FILE_VERTS, &vertices);
+    if (st == LFIO_OK)
+        st = hdr_scan_offsets(h, V2_CELL_OFFSET, LFIO_RADMAP_MAX_CELLS, &cells);
+    for (int t = 0; st == LFIO_OK && t < V2_COUNT; t++) {
+        const enum v2_rows r = v2_datasets[t].rows;
+        if (r == ROWS_VERTEX || r == ROWS_CELL)
+            st = hdr_open_dataset(h, (enum v2_ds)t, r == ROWS_VERTEX ? vertices : cells,
+                                  r == ROWS_VERTEX ? "vertex_offset" : "cell_offset", r == ROWS_VERTEX);
+    }
+    h->meta->cells = cells;
+    return st;
+}
+
+/* lfio_radmap_headers_open() without silencing HDF5. */
+static lfio_status hdr_open(lfio_radmap_headers *h)
+{
+    lfio_status st = lfio__h5_open_read(h->path, &h->file);
+    if (st == LFIO_OK)
+        st = read_root(h->path, h->file, h->meta, &h->count);
+    if (st == LFIO_OK && h->meta->format == 1) {
+        lfio__h5_close(h->file);
+        h->file = -1;
+        lfio_radmap_destroy(h->meta);
+        h->meta = NULL;
+        st = radmap_read_impl(h->path, 1, &h->meta);
+        h->count = lfio_radmap_count(h->meta);
+        return st;
+    }
+    if (st == LFIO_OK)
+        st = lfio__h5_open_group(h->path, "/patches", h->file, "patches", "group", &h->g);
+    if (st == LFIO_OK)
+        st = hdr_open_v2(h);
+    return st;
+}
+
+lfio_status lfio_radmap_headers_open(const char *path, lfio_radmap_headers **out)
+{
+    if (out == NULL)
+        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_headers_open: NULL argument");
+    *out = NULL;
+    if (path == NULL || path[0] == '\0')
+        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_headers_open: NULL or empty path");
+    lfio_radmap_headers *h = calloc(1, sizeof *h);
+    if (h != NULL) {
+        h->file = h->g = -1;
+        for (int t = 0; t < V2_COUNT; t++)
+            h->d[t] = -1;
+        h->block = h->label_block = SIZE_MAX;
+    }
+    if (h == NULL || (h->path = malloc(strlen(path) + 1)) == NULL ||
+        (h->meta = calloc(1, sizeof *h->meta)) == NULL) {
+        lfio_radmap_headers_close(h);
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
+    }
+    memcpy(h->path, path, strlen(path) + 1);
+    h->meta->headers = 1;
+    lfio__h5_quiet q;
+    lfio__h5_quiet_begin(&q);
+    lfio_status st = hdr_open(h);
+    lfio__h5_quiet_end(&q);
+    if (st != LFIO_OK)
+        lfio_radmap_headers_close(h);
+    else
+        *out = h;
+    return st;
+}
+
+void lfio_radmap_headers_close(lfio_radmap_headers *h)
+{
+    if (h == NULL)
+        return;
+    lfio__h5_quiet q;
+    lfio__h5_quiet_begin(&q);
+    for (int t = 0; t < V2_COUNT; t++) {
+        lfio__h5_close(h->d[t]);
+        free(h->vetted[t]);
+        free(h->tab[t]);
+    }
+    lfio__h5_close(h->g);
+    lfio__h5_close(h->file);
+    lfio__h5_quiet_end(&q);
+    lfio_radmap_destroy(h->meta);
+    free(h->label_start);
+    free(h->labels);
+    free(h->verts);
+    free(h->path);
+    free(h);
+}
+
+/* Loads block b of h: its rows of every table. */
+static lfio_status hdr_load_block(lfio_radmap_headers *h, size_t b)
+{
+    h->block = SIZE_MAX;
+    h->vcount = 0;
+    h->k0 = b * LFIO_RADMAP_HEADERS_BLOCK;
+    h->n = h->count - h->k0 < LFIO_RADMAP_HEADERS_BLOCK ? h->count - h->k0 : LFIO_RADMAP_HEADERS_BLOCK;
+    lfio_status st = LFIO_OK;
+    for (int t = 0; st == LFIO_OK && t < V2_COUNT; t++) {
+        const enum v2_rows r = v2_datasets[t].rows;
+        if (r == ROWS_PATCH || r == ROWS_OFFSET)
+            st = hdr_read_rows(h, (enum v2_ds)t, h->k0, h->n + (r == ROWS_OFFSET), h->tab[t]);
+    }
+    if (st == LFIO_OK)
+        h->block = b;
+    return st;
+}
+
+/* Loads label block b of h: the labels of patches [b * HDR_LABEL_BLOCK, ...), each checked at opening to be
+ * NUL-terminated and at most LFIO_RADMAP_TEXT_MAX bytes. */
+static lfio_status hdr_load_labels(lfio_radmap_headers *h, size_t b)
+{
+    h->label_block = SIZE_MAX;
+    const size_t k0 = b * HDR_LABEL_BLOCK, n = h->count - k0 < HDR_LABEL_BLOCK ? h->count - k0 : HDR_LABEL_BLOCK;
+    const uint64_t first = h->label_start[b], end = k0 + n == h->count ? h->label_bytes : h->label_start[b + 1];
+    char *labels = realloc(h->labels, end - first + 1);
+    if (labels == NULL)
+        return lfio__fail(LFIO_ERR_NOMEM, "%s: /patches/label: out of memory", h->path);
+    h->labels = labels;
+    lfio_status st = hdr_read_rows(h, V2_LABEL, first, end - first, h->labels);
+    const char *label = h->labels;
+    for (size_t i = 0; st == LFIO_OK && i < n; i++) {
+        h->label[i] = label;
+        label += strlen(label) + 1;
+    }
+    if (st == LFIO_OK)
+        h->label_block = b;
+    return st;
+}
+
+/* Makes the vertices of patch i of the loaded block (n of them, at most LFIO_RADMAP_MAX_VERTS) part of h's
+ * window, reading on over the block's next patches as far as they fit in HDR_VERT_WINDOW. */
+static lfio_status hdr_load_vertices(lfio_radmap_headers *h, size_t i, uint64_t n)
+{
+    const uint32_t *voff = (const uint32_t *)h->tab[V2_VERTEX_OFFSET];
+    const uint64_t first = voff[i];
+    if (first >= h->vfirst && first + n <= h->vfirst + h->vcount)
+        return LFIO_OK;
+    uint64_t end = first + n;
+    for (size_t j = i + 1; j <= h->n && voff[j] - first <= HDR_VERT_WINDOW; j++)
+        end = voff[j] > end ? voff[j] : end;
+    h->vcount = 0;
+    if (end - first > h->vcap) {
+        const uint64_t cap = end - first > HDR_VERT_WINDOW ? end - first : HDR_VERT_WINDOW;
+        double *v = realloc(h->verts, cap * 3 * sizeof *v);
+        if (v == NULL)
+            return lfio__fail(LFIO_ERR_NOMEM, "%s: /patches/vertices: out of memory", h->path);
+        h->verts = v;
+        h->vcap = cap;
+    }
+    h->vfirst = first;
+    lfio_status st = hdr_read_rows(h, V2_VERTICES, first, end - first, h->verts);
+    if (st == LFIO_OK)
+        h->vcount = end - first;
+    return st;
+}
+
+/* Describes patch k of format-2 h in *out and checks it as lfio_radmap_read_headers() does. */
+static lfio_status hdr_get_v2(lfio_radmap_headers *h, size_t k, lfio_radmap_patch *out)
+{
+    lfio_status st = LFIO_OK;
+    if (h->block != k / LFIO_RADMAP_HEADERS_BLOCK)
+        st = hdr_load_block(h, k / LFIO_RADMAP_HEADERS_BLOCK);
+    if (st == LFIO_OK && h->label_block != k / HDR_LABEL_BLOCK)
+        st = hdr_load_labels(h, k / HDR_LABEL_BLOCK);
+    if (st != LFIO_OK)
+        return st;
+    const size_t i = k - h->k0;
+    lfio_radmap_patch p;
+    v2_fill_scalars(h->tab, i, h->label[k % HDR_LABEL_BLOCK], &p);
+    char why[256];
+    const uint64_t v0 = ((const uint32_t *)h->tab[V2_VERTEX_OFFSET])[i];
+    if (check_patch_scalars(&p, why, sizeof why))
+        st = hdr_load_vertices(h, i, p.nverts);
+    else
+        st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches: patch %zu: %s", h->path, k, why);
+    if (st != LFIO_OK)
+        return st;
+    p.vertices = h->verts + 3 * (v0 - h->vfirst);
+    if (!check_patch_header(&p, why, sizeof why))
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: /patches: patch %zu: %s", h->path, k, why);
+    *out = p;
+    return LFIO_OK;
+}
+
+lfio_status lfio_radmap_headers_get(lfio_radmap_headers *h, size_t k, lfio_radmap_patch *out)
+{
+    if (h == NULL || out == NULL)
+        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_headers_get: NULL argument");
+    if (k >= h->count)
+        return lfio__fail(LFIO_ERR_ARG, "lfio_radmap_headers_get: patch %zu out of range (%zu patches)", k, h->count);
+    return h->meta->format == 1 ? lfio_radmap_get(h->meta, k, out) : hdr_get_v2(h, k, out);
+}
+
+size_t lfio_radmap_headers_count(const lfio_radmap_headers *h)
+{
+    return h ? h->count : 0;
+}
+
+const char *lfio_radmap_headers_creator(const lfio_radmap_headers *h)
+{
+    return h ? lfio_radmap_creator(h->meta) : "";
+}
+
+const char *lfio_radmap_headers_scene(const lfio_radmap_headers *h)
+{
+    return h ? lfio_radmap_scene(h->meta) : "";
+}
+
+int lfio_radmap_headers_format_version(const lfio_radmap_headers *h)
+{
+    return h ? lfio_radmap_format_version(h->meta) : 0;
+}
+
+uint64_t lfio_radmap_headers_cell_count(const lfio_radmap_headers *h)
+{
+    return h ? lfio_radmap_cell_count(h->meta) : 0;
 }

@@ -22,11 +22,14 @@
  *     irradiance and radiosity [ncells][3].
  *   - Every pointer in lfio_radmap_patch is borrowed: lfio_radmap_write()
  *     only reads through them during the call; lfio_radmap_get() points
- *     them into the reader's object, valid until lfio_radmap_destroy().
+ *     them into the reader's object, valid until lfio_radmap_destroy();
+ *     lfio_radmap_headers_get() into the header reader's, valid until its
+ *     next call or lfio_radmap_headers_close().
  *   - Status codes and messages as in lfio/lfio.h.
  *
  * Thread safety: a radiance map is read-only once read and may be queried
- * from any number of threads.
+ * from any number of threads; a header reader (lfio_radmap_headers) is used
+ * by one thread at a time.
  *
  * This header is valid C99 and C++.
  */
@@ -220,6 +223,60 @@ int lfio_radmap_format_version(const lfio_radmap *map);
 int lfio_radmap_has_cells(const lfio_radmap *map);
 /** @return the cells stored over every patch; 0 for NULL. */
 uint64_t lfio_radmap_cell_count(const lfio_radmap *map);
+
+/** Patches an lfio_radmap_headers reader holds in memory at once (format 2). */
+#define LFIO_RADMAP_HEADERS_BLOCK 4096u
+
+/**
+ * A reader of a file's patch descriptions a block at a time: its memory is
+ * bounded whatever the number of patches (the tables of
+ * LFIO_RADMAP_HEADERS_BLOCK patches, their labels, at most
+ * LFIO_RADMAP_MAX_VERTS vertices, and HDF5's caches of the open datasets:
+ * a few MiB). Format 2 only: a format-1 file (a group a patch) is read
+ * whole by lfio_radmap_read_headers(), its memory growing with its patches.
+ * Opaque; one thread at a time.
+ */
+typedef struct lfio_radmap_headers lfio_radmap_headers;
+
+/**
+ * Opens path for lfio_radmap_headers_get(), making every file-wide check of
+ * lfio_radmap_read_headers() (root attributes, every dataset's storage and
+ * shape, the offset tables, the labels) in passes of bounded memory; each
+ * patch's own checks are made when it is got. The file stays open until
+ * lfio_radmap_headers_close().
+ * @return LFIO_OK and *out, owned by the caller; as lfio_radmap_read()
+ * otherwise, with *out = NULL.
+ */
+lfio_status lfio_radmap_headers_open(const char *path, lfio_radmap_headers **out);
+
+/** Closes h. NULL is a no-op. */
+void lfio_radmap_headers_close(lfio_radmap_headers *h);
+
+/** @return the number of patches; 0 for NULL. */
+size_t lfio_radmap_headers_count(const lfio_radmap_headers *h);
+
+/**
+ * Describes patch k in *out as lfio_radmap_read_headers() would (cell arrays
+ * NULL, ncells the stored count), checked as that checks it. Reads the
+ * block holding k when it is not the one in memory: cheapest with k in
+ * order. out's pointers are borrowed from h, valid until the next
+ * lfio_radmap_headers_get() or lfio_radmap_headers_close().
+ * @return LFIO_OK; LFIO_ERR_ARG (k out of range, NULL); LFIO_ERR_FORMAT,
+ * LFIO_ERR_CHECKSUM, LFIO_ERR_IO, LFIO_ERR_NOMEM (the file's problem).
+ */
+lfio_status lfio_radmap_headers_get(lfio_radmap_headers *h, size_t k, lfio_radmap_patch *out);
+
+/** @return the creator stored in the file (borrowed from h); "" for NULL. */
+const char *lfio_radmap_headers_creator(const lfio_radmap_headers *h);
+
+/** @return the scene path stored in the file (borrowed from h); "" for NULL. */
+const char *lfio_radmap_headers_scene(const lfio_radmap_headers *h);
+
+/** @return the file's format_version (1 or 2); 0 for NULL. */
+int lfio_radmap_headers_format_version(const lfio_radmap_headers *h);
+
+/** @return the cells stored over every patch (from the offsets); 0 for NULL. */
+uint64_t lfio_radmap_headers_cell_count(const lfio_radmap_headers *h);
 
 #ifdef __cplusplus
 }
