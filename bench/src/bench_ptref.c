@@ -30,6 +30,7 @@
 #include <time.h>
 
 #include "bench.h"
+#include "ilf/message.h"
 #include "bench_pathtrace.h"
 #include "cli.h"
 #include "ilf/pool.h"
@@ -154,7 +155,7 @@ static void pathtrace_child(void *arg, bench_result *out)
     bench_pt *pt = job->cells != NULL ? bench_pt_new(job->scene, why, sizeof why) : NULL;
     int ok = pt != NULL;
     if (!ok)
-        snprintf(out->message, sizeof out->message, "path tracer: %s", why);
+        ilf_format_cut(out->message, sizeof out->message, "path tracer: %s", why);
     ok = ok && place_cells(sol, total, job->cells, count, out);
     if (ok) {
         job->pt = pt;

@@ -25,6 +25,7 @@
 #include <time.h>
 
 #include "bench.h"
+#include "ilf/message.h"
 #include "cli.h"
 #include "jsonout.h"
 #include "lfio/radmap.h"
@@ -200,7 +201,7 @@ static int write_sidecar(const reference_job *job, bench_result *r)
              cJSON_AddNumberToObject(root, "cpu_seconds", r->cpu_seconds);
     ok = ok && json_write_file(job->json, root, err, sizeof err);
     if (!ok)
-        snprintf(r->message, sizeof r->message, "%s", err);
+        ilf_format_cut(r->message, sizeof r->message, "%s", err);
     cJSON_Delete(root);
     return ok;
 }

@@ -32,6 +32,7 @@
 #include <unistd.h>
 
 #include "bench.h"
+#include "ilf/message.h"
 #include "cli.h"
 #include "ilf/atomic_file.h"
 #include "jsonout.h"
@@ -330,7 +331,7 @@ static int write_error_image(const rl_solution *sol, const rl_scene *scene, cons
     if (ok && !file_write_atomic(path, pixels, count * sizeof *pixels, err, sizeof err))
         ok = 0;
     if (!ok)
-        snprintf(r->message, sizeof r->message, "%s", err);
+        ilf_format_cut(r->message, sizeof r->message, "%s", err);
     free(map_ids);
     free(cell_ids);
     free(pixels);
