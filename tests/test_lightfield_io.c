@@ -138,28 +138,12 @@ static int count_temporaries(void)
 }
 
 /* stderr capture: proves that lfio calls print nothing, with HDF5's printer left on. */
-static int saved_stderr = -1, capture_fd = -1;
-
-/* Redirects stderr to a scratch file. */
 static void capture_begin(void)
 {
     char p[512];
-    fflush(stderr);
-    saved_stderr = dup(2);
-    capture_fd = open(tmp_path(p, sizeof p, "stderr.txt"), O_CREAT | O_TRUNC | O_RDWR, 0644);
-    dup2(capture_fd, 2);
+    check_stderr_begin(tmp_path(p, sizeof p, "stderr.txt"));
 }
-
-/* Restores stderr. @return the number of bytes written to it meanwhile. */
-static long capture_end(void)
-{
-    fflush(stderr);
-    long bytes = (long)lseek(capture_fd, 0, SEEK_END);
-    dup2(saved_stderr, 2);
-    close(saved_stderr);
-    close(capture_fd);
-    return bytes;
-}
+#define capture_end check_stderr_end
 
 /* --------------------------------------------------------------- test data */
 

@@ -103,28 +103,12 @@ static int sweep_tmpdir(int only_temporaries)
 }
 
 /* stderr redirection around lfio calls: they must print nothing. */
-static int saved_stderr = -1, capture_fd = -1;
-
-/* Sends stderr to a scratch file. */
 static void quiet_start(void)
 {
     char p[512];
-    fflush(stderr);
-    saved_stderr = dup(2);
-    capture_fd = open(tmp_path(p, sizeof p, "stderr.txt"), O_CREAT | O_TRUNC | O_RDWR, 0644);
-    dup2(capture_fd, 2);
+    check_stderr_begin(tmp_path(p, sizeof p, "stderr.txt"));
 }
-
-/* Restores stderr. @return the number of bytes written to it meanwhile. */
-static long quiet_stop(void)
-{
-    fflush(stderr);
-    long bytes = (long)lseek(capture_fd, 0, SEEK_END);
-    dup2(saved_stderr, 2);
-    close(saved_stderr);
-    close(capture_fd);
-    return bytes;
-}
+#define quiet_stop check_stderr_end
 
 /* A describe function over an array that fails at patch fail_at (SIZE_MAX: never). */
 struct describer {
