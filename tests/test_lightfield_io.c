@@ -31,6 +31,7 @@
 #include <zlib.h>
 
 #include "check.h"
+#include "h5edit.h"
 #include "lfio/lightfield.h"
 #include "lfio/partition.h"
 #include "radmap_patches.h"
@@ -235,99 +236,6 @@ static void check_slab_equal(const lfio_slab *a, const lfio_slab *b, const char 
 }
 
 /* --------------------------------------------------------- HDF5 file surgery */
-
-/* Opens path for editing. @return the file id (negative on failure, which is checked). */
-static hid_t edit_open(const char *path)
-{
-    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
-    CHECK(f >= 0, "cannot open %s for editing", path);
-    return f;
-}
-
-/* Replaces attribute name of object obj with a value of file type ftype (scalar when count is 0). */
-static void edit_attr(const char *path, const char *obj, const char *name, hid_t ftype, hid_t mtype,
-                      hsize_t count, const void *value)
-{
-    hid_t f = edit_open(path);
-    hid_t o = H5Oopen(f, obj, H5P_DEFAULT);
-    if (H5Aexists(o, name) > 0)
-        H5Adelete(o, name);
-    hid_t space = count ? H5Screate_simple(1, &count, NULL) : H5Screate(H5S_SCALAR);
-    hid_t a = H5Acreate2(o, name, ftype, space, H5P_DEFAULT, H5P_DEFAULT);
-    CHECK(a >= 0 && H5Awrite(a, mtype, value) >= 0, "edit %s %s@%s", path, obj, name);
-    H5Aclose(a);
-    H5Sclose(space);
-    H5Oclose(o);
-    H5Fclose(f);
-}
-
-/* Replaces string attribute name of obj with value. */
-static void edit_attr_str(const char *path, const char *obj, const char *name, const char *value)
-{
-    hid_t t = H5Tcopy(H5T_C_S1);
-    H5Tset_size(t, strlen(value) + 1);
-    edit_attr(path, obj, name, t, t, 0, value);
-    H5Tclose(t);
-}
-
-/* Removes attribute name of obj. */
-static void edit_delete_attr(const char *path, const char *obj, const char *name)
-{
-    hid_t f = edit_open(path);
-    CHECK(H5Adelete_by_name(f, obj, name, H5P_DEFAULT) >= 0, "delete %s@%s", obj, name);
-    H5Fclose(f);
-}
-
-/* Overwrites one element of dataset dset, at coordinates at[rank], with a double value. */
-static void edit_element(const char *path, const char *dset, int rank, const hsize_t *at, double value)
-{
-    hsize_t one[4] = {1, 1, 1, 1}, n1 = 1;
-    hid_t f = edit_open(path);
-    hid_t d = H5Dopen2(f, dset, H5P_DEFAULT);
-    hid_t fs = H5Dget_space(d), ms = H5Screate_simple(1, &n1, NULL);
-    H5Sselect_hyperslab(fs, H5S_SELECT_SET, at, NULL, one, NULL);
-    (void)rank;
-    CHECK(H5Dwrite(d, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, &value) >= 0, "edit %s", dset);
-    H5Sclose(ms);
-    H5Sclose(fs);
-    H5Dclose(d);
-    H5Fclose(f);
-}
-
-/* @return element at[] of dataset dset as a double (NAN on failure). */
-static double peek_element(const char *path, const char *dset, const hsize_t *at)
-{
-    hsize_t one[4] = {1, 1, 1, 1}, n1 = 1;
-    double value = NAN;
-    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
-    hid_t d = H5Dopen2(f, dset, H5P_DEFAULT);
-    hid_t fs = H5Dget_space(d), ms = H5Screate_simple(1, &n1, NULL);
-    H5Sselect_hyperslab(fs, H5S_SELECT_SET, at, NULL, one, NULL);
-    H5Dread(d, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, &value);
-    H5Sclose(ms);
-    H5Sclose(fs);
-    H5Dclose(d);
-    H5Fclose(f);
-    return value;
-}
-
-/* Replaces dataset dset (full path) by a zero-filled one of type ftype and shape dims, with units and axes. */
-static void edit_replace_dataset(const char *path, const char *dset, hid_t ftype, int rank,
-                                 const hsize_t *dims, const char *units, const char *axes)
-{
-    hid_t f = edit_open(path);
-    CHECK(H5Ldelete(f, dset, H5P_DEFAULT) >= 0, "delete %s", dset);
-    hid_t space = H5Screate_simple(rank, dims, NULL);
-    hid_t d = H5Dcreate2(f, dset, ftype, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    CHECK(d >= 0, "create %s", dset);
-    H5Sclose(space);
-    H5Dclose(d);
-    H5Fclose(f);
-    char obj[256];
-    snprintf(obj, sizeof obj, "%s", dset);
-    edit_attr_str(path, obj, "units", units);
-    edit_attr_str(path, obj, "axes", axes);
-}
 
 /* Finds the file offset and size of chunk 0 of dataset dset. @return 1 on success. */
 static int chunk_location(const char *path, const char *dset, haddr_t *addr, hsize_t *size)
@@ -902,21 +810,21 @@ static void test_bad_files(const char *good, const char *small)
 
     const hsize_t rank3[3] = {4, 1, 3}, f64dims[4] = {4, 1, 3, 3};
     edit_replace_dataset(fresh_copy(p, sizeof p, small, "rank3.h5"), "/slabs/0/radiance", H5T_IEEE_F32LE,
-                         3, rank3, "W sr^-1 m^-2", "dir:v:u:rgb");
+                         3, rank3, NULL, "W sr^-1 m^-2", "dir:v:u:rgb");
     expect_bad(p, LFIO_ERR_FORMAT, "dims mismatch", 0, "radiance of rank 3");
     edit_replace_dataset(fresh_copy(p, sizeof p, small, "float64.h5"), "/slabs/0/radiance", H5T_IEEE_F64LE,
-                         4, f64dims, "W sr^-1 m^-2", "dir:v:u:rgb");
+                         4, f64dims, NULL, "W sr^-1 m^-2", "dir:v:u:rgb");
     expect_bad(p, LFIO_ERR_FORMAT, "element type", 0, "radiance of float64");
     edit_replace_dataset(fresh_copy(p, sizeof p, small, "axes.h5"), "/slabs/0/radiance", H5T_IEEE_F32LE,
-                         4, f64dims, "W sr^-1 m^-2", "u:v:dir:rgb");
+                         4, f64dims, NULL, "W sr^-1 m^-2", "u:v:dir:rgb");
     expect_bad(p, LFIO_ERR_FORMAT, "axes", 0, "radiance with other axes");
 
     const hsize_t at_nan[4] = {1, 0, 2, 1}, at_neg[4] = {2, 0, 1, 0};
-    edit_element(fresh_copy(p, sizeof p, small, "nan.h5"), "/slabs/0/radiance", 4, at_nan, NAN);
+    edit_element(fresh_copy(p, sizeof p, small, "nan.h5"), "/slabs/0/radiance", at_nan, NAN);
     expect_bad(p, LFIO_ERR_FORMAT, "dir 1, i 2, j 0", 1, "NaN radiance");
-    edit_element(fresh_copy(p, sizeof p, small, "negative.h5"), "/slabs/0/radiance", 4, at_neg, -1.0);
+    edit_element(fresh_copy(p, sizeof p, small, "negative.h5"), "/slabs/0/radiance", at_neg, -1.0);
     expect_bad(p, LFIO_ERR_FORMAT, "dir 2, i 1, j 0", 1, "negative radiance");
-    edit_element(fresh_copy(p, sizeof p, small, "inf.h5"), "/slabs/0/radiance", 4, at_neg, INFINITY);
+    edit_element(fresh_copy(p, sizeof p, small, "inf.h5"), "/slabs/0/radiance", at_neg, INFINITY);
     expect_bad(p, LFIO_ERR_FORMAT, "dir 2, i 1, j 0", 1, "infinite radiance");
 
     const double skew[3] = {0.5, 1, 0};
@@ -1019,16 +927,16 @@ static void test_coverage(const char *path)
     const hsize_t wrong_shape[3] = {lfio_slab_dir_count(s1), d1->nv, d1->nu + 1};
     const hsize_t right_shape[3] = {lfio_slab_dir_count(s1), d1->nv, d1->nu};
     edit_replace_dataset(fresh_copy(p, sizeof p, path, "cov_shape.h5"), "/slabs/1/coverage", H5T_STD_U8LE, 3,
-                         wrong_shape, "1", "dir:v:u");
+                         wrong_shape, NULL, "1", "dir:v:u");
     expect_bad(p, LFIO_ERR_FORMAT, "/slabs/1/coverage: dims mismatch", 0, "coverage of the wrong shape");
     edit_replace_dataset(fresh_copy(p, sizeof p, path, "cov_rank.h5"), "/slabs/1/coverage", H5T_STD_U8LE, 2,
-                         right_shape, "1", "dir:v");
+                         right_shape, NULL, "1", "dir:v");
     expect_bad(p, LFIO_ERR_FORMAT, "/slabs/1/coverage: dims mismatch", 0, "coverage of rank 2");
     edit_replace_dataset(fresh_copy(p, sizeof p, path, "cov_type.h5"), "/slabs/1/coverage", H5T_IEEE_F32LE, 3,
-                         right_shape, "1", "dir:v:u");
+                         right_shape, NULL, "1", "dir:v:u");
     expect_bad(p, LFIO_ERR_FORMAT, "/slabs/1/coverage: element type", 0, "coverage of float32");
     const hsize_t at[3] = {2, 5, 3};
-    edit_element(fresh_copy(p, sizeof p, path, "cov_value.h5"), "/slabs/1/coverage", 3, at, 2.0);
+    edit_element(fresh_copy(p, sizeof p, path, "cov_value.h5"), "/slabs/1/coverage", at, 2.0);
     expect_bad(p, LFIO_ERR_FORMAT, "/slabs/1/coverage: value 2 at dir 2, i 3, j 5", 1, "coverage value 2");
     free(c1);
     free(c3);
@@ -1042,7 +950,7 @@ static void test_verify_tampered(const char *good)
     lfio_verify_report rep;
     const hsize_t at5[1] = {5};
     fresh_copy(p, sizeof p, good, "tampered_sa.h5");
-    edit_element(p, "/slabs/2/solid_angle", 1, at5, peek_element(p, "/slabs/2/solid_angle", at5) + 1e-6);
+    edit_element(p, "/slabs/2/solid_angle", at5, peek_element(p, "/slabs/2/solid_angle", at5) + 1e-6);
     lfio_status st = lfio_verify(p, &rep);
     CHECK(st == LFIO_ERR_FORMAT && rep.problems == 1 && strstr(rep.first, "/slabs/2/solid_angle")
               && strstr(rep.first, "tampered_sa.h5"),
@@ -1055,15 +963,15 @@ static void test_verify_tampered(const char *good)
     /* Flip one bit of the finest mask level of slab 3 (n = 8) and one of slab 1's direction. */
     fresh_copy(p, sizeof p, good, "tampered_mask.h5");
     const hsize_t at7[1] = {7}, at_dir[2] = {3, 2};
-    edit_element(p, "/slabs/3/mask/level_8", 1, at7, 1.0 - peek_element(p, "/slabs/3/mask/level_8", at7));
-    edit_element(p, "/slabs/1/direction", 2, at_dir, peek_element(p, "/slabs/1/direction", at_dir) * 1.001);
+    edit_element(p, "/slabs/3/mask/level_8", at7, 1.0 - peek_element(p, "/slabs/3/mask/level_8", at7));
+    edit_element(p, "/slabs/1/direction", at_dir, peek_element(p, "/slabs/1/direction", at_dir) * 1.001);
     st = lfio_verify(p, &rep);
     CHECK(st == LFIO_ERR_FORMAT && rep.problems == 2 && strstr(rep.first, "/slabs/1/direction"),
           "tampered mask and direction: %s, %u problems: %s", lfio_status_name(st), rep.problems, rep.first);
 
     fresh_copy(p, sizeof p, good, "tampered_pos.h5");
     const hsize_t at_pos[3] = {6, 16, 0};
-    edit_element(p, "/slabs/1/position", 3, at_pos, 1e3);
+    edit_element(p, "/slabs/1/position", at_pos, 1e3);
     st = lfio_verify(p, &rep);
     CHECK(st == LFIO_ERR_FORMAT && rep.problems == 1 && strstr(rep.first, "/slabs/1/position")
               && strstr(rep.first, "[6, 16, 0]"),

@@ -32,6 +32,7 @@
 #include <hdf5.h>
 
 #include "check.h"
+#include "h5edit.h"
 #include "radmap_patches.h"
 #include "lfio/radmap.h"
 
@@ -478,70 +479,6 @@ static void test_writer_refusals(const struct test_patch *good, const char *exis
 
 /* ------------------------------------------------------- HDF5 file surgery */
 
-/* Replaces attribute name of object obj of file path (scalar when count is 0). */
-static void edit_attr(const char *path, const char *obj, const char *name, hid_t ftype, hid_t mtype,
-                      hsize_t count, const void *value)
-{
-    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
-    hid_t o = H5Oopen(f, obj, H5P_DEFAULT);
-    if (H5Aexists(o, name) > 0)
-        H5Adelete(o, name);
-    hid_t space = count ? H5Screate_simple(1, &count, NULL) : H5Screate(H5S_SCALAR);
-    hid_t a = H5Acreate2(o, name, ftype, space, H5P_DEFAULT, H5P_DEFAULT);
-    CHECK(a >= 0 && H5Awrite(a, mtype, value) >= 0, "edit %s %s@%s", path, obj, name);
-    H5Aclose(a);
-    H5Sclose(space);
-    H5Oclose(o);
-    H5Fclose(f);
-}
-
-/* Replaces string attribute name of obj with value. */
-static void edit_attr_str(const char *path, const char *obj, const char *name, const char *value)
-{
-    hid_t t = H5Tcopy(H5T_C_S1);
-    H5Tset_size(t, strlen(value) + 1);
-    edit_attr(path, obj, name, t, t, 0, value);
-    H5Tclose(t);
-}
-
-/* Replaces dataset dset by one of type ftype and shape dims filled with `fill`, with units and axes. */
-static void edit_replace_dataset(const char *path, const char *dset, hid_t ftype, int rank, const hsize_t *dims,
-                                 double fill, const char *units, const char *axes)
-{
-    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
-    CHECK(H5Ldelete(f, dset, H5P_DEFAULT) >= 0, "delete %s", dset);
-    hid_t space = H5Screate_simple(rank, dims, NULL);
-    hid_t d = H5Dcreate2(f, dset, ftype, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    hsize_t count = 1;
-    for (int k = 0; k < rank; k++)
-        count *= dims[k];
-    double *values = malloc((count ? count : 1) * sizeof *values);
-    for (hsize_t k = 0; k < count; k++)
-        values[k] = fill;
-    CHECK(d >= 0 && H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values) >= 0, "create %s", dset);
-    free(values);
-    H5Sclose(space);
-    H5Dclose(d);
-    H5Fclose(f);
-    edit_attr_str(path, dset, "units", units);
-    edit_attr_str(path, dset, "axes", axes);
-}
-
-/* Overwrites element `at` (row, column) of 2-D dataset dset with value. */
-static void edit_element(const char *path, const char *dset, hsize_t row, hsize_t col, double value)
-{
-    const hsize_t at[2] = {row, col}, one[2] = {1, 1}, n1 = 1;
-    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
-    hid_t d = H5Dopen2(f, dset, H5P_DEFAULT);
-    hid_t fs = H5Dget_space(d), ms = H5Screate_simple(1, &n1, NULL);
-    H5Sselect_hyperslab(fs, H5S_SELECT_SET, at, NULL, one, NULL);
-    CHECK(H5Dwrite(d, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, &value) >= 0, "edit %s", dset);
-    H5Sclose(ms);
-    H5Sclose(fs);
-    H5Dclose(d);
-    H5Fclose(f);
-}
-
 /* XORs the middle byte of chunk 0 of dataset dset with 0x5a. @return 1 on success. */
 static int flip_chunk_byte(const char *path, const char *dset)
 {
@@ -663,30 +600,30 @@ static void test_bad_files(const char *good)
     /* Wrong shapes and types; patch 0 of good has 12 cells. */
     const hsize_t long_rgb[2] = {13, 3}, rgb[2] = {12, 3}, ij1[1] = {12}, verts2[2] = {4, 2};
     edit_replace_dataset(copy_to(p, sizeof p, good, "long_irr.h5"), "/patches/0/irradiance", H5T_IEEE_F32LE, 2,
-                         long_rgb, 1.0, "W m^-2", "cell:rgb");
+                         long_rgb, &(double){1.0}, "W m^-2", "cell:rgb");
     expect_bad(p, LFIO_ERR_FORMAT, "dims mismatch: shape [13, 3], expected [12, 3]", "irradiance with one row too many");
     edit_replace_dataset(copy_to(p, sizeof p, good, "f64_irr.h5"), "/patches/0/irradiance", H5T_IEEE_F64LE, 2, rgb,
-                         1.0, "W m^-2", "cell:rgb");
+                         &(double){1.0}, "W m^-2", "cell:rgb");
     expect_bad(p, LFIO_ERR_FORMAT, "element type", "irradiance of float64");
-    edit_replace_dataset(copy_to(p, sizeof p, good, "ij_rank1.h5"), "/patches/0/cell_ij", H5T_STD_U32LE, 1, ij1, 0,
+    edit_replace_dataset(copy_to(p, sizeof p, good, "ij_rank1.h5"), "/patches/0/cell_ij", H5T_STD_U32LE, 1, ij1, &(double){0},
                          "1", "cell:ij");
     expect_bad(p, LFIO_ERR_FORMAT, "/patches/0/cell_ij: dims mismatch", "cell_ij of rank 1");
     edit_replace_dataset(copy_to(p, sizeof p, good, "verts2.h5"), "/patches/1/vertices", H5T_IEEE_F64LE, 2, verts2,
-                         0, "m", "vertex:xyz");
+                         &(double){0}, "m", "vertex:xyz");
     expect_bad(p, LFIO_ERR_FORMAT, "/patches/1/vertices: dims mismatch", "vertices with 2 coordinates");
-    edit_replace_dataset(copy_to(p, sizeof p, good, "axes.h5"), "/patches/0/radiosity", H5T_IEEE_F32LE, 2, rgb, 1.0,
+    edit_replace_dataset(copy_to(p, sizeof p, good, "axes.h5"), "/patches/0/radiosity", H5T_IEEE_F32LE, 2, rgb, &(double){1.0},
                          "W m^-2", "rgb:cell");
     expect_bad(p, LFIO_ERR_FORMAT, "axes", "radiosity with other axes");
-    edit_replace_dataset(copy_to(p, sizeof p, good, "units.h5"), "/patches/0/radiosity", H5T_IEEE_F32LE, 2, rgb, 1.0,
+    edit_replace_dataset(copy_to(p, sizeof p, good, "units.h5"), "/patches/0/radiosity", H5T_IEEE_F32LE, 2, rgb, &(double){1.0},
                          "W sr^-1 m^-2", "cell:rgb");
     expect_bad(p, LFIO_ERR_FORMAT, "units", "radiosity in radiance units");
 
     /* Values the layout cannot rule out. */
-    edit_element(copy_to(p, sizeof p, good, "nan.h5"), "/patches/2/irradiance", 5, 1, NAN);
+    edit_element(copy_to(p, sizeof p, good, "nan.h5"), "/patches/2/irradiance", (const hsize_t[]){5, 1}, NAN);
     expect_bad(p, LFIO_ERR_FORMAT, "irradiance of cell 5", "NaN irradiance");
-    edit_element(copy_to(p, sizeof p, good, "ij_out.h5"), "/patches/0/cell_ij", 2, 0, 1000);
+    edit_element(copy_to(p, sizeof p, good, "ij_out.h5"), "/patches/0/cell_ij", (const hsize_t[]){2, 0}, 1000);
     expect_bad(p, LFIO_ERR_FORMAT, "outside", "cell index outside the grid");
-    edit_element(copy_to(p, sizeof p, good, "inf_centre.h5"), "/patches/0/cell_centre", 0, 2, INFINITY);
+    edit_element(copy_to(p, sizeof p, good, "inf_centre.h5"), "/patches/0/cell_centre", (const hsize_t[]){0, 2}, INFINITY);
     expect_bad(p, LFIO_ERR_FORMAT, "centre", "infinite centre");
 
     lfio_radmap *map = (lfio_radmap *)1;
@@ -707,27 +644,27 @@ static void test_bad_files_v2(const char *good)
               &four);
     expect_bad_headers(p, LFIO_ERR_FORMAT, "/patches/label", "format 2: patch_count 4 with three patches");
     /* patch 1 claims patch 2's first cell: patch 2 then ends past the cells stored */
-    edit_element(copy_to(p, sizeof p, good, "v2_offset_late.h5"), "/patches/cell_offset", 2, 0, 13);
-    edit_element(p, "/patches/cell_offset", 3, 0, 40013);
+    edit_element(copy_to(p, sizeof p, good, "v2_offset_late.h5"), "/patches/cell_offset", (const hsize_t[]){2, 0}, 13);
+    edit_element(p, "/patches/cell_offset", (const hsize_t[]){3, 0}, 40013);
     expect_bad_headers(p, LFIO_ERR_FORMAT, "/patches/cell_ij: dims mismatch", "format 2: cell offsets past the cells");
-    edit_element(copy_to(p, sizeof p, good, "v2_offset_back.h5"), "/patches/cell_offset", 2, 0, 5);
+    edit_element(copy_to(p, sizeof p, good, "v2_offset_back.h5"), "/patches/cell_offset", (const hsize_t[]){2, 0}, 5);
     expect_bad_headers(p, LFIO_ERR_FORMAT, "/patches/cell_offset: offset 2 decreases", "format 2: decreasing offsets");
-    edit_element(copy_to(p, sizeof p, good, "v2_offset_start.h5"), "/patches/vertex_offset", 0, 0, 1);
+    edit_element(copy_to(p, sizeof p, good, "v2_offset_start.h5"), "/patches/vertex_offset", (const hsize_t[]){0, 0}, 1);
     expect_bad_headers(p, LFIO_ERR_FORMAT, "/patches/vertex_offset: must start at 0", "format 2: offsets not from 0");
-    edit_element(copy_to(p, sizeof p, good, "v2_small_grid.h5"), "/patches/nv", 0, 0, 1);
+    edit_element(copy_to(p, sizeof p, good, "v2_small_grid.h5"), "/patches/nv", (const hsize_t[]){0, 0}, 1);
     expect_bad_headers(p, LFIO_ERR_FORMAT, "patch 0: 12 cells in a grid", "format 2: more cells than nu*nv");
-    edit_element(copy_to(p, sizeof p, good, "v2_nan.h5"), "/patches/irradiance", 12 + 5, 1, NAN);
+    edit_element(copy_to(p, sizeof p, good, "v2_nan.h5"), "/patches/irradiance", (const hsize_t[]){12 + 5, 1}, NAN);
     expect_bad(p, LFIO_ERR_FORMAT, "patch 2: irradiance of cell 5", "format 2: NaN irradiance");
     lfio_radmap *map = NULL;
     CHECK(lfio_radmap_read_headers(p, &map) == LFIO_OK && lfio_radmap_cell_count(map) == 40012,
           "format 2: the headers of a file with a NaN irradiance read (no value is read): %s", lfio_errmsg());
     lfio_radmap_destroy(map);
-    edit_element(copy_to(p, sizeof p, good, "v2_albedo.h5"), "/patches/albedo", 1, 2, 1.5);
+    edit_element(copy_to(p, sizeof p, good, "v2_albedo.h5"), "/patches/albedo", (const hsize_t[]){1, 2}, 1.5);
     expect_bad_headers(p, LFIO_ERR_FORMAT, "patch 1: albedo", "format 2: albedo above 1");
-    edit_element(copy_to(p, sizeof p, good, "v2_label.h5"), "/patches/label", 0, 0, 0);
+    edit_element(copy_to(p, sizeof p, good, "v2_label.h5"), "/patches/label", (const hsize_t[]){0, 0}, 0);
     expect_bad_headers(p, LFIO_ERR_FORMAT, "NUL-terminated labels", "format 2: a label split in two");
     const hsize_t rgb[2] = {40012, 3};
-    edit_replace_dataset(copy_to(p, sizeof p, good, "v2_units.h5"), "/patches/radiosity", H5T_IEEE_F32LE, 2, rgb, 1.0,
+    edit_replace_dataset(copy_to(p, sizeof p, good, "v2_units.h5"), "/patches/radiosity", H5T_IEEE_F32LE, 2, rgb, &(double){1.0},
                          "W sr^-1 m^-2", "cell:rgb");
     expect_bad_headers(p, LFIO_ERR_FORMAT, "units", "format 2: radiosity in radiance units");
 }
