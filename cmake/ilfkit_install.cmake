@@ -45,11 +45,19 @@ function(ilfkit_version_script target prefix)
   set_property(TARGET ${target} APPEND PROPERTY LINK_DEPENDS ${script})
 endfunction()
 
-# ilfkit_add_shared_twin(NAME PREFIX DESCRIPTION): NAME_objects (an OBJECT library, position-independent)
-# is compiled once and archived as the static NAME, which ilf and the tests link (tests reach
+# ilfkit_add_shared_twin(NAME PREFIX DESCRIPTION): NAME_objects (an OBJECT library, made position-independent
+# here) is compiled once and archived as the static NAME (made here), which ilf and the tests link (tests reach
 # internals); this makes from the same objects the shared libNAME.so.MAJOR, installed with the
 # headers of include/NAME, NAME.pc (Requires: lfio) and the target ilfkit::NAME.
 function(ilfkit_add_shared_twin name prefix description)
+  # The objects serve the shared twin too, so they are position-independent; -fno-semantic-interposition
+  # keeps the inlining across the library's own functions that a program's (PIE) build has.
+  set_target_properties(${name}_objects PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  if(CMAKE_C_COMPILER_ID MATCHES "GNU|Clang")
+    target_compile_options(${name}_objects PRIVATE -fno-semantic-interposition)
+  endif()
+  add_library(${name} STATIC)
+  target_link_libraries(${name} PUBLIC ${name}_objects)
   add_library(${name}_shared SHARED)
   target_link_libraries(${name}_shared PRIVATE ${name}_objects PUBLIC lfio::lfio)
   target_include_directories(${name}_shared INTERFACE
