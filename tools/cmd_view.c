@@ -301,9 +301,8 @@ int ilf_cmd_view(int argc, char **argv)
     lfio_radmap *map = NULL;
     code = ilf_radmap_open("view", o.path, &map);
     rl_scene *scene = NULL;
-    rl_job job; /* unused: the view needs the scene's light fields, not a run */
-    if (code == ILF_EXIT_OK && o.scene != NULL)
-        code = relight_scene_open("view", o.scene, &(sampling_overrides){0}, &scene, &job);
+    if (code == ILF_EXIT_OK && o.scene != NULL) /* its light fields, not a run: no job */
+        code = relight_scene_open("view", o.scene, &(sampling_overrides){0}, &scene, NULL);
     if (code == ILF_EXIT_OK) {
         cli_output_watch(o.output);
         code = cli_output_check("view", o.output);

@@ -176,8 +176,9 @@ int relight_scene_open(const char *sub, const char *path, const sampling_overrid
             cli_error(sub, "%s", msg);
         return st == RL_ERR_NOMEM ? ILF_EXIT_FAILED : ILF_EXIT_USAGE;
     }
-    relight_job(o, scene, job);
-    st = rl_job_check(job);
+    if (job != NULL)
+        relight_job(o, scene, job);
+    st = job != NULL ? rl_job_check(job) : RL_OK;
     if (st != RL_OK) {
         int code = relight_failure(sub, st);
         rl_scene_destroy(scene);

@@ -55,8 +55,9 @@ typedef struct sampling_overrides {
 int sampling_option_apply(const cli_parser *p, sampling_overrides *o, int opt, const char *value);
 
 /**
- * Loads scene path and makes its job with the overrides (relight_job()),
- * checked by rl_job_check().
+ * Loads scene path and, unless job is NULL (a caller that needs the scene
+ * alone), makes its job with the overrides (relight_job()), checked by
+ * rl_job_check().
  * @return ILF_EXIT_OK, *out (the caller destroys it) and *job; an exit code
  * after reporting, with *out = NULL.
  */
