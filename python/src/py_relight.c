@@ -73,8 +73,7 @@ static int apply_settings(rl_sampling *s, PyObject *settings)
 
 /* One run: the settings over the scene's own, what to compute, and what it gave. */
 typedef struct engine_call {
-    rl_sampling sampling;  /* the scene's settings with the caller's applied */
-    rl_job job;            /* the job the scene suggests, with sampling and threads the caller's */
+    rl_job job;            /* the job the scene suggests, with the caller's settings and threads */
     unsigned threads;      /* 0: every core */
     const double *points;  /* irradiance: [count][6] x y z nx ny nz; NULL: relight */
     size_t count;
@@ -84,15 +83,11 @@ typedef struct engine_call {
 } engine_call;
 
 /*
- * Runs the engine on call->scene as call says: irradiance at call->points, or
- * a relighting into call->solution. Every call that sets how the engine runs
- * is here.
+ * Runs the engine on call->scene with call->job: irradiance at call->points,
+ * or a relighting into call->solution.
  */
 static rl_status run_engine(engine_call *call)
 {
-    rl_job_default(call->scene, &call->job); /* cell size and time budget as the file says, as `ilf relight` */
-    call->job.sampling = call->sampling;
-    call->job.run.threads = call->threads;
     if (call->points != NULL)
         return rl_irradiance(call->scene, &call->job, call->points, call->count, call->irradiance, NULL);
     return rl_relight(call->scene, &call->job, &call->solution);
@@ -135,8 +130,9 @@ static PyObject *raise_relight(rl_status st, const char *path)
 static int load_and_run(const char *path, PyObject *settings, engine_call *call)
 {
     /* a setting out of its range is refused before a large scene is loaded for nothing */
-    rl_sampling_default(&call->sampling);
-    if (apply_settings(&call->sampling, settings) < 0)
+    rl_sampling early;
+    rl_sampling_default(&early);
+    if (apply_settings(&early, settings) < 0)
         return -1;
     rl_status st;
     Py_BEGIN_ALLOW_THREADS
@@ -147,10 +143,10 @@ static int load_and_run(const char *path, PyObject *settings, engine_call *call)
     Py_END_ALLOW_THREADS
     if (st != RL_OK)
         return raise_relight(st, path), -1;
-    rl_job suggested;
-    rl_job_default(call->scene, &suggested);
-    call->sampling = suggested.sampling;
-    if (apply_settings(&call->sampling, settings) < 0) {
+    /* the file's job (cell size, time budget, sampling), as `ilf relight`'s, with the caller's settings */
+    rl_job_default(call->scene, &call->job);
+    call->job.run.threads = call->threads;
+    if (apply_settings(&call->job.sampling, settings) < 0) {
         engine_call_free(call);
         return -1;
     }
