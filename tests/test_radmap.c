@@ -642,7 +642,11 @@ static void test_bad_files_v2(const char *good)
     const uint32_t four = 4;
     edit_attr(copy_to(p, sizeof p, good, "v2_count4.h5"), "/", "patch_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, 0,
               &four);
-    expect_bad_headers(p, LFIO_ERR_FORMAT, "/patches/label", "format 2: patch_count 4 with three patches");
+    /* The whole reads scan the labels first; the block reader, which scans them only as far as the patches got,
+     * finds the tables one row short first. */
+    expect_refused_by(lfio_radmap_read, p, LFIO_ERR_FORMAT, "/patches/label", "format 2: patch_count 4, 3 patches");
+    expect_refused_by(lfio_radmap_read_headers, p, LFIO_ERR_FORMAT, "/patches/label", "format 2: patch_count 4");
+    expect_refused_by(read_by_blocks, p, LFIO_ERR_FORMAT, "expected [4] from patch_count", "format 2: patch_count 4");
     /* patch 1 claims patch 2's first cell: patch 2 then ends past the cells stored */
     edit_element(copy_to(p, sizeof p, good, "v2_offset_late.h5"), "/patches/cell_offset", (const hsize_t[]){2, 0}, 13);
     edit_element(p, "/patches/cell_offset", (const hsize_t[]){3, 0}, 40013);
@@ -756,6 +760,41 @@ static void check_handle_patch(lfio_radmap_headers *h, const lfio_radmap *map, s
     check_patch_equal(&a, &b, name);
 }
 
+/* Opens path with lfio_radmap_headers_open() and gets patch 0 alone, as `ilf info` does to print the first maps.
+ * @return the first failure's status, or LFIO_OK. */
+static lfio_status open_and_get_first(const char *path)
+{
+    lfio_radmap_headers *h = NULL;
+    lfio_status st = lfio_radmap_headers_open(path, &h);
+    lfio_radmap_patch p;
+    if (st == LFIO_OK)
+        st = lfio_radmap_headers_get(h, 0, &p);
+    lfio_radmap_headers_close(h);
+    return st;
+}
+
+/* The block reader reads only the blocks of the patches got: a file of count patches (many, as
+ * test_headers_reader() writes it) damaged in its last block opens and gives patch 0, and is refused, as the
+ * whole reads refuse it, once that block is got. */
+static void test_headers_lazy(const char *many, size_t count)
+{
+    char p[512];
+    /* the last patch's vertices said to start at 0: the vertex offsets decrease in the last block */
+    edit_element(copy_to(p, sizeof p, many, "many_offset.h5"), "/patches/vertex_offset", (const hsize_t[]){count - 1, 0},
+                 0);
+    char needle[96];
+    snprintf(needle, sizeof needle, "/patches/vertex_offset: offset %zu decreases", count - 1);
+    CHECK(open_and_get_first(p) == LFIO_OK, "%s: opened and patch 0 got: %s", p, lfio_errmsg());
+    expect_bad_headers(p, LFIO_ERR_FORMAT, needle, "format 2: an offset decreasing in the last block");
+    /* the last label's NUL replaced: the labels end unterminated, one short */
+    uint64_t bytes = 0;
+    for (size_t k = 0; k < count; k++)
+        bytes += (uint64_t)snprintf(NULL, 0, "tile %zu", k) + 1;
+    edit_element(copy_to(p, sizeof p, many, "many_label.h5"), "/patches/label", (const hsize_t[]){bytes - 1, 0}, 'x');
+    CHECK(open_and_get_first(p) == LFIO_OK, "%s: opened and patch 0 got: %s", p, lfio_errmsg());
+    expect_bad_headers(p, LFIO_ERR_FORMAT, "NUL-terminated labels", "format 2: the last label unterminated");
+}
+
 /* lfio_radmap_headers reads what lfio_radmap_read_headers() reads, in order and out of order, across its blocks
  * of patches (a file of 2.2 blocks) and of labels, in either format; its arguments are checked. */
 static void test_headers_reader(const lfio_radmap_patch *patches, size_t count_small)
@@ -808,6 +847,7 @@ static void test_headers_reader(const lfio_radmap_patch *patches, size_t count_s
               lfio_radmap_headers_format_version(NULL) == 0 && strcmp(lfio_radmap_headers_creator(NULL), "") == 0 &&
               strcmp(lfio_radmap_headers_scene(NULL), "") == 0, "NULL accessors of the handle");
     lfio_radmap_headers_close(NULL);
+    test_headers_lazy(path, count);
 }
 
 /* @return the format version of the file at path as lfio reads it, or -1 if it does not read. */

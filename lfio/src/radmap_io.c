@@ -35,7 +35,12 @@
  *     write (chunks.h) only filter chunks while it makes a patch's objects.
  *   - lfio_radmap_headers (the last section) reads a format-2 file's
  *     headers in blocks of bounded size, with the checks of the headers
- *     read: the file-wide ones when it opens, each patch's when it is got.
+ *     read: when it opens, those whose cost does not grow with the patches
+ *     (root attributes, every dataset's storage and shape, the offsets'
+ *     first and last rows); the offsets' order, the labels and each
+ *     patch's own checks as the blocks holding them are read, so that a
+ *     reader that gets every patch has made every check of the headers
+ *     read and one that gets a few has read no more than their blocks.
  *   - Every public entry point silences HDF5 for its whole duration (or,
  *     lfio_radmap_headers_get(), for each HDF5 read it makes); the
  *     HDF5 plumbing (errors, attributes, layouts, atomic writes) is shared
@@ -1503,10 +1508,15 @@ uint64_t lfio_radmap_cell_count(const lfio_radmap *map)
 /*
  * lfio_radmap_headers: a format-2 file's tables read LFIO_RADMAP_HEADERS_BLOCK patches at a time, the
  * datasets kept open (HDF5 caches their decompressed chunks, and the vetted maps mean each chunk is
- * inflated by lfio once). Opening makes every file-wide check of the whole read (root attributes, every
- * dataset's storage and shape, the offset tables, the labels) in passes of bounded memory, recording where
- * each block's labels start; each patch is checked as the whole read checks its headers when it is got.
- * A format-1 file is read whole by lfio_radmap_read_headers() instead (its patches are groups anyway).
+ * inflated by lfio once). Opening reads no table whole: it checks the root attributes, every dataset's
+ * storage and shape, and the offset tables' first row (0) and last (the totals, which size the vertex and
+ * cell datasets and bound every other row), so that it costs the same whatever the number of patches. The
+ * rest of the checks of the whole read are made as the data they judge is read: a block's offsets (in
+ * order, at most the total; the blocks overlap by a row, so the blocks together check the whole table),
+ * the labels (scanned forward as far as the block asked for reaches, recording where each block of labels
+ * starts; the count of labels when the scan reaches the end), and each patch as the whole read checks its
+ * headers when it is got. A format-1 file is read whole by lfio_radmap_read_headers() instead (its patches
+ * are groups anyway).
  */
 
 /* Vertices a handle reads at once (a chunk's, 384 KiB), unless one patch has more (LFIO_RADMAP_MAX_VERTS at most,
@@ -1524,8 +1534,13 @@ struct lfio_radmap_headers {
     hid_t file, g;
     hid_t d[V2_COUNT];       /* open tables and vertices; -1 otherwise */
     unsigned char *vetted[V2_COUNT];
-    uint64_t *label_start;   /* byte where label block b's first label starts, b = 0 .. label blocks */
+    uint64_t *label_start;   /* byte where label block b's first label starts, b = 0 .. label blocks,
+                              * known for the blocks the scan has passed */
     uint64_t label_bytes;
+    uint64_t scan_pos;       /* labels' bytes scanned so far (a whole number of HDR_LABEL_WINDOW unless all) */
+    size_t scan_nul;         /* labels they end */
+    uint64_t scan_begin;     /* byte where the label after the last ended starts */
+    uint64_t total[V2_COUNT];/* offsets tables: their last row, the vertices or cells of the file */
     size_t block;            /* the block of LFIO_RADMAP_HEADERS_BLOCK patches loaded, SIZE_MAX for none */
     size_t k0, n;            /* its first patch and size */
     unsigned char *tab[V2_COUNT]; /* the block's rows of each table (offsets: n + 1 rows) */
@@ -1575,65 +1590,75 @@ static lfio_status hdr_open_dataset(lfio_radmap_headers *h, enum v2_ds t, uint64
     return st;
 }
 
-/* Checks offsets table t a block at a time, as v2_check_offsets() does. @return LFIO_OK and *total. */
-static lfio_status hdr_scan_offsets(lfio_radmap_headers *h, enum v2_ds t, uint64_t limit, uint64_t *total)
+/* Reads the first and last rows of offsets table t of h: the first must be 0, the last (the file's total,
+ * *total) at most limit. The rows between are checked a block at a time (hdr_check_offsets()). */
+static lfio_status hdr_offset_ends(lfio_radmap_headers *h, enum v2_ds t, uint64_t limit, uint64_t *total)
 {
-    uint32_t *off = (uint32_t *)h->tab[t], prev = 0;
-    lfio_status st = LFIO_OK;
-    for (size_t k0 = 0; st == LFIO_OK && k0 <= h->count; k0 += LFIO_RADMAP_HEADERS_BLOCK) {
-        const size_t n = h->count + 1 - k0 < LFIO_RADMAP_HEADERS_BLOCK ? h->count + 1 - k0 : LFIO_RADMAP_HEADERS_BLOCK;
-        st = hdr_read_rows(h, t, k0, n, off);
-        for (size_t i = 0; st == LFIO_OK && i < n; i++) {
-            if (k0 + i == 0 && off[0] != 0)
-                st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/%s: must start at 0 and end at most at %llu",
-                                h->path, v2_datasets[t].name, (unsigned long long)limit);
-            else if (off[i] < prev)
-                st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/%s: offset %zu decreases", h->path,
-                                v2_datasets[t].name, k0 + i);
-            prev = off[i];
-        }
-    }
-    if (st == LFIO_OK && prev > limit)
+    uint32_t first = 0, last = 0;
+    lfio_status st = hdr_read_rows(h, t, 0, 1, &first);
+    if (st == LFIO_OK)
+        st = hdr_read_rows(h, t, h->count, 1, &last);
+    if (st == LFIO_OK && (first != 0 || last > limit))
         st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/%s: must start at 0 and end at most at %llu", h->path,
                         v2_datasets[t].name, (unsigned long long)limit);
-    *total = prev;
+    *total = last;
+    h->total[t] = last;
     return st;
 }
 
-/* Reads the labels a window at a time: counts them, bounds each, records where each block's first starts. */
-static lfio_status hdr_scan_labels(lfio_radmap_headers *h)
+/* Checks the rows [k0, k0 + n] of offsets table t that h's block holds, as v2_check_offsets() checks the
+ * table: never decreasing, and at most the table's last row (which the open read). */
+static lfio_status hdr_check_offsets(const lfio_radmap_headers *h, enum v2_ds t)
+{
+    const uint32_t *off = (const uint32_t *)h->tab[t];
+    for (size_t i = 1; i <= h->n; i++)
+        if (off[i] < off[i - 1])
+            return lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/%s: offset %zu decreases", h->path, v2_datasets[t].name,
+                              h->k0 + i);
+    if (off[h->n] > h->total[t])
+        return lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/%s: offset %zu exceeds the last, %llu", h->path,
+                          v2_datasets[t].name, h->k0 + h->n, (unsigned long long)h->total[t]);
+    return LFIO_OK;
+}
+
+/* Scans the labels on from where the scan stopped, a window at a time, until the first need labels are known
+ * to end (all of them, and the dataset's end, for need = count): bounds each, records where each block's
+ * first starts, and checks their count when the scan reaches the end. */
+static lfio_status hdr_scan_labels(lfio_radmap_headers *h, size_t need)
 {
     const size_t blocks = h->count / HDR_LABEL_BLOCK + 1;
-    unsigned char *buf = malloc(HDR_LABEL_WINDOW);
-    h->label_start = calloc(blocks + 1, sizeof *h->label_start);
-    if (buf == NULL || h->label_start == NULL) {
-        free(buf);
-        return lfio__fail(LFIO_ERR_NOMEM, "%s: /patches/label: out of memory", h->path);
-    }
+    unsigned char *buf = NULL;
     lfio_status st = LFIO_OK;
-    size_t nul = 0;
-    uint64_t label_begin = 0;
-    for (uint64_t b0 = 0; st == LFIO_OK && b0 < h->label_bytes; b0 += HDR_LABEL_WINDOW) {
+    while (st == LFIO_OK && h->scan_pos < h->label_bytes && (h->scan_nul < need || need >= h->count)) {
+        if (buf == NULL && (buf = malloc(HDR_LABEL_WINDOW)) == NULL) {
+            st = lfio__fail(LFIO_ERR_NOMEM, "%s: /patches/label: out of memory", h->path);
+            break;
+        }
+        const uint64_t b0 = h->scan_pos;
         const uint64_t n = h->label_bytes - b0 < HDR_LABEL_WINDOW ? h->label_bytes - b0 : HDR_LABEL_WINDOW;
         st = hdr_read_rows(h, V2_LABEL, b0, n, buf);
         for (uint64_t i = 0; st == LFIO_OK && i < n; i++) {
-            if (b0 + i - label_begin > LFIO_RADMAP_TEXT_MAX)
+            if (b0 + i - h->scan_begin > LFIO_RADMAP_TEXT_MAX)
                 st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches: patch %zu: label is missing or longer than %u bytes",
-                                h->path, nul, LFIO_RADMAP_TEXT_MAX);
+                                h->path, h->scan_nul, LFIO_RADMAP_TEXT_MAX);
             if (buf[i] != '\0')
                 continue;
-            label_begin = b0 + i + 1;
-            if (++nul % HDR_LABEL_BLOCK == 0 && nul / HDR_LABEL_BLOCK <= blocks)
-                h->label_start[nul / HDR_LABEL_BLOCK] = label_begin;
+            h->scan_begin = b0 + i + 1;
+            if (++h->scan_nul % HDR_LABEL_BLOCK == 0 && h->scan_nul / HDR_LABEL_BLOCK <= blocks)
+                h->label_start[h->scan_nul / HDR_LABEL_BLOCK] = h->scan_begin;
         }
+        h->scan_pos = b0 + n;
     }
     free(buf);
-    if (st == LFIO_OK && (nul != h->count || label_begin != h->label_bytes))
+    if (st == LFIO_OK && h->scan_pos >= h->label_bytes && (h->scan_nul != h->count || h->scan_begin != h->label_bytes))
         st = lfio__fail(LFIO_ERR_FORMAT, "%s: /patches/label: expected %zu NUL-terminated labels", h->path, h->count);
+    if (st != LFIO_OK)
+        h->scan_pos = 0, h->scan_nul = 0, h->scan_begin = 0; /* a failed scan is made again, and fails again */
     return st;
 }
 
-/* Opens format-2 group g of h (h->count patches): every dataset checked, the tables and vertices left open. */
+/* Opens format-2 group g of h (h->count patches): every dataset's storage and shape checked and the offsets'
+ * ends, the tables and vertices left open. */
 static lfio_status hdr_open_v2(lfio_radmap_headers *h)
 {
     h->label_bytes = first_axis_length(h->path, "/patches/label", h->g, "label");
@@ -1643,8 +1668,8 @@ static lfio_status hdr_open_v2(lfio_radmap_headers *h)
                         (unsigned long long)h->label_bytes, h->count, LFIO_RADMAP_TEXT_MAX);
     if (st == LFIO_OK)
         st = hdr_open_dataset(h, V2_LABEL, h->label_bytes, "its own length", 1);
-    if (st == LFIO_OK)
-        st = hdr_scan_labels(h);
+    if (st == LFIO_OK && (h->label_start = calloc(h->count / HDR_LABEL_BLOCK + 2, sizeof *h->label_start)) == NULL)
+        st = lfio__fail(LFIO_ERR_NOMEM, "%s: /patches/label: out of memory", h->path);
     for (int t = 0; st == LFIO_OK && t < V2_COUNT; t++) {
         const enum v2_rows r = v2_datasets[t].rows;
         if (r != ROWS_PATCH && r != ROWS_OFFSET)
@@ -1656,9 +1681,9 @@ static lfio_status hdr_open_v2(lfio_radmap_headers *h)
     }
     uint64_t vertices = 0, cells = 0;
     if (st == LFIO_OK)
-        st = hdr_scan_offsets(h, V2_VERTEX_OFFSET, LFIO_RADMAP_MAX_FILE_VERTS, &vertices);
+        st = hdr_offset_ends(h, V2_VERTEX_OFFSET, LFIO_RADMAP_MAX_FILE_VERTS, &vertices);
     if (st == LFIO_OK)
-        st = hdr_scan_offsets(h, V2_CELL_OFFSET, LFIO_RADMAP_MAX_CELLS, &cells);
+        st = hdr_offset_ends(h, V2_CELL_OFFSET, LFIO_RADMAP_MAX_CELLS, &cells);
     for (int t = 0; st == LFIO_OK && t < V2_COUNT; t++) {
         const enum v2_rows r = v2_datasets[t].rows;
         if (r == ROWS_VERTEX || r == ROWS_CELL)
@@ -1745,7 +1770,7 @@ void lfio_radmap_headers_close(lfio_radmap_headers *h)
     free(h);
 }
 
-/* Loads block b of h: its rows of every table. */
+/* Loads block b of h: its rows of every table, its offsets checked. */
 static lfio_status hdr_load_block(lfio_radmap_headers *h, size_t b)
 {
     h->block = SIZE_MAX;
@@ -1757,18 +1782,23 @@ static lfio_status hdr_load_block(lfio_radmap_headers *h, size_t b)
         const enum v2_rows r = v2_datasets[t].rows;
         if (r == ROWS_PATCH || r == ROWS_OFFSET)
             st = hdr_read_rows(h, (enum v2_ds)t, h->k0, h->n + (r == ROWS_OFFSET), h->tab[t]);
+        if (st == LFIO_OK && r == ROWS_OFFSET)
+            st = hdr_check_offsets(h, (enum v2_ds)t);
     }
     if (st == LFIO_OK)
         h->block = b;
     return st;
 }
 
-/* Loads label block b of h: the labels of patches [b * HDR_LABEL_BLOCK, ...), each checked at opening to be
+/* Loads label block b of h: the labels of patches [b * HDR_LABEL_BLOCK, ...), each checked by the scan to be
  * NUL-terminated and at most LFIO_RADMAP_TEXT_MAX bytes. */
 static lfio_status hdr_load_labels(lfio_radmap_headers *h, size_t b)
 {
     h->label_block = SIZE_MAX;
     const size_t k0 = b * HDR_LABEL_BLOCK, n = h->count - k0 < HDR_LABEL_BLOCK ? h->count - k0 : HDR_LABEL_BLOCK;
+    lfio_status scanned = hdr_scan_labels(h, k0 + n);
+    if (scanned != LFIO_OK)
+        return scanned;
     const uint64_t first = h->label_start[b], end = k0 + n == h->count ? h->label_bytes : h->label_start[b + 1];
     char *labels = realloc(h->labels, end - first + 1);
     if (labels == NULL)

@@ -239,10 +239,15 @@ uint64_t lfio_radmap_cell_count(const lfio_radmap *map);
 typedef struct lfio_radmap_headers lfio_radmap_headers;
 
 /**
- * Opens path for lfio_radmap_headers_get(), making every file-wide check of
- * lfio_radmap_read_headers() (root attributes, every dataset's storage and
- * shape, the offset tables, the labels) in passes of bounded memory; each
- * patch's own checks are made when it is got. The file stays open until
+ * Opens path for lfio_radmap_headers_get(). Opening reads no table whole, so
+ * that its time is the same whatever the number of patches: it checks the
+ * root attributes, every dataset's storage and shape, and the first and last
+ * rows of the offset tables (the file's totals of vertices and cells). The
+ * other checks of lfio_radmap_read_headers() are made as the data they judge
+ * is read by lfio_radmap_headers_get(): the offsets of the block read, the
+ * labels as far as the patch got, the patch itself. A caller that gets every
+ * patch has made every check of lfio_radmap_read_headers(); one that gets a
+ * few has read, and checked, only their blocks. The file stays open until
  * lfio_radmap_headers_close().
  * @return LFIO_OK and *out, owned by the caller; as lfio_radmap_read()
  * otherwise, with *out = NULL.
@@ -275,7 +280,7 @@ const char *lfio_radmap_headers_scene(const lfio_radmap_headers *h);
 /** @return the file's format_version (1 or 2); 0 for NULL. */
 int lfio_radmap_headers_format_version(const lfio_radmap_headers *h);
 
-/** @return the cells stored over every patch (from the offsets); 0 for NULL. */
+/** @return the cells stored over every patch (the cell offsets' last row, read when opening); 0 for NULL. */
 uint64_t lfio_radmap_headers_cell_count(const lfio_radmap_headers *h);
 
 #ifdef __cplusplus
