@@ -144,7 +144,10 @@ run_case() {
         ;;
     verify) "${expect[@]}" - "$ILF" verify "$path" ;;
     radmap | radmaphead)
-        [ "$kind" = radmaphead ] && "${expect[@]}" - "$ILF" info "$path"
+        if [ "$kind" = radmaphead ]; then
+            "${expect[@]}" - "$ILF" info "$path"
+            "${expect[@]}" - "$ILF" info "$path" --maps
+        fi
         "${expect[@]}" - "$ILF" info "$path" --stats
         "${expect[@]}" - "$ILF" verify "$path"
         "${expect[@]}" "$out.glb" "$ILF" export "$path" -o "$out.glb"

@@ -64,7 +64,7 @@ static const cli_option info_options_table[] = {
     {"slab", 0, "NAME|INDEX", "describe only this slab (default: every slab)"},
     {"stats", 0, NULL, "also read the data: radiance statistics, mask, coverage (default: headers only)"},
     {"irradiance", 0, "I,J", "also report the irradiance at the centre of position (I,J)"},
-    {"maps", 0, NULL, "radiance map: list every map's details (default: the first 10)"},
+    {"maps", 0, NULL, "radiance map: read, check and list every map, and the total area (default: the first 10)"},
 };
 
 static const cli_usage info_usage = {
@@ -79,9 +79,11 @@ static const cli_usage info_usage = {
     "--irradiance I,J adds the irradiance at s=(I+0.5)/nu, t=(J+0.5)/nv on a surface\n"
     "facing -e3 (lfio_slab_irradiance).\n"
     "A radiance-map file (radiance.h5 of 'ilf relight') is described too: creator,\n"
-    "scene, maps, cells, and per map its label, vertices, grid and cell count (the\n"
-    "first 10 maps, every map with --maps or --json); with --stats the irradiance\n"
-    "and radiosity min/max/area-weighted mean.",
+    "scene, maps, cells, and per map its label, vertices, grid and cell count. The\n"
+    "text reads only the first 10 maps, whatever the file holds; --maps and --json\n"
+    "read and check every map and add the total area; --stats reads every cell too\n"
+    "and adds the irradiance and radiosity min/max/area-weighted mean. 'ilf verify'\n"
+    "checks every value.",
     "ilf info data/beams_lightfield.h5\n"
     "ilf info data/beams_lightfield.h5 --stats\n"
     "ilf info data/beams_lightfield.h5 --json --irradiance 8,8 | python3 -m json.tool\n"

@@ -10,8 +10,12 @@
  * map's area is its polygon's, which the headers give, so that `ilf info`
  * need not read a cell (lfio_radmap_headers_open()); the report reads the
  * maps one at a time, twice (the totals, then the maps printed), never
- * holding more than one, and checks every map before printing anything;
- * the text report details the first INFO_MAPS_SHOWN maps unless --maps.
+ * holding more than one, and checks every map it reads before printing
+ * anything. The text report details the first INFO_MAPS_SHOWN maps unless
+ * --maps, and then reads no other map: the cell count is the headers'
+ * (the cell offsets' last row) and the total area, which needs every map,
+ * is left to --maps, --stats and --json, which read them all; so the
+ * default report's time and memory do not grow with the maps (format 2).
  */
 #include <cjson/cJSON.h>
 #include <float.h>
@@ -299,7 +303,9 @@ static cJSON *file_json(const ilf_radmap_info *in, const map_summary *total, int
     return root;
 }
 
-static void print_file_text(const ilf_radmap_info *in, const map_summary *total, int stats)
+/* Prints the text summary; total's area when the report reads every map (whole: --maps, --stats), else the
+ * cell count alone, whatever the number of maps, so that the summary's lines do not depend on it. */
+static void print_file_text(const ilf_radmap_info *in, const map_summary *total, int stats, int whole)
 {
     const char *path = in->path;
     char size[32];
@@ -311,22 +317,25 @@ static void print_file_text(const ilf_radmap_info *in, const map_summary *total,
     printf("scene:            %s\n", src_scene(in));
     printf("file size:        %s (%lld bytes)\n", cli_format_bytes(bytes, size, sizeof size), bytes);
     printf("maps:             %zu\n", src_count(in));
-    printf("cells:            %u, %.9g m^2\n", (unsigned)total->p.ncells, total->area);
+    if (whole)
+        printf("cells:            %u, %.9g m^2\n", (unsigned)total->p.ncells, total->area);
+    else
+        printf("cells:            %u\n", (unsigned)total->p.ncells);
     if (stats) {
         print_stats_text("irradiance", &total->irradiance);
         print_stats_text("radiosity", &total->radiosity);
     }
 }
 
-/* Sums every map into *total, checking each as it is read: a damaged map fails here, before anything is
- * printed. */
-static lfio_status gather_total(const ilf_radmap_info *in, int stats, map_summary *total)
+/* Sums maps [0, n) into *total, checking each as it is read: a damaged map among them fails here, before
+ * anything is printed. */
+static lfio_status gather_total(const ilf_radmap_info *in, int stats, size_t n, map_summary *total)
 {
     memset(total, 0, sizeof *total);
     stats_init(&total->irradiance);
     stats_init(&total->radiosity);
     lfio_status st = LFIO_OK;
-    for (size_t k = 0; st == LFIO_OK && k < src_count(in); k++) {
+    for (size_t k = 0; st == LFIO_OK && k < n; k++) {
         map_summary m;
         st = src_summarise(in, k, stats, &m);
         if (st == LFIO_OK)
@@ -403,13 +412,21 @@ static int print_json(const ilf_radmap_info *in, const map_summary *total, int s
     return ILF_EXIT_OK;
 }
 
+/* @return the maps the report reads: every map for JSON, --maps or --stats (the file read whole), else the
+ * INFO_MAPS_SHOWN the text details. */
+static size_t maps_read(const ilf_radmap_info *in)
+{
+    const size_t count = src_count(in);
+    return in->json || in->all_maps || in->map != NULL || count < INFO_MAPS_SHOWN ? count : INFO_MAPS_SHOWN;
+}
+
 /* Prints the text report: the file's summary, then the first INFO_MAPS_SHOWN maps (every map with all_maps)
  * and a line counting the rest. @return an exit code. */
 static int print_text(const ilf_radmap_info *in, const map_summary *total, int stats)
 {
-    print_file_text(in, total, stats);
     const size_t count = src_count(in);
     const size_t shown = in->all_maps || count < INFO_MAPS_SHOWN ? count : INFO_MAPS_SHOWN;
+    print_file_text(in, total, stats, in->all_maps || in->map != NULL);
     for (size_t k = 0; k < shown; k++) {
         map_summary m;
         lfio_status st = src_summarise(in, k, stats, &m);
@@ -426,8 +443,11 @@ int ilf_info_radmap(const ilf_radmap_info *in)
 {
     const int stats = in->stats && in->map != NULL && lfio_radmap_has_cells(in->map);
     map_summary total;
-    lfio_status st = gather_total(in, stats, &total);
+    const size_t n = maps_read(in);
+    lfio_status st = gather_total(in, stats, n, &total);
     if (st != LFIO_OK)
         return info_failure(in, st);
+    if (n < src_count(in)) /* the cells of the maps not read: the headers count every map's */
+        total.p.ncells = (uint32_t)lfio_radmap_headers_cell_count(in->headers);
     return in->json ? print_json(in, &total, stats) : print_text(in, &total, stats);
 }
