@@ -832,7 +832,8 @@ static lfio_status v2_store_direct(const char *path, hid_t d, const lfio__h5_lay
 
 /* Creates format-2 dataset t in group g and writes this rank's part of it from v: the cells of its own
  * patches, every other dataset on rank 0 (all ranks take part in a collective write). direct: lfio filters
- * the chunks itself (a serial write on a little-endian machine), or they come filtered in mc->prepared.
+ * the chunks itself (a serial write on a little-endian machine), or a cell dataset's come filtered in
+ * mc->prepared.
  * @return LFIO_OK or the failure's status. */
 static lfio_status v2_write_dataset(const struct map_content *mc, const char *path, hid_t g, const v2_content *v,
                                     enum v2_ds t, uint64_t cells, int direct)
@@ -849,7 +850,7 @@ static lfio_status v2_write_dataset(const struct map_content *mc, const char *pa
     if (l.dims[0] > 0) {
         const uint64_t first = is_cells ? v->cell_first : 0, rows = v->rows[t];
         const int mine = is_cells ? rows > 0 : mc->rank == 0;
-        if (direct && l.deflate && mc->prepared)
+        if (direct && l.deflate && is_cells && mc->prepared)
             st = v2_store_chunks(path, d, &l, mc->prepared->c[t], mc->prepared->n[t]);
         else if (direct && l.deflate)
             st = v2_store_direct(path, d, &l, v->a[t], t, ilf_thread_count(mc->threads));
