@@ -1021,13 +1021,14 @@ lfio_status lfio_radmap_write_each(const char *path, const char *creator, const 
 #ifdef LFIO_MPI
 /*
  * Format 2 over the ranks of an MPI job. Rank q holds the cells of its own patches, cells
- * [held[q], held[q + 1]) of the file (v2_gather()), and owns the chunks of each deflated cell dataset whose
- * first row lies there: rows [own[q], own[q + 1]), own[q] being held[q] rounded up to a chunk's start. The
- * ranks first trade rows so that each holds its own chunks' (a rank whose run is shorter than a chunk may
- * feed a chunk owned several ranks back), filter them with lfio's pipeline on their threads (chunks.h),
- * and send them to rank 0, which writes the file with the serial writer's calls, fed the chunks: the same
- * bytes as lfio_radmap_write_with()'s. Every step where one rank can fail alone ends in an agreement, so
- * no rank waits for a message that will not come.
+ * [held[q], held[q + 1]) of the file (v2_gather(): patches dealt by count), and owns the chunks of each
+ * deflated cell dataset in rows [own[q], own[q + 1]): the file's cells dealt evenly, each bound moved to
+ * the nearest chunk's start (dealt as the patches are, the first of two ranks filtered 88% of the
+ * classroom's chunks). The ranks first trade rows (MPI_Alltoallv) so that each holds its own chunks'
+ * (any rank may feed any other: a run shorter than a chunk, a patch of many chunks), filter them with
+ * lfio's pipeline on their threads (chunks.h), and send them to rank 0, which writes the file with the
+ * serial writer's calls, fed the chunks: the same bytes as lfio_radmap_write_with()'s. Every step where
+ * one rank can fail alone ends in an agreement, so no rank waits for a message that will not come.
  */
 
 /* A collective write of format 2 under way on one rank. */
@@ -1052,7 +1053,7 @@ static int mpi_deflated(const mpi_write *w, int t)
     return v2_datasets[t].rows == ROWS_CELL && w->lay[t].deflate;
 }
 
-/* @return the rows of [a0, a1) within [b0, b1), as an int count (at most a chunk's rows between two ranks). */
+/* @return the rows of [a0, a1) within [b0, b1), as an int count (rows are at most LFIO_RADMAP_MAX_CELLS). */
 static int overlap(uint64_t a0, uint64_t a1, uint64_t b0, uint64_t b1)
 {
     const uint64_t lo = a0 > b0 ? a0 : b0, hi = a1 < b1 ? a1 : b1;
@@ -1076,8 +1077,9 @@ static lfio_status mpi_ranges(mpi_write *w)
     const uint64_t chunk = w->lay[V2_CELL_IJ].chunk[0];
     for (int q = 0; q <= mc->ranks; q++) {
         w->held[q] = cell_end[mc->count * (size_t)q / (size_t)mc->ranks];
-        const uint64_t up = (w->held[q] + chunk - 1) / chunk * chunk;
-        w->own[q] = up < w->cells ? up : w->cells;
+        const uint64_t even = w->cells * (uint64_t)q / (uint64_t)mc->ranks, near = (even + chunk / 2) / chunk * chunk;
+        /* the last bound is the file's end, whatever chunk it falls in */
+        w->own[q] = near < w->cells && q < mc->ranks ? near : w->cells;
     }
     return LFIO_OK;
 }
