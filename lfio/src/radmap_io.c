@@ -19,6 +19,10 @@
  *     one dataset at a time, from one table (v2_datasets[], through
  *     v2_layout()) that the reader checks against; the reader checks the
  *     per-patch tables and offsets before it sizes any vertex or cell array.
+ *     A collective write on a little-endian machine makes the serial
+ *     writer's file byte for byte: the ranks filter the cell datasets'
+ *     chunks with the serial writer's filter and rank 0 makes the serial
+ *     writer's HDF5 calls, fed those chunks (mpi_write_v2()).
  *   - Format 1: a serial write holds one slice of a patch's cells at a time
  *     (LFIO_RADMAP_ROWS_MAX, a whole number of chunks) and their compressed
  *     chunks; a write through MPI-IO, which HDF5 filters, one whole patch.
