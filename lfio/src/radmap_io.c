@@ -1027,8 +1027,10 @@ lfio_status lfio_radmap_write_each(const char *path, const char *creator, const 
  * Format 2 over the ranks of an MPI job. Rank q holds the cells of its own patches, cells
  * [held[q], held[q + 1]) of the file (v2_gather(): patches dealt by count), and owns the chunks of each
  * deflated cell dataset in rows [own[q], own[q + 1]): the file's cells dealt evenly, each bound moved to
- * the nearest chunk's start (dealt as the patches are, the first of two ranks filtered 88% of the
- * classroom's chunks). The ranks first trade rows (MPI_Alltoallv) so that each holds its own chunks'
+ * the nearest chunk's start, so that each rank compresses its share of every dataset, whatever zlib's
+ * cost a byte of each (dealt as the patches are, the first of two ranks filtered 88% of the classroom's
+ * chunks; its datasets have 4 chunks each, so this deal gives it 64%, as did one of the datasets' bytes
+ * one after another, which left it waiting for the other rank). The ranks first trade rows (MPI_Alltoallv) so that each holds its own chunks'
  * (any rank may feed any other: a run shorter than a chunk, a patch of many chunks), filter them with
  * lfio's pipeline on their threads (chunks.h), and send them to rank 0, which writes the file with the
  * serial writer's calls, fed the chunks: the same bytes as lfio_radmap_write_with()'s. Every step where
