@@ -1030,11 +1030,12 @@ lfio_status lfio_radmap_write_each(const char *path, const char *creator, const 
  * the nearest chunk's start, so that each rank compresses its share of every dataset, whatever zlib's
  * cost a byte of each (dealt as the patches are, the first of two ranks filtered 88% of the classroom's
  * chunks; its datasets have 4 chunks each, so this deal gives it 64%, as did one of the datasets' bytes
- * one after another, which left it waiting for the other rank). The ranks first trade rows (MPI_Alltoallv) so that each holds its own chunks'
- * (any rank may feed any other: a run shorter than a chunk, a patch of many chunks), filter them with
- * lfio's pipeline on their threads (chunks.h), and send them to rank 0, which writes the file with the
- * serial writer's calls, fed the chunks: the same bytes as lfio_radmap_write_with()'s. Every step where
- * one rank can fail alone ends in an agreement, so no rank waits for a message that will not come.
+ * one after another, which left it waiting for the other rank). The ranks first trade rows
+ * (MPI_Alltoallv) so that each holds its own chunks' (any rank may feed any other: a run shorter than a
+ * chunk, a patch of many chunks), filter them with lfio's pipeline on their threads (chunks.h), and send
+ * them to rank 0, which writes the file with the serial writer's calls, fed the chunks: the same bytes as
+ * lfio_radmap_write_with()'s. Every step where one rank can fail alone ends in an agreement, so no rank
+ * waits for a message that will not come.
  */
 
 /* A collective write of format 2 under way on one rank. */
@@ -1202,8 +1203,10 @@ static lfio_status mpi_receive(mpi_write *w)
             const size_t row = v2_row_bytes((enum v2_ds)t);
             if (!mpi_deflated(w, t)) {
                 const uint64_t rows = w->held[q + 1] - w->held[q];
-                if (MPI_Recv(w->prep.v.a[t] + (size_t)w->held[q] * row, (int)(rows * row), MPI_BYTE, q, t, w->comm,
-                             MPI_STATUS_IGNORE) != MPI_SUCCESS)
+                /* no message for no rows (mpi_send()): the array may be NULL */
+                if (rows > 0
+                    && MPI_Recv(w->prep.v.a[t] + (size_t)w->held[q] * row, (int)(rows * row), MPI_BYTE, q, t,
+                                w->comm, MPI_STATUS_IGNORE) != MPI_SUCCESS)
                     st = LFIO_ERR_IO;
                 continue;
             }
@@ -1240,8 +1243,8 @@ static lfio_status mpi_send(mpi_write *w)
             continue;
         if (!mpi_deflated(w, t)) {
             const uint64_t rows = w->held[me + 1] - w->held[me];
-            ok &= MPI_Send(w->prep.v.a[t], (int)(rows * v2_row_bytes((enum v2_ds)t)), MPI_BYTE, 0, t, w->comm)
-                  == MPI_SUCCESS;
+            const int bytes = (int)(rows * v2_row_bytes((enum v2_ds)t));
+            ok &= rows == 0 || MPI_Send(w->prep.v.a[t], bytes, MPI_BYTE, 0, t, w->comm) == MPI_SUCCESS;
             continue;
         }
         for (size_t k = 0; k < w->nmine[t]; k++, at++)
