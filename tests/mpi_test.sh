@@ -6,9 +6,10 @@
 # (a) Identity. 'beams' (its light field and a diffuse lamp added, 0.15 m
 #     cells, 2 bounces) relit by `ilf --threads 1` and by `mpirun -n K
 #     ilf-mpi --threads T` for (K, T) = (1, 2), (2, 1), (2, 2), (3, 1): every
-#     radiance.h5 must hold the same values (h5diff, exact; and the same bytes
-#     in every array of format 2) and every
-#     view.exr the same bytes; the same for adaptive at K = 3, and for 2 ranks
+#     radiance.h5 must be the same file, byte for byte (cmp; h5diff and the
+#     bytes of every array of format 2 say what differs if it is not), and
+#     every view.exr the same bytes; the same for adaptive at K = 3, for a
+#     direct pass of several chunks a cell dataset at K = 3, and for 2 ranks
 #     of 2 and 1 threads (tiles claimed as ranks become free); with one rank
 #     slowed by 0.25 s a tile (SLOWCLOCK_SO preloaded on it), the other claims
 #     most of the tiles. Point queries
@@ -74,7 +75,8 @@ a, b = (re.sub(rb'capDate\0string\0.{4}[0-9: ]{19}', b'', open(f, 'rb').read(), 
 sys.exit(a != b)" "$1" "$2"
 }
 same_maps() { # DIR: its radiance.h5 and view.exr equal the reference's
-    h5diff -q ref/radiance.h5 "$1/radiance.h5" >/dev/null && same_image ref/view.exr "$1/view.exr"
+    h5diff -q ref/radiance.h5 "$1/radiance.h5" >/dev/null && cmp -s ref/radiance.h5 "$1/radiance.h5" \
+        && same_image ref/view.exr "$1/view.exr"
 }
 for kt in "1 2" "2 1" "2 2" "3 1"; do
     set -- $kt
@@ -116,7 +118,15 @@ check "stats.json of 2 and 3 ranks: rank 0 claimed tiles in every pass" \
     python3 -c "import json; a, b = (json.load(open(p + '/stats.json')) for p in ('k2t1', 'k3t1')); assert all(x['tiles_claimed'] > 0 for x in a['exchanges'] + b['exchanges']), (a, b)"
 "$ilf" relight scene.json -o ref_adaptive --threads 1 --quiet --method adaptive --no-view --bounces 1
 "${mpirun[@]}" -n 3 "$ilf_mpi" relight scene.json -o adaptive3 --threads 1 --quiet --method adaptive --no-view --bounces 1
-check "adaptive: 3 ranks give the maps of one process" h5diff -q ref_adaptive/radiance.h5 adaptive3/radiance.h5
+check "adaptive: 3 ranks give the maps of one process, byte for byte" cmp ref_adaptive/radiance.h5 adaptive3/radiance.h5
+# Cells of 0.05 m: more than one chunk (16,384 cells) a cell dataset, so chunks straddle the ranks' runs.
+python3 -c "import json; s = json.load(open('scene.json')); s['radiance_maps']['cell_size'] = 0.05; json.dump(s, open('fine.json', 'w'))"
+"$ilf" relight fine.json -o ref_fine --threads 1 --quiet --no-view --bounces 0
+"${mpirun[@]}" -n 3 "$ilf_mpi" relight fine.json -o fine3 --threads 1 --quiet --no-view --bounces 0
+check "direct pass of 0.05 m cells: more than 16,384 cells" \
+    python3 -c "import json; assert json.load(open('ref_fine/stats.json'))['cells'] > 16384"
+check "direct pass of 0.05 m cells: 3 ranks write the file of one process, byte for byte" \
+    cmp ref_fine/radiance.h5 fine3/radiance.h5
 # Ranks of unequal speed (2 threads and 1) claim unequal shares of the tiles as each becomes free: the
 # maps must not depend on who claimed which.
 "${mpirun[@]}" -n 1 "$ilf_mpi" relight scene.json -o uneven --threads 2 --quiet : \

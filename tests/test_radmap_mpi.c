@@ -1,10 +1,15 @@
 /*
  * test_radmap_mpi.c - lfio_radmap_write_each_mpi() (lfio/radmap_mpi.h), run
- * under mpirun with any number of ranks (ctest runs 1 and 3):
+ * under mpirun with any number of ranks (ctest runs 1, 2 and 3):
  *   - a file written by every rank together reads back through
  *     lfio_radmap_read() with exactly the patches given, and holds what the
  *     serial writer writes (empty patches and a 100,000-cell one included),
- *     in format 2, or in format 1 when asked; fewer patches than ranks too;
+ *     in format 2 byte for byte, or in format 1 when asked; fewer patches
+ *     than ranks too;
+ *   - the 100,000-cell patch (7 chunks of each cell dataset) first, then
+ *     last: with 3 ranks, ranks holding runs shorter than a chunk, and rows
+ *     sent to a rank two ahead and two back (ranks own the chunks by an even
+ *     deal of the cells, not of the patches): the serial writer's bytes again;
  *   - a describe() that fails on the last rank alone fails the write on every
  *     rank (with "another rank" in the others' messages), leaves an existing
  *     file as it was and no temporary beside it;
@@ -29,6 +34,9 @@
 static int rank, ranks;
 static struct test_patch patches[NPATCHES];
 static const char *fail_on_rank_label; /* set: describe() fails for this patch on the last rank */
+/* orders of describe_ordered(): the 100,000-cell patch first, then last */
+static const size_t orders[2][NPATCHES] = {{3, 0, 1, 2, 4, 5, 6}, {0, 1, 2, 4, 5, 6, 3}};
+static int order;
 
 /* describe(): patch k, failing once on the last rank for the patch labelled fail_on_rank_label. */
 static lfio_status describe(void *user, size_t k, lfio_radmap_patch *out)
@@ -38,6 +46,28 @@ static lfio_status describe(void *user, size_t k, lfio_radmap_patch *out)
     if (fail_on_rank_label && rank == ranks - 1 && strcmp(out->label, fail_on_rank_label) == 0)
         return LFIO_ERR_NOMEM;
     return LFIO_OK;
+}
+
+/* describe(): the patches in the order orders[order]. */
+static lfio_status describe_ordered(void *user, size_t k, lfio_radmap_patch *out)
+{
+    return describe(user, orders[order][k], out);
+}
+
+/* @return 1 if files a and b hold the same bytes, else 0. */
+static int same_bytes(const char *a, const char *b)
+{
+    FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
+    int same = fa != NULL && fb != NULL;
+    for (int ca = 0, cb = 0; same && ca != EOF;) {
+        ca = getc(fa), cb = getc(fb);
+        same = ca == cb;
+    }
+    if (fa)
+        fclose(fa);
+    if (fb)
+        fclose(fb);
+    return same;
 }
 
 /* @return how many names in folder dir start with prefix. */
@@ -95,9 +125,28 @@ int main(int argc, char **argv)
         }
     }
     CHECK(lfio_radmap_format_version(a) == 2 && lfio_radmap_format_version(b) == 2, "format 2 written");
+    CHECK(same_bytes(shared, serial), "%s and %s differ", shared, serial);
     lfio_radmap_destroy(a);
     lfio_radmap_destroy(b);
     MPI_Barrier(MPI_COMM_WORLD);
+
+    /* Runs shorter than a chunk, rows traded forward and back over two ranks (with 3 ranks). */
+    for (order = 0; order < 2; order++) {
+        char shared_big[512], serial_big[512];
+        snprintf(shared_big, sizeof shared_big, "%s/order%d-shared-%d.h5", dir, order, ranks);
+        snprintf(serial_big, sizeof serial_big, "%s/order%d-serial-%d.h5", dir, order, ranks);
+        st = lfio_radmap_write_each_mpi(shared_big, "test_radmap_mpi", "scene.json", NPATCHES, describe_ordered, NULL,
+                                        MPI_COMM_WORLD);
+        CHECK(st == LFIO_OK, "collective write, order %d: %s", order, lfio_errmsg());
+        if (rank == 0) {
+            st = lfio_radmap_write_each(serial_big, "test_radmap_mpi", "scene.json", NPATCHES, describe_ordered, NULL);
+            CHECK(st == LFIO_OK, "serial write, order %d: %s", order, lfio_errmsg());
+        }
+        MPI_Barrier(MPI_COMM_WORLD);
+        CHECK(same_bytes(shared_big, serial_big), "%s and %s differ", shared_big, serial_big);
+        CHECK(!same_bytes(shared_big, serial), "the comparison can fail: %s and %s are the same", shared_big, serial);
+        MPI_Barrier(MPI_COMM_WORLD);
+    }
 
     /* Format 1 on request, and format 2 of fewer patches than ranks (a rank with no cells of its own). */
     for (size_t v = 1; v <= 2; v++) {

@@ -1219,9 +1219,7 @@ lfio_status lfio__h5_write_atomic(const char *path, lfio__h5_fill_fn fill, const
 }
 
 #ifdef LFIO_MPI
-/* Collective: @return st if this rank failed; else LFIO_OK if every rank succeeded, or an error whose
- * message says that another rank failed writing path. */
-static lfio_status agree(const char *path, lfio_status st, MPI_Comm comm)
+lfio_status lfio__h5_agree_over(const char *path, lfio_status st, MPI_Comm comm)
 {
     int mine = (int)st, worst = 0;
     if (MPI_Allreduce(&mine, &worst, 1, MPI_INT, MPI_MAX, comm) != MPI_SUCCESS)
@@ -1245,7 +1243,7 @@ static hid_t create_shared(const char *path, const char *tmp, MPI_Comm comm)
     /* H5Fcreate is collective: every rank enters it or none does, or those that did would wait forever */
     lfio_status st = ready ? LFIO_OK
                            : lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot set up a collective write's properties");
-    if (agree(path, st, comm) == LFIO_OK && (file = H5Fcreate(tmp, H5F_ACC_TRUNC, fcpl, fapl)) < 0)
+    if (lfio__h5_agree_over(path, st, comm) == LFIO_OK && (file = H5Fcreate(tmp, H5F_ACC_TRUNC, fcpl, fapl)) < 0)
         lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot create the temporary file for a collective write");
     lfio__h5_close(fapl);
     lfio__h5_close(fcpl);
@@ -1275,18 +1273,18 @@ lfio_status lfio__h5_write_collective(const char *path, lfio__h5_fill_fn fill, c
         st = lfio__fail(LFIO_ERR_IO, "%s: cannot share the temporary file's name between ranks", path);
     if (rank != 0 && len > 0 && (tmp = malloc(len)) == NULL)
         st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
-    st = agree(path, st, comm);
+    st = lfio__h5_agree_over(path, st, comm);
     if (st == LFIO_OK && MPI_Bcast(tmp, (int)len, MPI_CHAR, 0, comm) != MPI_SUCCESS)
         st = lfio__fail(LFIO_ERR_IO, "%s: cannot share the temporary file's name between ranks", path);
     hid_t file = st == LFIO_OK ? create_shared(path, tmp, comm) : -1;
-    st = agree(path, st == LFIO_OK && file < 0 ? LFIO_ERR_IO : st, comm);
+    st = lfio__h5_agree_over(path, st == LFIO_OK && file < 0 ? LFIO_ERR_IO : st, comm);
     writing_comm = comm;
     if (st == LFIO_OK)
         st = fill(path, file, content);
     writing_comm = MPI_COMM_NULL;
     if (file >= 0 && H5Fclose(file) < 0 && st == LFIO_OK)
         st = lfio__h5_fail(LFIO_ERR_IO, path, "/", "cannot close the temporary file");
-    st = agree(path, st, comm);
+    st = lfio__h5_agree_over(path, st, comm);
     if (rank == 0 && st == LFIO_OK && (err = ilf_atomic_commit(a, &step)) != 0)
         st = atomic_fail(path, err, step);
     ilf_atomic_release(a); /* rank 0: removes the temporary unless it was put in place */
@@ -1306,7 +1304,7 @@ lfio_status lfio__h5_agree(const char *path, lfio_status st)
 {
 #ifdef LFIO_MPI
     if (writing_comm != MPI_COMM_NULL)
-        return agree(path, st, writing_comm);
+        return lfio__h5_agree_over(path, st, writing_comm);
 #endif
     (void)path;
     return st;

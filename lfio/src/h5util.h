@@ -284,6 +284,14 @@ lfio_status lfio__h5_agree(const char *path, lfio_status st);
 
 #ifdef LFIO_MPI
 /*
+ * Collective over comm (every rank calls it): every rank learns whether any
+ * failed, for a step where one rank can fail alone.
+ * @return st if this rank failed; else LFIO_OK if every rank succeeded, or
+ * an error whose message says that another rank failed writing path.
+ */
+lfio_status lfio__h5_agree_over(const char *path, lfio_status st, MPI_Comm comm);
+
+/*
  * Writes a file atomically over the ranks of comm (collective: every rank
  * calls it with the same path and fill): rank 0 creates the temporary beside
  * path, every rank opens it with HDF5's MPI-IO driver (1.10 object formats,

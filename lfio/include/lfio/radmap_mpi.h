@@ -1,9 +1,9 @@
 /*
  * radmap_mpi.h - writing a radiance-map file collectively from the ranks of
- * an MPI job, with HDF5's MPI-IO driver. Present only in an lfio built with
- * MPI (CMake option ILFKIT_MPI, linked with a parallel HDF5); the file
- * written is the one lfio_radmap_write_each() writes, read by the same
- * lfio_radmap_read(). Conventions as in lfio/radmap.h.
+ * an MPI job. Present only in an lfio built with MPI (CMake option
+ * ILFKIT_MPI, linked with a parallel HDF5); the file written is the one
+ * lfio_radmap_write_each() writes (in format 2, the same bytes), read by the
+ * same lfio_radmap_read(). Conventions as in lfio/radmap.h.
  *
  * Thread safety: collective over comm; one call at a time per process.
  *
@@ -24,9 +24,11 @@ extern "C" {
  * Writes count patches to path as lfio_radmap_write_each() does, collectively
  * over comm: every rank calls it with the same arguments, and describe must
  * give every rank the same patch k (each rank checks every patch); the arrays
- * of patch k are written by one rank (format 2: see lfio_radmap_write_with_mpi()). Rank 0 creates the temporary
- * beside path (so every rank must see path's folder) and renames it over path
- * once every rank has written its part; on failure path is untouched.
+ * of patch k are taken from one rank (see lfio_radmap_write_with_mpi()).
+ * Rank 0 writes the file (format 2; in format 1 every rank writes through
+ * MPI-IO, so every rank must see path's folder) in a temporary beside path
+ * and renames it over path once every rank has done its part; on failure
+ * path is untouched.
  * @return on every rank: LFIO_OK once the file is in place; this rank's error,
  * or LFIO_ERR_IO (or another rank's status) with a message that another rank failed.
  */
@@ -35,11 +37,15 @@ lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, co
 
 /**
  * Writes a file as lfio_radmap_write_each_mpi() does, stored as opt says
- * (lfio/radmap.h; NULL: the defaults; threads is ignored: HDF5 compresses).
- * In format 2, each rank holds the cells of its own patches, a contiguous
- * run of them (patches [count * rank / size, count * (rank + 1) / size)),
- * and writes them as one hyperslab of each cell dataset, collectively; rank
- * 0 writes the per-patch tables and the vertices.
+ * (lfio/radmap.h; NULL: the defaults). In format 2, each rank takes the
+ * cells of its own patches, a contiguous run of them (patches
+ * [count * rank / size, count * (rank + 1) / size)); the chunks of the
+ * compressed cell datasets are dealt evenly over the ranks by cells, each
+ * rank receives from the others the cells its chunks need and compresses
+ * them on opt's threads, and rank 0 gathers every chunk and writes the file
+ * alone (without MPI-IO): the bytes lfio_radmap_write_with() writes. In
+ * format 1 (or where memory is big-endian), every rank writes its patches
+ * through HDF5's MPI-IO driver, collectively, and threads is ignored.
  * @return as lfio_radmap_write_each_mpi(); LFIO_ERR_ARG for options out of range.
  */
 lfio_status lfio_radmap_write_with_mpi(const char *path, const char *creator, const char *scene, size_t count,
