@@ -29,8 +29,9 @@ import h5py
 import numpy as np
 
 # The default's mottling against the reference's (4 times the bounce rays),
-# measured at 10 cm cells: 1.32 (two bounces of the default 256 rays a cell,
-# 1024 for the cells near the frame, one sequence per map); with 256 rays for
+# measured at 10 cm cells: 1.33 (two bounces of the default 256 rays a cell,
+# up to 1024 for the cells near the frame, fewer once a cell's error is within
+# 2% of its light, one sequence per map; 1.32 with 1024 always); with 256 rays for
 # every cell 1.74; with independent sequences for each cell, 2.17. The
 # reference's own is 1.8% of the light, 1.5% at 16 times the rays: what is
 # left is the light's own curvature and the seam of the cells near the frame.
