@@ -110,6 +110,12 @@ def main():
         e = p["cell_error"]
         check(e["cells"] > 0 and 0 < e["median"] <= e["p95"] <= e["max"],
               "pass %d: cell_error present and ordered: %s" % (p["pass"], e))
+    # the cells gathered on their own stop once their error is within 2% of their light (bounce.c): the
+    # second bounce, which carries less light than the direct pass and the first bounce, casts fewer
+    # rays than the first, which the ceiling (lit by bounces alone) keeps at its full count
+    check(passes[2]["rays_cast"] < passes[1]["rays_cast"],
+          "the second bounce stops sooner: %d rays against the first's %d"
+          % (passes[2]["rays_cast"], passes[1]["rays_cast"]))
     # the ceiling's mottling is the bounce passes' noise: of relative deviation s it gives a second
     # difference of about 1.2 s, so what is measured cannot much exceed what the reported errors allow
     p95 = max(p["cell_error"]["p95"] for p in passes[1:])
