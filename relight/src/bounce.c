@@ -21,7 +21,9 @@
  * origin in the cell, two for the direction) of one key per (pass, map), so
  * results do not depend on threads and neighbouring cells' errors are alike
  * (no mottling); each cell's rays also give its estimate's standard error
- * (the pass's histogram of them, rl_counters.cell_error);
+ * (the pass's histogram of them, rl_counters.cell_error), and a cell
+ * gathered on its own casts as many rounds of them as that error and its
+ * earlier passes' light call for, so its count too is its own;
  * a ray that leaves the scene, or meets a surface's back or a surface that
  * re-emits nothing, carries zero; where two polygons lie back to back, a ray
  * that Embree gives the back of one reads the front of the other, as a
