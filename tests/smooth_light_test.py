@@ -29,8 +29,9 @@ import h5py
 import numpy as np
 
 # The default's mottling against the reference's (4 times the bounce rays),
-# measured at 10 cm cells: 1.32 (two bounces of the default 256 rays a cell,
-# 1024 for the cells near the frame, one sequence per map); with 256 rays for
+# measured at 10 cm cells: 1.33 (two bounces of the default 256 rays a cell,
+# up to 1024 for the cells near the frame, fewer once a cell's error is within
+# 2% of its light, one sequence per map; 1.32 with 1024 always); with 256 rays for
 # every cell 1.74; with independent sequences for each cell, 2.17. The
 # reference's own is 1.8% of the light, 1.5% at 16 times the rays: what is
 # left is the light's own curvature and the seam of the cells near the frame.
@@ -109,6 +110,12 @@ def main():
         e = p["cell_error"]
         check(e["cells"] > 0 and 0 < e["median"] <= e["p95"] <= e["max"],
               "pass %d: cell_error present and ordered: %s" % (p["pass"], e))
+    # the cells gathered on their own stop once their error is within 2% of their light (bounce.c): the
+    # second bounce, which carries less light than the direct pass and the first bounce, casts fewer
+    # rays than the first, which the ceiling (lit by bounces alone) keeps at its full count
+    check(passes[2]["rays_cast"] < passes[1]["rays_cast"],
+          "the second bounce stops sooner: %d rays against the first's %d"
+          % (passes[2]["rays_cast"], passes[1]["rays_cast"]))
     # the ceiling's mottling is the bounce passes' noise: of relative deviation s it gives a second
     # difference of about 1.2 s, so what is measured cannot much exceed what the reported errors allow
     p95 = max(p["cell_error"]["p95"] for p in passes[1:])

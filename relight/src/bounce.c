@@ -21,7 +21,9 @@
  * origin in the cell, two for the direction) of one key per (pass, map), so
  * results do not depend on threads and neighbouring cells' errors are alike
  * (no mottling); each cell's rays also give its estimate's standard error
- * (the pass's histogram of them, rl_counters.cell_error);
+ * (the pass's histogram of them, rl_counters.cell_error), and a cell
+ * gathered on its own casts as many rounds of them as that error and its
+ * earlier passes' light call for, so its count too is its own;
  * a ray that leaves the scene, or meets a surface's back or a surface that
  * re-emits nothing, carries zero; where two polygons lie back to back, a ray
  * that Embree gives the back of one reads the front of the other, as a
@@ -34,11 +36,19 @@
 #include "bounce.h"
 #include "pair.h"
 
-/* Rays of a cell gathered on its own (near an occluder) per bounce_rays: 4, which halves its noise, the
- * noise no interpolation smooths. Measured on the demo (docs/accuracy.md): the ceiling's cell-to-cell
- * variation inside the lamp's frame 1.4% instead of 2.7% at 1 (2.0% at 2), at 2.4 times the bounce
- * passes' rays. */
+/* Rounds of bounce_rays rays a cell gathered on its own (near an occluder) casts at most: 4, which halves
+ * its noise, the noise no interpolation smooths. Measured on the demo (docs/accuracy.md): the ceiling's
+ * cell-to-cell variation inside the lamp's frame 1.4% instead of 2.7% at 1 (2.0% at 2). A cell stops
+ * after a round once its estimate's standard error is within RL_OWN_CELL_ERROR of its light
+ * (own_cell_converged()). */
 #define RL_OWN_CELL_RAYS 4u
+
+/* The standard error, relative to the cell's light so far (earlier passes and this pass's estimate), within
+ * which a cell gathered on its own casts no further round. At 2% the demo's ceiling inside the lamp's frame
+ * (lit by bounces alone, so judged against the bounce itself) keeps its 1,024 rays in the first bounce and
+ * its mottling (1.43% against 1.40% at 5 cm cells); on the paper's 'beams' the second bounce casts half
+ * its rays (4.20 M against 8.39 M) and the first 5% fewer (BENCHMARKS-journal.md, 4c). */
+#define RL_OWN_CELL_ERROR 0.02
 
 /* Maps (a, b) in [0, 1)^2 to the unit disc, area-preserving, squares to rings (Shirley and Chiu 1997). */
 static void concentric_disc(double a, double b, double *x, double *y)
@@ -190,6 +200,18 @@ static void count_cell_error(uint32_t n, const double acc[3], double acc2, rl_co
     cnt->cell_error[mean > 0 ? rl__cell_error_bin(sqrt(var / n) / mean) : 0]++;
 }
 
+/* @return 1 if a cell of n rays (sums acc and acc2 as count_cell_error()'s), whose earlier passes lit it
+ * with luminance prior, needs no more rays: the pass's estimate, pi times the rays' mean, has a standard
+ * error within RL_OWN_CELL_ERROR of the cell's light, prior plus that estimate. A later bounce carries
+ * less light than the passes before it, so its cells stop sooner. The rule reads the cell's own rays and
+ * earlier passes alone, so results stay independent of threads. */
+static int own_cell_converged(uint32_t n, const double acc[3], double acc2, double prior)
+{
+    double mean = (acc[0] + acc[1] + acc[2]) / (3.0 * n);
+    double var = n > 1 ? fmax(0.0, (acc2 - n * mean * mean) / (n - 1.0)) : 0.0;
+    return ILF_PI * sqrt(var / n) <= RL_OWN_CELL_ERROR * (prior + ILF_PI * mean);
+}
+
 /* Directions a tile works out once for all its cells: every cell of a map draws the same sequence, so
  * ray k's direction is the same in each; beyond these the rays' directions are worked out per cell. */
 #define RL_SHARED_DIRECTIONS 1024
@@ -206,22 +228,56 @@ static void ray_direction(const lds_key *key, uint32_t k, const rl_frame *f, v3 
     *d = v3_madd(v3_madd(v3_scale(f->n, *cz), f->e1, dx), f->e2, dy);
 }
 
+/* What every cell of a tile draws its rays from: the map's sequence and the directions worked out once. */
+typedef struct tile_rays {
+    const rl_transfer_ctx *ctx;
+    rl_map *m;
+    lds_key key;
+    uint32_t nshared;
+    v3 shared_d[RL_SHARED_DIRECTIONS];
+    double shared_cz[RL_SHARED_DIRECTIONS];
+} tile_rays;
+
+/* Traces rays [s0, s1) of the sequence from the cell of origin domain dom and adds what they read into
+ * acc, *acc2 and *near (trace_packet()). */
+static void gather_rays(const tile_rays *t, const rl_origin_domain *dom, uint32_t s0, uint32_t s1, double acc[3],
+                        double *acc2, int *near, rl_counters *cnt)
+{
+    for (; s0 < s1; s0 += RL_RAY_PACKET) {
+        size_t np = s1 - s0 < RL_RAY_PACKET ? s1 - s0 : RL_RAY_PACKET;
+        v3 x[RL_RAY_PACKET], d[RL_RAY_PACKET];
+        double tnear[RL_RAY_PACKET];
+        for (size_t k = 0; k < np; k++) {
+            uint32_t s = s0 + (uint32_t)k;
+            double cz;
+            if (s < t->nshared)
+                d[k] = t->shared_d[s], cz = t->shared_cz[s];
+            else
+                ray_direction(&t->key, s, &t->m->frame, &d[k], &cz);
+            x[k] = rl__domain_point(t->m, dom, rl__lds_coord(&t->key, s, 2), rl__lds_coord(&t->key, s, 3));
+            tnear[k] = t->ctx->eps / fmax(cz, 1e-3);
+        }
+        trace_packet(t->ctx, t->m, np, x, d, tnear, acc, acc2, near, cnt);
+    }
+}
+
 void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
                      rl_counters *cnt)
 {
     /* the cells gathered on their own are interpolated from nothing: their noise shows cell by cell, where
-     * the larger cells' is smoothed over by interpolation; RL_OWN_CELL_RAYS times the rays halve it */
+     * the larger cells' is smoothed over by interpolation; up to RL_OWN_CELL_RAYS rounds of bounce_rays
+     * rays halve it where it matters (own_cell_converged()); a larger cell casts one round */
     uint32_t n = ctx->sampling->bounce_rays * (m->subset ? RL_OWN_CELL_RAYS : 1u);
-    const rl_frame *f = &m->frame;
+    uint32_t round = m->subset ? ctx->sampling->bounce_rays : n;
     /* every cell of a map, larger or gathered on its own, draws the same sequence (one key per pass and
      * map), each from its own place: the estimate's error then changes smoothly from cell to cell as its
      * rays' hits move, instead of jumping between independent draws (mottling) */
-    const lds_key key = rl__lds_make(rl__pair_key(ctx, UINT32_MAX, map_index));
-    v3 shared_d[RL_SHARED_DIRECTIONS];
-    double shared_cz[RL_SHARED_DIRECTIONS];
-    uint32_t nshared = n < RL_SHARED_DIRECTIONS ? n : RL_SHARED_DIRECTIONS;
-    for (uint32_t k = 0; k < nshared; k++)
-        ray_direction(&key, k, f, &shared_d[k], &shared_cz[k]);
+    tile_rays tr, *t = &tr;
+    t->ctx = ctx, t->m = m;
+    t->key = rl__lds_make(rl__pair_key(ctx, UINT32_MAX, map_index));
+    t->nshared = n < RL_SHARED_DIRECTIONS ? n : RL_SHARED_DIRECTIONS;
+    for (uint32_t k = 0; k < t->nshared; k++)
+        ray_direction(&t->key, k, &m->frame, &t->shared_d[k], &t->shared_cz[k]);
     for (uint32_t j = row0; j < row1; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
             int32_t cell = rl__map_grid_cell(m, i, j);
@@ -231,27 +287,21 @@ void rl__bounce_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, 
             rl__cell_domain(m, (uint32_t)cell, &dom);
             double acc[3] = {0, 0, 0}, acc2 = 0.0;
             int near = 0;
-            for (uint32_t s0 = 0; s0 < n; s0 += RL_RAY_PACKET) {
-                size_t np = n - s0 < RL_RAY_PACKET ? n - s0 : RL_RAY_PACKET;
-                v3 x[RL_RAY_PACKET], d[RL_RAY_PACKET];
-                double tnear[RL_RAY_PACKET];
-                for (size_t k = 0; k < np; k++) {
-                    uint32_t s = s0 + (uint32_t)k;
-                    double cz;
-                    if (s < nshared)
-                        d[k] = shared_d[s], cz = shared_cz[s];
-                    else
-                        ray_direction(&key, s, f, &d[k], &cz);
-                    x[k] = rl__domain_point(m, &dom, rl__lds_coord(&key, s, 2), rl__lds_coord(&key, s, 3));
-                    tnear[k] = ctx->eps / fmax(cz, 1e-3);
-                }
-                trace_packet(ctx, m, np, x, d, tnear, acc, &acc2, &near, cnt);
-            }
+            /* the light of the cell's earlier passes, against which its own error is judged */
+            double prior = m->e_total != m->e_pass
+                               ? (m->e_total[cell][0] + m->e_total[cell][1] + m->e_total[cell][2]) / 3.0
+                               : 0.0;
+            uint32_t cast = 0;
+            do {
+                uint32_t to = n - cast < round ? n : cast + round;
+                gather_rays(t, &dom, cast, to, acc, &acc2, &near, cnt);
+                cast = to;
+            } while (cast < n && !own_cell_converged(cast, acc, acc2, prior));
             if (m->near)
                 m->near[cell] = (uint8_t)near;
-            cnt->samples += n;
-            count_cell_error(n, acc, acc2, cnt);
+            cnt->samples += cast;
+            count_cell_error(cast, acc, acc2, cnt);
             for (int c = 0; c < 3; c++)
-                m->e_pass[cell][c] += ILF_PI * acc[c] / n;
+                m->e_pass[cell][c] += ILF_PI * acc[c] / cast;
         }
 }
