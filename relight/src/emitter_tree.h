@@ -17,6 +17,7 @@
 
 #include "emitter.h"
 #include "shadow.h"
+#include "tracer.h"
 
 typedef struct rl_emitter_tree rl_emitter_tree;
 
@@ -25,10 +26,11 @@ typedef struct rl_emitter_tree rl_emitter_tree;
  * edges at the tracer's single precision (eps is eight of its ulps). */
 #define RL_REACH_TOL_EPS 2000.0
 
-/* Builds the tree of emitters e[0 .. n) (n >= 1; e must outlive it). centre and eps_floor are the pass's
- * (rl_transfer_ctx): the cull's margin is measured as the pairs' eps is. @return RL_OK and *out, or
- * RL_ERR_NOMEM. */
-rl_status rl__emitter_tree_new(const rl_emitter *e, size_t n, v3 centre, double eps_floor, rl_emitter_tree **out);
+/* Builds the tree of emitters e[0 .. n) (n >= 1; e and tracer must outlive it; the tracer's segments only
+ * spare searches). centre and eps_floor are the pass's (rl_transfer_ctx): the cull's margin is measured as
+ * the pairs' eps is. @return RL_OK and *out, or RL_ERR_NOMEM. */
+rl_status rl__emitter_tree_new(const rl_emitter *e, size_t n, const rl_tracer *tracer, v3 centre, double eps_floor,
+                               rl_emitter_tree **out);
 
 /* Releases the tree. NULL is a no-op. */
 void rl__emitter_tree_destroy(rl_emitter_tree *t);
@@ -36,8 +38,11 @@ void rl__emitter_tree_destroy(rl_emitter_tree *t);
 /* Lists into out (room for every emitter of t), in increasing index, the
  * emitters of t that some segment from the convex hull of the world points
  * a (na, 1 .. RL_BEAM_MAX_VERTS) may reach unblocked by the polygons of o:
- * all but those one polygon wholly hides from it. @return their count. */
+ * all but those one polygon wholly hides from it. Also left out, as rl__pair_setup()
+ * would leave them: emitters wholly behind the plane of frame rf, a's
+ * receiver (unless rf is NULL: a is a point), and emitters the whole of a
+ * lies behind. @return their count. */
 size_t rl__emitter_tree_reach(const rl_emitter_tree *t, const rl_occluders *o, const v3 *a, size_t na,
-                              uint32_t *out);
+                              const rl_frame *rf, uint32_t *out);
 
 #endif /* RELIGHT_EMITTER_TREE_H */

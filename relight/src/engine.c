@@ -791,7 +791,7 @@ rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st)
     /* the other passes gather each tile from the emitters that may reach it, listed by a tree built once */
     rl_emitter_tree *reach = NULL;
     if (!glow && ne > 0 && job.ctx.occluders) {
-        if (rl__emitter_tree_new(in->e, ne, job.ctx.centre, job.ctx.eps, &reach) != RL_OK)
+        if (rl__emitter_tree_new(in->e, ne, in->tracer, job.ctx.centre, job.ctx.eps, &reach) != RL_OK)
             return RL_ERR_NOMEM;
         job.ctx.reach = reach;
     }

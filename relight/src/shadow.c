@@ -461,7 +461,14 @@ static int box_meets_probes(const probe_set *ps, v3 lo, v3 hi, double pad)
     return 1;
 }
 
-int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const v3 *b, size_t nb, double tol)
+int rl__occluders_blocks(const rl_occluders *o, uint32_t k, const v3 *a, size_t na, const v3 *b, size_t nb,
+                         double tol)
+{
+    return k < o->npolys && na >= 1 && nb >= 1 && blocks_ends(o, &o->polys[k], a, na, b, nb, tol);
+}
+
+int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const v3 *b, size_t nb, double tol,
+                            uint32_t *blocker)
 {
     if (o->npolys == 0 || na < 1 || nb < 1 || na > RL_BEAM_MAX_VERTS || nb > RL_BEAM_MAX_VERTS)
         return 0;
@@ -491,8 +498,11 @@ int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const
         }
         for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
             const occ_poly *q = &o->polys[o->order[i]];
-            if (segment_meets_box(ca, cb, q->lo, q->hi, pad) && blocks_ends(o, q, a, na, b, nb, tol))
+            if (segment_meets_box(ca, cb, q->lo, q->hi, pad) && blocks_ends(o, q, a, na, b, nb, tol)) {
+                if (blocker)
+                    *blocker = o->order[i];
                 return 1;
+            }
         }
     }
     return 0;

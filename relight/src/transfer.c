@@ -31,10 +31,11 @@ const rl_method_impl *rl__method_for(rl_method id)
 }
 
 /* Lists in s->reach the emitters that region a (na world points, their
- * hull) may exchange light with, in increasing index: every emitter when the
+ * hull; a tile's with its map's frame rf, a point's with NULL) may
+ * exchange light with, in increasing index: every emitter when the
  * pass has no tree, else those no single polygon hides from the region
- * (rl__emitter_tree_reach()). @return their count, or SIZE_MAX without memory. */
-static size_t reachable(const rl_transfer_ctx *ctx, const v3 *a, size_t na, rl_scratch *s)
+ * and that face it (rl__emitter_tree_reach()). @return their count, or SIZE_MAX without memory. */
+static size_t reachable(const rl_transfer_ctx *ctx, const v3 *a, size_t na, const rl_frame *rf, rl_scratch *s)
 {
     if (ctx->nemitters > s->reach_cap) {
         uint32_t *grown = realloc(s->reach, ctx->nemitters * sizeof *grown);
@@ -48,7 +49,7 @@ static size_t reachable(const rl_transfer_ctx *ctx, const v3 *a, size_t na, rl_s
             s->reach[e] = (uint32_t)e;
         return ctx->nemitters;
     }
-    return rl__emitter_tree_reach(ctx->reach, ctx->occluders, a, na, s->reach);
+    return rl__emitter_tree_reach(ctx->reach, ctx->occluders, a, na, rf, s->reach);
 }
 
 int rl__transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
@@ -58,7 +59,7 @@ int rl__transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m,
     assert(method); /* the scene's settings are validated against the same list */
     if (m->polygon < 0 && method->point_view) {
         /* a point receiver is culled from its own view of each emitter it may reach */
-        size_t n = reachable(ctx, &m->frame.origin, 1, scratch);
+        size_t n = reachable(ctx, &m->frame.origin, 1, NULL, scratch);
         if (n == SIZE_MAX)
             return -1;
         int rc = 0;
@@ -83,7 +84,7 @@ int rl__transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m,
         v3 a[RL_MAX_POLY_VERTS + 4];
         for (size_t j = 0; j < t->npoly; j++)
             a[j] = frame_point(&m->frame, t->poly[j]);
-        size_t n = reachable(ctx, a, t->npoly, scratch);
+        size_t n = reachable(ctx, a, t->npoly, &m->frame, scratch);
         rc = n == SIZE_MAX ? -1 : 0;
         for (size_t k = 0; k < n && rc == 0; k++)
             rc = method->gather(ctx, t, scratch->reach[k], scratch, cnt);
