@@ -399,21 +399,20 @@ static int room_quads(tpoly *p, double x0, int door, const char *lamp)
 }
 
 /* Relights the rooms p (n) as the test's scene with method m. @return the solution (or NULL), *st its direct
- * pass's statistics. */
-static rl_solution *rooms_relight(const tpoly *p, int n, rl_method m, rl_pass_stats *st)
+ * pass's statistics, *scene the scene it reads (destroy it after the solution). */
+static rl_solution *rooms_relight(const tpoly *p, int n, rl_method m, rl_pass_stats *st, rl_scene **scene)
 {
     char path[600];
     snprintf(path, sizeof path, "%s/rooms.json", tmpdir);
     ts_write_scene(path, MATS, p, n, "\"radiance_maps\": {\"cell_size\": 0.25}, \"sampling\": {\"bounces\": 0}");
-    rl_scene *s = ts_load(path);
-    if (!s)
-        return NULL;
-    set_sampling(s, m, 8, 2, 16, 2);
-    rl_solution *sol = ts_relight(s, "rooms");
     memset(st, 0, sizeof *st);
+    *scene = ts_load(path);
+    if (!*scene)
+        return NULL;
+    set_sampling(*scene, m, 8, 2, 16, 2);
+    rl_solution *sol = ts_relight(*scene, "rooms");
     if (sol)
         CHECK(rl_solution_pass_stats(sol, 0, st) == RL_OK, "rooms: pass stats: %s", rl_errmsg());
-    rl_scene_destroy(s);
     return sol;
 }
 
@@ -438,9 +437,10 @@ static void check_rooms_cull(void)
         int na = room_quads(p, 0, 0, "light");
         int n = na + room_quads(p + na, 2.2, 0, "light");
         rl_pass_stats both, one;
-        rl_solution *lit = rooms_relight(p, n, method, &both);
+        rl_scene *scenes[3] = {NULL, NULL, NULL};
+        rl_solution *lit = rooms_relight(p, n, method, &both, &scenes[0]);
         p[n - 1].material = "black"; /* the second room's lamp dark */
-        rl_solution *dark = rooms_relight(p, n, method, &one);
+        rl_solution *dark = rooms_relight(p, n, method, &one, &scenes[1]);
         if (lit && dark) {
             /* each room's maps in front of its own lamp: all but the ceiling's (and the lamps') */
             uint64_t maps[2] = {0, 0};
@@ -472,7 +472,7 @@ static void check_rooms_cull(void)
         /* doors in line; the first room's lamp dark */
         na = room_quads(p, 0, 1, "black");
         n = na + room_quads(p + na, 2.2, -1, "light");
-        rl_solution *door = rooms_relight(p, n, method, &one);
+        rl_solution *door = rooms_relight(p, n, method, &one, &scenes[2]);
         long floor = door ? ts_map_of(door, 0) : -1;
         double lit_floor = NAN;
         if (floor >= 0) {
@@ -487,6 +487,8 @@ static void check_rooms_cull(void)
         CHECK(lit_floor > 0, "rooms with doors, %s: the first room's floor is dark: the lamp seen through the doors "
               "was left out", name);
         rl_solution_destroy(door);
+        for (int k = 0; k < 3; k++)
+            rl_scene_destroy(scenes[k]);
     }
 }
 
