@@ -173,13 +173,19 @@ void rl__emitter_tree_destroy(rl_emitter_tree *t)
 }
 
 /* @return 1 if one of a few segments from the hull of a (na; ca its vertex mean) to the hull of b (nb; cb
- * its vertex mean), but for tol at either end, meets no polygon as the tracer sees it: from ca, and from
- * halfway to each vertex of a, to cb and to the point of b's box nearest to it. Then no polygon hides b
+ * its vertex mean), but for tol at either end, meets no polygon as the tracer sees it: from ca to cb alone,
+ * then at once from ca and from halfway to each vertex of a to cb and to the point of b's box nearest to
+ * it, and from ca to halfway to each vertex of b. Then no polygon hides b
  * from a, nor anything holding b. (Only a shortcut, to spare the searches for blockers that would fail: a
  * segment the tracer finds clear that an exact test would find blocked only keeps an emitter, which is
  * always exact.) */
 static int seen(const rl_emitter_tree *t, const v3 *a, size_t na, v3 ca, const v3 *b, size_t nb, v3 cb, double tol)
 {
+    /* the segment between the centres first, alone: it alone proves most seen boxes seen */
+    v3 d0 = v3_sub(cb, ca);
+    double len0 = v3_len(d0);
+    if (len0 > 4.0 * tol && !rl__tracer_occluded(t->tracer, ca, v3_scale(d0, 1.0 / len0), tol, len0 - tol))
+        return 1;
     v3 lo = b[0], hi = b[0];
     for (size_t j = 1; j < nb; j++) {
         lo = (v3){dmin(lo.x, b[j].x), dmin(lo.y, b[j].y), dmin(lo.z, b[j].z)};
@@ -189,8 +195,9 @@ static int seen(const rl_emitter_tree *t, const v3 *a, size_t na, v3 ca, const v
     double tn[RL_RAY_PACKET], tf[RL_RAY_PACKET];
     int occluded[RL_RAY_PACKET];
     size_t n = 0;
-    from[n] = ca, to[n++] = cb;
-    for (size_t i = 0; i <= na && n + 1 < RL_RAY_PACKET; i++) {
+    /* then, at once: from ca and halfway to each vertex of a, to the nearest point of b's box and to cb; and
+     * from ca to halfway to each vertex of b */
+    for (size_t i = 0; i <= na && n < RL_RAY_PACKET; i++) {
         v3 f = i == na ? ca : v3_scale(v3_add(ca, a[i]), 0.5);
         from[n] = f, to[n++] = (v3){dmin(dmax(f.x, lo.x), hi.x), dmin(dmax(f.y, lo.y), hi.y), dmin(dmax(f.z, lo.z), hi.z)};
         if (na == 1)
@@ -198,6 +205,8 @@ static int seen(const rl_emitter_tree *t, const v3 *a, size_t na, v3 ca, const v
     }
     for (size_t i = 0; i < na && na > 1 && n < RL_RAY_PACKET; i++)
         from[n] = v3_scale(v3_add(ca, a[i]), 0.5), to[n++] = cb;
+    for (size_t j = 0; j < nb && n < RL_RAY_PACKET; j++)
+        from[n] = ca, to[n++] = v3_scale(v3_add(cb, b[j]), 0.5);
     size_t m = 0;
     for (size_t k = 0; k < n; k++) {
         v3 d = v3_sub(to[k], from[k]);
