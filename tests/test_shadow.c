@@ -80,7 +80,7 @@ static void box_blocks(const rl_scene *s, const rl_occluders *occ, const v3 *a, 
     }
     for (int c = 0; c < 8; c++)
         corner[c] = (v3){c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z};
-    if (!rl__occluders_block_any(occ, a, na, corner, 8, 1e-9, NULL))
+    if (!rl__occluders_block_any(occ, a, na, corner, 8, 1e-6, 1e-9, NULL))
         return;
     (*found)++;
     int all_met = 1;
@@ -162,8 +162,8 @@ int main(void)
             /* the early-exit search finds a blocker exactly when the classification does: its pruning
              * by the boxes that segments must cross never loses one */
             uint32_t blocker = UINT32_MAX;
-            int any = rl__occluders_block_any(occ, a, na, b, 4, 1e-9, &blocker);
-            CHECK(!any || rl__occluders_blocks(occ, blocker, a, na, b, 4, 1e-9),
+            int any = rl__occluders_block_any(occ, a, na, b, 4, 1e-9, 1e-9, &blocker);
+            CHECK(!any || rl__occluders_blocks(occ, blocker, a, na, b, 4, 1e-9, 1e-9),
                   "scene %d beam %d: the blocker found does not block alone", sc, bi);
             CHECK(any == (vis == VIS_BLOCKED), "scene %d beam %d: a blocker %s, but the beam is %s", sc, bi,
                   any ? "found" : "not found", vis == VIS_BLOCKED ? "BLOCKED" : "not BLOCKED");

@@ -242,15 +242,16 @@ typedef struct walk {
     size_t nrecent;
 } walk;
 
-/* @return 1 if one polygon hides the hull of b (nb) from that of a (na) with margin tol: one of w's recent
+/* @return 1 if one polygon hides the hull of b (nb) from that of a (na) with margins tol and edge
+ * (rl__occluders_block_any()): one of w's recent
  * blockers, or one found by a search (then made the most recent). */
-static int blocked(walk *w, const v3 *a, size_t na, const v3 *b, size_t nb, double tol)
+static int blocked(walk *w, const v3 *a, size_t na, const v3 *b, size_t nb, double tol, double edge)
 {
     for (size_t i = 0; i < w->nrecent; i++)
-        if (rl__occluders_blocks(w->o, w->recent[i], a, na, b, nb, tol))
+        if (rl__occluders_blocks(w->o, w->recent[i], a, na, b, nb, tol, edge))
             return 1;
     uint32_t k = 0;
-    if (!rl__occluders_block_any(w->o, a, na, b, nb, tol, &k))
+    if (!rl__occluders_block_any(w->o, a, na, b, nb, tol, edge, &k))
         return 0;
     size_t n = w->nrecent < RECENT ? w->nrecent + 1 : RECENT;
     for (size_t i = n - 1; i > 0; i--)
@@ -261,8 +262,8 @@ static int blocked(walk *w, const v3 *a, size_t na, const v3 *b, size_t nb, doub
 }
 
 /* @return 1 if every point of b (nb) is hidden from the hull of a (na): one polygon of o crosses every
- * segment between them, with the margin of RL_REACH_TOL_EPS times the eps of such segments (as pair.c
- * measures a pair's). */
+ * segment between them, with the margins of RL_REACH_TOL_EPS and RL_REACH_EDGE_EPS times the eps of such
+ * segments (as pair.c measures a pair's). */
 static int hidden(walk *w, const v3 *a, size_t na, const v3 *b, size_t nb)
 {
     const rl_emitter_tree *t = w->t;
@@ -271,8 +272,9 @@ static int hidden(walk *w, const v3 *a, size_t na, const v3 *b, size_t nb)
         r = dmax(r, v3_maxabs(v3_sub(a[i], t->centre)));
     for (size_t j = 0; j < nb; j++)
         r = dmax(r, v3_maxabs(v3_sub(b[j], t->centre)));
-    double tol = RL_REACH_TOL_EPS * dmax(1e-6 * r, t->eps_floor);
-    return !seen(t, a, na, mean_of(a, na), b, nb, mean_of(b, nb), tol) && blocked(w, a, na, b, nb, tol);
+    double eps = dmax(1e-6 * r, t->eps_floor), tol = RL_REACH_TOL_EPS * eps;
+    return !seen(t, a, na, mean_of(a, na), b, nb, mean_of(b, nb), tol) &&
+           blocked(w, a, na, b, nb, tol, RL_REACH_EDGE_EPS * eps);
 }
 
 static int cmp_u32(const void *x, const void *y)

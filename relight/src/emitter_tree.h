@@ -4,9 +4,9 @@
  * with at all (emitter_tree.c).
  *
  * An emitter is dropped for a region only when one scene polygon crosses
- * every segment from the region to it, with a margin that holds for the
- * shadow rays as traced (their ends offset by up to RL_REACH_TOL_EPS times
- * the pair's eps): every ray of such a pair would be occluded, so the pair
+ * every segment from the region to it, with margins that hold for the
+ * shadow rays as traced (their ends offset by up to half RL_REACH_TOL_EPS
+ * times the pair's eps, along their own lines): every ray of such a pair would be occluded, so the pair
  * adds nothing to any cell and leaving it out changes no sum. Nothing is
  * dropped for distance or for being faint. Emitters are listed in
  * increasing index, the order the pass would have visited them in, so the
@@ -22,9 +22,15 @@
 typedef struct rl_emitter_tree rl_emitter_tree;
 
 /* A shadow ray's ends are offset by up to eps / 1e-3 (pair.c, point_gather.c: eps / max(cos, 1e-3)); the
- * cull's margin is twice that, so that the ray's end points stay well clear of the blocker's plane and
- * edges at the tracer's single precision (eps is eight of its ulps). */
+ * cull's margin from a blocker's plane is twice that, so that the ray's end points stay well clear of it
+ * at the tracer's single precision (eps is eight of its ulps). */
 #define RL_REACH_TOL_EPS 2000.0
+
+/* Offsets shorten a ray along its own line, so where it crosses a blocker's plane does not move: inside the
+ * blocker's edges the margin need only outlast the tracer's rounding (eps is eight of its ulps). A margin that
+ * grew with the offsets (which grow with the scene's extent) would, on a floor of 10 x 10 rooms, exceed the
+ * few centimetres by which a segment from a floor to the next room's lamp clears that room's wall's foot. */
+#define RL_REACH_EDGE_EPS 16.0
 
 /* Builds the tree of emitters e[0 .. n) (n >= 1; e and tracer must outlive it; the tracer's segments only
  * spare searches). centre and eps_floor are the pass's (rl_transfer_ctx): the cull's margin is measured as

@@ -339,10 +339,10 @@ static int meets(const rl_occluders *o, const occ_poly *q, const rl_beam *p)
 /* @return 1 if polygon q crosses every segment between the convex hulls of
  * points pa (na) and pb (nb): its plane parts the two sets by more than tol,
  * and the segment between every pair of their points crosses it more than
- * tol inside its edges (the section of a convex hull by a plane that parts
+ * edge inside its edges (the section of a convex hull by a plane that parts
  * its ends is the hull of those crossings; the ends need not be planar). */
 static int blocks_ends(const rl_occluders *o, const occ_poly *q, const v3 *pa, size_t na, const v3 *pb, size_t nb,
-                       double tol)
+                       double tol, double edge)
 {
     const v3 *v = o->verts + q->first;
     int near_above = v3_dot(v3_sub(pa[0], v[0]), q->n) > 0; /* the side every near vertex must share */
@@ -358,7 +358,7 @@ static int blocks_ends(const rl_occluders *o, const occ_poly *q, const v3 *pa, s
             for (uint32_t i = 0; i < q->count; i++) {
                 v3 a = v[i], c = v[(i + 1) % q->count];
                 v3 m = v3_cross(q->n, v3_sub(c, a));
-                if (!(v3_dot(v3_sub(h, a), m) > tol * v3_len(m)))
+                if (!(v3_dot(v3_sub(h, a), m) > edge * v3_len(m)))
                     return 0;
             }
         }
@@ -369,7 +369,7 @@ static int blocks_ends(const rl_occluders *o, const occ_poly *q, const v3 *pa, s
 /* blocks_ends() for beam p's two ends and tolerance. */
 static int blocks(const rl_occluders *o, const occ_poly *q, const rl_beam *p)
 {
-    return blocks_ends(o, q, p->a, p->na, p->b, p->nb, p->tol);
+    return blocks_ends(o, q, p->a, p->na, p->b, p->nb, p->tol, p->tol);
 }
 
 /* @return 1 if box [lo, hi] lies wholly outside some face of p. */
@@ -462,13 +462,13 @@ static int box_meets_probes(const probe_set *ps, v3 lo, v3 hi, double pad)
 }
 
 int rl__occluders_blocks(const rl_occluders *o, uint32_t k, const v3 *a, size_t na, const v3 *b, size_t nb,
-                         double tol)
+                         double tol, double edge)
 {
-    return k < o->npolys && na >= 1 && nb >= 1 && blocks_ends(o, &o->polys[k], a, na, b, nb, tol);
+    return k < o->npolys && na >= 1 && nb >= 1 && blocks_ends(o, &o->polys[k], a, na, b, nb, tol, edge);
 }
 
 int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const v3 *b, size_t nb, double tol,
-                            uint32_t *blocker)
+                            double edge, uint32_t *blocker)
 {
     if (o->npolys == 0 || na < 1 || nb < 1 || na > RL_BEAM_MAX_VERTS || nb > RL_BEAM_MAX_VERTS)
         return 0;
@@ -481,7 +481,7 @@ int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const
         ps.from[ps.n] = ca, ps.to[ps.n++] = b[j];
     /* a blocker crosses every probe inside its edges, so its box (and every box holding it) meets each;
      * the pad only keeps rounding from turning away a box as thin as the wall it holds */
-    double pad = tol + 1e-12 * (v3_maxabs(ca) + v3_maxabs(cb));
+    double pad = edge + 1e-12 * (v3_maxabs(ca) + v3_maxabs(cb));
     uint32_t stack[TREE_STACK];
     size_t top = 0;
     stack[top++] = 0;
@@ -498,7 +498,7 @@ int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const
         }
         for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
             const occ_poly *q = &o->polys[o->order[i]];
-            if (segment_meets_box(ca, cb, q->lo, q->hi, pad) && blocks_ends(o, q, a, na, b, nb, tol)) {
+            if (segment_meets_box(ca, cb, q->lo, q->hi, pad) && blocks_ends(o, q, a, na, b, nb, tol, edge)) {
                 if (blocker)
                     *blocker = o->order[i];
                 return 1;
