@@ -292,12 +292,13 @@ static int behind(const v3 *v, size_t n, v3 org, v3 nrm)
     return 1;
 }
 
-/* @return 1 if emitter e and region a cannot exchange light whatever lies between: the region (in the plane
- * of frame rf, unless NULL) faces away from all of e, or lies behind e's plane -- rl__pair_setup()'s tests
- * (pair.c), in the same arithmetic, so that an emitter left out here is one it would turn away. */
+/* @return 1 if emitter e and tile a cannot exchange light whatever lies between: the tile (in the plane of
+ * frame rf; NULL: a point, for which nothing is told here) faces away from all of e, or lies behind e's
+ * plane -- rl__pair_setup()'s tests (pair.c), in the same arithmetic, so that an emitter left out here is
+ * one it would turn away. */
 static int facing_away(const rl_emitter *e, const v3 *a, size_t na, const rl_frame *rf)
 {
-    return (rf && behind(e->verts, e->nverts, rf->origin, rf->n)) || behind(a, na, e->frame.origin, e->frame.n);
+    return rf && (behind(e->verts, e->nverts, rf->origin, rf->n) || behind(a, na, e->frame.origin, e->frame.n));
 }
 
 size_t rl__emitter_tree_reach(const rl_emitter_tree *t, const rl_occluders *o, const v3 *a, size_t na,

@@ -46,8 +46,8 @@ void rl__emitter_tree_destroy(rl_emitter_tree *t);
  * a (na, 1 .. RL_BEAM_MAX_VERTS) may reach unblocked by the polygons of o:
  * all but those one polygon wholly hides from it. Also left out, as rl__pair_setup()
  * would leave them: emitters wholly behind the plane of frame rf, a's
- * receiver (unless rf is NULL: a is a point), and emitters the whole of a
- * lies behind. @return their count. */
+ * receiver, and emitters the whole of a lies behind (both only when rf is
+ * given: a is a tile, not a point). @return their count. */
 size_t rl__emitter_tree_reach(const rl_emitter_tree *t, const rl_occluders *o, const v3 *a, size_t na,
                               const rl_frame *rf, uint32_t *out);
 
