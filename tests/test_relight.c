@@ -369,6 +369,129 @@ static void check_narrow_wall(void)
     }
 }
 
+/* The closed box [x0, x0 + 2] x [0, 2] x [0, 2] as six inward-facing quads into p (returns the count; the
+ * floor first, then the ceiling), with, when
+ * door is set, an opening y in [0.8, 1.2], z in [0, 1.2] through its wall at x = x0 + 2 (if door > 0) or at
+ * x = x0 (door < 0), that wall then in three pieces; and a lamp of material lamp, 0.4 m square, 0.1 m under
+ * its ceiling, facing down. */
+static int room_quads(tpoly *p, double x0, int door, const char *lamp)
+{
+    double x1 = x0 + 2, h = 2;
+    int n = 0;
+    p[n++] = ts_rect_z("grey", x0, 0, x1, 2, 0, 1);
+    p[n++] = ts_rect_z("grey", x0, 0, x1, 2, h, 0);
+    p[n++] = (tpoly){"grey", 4, {{x0, 0, 0}, {x0, 0, h}, {x1, 0, h}, {x1, 0, 0}}}; /* y = 0, facing +y */
+    p[n++] = (tpoly){"grey", 4, {{x0, 2, 0}, {x1, 2, 0}, {x1, 2, h}, {x0, 2, h}}}; /* y = 2, facing -y */
+    /* the x walls: facing +x at x0, -x at x1, each whole or in three pieces around the door */
+    for (int side = 0; side < 2; side++) {
+        double x = side ? x1 : x0;
+        int pieces = (door > 0 && side) || (door < 0 && !side);
+        double ya[3] = {0, 1.2, 0.8}, yb[3] = {0.8, 2, 1.2}, za[3] = {0, 0, 1.2};
+        for (int k = 0; k < (pieces ? 3 : 1); k++) {
+            double y0 = pieces ? ya[k] : 0, y1 = pieces ? yb[k] : 2, z0 = pieces ? za[k] : 0;
+            tpoly w = side ? (tpoly){"grey", 4, {{x, y0, z0}, {x, y0, h}, {x, y1, h}, {x, y1, z0}}}
+                           : (tpoly){"grey", 4, {{x, y0, z0}, {x, y1, z0}, {x, y1, h}, {x, y0, h}}};
+            p[n++] = w;
+        }
+    }
+    p[n++] = ts_rect_z(lamp, x0 + 0.8, 0.8, x0 + 1.2, 1.2, h - 0.1, 0);
+    return n;
+}
+
+/* Relights the rooms p (n) as the test's scene with method m. @return the solution (or NULL), *st its direct
+ * pass's statistics, *scene the scene it reads (destroy it after the solution). */
+static rl_solution *rooms_relight(const tpoly *p, int n, rl_method m, rl_pass_stats *st, rl_scene **scene)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/rooms.json", tmpdir);
+    ts_write_scene(path, MATS, p, n, "\"radiance_maps\": {\"cell_size\": 0.25}, \"sampling\": {\"bounces\": 0}");
+    memset(st, 0, sizeof *st);
+    *scene = ts_load(path);
+    if (!*scene)
+        return NULL;
+    set_sampling(*scene, m, 8, 2, 16, 2);
+    rl_solution *sol = ts_relight(*scene, "rooms");
+    if (sol)
+        CHECK(rl_solution_pass_stats(sol, 0, st) == RL_OK, "rooms: pass stats: %s", rl_errmsg());
+    return sol;
+}
+
+/*
+ * Emitters a tile cannot reach are left out before any per-pair work
+ * (emitter_tree.h), exactly. Two closed rooms 0.2 m apart, each with a
+ * lamp: every receiving polygon of a room (one tile each) exchanges light
+ * with its own room's lamp alone, so the pairs counted are the maps of the
+ * room of the lit lamp (the other room's maps would double them), and the
+ * first room's maps are the same, bit for bit, as with the second lamp
+ * dark. With doors in line through both rooms' facing walls, the second
+ * lamp lights the first room through them, though each wall's plane parts
+ * the rooms: no single polygon hides it, so it must not be left out, and the
+ * first room's floor is lit.
+ */
+static void check_rooms_cull(void)
+{
+    tpoly p[24];
+    for (int m = 0; m < 2; m++) {
+        rl_method method = m ? RL_METHOD_NAIVE : RL_METHOD_CULLED;
+        const char *name = m ? "naive" : "culled";
+        int na = room_quads(p, 0, 0, "light");
+        int n = na + room_quads(p + na, 2.2, 0, "light");
+        rl_pass_stats both, one;
+        rl_scene *scenes[3] = {NULL, NULL, NULL};
+        rl_solution *lit = rooms_relight(p, n, method, &both, &scenes[0]);
+        p[n - 1].material = "black"; /* the second room's lamp dark */
+        rl_solution *dark = rooms_relight(p, n, method, &one, &scenes[1]);
+        if (lit && dark) {
+            /* each room's maps in front of its own lamp: all but the ceiling's (and the lamps') */
+            uint64_t maps[2] = {0, 0};
+            long differ = 0;
+            for (int k = 0; k < n; k++) {
+                long a = ts_map_of(lit, (uint32_t)k), b = ts_map_of(dark, (uint32_t)k);
+                if (a < 0 || k == 1 || k == na + 1 || k == na - 1 || k == n - 1)
+                    continue;
+                maps[k >= na]++;
+                if (k >= na)
+                    continue;
+                ts_cells ca = ts_cells_get(lit, (size_t)a), cb = ts_cells_get(dark, (size_t)b);
+                differ += ca.n != cb.n || memcmp(ca.e, cb.e, 3 * ca.n * sizeof *ca.e) != 0;
+                ts_cells_free(&ca);
+                ts_cells_free(&cb);
+            }
+            printf("two closed rooms, %s: %llu pairs with both lamps lit, %llu with one, of %llu + %llu maps\n", name,
+                   (unsigned long long)both.pairs, (unsigned long long)one.pairs, (unsigned long long)maps[0],
+                   (unsigned long long)maps[1]);
+            CHECK(maps[0] > 0 && one.pairs == maps[0] && both.pairs == maps[0] + maps[1],
+                  "two closed rooms, %s: %llu and %llu pairs, not %llu and %llu: a lamp paired with the other room",
+                  name, (unsigned long long)one.pairs, (unsigned long long)both.pairs, (unsigned long long)maps[0],
+                  (unsigned long long)(maps[0] + maps[1]));
+            CHECK(differ == 0, "two closed rooms, %s: %ld maps of the first room change with the second lamp", name,
+                  differ);
+        }
+        rl_solution_destroy(lit);
+        rl_solution_destroy(dark);
+        /* doors in line; the first room's lamp dark */
+        na = room_quads(p, 0, 1, "black");
+        n = na + room_quads(p + na, 2.2, -1, "light");
+        rl_solution *door = rooms_relight(p, n, method, &one, &scenes[2]);
+        long floor = door ? ts_map_of(door, 0) : -1;
+        double lit_floor = NAN;
+        if (floor >= 0) {
+            ts_cells c = ts_cells_get(door, (size_t)floor);
+            lit_floor = 0;
+            for (uint32_t i = 0; i < c.n; i++)
+                lit_floor += c.e[3 * i] > 0;
+            ts_cells_free(&c);
+        }
+        printf("rooms with doors, %s: %.0f cells of the first room's floor lit through them, %llu pairs\n", name,
+               lit_floor, (unsigned long long)one.pairs);
+        CHECK(lit_floor > 0, "rooms with doors, %s: the first room's floor is dark: the lamp seen through the doors "
+              "was left out", name);
+        rl_solution_destroy(door);
+        for (int k = 0; k < 3; k++)
+            rl_scene_destroy(scenes[k]);
+    }
+}
+
 /* An occluded room: culled and naive must agree bit for bit, and thread counts must not matter, with the
  * bounce pass gathered by each method's own transfer (bounce_rays 0) or by first-hit rays (bounce_rays). */
 static void check_identities(uint32_t bounce_rays)
@@ -1927,6 +2050,7 @@ int main(int argc, char **argv)
         check_back_to_back();
         check_contact_bounce();
         check_narrow_wall();
+        check_rooms_cull();
         check_lightfield();
         check_lightfield_anchors();
         check_maps_ready();

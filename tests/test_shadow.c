@@ -8,8 +8,11 @@
  * hold: a beam classified FREE has no segment meeting any polygon; one
  * classified BLOCKED has every segment meeting one; and the list of polygons
  * collected for a beam holds every polygon some segment meets (a superset is
- * what lets a block's parts be classified against its list). Every outcome
- * must occur, so that none of these checks is vacuous.
+ * what lets a block's parts be classified against its list). The search
+ * for a single blocker (rl__occluders_block_any()) must find one exactly
+ * for the BLOCKED beams, and, toward a box as the emitter tree asks, only
+ * when every segment is met. Every outcome must occur, so that none of
+ * these checks is vacuous.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -63,10 +66,40 @@ static int segment_meets(const rl_scene *s, size_t k, v3 x, v3 y, double margin)
     return ts_segment_meets(v, pg->count, v3_load(pg->normal), x, y, margin);
 }
 
+/* Checks rl__occluders_block_any() from points a (na) to the eight corners
+ * of b's bounding box, a far end that is not planar (as the emitter tree
+ * gives it): when it finds a blocker, every segment from a point of a's hull
+ * to a point of the box must meet a polygon. Counts the found in *found. */
+static void box_blocks(const rl_scene *s, const rl_occluders *occ, const v3 *a, size_t na, const v3 *b, long *found,
+                       long *segments)
+{
+    v3 lo = b[0], hi = b[0], corner[8];
+    for (int k = 1; k < 4; k++) {
+        lo = (v3){fmin(lo.x, b[k].x), fmin(lo.y, b[k].y), fmin(lo.z, b[k].z)};
+        hi = (v3){fmax(hi.x, b[k].x), fmax(hi.y, b[k].y), fmax(hi.z, b[k].z)};
+    }
+    for (int c = 0; c < 8; c++)
+        corner[c] = (v3){c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z};
+    if (!rl__occluders_block_any(occ, a, na, corner, 8, 1e-6, 1e-9, NULL))
+        return;
+    (*found)++;
+    int all_met = 1;
+    for (int sg = 0; sg < SEGMENTS; sg++, (*segments)++) {
+        v3 x = na == 1 ? a[0] : sg < 32 ? a[sg % 4] : quad_point(a, ts_rnd(), ts_rnd());
+        v3 y = sg < 32 ? corner[(sg / 4) % 8] : (v3){lo.x + ts_rnd() * (hi.x - lo.x), lo.y + ts_rnd() * (hi.y - lo.y),
+                                                      lo.z + ts_rnd() * (hi.z - lo.z)};
+        int met = 0;
+        for (size_t k = 0; k < s->npolygons && !met; k++)
+            met = segment_meets(s, k, x, y, -1e-7);
+        all_met &= met;
+    }
+    CHECK(all_met, "a blocker found from a patch to a box, but a segment between them passes");
+}
+
 int main(void)
 {
     const char *tmp = getenv("ILF_TEST_TMP") ? getenv("ILF_TEST_TMP") : "/tmp";
-    long outcomes[3] = {0, 0, 0}, overflowed = 0, segments = 0, tried[2] = {0, 0}, made[2] = {0, 0};
+    long outcomes[3] = {0, 0, 0}, overflowed = 0, segments = 0, tried[2] = {0, 0}, made[2] = {0, 0}, box_found = 0;
     rl_beam *beam = malloc(sizeof *beam);
     if (!beam)
         return 1;
@@ -126,6 +159,15 @@ int main(void)
             }
             rl_visibility vis = rl__occluders_classify(occ, beam, list, n, mine, &nmine);
             outcomes[vis]++;
+            /* the early-exit search finds a blocker exactly when the classification does: its pruning
+             * by the boxes that segments must cross never loses one */
+            uint32_t blocker = UINT32_MAX;
+            int any = rl__occluders_block_any(occ, a, na, b, 4, 1e-9, 1e-9, &blocker);
+            CHECK(!any || rl__occluders_blocks(occ, blocker, a, na, b, 4, 1e-9, 1e-9),
+                  "scene %d beam %d: the blocker found does not block alone", sc, bi);
+            CHECK(any == (vis == VIS_BLOCKED), "scene %d beam %d: a blocker %s, but the beam is %s", sc, bi,
+                  any ? "found" : "not found", vis == VIS_BLOCKED ? "BLOCKED" : "not BLOCKED");
+            box_blocks(s, occ, a, na, b, &box_found, &segments);
             int in_list[12] = {0};
             for (size_t i = 0; i < n; i++)
                 in_list[list[i]] = 1;
@@ -164,6 +206,8 @@ int main(void)
           made[0], tried[0], made[1], tried[1]);
     CHECK(outcomes[VIS_FREE] > 0 && outcomes[VIS_PARTIAL] > 0 && outcomes[VIS_BLOCKED] > 0,
           "every outcome occurs: %ld free, %ld partial, %ld blocked", outcomes[0], outcomes[1], outcomes[2]);
+    printf("blockers found from a patch to a box: %ld\n", box_found);
+    CHECK(box_found > 0, "some patch is wholly hidden from some box");
     free(beam);
     return check_report();
 }

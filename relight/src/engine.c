@@ -28,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "emitter_tree.h"
 #include "engine_internal.h"
 #include "ilf/clock.h"
 #include "ilf/pool.h"
@@ -787,6 +788,13 @@ rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st)
             return rl__fail(RL_ERR_NOMEM, "out of memory for the bounce pass");
         job.ctx.glow = glow;
     }
+    /* the other passes gather each tile from the emitters that may reach it, listed by a tree built once */
+    rl_emitter_tree *reach = NULL;
+    if (!glow && ne > 0 && job.ctx.occluders) {
+        if (rl__emitter_tree_new(in->e, ne, in->tracer, job.ctx.centre, job.ctx.eps, &reach) != RL_OK)
+            return RL_ERR_NOMEM;
+        job.ctx.reach = reach;
+    }
     size_t nall = 0;
     /* a first-hit gather costs its cells alone: small tiles share its cells out evenly between threads, and
      * let a last pass tell of its maps as they finish */
@@ -800,6 +808,7 @@ rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st)
     if (!all || (cl && share_deal(cl, maps, all, nall, *measured, &sh) != 0)) {
         free(all);
         rl__glow_free(glow, scene->npolygons);
+        rl__emitter_tree_destroy(reach);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
     }
     job.items = cl ? sh.mine : all;
@@ -812,6 +821,7 @@ rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st)
         share_free(&sh);
         free(all);
         rl__glow_free(glow, scene->npolygons);
+        rl__emitter_tree_destroy(reach);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the work list");
     }
     int rc = ne > 0 ? run_job(&job, run->threads, run, in->base, in->span) : 0;
@@ -835,6 +845,7 @@ rl_status rl__run_pass(const rl__pass *in, double **measured, rl_pass_stats *st)
         rc = -2, why = "the exchange of statistics between ranks failed";
     free(all);
     rl__glow_free(glow, scene->npolygons);
+    rl__emitter_tree_destroy(reach);
     share_free(&sh);
     if (rc != 0)
         return rl__fail(rc == -2 ? RL_ERR_IO : RL_ERR_NOMEM, "pass %u: %s", in->pass, why);

@@ -60,6 +60,7 @@ typedef struct rl_transfer_ctx {
     double eps;    /* distance below which single precision cannot resolve the scene itself, m */
     double margin; /* outward margin of every Minkowski region, m */
     const struct rl_glow *glow; /* bounce passes with bounce_rays: what each scene polygon re-emits (bounce.c) */
+    const struct rl_emitter_tree *reach; /* the emitters, to list those a tile may exchange light with (or NULL: all) */
     double deadline; /* adaptive: CLOCK_MONOTONIC seconds after which nothing is refined; 0 = none */
 } rl_transfer_ctx;
 
@@ -84,6 +85,8 @@ typedef struct rl_scratch {
     float *blend;         /* a light field leaf's mixed radiance tables (rl__leaf_blend()) */
     struct rl_shadows *shadows; /* the current leaf's shadows (leaf_shadow.c) */
     size_t blend_cap;
+    uint32_t *reach;      /* the emitters the current tile may exchange light with (emitter_tree.h) */
+    size_t reach_cap;
 } rl_scratch;
 
 /* What a bounce pass by first hits reads of one scene polygon: the radiance its map re-emits from each

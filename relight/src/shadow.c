@@ -336,32 +336,40 @@ static int meets(const rl_occluders *o, const occ_poly *q, const rl_beam *p)
     return v3_len(newell) > 1e-6 * p->tol * p->tol;
 }
 
-/* @return 1 if polygon q crosses every segment of beam p: its plane strictly
- * parts the two ends, and the segment between every pair of their vertices
- * crosses it inside its edges (the section of a convex hull by a plane that
- * parts its ends is the hull of those crossings). */
-static int blocks(const rl_occluders *o, const occ_poly *q, const rl_beam *p)
+/* @return 1 if polygon q crosses every segment between the convex hulls of
+ * points pa (na) and pb (nb): its plane parts the two sets by more than tol,
+ * and the segment between every pair of their points crosses it more than
+ * edge inside its edges (the section of a convex hull by a plane that parts
+ * its ends is the hull of those crossings; the ends need not be planar). */
+static int blocks_ends(const rl_occluders *o, const occ_poly *q, const v3 *pa, size_t na, const v3 *pb, size_t nb,
+                       double tol, double edge)
 {
     const v3 *v = o->verts + q->first;
-    int near_above = v3_dot(v3_sub(p->a[0], v[0]), q->n) > 0; /* the side every near vertex must share */
-    for (size_t ia = 0; ia < p->na; ia++) {
-        double sa = v3_dot(v3_sub(p->a[ia], v[0]), q->n);
-        if (!(fabs(sa) > p->tol) || (sa > 0) != near_above)
+    int near_above = v3_dot(v3_sub(pa[0], v[0]), q->n) > 0; /* the side every near vertex must share */
+    for (size_t ia = 0; ia < na; ia++) {
+        double sa = v3_dot(v3_sub(pa[ia], v[0]), q->n);
+        if (!(fabs(sa) > tol) || (sa > 0) != near_above)
             return 0;
-        for (size_t b = 0; b < p->nb; b++) {
-            double sb = v3_dot(v3_sub(p->b[b], v[0]), q->n);
-            if (!(sa > 0 ? sb < -p->tol : sb > p->tol))
+        for (size_t b = 0; b < nb; b++) {
+            double sb = v3_dot(v3_sub(pb[b], v[0]), q->n);
+            if (!(sa > 0 ? sb < -tol : sb > tol))
                 return 0;
-            v3 h = v3_madd(p->a[ia], v3_sub(p->b[b], p->a[ia]), sa / (sa - sb));
+            v3 h = v3_madd(pa[ia], v3_sub(pb[b], pa[ia]), sa / (sa - sb));
             for (uint32_t i = 0; i < q->count; i++) {
                 v3 a = v[i], c = v[(i + 1) % q->count];
                 v3 m = v3_cross(q->n, v3_sub(c, a));
-                if (!(v3_dot(v3_sub(h, a), m) > p->tol * v3_len(m)))
+                if (!(v3_dot(v3_sub(h, a), m) > edge * v3_len(m)))
                     return 0;
             }
         }
     }
     return 1;
+}
+
+/* blocks_ends() for beam p's two ends and tolerance. */
+static int blocks(const rl_occluders *o, const occ_poly *q, const rl_beam *p)
+{
+    return blocks_ends(o, q, p->a, p->na, p->b, p->nb, p->tol, p->tol);
 }
 
 /* @return 1 if box [lo, hi] lies wholly outside some face of p. */
@@ -406,6 +414,98 @@ size_t rl__occluders_collect(const rl_occluders *o, const rl_beam *p, int32_t sk
         }
     }
     return n;
+}
+
+/* @return 1 if the segment from p0 to p1 meets box [lo, hi] widened by pad on every side. */
+static int segment_meets_box(v3 p0, v3 p1, v3 lo, v3 hi, double pad)
+{
+    double t0 = 0.0, t1 = 1.0;
+    for (int k = 0; k < 3; k++) {
+        double a = v3_axis(p0, k), d = v3_axis(p1, k) - a, l = v3_axis(lo, k) - pad, h = v3_axis(hi, k) + pad;
+        if (d == 0.0) {
+            if (a < l || a > h)
+                return 0;
+            continue;
+        }
+        double ta = (l - a) / d, tb = (h - a) / d;
+        t0 = dmax(t0, dmin(ta, tb));
+        t1 = dmin(t1, dmax(ta, tb));
+        if (t0 > t1)
+            return 0;
+    }
+    return 1;
+}
+
+/* The segments a blocker must cross, to tell which boxes may hold one: from
+ * the near end's vertex mean to the far end's, and from each vertex of either
+ * end to the other end's mean. */
+typedef struct probe_set {
+    v3 from[2 * RL_BEAM_MAX_VERTS + 1], to[2 * RL_BEAM_MAX_VERTS + 1];
+    size_t n;
+} probe_set;
+
+static v3 vertex_mean(const v3 *v, size_t n)
+{
+    v3 c = {0, 0, 0};
+    for (size_t i = 0; i < n; i++)
+        c = v3_add(c, v3_scale(v[i], 1.0 / (double)n));
+    return c;
+}
+
+/* @return 1 if box [lo, hi] meets every probe of ps (widened by pad). */
+static int box_meets_probes(const probe_set *ps, v3 lo, v3 hi, double pad)
+{
+    for (size_t i = 0; i < ps->n; i++)
+        if (!segment_meets_box(ps->from[i], ps->to[i], lo, hi, pad))
+            return 0;
+    return 1;
+}
+
+int rl__occluders_blocks(const rl_occluders *o, uint32_t k, const v3 *a, size_t na, const v3 *b, size_t nb,
+                         double tol, double edge)
+{
+    return k < o->npolys && na >= 1 && nb >= 1 && blocks_ends(o, &o->polys[k], a, na, b, nb, tol, edge);
+}
+
+int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const v3 *b, size_t nb, double tol,
+                            double edge, uint32_t *blocker)
+{
+    if (o->npolys == 0 || na < 1 || nb < 1 || na > RL_BEAM_MAX_VERTS || nb > RL_BEAM_MAX_VERTS)
+        return 0;
+    probe_set ps;
+    v3 ca = vertex_mean(a, na), cb = vertex_mean(b, nb);
+    ps.from[0] = ca, ps.to[0] = cb, ps.n = 1;
+    for (size_t i = 0; i < na; i++)
+        ps.from[ps.n] = a[i], ps.to[ps.n++] = cb;
+    for (size_t j = 0; j < nb; j++)
+        ps.from[ps.n] = ca, ps.to[ps.n++] = b[j];
+    /* a blocker crosses every probe inside its edges, so its box (and every box holding it) meets each;
+     * the pad only keeps rounding from turning away a box as thin as the wall it holds */
+    double pad = edge + 1e-12 * (v3_maxabs(ca) + v3_maxabs(cb));
+    uint32_t stack[TREE_STACK];
+    size_t top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const occ_node *nd = &o->nodes[stack[--top]];
+        if (!box_meets_probes(&ps, nd->lo, nd->hi, pad))
+            continue;
+        if (nd->count == 0) {
+            if (top + 2 > TREE_STACK)
+                return 0; /* deeper than any tree of 2^64 polygons: cannot happen; finding none is safe */
+            stack[top++] = nd->first + 1;
+            stack[top++] = nd->first;
+            continue;
+        }
+        for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
+            const occ_poly *q = &o->polys[o->order[i]];
+            if (segment_meets_box(ca, cb, q->lo, q->hi, pad) && blocks_ends(o, q, a, na, b, nb, tol, edge)) {
+                if (blocker)
+                    *blocker = o->order[i];
+                return 1;
+            }
+        }
+    }
+    return 0;
 }
 
 size_t rl__occluders_polygon(const rl_occluders *o, uint32_t k, const v3 **verts)

@@ -66,6 +66,20 @@ int rl__beam_make(const v3 *a, size_t na, const v3 *b, size_t nb, double tol, rl
  * cap meet it (then treat the beam as PARTIAL and the list as unknown). */
 size_t rl__occluders_collect(const rl_occluders *o, const rl_beam *p, int32_t skip, uint32_t *list, size_t cap);
 
+/* Tells whether one polygon of o crosses every segment from the convex hull
+ * of the points a (na) to that of the points b (nb; neither need be planar,
+ * each at most RL_BEAM_MAX_VERTS): its plane parts them by more than tol and
+ * every crossing lies more than edge (<= tol) inside its edges. It visits only the
+ * boxes that segments between the two sets must cross, and stops at the
+ * first such polygon, which it gives in *blocker (unless NULL). @return 1
+ * if one does, 0 if none does (or it cannot tell: nothing is then known). */
+int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const v3 *b, size_t nb, double tol,
+                            double edge, uint32_t *blocker);
+
+/* The same test for polygon k of o alone. @return 1 if it crosses every such segment. */
+int rl__occluders_blocks(const rl_occluders *o, uint32_t k, const v3 *a, size_t na, const v3 *b, size_t nb,
+                         double tol, double edge);
+
 /* Gives in *verts polygon k's world vertices (counter-clockwise about its
  * normal). @return their count. */
 size_t rl__occluders_polygon(const rl_occluders *o, uint32_t k, const v3 **verts);
