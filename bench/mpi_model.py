@@ -25,19 +25,26 @@ The model, per case, for K ranks of T threads each (one rank per node):
         B_p (K - 1) / K / bandwidth (B_p measured: 24 bytes a cell of the
         pass's receivers), plus the sum of which rank claimed which tile
         (16 bytes a tile, small beside B_p: left out);
-  W(K)  the collective write of format 2, measured with one process (W1,
-        after the engine) and two ranks (W2): W1 for K = 1; else a part F of
-        W2 that every rank pays whatever K (about twenty collective HDF5
-        operations, growing with the collectives' depth, 1 + 0.5 log2(K / 2))
-        and the rest, compressing and transferring the rank's own run of
-        maps, divided by K / 2. F (--write-fixed, default 0.25) is what the
-        write kept without compression at one process (deflate level 0: 0.28
-        of 1.20 s at 1.3 M cells, section 6b). --write-ratio R takes W2 as
-        R W1 instead of the 2-rank run's (whose ranks, on a loaded machine,
-        wait for each other's turn on the cores in every collective call).
+  W(K)  the write of format 2, measured with one process (W1, after the
+        engine) and two ranks (W2): W1 for K = 1; else a part F of W2 that
+        rank 0 does alone whatever K (describing every map, HDF5's storing
+        of the compressed chunks, a few agreements; --write-fixed, default
+        0.25: by callgrind, 0.13 of the write's instructions at 1.3 M cells
+        and 0.24 at 51 k, BENCHMARKS-journal.md 6d) and the rest, each
+        rank compressing its share of the chunks, divided by K / 2; plus
+        the compressed file (Z bytes, the 2-rank run's radiance.h5)
+        crossing rank 0's link once, Z (K - 1) / K / bandwidth, and one
+        latency a rank for the gather of the chunks' sizes and the trade
+        of boundary rows. --write-ratio R takes W2 as R W1 instead of the
+        2-rank run's.
 
 A scene 100 times larger (data/gen_scenes.py --building 10 10) scales S, C,
-B and W by 100: each rank still holds the whole scene. Two more columns say
+B and W by 100: each rank still holds the whole scene. Measured on the
+building itself (one process, 2 threads, --bounces 0; BENCHMARKS-journal.md
+6e): from 1 to 25 rooms the setup grows less than 100-fold scaling says
+(0.63 s at 25 rooms against 25 x 0.11 s) and the relighting more (2.4 CPU
+s a room against 0.9 s), so the model's S is pessimistic and its C
+optimistic for that scene. Two more columns say
 what lifts the limits: "setup divided" takes S as S / K (each rank loading
 and building only what its tiles need), and "and write apart" also takes
 the write off the ranks' time, one rank's too (the speed-up of the
@@ -46,7 +53,6 @@ separate writers, would leave).
 """
 import argparse
 import json
-import math
 import os
 import sys
 
@@ -79,7 +85,8 @@ def measure(out, case, whole, efficiency, write_ratio):
     if write_ratio:
         w2 = write_ratio * w1
     s = max(0.0, whole[case + ":1x2"] - passes_wall - w1)
-    return {"s": s, "c": c, "e": e, "i": imbalance, "w1": w1, "w2": w2, "bytes": [x["bytes"] for x in ex]}
+    z = os.path.getsize(os.path.join(out, case + "-2x1", "radiance.h5"))
+    return {"s": s, "c": c, "e": e, "i": imbalance, "w1": w1, "w2": w2, "z": z, "bytes": [x["bytes"] for x in ex]}
 
 
 def predict(m, scale, k, a, setup_divided=False, write_apart=False):
@@ -93,7 +100,7 @@ def predict(m, scale, k, a, setup_divided=False, write_apart=False):
         write = scale * m["w1"]
     else:
         f = a.write_fixed
-        write = scale * m["w2"] * (f * (1 + 0.5 * math.log2(k / 2)) + (1 - f) * 2 / k)
+        write = scale * m["w2"] * (f + (1 - f) * 2 / k) + scale * m["z"] * (k - 1) / k / bw + 2 * (k - 1) * lat
     setup = scale * m["s"] / (k if setup_divided else 1)
     return setup + compute + exchange + write, compute, exchange, write, setup
 
@@ -111,7 +118,7 @@ def main():
     p.add_argument("--bandwidth", type=float, default=10.0, help="GB/s per node (100 Gb/s InfiniBand: about 10)")
     p.add_argument("--latency", type=float, default=2.0, help="microseconds per message")
     p.add_argument("--efficiency", type=float, default=0.0, help="the threads' efficiency (0: as measured)")
-    p.add_argument("--write-fixed", type=float, default=0.25, help="part of the 2-rank write every rank pays")
+    p.add_argument("--write-fixed", type=float, default=0.25, help="part of the 2-rank write rank 0 does alone, whatever the ranks")
     p.add_argument("--write-ratio", type=float, default=0.0, help="W2 as this times W1 (0: as measured)")
     a = p.parse_args()
     whole = whole_runs(a.out)
