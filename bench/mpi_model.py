@@ -43,8 +43,9 @@ B and W by 100: each rank still holds the whole scene. Measured on the
 building itself (one process, 2 threads, --bounces 0; BENCHMARKS-journal.md
 6e): from 1 to 25 rooms the setup grows less than 100-fold scaling says
 (0.63 s at 25 rooms against 25 x 0.11 s) and the relighting more (2.4 CPU
-s a room against 0.9 s), so the model's S is pessimistic and its C
-optimistic for that scene. Two more columns say
+s a room against 0.9 s: lamps of diagonal rooms, hidden by two walls
+together, escape the emitter cull), so the model's S is pessimistic and its
+C optimistic for that scene. Two more columns say
 what lifts the limits: "setup divided" takes S as S / K (each rank loading
 and building only what its tiles need), and "and write apart" also takes
 the write off the ranks' time, one rank's too (the speed-up of the
