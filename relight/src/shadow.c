@@ -14,16 +14,14 @@
  * within `tol` of a plane count as on it, and "inside P" needs a margin of
  * tol, so FREE and BLOCKED err towards PARTIAL, which only costs rays.
  *
- * The tree is built once by median splits on the longest axis of the
- * polygons' box centres, four polygons a leaf; it is read-only afterwards.
+ * The tree (box_tree.h) is built once over the polygons' boxes; it is
+ * read-only afterwards.
  */
 #include <stdlib.h>
 #include <string.h>
 
+#include "box_tree.h"
 #include "shadow.h"
-
-#define LEAF_SIZE 4
-#define TREE_STACK 128
 
 typedef struct occ_poly {
     uint32_t first, count; /* into rl_occluders.verts */
@@ -31,18 +29,11 @@ typedef struct occ_poly {
     v3 lo, hi;
 } occ_poly;
 
-typedef struct occ_node {
-    v3 lo, hi;
-    uint32_t first, count; /* leaf: polygons order[first .. first+count); inner: count = 0, children first, first+1 */
-} occ_node;
-
 struct rl_occluders {
     v3 *verts;
     occ_poly *polys;
-    uint32_t *order;
     size_t npolys;
-    occ_node *nodes;
-    size_t nnodes;
+    rl_box_tree tree; /* over the polygons' boxes */
 };
 
 static v3 v3_min(v3 a, v3 b) { return (v3){dmin(a.x, b.x), dmin(a.y, b.y), dmin(a.z, b.z)}; }
@@ -55,68 +46,22 @@ static int boxes_overlap(v3 alo, v3 ahi, v3 blo, v3 bhi)
            blo.z <= ahi.z;
 }
 
-/* Partially orders order[lo..hi) so that the polygon at mid has the median
- * box centre on axis k (quickselect). */
-static void select_median(const occ_poly *p, uint32_t *order, size_t lo, size_t hi, size_t mid, int k)
+/* Builds o's tree over its polygons' boxes. @return 0, or -1 when memory runs out. */
+static int index_polygons(rl_occluders *o)
 {
-    while (hi - lo > 1) {
-        double pivot = v3_axis(p[order[(lo + hi) / 2]].lo, k) + v3_axis(p[order[(lo + hi) / 2]].hi, k);
-        size_t i = lo, j = hi - 1;
-        while (i <= j) {
-            while (v3_axis(p[order[i]].lo, k) + v3_axis(p[order[i]].hi, k) < pivot)
-                i++;
-            while (v3_axis(p[order[j]].lo, k) + v3_axis(p[order[j]].hi, k) > pivot)
-                j--;
-            if (i <= j) {
-                uint32_t t = order[i];
-                order[i] = order[j];
-                order[j] = t;
-                i++;
-                if (j == 0)
-                    break;
-                j--;
-            }
+    size_t n = o->npolys;
+    v3 *lo = malloc((n ? n : 1) * sizeof *lo), *hi = malloc((n ? n : 1) * sizeof *hi);
+    int rc = -1;
+    if (lo && hi) {
+        for (size_t k = 0; k < n; k++) {
+            lo[k] = o->polys[k].lo;
+            hi[k] = o->polys[k].hi;
         }
-        if (mid <= j)
-            hi = j + 1;
-        else if (mid >= i)
-            lo = i;
-        else
-            return;
+        rc = rl__box_tree_build(&o->tree, lo, hi, n);
     }
-}
-
-/* Builds the subtree of node over order[first, first+count). */
-static void build(rl_occluders *o, size_t node, uint32_t first, uint32_t count)
-{
-    occ_node *nd = &o->nodes[node];
-    v3 lo = o->polys[o->order[first]].lo, hi = o->polys[o->order[first]].hi;
-    v3 clo = v3_scale(v3_add(lo, hi), 0.5), chi = clo;
-    for (uint32_t i = first; i < first + count; i++) {
-        const occ_poly *p = &o->polys[o->order[i]];
-        lo = v3_min(lo, p->lo);
-        hi = v3_max(hi, p->hi);
-        v3 c = v3_scale(v3_add(p->lo, p->hi), 0.5);
-        clo = v3_min(clo, c);
-        chi = v3_max(chi, c);
-    }
-    nd->lo = lo;
-    nd->hi = hi;
-    if (count <= LEAF_SIZE) {
-        nd->first = first;
-        nd->count = count;
-        return;
-    }
-    v3 ext = v3_sub(chi, clo);
-    int k = ext.x >= ext.y && ext.x >= ext.z ? 0 : ext.y >= ext.z ? 1 : 2;
-    uint32_t half = count / 2;
-    select_median(o->polys, o->order, first, first + count, first + half, k);
-    size_t left = o->nnodes;
-    o->nnodes += 2;
-    nd->first = (uint32_t)left;
-    nd->count = 0;
-    build(o, left, first, half);
-    build(o, left + 1, first + half, count - half);
+    free(lo);
+    free(hi);
+    return rc;
 }
 
 rl_status rl__occluders_new(const rl_scene *scene, rl_occluders **out)
@@ -129,10 +74,8 @@ rl_status rl__occluders_new(const rl_scene *scene, rl_occluders **out)
     if (o) {
         o->verts = malloc((nv ? nv : 1) * sizeof *o->verts);
         o->polys = malloc((n ? n : 1) * sizeof *o->polys);
-        o->order = malloc((n ? n : 1) * sizeof *o->order);
-        o->nodes = malloc((2 * n + 1) * sizeof *o->nodes);
     }
-    if (!o || !o->verts || !o->polys || !o->order || !o->nodes) {
+    if (!o || !o->verts || !o->polys) {
         rl__occluders_destroy(o);
         return rl__fail(RL_ERR_NOMEM, "out of memory for the occluder index of %zu polygons", n);
     }
@@ -149,12 +92,11 @@ rl_status rl__occluders_new(const rl_scene *scene, rl_occluders **out)
             p->lo = i ? v3_min(p->lo, v) : v;
             p->hi = i ? v3_max(p->hi, v) : v;
         }
-        o->order[k] = (uint32_t)k;
     }
     o->npolys = n;
-    if (n > 0) {
-        o->nnodes = 1;
-        build(o, 0, 0, (uint32_t)n);
+    if (index_polygons(o) != 0) {
+        rl__occluders_destroy(o);
+        return rl__fail(RL_ERR_NOMEM, "out of memory for the occluder index of %zu polygons", n);
     }
     *out = o;
     return RL_OK;
@@ -166,8 +108,7 @@ void rl__occluders_destroy(rl_occluders *o)
         return;
     free(o->verts);
     free(o->polys);
-    free(o->order);
-    free(o->nodes);
+    rl__box_tree_free(&o->tree);
     free(o);
 }
 
@@ -388,22 +329,22 @@ size_t rl__occluders_collect(const rl_occluders *o, const rl_beam *p, int32_t sk
 {
     if (o->npolys == 0)
         return 0;
-    uint32_t stack[TREE_STACK];
+    uint32_t stack[RL_BOX_TREE_STACK];
     size_t top = 0, n = 0;
     stack[top++] = 0;
     while (top > 0) {
-        const occ_node *nd = &o->nodes[stack[--top]];
+        const rl_box_node *nd = &o->tree.nodes[stack[--top]];
         if (!boxes_overlap(nd->lo, nd->hi, p->lo, p->hi) || box_outside(nd->lo, nd->hi, p))
             continue;
         if (nd->count == 0) {
-            if (top + 2 > TREE_STACK)
+            if (top + 2 > RL_BOX_TREE_STACK)
                 return SIZE_MAX; /* deeper than any tree of 2^64 polygons: cannot happen */
             stack[top++] = nd->first + 1;
             stack[top++] = nd->first;
             continue;
         }
         for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
-            uint32_t k = o->order[i];
+            uint32_t k = o->tree.order[i];
             const occ_poly *q = &o->polys[k];
             if ((int64_t)k == skip || !boxes_overlap(q->lo, q->hi, p->lo, p->hi) || unreachable(o, q, p) ||
                 !meets(o, q, p))
@@ -482,25 +423,25 @@ int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const
     /* a blocker crosses every probe inside its edges, so its box (and every box holding it) meets each;
      * the pad only keeps rounding from turning away a box as thin as the wall it holds */
     double pad = edge + 1e-12 * (v3_maxabs(ca) + v3_maxabs(cb));
-    uint32_t stack[TREE_STACK];
+    uint32_t stack[RL_BOX_TREE_STACK];
     size_t top = 0;
     stack[top++] = 0;
     while (top > 0) {
-        const occ_node *nd = &o->nodes[stack[--top]];
+        const rl_box_node *nd = &o->tree.nodes[stack[--top]];
         if (!box_meets_probes(&ps, nd->lo, nd->hi, pad))
             continue;
         if (nd->count == 0) {
-            if (top + 2 > TREE_STACK)
+            if (top + 2 > RL_BOX_TREE_STACK)
                 return 0; /* deeper than any tree of 2^64 polygons: cannot happen; finding none is safe */
             stack[top++] = nd->first + 1;
             stack[top++] = nd->first;
             continue;
         }
         for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
-            const occ_poly *q = &o->polys[o->order[i]];
+            const occ_poly *q = &o->polys[o->tree.order[i]];
             if (segment_meets_box(ca, cb, q->lo, q->hi, pad) && blocks_ends(o, q, a, na, b, nb, tol, edge)) {
                 if (blocker)
-                    *blocker = o->order[i];
+                    *blocker = o->tree.order[i];
                 return 1;
             }
         }
