@@ -189,27 +189,34 @@ static void trace_packet(const rl_transfer_ctx *ctx, const rl_map *m, size_t n, 
     }
 }
 
-/* Counts a cell of n rays, whose radiances summed to acc and their luminances' squares to acc2, in cnt's
- * histogram of relative standard errors: the rays are n draws of one estimator, so the estimate (their
- * mean) has the standard error s / sqrt(n), s their sample deviation. A cell that met no light counts
- * as exact (bin 0): its value is 0 however many rays it casts. */
-static void count_cell_error(uint32_t n, const double acc[3], double acc2, rl_counters *cnt)
+/* @return the standard error of the mean of a cell's n rays, whose radiances summed to acc and their
+ * luminances' squares to acc2, and *mean that mean's luminance: the rays are n draws of one estimator, so
+ * their mean has the standard error s / sqrt(n), s their sample deviation. */
+static double rays_standard_error(uint32_t n, const double acc[3], double acc2, double *mean)
 {
-    double mean = (acc[0] + acc[1] + acc[2]) / (3.0 * n);
-    double var = n > 1 ? fmax(0.0, (acc2 - n * mean * mean) / (n - 1.0)) : 0.0;
-    cnt->cell_error[mean > 0 ? rl__cell_error_bin(sqrt(var / n) / mean) : 0]++;
+    *mean = (acc[0] + acc[1] + acc[2]) / (3.0 * n);
+    double var = n > 1 ? fmax(0.0, (acc2 - n * *mean * *mean) / (n - 1.0)) : 0.0;
+    return sqrt(var / n);
 }
 
-/* @return 1 if a cell of n rays (sums acc and acc2 as count_cell_error()'s), whose earlier passes lit it
- * with luminance prior, needs no more rays: the pass's estimate, pi times the rays' mean, has a standard
+/* Counts a cell of n rays (sums acc and acc2 as rays_standard_error()'s) in cnt's histogram of relative
+ * standard errors. A cell that met no light counts as exact (bin 0): its value is 0 however many rays it
+ * casts. */
+static void count_cell_error(uint32_t n, const double acc[3], double acc2, rl_counters *cnt)
+{
+    double mean, se = rays_standard_error(n, acc, acc2, &mean);
+    cnt->cell_error[mean > 0 ? rl__cell_error_bin(se / mean) : 0]++;
+}
+
+/* @return 1 if a cell of n rays (sums acc and acc2 as rays_standard_error()'s), whose earlier passes lit
+ * it with luminance prior, needs no more rays: the pass's estimate, pi times the rays' mean, has a standard
  * error within RL_OWN_CELL_ERROR of the cell's light, prior plus that estimate. A later bounce carries
  * less light than the passes before it, so its cells stop sooner. The rule reads the cell's own rays and
  * earlier passes alone, so results stay independent of threads. */
 static int own_cell_converged(uint32_t n, const double acc[3], double acc2, double prior)
 {
-    double mean = (acc[0] + acc[1] + acc[2]) / (3.0 * n);
-    double var = n > 1 ? fmax(0.0, (acc2 - n * mean * mean) / (n - 1.0)) : 0.0;
-    return ILF_PI * sqrt(var / n) <= RL_OWN_CELL_ERROR * (prior + ILF_PI * mean);
+    double mean, se = rays_standard_error(n, acc, acc2, &mean);
+    return ILF_PI * se <= RL_OWN_CELL_ERROR * (prior + ILF_PI * mean);
 }
 
 /* Directions a tile works out once for all its cells: every cell of a map draws the same sequence, so
