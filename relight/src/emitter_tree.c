@@ -128,14 +128,6 @@ static int seen(const rl_emitter_tree *t, const v3 *a, size_t na, v3 ca, const v
     return 0;
 }
 
-static v3 mean_of(const v3 *v, size_t n)
-{
-    v3 c = {0, 0, 0};
-    for (size_t i = 0; i < n; i++)
-        c = v3_add(c, v3_scale(v[i], 1.0 / (double)n));
-    return c;
-}
-
 /* The polygons that hid something from the region of one walk, most recent first: the next box is often
  * hidden by the same wall, which is then found without a search. */
 #define RECENT 4
@@ -177,7 +169,7 @@ static int hidden(walk *w, const v3 *a, size_t na, const v3 *b, size_t nb)
     for (size_t j = 0; j < nb; j++)
         r = dmax(r, v3_maxabs(v3_sub(b[j], t->centre)));
     double eps = dmax(1e-6 * r, t->eps_floor), tol = RL_REACH_TOL_EPS * eps;
-    return !seen(t, a, na, mean_of(a, na), b, nb, mean_of(b, nb), tol) &&
+    return !seen(t, a, na, v3_mean(a, na), b, nb, v3_mean(b, nb), tol) &&
            blocked(w, a, na, b, nb, tol, RL_REACH_EDGE_EPS * eps);
 }
 

@@ -385,14 +385,6 @@ typedef struct probe_set {
     size_t n;
 } probe_set;
 
-static v3 vertex_mean(const v3 *v, size_t n)
-{
-    v3 c = {0, 0, 0};
-    for (size_t i = 0; i < n; i++)
-        c = v3_add(c, v3_scale(v[i], 1.0 / (double)n));
-    return c;
-}
-
 /* @return 1 if box [lo, hi] meets every probe of ps (widened by pad). */
 static int box_meets_probes(const probe_set *ps, v3 lo, v3 hi, double pad)
 {
@@ -414,7 +406,7 @@ int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const
     if (o->npolys == 0 || na < 1 || nb < 1 || na > RL_BEAM_MAX_VERTS || nb > RL_BEAM_MAX_VERTS)
         return 0;
     probe_set ps;
-    v3 ca = vertex_mean(a, na), cb = vertex_mean(b, nb);
+    v3 ca = v3_mean(a, na), cb = v3_mean(b, nb);
     ps.from[0] = ca, ps.to[0] = cb, ps.n = 1;
     for (size_t i = 0; i < na; i++)
         ps.from[ps.n] = a[i], ps.to[ps.n++] = cb;

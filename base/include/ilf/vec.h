@@ -9,6 +9,7 @@
 #define ILF_VEC_H
 
 #include <math.h>
+#include <stddef.h>
 
 /* pi, the project's one definition (strict C17 does not provide M_PI). */
 #define ILF_PI 3.14159265358979323846
@@ -32,6 +33,14 @@ static inline v3 v3_cross(v3 a, v3 b)
 static inline double v3_len(v3 a) { return sqrt(v3_dot(a, a)); }
 /* @return a scaled to unit length (a must be nonzero). */
 static inline v3 v3_norm(v3 a) { return v3_scale(a, 1.0 / v3_len(a)); }
+/* @return the mean of the n >= 1 points v. */
+static inline v3 v3_mean(const v3 *v, size_t n)
+{
+    v3 c = {0, 0, 0};
+    for (size_t i = 0; i < n; i++)
+        c = v3_add(c, v3_scale(v[i], 1.0 / (double)n));
+    return c;
+}
 /* max and min for hot paths: compiled inline (fmax is a library call
  * unless NaN semantics are waived); a NaN argument yields b. */
 static inline double dmax(double a, double b) { return a > b ? a : b; }
