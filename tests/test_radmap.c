@@ -320,10 +320,23 @@ static void test_write_rows(const lfio_radmap_patch *patches, size_t count, cons
     CHECK(slices >= count + 3, "the big patch takes at least three slices (%zu slices in all)", slices);
     char path[512];
     tmp_path(path, sizeof path, "rows.h5");
+    /* one thread filters the cells as they come a chunk at a time, three in batches of three chunks (the
+     * rest at the end): the same bytes */
+    unsigned char *first_file = NULL;
+    size_t first_size = 0;
     for (unsigned threads = 1; threads <= 3; threads += 2) {
         struct slicer s = {.bad_patch = SIZE_MAX, .fail_patch = SIZE_MAX};
         lfio_status st = write_sliced(path, all, count + 1, &s, threads);
         CHECK(st == LFIO_OK, "write_rows on %u threads: %s", threads, lfio_errmsg());
+        size_t size = 0;
+        unsigned char *bytes = read_whole(path, &size);
+        if (first_file == NULL)
+            first_file = bytes, first_size = size;
+        else
+            CHECK(bytes && size == first_size && memcmp(bytes, first_file, size) == 0,
+                  "write_rows on %u threads wrote other bytes than on one", threads);
+        if (bytes != first_file)
+            free(bytes);
         CHECK(s.next == big->ncells && s.max_count == LFIO_RADMAP_ROWS_MAX && s.calls == slices,
               "write_rows asked %zu times, at most %u cells, ending at %u", s.calls, s.max_count, s.next);
         lfio_radmap *map = NULL;
@@ -336,6 +349,7 @@ static void test_write_rows(const lfio_radmap_patch *patches, size_t count, cons
         }
         lfio_radmap_destroy(map);
     }
+    free(first_file);
     size_t a_size = 0;
     unsigned char *a = read_whole(path, &a_size);
     const uint32_t bad = LFIO_RADMAP_ROWS_MAX + 1234;

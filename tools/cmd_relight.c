@@ -605,8 +605,8 @@ static lfio_status radiance_write(relight_run *run, const rl_solution *solution,
     patch_arrays arrays = {solution, beside, beside ? beside->held : NULL, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
     lfio_radmap_write_options opt;
     lfio_radmap_write_options_init(&opt);
-    /* lfio gathers every map before it compresses anything, so the chunks are compressed once the last map
-     * is final, on the threads the engine used */
+    /* lfio compresses the cells a batch of chunks at a time as they come (beside the engine: as the maps
+     * become final), the last batch once the last map is final, on the threads the engine uses */
     opt.threads = relight_threads_used(&run->job.run);
     lfio_status st = job_radmap_write(run->staged[OUT_RADIANCE], RELIGHT_CREATOR, run->o->scene, n, describe_map,
                                       map_rows, &arrays, &opt);
