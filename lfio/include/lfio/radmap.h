@@ -145,8 +145,9 @@ typedef lfio_status (*lfio_radmap_rows_fn)(void *user, size_t k, uint32_t first,
  * Writes a file as lfio_radmap_write_each() does, but describe gives each
  * patch without its cells (its five cell arrays are ignored) and rows gives
  * them a slice at a time, so that a caller need hold at most
- * LFIO_RADMAP_ROWS_MAX cells' arrays (lfio gathers them all in format 2, 64
- * bytes a cell; in format 1 it holds one slice's compressed chunks). The
+ * LFIO_RADMAP_ROWS_MAX cells' arrays (lfio holds them compressed in format
+ * 2, each batch of whole chunks filtered as it fills, until the datasets are
+ * written; in format 1 it holds one slice's compressed chunks). The
  * file is the same. Each slice is checked as it arrives. rows NULL: the
  * cells are the described patch's arrays, as in lfio_radmap_write_each().
  * @return as lfio_radmap_write_each(), or rows's status.
@@ -174,9 +175,10 @@ void lfio_radmap_write_options_init(lfio_radmap_write_options *opt);
 /**
  * Writes a file as lfio_radmap_write_rows() does, stored as opt says (NULL:
  * the defaults of lfio_radmap_write_options_init()). In format 2 every array
- * is stored once for all patches, so the write holds every cell's arrays
- * (64 bytes a cell) until it ends, and is one transfer a dataset whatever
- * the number of patches.
+ * is stored once for all patches, so the write holds every cell until it
+ * ends (compressed as they come when lfio filters the chunks itself: about
+ * the file's size; else 64 bytes a cell), and is one transfer a dataset
+ * whatever the number of patches.
  * @return as lfio_radmap_write_rows(); LFIO_ERR_ARG for options out of range.
  */
 lfio_status lfio_radmap_write_with(const char *path, const char *creator, const char *scene, size_t count,
