@@ -3,6 +3,7 @@
 
 Usage: python3 bench/mpi_model.py OUT [--cores-per-rank T] [--bandwidth GBPS] [--latency US]
                                       [--efficiency E] [--write-fixed F] [--write-ratio R]
+                                      [--setup-x100 CASE=S]
 
 OUT is bench/mpi.sh's folder: each case's stats.json of one process (CASE-1x2)
 and of two ranks (CASE-2x1), and runs.txt for the whole runs' times.
@@ -39,7 +40,11 @@ The model, per case, for K ranks of T threads each (one rank per node):
         2-rank run's.
 
 A scene 100 times larger (data/gen_scenes.py --building 10 10) scales S, C,
-B and W by 100: each rank still holds the whole scene. Measured on the
+B and W by 100: each rank still holds the whole scene. --setup-x100
+classroom=S replaces the classroom's scaled S by the setup measured on that
+scene itself (its 303,500 polygons read, 5.1 M cells made, ray tracer
+built: BENCHMARKS-journal.md 6f); only for a case whose cells are the
+building's (the classroom at its own 0.1 m cells, not at 0.018 m). Measured on the
 building itself (one process, 2 threads, --bounces 0; BENCHMARKS-journal.md
 6e): from 1 to 25 rooms the setup grows less than 100-fold scaling says
 (0.63 s at 25 rooms against 25 x 0.11 s) and the relighting more (2.4 CPU
@@ -102,7 +107,8 @@ def predict(m, scale, k, a, setup_divided=False, write_apart=False):
     else:
         f = a.write_fixed
         write = scale * m["w2"] * (f + (1 - f) * 2 / k) + scale * m["z"] * (k - 1) / k / bw + 2 * (k - 1) * lat
-    setup = scale * m["s"] / (k if setup_divided else 1)
+    s = m["s100"] if scale == 100 and m.get("s100") else scale * m["s"]
+    setup = s / (k if setup_divided else 1)
     return setup + compute + exchange + write, compute, exchange, write, setup
 
 
@@ -121,8 +127,14 @@ def main():
     p.add_argument("--efficiency", type=float, default=0.0, help="the threads' efficiency (0: as measured)")
     p.add_argument("--write-fixed", type=float, default=0.25, help="part of the 2-rank write rank 0 does alone, whatever the ranks")
     p.add_argument("--write-ratio", type=float, default=0.0, help="W2 as this times W1 (0: as measured)")
+    p.add_argument("--setup-x100", action="append", default=[], metavar="CASE=S",
+                   help="case's setup at 100 times the scene, seconds, measured on that scene (else 100 times S)")
     a = p.parse_args()
     whole = whole_runs(a.out)
+    setups = {}
+    for item in a.setup_x100:
+        name, _, value = item.partition("=")
+        setups[name] = float(value)
     print("Predicted speed-up over one rank of %d threads; %.0f GB/s, %.0f us per message.\n"
           % (a.cores_per_rank, a.bandwidth, a.latency))
     print("| case | S (s) | C (cpu s) | e | I | exchanged per run | W1, W2 (s) | K = 1 | 64 | 512 "
@@ -131,6 +143,7 @@ def main():
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|")
     for case in sorted({k.split(":")[0] for k in whole}):
         m = measure(a.out, case, whole, a.efficiency, a.write_ratio)
+        m["s100"] = setups.get(case)
         for scale, name in ((1, case), (100, case + " x 100")):
             t1 = predict(m, scale, 1, a)[0]
             at = predict(m, scale, 512, a)
@@ -139,7 +152,7 @@ def main():
             apart = [t1_apart / predict(m, scale, k, a, True, True)[0] for k in (64, 512)]
             print("| %s | %.1f | %.1f | %.2f | %.3f | %.1f MB | %.2f, %.2f | %.1f s | %.1fx | %.1fx "
                   "| %.2f, %.2f, %.2f, %.2f | %s | %.1fx, %.1fx | %.1fx, %.1fx |" % (
-                      name, scale * m["s"], scale * m["c"], m["e"], m["i"], scale * sum(m["bytes"]) / 1e6,
+                      name, predict(m, scale, 1, a)[4], scale * m["c"], m["e"], m["i"], scale * sum(m["bytes"]) / 1e6,
                       scale * m["w1"], scale * m["w2"], t1, t1 / predict(m, scale, 64, a)[0], t1 / at[0],
                       at[4], at[3], at[2], at[1], first_limit(at), lifted[0], lifted[1], apart[0], apart[1]))
     return 0
