@@ -218,11 +218,13 @@ static void test_write_each(const lfio_radmap_patch *patches, size_t count)
 }
 
 /* Describes patches without their cells, and gives the cells a slice at a time from buffers of its own (as
- * a caller of lfio_radmap_write_rows() would), checking that lfio asks for each cell once, in order, at
- * most LFIO_RADMAP_ROWS_MAX at once; it fails (fail_first) or gives a bad irradiance (bad_cell) when told. */
+ * a caller of lfio_radmap_write_rows() would), checking that lfio asks for the patches in order, for each
+ * cell once, in order, after its patch is described, at most LFIO_RADMAP_ROWS_MAX at once; it fails
+ * (fail_first) or gives a bad irradiance (bad_cell) when told. */
 struct slicer {
     const lfio_radmap_patch *patches;
-    size_t described, calls;
+    size_t described, calls; /* described: patches [0, described) were */
+    size_t rows_k;           /* the patch whose cells are being asked for (SIZE_MAX: none yet) */
     uint32_t next, max_count;
     size_t bad_patch, fail_patch; /* SIZE_MAX: never */
     uint32_t bad_cell, fail_first;
@@ -231,17 +233,15 @@ struct slicer {
     float *irradiance, *radiosity;
 };
 
-/* lfio_radmap_describe_fn: patch k without its cells, checking the last one's were all asked for. @return LFIO_OK. */
+/* lfio_radmap_describe_fn: patch k without its cells, checking that the patches come in order. @return LFIO_OK. */
 static lfio_status describe_bare(void *user, size_t k, lfio_radmap_patch *out)
 {
     struct slicer *s = user;
-    CHECK(k == 0 || s->next == s->patches[s->described].ncells, "patch %zu left at cell %u of %u", s->described,
-          s->next, s->patches[s->described].ncells);
+    CHECK(k == s->described, "patch %zu described after %zu", k, s->described);
     *out = s->patches[k];
     out->cell_ij = NULL, out->cell_area = NULL, out->cell_centre = NULL;
     out->irradiance = NULL, out->radiosity = NULL;
-    s->described = k;
-    s->next = 0;
+    s->described = k + 1;
     return LFIO_OK;
 }
 
@@ -251,7 +251,14 @@ static lfio_status rows_copied(void *user, size_t k, uint32_t first, uint32_t co
 {
     struct slicer *s = user;
     const lfio_radmap_patch *p = &s->patches[k];
-    CHECK(k == s->described && first == s->next && count <= LFIO_RADMAP_ROWS_MAX &&
+    if (k != s->rows_k) {
+        /* the next patch, once every cell of the one before was asked for */
+        CHECK(s->rows_k == SIZE_MAX ? k == 0 : k == s->rows_k + 1 && s->next == s->patches[s->rows_k].ncells,
+              "rows asked for patch %zu after patch %zu left at cell %u", k, s->rows_k, s->next);
+        s->rows_k = k;
+        s->next = 0;
+    }
+    CHECK(k < s->described && first == s->next && count <= LFIO_RADMAP_ROWS_MAX &&
               (uint64_t)first + count <= p->ncells,
           "rows asked for patch %zu cells %u + %u (described %zu, next %u, %u cells)", k, first, count, s->described,
           s->next, p->ncells);
@@ -325,7 +332,7 @@ static void test_write_rows(const lfio_radmap_patch *patches, size_t count, cons
     unsigned char *first_file = NULL;
     size_t first_size = 0;
     for (unsigned threads = 1; threads <= 3; threads += 2) {
-        struct slicer s = {.bad_patch = SIZE_MAX, .fail_patch = SIZE_MAX};
+        struct slicer s = {.rows_k = SIZE_MAX, .bad_patch = SIZE_MAX, .fail_patch = SIZE_MAX};
         lfio_status st = write_sliced(path, all, count + 1, &s, threads);
         CHECK(st == LFIO_OK, "write_rows on %u threads: %s", threads, lfio_errmsg());
         size_t size = 0;
@@ -349,17 +356,26 @@ static void test_write_rows(const lfio_radmap_patch *patches, size_t count, cons
         }
         lfio_radmap_destroy(map);
     }
+    /* the whole patches, described with their cells (lfio_radmap_write()): the same bytes as a slice at a time */
+    char whole[512];
+    write_ok(tmp_path(whole, sizeof whole, "whole.h5"), all, count + 1, 0);
+    size_t whole_size = 0;
+    unsigned char *whole_bytes = read_whole(whole, &whole_size);
+    CHECK(whole_bytes && whole_size == first_size && memcmp(whole_bytes, first_file, whole_size) == 0,
+          "lfio_radmap_write() wrote other bytes than lfio_radmap_write_rows()");
+    free(whole_bytes);
+    remove(whole);
     free(first_file);
     size_t a_size = 0;
     unsigned char *a = read_whole(path, &a_size);
     const uint32_t bad = LFIO_RADMAP_ROWS_MAX + 1234;
-    struct slicer s = {.bad_patch = count, .bad_cell = bad, .fail_patch = SIZE_MAX};
+    struct slicer s = {.rows_k = SIZE_MAX, .bad_patch = count, .bad_cell = bad, .fail_patch = SIZE_MAX};
     lfio_status st = write_sliced(path, all, count + 1, &s, 0);
     char want[64];
     snprintf(want, sizeof want, "irradiance of cell %u is nan", bad);
     CHECK(st == LFIO_ERR_ARG && strstr(lfio_errmsg(), want) && strstr(lfio_errmsg(), big->label),
           "a bad value in a later slice: %s: %s", lfio_status_name(st), lfio_errmsg());
-    struct slicer f = {.bad_patch = SIZE_MAX, .fail_patch = count, .fail_first = LFIO_RADMAP_ROWS_MAX};
+    struct slicer f = {.rows_k = SIZE_MAX, .bad_patch = SIZE_MAX, .fail_patch = count, .fail_first = LFIO_RADMAP_ROWS_MAX};
     st = write_sliced(path, all, count + 1, &f, 0);
     /* the second slice fails: lfio asks for no third */
     CHECK(st == LFIO_ERR_NOMEM && f.next == 2 * LFIO_RADMAP_ROWS_MAX, "a failing rows: %s after cell %u",

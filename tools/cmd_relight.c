@@ -379,9 +379,9 @@ static int relight(relight_run *run)
 /*
  * radiance.h5 beside the engine (one process): the engine tells which maps
  * are final as its last pass goes (rl_maps_ready_fn), and a thread of its
- * own hands them to lfio in order meanwhile, so that checking and gathering
- * their cells overlaps the engine; lfio stores the file (a few datasets,
- * compressed on the engine's threads) once the last map is final. That
+ * own hands them to lfio in order meanwhile, so that checking, compressing
+ * and storing their cells overlaps the engine (lfio describes every map
+ * first: a description does not change during the run). That
  * thread prints nothing: it keeps its messages, and the main thread reports
  * the write once both end.
  */
@@ -549,12 +549,14 @@ static void read_end(patch_arrays *a)
         writer_done(a->beside);
 }
 
-/* lfio_radmap_write_rows()'s describe: map k of the solution but its cells (map_rows() gives those), once it
- * is final. Reports its own failures (cli.h). @return LFIO_OK, or LFIO_ERR_ARG after reporting. */
+/* lfio_radmap_write_rows()'s describe: map k of the solution but its cells (map_rows() gives those), once
+ * the engine has told of its solution (a map's description is fixed before the run: lfio asks for every
+ * map's before any cells). Reports its own failures (cli.h). @return LFIO_OK, or LFIO_ERR_ARG after
+ * reporting. */
 static lfio_status describe_map(void *user, size_t k, lfio_radmap_patch *p)
 {
     patch_arrays *a = user;
-    if (!read_begin(a, k))
+    if (!read_begin(a, 0))
         return LFIO_ERR_ARG;
     lfio_status st = describe_solution_map(a, k, p);
     read_end(a);
@@ -583,8 +585,8 @@ static lfio_status solution_map_rows(patch_arrays *a, size_t k, uint32_t first, 
     return LFIO_OK;
 }
 
-/* lfio_radmap_write_rows()'s rows: cells [first, first + count) of map k (describe_map() having waited for
- * it to be final), in the arrays of user (a patch_arrays). Reports its own failures, as describe_map().
+/* lfio_radmap_write_rows()'s rows: cells [first, first + count) of map k, once it is final, in the arrays
+ * of user (a patch_arrays). Reports its own failures, as describe_map().
  * @return LFIO_OK, or LFIO_ERR_NOMEM / LFIO_ERR_ARG after reporting (or after the engine's failure). */
 static lfio_status map_rows(void *user, size_t k, uint32_t first, uint32_t count, lfio_radmap_rows *out)
 {
@@ -605,8 +607,9 @@ static lfio_status radiance_write(relight_run *run, const rl_solution *solution,
     patch_arrays arrays = {solution, beside, beside ? beside->held : NULL, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
     lfio_radmap_write_options opt;
     lfio_radmap_write_options_init(&opt);
-    /* lfio compresses the cells a batch of chunks at a time as they come (beside the engine: as the maps
-     * become final), the last batch once the last map is final, on the threads the engine uses */
+    /* lfio describes every map first, then asks for the cells map by map and stores them a batch of
+     * chunks at a time (beside the engine: as the maps become final), compressed on the threads the engine
+     * uses */
     opt.threads = relight_threads_used(&run->job.run);
     lfio_status st = job_radmap_write(run->staged[OUT_RADIANCE], RELIGHT_CREATOR, run->o->scene, n, describe_map,
                                       map_rows, &arrays, &opt);

@@ -668,25 +668,38 @@ struct v2_prepared {
     size_t n[V2_COUNT];
 };
 
+/* A format-2 file's datasets, made in file order before any is written (v2_open_all()). */
+typedef struct v2_open {
+    hid_t d[V2_COUNT];          /* -1: not made */
+    lfio__h5_layout l[V2_COUNT];
+} v2_open;
+
 /*
- * A serial write's cell datasets filtered as their rows arrive: each deflated cell dataset's rows wait in
- * a stage of `batch` whole chunks, filtered together (lfio's pipeline, on the write's threads) once it is
- * full and kept compressed in prep's chunks; the part left when every patch is in is filtered then, as the
- * chunks of the dataset's last rows. The write then holds its cells compressed (the 1.3 M-cell classroom:
- * 24 MB instead of 83 MB of arrays), and a write beside the engine compresses as the maps become final.
- * A whole chunk is the format's V2_CHUNK rows whenever there is one (a dataset of at least V2_CHUNK rows
- * has chunks of V2_CHUNK rows) and a dataset of one stage or less is decided only at the end (deflated
- * when 1 KiB or more, else written from the stage as it is), so the file is the same bytes as a write
- * that gathers the arrays whole.
+ * A serial write's cell datasets filtered as their rows arrive: the rows of the five cell datasets wait in
+ * stages of `batch` whole chunks (the same rows in each), filtered together with lfio's pipeline on the
+ * write's threads once full. When the file's datasets are made already (`open`: the cells asked for in a
+ * second pass, after every patch is described), the filtered chunks are stored at once and the write holds
+ * no more than its stages; otherwise (the cells come with each description) they are kept, compressed, in
+ * prep for v2_store_held(). The rows left when every patch is in become the last chunks. Either way the
+ * deflated cell datasets' chunks reach the file chunk by chunk, each chunk index in every dataset before
+ * the next (v2_store_held() keeps that order), so the file is the same bytes however the cells came and
+ * whatever the batch. A whole chunk is V2_CHUNK rows whenever there is one, and a dataset of one stage or
+ * less is decided only at the end (deflated when 1 KiB or more, else written from its stage as it is).
  */
 typedef struct v2_stream {
     struct v2_prepared *prep;
+    const char *path;
+    const v2_open *open;            /* the datasets to store each batch in; NULL: keep the batches in prep */
+    int later;                      /* the cells are asked after every patch is described (v2_stream_rows()) */
     unsigned char *stage[V2_COUNT]; /* cell dataset t: its rows not filtered yet, at most batch chunks */
-    uint64_t staged[V2_COUNT];      /* rows in stage[t] */
+    uint64_t staged;                /* rows in each stage */
+    uint64_t chunks_done;           /* chunks of each cell dataset filtered so far */
     size_t cap[V2_COUNT];           /* chunks prep->c[t] has room for */
+    lfio__chunk *work;              /* one batch's chunks of every cell dataset */
     uint32_t batch;                 /* whole chunks filtered together */
     unsigned threads;
     int level;
+    lfio_status st;                 /* a failure storing a batch (its message set) */
 } v2_stream;
 
 /* Makes room for more rows of dataset t of v. @return 1, or 0 when memory runs out. */
@@ -746,6 +759,7 @@ static int v2_add_patch(v2_content *v, const lfio_radmap_patch *p, uint32_t vert
 }
 
 static int v2_stream_add(v2_stream *s, const lfio_radmap_patch *q);
+static void v2_fill_scalars(unsigned char *const *w, size_t i, const char *label, lfio_radmap_patch *p);
 
 /* Appends cells q (a checked slice of one patch) to v's cell arrays, or to its stream.
  * @return 1, or 0 when memory runs out. */
@@ -809,7 +823,8 @@ static lfio_status v2_gather(const struct map_content *mc, const char *path, v2_
             v->cell_first = cells - p.ncells;
         if (!v2_add_patch(v, &p, (uint32_t)vertices, (uint32_t)cells))
             return lfio__fail(LFIO_ERR_NOMEM, "%s: patch %zu: out of memory", path, k);
-        if (k >= v->mine_first && k < v->mine_end && (st = v2_gather_cells(mc, path, k, &p, v)) != LFIO_OK)
+        const int cells_now = !(v->stream && v->stream->later);
+        if (cells_now && k >= v->mine_first && k < v->mine_end && (st = v2_gather_cells(mc, path, k, &p, v)) != LFIO_OK)
             return st;
     }
     if (v->mine_first == mc->count)
@@ -833,6 +848,7 @@ static size_t v2_chunk_list(const lfio__h5_layout *l, size_t row, const unsigned
 
 /* The cell datasets of format 2, in v2_add_cells()'s order. */
 static const enum v2_ds v2_cell_datasets[] = {V2_CELL_IJ, V2_CELL_AREA, V2_CELL_CENTRE, V2_IRRADIANCE, V2_RADIOSITY};
+#define V2_CELL_DATASETS (sizeof v2_cell_datasets / sizeof v2_cell_datasets[0])
 
 /* @return slice q's array of cell dataset t. */
 static const void *v2_slice_array(const lfio_radmap_patch *q, enum v2_ds t)
@@ -846,99 +862,166 @@ static const void *v2_slice_array(const lfio_radmap_patch *q, enum v2_ds t)
     }
 }
 
-/* Sets up s to take a serial write's cells into prep (zeroed), filtered at c's level on c's threads.
- * @return 1, or 0 when memory runs out. */
-static int v2_stream_init(v2_stream *s, struct v2_prepared *prep, const struct map_content *c)
+/* Sets up s to take a serial write's cells, into prep (zeroed) unless stored as they come, filtered at c's
+ * level on c's threads. @return 1, or 0 when memory runs out. */
+static int v2_stream_init(v2_stream *s, struct v2_prepared *prep, const struct map_content *c, const char *path)
 {
     memset(s, 0, sizeof *s);
     s->prep = prep;
+    s->path = path;
+    s->later = c->rows != NULL;
     s->threads = ilf_thread_count(c->threads);
     /* a batch keeps every thread busy, and at most 8 chunks (3 MiB of the widest dataset) wait */
     s->batch = s->threads < 8 ? (s->threads > 0 ? s->threads : 1) : 8;
     s->level = c->level;
-    for (size_t k = 0; k < sizeof v2_cell_datasets / sizeof v2_cell_datasets[0]; k++) {
+    for (size_t k = 0; k < V2_CELL_DATASETS; k++) {
         const enum v2_ds t = v2_cell_datasets[k];
         if ((s->stage[t] = malloc((size_t)s->batch * V2_CHUNK * v2_row_bytes(t))) == NULL)
             return 0;
     }
-    return 1;
+    return (s->work = malloc(V2_CELL_DATASETS * s->batch * sizeof *s->work)) != NULL;
 }
 
-/* Filters the first rows rows of s's stage of dataset t as chunks of chunk rows (the last may be short),
- * appended to s->prep's chunks of t. @return 1, or 0 when memory runs out. */
-static int v2_stream_filter(v2_stream *s, enum v2_ds t, uint64_t rows, uint64_t chunk)
+static lfio_status v2_store_chunk(const char *path, const v2_open *o, enum v2_ds t, size_t k, const lfio__chunk *c);
+
+/* Keeps chunk c (filtered) as the next of cell dataset t in s->prep. @return 1, or 0 when memory runs out. */
+static int v2_stream_keep(v2_stream *s, enum v2_ds t, const lfio__chunk *c)
 {
     struct v2_prepared *p = s->prep;
-    const size_t row = v2_row_bytes(t), n = (size_t)((rows + chunk - 1) / chunk);
-    if (p->n[t] + n > s->cap[t]) {
+    if (p->n[t] == s->cap[t]) {
         size_t cap = s->cap[t] ? 2 * s->cap[t] : 16;
-        while (cap < p->n[t] + n)
-            cap *= 2;
         lfio__chunk *grown = realloc(p->c[t], cap * sizeof *grown);
         if (grown == NULL)
             return 0;
         p->c[t] = grown, s->cap[t] = cap;
     }
-    lfio__chunk *c = p->c[t] + p->n[t];
-    for (size_t k = 0; k < n; k++) {
-        const uint64_t r0 = k * chunk, take = rows - r0 < chunk ? rows - r0 : chunk;
-        c[k] = (lfio__chunk){s->stage[t] + r0 * row, take * row, chunk * row, v2_datasets[t].size, s->level,
-                             NULL, 0};
-    }
-    if (lfio__chunks_filter(c, n, s->threads, NULL, NULL) != 0)
-        return 0;
-    p->n[t] += n;
+    p->c[t][p->n[t]++] = *c;
     return 1;
 }
 
-/* Takes the cells of slice q into s's stages, filtering each stage that fills (batch whole chunks of
+/* Filters the first rows rows of the stages of the cell datasets deflated[] says, as chunks of chunk rows
+ * (the last may be short), and stores them (s->open) chunk by chunk, or keeps them. @return 1, or 0 on a
+ * failure (s->st says which). */
+static int v2_stream_flush(v2_stream *s, uint64_t rows, uint64_t chunk, const int deflated[V2_COUNT])
+{
+    const size_t n = (size_t)((rows + chunk - 1) / chunk);
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++)
+        for (size_t k = 0; k < V2_CELL_DATASETS; k++) {
+            const enum v2_ds t = v2_cell_datasets[k];
+            if (!deflated[t])
+                continue;
+            const size_t row = v2_row_bytes(t);
+            const uint64_t r0 = i * chunk, take = rows - r0 < chunk ? rows - r0 : chunk;
+            s->work[m++] = (lfio__chunk){s->stage[t] + r0 * row, take * row, chunk * row, v2_datasets[t].size,
+                                         s->level, NULL, 0};
+        }
+    assert(m <= V2_CELL_DATASETS * s->batch);
+    if (lfio__chunks_filter(s->work, m, s->threads, NULL, NULL) != 0) {
+        s->st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", s->path);
+        return 0;
+    }
+    /* in the order they were listed: chunk by chunk, each in every dataset */
+    size_t j = 0;
+    for (size_t i = 0; i < n; i++)
+        for (size_t k = 0; k < V2_CELL_DATASETS; k++) {
+            const enum v2_ds t = v2_cell_datasets[k];
+            if (!deflated[t])
+                continue;
+            if (s->st != LFIO_OK)
+                ; /* freed below */
+            else if (s->open)
+                s->st = v2_store_chunk(s->path, s->open, t, (size_t)s->chunks_done + i, &s->work[j]);
+            else if (v2_stream_keep(s, t, &s->work[j]))
+                s->work[j].out = NULL; /* kept in prep, which frees it */
+            else
+                s->st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", s->path);
+            j++;
+        }
+    lfio__chunks_free(s->work, m);
+    s->chunks_done += n;
+    return s->st == LFIO_OK;
+}
+
+/* Takes the cells of slice q into s's stages, flushing them each time they fill (batch whole chunks of
  * V2_CHUNK rows: a dataset that fills one has at least that many rows, so it is deflated, since s->level
- * > 0, in chunks of V2_CHUNK rows). @return 1, or 0 when memory runs out. */
+ * > 0, in chunks of V2_CHUNK rows). @return 1, or 0 on a failure (s->st). */
 static int v2_stream_add(v2_stream *s, const lfio_radmap_patch *q)
 {
     const uint64_t room = (uint64_t)s->batch * V2_CHUNK;
-    for (size_t k = 0; k < sizeof v2_cell_datasets / sizeof v2_cell_datasets[0]; k++) {
-        const enum v2_ds t = v2_cell_datasets[k];
-        const size_t row = v2_row_bytes(t);
-        const unsigned char *src = v2_slice_array(q, t);
-        for (uint64_t left = q->ncells; left > 0;) {
-            const uint64_t take = room - s->staged[t] < left ? room - s->staged[t] : left;
-            memcpy(s->stage[t] + (size_t)s->staged[t] * row, src, (size_t)take * row);
-            s->staged[t] += take, src += (size_t)take * row, left -= take;
-            if (s->staged[t] == room) {
-                if (!v2_stream_filter(s, t, room, V2_CHUNK))
-                    return 0;
-                s->staged[t] = 0;
-            }
+    static const int all[V2_COUNT] = {[V2_CELL_IJ] = 1, [V2_CELL_AREA] = 1, [V2_CELL_CENTRE] = 1,
+                                      [V2_IRRADIANCE] = 1, [V2_RADIOSITY] = 1};
+    for (uint64_t done = 0; done < q->ncells;) {
+        const uint64_t take = room - s->staged < q->ncells - done ? room - s->staged : q->ncells - done;
+        for (size_t k = 0; k < V2_CELL_DATASETS; k++) {
+            const enum v2_ds t = v2_cell_datasets[k];
+            const size_t row = v2_row_bytes(t);
+            memcpy(s->stage[t] + (size_t)s->staged * row, (const unsigned char *)v2_slice_array(q, t) + done * row,
+                   (size_t)take * row);
+        }
+        s->staged += take, done += take;
+        if (s->staged == room) {
+            if (!v2_stream_flush(s, room, V2_CHUNK, all))
+                return 0;
+            s->staged = 0;
         }
     }
     return 1;
 }
 
-/* Ends s once every patch is in v (cells in all): a deflated dataset's rows still staged become its last
- * chunks; one that is not deflated (under 1 KiB: all its rows are still in the stage) moves to v's arrays
- * for a plain write. @return 1, or 0 when memory runs out. */
-static int v2_stream_finish(v2_stream *s, v2_content *v, uint64_t cells)
+/* Ends s once every patch is in v (cells in all): the rows still staged of a deflated dataset become its
+ * last chunks; a dataset that is not deflated (under 1 KiB: all its rows are still in the stage) moves to
+ * v's arrays for a plain write. @return LFIO_OK or the failure's status. */
+static lfio_status v2_stream_finish(v2_stream *s, v2_content *v, uint64_t cells)
 {
-    for (size_t k = 0; k < sizeof v2_cell_datasets / sizeof v2_cell_datasets[0]; k++) {
+    int deflated[V2_COUNT] = {0};
+    uint64_t chunk = V2_CHUNK;
+    for (size_t k = 0; k < V2_CELL_DATASETS; k++) {
         const enum v2_ds t = v2_cell_datasets[k];
         lfio__h5_layout l;
         v2_layout(t, cells, s->level, &l);
-        if (l.deflate) {
-            if (s->staged[t] > 0 && !v2_stream_filter(s, t, s->staged[t], l.chunk[0]))
-                return 0;
-        } else {
-            assert(s->prep->n[t] == 0 && s->staged[t] == cells);
+        deflated[t] = l.deflate != 0;
+        chunk = l.chunk[0];
+        if (!deflated[t]) {
+            assert(s->chunks_done == 0 && s->staged == cells);
             free(v->a[t]);
-            v->a[t] = s->stage[t], v->rows[t] = v->cap[t] = s->staged[t];
+            v->a[t] = s->stage[t], v->rows[t] = v->cap[t] = s->staged;
             s->stage[t] = NULL;
         }
-        s->staged[t] = 0;
     }
-    return 1;
+    if (s->staged > 0 && !v2_stream_flush(s, s->staged, chunk, deflated))
+        return s->st;
+    s->staged = 0;
+    return LFIO_OK;
 }
 
-/* Frees s's stages and the filtered chunks of prep. */
+/* Asks for the cells of every patch described in v (all of them, in order: a serial write), a slice at a
+ * time, checked, into s. @return LFIO_OK or the first failure's status. */
+static lfio_status v2_stream_rows(const struct map_content *mc, const char *path, const v2_content *v,
+                                  v2_stream *s)
+{
+    const uint32_t *voff = (const uint32_t *)v->a[V2_VERTEX_OFFSET];
+    const char *label = (const char *)v->a[V2_LABEL];
+    for (size_t k = 0; k < mc->count; k++, label += strlen(label) + 1) {
+        lfio_radmap_patch p;
+        v2_fill_scalars(v->a, k, label, &p);
+        p.vertices = (const double *)v->a[V2_VERTICES] + 3 * (size_t)voff[k];
+        uint32_t first = 0;
+        do {
+            lfio_radmap_patch q;
+            const uint32_t count = p.ncells - first < LFIO_RADMAP_ROWS_MAX ? p.ncells - first : LFIO_RADMAP_ROWS_MAX;
+            lfio_status st = patch_slice(mc, path, k, &p, first, count, &q);
+            if (st != LFIO_OK)
+                return st;
+            if (!v2_stream_add(s, &q))
+                return s->st;
+            first += count;
+        } while (first < p.ncells);
+    }
+    return LFIO_OK;
+}
+
+/* Frees s's stages and work, and the filtered chunks of prep. */
 static void v2_stream_free(v2_stream *s, struct v2_prepared *prep)
 {
     for (int t = 0; t < V2_COUNT; t++) {
@@ -947,30 +1030,28 @@ static void v2_stream_free(v2_stream *s, struct v2_prepared *prep)
             lfio__chunks_free(prep->c[t], prep->n[t]);
         free(prep->c[t]);
     }
+    free(s->work);
 }
 
-/* Stores c[0..n), the filtered chunks of dataset d (layout l) in order, as they are.
- * @return LFIO_OK, or LFIO_ERR_IO. */
-static lfio_status v2_store_chunks(const char *path, hid_t d, const lfio__h5_layout *l, const lfio__chunk *c,
-                                   size_t n)
+/* Stores filtered chunk c as chunk k of dataset t of o, as it is. @return LFIO_OK, or LFIO_ERR_IO. */
+static lfio_status v2_store_chunk(const char *path, const v2_open *o, enum v2_ds t, size_t k, const lfio__chunk *c)
 {
-    for (size_t k = 0; k < n; k++) {
-        const hsize_t offset[2] = {(hsize_t)k * l->chunk[0], 0};
-        /* filter mask 0: every filter of the pipeline was applied */
-        if (H5Dwrite_chunk(d, H5P_DEFAULT, 0, offset, c[k].out_bytes, c[k].out) < 0) {
-            char dobj[64];
-            snprintf(dobj, sizeof dobj, "/patches/%s", l->name);
-            return lfio__h5_fail(LFIO_ERR_IO, path, dobj, "cannot store a chunk");
-        }
+    const hsize_t offset[2] = {(hsize_t)k * o->l[t].chunk[0], 0};
+    /* filter mask 0: every filter of the pipeline was applied */
+    if (H5Dwrite_chunk(o->d[t], H5P_DEFAULT, 0, offset, c->out_bytes, c->out) < 0) {
+        char dobj[64];
+        snprintf(dobj, sizeof dobj, "/patches/%s", o->l[t].name);
+        return lfio__h5_fail(LFIO_ERR_IO, path, dobj, "cannot store a chunk");
     }
     return LFIO_OK;
 }
 
-/* Stores dataset d (layout l, v's array of t, rows [0, l->dims[0])) as chunks lfio filters on threads
- * threads, then hands to HDF5 as they are. @return LFIO_OK, LFIO_ERR_NOMEM or LFIO_ERR_IO. */
-static lfio_status v2_store_direct(const char *path, hid_t d, const lfio__h5_layout *l, const unsigned char *a,
-                                   enum v2_ds t, unsigned threads)
+/* Stores dataset t of o (v's array a, rows [0, o->l[t].dims[0])) as chunks lfio filters on threads threads,
+ * then hands to HDF5 as they are. @return LFIO_OK, LFIO_ERR_NOMEM or LFIO_ERR_IO. */
+static lfio_status v2_store_direct(const char *path, const v2_open *o, enum v2_ds t, const unsigned char *a,
+                                   unsigned threads)
 {
+    const lfio__h5_layout *l = &o->l[t];
     const size_t n = (size_t)((l->dims[0] + l->chunk[0] - 1) / l->chunk[0]);
     lfio__chunk *c = calloc(n ? n : 1, sizeof *c);
     if (c == NULL)
@@ -979,47 +1060,90 @@ static lfio_status v2_store_direct(const char *path, hid_t d, const lfio__h5_lay
     lfio_status st = LFIO_OK;
     if (lfio__chunks_filter(c, n, threads, NULL, NULL) != 0)
         st = lfio__fail(LFIO_ERR_NOMEM, "%s: /patches/%s: out of memory", path, l->name);
-    if (st == LFIO_OK)
-        st = v2_store_chunks(path, d, l, c, n);
+    for (size_t k = 0; st == LFIO_OK && k < n; k++)
+        st = v2_store_chunk(path, o, t, k, &c[k]);
     lfio__chunks_free(c, n);
     free(c);
     return st;
 }
 
-/* Creates format-2 dataset t in group g and writes this rank's part of it from v: the cells of its own
- * patches, every other dataset on rank 0 (all ranks take part in a collective write). direct: lfio filters
- * the chunks itself (a serial write on a little-endian machine), or a cell dataset's come filtered in
- * mc->prepared.
- * @return LFIO_OK or the failure's status. */
-static lfio_status v2_write_dataset(const struct map_content *mc, const char *path, hid_t g, const v2_content *v,
-                                    enum v2_ds t, uint64_t cells, int direct)
+/* @return whether dataset t of o comes as chunks lfio filtered (v2_stream, or an MPI job's prepared
+ * content): a deflated cell dataset of a write whose chunks lfio filters (direct). */
+static int v2_cells_filtered(const v2_open *o, enum v2_ds t, int direct)
 {
-    const int is_cells = v2_datasets[t].rows == ROWS_CELL;
-    lfio__h5_layout l;
-    v2_layout(t, is_cells ? cells : v->rows[t], mc->level, &l);
-    hid_t d;
-    lfio_status st = lfio__h5_create_dataset(path, "/patches", g, &l, &d);
-    if (st != LFIO_OK)
-        return st;
-    char dobj[64];
-    snprintf(dobj, sizeof dobj, "/patches/%s", l.name);
-    if (l.dims[0] > 0) {
+    return direct && v2_datasets[t].rows == ROWS_CELL && o->l[t].deflate;
+}
+
+/* Makes every dataset of format 2 in group g, in file order, sized for v (cells cells). @return LFIO_OK or
+ * the failure's status (the ones made are in o, to close). */
+static lfio_status v2_open_all(const struct map_content *mc, const char *path, hid_t g, const v2_content *v,
+                               uint64_t cells, v2_open *o)
+{
+    lfio_status st = LFIO_OK;
+    for (int t = 0; st == LFIO_OK && t < V2_COUNT; t++) {
+        v2_layout((enum v2_ds)t, v2_datasets[t].rows == ROWS_CELL ? cells : v->rows[t], mc->level, &o->l[t]);
+        st = lfio__h5_create_dataset(path, "/patches", g, &o->l[t], &o->d[t]);
+    }
+    return st;
+}
+
+/* Stores the filtered cell chunks prep holds, chunk by chunk, each in every cell dataset (v2_stream's
+ * order). @return LFIO_OK, or LFIO_ERR_IO. */
+static lfio_status v2_store_held(const char *path, const v2_open *o, const struct v2_prepared *prep, int direct)
+{
+    size_t most = 0;
+    for (size_t k = 0; k < V2_CELL_DATASETS; k++)
+        most = prep->n[v2_cell_datasets[k]] > most ? prep->n[v2_cell_datasets[k]] : most;
+    lfio_status st = LFIO_OK;
+    for (size_t i = 0; i < most; i++)
+        for (size_t k = 0; st == LFIO_OK && k < V2_CELL_DATASETS; k++) {
+            const enum v2_ds t = v2_cell_datasets[k];
+            if (v2_cells_filtered(o, t, direct) && i < prep->n[t])
+                st = v2_store_chunk(path, o, t, i, &prep->c[t][i]);
+        }
+    return st;
+}
+
+/* Writes this rank's part of every dataset of o from v but the cell chunks stored already: the cells of
+ * its own patches, every other dataset on rank 0 (all ranks take part in a collective write). direct: lfio
+ * filters the deflated datasets' chunks itself. @return LFIO_OK or the failure's status. */
+static lfio_status v2_write_rest(const struct map_content *mc, const char *path, const v2_open *o,
+                                 const v2_content *v, int direct)
+{
+    lfio_status st = LFIO_OK;
+    for (int t = 0; st == LFIO_OK && t < V2_COUNT; t++) {
+        const lfio__h5_layout *l = &o->l[t];
+        const int is_cells = v2_datasets[t].rows == ROWS_CELL;
+        if (l->dims[0] == 0 || v2_cells_filtered(o, (enum v2_ds)t, direct))
+            continue;
+        if (direct && l->deflate) {
+            st = v2_store_direct(path, o, (enum v2_ds)t, v->a[t], ilf_thread_count(mc->threads));
+            continue;
+        }
+        char dobj[64];
+        snprintf(dobj, sizeof dobj, "/patches/%s", l->name);
         const uint64_t first = is_cells ? v->cell_first : 0, rows = v->rows[t];
         const int mine = is_cells ? rows > 0 : mc->rank == 0;
-        if (direct && l.deflate && is_cells && mc->prepared)
-            st = v2_store_chunks(path, d, &l, mc->prepared->c[t], mc->prepared->n[t]);
-        else if (direct && l.deflate)
-            st = v2_store_direct(path, d, &l, v->a[t], t, ilf_thread_count(mc->threads));
-        else {
-            /* a rank with nothing of its own still takes part (lfio__h5_write_part() selects none when !mine),
-             * with a count that is not empty, which it would skip */
-            const hsize_t start[2] = {mine ? first : 0, 0}, count[2] = {mine ? rows : l.dims[0], l.dims[1]};
-            st = lfio__h5_write_part(path, dobj, d, v2_memory_type(t), l.rank, start, count, v->a[t], mine);
-        }
+        /* a rank with nothing of its own still takes part (lfio__h5_write_part() selects none when !mine),
+         * with a count that is not empty, which it would skip */
+        const hsize_t start[2] = {mine ? first : 0, 0}, count[2] = {mine ? rows : l->dims[0], l->dims[1]};
+        st = lfio__h5_write_part(path, dobj, o->d[t], v2_memory_type((enum v2_ds)t), l->rank, start, count, v->a[t],
+                                 mine);
     }
-    /* closing flushes the chunk cache: the last chunks reach the file only here */
-    if (H5Dclose(d) < 0 && st == LFIO_OK)
-        st = lfio__h5_fail(LFIO_ERR_IO, path, dobj, "cannot flush dataset");
+    return st;
+}
+
+/* Closes the datasets of o, in file order (closing flushes the chunk cache: the last chunks reach the file
+ * only here). @return st, or the first failure to close when st is LFIO_OK. */
+static lfio_status v2_close_all(const char *path, v2_open *o, lfio_status st)
+{
+    for (int t = 0; t < V2_COUNT; t++) {
+        char dobj[64];
+        snprintf(dobj, sizeof dobj, "/patches/%s", o->l[t].name);
+        if (o->d[t] >= 0 && H5Dclose(o->d[t]) < 0 && st == LFIO_OK)
+            st = lfio__h5_fail(LFIO_ERR_IO, path, dobj, "cannot flush dataset");
+        o->d[t] = -1;
+    }
     return st;
 }
 
@@ -1041,8 +1165,10 @@ static lfio_status write_root(const char *path, hid_t file, const struct map_con
     return st;
 }
 
-/* write_contents() for format 2: the root attributes, then every patch gathered (unless c->prepared has
- * it) and written one dataset at a time. */
+/* write_contents() for format 2: the root attributes; every patch described, and its cells gathered unless
+ * c->prepared has them or a serial write asks for them after every description (v2_stream: then stored as
+ * they come); every dataset made; the cell datasets' filtered chunks stored, chunk by chunk; the rest
+ * written. Whichever way the cells come, the HDF5 calls are the same, in the same order: so are the bytes. */
 static lfio_status write_contents_v2(const char *path, hid_t file, const struct map_content *c)
 {
     lfio_status st = write_root(path, file, c, 2);
@@ -1050,38 +1176,43 @@ static lfio_status write_contents_v2(const char *path, hid_t file, const struct 
         return st;
     struct v2_prepared own;
     v2_stream stream;
-    struct map_content streamed;
+    v2_open o;
     memset(&own, 0, sizeof own);
     memset(&stream, 0, sizeof stream);
+    for (int t = 0; t < V2_COUNT; t++)
+        o.d[t] = -1;
     const int direct = (c->serial || c->prepared) && LFIO_LITTLE_ENDIAN;
+    const struct v2_prepared *prep = c->prepared ? c->prepared : &own;
     if (c->prepared == NULL) {
-        /* a serial write that lfio filters takes its cells filtered as they come (v2_stream) */
+        /* a serial write that lfio filters takes its cells filtered as they come */
         if (direct && c->serial && c->level > 0) {
             own.v.stream = &stream;
-            if (!v2_stream_init(&stream, &own, c))
+            if (!v2_stream_init(&stream, &own, c, path))
                 st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
         }
         if (st == LFIO_OK)
             st = v2_gather(c, path, &own.v);
-        if (st == LFIO_OK && own.v.stream
-            && !v2_stream_finish(&stream, &own.v, ((const uint32_t *)own.v.a[V2_CELL_OFFSET])[c->count]))
-            st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", path);
         /* describing can fail on one rank of a collective write alone (out of memory): agree before HDF5 */
         st = lfio__h5_agree(path, st);
-        if (own.v.stream) {
-            streamed = *c;
-            streamed.prepared = &own;
-            c = &streamed;
-        }
     }
-    const v2_content *v = c->prepared ? &c->prepared->v : &own.v;
+    const v2_content *v = &prep->v;
     hid_t patches = -1;
     if (st == LFIO_OK)
         st = lfio__h5_create_group(path, "/patches", file, "patches", &patches);
-    const uint32_t *cell_end = (const uint32_t *)v->a[V2_CELL_OFFSET];
-    const uint64_t cells = st == LFIO_OK ? cell_end[c->count] : 0;
-    for (int t = 0; st == LFIO_OK && t < V2_COUNT; t++)
-        st = v2_write_dataset(c, path, patches, v, (enum v2_ds)t, cells, direct);
+    const uint64_t cells = st == LFIO_OK ? ((const uint32_t *)v->a[V2_CELL_OFFSET])[c->count] : 0;
+    if (st == LFIO_OK)
+        st = v2_open_all(c, path, patches, v, cells, &o);
+    if (st == LFIO_OK && own.v.stream && stream.later) {
+        stream.open = &o;
+        st = v2_stream_rows(c, path, &own.v, &stream);
+    }
+    if (st == LFIO_OK && own.v.stream)
+        st = v2_stream_finish(&stream, &own.v, cells);
+    if (st == LFIO_OK)
+        st = v2_store_held(path, &o, prep, direct);
+    if (st == LFIO_OK)
+        st = v2_write_rest(c, path, &o, v, direct);
+    st = v2_close_all(path, &o, st);
     lfio__h5_close(patches);
     v2_stream_free(&stream, &own);
     v2_free(&own.v);

@@ -31,8 +31,10 @@ typedef struct rl_solution rl_solution;
 
 /**
  * Told that maps [0, ready) of the solution being computed hold their final
- * values: from then on they may be read with rl_solution_map_info(),
- * rl_solution_map_cells() and rl_solution_map_rows(), from any thread, while the run goes on (no other
+ * values: from then on they may be read with rl_solution_map_cells() and
+ * rl_solution_map_rows(), and every map (ready or not) described with
+ * rl_solution_map_info(), which does not change during the run, from any
+ * thread, while the run goes on (no other
  * call on solution is allowed before rl_relight() returns it). Called from
  * one of the engine's threads, with ready increasing, the last time with
  * the map count, and only if the run succeeds that far. A run on one
