@@ -19,7 +19,10 @@
  *     bytes; rows is asked for each patch after describing it, slices of at
  *     most LFIO_RADMAP_ROWS_MAX, and every cell of the file once over all
  *     the ranks (no rank takes another's); rows failing on the last rank
- *     alone fails the write everywhere, leaving no file; format 1 reads back.
+ *     alone fails the write everywhere, leaving no file; format 1 reads back;
+ *   - 600 patches, whose tables are large enough to be deflated (the last
+ *     rank compresses them for rank 0), by both collective writes: the
+ *     serial writer's bytes.
  * Every rank prints its own "N passed, M failed" line; the exit status is
  * nonzero on a rank that failed, which fails the job.
  */
@@ -112,6 +115,41 @@ static int count_prefixed(const char *dir, const char *prefix)
     if (d)
         closedir(d);
     return n;
+}
+
+/* The patches of describe_many(): every made patch but the 100,000-cell one, over and over. */
+static const size_t small_patches[6] = {0, 1, 2, 4, 5, 6};
+#define MANY 600
+
+/* describe(): patch k is made patch small_patches[k % 6]. */
+static lfio_status describe_many(void *user, size_t k, lfio_radmap_patch *out)
+{
+    lfio_status st = describe(user, small_patches[k % 6], out);
+    last_described = k;
+    return st;
+}
+
+/* Writes MANY patches by both collective writes and by the serial one: the same bytes. */
+static void check_many(const char *dir)
+{
+    char serial[512], each[512], held[512];
+    snprintf(serial, sizeof serial, "%s/many-serial-%d.h5", dir, ranks);
+    snprintf(each, sizeof each, "%s/many-each-%d.h5", dir, ranks);
+    snprintf(held, sizeof held, "%s/many-held-%d.h5", dir, ranks);
+    lfio_status st = lfio_radmap_write_each_mpi(each, "test_radmap_mpi", "scene.json", MANY, describe_many, NULL,
+                                                MPI_COMM_WORLD);
+    CHECK(st == LFIO_OK, "collective write of %d patches: %s", MANY, lfio_errmsg());
+    st = lfio_radmap_write_rows_mpi(held, "test_radmap_mpi", "scene.json", MANY, describe_many, NULL, NULL, NULL,
+                                    MPI_COMM_WORLD);
+    CHECK(st == LFIO_OK, "write of %d patches, every cell held: %s", MANY, lfio_errmsg());
+    if (rank == 0) {
+        st = lfio_radmap_write_each(serial, "test_radmap_mpi", "scene.json", MANY, describe_many, NULL);
+        CHECK(st == LFIO_OK, "serial write of %d patches: %s", MANY, lfio_errmsg());
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    CHECK(same_bytes(each, serial), "%s and %s differ", each, serial);
+    CHECK(same_bytes(held, serial), "%s and %s differ", held, serial);
+    MPI_Barrier(MPI_COMM_WORLD);
 }
 
 /* Writes path by lfio_radmap_write_rows_mpi(), every rank holding every cell, count patches in order o
@@ -273,6 +311,7 @@ int main(int argc, char **argv)
     }
 
     check_write_held(dir);
+    check_many(dir);
 
     /* Format 1 on request, and format 2 of fewer patches than ranks (a rank with no cells of its own). */
     for (size_t v = 1; v <= 2; v++) {

@@ -42,7 +42,8 @@ lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, co
  * [count * rank / size, count * (rank + 1) / size)); the chunks of the
  * compressed cell datasets are dealt evenly over the ranks by cells, each
  * rank receives from the others the cells its chunks need and compresses
- * them on opt's threads, and rank 0 gathers every chunk and writes the file
+ * them on opt's threads (the last rank also the compressed tables: labels,
+ * frames, vertices, offsets), and rank 0 gathers every chunk and writes the file
  * alone (without MPI-IO): the bytes lfio_radmap_write_with() writes. In
  * format 1 (or where memory is big-endian), every rank writes its patches
  * through HDF5's MPI-IO driver, collectively, and threads is ignored.
@@ -64,9 +65,10 @@ lfio_status lfio_radmap_write_with_mpi(const char *path, const char *creator, co
  * them, with no trade of cells between the ranks; rank 0 writes the file
  * as lfio_radmap_write_with_mpi() does, the same bytes. In format 1 (or
  * where memory is big-endian), rows is asked for whole patches (count up to
- * the patch's cells), as lfio_radmap_write_with_mpi() takes them. A cell that fails its check is found by the rank that takes
- * it, whose message names it; the others fail with its status and a message
- * that another rank failed.
+ * the patch's cells), as lfio_radmap_write_with_mpi() takes them. A cell
+ * that fails its check is found by the rank that takes it, whose message
+ * names it; the others fail with its status and a message that another rank
+ * failed.
  * @return as lfio_radmap_write_with_mpi(), or rows's status.
  */
 lfio_status lfio_radmap_write_rows_mpi(const char *path, const char *creator, const char *scene, size_t count,
