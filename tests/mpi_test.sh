@@ -127,6 +127,9 @@ check "direct pass of 0.05 m cells: more than 16,384 cells" \
     python3 -c "import json; assert json.load(open('ref_fine/stats.json'))['cells'] > 16384"
 check "direct pass of 0.05 m cells: 3 ranks write the file of one process, byte for byte" \
     cmp ref_fine/radiance.h5 fine3/radiance.h5
+# each rank reads only its own chunks' cells from the solution: the count reported is still the file's
+check "direct pass of 0.05 m cells: stats.json of 3 ranks counts the cells of one process" \
+    python3 -c "import json; a, b = (json.load(open(p + '/stats.json'))['cells'] for p in ('ref_fine', 'fine3')); assert a == b, (a, b)"
 # Ranks of unequal speed (2 threads and 1) claim unequal shares of the tiles as each becomes free: the
 # maps must not depend on who claimed which.
 "${mpirun[@]}" -n 1 "$ilf_mpi" relight scene.json -o uneven --threads 2 --quiet : \

@@ -13,7 +13,16 @@
  *   - a describe() that fails on the last rank alone fails the write on every
  *     rank (with "another rank" in the others' messages), leaves an existing
  *     file as it was and no temporary beside it;
- *   - a patch every rank refuses gives LFIO_ERR_ARG everywhere, the same way.
+ *   - a patch every rank refuses gives LFIO_ERR_ARG everywhere, the same way;
+ *   - lfio_radmap_write_rows_mpi(), every rank holding every cell, in both
+ *     orders, with rows NULL and with a rows function: the serial writer's
+ *     bytes; rows is asked for each patch after describing it, slices of at
+ *     most LFIO_RADMAP_ROWS_MAX, and every cell of the file once over all
+ *     the ranks (no rank takes another's); rows failing on the last rank
+ *     alone fails the write everywhere, leaving no file; format 1 reads back;
+ *   - 600 patches, whose tables are large enough to be deflated (the last
+ *     rank compresses them for rank 0), by both collective writes: the
+ *     serial writer's bytes.
  * Every rank prints its own "N passed, M failed" line; the exit status is
  * nonzero on a rank that failed, which fails the job.
  */
@@ -37,12 +46,18 @@ static const char *fail_on_rank_label; /* set: describe() fails for this patch o
 /* orders of describe_ordered(): the 100,000-cell patch first, then last */
 static const size_t orders[2][NPATCHES] = {{3, 0, 1, 2, 4, 5, 6}, {0, 1, 2, 4, 5, 6, 3}};
 static int order;
+static const size_t *order_map;    /* describe() and rows(): patch k is patches[order_map[k]] (NULL: patches[k]) */
+static size_t last_described;      /* the patch describe() gave last, as numbered by the writer */
+static uint64_t rows_asked;        /* cells rows() gave on this rank */
+static int rows_broken;            /* calls of rows() outside its contract */
+static int fail_rows_on_last;      /* set: rows() fails on the last rank */
 
 /* describe(): patch k, failing once on the last rank for the patch labelled fail_on_rank_label. */
 static lfio_status describe(void *user, size_t k, lfio_radmap_patch *out)
 {
     (void)user;
-    *out = patches[k].p;
+    last_described = k;
+    *out = patches[order_map ? order_map[k] : k].p;
     if (fail_on_rank_label && rank == ranks - 1 && strcmp(out->label, fail_on_rank_label) == 0)
         return LFIO_ERR_NOMEM;
     return LFIO_OK;
@@ -51,7 +66,27 @@ static lfio_status describe(void *user, size_t k, lfio_radmap_patch *out)
 /* describe(): the patches in the order orders[order]. */
 static lfio_status describe_ordered(void *user, size_t k, lfio_radmap_patch *out)
 {
-    return describe(user, orders[order][k], out);
+    order_map = orders[order];
+    lfio_status st = describe(user, k, out);
+    order_map = NULL;
+    return st;
+}
+
+/* lfio_radmap_rows_fn: cells [first, first + count) of patch k (as describe() numbers it with order_map),
+ * counted, each call checked against the contract of lfio_radmap_write_rows_mpi(). */
+static lfio_status rows(void *user, size_t k, uint32_t first, uint32_t count, lfio_radmap_rows *out)
+{
+    (void)user;
+    const struct test_patch *t = &patches[order_map ? order_map[k] : k];
+    if (k != last_described || count > LFIO_RADMAP_ROWS_MAX || first > t->p.ncells || count > t->p.ncells - first)
+        rows_broken++;
+    else
+        rows_asked += count;
+    if (fail_rows_on_last && rank == ranks - 1)
+        return LFIO_ERR_NOMEM;
+    *out = (lfio_radmap_rows){t->ij + 2 * (size_t)first, t->area + first, t->centre + 3 * (size_t)first,
+                              t->irradiance + 3 * (size_t)first, t->radiosity + 3 * (size_t)first};
+    return LFIO_OK;
 }
 
 /* @return 1 if files a and b hold the same bytes, else 0. */
@@ -80,6 +115,133 @@ static int count_prefixed(const char *dir, const char *prefix)
     if (d)
         closedir(d);
     return n;
+}
+
+/* The patches of describe_many(): every made patch but the 100,000-cell one, over and over. */
+static const size_t small_patches[6] = {0, 1, 2, 4, 5, 6};
+#define MANY 600
+
+/* describe(): patch k is made patch small_patches[k % 6]. */
+static lfio_status describe_many(void *user, size_t k, lfio_radmap_patch *out)
+{
+    lfio_status st = describe(user, small_patches[k % 6], out);
+    last_described = k;
+    return st;
+}
+
+/* Writes MANY patches by both collective writes and by the serial one: the same bytes. */
+static void check_many(const char *dir)
+{
+    char serial[512], each[512], held[512];
+    snprintf(serial, sizeof serial, "%s/many-serial-%d.h5", dir, ranks);
+    snprintf(each, sizeof each, "%s/many-each-%d.h5", dir, ranks);
+    snprintf(held, sizeof held, "%s/many-held-%d.h5", dir, ranks);
+    lfio_status st = lfio_radmap_write_each_mpi(each, "test_radmap_mpi", "scene.json", MANY, describe_many, NULL,
+                                                MPI_COMM_WORLD);
+    CHECK(st == LFIO_OK, "collective write of %d patches: %s", MANY, lfio_errmsg());
+    st = lfio_radmap_write_rows_mpi(held, "test_radmap_mpi", "scene.json", MANY, describe_many, NULL, NULL, NULL,
+                                    MPI_COMM_WORLD);
+    CHECK(st == LFIO_OK, "write of %d patches, every cell held: %s", MANY, lfio_errmsg());
+    if (rank == 0) {
+        st = lfio_radmap_write_each(serial, "test_radmap_mpi", "scene.json", MANY, describe_many, NULL);
+        CHECK(st == LFIO_OK, "serial write of %d patches: %s", MANY, lfio_errmsg());
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    CHECK(same_bytes(each, serial), "%s and %s differ", each, serial);
+    CHECK(same_bytes(held, serial), "%s and %s differ", held, serial);
+    MPI_Barrier(MPI_COMM_WORLD);
+}
+
+/* Writes path by lfio_radmap_write_rows_mpi(), every rank holding every cell, count patches in order o
+ * (NULL: as made), their cells from rows() (with_rows) or described. @return its status. */
+static lfio_status write_held(const char *path, size_t count, const size_t *o, int with_rows, int format)
+{
+    lfio_radmap_write_options opt;
+    lfio_radmap_write_options_init(&opt);
+    opt.format_version = format;
+    order_map = o;
+    lfio_status st = lfio_radmap_write_rows_mpi(path, "test_radmap_mpi", "scene.json", count, describe,
+                                                with_rows ? rows : NULL, NULL, &opt, MPI_COMM_WORLD);
+    order_map = NULL;
+    return st;
+}
+
+/* lfio_radmap_write_rows_mpi() in both orders and without or with rows(): the serial writer's bytes, every
+ * cell asked once over the ranks; then rows() failing on one rank, then format 1. */
+static void check_write_held(const char *dir)
+{
+    uint64_t cells = 0;
+    for (int k = 0; k < NPATCHES; k++)
+        cells += patches[k].p.ncells;
+    for (int o = 0; o < 2; o++)
+        for (int with_rows = 0; with_rows < 2; with_rows++) {
+            char held[512], serial[512];
+            snprintf(held, sizeof held, "%s/held%d%d-%d.h5", dir, o, with_rows, ranks);
+            snprintf(serial, sizeof serial, "%s/order%d-serial-%d.h5", dir, o, ranks);
+            rows_asked = 0, rows_broken = 0;
+            lfio_status st = write_held(held, NPATCHES, orders[o], with_rows, 2);
+            CHECK(st == LFIO_OK, "write with every cell held, order %d, rows %d: %s", o, with_rows, lfio_errmsg());
+            uint64_t asked = 0;
+            int broken = 0;
+            MPI_Allreduce(&rows_asked, &asked, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
+            MPI_Allreduce(&rows_broken, &broken, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+            CHECK(broken == 0, "order %d: %d calls of rows() broke its contract", o, broken);
+            if (with_rows)
+                CHECK(asked == cells, "order %d: rows() gave %llu cells over the ranks, the file has %llu", o,
+                      (unsigned long long)asked, (unsigned long long)cells);
+            MPI_Barrier(MPI_COMM_WORLD);
+            CHECK(same_bytes(held, serial), "%s and %s differ", held, serial);
+            MPI_Barrier(MPI_COMM_WORLD);
+        }
+
+    /* one cell: no cell dataset deflated, rank 0 takes them itself */
+    static const size_t tiny_only[1] = {4};
+    char tiny[512], tiny_serial[512];
+    snprintf(tiny, sizeof tiny, "%s/held-tiny-%d.h5", dir, ranks);
+    snprintf(tiny_serial, sizeof tiny_serial, "%s/serial-tiny-%d.h5", dir, ranks);
+    CHECK(patches[4].p.ncells > 0 && patches[4].p.ncells < 16, "the tiny patch has %u cells", patches[4].p.ncells);
+    CHECK(write_held(tiny, 1, tiny_only, 1, 2) == LFIO_OK, "one cell, every cell held: %s", lfio_errmsg());
+    if (rank == 0) {
+        order_map = tiny_only;
+        CHECK(lfio_radmap_write_each(tiny_serial, "test_radmap_mpi", "scene.json", 1, describe, NULL) == LFIO_OK,
+              "serial write of one cell: %s", lfio_errmsg());
+        order_map = NULL;
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    CHECK(same_bytes(tiny, tiny_serial), "%s and %s differ", tiny, tiny_serial);
+    MPI_Barrier(MPI_COMM_WORLD);
+
+    /* rows() fails on the last rank alone: every rank fails, no file, no temporary */
+    char failed[512];
+    snprintf(failed, sizeof failed, "%s/heldfail-%d.h5", dir, ranks);
+    fail_rows_on_last = 1;
+    lfio_status st = write_held(failed, NPATCHES, NULL, 1, 2);
+    fail_rows_on_last = 0;
+    CHECK(st != LFIO_OK, "rank %d: a write whose rows() failed on rank %d succeeded", rank, ranks - 1);
+    if (rank != ranks - 1)
+        CHECK(strstr(lfio_errmsg(), "another rank") != NULL, "rank %d: message '%s'", rank, lfio_errmsg());
+    MPI_Barrier(MPI_COMM_WORLD);
+    CHECK(count_prefixed(dir, "heldfail-") == 0, "a file or temporary is left for %s", failed);
+    MPI_Barrier(MPI_COMM_WORLD);
+
+    /* format 1: each rank's patches asked whole */
+    char v1[512];
+    snprintf(v1, sizeof v1, "%s/held-format1-%d.h5", dir, ranks);
+    st = write_held(v1, NPATCHES, NULL, 1, 1);
+    CHECK(st == LFIO_OK, "format 1 with every cell held: %s", lfio_errmsg());
+    MPI_Barrier(MPI_COMM_WORLD);
+    lfio_radmap *a = NULL;
+    CHECK(lfio_radmap_read(v1, &a) == LFIO_OK && lfio_radmap_format_version(a) == 1
+              && lfio_radmap_count(a) == NPATCHES, "read %s: %s", v1, lfio_errmsg());
+    for (size_t k = 0; a && k < NPATCHES && k < lfio_radmap_count(a); k++) {
+        lfio_radmap_patch pa;
+        char what[64];
+        snprintf(what, sizeof what, "format 1 held, rank %d, patch %zu", rank, k);
+        CHECK(lfio_radmap_get(a, k, &pa) == LFIO_OK, "%s: get", what);
+        check_patch_equal(&pa, &patches[k].p, what);
+    }
+    lfio_radmap_destroy(a);
+    MPI_Barrier(MPI_COMM_WORLD);
 }
 
 int main(int argc, char **argv)
@@ -147,6 +309,9 @@ int main(int argc, char **argv)
         CHECK(!same_bytes(shared_big, serial), "the comparison can fail: %s and %s are the same", shared_big, serial);
         MPI_Barrier(MPI_COMM_WORLD);
     }
+
+    check_write_held(dir);
+    check_many(dir);
 
     /* Format 1 on request, and format 2 of fewer patches than ranks (a rank with no cells of its own). */
     for (size_t v = 1; v <= 2; v++) {

@@ -465,6 +465,7 @@ typedef struct patch_arrays {
     double *area, *centre;
     float *irradiance, *radiosity;
     uint64_t cells;  /* over the patches described so far */
+    size_t described; /* patches [0, described) counted in cells (an MPI write describes some twice) */
     int reported;    /* describe_map reported a failure */
 } patch_arrays;
 
@@ -527,6 +528,9 @@ static lfio_status describe_solution_map(patch_arrays *a, size_t k, lfio_radmap_
     p->nu = m.nu;
     p->nv = m.nv;
     p->ncells = m.ncells;
+    /* lfio describes the maps in order, and again some of them (an MPI write, reading a rank's chunks) */
+    if (k == a->described)
+        a->cells += m.ncells, a->described++;
     memcpy(p->albedo, m.albedo, sizeof p->albedo);
     memcpy(p->emission, m.emission, sizeof p->emission);
     return LFIO_OK;
@@ -580,7 +584,6 @@ static lfio_status solution_map_rows(patch_arrays *a, size_t k, uint32_t first, 
         describe_failed(a, relight_failure_text(msg, sizeof msg));
         return st == RL_ERR_NOMEM ? LFIO_ERR_NOMEM : LFIO_ERR_ARG;
     }
-    a->cells += count;
     *out = (lfio_radmap_rows){a->ij, a->area, a->centre, a->irradiance, a->radiosity};
     return LFIO_OK;
 }
@@ -604,7 +607,7 @@ static lfio_status map_rows(void *user, size_t k, uint32_t first, uint32_t count
 static lfio_status radiance_write(relight_run *run, const rl_solution *solution, size_t n, map_writer *beside,
                                   uint64_t *cells, int *reported)
 {
-    patch_arrays arrays = {solution, beside, beside ? beside->held : NULL, 0, NULL, NULL, NULL, NULL, NULL, 0, 0};
+    patch_arrays arrays = {solution, beside, beside ? beside->held : NULL, 0, NULL, NULL, NULL, NULL, NULL, 0, 0, 0};
     lfio_radmap_write_options opt;
     lfio_radmap_write_options_init(&opt);
     /* lfio describes every map first, then asks for the cells map by map and stores them a batch of

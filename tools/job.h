@@ -46,8 +46,9 @@ int job_share(const char *sub, void *buf, size_t size);
 int job_fail(int code);
 
 /** Collective: writes a radiance-map file as lfio_radmap_write_with() does, stored as opt says; in a job of
- * several ranks through parallel HDF5 (lfio/radmap_mpi.h), each patch's cells asked of rows whole (count
- * unbounded), each rank writing those of its own patches.
+ * several ranks through lfio_radmap_write_rows_mpi() (lfio/radmap_mpi.h), every rank holding every patch's
+ * cells: in format 2 each rank asks rows for the cells of its own chunks of the file, slices of at most
+ * LFIO_RADMAP_ROWS_MAX; in format 1 for whole patches (count unbounded).
  * @return as lfio_radmap_write_with(), the same on every rank. */
 lfio_status job_radmap_write(const char *path, const char *creator, const char *scene, size_t count,
                              lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user,

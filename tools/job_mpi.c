@@ -231,35 +231,13 @@ int job_fail(int code)
     return code; /* not reached */
 }
 
-/* The caller's describe and rows, joined into the one describe of lfio_radmap_write_each_mpi(). */
-typedef struct whole_patches {
-    lfio_radmap_describe_fn describe;
-    lfio_radmap_rows_fn rows;
-    void *user;
-} whole_patches;
-
-/* lfio_radmap_describe_fn: patch k described, then its cells asked whole (rows NULL: as described).
- * @return describe's or rows's status. */
-static lfio_status describe_whole(void *user, size_t k, lfio_radmap_patch *out)
-{
-    const whole_patches *w = user;
-    lfio_status st = w->describe(w->user, k, out);
-    if (st != LFIO_OK || w->rows == NULL)
-        return st;
-    lfio_radmap_rows r;
-    memset(&r, 0, sizeof r);
-    st = w->rows(w->user, k, 0, out->ncells, &r);
-    out->cell_ij = r.cell_ij, out->cell_area = r.cell_area, out->cell_centre = r.cell_centre;
-    out->irradiance = r.irradiance, out->radiosity = r.radiosity;
-    return st;
-}
-
+/* Every rank holds the whole solution once the engine returns (relight/engine.h), so each takes the cells of
+ * its own chunks of the file from it, with no trade between the ranks. */
 lfio_status job_radmap_write(const char *path, const char *creator, const char *scene, size_t count,
                              lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user,
                              const lfio_radmap_write_options *opt)
 {
-    whole_patches w = {describe, rows, user};
-    return lfio_radmap_write_with_mpi(path, creator, scene, count, describe_whole, &w, opt, job_comm);
+    return lfio_radmap_write_rows_mpi(path, creator, scene, count, describe, rows, user, opt, job_comm);
 }
 
 /* --------------------------------------------------------------- job_mpi.h */

@@ -42,7 +42,8 @@ lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, co
  * [count * rank / size, count * (rank + 1) / size)); the chunks of the
  * compressed cell datasets are dealt evenly over the ranks by cells, each
  * rank receives from the others the cells its chunks need and compresses
- * them on opt's threads, and rank 0 gathers every chunk and writes the file
+ * them on opt's threads (the last rank also the compressed tables: labels,
+ * frames, vertices, offsets), and rank 0 gathers every chunk and writes the file
  * alone (without MPI-IO): the bytes lfio_radmap_write_with() writes. In
  * format 1 (or where memory is big-endian), every rank writes its patches
  * through HDF5's MPI-IO driver, collectively, and threads is ignored.
@@ -50,6 +51,28 @@ lfio_status lfio_radmap_write_each_mpi(const char *path, const char *creator, co
  */
 lfio_status lfio_radmap_write_with_mpi(const char *path, const char *creator, const char *scene, size_t count,
                                        lfio_radmap_describe_fn describe, void *user,
+                                       const lfio_radmap_write_options *opt, MPI_Comm comm);
+
+/**
+ * Writes a file as lfio_radmap_write_with_mpi() does, for a job where every
+ * rank holds every patch's cells (the ranks of a relight, whose exchanges
+ * leave each the whole solution): describe gives patch k without its cells
+ * and rows gives them a slice at a time, as in lfio_radmap_write_with()
+ * (rows NULL: the described patch's own arrays, on every rank), the same on
+ * every rank. In format 2, each rank describes every patch, then takes from
+ * rows only the cells of its own chunks (patch k described again first,
+ * slices of at most LFIO_RADMAP_ROWS_MAX in order of first) and compresses
+ * them, with no trade of cells between the ranks; rank 0 writes the file
+ * as lfio_radmap_write_with_mpi() does, the same bytes. In format 1 (or
+ * where memory is big-endian), rows is asked for whole patches (count up to
+ * the patch's cells), as lfio_radmap_write_with_mpi() takes them. A cell
+ * that fails its check is found by the rank that takes it, whose message
+ * names it; the others fail with its status and a message that another rank
+ * failed.
+ * @return as lfio_radmap_write_with_mpi(), or rows's status.
+ */
+lfio_status lfio_radmap_write_rows_mpi(const char *path, const char *creator, const char *scene, size_t count,
+                                       lfio_radmap_describe_fn describe, lfio_radmap_rows_fn rows, void *user,
                                        const lfio_radmap_write_options *opt, MPI_Comm comm);
 
 #ifdef __cplusplus
