@@ -132,10 +132,13 @@ typedef struct lfio_radmap_rows {
 } lfio_radmap_rows;
 
 /**
- * Gives cells [first, first + count) of patch k, the patch last described,
- * for lfio_radmap_write_rows(): fills *out, whose arrays must stay valid
- * until the next call or the write's end. Asked in order of first, each
- * cell once, count at most LFIO_RADMAP_ROWS_MAX (0 for a patch of no cells).
+ * Gives cells [first, first + count) of patch k, described already, for
+ * lfio_radmap_write_rows(): fills *out, whose arrays must stay valid until
+ * the next call or the write's end. Asked patch after patch in order, and
+ * within a patch in order of first, each cell once, count at most
+ * LFIO_RADMAP_ROWS_MAX (0 for a patch of no cells). Format 2 describes
+ * every patch before it asks for any cells; format 1 asks for a patch's
+ * cells right after describing it.
  * @return LFIO_OK, or another status to abandon the write.
  */
 typedef lfio_status (*lfio_radmap_rows_fn)(void *user, size_t k, uint32_t first, uint32_t count,
@@ -145,9 +148,9 @@ typedef lfio_status (*lfio_radmap_rows_fn)(void *user, size_t k, uint32_t first,
  * Writes a file as lfio_radmap_write_each() does, but describe gives each
  * patch without its cells (its five cell arrays are ignored) and rows gives
  * them a slice at a time, so that a caller need hold at most
- * LFIO_RADMAP_ROWS_MAX cells' arrays (lfio holds them compressed in format
- * 2, each batch of whole chunks filtered as it fills, until the datasets are
- * written; in format 1 it holds one slice's compressed chunks). The
+ * LFIO_RADMAP_ROWS_MAX cells' arrays (lfio stores them as they come, a
+ * batch of whole chunks at a time, filtered on the write's threads; in
+ * format 1 it holds one slice's compressed chunks). The
  * file is the same. Each slice is checked as it arrives. rows NULL: the
  * cells are the described patch's arrays, as in lfio_radmap_write_each().
  * @return as lfio_radmap_write_each(), or rows's status.
@@ -175,10 +178,11 @@ void lfio_radmap_write_options_init(lfio_radmap_write_options *opt);
 /**
  * Writes a file as lfio_radmap_write_rows() does, stored as opt says (NULL:
  * the defaults of lfio_radmap_write_options_init()). In format 2 every array
- * is stored once for all patches, so the write holds every cell until it
- * ends (compressed as they come when lfio filters the chunks itself: about
- * the file's size; else 64 bytes a cell), and is one transfer a dataset
- * whatever the number of patches.
+ * is stored once for all patches: when lfio filters the chunks itself (a
+ * little-endian machine, deflate_level > 0) a write with rows stores the
+ * cells as they come and one without holds them compressed (about the
+ * file's size) until it ends; otherwise it holds every cell (64 bytes a
+ * cell). Either way the file is the same bytes.
  * @return as lfio_radmap_write_rows(); LFIO_ERR_ARG for options out of range.
  */
 lfio_status lfio_radmap_write_with(const char *path, const char *creator, const char *scene, size_t count,
