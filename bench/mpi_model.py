@@ -43,7 +43,7 @@ A scene 100 times larger (data/gen_scenes.py --building 10 10) scales S, C,
 B and W by 100: each rank still holds the whole scene. --setup-x100
 classroom=S replaces the classroom's scaled S by the setup measured on that
 scene itself (its 303,500 polygons read, 5.1 M cells made, ray tracer
-built: BENCHMARKS-journal.md 6f); only for a case whose cells are the
+built: BENCHMARKS-journal.md 6g); only for a case whose cells are the
 building's (the classroom at its own 0.1 m cells, not at 0.018 m). Measured on the
 building itself (one process, 2 threads, --bounces 0; BENCHMARKS-journal.md
 6e): from 1 to 25 rooms the setup grows less than 100-fold scaling says
