@@ -760,6 +760,17 @@ static int v2_add_patch(v2_content *v, const lfio_radmap_patch *p, uint32_t vert
     return ok && v2_append(v, V2_VERTICES, p->vertices, p->nverts);
 }
 
+/* The cell datasets of format 2, in v2_add_cells()'s order, with their format-1 names (patch_array()). */
+static const struct {
+    enum v2_ds t;
+    enum map_ds m;
+} v2_cells[] = {{V2_CELL_IJ, MAP_CELL_IJ},
+                {V2_CELL_AREA, MAP_CELL_AREA},
+                {V2_CELL_CENTRE, MAP_CELL_CENTRE},
+                {V2_IRRADIANCE, MAP_IRRADIANCE},
+                {V2_RADIOSITY, MAP_RADIOSITY}};
+#define V2_CELL_DATASETS (sizeof v2_cells / sizeof v2_cells[0])
+
 static int v2_stream_add(v2_stream *s, const lfio_radmap_patch *q);
 static void v2_fill_scalars(unsigned char *const *w, size_t i, const char *label, lfio_radmap_patch *p);
 
@@ -769,10 +780,10 @@ static int v2_add_cells(v2_content *v, const lfio_radmap_patch *q)
 {
     if (v->stream)
         return v2_stream_add(v->stream, q);
-    return v2_append(v, V2_CELL_IJ, q->cell_ij, q->ncells) && v2_append(v, V2_CELL_AREA, q->cell_area, q->ncells)
-           && v2_append(v, V2_CELL_CENTRE, q->cell_centre, q->ncells)
-           && v2_append(v, V2_IRRADIANCE, q->irradiance, q->ncells)
-           && v2_append(v, V2_RADIOSITY, q->radiosity, q->ncells);
+    int ok = 1;
+    for (size_t k = 0; ok && k < V2_CELL_DATASETS; k++)
+        ok = v2_append(v, v2_cells[k].t, patch_array(q, v2_cells[k].m), q->ncells);
+    return ok;
 }
 
 /* Takes the cells of patch k (described as p), a slice at a time, checked, into v. @return LFIO_OK or the
@@ -849,22 +860,6 @@ static size_t v2_chunk_list(const lfio__h5_layout *l, size_t row, const unsigned
     return n;
 }
 
-/* The cell datasets of format 2, in v2_add_cells()'s order. */
-static const enum v2_ds v2_cell_datasets[] = {V2_CELL_IJ, V2_CELL_AREA, V2_CELL_CENTRE, V2_IRRADIANCE, V2_RADIOSITY};
-#define V2_CELL_DATASETS (sizeof v2_cell_datasets / sizeof v2_cell_datasets[0])
-
-/* @return slice q's array of cell dataset t. */
-static const void *v2_slice_array(const lfio_radmap_patch *q, enum v2_ds t)
-{
-    switch (t) {
-    case V2_CELL_IJ: return q->cell_ij;
-    case V2_CELL_AREA: return q->cell_area;
-    case V2_CELL_CENTRE: return q->cell_centre;
-    case V2_IRRADIANCE: return q->irradiance;
-    default: assert(t == V2_RADIOSITY); return q->radiosity;
-    }
-}
-
 /* Sets up s to take a serial write's cells, into prep (zeroed) unless stored as they come, filtered at c's
  * level on c's threads. @return 1, or 0 when memory runs out. */
 static int v2_stream_init(v2_stream *s, struct v2_prepared *prep, const struct map_content *c, const char *path)
@@ -878,7 +873,7 @@ static int v2_stream_init(v2_stream *s, struct v2_prepared *prep, const struct m
     s->batch = s->threads < 8 ? (s->threads > 0 ? s->threads : 1) : 8;
     s->level = c->level;
     for (size_t k = 0; k < V2_CELL_DATASETS; k++) {
-        const enum v2_ds t = v2_cell_datasets[k];
+        const enum v2_ds t = v2_cells[k].t;
         if ((s->stage[t] = malloc((size_t)s->batch * V2_CHUNK * v2_row_bytes(t))) == NULL)
             return 0;
     }
@@ -911,7 +906,7 @@ static int v2_stream_flush(v2_stream *s, uint64_t rows, uint64_t chunk, const in
     size_t m = 0;
     for (size_t i = 0; i < n; i++)
         for (size_t k = 0; k < V2_CELL_DATASETS; k++) {
-            const enum v2_ds t = v2_cell_datasets[k];
+            const enum v2_ds t = v2_cells[k].t;
             if (!deflated[t])
                 continue;
             const size_t row = v2_row_bytes(t);
@@ -928,7 +923,7 @@ static int v2_stream_flush(v2_stream *s, uint64_t rows, uint64_t chunk, const in
     size_t j = 0;
     for (size_t i = 0; i < n; i++)
         for (size_t k = 0; k < V2_CELL_DATASETS; k++) {
-            const enum v2_ds t = v2_cell_datasets[k];
+            const enum v2_ds t = v2_cells[k].t;
             if (!deflated[t])
                 continue;
             if (s->st != LFIO_OK)
@@ -957,9 +952,9 @@ static int v2_stream_add(v2_stream *s, const lfio_radmap_patch *q)
     for (uint64_t done = 0; done < q->ncells;) {
         const uint64_t take = room - s->staged < q->ncells - done ? room - s->staged : q->ncells - done;
         for (size_t k = 0; k < V2_CELL_DATASETS; k++) {
-            const enum v2_ds t = v2_cell_datasets[k];
+            const enum v2_ds t = v2_cells[k].t;
             const size_t row = v2_row_bytes(t);
-            memcpy(s->stage[t] + (size_t)s->staged * row, (const unsigned char *)v2_slice_array(q, t) + done * row,
+            memcpy(s->stage[t] + (size_t)s->staged * row, (const unsigned char *)patch_array(q, v2_cells[k].m) + done * row,
                    (size_t)take * row);
         }
         s->staged += take, done += take;
@@ -980,7 +975,7 @@ static lfio_status v2_stream_finish(v2_stream *s, v2_content *v, uint64_t cells)
     int deflated[V2_COUNT] = {0};
     uint64_t chunk = V2_CHUNK;
     for (size_t k = 0; k < V2_CELL_DATASETS; k++) {
-        const enum v2_ds t = v2_cell_datasets[k];
+        const enum v2_ds t = v2_cells[k].t;
         lfio__h5_layout l;
         v2_layout(t, cells, s->level, &l);
         deflated[t] = l.deflate != 0;
@@ -1105,11 +1100,11 @@ static lfio_status v2_store_held(const char *path, const v2_open *o, const struc
 {
     size_t most = 0;
     for (size_t k = 0; k < V2_CELL_DATASETS; k++)
-        most = prep->n[v2_cell_datasets[k]] > most ? prep->n[v2_cell_datasets[k]] : most;
+        most = prep->n[v2_cells[k].t] > most ? prep->n[v2_cells[k].t] : most;
     lfio_status st = LFIO_OK;
     for (size_t i = 0; i < most; i++)
         for (size_t k = 0; st == LFIO_OK && k < V2_CELL_DATASETS; k++) {
-            const enum v2_ds t = v2_cell_datasets[k];
+            const enum v2_ds t = v2_cells[k].t;
             if (v2_cells_filtered(o, t, direct) && i < prep->n[t])
                 st = v2_store_chunk(path, o, t, i, &prep->c[t][i]);
         }
