@@ -351,13 +351,33 @@ ilf_json_status ilf_json_vector(ilf_json_ctx *ctx, const ilf_json *j, const char
         return ilf_json_fail(ctx, elem, "expected %zu numbers, got %zu", n, count);
     size_t i = 0;
     for (const cJSON *e = j->child; e != NULL; e = e->next, i++) {
+        if (cJSON_IsNumber(e) && isfinite(e->valuedouble)) {
+            /* what ilf_json_number() takes, without naming the item: a large scene has millions */
+            out[i] = e->valuedouble;
+            continue;
+        }
         char sub[ILF_JSON_ELEM_MAX];
         ilf_json_item_name(sub, elem, i);
-        ilf_json_status st = ilf_json_number(ctx, e, sub, &out[i]);
-        if (st != ILF_JSON_OK)
-            return st;
+        return ilf_json_number(ctx, e, sub, &out[i]);
     }
     return ILF_JSON_OK;
+}
+
+ilf_json_status ilf_json_vector_item(ilf_json_ctx *ctx, const ilf_json *j, const char *parent, size_t i, size_t n,
+                                     double *out)
+{
+    size_t k = 0;
+    for (const cJSON *e = cJSON_IsArray(j) ? j->child : NULL; e != NULL && k < n; e = e->next, k++) {
+        if (!cJSON_IsNumber(e) || !isfinite(e->valuedouble))
+            break;
+        out[k] = e->valuedouble;
+    }
+    if (k == n && cJSON_IsArray(j) && ilf_json_count(j) == n)
+        return ILF_JSON_OK;
+    /* something is wrong: ilf_json_vector() finds it again and says it under the item's name */
+    char elem[ILF_JSON_ELEM_MAX];
+    ilf_json_item_name(elem, parent, i);
+    return ilf_json_vector(ctx, j, elem, n, out);
 }
 
 ilf_json_status ilf_json_integer(ilf_json_ctx *ctx, const ilf_json *j, const char *elem, uint64_t lo, uint64_t hi,

@@ -214,12 +214,10 @@ static rl_status read_polygon(rl_build *b, const ilf_json *p, const char *elem)
     if (n > RL_MAX_POLYGON_VERTICES) /* before anything is read into b->face */
         return rl__build_fail(b, elem, "has %zu vertices, more than the limit of %u", n, RL_MAX_POLYGON_VERTICES);
     size_t i = 0;
-    for (const ilf_json *v = ilf_json_first(vj); v; v = ilf_json_next(v), i++) {
-        char ve[ELEM_MAX];
-        entry_elem(ve, sub, i);
-        if ((st = json_vector(b, v, ve, 3, b->face[i])) != RL_OK)
+    ilf_json_ctx c = {.file = b->file};
+    for (const ilf_json *v = ilf_json_first(vj); v; v = ilf_json_next(v), i++)
+        if ((st = json_result(&c, ilf_json_vector_item(&c, v, sub, i, 3, b->face[i]))) != RL_OK)
             return st;
-    }
     return rl__build_polygon(b, (const double (*)[3])b->face, n, material, elem, RL_POLY_STRICT);
 }
 

@@ -135,6 +135,11 @@ ilf_json_status ilf_json_number(ilf_json_ctx *ctx, const ilf_json *j, const char
  * @return ILF_JSON_OK, or ILF_JSON_ERR_INPUT naming elem or the item at fault. */
 ilf_json_status ilf_json_vector(ilf_json_ctx *ctx, const ilf_json *j, const char *elem, size_t n, double *out);
 
+/* ilf_json_vector() of j, entry i of array element parent, naming it "parent[i]" only in a message (a large
+ * scene's vertices are millions of entries). */
+ilf_json_status ilf_json_vector_item(ilf_json_ctx *ctx, const ilf_json *j, const char *parent, size_t i, size_t n,
+                                     double *out);
+
 /* Reads a whole number in lo..hi (hi at most 2^53, what a JSON number holds exactly), also a power
  * of two when pow2. @return ILF_JSON_OK and *out, or ILF_JSON_ERR_INPUT naming elem and the rule. */
 ilf_json_status ilf_json_integer(ilf_json_ctx *ctx, const ilf_json *j, const char *elem, uint64_t lo, uint64_t hi,
