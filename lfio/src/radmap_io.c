@@ -697,7 +697,9 @@ typedef struct v2_stream {
     uint64_t staged;                /* rows in each stage */
     uint64_t chunks_done;           /* chunks of each cell dataset filtered so far */
     size_t cap[V2_COUNT];           /* chunks prep->c[t] has room for */
-    lfio__chunk *work;              /* one batch's chunks of every cell dataset */
+    lfio__chunk *work;              /* one batch's chunks of every cell dataset, in file order */
+    enum v2_ds *work_ds;            /* each one's dataset */
+    size_t *work_index;             /* and its chunk index within the batch */
     uint32_t batch;                 /* whole chunks filtered together */
     unsigned threads;
     int level;
@@ -877,7 +879,11 @@ static int v2_stream_init(v2_stream *s, struct v2_prepared *prep, const struct m
         if ((s->stage[t] = malloc((size_t)s->batch * V2_CHUNK * v2_row_bytes(t))) == NULL)
             return 0;
     }
-    return (s->work = malloc(V2_CELL_DATASETS * s->batch * sizeof *s->work)) != NULL;
+    const size_t most = V2_CELL_DATASETS * s->batch;
+    s->work = malloc(most * sizeof *s->work);
+    s->work_ds = malloc(most * sizeof *s->work_ds);
+    s->work_index = malloc(most * sizeof *s->work_index);
+    return s->work && s->work_ds && s->work_index;
 }
 
 static lfio_status v2_store_chunk(const char *path, const v2_open *o, enum v2_ds t, size_t k, const lfio__chunk *c);
@@ -911,6 +917,7 @@ static int v2_stream_flush(v2_stream *s, uint64_t rows, uint64_t chunk, const in
                 continue;
             const size_t row = v2_row_bytes(t);
             const uint64_t r0 = i * chunk, take = rows - r0 < chunk ? rows - r0 : chunk;
+            s->work_ds[m] = t, s->work_index[m] = i;
             s->work[m++] = (lfio__chunk){s->stage[t] + r0 * row, take * row, chunk * row, v2_datasets[t].size,
                                          s->level, NULL, 0};
         }
@@ -920,22 +927,15 @@ static int v2_stream_flush(v2_stream *s, uint64_t rows, uint64_t chunk, const in
         return 0;
     }
     /* in the order they were listed: chunk by chunk, each in every dataset */
-    size_t j = 0;
-    for (size_t i = 0; i < n; i++)
-        for (size_t k = 0; k < V2_CELL_DATASETS; k++) {
-            const enum v2_ds t = v2_cells[k].t;
-            if (!deflated[t])
-                continue;
-            if (s->st != LFIO_OK)
-                ; /* freed below */
-            else if (s->open)
-                s->st = v2_store_chunk(s->path, s->open, t, (size_t)s->chunks_done + i, &s->work[j]);
-            else if (v2_stream_keep(s, t, &s->work[j]))
-                s->work[j].out = NULL; /* kept in prep, which frees it */
-            else
-                s->st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", s->path);
-            j++;
-        }
+    for (size_t j = 0; j < m && s->st == LFIO_OK; j++) {
+        const enum v2_ds t = s->work_ds[j];
+        if (s->open)
+            s->st = v2_store_chunk(s->path, s->open, t, (size_t)s->chunks_done + s->work_index[j], &s->work[j]);
+        else if (v2_stream_keep(s, t, &s->work[j]))
+            s->work[j].out = NULL; /* kept in prep, which frees it */
+        else
+            s->st = lfio__fail(LFIO_ERR_NOMEM, "%s: out of memory", s->path);
+    }
     lfio__chunks_free(s->work, m);
     s->chunks_done += n;
     return s->st == LFIO_OK;
@@ -1029,6 +1029,8 @@ static void v2_stream_free(v2_stream *s, struct v2_prepared *prep)
         free(prep->c[t]);
     }
     free(s->work);
+    free(s->work_ds);
+    free(s->work_index);
 }
 
 /* Stores filtered chunk c as chunk k of dataset t of o, as it is. @return LFIO_OK, or LFIO_ERR_IO. */
