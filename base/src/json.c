@@ -342,8 +342,26 @@ ilf_json_status ilf_json_number(ilf_json_ctx *ctx, const ilf_json *j, const char
     return ILF_JSON_OK;
 }
 
+/* Reads j into out[0..n) when it is an array of exactly n finite numbers, the common case, checked without
+ * naming anything (a large scene has millions of vectors). @return 1, or 0 for the readers' checks to say
+ * what is wrong. */
+static int take_vector(const cJSON *j, size_t n, double *out)
+{
+    if (!cJSON_IsArray(j))
+        return 0;
+    size_t k = 0;
+    for (const cJSON *e = j->child; e != NULL; e = e->next, k++) {
+        if (k == n || !cJSON_IsNumber(e) || !isfinite(e->valuedouble))
+            return 0;
+        out[k] = e->valuedouble;
+    }
+    return k == n;
+}
+
 ilf_json_status ilf_json_vector(ilf_json_ctx *ctx, const ilf_json *j, const char *elem, size_t n, double *out)
 {
+    if (take_vector(j, n, out))
+        return ILF_JSON_OK;
     if (!cJSON_IsArray(j))
         return ilf_json_fail(ctx, elem, "expected an array of %zu numbers, got %s", n, ilf_json_kind(j));
     size_t count = ilf_json_count(j);
@@ -351,14 +369,11 @@ ilf_json_status ilf_json_vector(ilf_json_ctx *ctx, const ilf_json *j, const char
         return ilf_json_fail(ctx, elem, "expected %zu numbers, got %zu", n, count);
     size_t i = 0;
     for (const cJSON *e = j->child; e != NULL; e = e->next, i++) {
-        if (cJSON_IsNumber(e) && isfinite(e->valuedouble)) {
-            /* what ilf_json_number() takes, without naming the item: a large scene has millions */
-            out[i] = e->valuedouble;
-            continue;
-        }
         char sub[ILF_JSON_ELEM_MAX];
         ilf_json_item_name(sub, elem, i);
-        return ilf_json_number(ctx, e, sub, &out[i]);
+        ilf_json_status st = ilf_json_number(ctx, e, sub, &out[i]);
+        if (st != ILF_JSON_OK)
+            return st;
     }
     return ILF_JSON_OK;
 }
@@ -366,15 +381,8 @@ ilf_json_status ilf_json_vector(ilf_json_ctx *ctx, const ilf_json *j, const char
 ilf_json_status ilf_json_vector_item(ilf_json_ctx *ctx, const ilf_json *j, const char *parent, size_t i, size_t n,
                                      double *out)
 {
-    size_t k = 0;
-    for (const cJSON *e = cJSON_IsArray(j) ? j->child : NULL; e != NULL && k < n; e = e->next, k++) {
-        if (!cJSON_IsNumber(e) || !isfinite(e->valuedouble))
-            break;
-        out[k] = e->valuedouble;
-    }
-    if (k == n && cJSON_IsArray(j) && ilf_json_count(j) == n)
+    if (take_vector(j, n, out))
         return ILF_JSON_OK;
-    /* something is wrong: ilf_json_vector() finds it again and says it under the item's name */
     char elem[ILF_JSON_ELEM_MAX];
     ilf_json_item_name(elem, parent, i);
     return ilf_json_vector(ctx, j, elem, n, out);
