@@ -256,7 +256,15 @@ static int parse_header(ply_cursor *c, ply_header *h)
             continue;
         if (word_is(w[0], wl[0], "end_header")) {
             h->body = c->pos;
-            return h->has_format ? 1 : fail(c, "PLY header: no format line");
+            if (!h->has_format)
+                return fail(c, "PLY header: no format line");
+            /* assimp 5.2 skips a line end that opens binary data (assimp issue #5341), then reads every value
+             * one byte late: a valid file (a first vertex at x = 0.01 does it) fails or, worse, reads wrong */
+            if (h->format != PLY_ASCII && h->body < c->size && d[h->body] == '\n')
+                return fail(c, "binary data that opens with byte 0x0a, a line end, which assimp 5.2 skips and then "
+                               "reads every value one byte late (assimp issue #5341): save the file as ASCII PLY "
+                               "or in another format");
+            return 1;
         }
         if (word_is(w[0], wl[0], "format"))
             ok = header_format(c, h, w, wl, n);

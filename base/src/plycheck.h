@@ -8,7 +8,10 @@
  * 10^9 vertices costs minutes and gigabytes, a face claiming 4*10^9 indices
  * aborts the process. ilf__ply_check() walks the file's structure, as the
  * header describes it, against the bytes actually there, so that every count
- * assimp will allocate from is bounded by the file's size.
+ * assimp will allocate from is bounded by the file's size. It also refuses
+ * the one valid layout assimp 5.2 misreads: binary data whose first byte is
+ * a line end (0x0a), which assimp skips, reading every value after it one
+ * byte late (assimp issue #5341).
  */
 #ifndef ILF_PLYCHECK_H
 #define ILF_PLYCHECK_H

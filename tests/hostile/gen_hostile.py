@@ -84,6 +84,10 @@ def meshes(out):
     write(os.path.join(d, "truncated_binary.ply"), PLY_BINARY_HEADER % (3, 1) + body[:-5])
     write(os.path.join(d, "vertices_absurd_binary.ply"), PLY_BINARY_HEADER % (10 ** 9, 10 ** 9) + body)
     write(os.path.join(d, "garbage.ply"), b"ply\n" + garbage(4096))
+    # a valid file whose first vertex's x, 0.01, opens the data with byte 0x0a: assimp 5.2 skips it
+    opens = struct.pack("<9f", 0.01, 0, 0, 1, 0, 0, 1, 1, 0) + bytes([3]) + struct.pack("<3i", 0, 1, 2)
+    assert opens[0] == 0x0a
+    write(os.path.join(d, "binary_opens_with_line_end.ply"), PLY_BINARY_HEADER % (3, 1) + opens)
     write(os.path.join(d, "garbage.obj"), garbage(4096))
     write(os.path.join(d, "deep.gltf"), "[" * 100000 + "]" * 100000)
     face = " ".join(str(k + 1) for k in range(100000))
