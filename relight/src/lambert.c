@@ -47,6 +47,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "emitter_tree.h"
 #include "mesh.h"
 #include "method.h"
 #include "point_gather.h"
@@ -125,6 +126,21 @@ static void block_mark(const block_walk *w, uint32_t i0, uint32_t i1, uint32_t j
         memset(w->s->vis + (size_t)(j - w->t->row0) * nu + i0, (int)vis, i1 - i0);
 }
 
+/* @return 1 if one of the polygons that hid emitters from the whole tile (rl_scratch.reach_blockers, the
+ * cull's) crosses every segment from block a (na) to the pair's emitter, by the cull's test and margins
+ * (emitter_tree.h), which hold for the rays as traced. A lamp of a room diagonally off is hidden from a tile
+ * by the corner's two walls together, by neither alone, so the cull keeps it; most of the tile's blocks are
+ * then hidden by one wall, which this finds without collecting the polygons of a beam that crosses rooms. */
+static int hidden_by_tile_blockers(const block_walk *w, const v3 *a, size_t na)
+{
+    const rl_pair *p = w->p;
+    for (size_t k = 0; k < w->s->nreach_blockers; k++)
+        if (rl__occluders_blocks(w->ctx->occluders, w->s->reach_blockers[k], a, na, p->sclip, p->ns,
+                                 RL_REACH_TOL_EPS * p->eps, RL_REACH_EDGE_EPS * p->eps))
+            return 1;
+    return 0;
+}
+
 /* Classifies the segments from grid squares [i0, i1) x [j0, j1) of the tile
  * (clipped to its polygon) to the pair's emitter, given a superset of the
  * polygons meeting them (list, n; SIZE_MAX: unknown), and marks each square
@@ -148,7 +164,9 @@ static void classify_block(const block_walk *w, uint32_t i0, uint32_t i1, uint32
     size_t nmine = SIZE_MAX;
     if (nc >= 3 && depth + 1 < BLOCK_LEVELS && rl__beam_make(a, nc, w->p->sclip, w->p->ns, w->p->eps, w->beam)) {
         const rl_occluders *occ = w->ctx->occluders;
-        if (n == SIZE_MAX) {
+        if (n == SIZE_MAX && hidden_by_tile_blockers(w, a, nc)) {
+            vis = VIS_BLOCKED;
+        } else if (n == SIZE_MAX) {
             uint32_t *found = w->s->block_occ + (size_t)(BLOCK_LEVELS - 1) * BLOCK_OCC_CAP;
             size_t nf = rl__occluders_collect(occ, w->beam, w->p->e->polygon, found, BLOCK_OCC_CAP);
             if (nf != SIZE_MAX)

@@ -15,6 +15,7 @@
 #include "emitter.h"
 #include "ilf/hash.h"
 #include "relight/engine.h"
+#include "emitter_tree.h"
 #include "shadow.h"
 #include "tracer.h"
 
@@ -87,6 +88,8 @@ typedef struct rl_scratch {
     size_t blend_cap;
     uint32_t *reach;      /* the emitters the current tile may exchange light with (emitter_tree.h) */
     size_t reach_cap;
+    uint32_t reach_blockers[RL_REACH_BLOCKERS]; /* polygons that hid emitters from the current tile */
+    size_t nreach_blockers;
 } rl_scratch;
 
 /* What a bounce pass by first hits reads of one scene polygon: the radiance its map re-emits from each

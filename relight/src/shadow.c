@@ -277,34 +277,54 @@ static int meets(const rl_occluders *o, const occ_poly *q, const rl_beam *p)
     return v3_len(newell) > 1e-6 * p->tol * p->tol;
 }
 
-/* @return 1 if polygon q crosses every segment between the convex hulls of
+/* What polygon q does to the segments between the convex hulls of points pa (na) and pb (nb) (stands()). */
+typedef enum stand { STAND_MISSES, STAND_ONE_EDGE, STAND_BLOCKS } stand;
+
+/* STAND_BLOCKS if q crosses every segment between the convex hulls of
  * points pa (na) and pb (nb): its plane parts the two sets by more than tol,
  * and the segment between every pair of their points crosses it more than
  * edge inside its edges (the section of a convex hull by a plane that parts
- * its ends is the hull of those crossings; the ends need not be planar). */
-static int blocks_ends(const rl_occluders *o, const occ_poly *q, const v3 *pa, size_t na, const v3 *pb, size_t nb,
-                       double tol, double edge)
+ * its ends is the hull of those crossings; the ends need not be planar).
+ * With one_edge, STAND_ONE_EDGE if its plane parts them and the crossings
+ * lie so inside all its edges but one, whose number goes to *open
+ * (corner_blocks()); else STAND_MISSES, at the first crossing outside. */
+static stand stands(const rl_occluders *o, const occ_poly *q, const v3 *pa, size_t na, const v3 *pb, size_t nb,
+                    double tol, double edge, int one_edge, uint32_t *open)
 {
     const v3 *v = o->verts + q->first;
     int near_above = v3_dot(v3_sub(pa[0], v[0]), q->n) > 0; /* the side every near vertex must share */
+    uint32_t out = q->count;                                 /* the one edge some crossing lies outside */
     for (size_t ia = 0; ia < na; ia++) {
         double sa = v3_dot(v3_sub(pa[ia], v[0]), q->n);
         if (!(fabs(sa) > tol) || (sa > 0) != near_above)
-            return 0;
+            return STAND_MISSES;
         for (size_t b = 0; b < nb; b++) {
             double sb = v3_dot(v3_sub(pb[b], v[0]), q->n);
             if (!(sa > 0 ? sb < -tol : sb > tol))
-                return 0;
+                return STAND_MISSES;
             v3 h = v3_madd(pa[ia], v3_sub(pb[b], pa[ia]), sa / (sa - sb));
             for (uint32_t i = 0; i < q->count; i++) {
                 v3 a = v[i], c = v[(i + 1) % q->count];
                 v3 m = v3_cross(q->n, v3_sub(c, a));
-                if (!(v3_dot(v3_sub(h, a), m) > edge * v3_len(m)))
-                    return 0;
+                if (v3_dot(v3_sub(h, a), m) > edge * v3_len(m) || i == out)
+                    continue;
+                if (!one_edge || out < q->count)
+                    return STAND_MISSES;
+                out = i;
             }
         }
     }
-    return 1;
+    if (out == q->count)
+        return STAND_BLOCKS;
+    *open = out;
+    return STAND_ONE_EDGE;
+}
+
+/* @return 1 if polygon q crosses every segment between the hulls of pa (na) and pb (nb) (stands()). */
+static int blocks_ends(const rl_occluders *o, const occ_poly *q, const v3 *pa, size_t na, const v3 *pb, size_t nb,
+                       double tol, double edge)
+{
+    return stands(o, q, pa, na, pb, nb, tol, edge, 0, NULL) == STAND_BLOCKS;
 }
 
 /* blocks_ends() for beam p's two ends and tolerance. */
@@ -377,27 +397,102 @@ static int segment_meets_box(v3 p0, v3 p1, v3 lo, v3 hi, double pad)
     return 1;
 }
 
-/* The segments a blocker must cross, to tell which boxes may hold one: from
- * the near end's vertex mean to the far end's, and from each vertex of either
- * end to the other end's mean. */
-typedef struct probe_set {
-    v3 from[2 * RL_BEAM_MAX_VERTS + 1], to[2 * RL_BEAM_MAX_VERTS + 1];
-    size_t n;
-} probe_set;
-
-/* @return 1 if box [lo, hi] meets every probe of ps (widened by pad). */
-static int box_meets_probes(const probe_set *ps, v3 lo, v3 hi, double pad)
+/* @return 1 if points u and w are the same, coordinate for coordinate. */
+static int same_point(v3 u, v3 w)
 {
-    for (size_t i = 0; i < ps->n; i++)
-        if (!segment_meets_box(ps->from[i], ps->to[i], lo, hi, pad))
+    return u.x == w.x && u.y == w.y && u.z == w.z;
+}
+
+/* Finds the polygon other than kq that holds edge e of polygon kq, the same two vertices in either order.
+ * @return 1 with it in *kr and the edge's number in it in *er, or 0. */
+static int across_edge(const rl_occluders *o, uint32_t kq, uint32_t e, uint32_t *kr, uint32_t *er)
+{
+    const occ_poly *q = &o->polys[kq];
+    v3 q0 = o->verts[q->first + e], q1 = o->verts[q->first + (e + 1) % q->count];
+    v3 mid = v3_scale(v3_add(q0, q1), 0.5); /* within the box of any polygon holding both ends */
+    uint32_t stack[RL_BOX_TREE_STACK];
+    size_t top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const rl_box_node *nd = &o->tree.nodes[stack[--top]];
+        if (!boxes_overlap(nd->lo, nd->hi, mid, mid))
+            continue;
+        if (nd->count == 0) {
+            if (top + 2 > RL_BOX_TREE_STACK)
+                return 0; /* cannot happen; finding none is safe */
+            stack[top++] = nd->first + 1;
+            stack[top++] = nd->first;
+            continue;
+        }
+        for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
+            uint32_t k = o->tree.order[i];
+            const occ_poly *r = &o->polys[k];
+            if (k == kq || !boxes_overlap(r->lo, r->hi, mid, mid))
+                continue;
+            const v3 *vr = o->verts + r->first;
+            for (uint32_t j = 0; j < r->count; j++) {
+                v3 r0 = vr[j], r1 = vr[(j + 1) % r->count];
+                if ((same_point(q0, r1) && same_point(q1, r0)) || (same_point(q0, r0) && same_point(q1, r1))) {
+                    *kr = k, *er = j;
+                    return 1;
+                }
+            }
+        }
+    }
+    return 0;
+}
+
+/* @return 1 if polygon r lies on point x's side of q's plane: no vertex on the other side (rounding apart),
+ * and one clear of the plane (r is not in q's plane). */
+static int on_side_of(const rl_occluders *o, const occ_poly *q, const occ_poly *r, v3 x)
+{
+    const v3 *vq = o->verts + q->first, *vr = o->verts + r->first;
+    double sx = v3_dot(v3_sub(x, vq[0]), q->n);
+    int off = 0;
+    for (uint32_t i = 0; i < r->count; i++) {
+        double s = v3_dot(v3_sub(vr[i], vq[0]), q->n), round = 1e-9 * (1.0 + v3_maxabs(vr[i]));
+        if ((s > 0) != (sx > 0) && fabs(s) > round)
             return 0;
-    return 1;
+        off |= fabs(s) > 1e3 * round;
+    }
+    return off;
+}
+
+/* The corner of polygon kq, which parts the hulls of a (na) and b (nb) and crosses their segments inside all
+ * its edges but edge e (stands()), with the polygon across that edge, if any. Each on x's side of the other's
+ * plane, for x a point of a or of b: the region on that side of both planes is bounded there by the two
+ * half-planes that the line of the shared edge cuts them to, which hold the polygons. Every segment from a to
+ * b (beyond both planes) leaves the region about a, or enters the region about b, through a point of the
+ * plane it crosses first, or last, on its half-plane: one the polygon there crosses inside its other edges, so
+ * a point of that polygon. @return 1 if the corner so crosses every segment. */
+static int corner_blocks(const rl_occluders *o, uint32_t kq, uint32_t e, const v3 *a, size_t na, const v3 *b,
+                         size_t nb, double tol, double edge)
+{
+    uint32_t kr = 0, er = 0, open = 0;
+    if (!across_edge(o, kq, e, &kr, &er))
+        return 0;
+    const occ_poly *q = &o->polys[kq], *r = &o->polys[kr];
+    if (!((on_side_of(o, q, r, a[0]) && on_side_of(o, r, q, a[0])) ||
+          (on_side_of(o, q, r, b[0]) && on_side_of(o, r, q, b[0]))))
+        return 0;
+    stand s = stands(o, r, a, na, b, nb, tol, edge, 1, &open);
+    return s == STAND_BLOCKS || (s == STAND_ONE_EDGE && open == er);
+}
+
+/* @return 1 if polygon k crosses every segment between the hulls of a (na) and b (nb) on its own or, where
+ * they cross it inside all its edges but one, with the polygon across that edge (corner_blocks()). */
+static int blocks_or_corner(const rl_occluders *o, uint32_t k, const v3 *a, size_t na, const v3 *b, size_t nb,
+                            double tol, double edge)
+{
+    uint32_t open = 0;
+    stand s = stands(o, &o->polys[k], a, na, b, nb, tol, edge, 1, &open);
+    return s == STAND_BLOCKS || (s == STAND_ONE_EDGE && corner_blocks(o, k, open, a, na, b, nb, tol, edge));
 }
 
 int rl__occluders_blocks(const rl_occluders *o, uint32_t k, const v3 *a, size_t na, const v3 *b, size_t nb,
                          double tol, double edge)
 {
-    return k < o->npolys && na >= 1 && nb >= 1 && blocks_ends(o, &o->polys[k], a, na, b, nb, tol, edge);
+    return k < o->npolys && na >= 1 && nb >= 1 && blocks_or_corner(o, k, a, na, b, nb, tol, edge);
 }
 
 int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const v3 *b, size_t nb, double tol,
@@ -405,35 +500,29 @@ int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const
 {
     if (o->npolys == 0 || na < 1 || nb < 1 || na > RL_BEAM_MAX_VERTS || nb > RL_BEAM_MAX_VERTS)
         return 0;
-    probe_set ps;
+    /* one of the corner's two polygons crosses the segment between the hulls' vertex means */
     v3 ca = v3_mean(a, na), cb = v3_mean(b, nb);
-    ps.from[0] = ca, ps.to[0] = cb, ps.n = 1;
-    for (size_t i = 0; i < na; i++)
-        ps.from[ps.n] = a[i], ps.to[ps.n++] = cb;
-    for (size_t j = 0; j < nb; j++)
-        ps.from[ps.n] = ca, ps.to[ps.n++] = b[j];
-    /* a blocker crosses every probe inside its edges, so its box (and every box holding it) meets each;
-     * the pad only keeps rounding from turning away a box as thin as the wall it holds */
     double pad = edge + 1e-12 * (v3_maxabs(ca) + v3_maxabs(cb));
     uint32_t stack[RL_BOX_TREE_STACK];
     size_t top = 0;
     stack[top++] = 0;
     while (top > 0) {
         const rl_box_node *nd = &o->tree.nodes[stack[--top]];
-        if (!box_meets_probes(&ps, nd->lo, nd->hi, pad))
+        if (!segment_meets_box(ca, cb, nd->lo, nd->hi, pad))
             continue;
         if (nd->count == 0) {
             if (top + 2 > RL_BOX_TREE_STACK)
-                return 0; /* deeper than any tree of 2^64 polygons: cannot happen; finding none is safe */
+                return 0; /* cannot happen; finding none is safe */
             stack[top++] = nd->first + 1;
             stack[top++] = nd->first;
             continue;
         }
         for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
-            const occ_poly *q = &o->polys[o->tree.order[i]];
-            if (segment_meets_box(ca, cb, q->lo, q->hi, pad) && blocks_ends(o, q, a, na, b, nb, tol, edge)) {
+            uint32_t k = o->tree.order[i];
+            const occ_poly *q = &o->polys[k];
+            if (segment_meets_box(ca, cb, q->lo, q->hi, pad) && blocks_or_corner(o, k, a, na, b, nb, tol, edge)) {
                 if (blocker)
-                    *blocker = o->tree.order[i];
+                    *blocker = k;
                 return 1;
             }
         }

@@ -66,17 +66,29 @@ int rl__beam_make(const v3 *a, size_t na, const v3 *b, size_t nb, double tol, rl
  * cap meet it (then treat the beam as PARTIAL and the list as unknown). */
 size_t rl__occluders_collect(const rl_occluders *o, const rl_beam *p, int32_t skip, uint32_t *list, size_t cap);
 
-/* Tells whether one polygon of o crosses every segment from the convex hull
- * of the points a (na) to that of the points b (nb; neither need be planar,
- * each at most RL_BEAM_MAX_VERTS): its plane parts them by more than tol and
- * every crossing lies more than edge (<= tol) inside its edges. It visits only the
- * boxes that segments between the two sets must cross, and stops at the
- * first such polygon, which it gives in *blocker (unless NULL). @return 1
- * if one does, 0 if none does (or it cannot tell: nothing is then known). */
+/* Tells whether one polygon of o, alone or at a corner with another
+ * (rl__occluders_blocks()), crosses every segment from the convex hull of
+ * the points a (na) to that of the points b (nb; neither need be planar,
+ * each at most RL_BEAM_MAX_VERTS): its plane parts them by more than tol
+ * and every crossing lies more than edge (<= tol) inside its edges. It
+ * visits only the boxes that the segment between the two hulls' vertex
+ * means crosses (one of a corner's two polygons crosses it), and stops at
+ * the first such polygon, which it gives in *blocker (unless NULL): the
+ * same call on it with rl__occluders_blocks() finds its corner again.
+ * @return 1 if one does, 0 if none does (or it cannot tell: nothing is
+ * then known). */
 int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const v3 *b, size_t nb, double tol,
                             double edge, uint32_t *blocker);
 
-/* The same test for polygon k of o alone. @return 1 if it crosses every such segment. */
+/* The same test for polygon k of o: alone, or where the segments cross
+ * its plane outside one of its edges only, together with the polygon that
+ * shares that edge (the same two vertices) at a corner that turns toward a
+ * or toward b (each on that side of the other's plane), as a room's two
+ * walls do: then every segment crosses one of the two, or their shared
+ * edge, where the tracer may leave a crack no wider than its rounding,
+ * which the exact shadows count blocked (leaf_shadow.c, lambert.c). A lamp
+ * of a room diagonally off is hidden from most of a room by a corner's two
+ * walls, by neither alone. @return 1 if it crosses every such segment. */
 int rl__occluders_blocks(const rl_occluders *o, uint32_t k, const v3 *a, size_t na, const v3 *b, size_t nb,
                          double tol, double edge);
 

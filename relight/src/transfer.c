@@ -44,12 +44,14 @@ static size_t reachable(const rl_transfer_ctx *ctx, const v3 *a, size_t na, cons
         s->reach = grown;
         s->reach_cap = ctx->nemitters;
     }
+    s->nreach_blockers = 0;
     if (!ctx->reach || !ctx->occluders || na < 1 || na > RL_BEAM_MAX_VERTS) {
         for (size_t e = 0; e < ctx->nemitters; e++)
             s->reach[e] = (uint32_t)e;
         return ctx->nemitters;
     }
-    return rl__emitter_tree_reach(ctx->reach, ctx->occluders, a, na, rf, s->reach);
+    return rl__emitter_tree_reach(ctx->reach, ctx->occluders, a, na, rf, s->reach, s->reach_blockers,
+                                  &s->nreach_blockers);
 }
 
 int rl__transfer_tile(const rl_transfer_ctx *ctx, uint32_t map_index, rl_map *m, uint32_t row0, uint32_t row1,
