@@ -110,11 +110,22 @@ static rl_status map_frame(const rl_scene *scene, uint32_t k, rl_map *m)
     return RL_OK;
 }
 
-/* Clips the square of cell (i, j) to m's polygon. @return the clipped vertex count. */
-static uint32_t clip_square(const rl_map *m, uint32_t i, uint32_t j, v2 *out)
+/* Clips the square of cell (i, j) to m's polygon, whose edges' half-planes are edges[m->npoly] (or NULL:
+ * not known). A square whose corners all lie in every half-plane, as the clip tests them, is what the clip
+ * would give back unchanged: it is given back without clipping (most squares of a large polygon).
+ * @return the clipped vertex count. */
+static uint32_t clip_square(const rl_map *m, const rl_halfplane *edges, uint32_t i, uint32_t j, v2 *out)
 {
     double x0 = m->u0 + i * m->cell, y0 = m->v0 + j * m->cell, x1 = x0 + m->cell, y1 = y0 + m->cell;
     const v2 square[4] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+    int inside = edges != NULL;
+    for (uint32_t e = 0; inside && e < m->npoly; e++)
+        for (int k = 0; k < 4 && inside; k++)
+            inside = edges[e].a * square[k].x + edges[e].b * square[k].y + edges[e].c >= 0;
+    if (inside) {
+        memcpy(out, square, sizeof square);
+        return 4;
+    }
     v2 scratch[RL_MAX_POLY_VERTS + 8];
     return (uint32_t)rl__clip_to_polygon(square, 4, m->poly, m->npoly, out, scratch);
 }
@@ -152,10 +163,13 @@ static rl_status map_cells(rl_map *m)
      * polygon too: a polygon much smaller than a cell is one small cell, not none. */
     const double full = m->cell * m->cell, tiny = 1e-12 * fmin(full, rl__polygon_area2(m->poly, m->npoly));
     v2 poly[RL_MAX_POLY_VERTS + 8];
+    rl_halfplane edges[RL_MAX_POLY_VERTS];
+    for (uint32_t e = 0; e < m->npoly; e++)
+        edges[e] = edge_halfplane(m->poly[e], m->poly[(e + 1) % m->npoly]);
     m->ncells = 0;
     for (uint32_t j = 0; j < m->nv; j++)
         for (uint32_t i = 0; i < m->nu; i++) {
-            uint32_t count = clip_square(m, i, j, poly);
+            uint32_t count = clip_square(m, edges, i, j, poly);
             double area = count >= 3 ? rl__polygon_area2(poly, count) : 0.0;
             m->grid[(size_t)j * m->nu + i] = -1;
             if (!(area > tiny))
@@ -392,7 +406,7 @@ uint32_t rl__map_cell_polygon(const rl_map *m, uint32_t cell, v2 *out)
     }
     const rl_cell c = rl__map_cell(m, cell);
     if (c.clipped)
-        return clip_square(m, c.i, c.j, out);
+        return clip_square(m, NULL, c.i, c.j, out);
     double x0 = m->u0 + c.i * m->cell, y0 = m->v0 + c.j * m->cell;
     out[0] = (v2){x0, y0};
     out[1] = (v2){x0 + m->cell, y0};
