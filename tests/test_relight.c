@@ -423,7 +423,9 @@ static rl_solution *rooms_relight(const tpoly *p, int n, rl_method m, rl_pass_st
  * with its own room's lamp alone, so the pairs counted are the maps of the
  * room of the lit lamp (the other room's maps would double them), and the
  * first room's maps are the same, bit for bit, as with the second lamp
- * dark. With doors in line through both rooms' facing walls, the second
+ * dark. So also with the second room moved diagonally off, where its lamp
+ * is hidden from the first room by no single wall, only by a corner's two
+ * (shadow.h). With doors in line through both rooms' facing walls, the second
  * lamp lights the first room through them, though each wall's plane parts
  * the rooms: no single polygon hides it, so it must not be left out, and the
  * first room's floor is lit.
@@ -434,45 +436,52 @@ static void check_rooms_cull(void)
     for (int m = 0; m < 2; m++) {
         rl_method method = m ? RL_METHOD_NAIVE : RL_METHOD_CULLED;
         const char *name = m ? "naive" : "culled";
-        int na = room_quads(p, 0, 0, "light");
-        int n = na + room_quads(p + na, 2.2, 0, "light");
         rl_pass_stats both, one;
-        rl_scene *scenes[3] = {NULL, NULL, NULL};
-        rl_solution *lit = rooms_relight(p, n, method, &both, &scenes[0]);
-        p[n - 1].material = "black"; /* the second room's lamp dark */
-        rl_solution *dark = rooms_relight(p, n, method, &one, &scenes[1]);
-        if (lit && dark) {
-            /* each room's maps in front of its own lamp: all but the ceiling's (and the lamps') */
-            uint64_t maps[2] = {0, 0};
-            long differ = 0;
-            for (int k = 0; k < n; k++) {
-                long a = ts_map_of(lit, (uint32_t)k), b = ts_map_of(dark, (uint32_t)k);
-                if (a < 0 || k == 1 || k == na + 1 || k == na - 1 || k == n - 1)
-                    continue;
-                maps[k >= na]++;
-                if (k >= na)
-                    continue;
-                ts_cells ca = ts_cells_get(lit, (size_t)a), cb = ts_cells_get(dark, (size_t)b);
-                differ += ca.n != cb.n || memcmp(ca.e, cb.e, 3 * ca.n * sizeof *ca.e) != 0;
-                ts_cells_free(&ca);
-                ts_cells_free(&cb);
+        rl_scene *scenes[5] = {NULL, NULL, NULL, NULL, NULL};
+        int na = 0, n = 0;
+        for (int diagonal = 0; diagonal < 2; diagonal++) {
+            na = room_quads(p, 0, 0, "light");
+            n = na + room_quads(p + na, 2.2, 0, "light");
+            const double off[3] = {0, 2.2, 0};
+            for (int k = na; k < n && diagonal; k++)
+                p[k] = ts_moved(p[k], off);
+            const char *layout = diagonal ? "diagonally" : "side by side";
+            rl_solution *lit = rooms_relight(p, n, method, &both, &scenes[2 * diagonal]);
+            p[n - 1].material = "black"; /* the second room's lamp dark */
+            rl_solution *dark = rooms_relight(p, n, method, &one, &scenes[2 * diagonal + 1]);
+            if (lit && dark) {
+                /* each room's maps in front of its own lamp: all but the ceiling's (and the lamps') */
+                uint64_t maps[2] = {0, 0};
+                long differ = 0;
+                for (int k = 0; k < n; k++) {
+                    long a = ts_map_of(lit, (uint32_t)k), b = ts_map_of(dark, (uint32_t)k);
+                    if (a < 0 || k == 1 || k == na + 1 || k == na - 1 || k == n - 1)
+                        continue;
+                    maps[k >= na]++;
+                    if (k >= na)
+                        continue;
+                    ts_cells ca = ts_cells_get(lit, (size_t)a), cb = ts_cells_get(dark, (size_t)b);
+                    differ += ca.n != cb.n || memcmp(ca.e, cb.e, 3 * ca.n * sizeof *ca.e) != 0;
+                    ts_cells_free(&ca);
+                    ts_cells_free(&cb);
+                }
+                printf("two closed rooms %s, %s: %llu pairs with both lamps lit, %llu with one, of %llu + %llu maps\n",
+                       layout, name, (unsigned long long)both.pairs, (unsigned long long)one.pairs,
+                       (unsigned long long)maps[0], (unsigned long long)maps[1]);
+                CHECK(maps[0] > 0 && one.pairs == maps[0] && both.pairs == maps[0] + maps[1],
+                      "two closed rooms %s, %s: %llu and %llu pairs, not %llu and %llu: a lamp paired with the other "
+                      "room", layout, name, (unsigned long long)one.pairs, (unsigned long long)both.pairs,
+                      (unsigned long long)maps[0], (unsigned long long)(maps[0] + maps[1]));
+                CHECK(differ == 0, "two closed rooms %s, %s: %ld maps of the first room change with the second lamp",
+                      layout, name, differ);
             }
-            printf("two closed rooms, %s: %llu pairs with both lamps lit, %llu with one, of %llu + %llu maps\n", name,
-                   (unsigned long long)both.pairs, (unsigned long long)one.pairs, (unsigned long long)maps[0],
-                   (unsigned long long)maps[1]);
-            CHECK(maps[0] > 0 && one.pairs == maps[0] && both.pairs == maps[0] + maps[1],
-                  "two closed rooms, %s: %llu and %llu pairs, not %llu and %llu: a lamp paired with the other room",
-                  name, (unsigned long long)one.pairs, (unsigned long long)both.pairs, (unsigned long long)maps[0],
-                  (unsigned long long)(maps[0] + maps[1]));
-            CHECK(differ == 0, "two closed rooms, %s: %ld maps of the first room change with the second lamp", name,
-                  differ);
+            rl_solution_destroy(lit);
+            rl_solution_destroy(dark);
         }
-        rl_solution_destroy(lit);
-        rl_solution_destroy(dark);
         /* doors in line; the first room's lamp dark */
         na = room_quads(p, 0, 1, "black");
         n = na + room_quads(p + na, 2.2, -1, "light");
-        rl_solution *door = rooms_relight(p, n, method, &one, &scenes[2]);
+        rl_solution *door = rooms_relight(p, n, method, &one, &scenes[4]);
         long floor = door ? ts_map_of(door, 0) : -1;
         double lit_floor = NAN;
         if (floor >= 0) {
@@ -487,7 +496,7 @@ static void check_rooms_cull(void)
         CHECK(lit_floor > 0, "rooms with doors, %s: the first room's floor is dark: the lamp seen through the doors "
               "was left out", name);
         rl_solution_destroy(door);
-        for (int k = 0; k < 3; k++)
+        for (int k = 0; k < 5; k++)
             rl_scene_destroy(scenes[k]);
     }
 }
