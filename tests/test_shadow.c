@@ -104,6 +104,17 @@ static void box_blocks(const rl_scene *s, const rl_occluders *occ, const v3 *a, 
     CHECK(all_met, "a blocker found from a patch to a box, but a segment between them passes");
 }
 
+/* Writes the n grey quads p as the scene at path and loads it into *s. @return its occluder index, or NULL
+ * (reported). */
+static rl_occluders *grey_scene(const char *path, const tpoly *p, int n, rl_scene **s)
+{
+    ts_write_scene(path, "{\"grey\": {\"albedo\": [0.5, 0.5, 0.5]}}", p, n, NULL);
+    *s = ts_load(path);
+    rl_occluders *occ = NULL;
+    CHECK(*s && rl__occluders_new(*s, &occ) == RL_OK, "%s and its occluder index", path);
+    return occ;
+}
+
 /* A patch of side f about point c, in the plane spanned by unit vectors u and w. */
 static void patch_at(v3 c, v3 u, v3 w, double f, v3 out[4])
 {
@@ -152,10 +163,8 @@ static void check_corners(const char *tmp, rl_beam *beam, long found[2], long *s
         }
         char path[1100];
         snprintf(path, sizeof path, "%s/shadow_corner_%d.json", tmp, sc);
-        ts_write_scene(path, "{\"grey\": {\"albedo\": [0.5, 0.5, 0.5]}}", p, 12, NULL);
-        rl_scene *s = ts_load(path);
-        rl_occluders *occ = NULL;
-        CHECK(s && rl__occluders_new(s, &occ) == RL_OK, "corner scene %d and its occluder index", sc);
+        rl_scene *s = NULL;
+        rl_occluders *occ = grey_scene(path, p, 12, &s);
         for (int bi = 0; occ && bi < BEAMS_PER_SCENE; bi++) {
             v3 a[4], b[4];
             int across = bi % 3 == 2;
@@ -224,10 +233,8 @@ int main(void)
             for (int k = 0; k < 4; k++)
                 v3_store(hinge[k], p[1].v[k]);
         }
-        ts_write_scene(path, "{\"grey\": {\"albedo\": [0.5, 0.5, 0.5]}}", p, 12, NULL);
-        rl_scene *s = ts_load(path);
-        rl_occluders *occ = NULL;
-        CHECK(s && rl__occluders_new(s, &occ) == RL_OK, "scene %d and its occluder index", sc);
+        rl_scene *s = NULL;
+        rl_occluders *occ = grey_scene(path, p, 12, &s);
         for (int bi = 0; occ && bi < BEAMS_PER_SCENE; bi++) {
             v3 a[4], b[4];
             size_t na = bi % 2 ? 4 : 1; /* every other beam a pyramid */

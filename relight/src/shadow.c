@@ -403,43 +403,75 @@ static int same_point(v3 u, v3 w)
     return u.x == w.x && u.y == w.y && u.z == w.z;
 }
 
-/* Finds the polygon other than kq that holds edge e of polygon kq, the same two vertices in either order.
- * @return 1 with it in *kr and the edge's number in it in *er, or 0. */
-static int across_edge(const rl_occluders *o, uint32_t kq, uint32_t e, uint32_t *kr, uint32_t *er)
+/* Visits, in the tree's order, the polygons of o whose boxes meet the segment from p0 to p1 widened by pad
+ * (a point when p0 is p1), until test(user, k) holds for one. @return 1 with it in *found, or 0. */
+static int first_along(const rl_occluders *o, v3 p0, v3 p1, double pad, int (*test)(void *, uint32_t), void *user,
+                       uint32_t *found)
 {
-    const occ_poly *q = &o->polys[kq];
-    v3 q0 = o->verts[q->first + e], q1 = o->verts[q->first + (e + 1) % q->count];
-    v3 mid = v3_scale(v3_add(q0, q1), 0.5); /* within the box of any polygon holding both ends */
+    if (o->npolys == 0)
+        return 0;
     uint32_t stack[RL_BOX_TREE_STACK];
     size_t top = 0;
     stack[top++] = 0;
     while (top > 0) {
         const rl_box_node *nd = &o->tree.nodes[stack[--top]];
-        if (!boxes_overlap(nd->lo, nd->hi, mid, mid))
+        if (!segment_meets_box(p0, p1, nd->lo, nd->hi, pad))
             continue;
         if (nd->count == 0) {
             if (top + 2 > RL_BOX_TREE_STACK)
-                return 0; /* cannot happen; finding none is safe */
+                return 0; /* deeper than any tree of 2^64 polygons: cannot happen; finding none is safe */
             stack[top++] = nd->first + 1;
             stack[top++] = nd->first;
             continue;
         }
         for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
             uint32_t k = o->tree.order[i];
-            const occ_poly *r = &o->polys[k];
-            if (k == kq || !boxes_overlap(r->lo, r->hi, mid, mid))
-                continue;
-            const v3 *vr = o->verts + r->first;
-            for (uint32_t j = 0; j < r->count; j++) {
-                v3 r0 = vr[j], r1 = vr[(j + 1) % r->count];
-                if ((same_point(q0, r1) && same_point(q1, r0)) || (same_point(q0, r0) && same_point(q1, r1))) {
-                    *kr = k, *er = j;
-                    return 1;
-                }
+            const occ_poly *q = &o->polys[k];
+            if (segment_meets_box(p0, p1, q->lo, q->hi, pad) && test(user, k)) {
+                *found = k;
+                return 1;
             }
         }
     }
     return 0;
+}
+
+/* A polygon's edge, from q0 to q1, looked for in other polygons (across_edge()). */
+typedef struct edge_search {
+    const rl_occluders *o;
+    uint32_t kq;
+    v3 q0, q1;
+    uint32_t er; /* found: the edge's number in the polygon holding it */
+} edge_search;
+
+/* first_along()'s test: polygon k, other than es->kq, has es's edge (the same two vertices, in either order). */
+static int holds_edge(void *user, uint32_t k)
+{
+    edge_search *es = user;
+    const occ_poly *r = &es->o->polys[k];
+    const v3 *vr = es->o->verts + r->first;
+    for (uint32_t j = 0; k != es->kq && j < r->count; j++) {
+        v3 r0 = vr[j], r1 = vr[(j + 1) % r->count];
+        if ((same_point(es->q0, r1) && same_point(es->q1, r0)) || (same_point(es->q0, r0) && same_point(es->q1, r1))) {
+            es->er = j;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Finds the polygon other than kq that holds edge e of polygon kq, the same two vertices in either order:
+ * among those whose boxes hold the edge's middle. @return 1 with it in *kr and the edge's number in it in
+ * *er, or 0. */
+static int across_edge(const rl_occluders *o, uint32_t kq, uint32_t e, uint32_t *kr, uint32_t *er)
+{
+    const occ_poly *q = &o->polys[kq];
+    edge_search es = {o, kq, o->verts[q->first + e], o->verts[q->first + (e + 1) % q->count], 0};
+    v3 mid = v3_scale(v3_add(es.q0, es.q1), 0.5);
+    if (!first_along(o, mid, mid, 0.0, holds_edge, &es, kr))
+        return 0;
+    *er = es.er;
+    return 1;
 }
 
 /* @return 1 if polygon r lies on point x's side of q's plane: no vertex on the other side (rounding apart),
@@ -495,39 +527,36 @@ int rl__occluders_blocks(const rl_occluders *o, uint32_t k, const v3 *a, size_t 
     return k < o->npolys && na >= 1 && nb >= 1 && blocks_or_corner(o, k, a, na, b, nb, tol, edge);
 }
 
+/* What rl__occluders_block_any() looks for, as first_along()'s test (blocks_or_corner()). */
+typedef struct blocker_search {
+    const rl_occluders *o;
+    const v3 *a, *b;
+    size_t na, nb;
+    double tol, edge;
+} blocker_search;
+
+/* first_along()'s test: polygon k blocks alone or at a corner. */
+static int blocks_all(void *user, uint32_t k)
+{
+    const blocker_search *bs = user;
+    return blocks_or_corner(bs->o, k, bs->a, bs->na, bs->b, bs->nb, bs->tol, bs->edge);
+}
+
 int rl__occluders_block_any(const rl_occluders *o, const v3 *a, size_t na, const v3 *b, size_t nb, double tol,
                             double edge, uint32_t *blocker)
 {
-    if (o->npolys == 0 || na < 1 || nb < 1 || na > RL_BEAM_MAX_VERTS || nb > RL_BEAM_MAX_VERTS)
+    if (na < 1 || nb < 1 || na > RL_BEAM_MAX_VERTS || nb > RL_BEAM_MAX_VERTS)
         return 0;
-    /* one of the corner's two polygons crosses the segment between the hulls' vertex means */
+    /* every blocker, and one of a corner's two polygons, crosses the segment between the hulls' vertex means */
     v3 ca = v3_mean(a, na), cb = v3_mean(b, nb);
     double pad = edge + 1e-12 * (v3_maxabs(ca) + v3_maxabs(cb));
-    uint32_t stack[RL_BOX_TREE_STACK];
-    size_t top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-        const rl_box_node *nd = &o->tree.nodes[stack[--top]];
-        if (!segment_meets_box(ca, cb, nd->lo, nd->hi, pad))
-            continue;
-        if (nd->count == 0) {
-            if (top + 2 > RL_BOX_TREE_STACK)
-                return 0; /* cannot happen; finding none is safe */
-            stack[top++] = nd->first + 1;
-            stack[top++] = nd->first;
-            continue;
-        }
-        for (uint32_t i = nd->first; i < nd->first + nd->count; i++) {
-            uint32_t k = o->tree.order[i];
-            const occ_poly *q = &o->polys[k];
-            if (segment_meets_box(ca, cb, q->lo, q->hi, pad) && blocks_or_corner(o, k, a, na, b, nb, tol, edge)) {
-                if (blocker)
-                    *blocker = k;
-                return 1;
-            }
-        }
-    }
-    return 0;
+    blocker_search bs = {o, a, b, na, nb, tol, edge};
+    uint32_t k = 0;
+    if (!first_along(o, ca, cb, pad, blocks_all, &bs, &k))
+        return 0;
+    if (blocker)
+        *blocker = k;
+    return 1;
 }
 
 size_t rl__occluders_polygon(const rl_occluders *o, uint32_t k, const v3 **verts)
