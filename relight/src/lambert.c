@@ -127,10 +127,10 @@ static void block_mark(const block_walk *w, uint32_t i0, uint32_t i1, uint32_t j
 }
 
 /* @return 1 if one of the polygons that hid emitters from the whole tile (rl_scratch.reach_blockers, the
- * cull's) crosses every segment from block a (na) to the pair's emitter, by the cull's test and margins
- * (emitter_tree.h), which hold for the rays as traced. A lamp of a room diagonally off is hidden from a tile
- * by the corner's two walls together, by neither alone, so the cull keeps it; most of the tile's blocks are
- * then hidden by one wall, which this finds without collecting the polygons of a beam that crosses rooms. */
+ * cull's), alone or at a corner, crosses every segment from block a (na) to the pair's emitter, by the
+ * cull's test and margins (emitter_tree.h), which hold for the rays as traced. An emitter the cull kept
+ * because it is hidden from part of the tile only is often hidden from most of its blocks by those walls,
+ * which this finds without collecting the polygons of a beam that may cross rooms. */
 static int hidden_by_tile_blockers(const block_walk *w, const v3 *a, size_t na)
 {
     const rl_pair *p = w->p;

@@ -13,9 +13,9 @@
 #include <math.h>
 
 #include "emitter.h"
+#include "emitter_tree.h"
 #include "ilf/hash.h"
 #include "relight/engine.h"
-#include "emitter_tree.h"
 #include "shadow.h"
 #include "tracer.h"
 
